@@ -1,0 +1,115 @@
+"""What every fit returns: a frozen result object (primitive, residuals, inliers, standard errors)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..primitives import Primitive
+from ..scan.model import Scan, ScanObject
+
+__all__ = ["FitResult", "ObjectFit", "FitReport"]
+
+
+@dataclass(frozen=True, eq=False)
+class FitResult:
+    """The outcome of fitting one primitive to points.
+
+    Attributes
+    ----------
+    primitive : Primitive
+        The fitted primitive, metres.
+    residuals : ndarray, shape (n,), metres
+        Signed orthogonal (geometric) distance of *every* input point to the fitted surface.
+    inliers : ndarray, shape (n,), bool
+        Points kept by the robust estimator; the final estimate uses only these.
+    stderr : Mapping[str, float or tuple of float]
+        Standard errors of the main parameters from the fit's covariance. Keys ending in ``_deg``
+        are angles in degrees; every other key is a length in metres. Cylinder: ``radius``,
+        ``axis_deg``, ``center`` (across the axis), ``length``; sphere: ``radius``, ``center``;
+        plane: ``normal_deg``, ``offset``; cuboid: ``size`` (3 values), ``axes_deg``, ``center``.
+    sigma : float, metres
+        Noise level the standard errors were scaled by.
+    sigma_source : str
+        ``"sensor"`` (the scan's range sigma) or ``"residuals"`` (estimated from the fit).
+    method : str
+        The algorithm, e.g. ``"normals + geometric Gauss-Newton (Lukacs et al. 1998)"``.
+    covariance : ndarray or None
+        Covariance of the fit's internal parameters (documented per fit), metres/radians.
+    observed : tuple of bool or None
+        Cuboids only: whether each size was measured between two seen faces (True) or only
+        bounded by the extent of the points (False).
+    diagnostics : Mapping[str, float]
+        Geometry quality numbers, e.g. ``arc_deg`` (visible arc of a cylinder), ``faces`` (seen
+        faces of a cuboid), ``length_over_diameter``.
+    notes : tuple of str
+        Human-readable remarks (e.g. why ``auto`` chose this kind).
+    """
+
+    primitive: Primitive
+    residuals: np.ndarray
+    inliers: np.ndarray
+    stderr: Mapping[str, float | tuple[float, ...]]
+    sigma: float
+    sigma_source: str
+    method: str
+    covariance: np.ndarray | None = None
+    observed: tuple[bool, bool, bool] | None = None
+    diagnostics: Mapping[str, float] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+
+    @property
+    def kind(self) -> str:
+        """The fitted primitive's kind."""
+        return self.primitive.kind
+
+    @property
+    def n_points(self) -> int:
+        return int(self.residuals.shape[0])
+
+    @property
+    def n_inliers(self) -> int:
+        return int(np.count_nonzero(self.inliers))
+
+    @property
+    def rms(self) -> float:
+        """Root mean square of the inliers' residuals, metres."""
+        kept = self.residuals[self.inliers]
+        return float(np.sqrt(np.mean(kept**2))) if kept.size else float("nan")
+
+    @property
+    def max_residual(self) -> float:
+        """Largest absolute inlier residual, metres."""
+        kept = self.residuals[self.inliers]
+        return float(np.max(np.abs(kept))) if kept.size else float("nan")
+
+
+@dataclass(frozen=True, eq=False)
+class ObjectFit:
+    """A scan object with its fit; ``requested`` is the kind the scan asked for (may be ``auto``)."""
+
+    object: ScanObject
+    result: FitResult
+    requested: str
+
+
+@dataclass(frozen=True, eq=False)
+class FitReport:
+    """Every object's fit, in the scan's order."""
+
+    scan: Scan
+    fits: tuple[ObjectFit, ...]
+
+    def __iter__(self):
+        return iter(self.fits)
+
+    def __len__(self) -> int:
+        return len(self.fits)
+
+    def get(self, object_id: str) -> ObjectFit:
+        for item in self.fits:
+            if item.object.id == object_id:
+                return item
+        raise KeyError(object_id)

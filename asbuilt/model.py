@@ -1,0 +1,299 @@
+"""The as-built model: plain frozen data (components with geometry, spools, findings).
+
+Fitting makes primitives; merging (:mod:`asbuilt.merge`) turns pipes into spools of standard
+components; the rules add findings; the CAD layer and the exporters read this and nothing else.
+All lengths are metres, in the scan frame (z up).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import ClassVar, Union
+
+import numpy as np
+
+from .findings import Finding
+from .fit.result import FitReport, FitResult
+from .primitives import Cuboid, Cylinder, Hull, Plane, Primitive, Sphere, as_vector
+from .scan.model import Scan
+
+__all__ = [
+    "Straight",
+    "Bend",
+    "Reducer",
+    "Tee",
+    "Geometry",
+    "Correction",
+    "Component",
+    "Spool",
+    "Model",
+    "COMPONENT_TYPES",
+    "model_from_fits",
+]
+
+#: Component types: piping parts made by merging, then the plain fitted kinds.
+COMPONENT_TYPES = (
+    "pipe", "elbow", "tee", "reducer", "coupling",
+    "cylinder", "cuboid", "sphere", "plane", "hull",
+)
+
+
+def _nonneg(value, name: str) -> float:
+    number = float(value)
+    if not np.isfinite(number) or number < 0:
+        raise ValueError(f"The {name} must be a non-negative finite number, not {value!r}.")
+    return number
+
+
+def _wall(outer_radius: float, wall: float) -> float:
+    wall = _nonneg(wall, "wall")
+    if wall >= outer_radius:
+        raise ValueError("The wall must be thinner than the outer radius (0 means solid).")
+    return wall
+
+
+@dataclass(frozen=True, eq=False)
+class Straight:
+    """A straight pipe (or coupling) from ``start`` to ``end`` (each (3,) metres).
+
+    ``outer_radius`` metres; ``wall`` metres, 0 for a solid bar when the schedule is unknown.
+    """
+
+    kind: ClassVar[str] = "straight"
+    start: np.ndarray
+    end: np.ndarray
+    outer_radius: float
+    wall: float = 0.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "start", as_vector(self.start, "start"))
+        object.__setattr__(self, "end", as_vector(self.end, "end"))
+        if np.linalg.norm(self.end - self.start) <= 0:
+            raise ValueError("A straight needs distinct start and end points.")
+        object.__setattr__(self, "outer_radius", _nonneg(self.outer_radius, "outer radius"))
+        object.__setattr__(self, "wall", _wall(self.outer_radius, self.wall))
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(self.end - self.start))
+
+    @property
+    def direction(self) -> np.ndarray:
+        """Unit vector from start to end, shape (3,)."""
+        return (self.end - self.start) / self.length
+
+
+@dataclass(frozen=True, eq=False)
+class Bend:
+    """An elbow: a torus section from ``start`` to ``end`` about the curvature centre ``center``.
+
+    All points (3,) metres. The bend radius is ``|start - center|`` (= ``|end - center|``);
+    the bend angle is the angle between them seen from ``center``.
+    """
+
+    kind: ClassVar[str] = "bend"
+    start: np.ndarray
+    end: np.ndarray
+    center: np.ndarray
+    outer_radius: float
+    wall: float = 0.0
+
+    def __post_init__(self):
+        for name in ("start", "end", "center"):
+            object.__setattr__(self, name, as_vector(getattr(self, name), name))
+        r1 = np.linalg.norm(self.start - self.center)
+        r2 = np.linalg.norm(self.end - self.center)
+        if r1 <= 0 or abs(r1 - r2) > 1e-6 * max(r1, 1.0):
+            raise ValueError("A bend's ends must be equidistant from its centre.")
+        object.__setattr__(self, "outer_radius", _nonneg(self.outer_radius, "outer radius"))
+        object.__setattr__(self, "wall", _wall(self.outer_radius, self.wall))
+
+    @property
+    def bend_radius(self) -> float:
+        return float(np.linalg.norm(self.start - self.center))
+
+    @property
+    def angle_deg(self) -> float:
+        a = self.start - self.center
+        b = self.end - self.center
+        cos = np.dot(a, b) / (np.linalg.norm(a) * np.linalg.norm(b))
+        return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+
+
+@dataclass(frozen=True, eq=False)
+class Reducer:
+    """A concentric reducer (a truncated cone) from ``start`` (radius ``outer_radius_start``) to
+    ``end`` (``outer_radius_end``); points (3,) metres, radii and wall metres."""
+
+    kind: ClassVar[str] = "reducer"
+    start: np.ndarray
+    end: np.ndarray
+    outer_radius_start: float
+    outer_radius_end: float
+    wall: float = 0.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "start", as_vector(self.start, "start"))
+        object.__setattr__(self, "end", as_vector(self.end, "end"))
+        for name in ("outer_radius_start", "outer_radius_end"):
+            object.__setattr__(self, name, _nonneg(getattr(self, name), name.replace("_", " ")))
+        object.__setattr__(
+            self, "wall", _wall(min(self.outer_radius_start, self.outer_radius_end), self.wall)
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Tee:
+    """An equal (or reducing-outlet) tee: a run from ``run_start`` to ``run_end`` through
+    ``center`` and a branch from ``center`` to ``branch_end``; points (3,) metres."""
+
+    kind: ClassVar[str] = "tee"
+    center: np.ndarray
+    run_start: np.ndarray
+    run_end: np.ndarray
+    branch_end: np.ndarray
+    outer_radius: float
+    branch_outer_radius: float
+    wall: float = 0.0
+
+    def __post_init__(self):
+        for name in ("center", "run_start", "run_end", "branch_end"):
+            object.__setattr__(self, name, as_vector(getattr(self, name), name))
+        object.__setattr__(self, "outer_radius", _nonneg(self.outer_radius, "outer radius"))
+        object.__setattr__(
+            self, "branch_outer_radius", _nonneg(self.branch_outer_radius, "branch outer radius")
+        )
+        object.__setattr__(
+            self, "wall", _wall(min(self.outer_radius, self.branch_outer_radius), self.wall)
+        )
+
+
+Geometry = Union[Straight, Bend, Reducer, Tee, Cylinder, Cuboid, Sphere, Plane, Hull]
+
+
+@dataclass(frozen=True)
+class Correction:
+    """A change merging made to a fitted value, recorded like a spell checker's correction.
+
+    ``what`` names it (``"diameter snapped"``, ``"axis made vertical"``...), ``before`` and
+    ``after`` are the values (lengths in metres, angles in degrees), ``size`` the magnitude of
+    the change in ``unit``.
+    """
+
+    what: str
+    before: object
+    after: object
+    size: float
+    unit: str
+
+
+@dataclass(frozen=True, eq=False)
+class Component:
+    """One part of the as-built model.
+
+    Attributes
+    ----------
+    id : str
+        Unique in the model (a scan object id, or e.g. ``"P1-P2"`` for the elbow joining them).
+    type : str
+        One of :data:`COMPONENT_TYPES`.
+    geometry : Geometry
+        Its shape, metres.
+    sources : tuple of str
+        Scan object ids it comes from (empty for fittings made by merging).
+    spool, group, label : str or None
+    nominal, schedule : str or None
+        Catalog nominal size (e.g. ``"4"``) and schedule (e.g. ``"STD"``) when known.
+    fit : FitResult or None
+        The fit it comes from.
+    snap : Mapping
+        How the size was chosen: ``status`` ("snapped", "no-size", "ambiguous", "hint"),
+        ``od_fit``, ``od_stderr``, ``od_catalog`` (metres), ``candidates`` and ``reason``.
+    corrections : tuple of Correction
+    """
+
+    id: str
+    type: str
+    geometry: Geometry
+    sources: tuple[str, ...] = ()
+    spool: str | None = None
+    group: str | None = None
+    label: str | None = None
+    nominal: str | None = None
+    schedule: str | None = None
+    fit: FitResult | None = None
+    snap: Mapping = field(default_factory=dict)
+    corrections: tuple[Correction, ...] = ()
+
+    def __post_init__(self):
+        if self.type not in COMPONENT_TYPES:
+            raise ValueError(f"component type must be one of {COMPONENT_TYPES}, not {self.type!r}")
+
+
+@dataclass(frozen=True)
+class Spool:
+    """A connected group of piping components; ``pipe_length`` metres of straight pipe."""
+
+    id: str
+    components: tuple[str, ...]
+    pipe_length: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """The as-built model of one scan.
+
+    ``units`` is the unit outputs are written in (the scan's unless asked otherwise); the data
+    stay in metres. ``catalog`` names the pipe catalog used for snapping, if any.
+    """
+
+    components: tuple[Component, ...]
+    units: str = "m"
+    name: str | None = None
+    catalog: str | None = None
+    spools: tuple[Spool, ...] = ()
+    findings: tuple[Finding, ...] = ()
+    scan: Scan | None = None
+    fits: FitReport | None = None
+
+    def component(self, component_id: str) -> Component:
+        for comp in self.components:
+            if comp.id == component_id:
+                return comp
+        raise KeyError(component_id)
+
+    def replace(self, **changes) -> Model:
+        """A copy with some fields changed (e.g. ``model.replace(findings=...)``)."""
+        return dataclasses.replace(self, **changes)
+
+
+def _component_from_fit(item) -> Component:
+    obj, result = item.object, item.result
+    return Component(
+        id=obj.id,
+        type=result.primitive.kind,
+        geometry=result.primitive,
+        sources=(obj.id,),
+        group=obj.group,
+        label=obj.label,
+        fit=result,
+    )
+
+
+def model_from_fits(report: FitReport) -> Model:
+    """The unmerged model: one component per fitted object, exactly as fitted."""
+    scan = report.scan
+    return Model(
+        components=tuple(_component_from_fit(item) for item in report.fits),
+        units=scan.units,
+        name=scan.name,
+        scan=scan,
+        fits=report,
+    )
+
+
+def fitted_primitive(component: Component) -> Primitive | None:
+    """The primitive a component was fitted as, if it came from a fit."""
+    return component.fit.primitive if component.fit is not None else None

@@ -1,0 +1,1 @@
+"""Scan format (placeholder for layout test)."""
