@@ -1,0 +1,86 @@
+"""Packaging: a wheel built from the repository works on its own, data files included."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+# Folders whose non-Python files the code loads at run time, and where the wheel puts them.
+DATA_FOLDERS = {"catalogs": "asbuilt/catalogs", "asbuilt": "asbuilt", "drivers": "asbuilt/drivers"}
+DATA_SUFFIXES = {".csv", ".json", ".toml"}
+
+
+def _data_files_in_repo() -> set[str]:
+    expected = set()
+    for folder, installed in DATA_FOLDERS.items():
+        for path in (ROOT / folder).rglob("*"):
+            if path.suffix in DATA_SUFFIXES and "__pycache__" not in path.parts:
+                rel = path.relative_to(ROOT / folder).as_posix()
+                expected.add(f"{installed}/{rel}")
+    return expected
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    """Build a wheel from a copy of the repository's own files (no network, no build isolation)."""
+    src = tmp_path_factory.mktemp("src")
+    for name in ("asbuilt", "drivers", "catalogs"):
+        shutil.copytree(ROOT / name, src / name, ignore=shutil.ignore_patterns("__pycache__"))
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy2(ROOT / name, src / name)
+    out = tmp_path_factory.mktemp("dist")
+    subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+         "-w", str(out), str(src)],
+        check=True,
+    )
+    (found,) = out.glob("asbuilt-*.whl")
+    return found
+
+
+def test_wheel_contains_every_data_file(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    missing = sorted(_data_files_in_repo() - names)
+    assert not missing, f"data files missing from the wheel: {missing}"
+    assert "asbuilt/drivers/__init__.py" in names
+    assert "asbuilt/catalogs/__init__.py" in names
+
+
+def test_installed_wheel_works_on_its_own(wheel, tmp_path):
+    target = tmp_path / "site"
+    subprocess.run(
+        [sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target),
+         str(wheel)],
+        check=True,
+    )
+    probe = (
+        "import asbuilt, asbuilt.drivers, asbuilt.catalogs, importlib.resources as r\n"
+        "assert asbuilt.__file__.startswith(%r), asbuilt.__file__\n"
+        "from asbuilt.cli import build_parser\n"
+        "build_parser()\n"
+        "names = [p.name for p in r.files('asbuilt.catalogs').iterdir()]\n"
+        "assert any(n.endswith('.csv') for n in names), names\n"
+        "print('ok')\n"
+    ) % str(target)
+    env = dict(os.environ, PYTHONPATH=str(target))
+    result = subprocess.run(
+        [sys.executable, "-c", probe], cwd=tmp_path, env=env, capture_output=True, text=True
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "ok"
+
+
+def test_readme_test_command_is_what_ci_runs():
+    readme = (ROOT / "README.md").read_text()
+    ci = (ROOT / ".ci" / "run").read_text()
+    command = next(
+        line.strip() for line in readme.splitlines() if line.strip().endswith(".venv/bin/pytest")
+    )
+    assert command in ci
