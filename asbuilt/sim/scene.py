@@ -1,0 +1,755 @@
+"""Scene description files for the simulator: load, validate, and expand into ray-castable shapes.
+
+A scene (JSON, documented in ``docs/scene-format.md``) has units, one or more stations (the
+pan-tilt range finder's position and noise) and objects, each with the kind the operator would
+say and an exact geometry. Loading converts every length to metres once; the result is a frozen
+:class:`Scene` whose :meth:`Scene.raycast` casts rays against every object (occlusion included).
+Every mistake in the file raises :class:`~asbuilt.errors.SceneError` naming the file, the
+object and the field.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from asbuilt.errors import SceneError
+from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Primitive, Sphere
+from asbuilt.scan.model import KINDS
+from asbuilt.tolerances import MIN_POINTS
+from asbuilt.units import UNITS
+
+from .geometry import frustum_mesh, member_axes, plate_axes, rotation_zyx, torus_segment_mesh
+from .raycast import (
+    BoxShape,
+    CylinderShape,
+    MeshShape,
+    PlaneShape,
+    RayHits,
+    Shape,
+    SphereShape,
+    raycast,
+)
+
+__all__ = [
+    "Station",
+    "SceneObject",
+    "Scene",
+    "load_scene",
+    "loads_scene",
+    "scene_from_dict",
+    "GEOMETRY_TYPES",
+    "DEFAULT_POINTS",
+]
+
+#: Geometry types a scene object may use.
+GEOMETRY_TYPES = (
+    "cylinder",
+    "tank",
+    "pipe_run",
+    "box",
+    "member",
+    "plate",
+    "sphere",
+    "frustum",
+    "mesh",
+    "ground",
+)
+
+#: Points per object when neither the object nor the scene says.
+DEFAULT_POINTS = 30
+
+_MAX_FILE_BYTES = 20_000_000
+
+
+@dataclass(frozen=True, eq=False)
+class Station:
+    """Where the pan-tilt range finder stands and how it errs.
+
+    Attributes
+    ----------
+    id : str
+    position : ndarray, shape (3,), metres
+        The beam origin (ideal chain: pan and tilt axes meet here).
+    range_sigma : float, metres
+        Standard deviation of the range noise (default 2 mm).
+    angular_sigma : float, radians
+        Standard deviation of the pan and tilt pointing noise (default 0.01 degree).
+    dropout : float
+        Probability that any shot returns nothing.
+    mixed_return : float
+        Probability that a shot whose footprint straddles a silhouette edge returns the
+        background range or a range in between.
+    beam_divergence : float, radians
+        Full divergence of the laser beam (footprint grows with range).
+    spot_diameter : float, metres
+        Beam diameter at the exit.
+    max_range : float, metres
+        Farther surfaces return nothing.
+    """
+
+    id: str
+    position: np.ndarray
+    range_sigma: float = 0.002
+    angular_sigma: float = math.radians(0.01)
+    dropout: float = 0.0
+    mixed_return: float = 0.3
+    beam_divergence: float = 0.0005
+    spot_diameter: float = 0.003
+    max_range: float = 100.0
+
+    def footprint_radius(self, rng) -> np.ndarray:
+        """Beam footprint radius, metres, at range ``rng`` (array, metres)."""
+        return 0.5 * self.spot_diameter + 0.5 * self.beam_divergence * np.asarray(rng, float)
+
+
+@dataclass(frozen=True, eq=False)
+class SceneObject:
+    """One object of the scene.
+
+    Attributes
+    ----------
+    id : str
+    kind : str or None
+        The kind the operator says when scanning it (one of the scan kinds); None for
+        background-only geometry.
+    shape : Shape
+        Exact geometry in metres.
+    truth : Primitive
+        The true primitive (what a perfect fit would return), metres.
+    points : int
+        Shots wanted on it.
+    scan : bool
+        Whether the operator scans it (False: it only occludes and catches stray beams).
+    station : str
+        The station that scans it.
+    index : int
+        Position in :attr:`Scene.objects` (the ``object_index`` of ray hits).
+    group, label, nominal : str or None
+        Copied to the scan.
+    """
+
+    id: str
+    kind: str | None
+    shape: Shape
+    truth: Primitive
+    points: int
+    scan: bool
+    station: str
+    index: int
+    group: str | None = None
+    label: str | None = None
+    nominal: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A loaded scene, all lengths in metres.
+
+    ``units`` is the unit the file was written in (simulated scans are written in it).
+    """
+
+    units: str
+    stations: tuple[Station, ...]
+    objects: tuple[SceneObject, ...]
+    links: tuple[tuple[str, str], ...] = ()
+    name: str | None = None
+    seed: int | None = None
+    source: str | None = None
+    extra: Mapping = field(default_factory=dict)
+
+    @property
+    def shapes(self) -> tuple[Shape, ...]:
+        """Every object's shape, in object order."""
+        return tuple(obj.shape for obj in self.objects)
+
+    def raycast(self, origins, directions, *, exclude=None) -> RayHits:
+        """Nearest hit of each ray over every object of the scene.
+
+        Parameters
+        ----------
+        origins : array_like, shape (n, 3) or (3,), metres
+        directions : array_like, shape (n, 3)
+            Normalised here.
+        exclude : int or array_like of int, shape (n,), optional
+            An object index each ray ignores (``-1`` for none).
+
+        Returns
+        -------
+        RayHits
+            ``range`` (n,) metres (``inf`` for a miss), ``object_index`` (n,) into
+            :attr:`objects` (``-1`` for a miss), ``cos_incidence`` (n,), ``normal`` (n, 3).
+        """
+        return raycast(self.shapes, origins, directions, exclude=exclude)
+
+    def station(self, station_id: str | None = None) -> Station:
+        """The station with this id (the first one when None); KeyError when unknown."""
+        if station_id is None:
+            return self.stations[0]
+        for station in self.stations:
+            if station.id == station_id:
+                return station
+        raise KeyError(station_id)
+
+    def object(self, object_id: str) -> SceneObject:
+        """The object with this id; KeyError when unknown."""
+        for obj in self.objects:
+            if obj.id == object_id:
+                return obj
+        raise KeyError(object_id)
+
+
+def load_scene(path) -> Scene:
+    """Read and validate a scene file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A JSON scene file; mesh files it names are resolved relative to it.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        The file is missing, unreadable, not JSON, or any field is wrong (one line naming the
+        file, the object and the field).
+    """
+    path = Path(path)
+    try:
+        if path.stat().st_size > _MAX_FILE_BYTES:
+            raise SceneError("file is larger than 20 MB; is this a scene file?", source=str(path))
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError("file not found; check the path", source=str(path)) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise SceneError(f"cannot read the file ({reason})", source=str(path)) from None
+    return loads_scene(text, source=str(path), base_dir=path.parent)
+
+
+def loads_scene(text: str, *, source: str | None = None, base_dir=None) -> Scene:
+    """Parse and validate a scene from JSON text (see :func:`load_scene`)."""
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise SceneError(
+            f"not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})", source=source
+        ) from None
+    return scene_from_dict(doc, source=source, base_dir=base_dir)
+
+
+class _Reader:
+    """Field access with located errors, converting lengths by the scene's unit factor."""
+
+    def __init__(self, source: str | None, scale: float, base_dir):
+        self.source = source
+        self.scale = scale
+        self.base_dir = Path(base_dir) if base_dir is not None else Path(".")
+
+    def fail(self, where: str, message: str):
+        raise SceneError(message, source=self.source, where=where)
+
+    def number(
+        self,
+        data,
+        key,
+        where,
+        *,
+        default=None,
+        minimum=None,
+        maximum=None,
+        positive=False,
+        required=False,
+    ) -> float:
+        if key not in data or data[key] is None:
+            if required:
+                self.fail(where, f"missing field {key!r}")
+            return default
+        value = data[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(f"{where}.{key}", f"must be a number, not {value!r}")
+        value = float(value)
+        if not math.isfinite(value):
+            self.fail(f"{where}.{key}", "must be finite")
+        if positive and value <= 0:
+            self.fail(f"{where}.{key}", f"must be positive, not {value:g}")
+        if minimum is not None and value < minimum:
+            self.fail(f"{where}.{key}", f"must be at least {minimum:g}, not {value:g}")
+        if maximum is not None and value > maximum:
+            self.fail(f"{where}.{key}", f"must be at most {maximum:g}, not {value:g}")
+        return value
+
+    def length(self, data, key, where, **kwargs) -> float:
+        value = self.number(data, key, where, **kwargs)
+        return None if value is None else value * self.scale
+
+    def vector(
+        self, data, key, where, *, required=True, default=None, length=True, size=3
+    ) -> np.ndarray:
+        if key not in data or data[key] is None:
+            if required:
+                self.fail(where, f"missing field {key!r}")
+            return default
+        value = data[key]
+        ok = (
+            isinstance(value, list)
+            and len(value) == size
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+        )
+        if not ok:
+            self.fail(f"{where}.{key}", f"must be a list of {size} numbers, not {value!r}")
+        array = np.array(value, dtype=np.float64)
+        if not np.all(np.isfinite(array)):
+            self.fail(f"{where}.{key}", "must be finite")
+        return array * self.scale if length else array
+
+    def direction(self, data, key, where, *, required=True, default=None) -> np.ndarray:
+        vector = self.vector(data, key, where, required=required, default=None, length=False)
+        if vector is None:
+            return default
+        norm = float(np.linalg.norm(vector))
+        if norm == 0.0:
+            self.fail(f"{where}.{key}", "must not be the zero vector")
+        return vector / norm
+
+    def text(self, data, key, where, *, required=False, default=None) -> str | None:
+        if key not in data or data[key] is None:
+            if required:
+                self.fail(where, f"missing field {key!r}")
+            return default
+        value = data[key]
+        if not isinstance(value, str) or not value.strip():
+            self.fail(f"{where}.{key}", f"must be a non-empty string, not {value!r}")
+        return value
+
+    def radius(self, data, where) -> float:
+        keys = [k for k in ("radius", "diameter", "od") if k in data]
+        if len(keys) != 1:
+            self.fail(where, "give exactly one of 'radius', 'diameter' or 'od'")
+        value = self.length(data, keys[0], where, positive=True)
+        return value if keys[0] == "radius" else 0.5 * value
+
+
+def _load_mesh(reader: _Reader, geo, where) -> tuple[np.ndarray, np.ndarray]:
+    if "file" in geo:
+        name = reader.text(geo, "file", where, required=True)
+        path = Path(name)
+        if not path.is_absolute():
+            path = reader.base_dir / path
+        try:
+            import trimesh
+
+            mesh = trimesh.load(str(path), force="mesh")
+        except Exception as exc:  # trimesh raises many kinds for unreadable files
+            reader.fail(f"{where}.file", f"cannot load mesh {str(path)!r} ({exc})")
+        vertices = np.asarray(mesh.vertices, dtype=np.float64)
+        faces = np.asarray(mesh.faces, dtype=np.int64)
+    else:
+        vertices = geo.get("vertices")
+        faces = geo.get("faces")
+        if vertices is None or faces is None:
+            reader.fail(where, "a mesh needs 'file' or both 'vertices' and 'faces'")
+        try:
+            vertices = np.array(vertices, dtype=np.float64)
+            faces = np.array(faces, dtype=np.int64)
+        except (TypeError, ValueError):
+            reader.fail(where, "'vertices' must be [[x, y, z], ...] and 'faces' [[i, j, k], ...]")
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or len(vertices) < 4:
+        reader.fail(f"{where}.vertices", "needs at least 4 vertices of 3 coordinates")
+    if not np.all(np.isfinite(vertices)):
+        reader.fail(f"{where}.vertices", "must be finite")
+    if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) < 4:
+        reader.fail(f"{where}.faces", "needs at least 4 triangles of 3 vertex indices")
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        reader.fail(f"{where}.faces", "must index the vertices (0-based)")
+    scale = reader.number(geo, "scale", where, default=1.0, positive=True)
+    vertices = vertices * scale * reader.scale
+    translate = reader.vector(geo, "translate", where, required=False, default=np.zeros(3))
+    return vertices + translate, faces
+
+
+def _cylinder_object(start, end, radius) -> tuple[Shape, Primitive]:
+    axis = end - start
+    length = float(np.linalg.norm(axis))
+    shape = CylinderShape(start=start, end=end, radius=radius)
+    truth = Cylinder(center=0.5 * (start + end), axis=axis / length, radius=radius, length=length)
+    return shape, truth
+
+
+def _box_object(center, axes, size) -> tuple[Shape, Primitive]:
+    truth = Cuboid(center=center, axes=axes, size=size)
+    return BoxShape(center=truth.center, axes=truth.axes, size=truth.size), truth
+
+
+def _geometry(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
+    """Expand one geometry into one or more pieces ``{id, shape, truth, scan?}``."""
+    kind = geo.get("type")
+    if kind not in GEOMETRY_TYPES:
+        reader.fail(
+            f"{where}.type",
+            f"unknown geometry type {kind!r}; use one of " + ", ".join(GEOMETRY_TYPES),
+        )
+    if kind == "cylinder":
+        start = reader.vector(geo, "start", where)
+        end = reader.vector(geo, "end", where)
+        if np.linalg.norm(end - start) <= 0:
+            reader.fail(where, "'start' and 'end' must differ")
+        return [
+            dict(zip(("shape", "truth"), _cylinder_object(start, end, reader.radius(geo, where))))
+        ]
+    if kind == "tank":
+        base = reader.vector(geo, "base", where)
+        height = reader.length(geo, "height", where, positive=True, required=True)
+        top = base + np.array([0.0, 0.0, height])
+        return [
+            dict(zip(("shape", "truth"), _cylinder_object(base, top, reader.radius(geo, where))))
+        ]
+    if kind == "pipe_run":
+        return _pipe_run(reader, geo, where, obj_id)
+    if kind == "sphere":
+        center = reader.vector(geo, "center", where)
+        radius = reader.radius(geo, where)
+        return [
+            {
+                "shape": SphereShape(center=center, radius=radius),
+                "truth": Sphere(center=center, radius=radius),
+            }
+        ]
+    if kind == "box":
+        center = reader.vector(geo, "center", where)
+        size = reader.vector(geo, "size", where)
+        if np.any(size <= 0):
+            reader.fail(f"{where}.size", "every size must be positive")
+        if "axes" in geo:
+            axes = (
+                np.array(geo["axes"], dtype=np.float64) if isinstance(geo["axes"], list) else None
+            )
+            if axes is None or axes.shape != (3, 3) or not np.all(np.isfinite(axes)):
+                reader.fail(f"{where}.axes", "must be three [x, y, z] rows")
+            axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
+            if np.abs(axes @ axes.T - np.eye(3)).max() > 1e-6:
+                reader.fail(f"{where}.axes", "rows must be mutually perpendicular")
+        else:
+            angles = [
+                reader.number(geo, k, where, default=0.0)
+                for k in ("yaw_deg", "pitch_deg", "roll_deg")
+            ]
+            axes = rotation_zyx(*angles)
+        shape, truth = _box_object(center, axes, size)
+        return [{"shape": shape, "truth": truth}]
+    if kind == "member":
+        start = reader.vector(geo, "start", where)
+        end = reader.vector(geo, "end", where)
+        length = float(np.linalg.norm(end - start))
+        if length <= 0:
+            reader.fail(where, "'start' and 'end' must differ")
+        section = reader.vector(geo, "section", where, size=2)
+        if np.any(section <= 0):
+            reader.fail(f"{where}.section", "width and depth must be positive")
+        axes = member_axes(start, end, reader.number(geo, "roll_deg", where, default=0.0))
+        size = np.array([length, section[0], section[1]])
+        shape, truth = _box_object(0.5 * (start + end), axes, size)
+        return [{"shape": shape, "truth": truth}]
+    if kind == "plate":
+        center = reader.vector(geo, "center", where)
+        normal = reader.direction(geo, "normal", where)
+        up = reader.direction(geo, "up", where, required=False)
+        size = reader.vector(geo, "size", where, size=2)
+        if np.any(size <= 0):
+            reader.fail(f"{where}.size", "width and height must be positive")
+        thickness = reader.length(geo, "thickness", where, positive=True, default=0.01)
+        try:
+            axes = plate_axes(normal, up)
+        except ValueError as exc:
+            reader.fail(f"{where}.up", str(exc))
+        box = BoxShape(center=center, axes=axes, size=np.array([size[0], size[1], thickness]))
+        face = center + 0.5 * thickness * axes[2]
+        half = 0.5 * size
+        outline = np.array(
+            [
+                face + sx * half[0] * axes[0] + sy * half[1] * axes[1]
+                for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))
+            ]
+        )
+        return [{"shape": box, "truth": Plane(point=face, normal=axes[2], outline=outline)}]
+    if kind == "frustum":
+        start = reader.vector(geo, "start", where)
+        end = reader.vector(geo, "end", where)
+        if np.linalg.norm(end - start) <= 0:
+            reader.fail(where, "'start' and 'end' must differ")
+        r0 = 0.5 * reader.length(geo, "start_diameter", where, positive=True, required=True)
+        r1 = 0.5 * reader.length(geo, "end_diameter", where, positive=True, required=True)
+        vertices, faces = frustum_mesh(start, end, r0, r1)
+        return [
+            {
+                "shape": MeshShape(vertices=vertices, faces=faces),
+                "truth": Hull(vertices=vertices, faces=faces),
+            }
+        ]
+    if kind == "mesh":
+        vertices, faces = _load_mesh(reader, geo, where)
+        return [
+            {
+                "shape": MeshShape(vertices=vertices, faces=faces),
+                "truth": Hull(vertices=vertices, faces=faces),
+            }
+        ]
+    # ground: an unbounded plane (floor or far wall) that only catches beams
+    point = reader.vector(geo, "point", where, required=False, default=np.zeros(3))
+    normal = reader.direction(
+        geo, "normal", where, required=False, default=np.array([0.0, 0.0, 1.0])
+    )
+    return [
+        {
+            "shape": PlaneShape(point=point, normal=normal),
+            "truth": Plane(point=point, normal=normal),
+            "scan": False,
+            "ground": True,
+        }
+    ]
+
+
+def _pipe_run(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
+    """A polyline pipe: straight cylinders stopping short of each corner by the elbow's
+    centre-to-end, plus (unscanned) elbow meshes at the corners."""
+    raw = geo.get("path")
+    if not isinstance(raw, list) or len(raw) < 2:
+        reader.fail(f"{where}.path", "must be a list of at least 2 points")
+    path = np.array([reader.vector({"p": p}, "p", f"{where}.path[{i}]") for i, p in enumerate(raw)])
+    radius = reader.radius(geo, where)
+    bend = reader.length(geo, "bend_radius", where, positive=True, default=3.0 * radius)
+    ids = geo.get("ids")
+    count = len(path) - 1
+    if ids is None:
+        ids = [f"{obj_id}-{i + 1}" for i in range(count)]
+    elif not (
+        isinstance(ids, list) and len(ids) == count and all(isinstance(i, str) and i for i in ids)
+    ):
+        reader.fail(f"{where}.ids", f"must be a list of {count} names, one per straight")
+    elbows = geo.get("elbows", True)
+    cut = np.zeros((count, 2))
+    for k in range(1, count):
+        d_in = path[k] - path[k - 1]
+        d_out = path[k + 1] - path[k]
+        if np.linalg.norm(d_in) == 0 or np.linalg.norm(d_out) == 0:
+            reader.fail(f"{where}.path[{k}]", "repeats the previous point")
+        c = d_in @ d_out / (np.linalg.norm(d_in) * np.linalg.norm(d_out))
+        angle = float(np.arccos(np.clip(c, -1.0, 1.0)))
+        if angle > np.radians(179.0):
+            reader.fail(f"{where}.path[{k}]", "the run turns back on itself")
+        setback = bend * np.tan(angle / 2)
+        cut[k - 1, 1] = setback
+        cut[k, 0] = setback
+    pieces = []
+    for k in range(count):
+        d = path[k + 1] - path[k]
+        length = float(np.linalg.norm(d))
+        if length <= 0:
+            reader.fail(f"{where}.path[{k + 1}]", "repeats the previous point")
+        u = d / length
+        if cut[k].sum() >= length - 1e-6:
+            reader.fail(
+                f"{where}.path[{k + 1}]",
+                "straight is shorter than its elbows' centre-to-end; lengthen it or "
+                "reduce bend_radius",
+            )
+        start = path[k] + cut[k, 0] * u
+        end = path[k + 1] - cut[k, 1] * u
+        shape, truth = _cylinder_object(start, end, radius)
+        pieces.append({"id": ids[k], "shape": shape, "truth": truth})
+    if elbows:
+        for k in range(1, count):
+            if cut[k, 0] <= 1e-9:
+                continue
+            vertices, faces = torus_segment_mesh(path[k], path[k - 1], path[k + 1], bend, radius)
+            pieces.append(
+                {
+                    "id": f"{obj_id}-E{k}",
+                    "shape": MeshShape(vertices=vertices, faces=faces),
+                    "truth": Hull(vertices=vertices, faces=faces),
+                    "scan": False,
+                    "kind": None,
+                }
+            )
+    return pieces
+
+
+def _station(reader: _Reader, data, where) -> Station:
+    if not isinstance(data, dict):
+        reader.fail(where, "must be an object with at least 'position'")
+    return Station(
+        id=reader.text(data, "id", where, default=None) or where,
+        position=reader.vector(data, "position", where),
+        range_sigma=reader.length(
+            data, "range_sigma", where, minimum=0.0, default=0.002 / reader.scale
+        ),
+        angular_sigma=math.radians(
+            reader.number(data, "angular_sigma_deg", where, minimum=0.0, default=0.01)
+        ),
+        dropout=reader.number(data, "dropout", where, minimum=0.0, maximum=0.9, default=0.0),
+        mixed_return=reader.number(
+            data, "mixed_return", where, minimum=0.0, maximum=1.0, default=0.3
+        ),
+        beam_divergence=1e-3
+        * reader.number(data, "beam_divergence_mrad", where, minimum=0.0, default=0.5),
+        spot_diameter=reader.length(
+            data, "spot_diameter", where, minimum=0.0, default=0.003 / reader.scale
+        ),
+        max_range=reader.length(
+            data, "max_range", where, positive=True, default=100.0 / reader.scale
+        ),
+    )
+
+
+def scene_from_dict(doc, *, source: str | None = None, base_dir=None) -> Scene:
+    """Validate a parsed scene document and build the :class:`Scene` (metres inside).
+
+    Parameters
+    ----------
+    doc : dict
+        The parsed JSON (see ``docs/scene-format.md``).
+    source : str, optional
+        File name for messages.
+    base_dir : str or Path, optional
+        Directory that relative mesh file names are resolved against.
+    """
+    if not isinstance(doc, dict):
+        raise SceneError("the top level must be a JSON object", source=source)
+    if doc.get("format", "asbuilt-scene") != "asbuilt-scene":
+        raise SceneError(
+            f"format is {doc.get('format')!r}, expected 'asbuilt-scene'",
+            source=source,
+            where="format",
+        )
+    if doc.get("version", 1) != 1:
+        raise SceneError(
+            f"version {doc.get('version')!r} is not supported; use 1",
+            source=source,
+            where="version",
+        )
+    units = doc.get("units", "m")
+    if units not in UNITS:
+        raise SceneError(
+            f"unknown unit {units!r}; use one of " + ", ".join(UNITS), source=source, where="units"
+        )
+    reader = _Reader(source, UNITS[units], base_dir)
+
+    stations_doc = doc.get("stations")
+    if not isinstance(stations_doc, list) or not stations_doc:
+        reader.fail("stations", "give a list with at least one station (its 'position')")
+    stations = tuple(_station(reader, s, f"stations[{i}]") for i, s in enumerate(stations_doc))
+    station_ids = [s.id for s in stations]
+    if len(set(station_ids)) != len(station_ids):
+        reader.fail("stations", "station ids must be unique")
+
+    default_points = doc.get("points", DEFAULT_POINTS)
+    if (
+        isinstance(default_points, bool)
+        or not isinstance(default_points, int)
+        or default_points < 1
+    ):
+        reader.fail("points", f"must be a positive integer, not {default_points!r}")
+    seed = doc.get("seed")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
+        reader.fail("seed", f"must be a non-negative integer, not {seed!r}")
+
+    objects_doc = doc.get("objects")
+    if not isinstance(objects_doc, list) or not objects_doc:
+        reader.fail("objects", "give a list with at least one object")
+    objects: list[SceneObject] = []
+    links: list[tuple[str, str]] = []
+    for i, data in enumerate(objects_doc):
+        where = f"objects[{i}]"
+        if not isinstance(data, dict):
+            reader.fail(where, "must be a JSON object")
+        obj_id = reader.text(data, "id", where, required=True)
+        where = f"objects[{i}] ({obj_id})"
+        scan = data.get("scan", True)
+        if not isinstance(scan, bool):
+            reader.fail(f"{where}.scan", f"must be true or false, not {scan!r}")
+        kind = data.get("kind")
+        if kind is not None and kind not in KINDS:
+            reader.fail(f"{where}.kind", f"unknown kind {kind!r}; use one of " + ", ".join(KINDS))
+        if scan and kind is None:
+            reader.fail(
+                where,
+                "missing field 'kind' (the kind the operator says); or set "
+                '"scan": false for background geometry',
+            )
+        geo = data.get("geometry")
+        if not isinstance(geo, dict):
+            reader.fail(where, "missing field 'geometry' (an object with a 'type')")
+        pieces = _geometry(reader, geo, f"{where}.geometry", obj_id)
+        if scan and any(p.get("ground") for p in pieces):
+            reader.fail(
+                f"{where}.scan",
+                "an unbounded ground plane cannot be scanned; use a "
+                "'plate' geometry or set \"scan\": false",
+            )
+        points = data.get("points", default_points)
+        if isinstance(points, bool) or not isinstance(points, int) or points < 1:
+            reader.fail(f"{where}.points", f"must be a positive integer, not {points!r}")
+        if scan and points < MIN_POINTS[kind]:
+            reader.fail(f"{where}.points", f"a {kind} needs at least {MIN_POINTS[kind]} points")
+        station = data.get("station", stations[0].id)
+        if station not in station_ids:
+            reader.fail(
+                f"{where}.station",
+                f"unknown station {station!r}; stations are " + ", ".join(station_ids),
+            )
+        strings = {k: reader.text(data, k, where) for k in ("group", "label", "nominal")}
+        scanned_ids = []
+        for piece in pieces:
+            piece_scan = scan and piece.get("scan", True)
+            piece_id = piece.get("id", obj_id)
+            objects.append(
+                SceneObject(
+                    id=piece_id,
+                    kind=piece.get("kind", kind),
+                    shape=piece["shape"],
+                    truth=piece["truth"],
+                    points=points,
+                    scan=piece_scan,
+                    station=station,
+                    index=len(objects),
+                    **strings,
+                )
+            )
+            if piece_scan:
+                scanned_ids.append(piece_id)
+        links.extend(zip(scanned_ids[:-1], scanned_ids[1:]))
+    ids = [o.id for o in objects]
+    seen = set()
+    for obj in objects:
+        if obj.id in seen:
+            reader.fail(
+                f"objects ({obj.id})",
+                "object ids must be unique (pipe runs add '-1', '-2', ... to their id)",
+            )
+        seen.add(obj.id)
+    links_doc = doc.get("links", [])
+    if not isinstance(links_doc, list):
+        reader.fail("links", "must be a list of [id, id] pairs")
+    for k, pair in enumerate(links_doc):
+        if not (isinstance(pair, list) and len(pair) == 2 and all(p in ids for p in pair)):
+            reader.fail(f"links[{k}]", f"must be a pair of object ids, not {pair!r}")
+        links.append((pair[0], pair[1]))
+    known = {"format", "version", "units", "name", "seed", "points", "stations", "objects", "links"}
+    return Scene(
+        units=units,
+        stations=stations,
+        objects=tuple(objects),
+        links=tuple(links),
+        name=doc.get("name") if isinstance(doc.get("name"), str) else None,
+        seed=seed,
+        source=source,
+        extra={k: v for k, v in doc.items() if k not in known},
+    )
