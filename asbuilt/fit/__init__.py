@@ -1,1 +1,175 @@
-"""fit"""
+"""Fitting: one primitive per scan object, chosen by the object's ``kind``.
+
+This module only dispatches; each primitive's algorithm lives in its own module and is imported
+on first use: :func:`asbuilt.fit.plane.fit_plane`, :func:`asbuilt.fit.sphere.fit_sphere`,
+:func:`asbuilt.fit.cylinder.fit_cylinder`, :func:`asbuilt.fit.cuboid.fit_cuboid`,
+:func:`asbuilt.fit.hull.fit_hull` and :func:`asbuilt.fit.auto.fit_auto` (each
+``(points (n, 3) m, *, sigma=None, tolerances=DEFAULT_TOLERANCES) -> FitResult``).
+
+>>> import asbuilt                                 # doctest: +SKIP
+>>> report = asbuilt.fit(asbuilt.load_scan("samples/spool.json"))
+>>> report.get("P1").result.primitive.radius     # metres
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from importlib import import_module
+
+import numpy as np
+
+from asbuilt.errors import FitError, located
+from asbuilt.fit.result import FitReport, FitResult, ObjectFit
+from asbuilt.primitives import as_points
+from asbuilt.scan.model import KINDS, Scan, ScanObject
+from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
+
+__all__ = ["FITTERS", "fit", "fit_object", "fit_points", "FitResult", "ObjectFit", "FitReport"]
+
+#: kind -> (module, function) of the fit that handles it; imported lazily by :func:`fitter_for`.
+FITTERS: dict[str, tuple[str, str]] = {
+    "plane": ("asbuilt.fit.plane", "fit_plane"),
+    "sphere": ("asbuilt.fit.sphere", "fit_sphere"),
+    "cylinder": ("asbuilt.fit.cylinder", "fit_cylinder"),
+    "cuboid": ("asbuilt.fit.cuboid", "fit_cuboid"),
+    "hull": ("asbuilt.fit.hull", "fit_hull"),
+    "auto": ("asbuilt.fit.auto", "fit_auto"),
+}
+
+#: Called after each object is fitted with (objects done, objects in all, object id).
+Progress = Callable[[int, int, str], None]
+
+
+def fitter_for(kind: str) -> Callable[..., FitResult]:
+    """The fit function for ``kind`` (one of :data:`asbuilt.scan.KINDS`).
+
+    Raises
+    ------
+    FitError
+        ``kind`` is not a known kind.
+    """
+    try:
+        module, name = FITTERS[kind]
+    except (KeyError, TypeError):
+        raise FitError(
+            f"unknown kind {kind!r}; use one of {', '.join(KINDS)}", where="kind"
+        ) from None
+    return getattr(import_module(module), name)
+
+
+def fit_points(
+    kind: str,
+    points,
+    *,
+    sigma: float | None = None,
+    tolerances: Tolerances = DEFAULT_TOLERANCES,
+) -> FitResult:
+    """Fit one primitive of ``kind`` to points.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`asbuilt.scan.KINDS`; ``"auto"`` lets :func:`asbuilt.fit.auto.fit_auto`
+        choose.
+    points : array_like, shape (n, 3), metres
+        Measured points.
+    sigma : float, optional, metres
+        Range noise of the sensor; when None the fit estimates it from its residuals.
+    tolerances : Tolerances
+        Numerical tolerances passed to the fit.
+
+    Returns
+    -------
+    FitResult
+        The primitive (metres), residuals shape (n,) metres, inliers shape (n,) bool and
+        standard errors. The algorithm is the one documented by the kind's fit function (and
+        named in ``FitResult.method``).
+
+    Raises
+    ------
+    FitError
+        Unknown kind, or the points cannot define the primitive.
+    """
+    function = fitter_for(kind)
+    try:
+        array = as_points(points)
+    except ValueError as exc:
+        raise FitError(str(exc), where="points") from None
+    return function(np.array(array), sigma=sigma, tolerances=tolerances)
+
+
+def fit_object(
+    obj: ScanObject,
+    *,
+    sigma: float | None = None,
+    tolerances: Tolerances = DEFAULT_TOLERANCES,
+) -> ObjectFit:
+    """Fit the primitive a scan object asks for.
+
+    Parameters
+    ----------
+    obj : ScanObject
+        Its ``points`` shape (n, 3) metres and ``kind``.
+    sigma : float, optional, metres
+        Sensor range noise (usually ``scan.sensor.range_sigma``).
+    tolerances : Tolerances
+        Numerical tolerances.
+
+    Returns
+    -------
+    ObjectFit
+        The object, its :class:`FitResult` and the requested kind.
+
+    Raises
+    ------
+    FitError
+        Located at the object, e.g. ``objects[2] (P3): <why the fit failed>``.
+    """
+    try:
+        result = fit_points(obj.kind, obj.points, sigma=sigma, tolerances=tolerances)
+    except FitError as exc:
+        raise FitError(
+            exc.message, source=exc.source, where=located(None, obj.where, exc.where)
+        ) from exc
+    return ObjectFit(object=obj, result=result, requested=obj.kind)
+
+
+def fit(
+    scan: Scan,
+    tolerances: Tolerances = DEFAULT_TOLERANCES,
+    *,
+    progress: Progress | None = None,
+) -> FitReport:
+    """Fit every object of a scan, in the scan's order.
+
+    Parameters
+    ----------
+    scan : Scan
+        A loaded scan (points in metres); ``scan.sensor.range_sigma`` (metres), when given, is
+        the noise level every fit uses.
+    tolerances : Tolerances
+        Numerical tolerances.
+    progress : callable, optional
+        Called as ``progress(done, total, object_id)`` after each object (for progress bars).
+
+    Returns
+    -------
+    FitReport
+        One :class:`ObjectFit` per object.
+
+    Raises
+    ------
+    FitError
+        Located at the scan file and object: ``scan.json: objects[2] (P3): ...``.
+    """
+    sigma = scan.sensor.range_sigma
+    fits = []
+    total = len(scan.objects)
+    for done, obj in enumerate(scan.objects, start=1):
+        try:
+            fits.append(fit_object(obj, sigma=sigma, tolerances=tolerances))
+        except FitError as exc:
+            raise FitError(exc.message, source=scan.source, where=exc.where) from exc
+        if progress is not None:
+            progress(done, total, obj.id)
+    return FitReport(scan=scan, fits=tuple(fits))

@@ -1,0 +1,98 @@
+"""``asbuilt fit SCAN [--json] [--units U] [--output FILE]``: fit every object and show the result.
+
+A table by default (id, kind, main dimensions, centre, RMS, inliers, standard errors); ``--json``
+prints the shape documented in :mod:`asbuilt.fit.output`, lengths in the scan's units unless
+``--units`` says otherwise; ``--output FILE`` writes that JSON atomically to FILE instead of
+standard output. Progress goes to standard error.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from asbuilt.units import UNITS
+
+__all__ = ["register", "run"]
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``fit`` subcommand to ``subparsers``."""
+    parser = subparsers.add_parser(
+        "fit",
+        help="fit a primitive to every object of a scan and show the dimensions",
+        description="Fit a cylinder, cuboid, sphere, plane or hull to every object of an "
+        "asbuilt-scan file (docs/scan-format.md) and show the result.",
+        epilog="Example: asbuilt fit samples/spool.json --json --units mm",
+    )
+    parser.add_argument("scan", metavar="SCAN", help="the asbuilt-scan JSON file")
+    parser.add_argument(
+        "--json", action="store_true", help="print the results as JSON instead of a table"
+    )
+    parser.add_argument(
+        "--units",
+        choices=tuple(UNITS),
+        default=None,
+        help="length unit of the output (default: the scan's own unit)",
+    )
+    parser.add_argument(
+        "--output",
+        "-o",
+        metavar="FILE",
+        default=None,
+        help="write the JSON to FILE (atomically) instead of standard output",
+    )
+    parser.set_defaults(handler=run)
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    """Load, fit, print; return the exit code (0). Bad input raises an AsbuiltError (exit 2)."""
+    import json
+    import sys
+
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+    from rich.table import Table
+
+    from asbuilt.atomic import atomic_write
+    from asbuilt.fit import fit
+    from asbuilt.fit.output import TABLE_COLUMNS, fit_report_to_dict, fit_table_rows
+    from asbuilt.scan import load_scan
+
+    scan = load_scan(args.scan)
+    err = Console(file=sys.stderr)
+    with Progress(
+        TextColumn("fitting"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.description}"),
+        console=err,
+        transient=True,
+        disable=not err.is_terminal,
+    ) as bar:
+        task = bar.add_task("", total=len(scan.objects))
+        report = fit(
+            scan,
+            progress=lambda done, total, oid: bar.update(task, completed=done, description=oid),
+        )
+
+    units = args.units or scan.units
+    if args.json or args.output:
+        text = json.dumps(fit_report_to_dict(report, units), indent=2, ensure_ascii=False) + "\n"
+        if args.output:
+            with atomic_write(args.output, "w") as handle:
+                handle.write(text)
+            err.print(f"wrote {args.output}", highlight=False)
+        else:
+            sys.stdout.write(text)
+        if args.json:
+            return 0
+
+    title = scan.name or args.scan
+    table = Table(title=f"{title}: {len(report)} object{'s' if len(report) != 1 else ''}")
+    for column in TABLE_COLUMNS:
+        table.add_column(column, no_wrap=column in ("id", "kind", "inliers"))
+    for row in fit_table_rows(report, units):
+        table.add_row(*row)
+    Console(file=sys.stdout, highlight=False).print(table)
+    return 0

@@ -1,0 +1,540 @@
+"""Read and validate ``asbuilt-scan`` version 1 documents (JSON) into :class:`~asbuilt.scan.model.Scan`.
+
+The file format is described in ``docs/scan-format.md`` and, as a JSON Schema, by
+:func:`asbuilt.scan.schema.scan_schema`; both are built from the constants in this module.
+
+Every problem a user can cause raises :class:`~asbuilt.errors.ScanError` (or
+:class:`~asbuilt.errors.ScanReadError` when the file cannot be read at all) with one line that
+names the file, the place in it and what to do, e.g.
+``scan.json: objects[3] (P4).points[17]: coordinate is NaN``.
+
+Points are converted with numpy in one go; only when that conversion finds something wrong does
+a Python loop walk the offending array to name the first bad entry.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping
+from types import MappingProxyType
+
+import numpy as np
+
+from asbuilt.errors import ScanError, ScanReadError, located
+from asbuilt.scan.model import KINDS, Scan, ScanObject, Sensor
+from asbuilt.tolerances import MIN_POINTS
+from asbuilt.units import UNITS
+
+__all__ = [
+    "FORMAT",
+    "VERSION",
+    "MAX_FILE_BYTES",
+    "MAX_POINTS",
+    "IDENTICAL_RTOL",
+    "COLLINEAR_RTOL",
+    "TOP_LEVEL_KEYS",
+    "OBJECT_KEYS",
+    "load_scan",
+    "loads_scan",
+]
+
+#: The ``format`` value every scan file carries.
+FORMAT = "asbuilt-scan"
+#: The only ``version`` this code reads.
+VERSION = 1
+#: Largest scan file accepted (checked with ``stat`` before parsing): 64 MiB is ~1.5 million
+#: points of JSON, far beyond a sparse scan of 20-40 shots per object.
+MAX_FILE_BYTES = 64 * 1024 * 1024
+#: Most points (all objects together) a scan may hold.
+MAX_POINTS = 1_000_000
+#: Points whose spread (largest singular value of the centred points) is below this fraction of
+#: their coordinate magnitude (at least 1 m) are taken as all identical.
+IDENTICAL_RTOL = 1e-9
+#: Points whose second singular value is below this fraction of the first lie on a line.
+COLLINEAR_RTOL = 1e-6
+
+#: Top-level keys the format defines; any other key is kept in ``Scan.extra`` and ignored.
+TOP_LEVEL_KEYS = ("format", "version", "units", "name", "sensor", "objects", "links")
+#: Object keys the format defines; any other key is kept in ``ScanObject.extra``.
+OBJECT_KEYS = ("id", "kind", "points", "group", "label", "nominal", "measurements")
+
+_UNITS_TEXT = ", ".join(UNITS)
+_KINDS_TEXT = ", ".join(KINDS)
+
+
+def _describe(value) -> str:
+    """A short phrase for a JSON value in messages: ``a string ("abc")``, ``null``, ``an array``."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        shown = value if len(value) <= 20 else value[:17] + "..."
+        return f"a string ({json.dumps(shown)})"
+    if isinstance(value, list):
+        return "an array"
+    if isinstance(value, dict):
+        return "an object"
+    return repr(value)
+
+
+def _shown(value) -> str:
+    """A value as it would appear in the file when it is text, else :func:`_describe`."""
+    return json.dumps(value) if isinstance(value, str) else _describe(value)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _article(kind: str) -> str:
+    return "an object" if kind == "auto" else f"a {kind}"
+
+
+def _size_text(n_bytes: int) -> str:
+    return f"{n_bytes / (1024 * 1024):.1f} MiB"
+
+
+class _Context:
+    """What every check needs to raise a located error: the source and a fast-path flag."""
+
+    def __init__(self, source: str | None, may_hold_bools: bool):
+        self.source = source
+        self.may_hold_bools = may_hold_bools
+
+    def error(self, where: str | None, message: str) -> ScanError:
+        return ScanError(message, source=self.source, where=where)
+
+
+# --------------------------------------------------------------------------------------------
+# Reading
+
+
+def load_scan(path) -> Scan:
+    """Read and validate an ``asbuilt-scan`` file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The JSON scan file; messages name it as given.
+
+    Returns
+    -------
+    Scan
+        All lengths in metres (points shape (n, 3) per object); ``Scan.units`` is the file's unit.
+
+    Raises
+    ------
+    ScanReadError
+        The file does not exist, cannot be read, or is larger than :data:`MAX_FILE_BYTES`.
+    ScanError
+        The content is not a valid version-1 scan (one located line says where and why).
+    """
+    source = os.fspath(path)
+    try:
+        size = os.stat(source).st_size
+    except FileNotFoundError:
+        raise ScanReadError(
+            located(source, None, "file does not exist; check the path and the current directory")
+        ) from None
+    except OSError as exc:
+        raise ScanReadError(
+            located(
+                source, None, f"cannot be read ({exc.strerror}); check the path and permissions"
+            )
+        ) from None
+    if os.path.isdir(source):
+        raise ScanReadError(located(source, None, "is a directory; give the scan's JSON file"))
+    if size > MAX_FILE_BYTES:
+        raise ScanReadError(_too_large(source, size))
+    try:
+        with open(source, "rb") as handle:
+            data = handle.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        raise ScanReadError(
+            located(source, None, f"cannot be read ({exc.strerror}); check the file's permissions")
+        ) from None
+    if len(data) > MAX_FILE_BYTES:
+        raise ScanReadError(_too_large(source, len(data)))
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ScanError(
+            f"is not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
+            "save the scan as UTF-8 JSON",
+            source=source,
+        ) from None
+    return loads_scan(text, source=source)
+
+
+def _too_large(source: str | None, size: int) -> str:
+    return located(
+        source,
+        None,
+        f"is {_size_text(size)}, too large to be a sparse scan (the limit is "
+        f"{MAX_FILE_BYTES // (1024 * 1024)} MiB and {MAX_POINTS:,} points); "
+        "split it into several scans",
+    )
+
+
+def loads_scan(text: str, source: str | None = None) -> Scan:
+    """Validate an ``asbuilt-scan`` document given as JSON text.
+
+    Parameters
+    ----------
+    text : str
+        The JSON document.
+    source : str, optional
+        Name used in messages (a file path); ``Scan.source`` keeps it.
+
+    Returns
+    -------
+    Scan
+        All lengths converted to metres; points shape (n, 3) per object.
+
+    Raises
+    ------
+    ScanReadError
+        The text is larger than :data:`MAX_FILE_BYTES`.
+    ScanError
+        Malformed JSON (with line and column) or an invalid document (located, one line).
+    """
+    if len(text) > MAX_FILE_BYTES:
+        raise ScanReadError(_too_large(source, len(text)))
+    try:
+        document = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ScanError(
+            f"invalid JSON ({exc.msg}); fix the syntax there",
+            source=source,
+            where=f"line {exc.lineno} column {exc.colno}",
+        ) from None
+    except RecursionError:
+        raise ScanError("invalid JSON (nested too deeply)", source=source) from None
+    context = _Context(source, may_hold_bools="true" in text or "false" in text)
+    return _scan_from_document(document, context)
+
+
+# --------------------------------------------------------------------------------------------
+# Validation
+
+
+def _scan_from_document(document, ctx: _Context) -> Scan:
+    if not isinstance(document, dict):
+        raise ctx.error(
+            None,
+            f"the top level is {_describe(document)}; an asbuilt-scan file is a JSON object "
+            f'starting {{"format": "{FORMAT}", "version": {VERSION}, ...}}',
+        )
+    _check_format(document, ctx)
+    factor = _check_units(document, ctx)
+    name = _optional_string(document, "name", "name", ctx)
+    sensor = _sensor(document.get("sensor"), factor, ctx)
+    objects = _objects(document, factor, ctx)
+    links = _links(document.get("links"), objects, ctx)
+    extra = {key: value for key, value in document.items() if key not in TOP_LEVEL_KEYS}
+    return Scan(
+        units=document["units"],
+        objects=objects,
+        links=links,
+        name=name,
+        sensor=sensor,
+        source=ctx.source,
+        extra=MappingProxyType(extra),
+    )
+
+
+def _check_format(document: dict, ctx: _Context) -> None:
+    if "format" not in document:
+        raise ctx.error(
+            "format",
+            f'missing; this is not an asbuilt scan (start the file with "format": "{FORMAT}", '
+            f'"version": {VERSION})',
+        )
+    if document["format"] != FORMAT:
+        raise ctx.error(
+            "format",
+            f'is {_shown(document["format"])}, not "{FORMAT}"; this is not an asbuilt scan file',
+        )
+    if "version" not in document:
+        raise ctx.error("version", f'missing; add "version": {VERSION}')
+    version = document["version"]
+    if not _is_number(version):
+        raise ctx.error("version", f"must be the number {VERSION}, not {_describe(version)}")
+    if version != VERSION:
+        raise ctx.error(
+            "version",
+            f"version {version} is not supported; this asbuilt reads version {VERSION} "
+            "(upgrade asbuilt or convert the file)",
+        )
+
+
+def _check_units(document: dict, ctx: _Context) -> float:
+    if "units" not in document:
+        raise ctx.error("units", f'missing; add "units": one of {_UNITS_TEXT} (e.g. "units": "m")')
+    units = document["units"]
+    if not isinstance(units, str) or units not in UNITS:
+        raise ctx.error("units", f"unknown unit {_shown(units)}; use one of {_UNITS_TEXT}")
+    return UNITS[units]
+
+
+def _optional_string(mapping: Mapping, key: str, where: str, ctx: _Context) -> str | None:
+    value = mapping.get(key)
+    if value is None or isinstance(value, str):
+        return value
+    raise ctx.error(where, f"must be text (a JSON string), not {_describe(value)}")
+
+
+def _sensor(raw, factor: float, ctx: _Context) -> Sensor:
+    if raw is None:
+        return Sensor()
+    if not isinstance(raw, dict):
+        raise ctx.error(
+            "sensor",
+            f'must be an object like {{"position": [x, y, z], "range_sigma": 0.002}}, '
+            f"not {_describe(raw)}",
+        )
+    position = raw.get("position")
+    if position is not None:
+        if (
+            not isinstance(position, list)
+            or len(position) != 3
+            or not all(_is_number(c) and math.isfinite(float(c)) for c in position)
+        ):
+            raise ctx.error(
+                "sensor.position", "must be 3 finite numbers [x, y, z] in the file's units"
+            )
+        position = np.array(position, dtype=np.float64) * factor
+        position.setflags(write=False)
+    sigma = raw.get("range_sigma")
+    if sigma is not None:
+        if not _is_number(sigma) or not math.isfinite(float(sigma)) or sigma <= 0:
+            raise ctx.error(
+                "sensor.range_sigma",
+                f"must be a positive number (the range noise in the file's units), "
+                f"not {_describe(sigma)}",
+            )
+        sigma = float(sigma) * factor
+    return Sensor(position=position, range_sigma=sigma)
+
+
+def _objects(document: dict, factor: float, ctx: _Context) -> tuple[ScanObject, ...]:
+    if "objects" not in document:
+        raise ctx.error(
+            "objects", 'missing; add "objects": [{"id": ..., "kind": ..., "points": [...]}]'
+        )
+    raw_objects = document["objects"]
+    if not isinstance(raw_objects, list):
+        raise ctx.error("objects", f"must be an array of objects, not {_describe(raw_objects)}")
+    objects = []
+    first_index: dict[str, int] = {}
+    total = 0
+    for index, raw in enumerate(raw_objects):
+        obj = _object(index, raw, factor, ctx)
+        if obj.id in first_index:
+            raise ctx.error(
+                f"{obj.where}.id",
+                f"duplicate id {json.dumps(obj.id)} (also objects[{first_index[obj.id]}]); "
+                "give every object its own id",
+            )
+        first_index[obj.id] = index
+        total += len(obj.points)
+        if total > MAX_POINTS:
+            raise ctx.error(
+                obj.where,
+                f"the scan holds more than {MAX_POINTS:,} points, too many for a sparse scan; "
+                "split it into several scans",
+            )
+        objects.append(obj)
+    return tuple(objects)
+
+
+def _object(index: int, raw, factor: float, ctx: _Context) -> ScanObject:
+    where = f"objects[{index}]"
+    if not isinstance(raw, dict):
+        raise ctx.error(
+            where,
+            f'must be an object like {{"id": "P1", "kind": "cylinder", "points": [...]}}, '
+            f"not {_describe(raw)}",
+        )
+    object_id = raw.get("id")
+    if not isinstance(object_id, str) or not object_id:
+        what = (
+            "missing" if "id" not in raw else f"must be non-empty text, not {_describe(object_id)}"
+        )
+        raise ctx.error(f"{where}.id", f'{what}; give the object an id such as "P1"')
+    where = f"{where} ({object_id})"
+    kind = raw.get("kind")
+    if "kind" not in raw:
+        raise ctx.error(f"{where}.kind", f"missing; use one of {_KINDS_TEXT}")
+    if not isinstance(kind, str) or kind not in KINDS:
+        raise ctx.error(
+            f"{where}.kind", f"unknown kind {_shown(kind)}; use one of {_KINDS_TEXT}"
+        )
+    if "points" not in raw:
+        raise ctx.error(f"{where}.points", "missing; add the measured points [[x, y, z], ...]")
+    points = _triples(raw["points"], f"{where}.points", "point", "[x, y, z]", ctx) * factor
+    _check_spread(points, kind, f"{where}.points", ctx)
+    points.setflags(write=False)
+    measurements = None
+    if raw.get("measurements") is not None:
+        measurements = _measurements(raw["measurements"], len(points), factor, where, ctx)
+    return ScanObject(
+        id=object_id,
+        kind=kind,
+        points=points,
+        index=index,
+        group=_optional_string(raw, "group", f"{where}.group", ctx),
+        label=_optional_string(raw, "label", f"{where}.label", ctx),
+        nominal=_optional_string(raw, "nominal", f"{where}.nominal", ctx),
+        measurements=measurements,
+        extra=MappingProxyType({k: v for k, v in raw.items() if k not in OBJECT_KEYS}),
+    )
+
+
+def _triples(raw, where: str, item: str, form: str, ctx: _Context) -> np.ndarray:
+    """``raw`` (a JSON array of 3-number arrays) as a float64 array (n, 3), or a located error.
+
+    numpy converts well-formed input in one call; anything it cannot convert cleanly (ragged rows,
+    strings, nulls, booleans, NaN, infinities) is then located by :func:`_locate_bad_triple`.
+    """
+    if not isinstance(raw, list):
+        raise ctx.error(where, f"must be an array of {item}s {form}, not {_describe(raw)}")
+    if not raw:
+        return np.zeros((0, 3))
+    try:
+        array = np.array(raw)
+    except (ValueError, TypeError, OverflowError):
+        array = None
+    clean = (
+        array is not None
+        and array.ndim == 2
+        and array.shape[1] == 3
+        and array.dtype.kind in "iuf"
+        and not (ctx.may_hold_bools and _holds_bool(raw))
+    )
+    if clean:
+        array = array.astype(np.float64, copy=False)
+        clean = bool(np.isfinite(array).all())
+    if not clean:
+        _locate_bad_triple(raw, where, item, form, ctx)
+    return np.array(array, dtype=np.float64)
+
+
+def _holds_bool(raw: list) -> bool:
+    return any(type(c) is bool for row in raw for c in row)
+
+
+def _locate_bad_triple(raw: list, where: str, item: str, form: str, ctx: _Context) -> None:
+    for i, row in enumerate(raw):
+        here = f"{where}[{i}]"
+        if not isinstance(row, list):
+            raise ctx.error(
+                here, f"a {item} must be an array of 3 numbers {form}, not {_describe(row)}"
+            )
+        if len(row) != 3:
+            raise ctx.error(here, f"a {item} must be 3 numbers {form}, not {len(row)}")
+        for value in row:
+            if not _is_number(value):
+                raise ctx.error(here, f"coordinate is {_describe(value)}, not a number")
+            try:
+                number = float(value)
+            except OverflowError:
+                raise ctx.error(here, "coordinate is too large to be a length") from None
+            if math.isnan(number):
+                raise ctx.error(here, "coordinate is NaN")
+            if math.isinf(number):
+                raise ctx.error(here, "coordinate is infinite")
+    raise AssertionError(
+        f"{where}: numpy rejected the array but no entry is bad"
+    )  # pragma: no cover
+
+
+def _check_spread(points: np.ndarray, kind: str, where: str, ctx: _Context) -> None:
+    """Too few points for the kind, or all identical, or collinear: a located error."""
+    n = len(points)
+    need = MIN_POINTS[kind]
+    if n < need:
+        raise ctx.error(
+            where,
+            f"has {n} point{'s' if n != 1 else ''}; {_article(kind)} needs at least {need}; "
+            "scan more points on the object",
+        )
+    centred = points - points.mean(axis=0)
+    singular = np.linalg.svd(centred, compute_uv=False)
+    scale = max(1.0, float(np.abs(points).max()))
+    if singular[0] <= IDENTICAL_RTOL * scale:
+        raise ctx.error(
+            where,
+            f"all {n} points are identical; {_article(kind)} needs points spread across its "
+            "surface (re-aim and rescan)",
+        )
+    if singular[1] <= COLLINEAR_RTOL * singular[0]:
+        raise ctx.error(
+            where,
+            f"the points are collinear; {_article(kind)} needs points spread across its surface "
+            "(re-aim and rescan)",
+        )
+
+
+def _measurements(raw, n_points: int, factor: float, where: str, ctx: _Context) -> np.ndarray:
+    """Raw ``[pan_deg, tilt_deg, range]`` rows to (n, 3) pan rad, tilt rad, range m."""
+    here = f"{where}.measurements"
+    values = _triples(raw, here, "measurement", "[pan_deg, tilt_deg, range]", ctx)
+    if len(values) != n_points:
+        raise ctx.error(
+            here,
+            f"{len(values)} measurements for {n_points} points; give one "
+            "[pan_deg, tilt_deg, range] per point, in the same order, or leave measurements out",
+        )
+    bad = np.flatnonzero(values[:, 2] <= 0)
+    if bad.size:
+        raise ctx.error(f"{here}[{bad[0]}]", "range must be positive (in the file's units)")
+    result = np.column_stack(
+        [np.radians(values[:, 0]), np.radians(values[:, 1]), values[:, 2] * factor]
+    )
+    result.setflags(write=False)
+    return result
+
+
+def _links(raw, objects: tuple[ScanObject, ...], ctx: _Context) -> tuple[tuple[str, str], ...]:
+    if raw is None:
+        return ()
+    if not isinstance(raw, list):
+        raise ctx.error(
+            "links", f'must be an array of id pairs like [["P1", "P2"]], not {_describe(raw)}'
+        )
+    known = {obj.id for obj in objects}
+    links = []
+    for i, pair in enumerate(raw):
+        where = f"links[{i}]"
+        if (
+            not isinstance(pair, list)
+            or len(pair) != 2
+            or not all(isinstance(x, str) for x in pair)
+        ):
+            raise ctx.error(
+                where, f'must be a pair of object ids like ["P1", "P2"], not {_describe_pair(pair)}'
+            )
+        for object_id in pair:
+            if object_id not in known:
+                raise ctx.error(
+                    where,
+                    f"unknown object id {json.dumps(object_id)}; link only ids listed in objects",
+                )
+        if pair[0] == pair[1]:
+            raise ctx.error(
+                where, f"links {json.dumps(pair[0])} to itself; link two different objects"
+            )
+        links.append((pair[0], pair[1]))
+    return tuple(links)
+
+
+def _describe_pair(value) -> str:
+    if not isinstance(value, list):
+        return _describe(value)
+    if len(value) != 2:
+        return f"an array of {len(value)} item{'s' if len(value) != 1 else ''}"
+    return "[" + ", ".join(_describe(v) for v in value) + "]"
