@@ -1,0 +1,692 @@
+"""Pipe and fitting catalogs: standard sizes read from CSV files (metres inside).
+
+One CSV file per standard (``catalogs/<name>.csv``, installed as the package
+``asbuilt.catalogs``); a user's own file in the same format is accepted by path. The format
+(documented in ``docs/catalogs.md``): ``# key: value`` header lines (``name``, ``title``,
+``standard``, ``kind`` = ``pipe`` or ``fittings``, ``units`` = ``mm``/``in``/``m``, and
+optionally ``material``, ``designation``, ``fittings``, ``default_schedule``, ``note``), then a
+CSV table with a header row. Pipe tables have ``nominal``, ``od``, ``source`` and optionally
+``dn``, ``nps`` and ``wall_<SCHEDULE>`` columns; fitting tables have ``nominal``, ``source`` and
+the dimension columns of :data:`FITTING_COLUMNS`. Every row carries its ``source``.
+
+A malformed file raises :class:`~asbuilt.errors.CatalogError` naming the file, the line and
+the column.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+import io
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+from .errors import CatalogError
+from .units import UNITS
+
+__all__ = [
+    "DEFAULT_CATALOG",
+    "FITTING_COLUMNS",
+    "PipeSize",
+    "FittingSize",
+    "FittingDims",
+    "NominalHint",
+    "Catalog",
+    "catalog_names",
+    "load_catalog",
+    "parse_nominal",
+    "fitting_dims",
+]
+
+#: The catalog used when none is given.
+DEFAULT_CATALOG = "asme-b36.10m"
+
+#: Dimension columns of a fittings table (lengths in the file's units), ASME B16.9 letters:
+#: 90 degree long-radius elbow centre-to-end A (= its bend radius), 45 degree long-radius elbow
+#: centre-to-end B, 90 degree short-radius elbow centre-to-end, equal tee run C and outlet M,
+#: concentric reducer length H (by the large end).
+FITTING_COLUMNS = (
+    "elbow90_lr",
+    "elbow45_lr",
+    "elbow90_sr",
+    "tee_run",
+    "tee_outlet",
+    "reducer",
+)
+
+_HEADER_KEYS = {
+    "name",
+    "title",
+    "standard",
+    "kind",
+    "units",
+    "material",
+    "designation",
+    "fittings",
+    "default_schedule",
+    "note",
+}
+_KINDS = ("pipe", "fittings")
+_PIPE_FIXED = ("nominal", "dn", "nps", "od", "source")
+_MM = 1e-3
+
+
+@dataclass(frozen=True)
+class PipeSize:
+    """One standard pipe size.
+
+    Attributes
+    ----------
+    nominal : str
+        The catalog's designation of the size (``"4"``, ``"1 1/2"`` for NPS; ``"100"`` for DN).
+    od : float
+        Outside diameter, metres.
+    walls : Mapping[str, float]
+        Wall thickness in metres by upper-case schedule name (``"STD"``, ``"40"``, ``"10S"``...).
+    nps : float or None
+        Nominal pipe size in inches, when known.
+    dn : int or None
+        Metric nominal diameter, when known.
+    source : str
+        Where the row's numbers come from.
+    line : int
+        Line of the catalog file (for messages).
+    """
+
+    nominal: str
+    od: float
+    walls: Mapping[str, float] = field(default_factory=dict)
+    nps: float | None = None
+    dn: int | None = None
+    source: str = ""
+    line: int = 0
+
+    def wall(self, schedule: str) -> float | None:
+        """Wall thickness (metres) for ``schedule`` (case-insensitive), None when not listed."""
+        return self.walls.get(schedule.upper())
+
+
+@dataclass(frozen=True)
+class FittingSize:
+    """Butt-weld fitting dimensions for one size; every length in metres or None when absent.
+
+    See :data:`FITTING_COLUMNS` for the meaning of each dimension.
+    """
+
+    nominal: str
+    nps: float | None
+    dn: int | None
+    od: float | None
+    dims: Mapping[str, float]
+    source: str = ""
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class FittingDims:
+    """The fitting dimensions merging uses for one pipe size (metres).
+
+    ``bend_radius`` is the centre-line radius of elbows (long or short radius as asked);
+    ``tee_run``/``tee_outlet`` the equal tee's centre-to-end of run and outlet;
+    ``reducer_length`` the concentric reducer's length by its large end; ``source`` is the
+    fittings catalog's name, or ``"rule"`` when a rule of thumb stood in (see :func:`fitting_dims`);
+    ``notes`` say which values came from a rule.
+    """
+
+    bend_radius: float
+    tee_run: float
+    tee_outlet: float
+    reducer_length: float
+    source: str
+    notes: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class NominalHint:
+    """An operator's size hint parsed: ``system`` is ``"nps"``, ``"dn"`` or ``"number"``
+    (a bare number, read in the catalog's designation first), ``value`` the number."""
+
+    system: str
+    value: float
+    text: str
+
+
+@dataclass(frozen=True, eq=False)
+class Catalog:
+    """A loaded catalog: header fields and its sizes (sorted by outside diameter).
+
+    Attributes
+    ----------
+    name, title, standard, kind, material, designation : str
+    units : str
+        Unit of the file's lengths (the data here are metres).
+    fittings_name : str or None
+        Name (or path) of the fittings catalog that goes with a pipe catalog.
+    default_schedule : str or None
+    sizes : tuple of PipeSize
+        Pipe catalogs only, by increasing OD.
+    fittings : tuple of FittingSize
+        Fitting catalogs only.
+    path : str
+        The file it was read from.
+    fitting_table : Catalog or None
+        The fittings catalog loaded for a pipe catalog, if it names one.
+    note : str
+    """
+
+    name: str
+    title: str
+    standard: str
+    kind: str
+    units: str
+    material: str = ""
+    designation: str = ""
+    fittings_name: str | None = None
+    default_schedule: str | None = None
+    sizes: tuple[PipeSize, ...] = ()
+    fittings: tuple[FittingSize, ...] = ()
+    path: str = ""
+    fitting_table: Catalog | None = None
+    note: str = ""
+    schedule_columns: tuple[str, ...] = ()
+
+    @property
+    def schedules(self) -> tuple[str, ...]:
+        """Every schedule with a wall in at least one size, in column order."""
+        listed = {name for size in self.sizes for name in size.walls}
+        return tuple(name for name in self.schedule_columns if name in listed)
+
+    @property
+    def od_range(self) -> tuple[float, float]:
+        """Smallest and largest outside diameter, metres."""
+        if not self.sizes:
+            raise ValueError(f"catalog {self.name} has no pipe sizes")
+        return self.sizes[0].od, self.sizes[-1].od
+
+    def label(self, nominal: str) -> str:
+        """A display label such as ``NPS 4`` or ``DN 100``."""
+        prefix = self.designation or ""
+        return f"{prefix} {nominal}".strip()
+
+    def size(self, nominal: str) -> PipeSize:
+        """The size designated ``nominal`` (exact catalog text, or any hint :func:`parse_nominal`
+        understands); KeyError when the catalog has none."""
+        for size in self.sizes:
+            if size.nominal == nominal:
+                return size
+        found = self.match_hint(parse_nominal(nominal)) if nominal else None
+        if found is None:
+            raise KeyError(nominal)
+        return found
+
+    def match_hint(self, hint: NominalHint | None) -> PipeSize | None:
+        """The size an operator's hint names, or None (not parseable or not in the catalog)."""
+        if hint is None:
+            return None
+
+        def by_nps(value):
+            return next(
+                (s for s in self.sizes if s.nps is not None and abs(s.nps - value) < 1e-6), None
+            )
+
+        def by_dn(value):
+            return next(
+                (s for s in self.sizes if s.dn is not None and abs(s.dn - value) < 1e-6), None
+            )
+
+        if hint.system == "nps":
+            return by_nps(hint.value)
+        if hint.system == "dn":
+            return by_dn(hint.value)
+        first, second = (by_dn, by_nps) if self.designation.upper() == "DN" else (by_nps, by_dn)
+        return first(hint.value) or second(hint.value)
+
+    def wall(self, nominal: str, schedule: str) -> float | None:
+        """Wall thickness in metres of size ``nominal`` in ``schedule``; None when not listed."""
+        return self.size(nominal).wall(schedule)
+
+    def nearest(self, od: float, count: int = 2) -> tuple[PipeSize, ...]:
+        """The ``count`` sizes whose OD is nearest ``od`` (metres), nearest first."""
+        return tuple(sorted(self.sizes, key=lambda s: abs(s.od - od))[:count])
+
+    def fitting(self, size: PipeSize) -> FittingSize | None:
+        """The row of :attr:`fitting_table` for a pipe size (matched by NPS, then DN)."""
+        table = self.fitting_table
+        if table is None:
+            return None
+        for row in table.fittings:
+            if size.nps is not None and row.nps is not None and abs(row.nps - size.nps) < 1e-6:
+                return row
+        for row in table.fittings:
+            if size.dn is not None and row.dn is not None and row.dn == size.dn:
+                return row
+        return None
+
+
+# ----------------------------------------------------------------------------------------------
+# nominal sizes
+
+
+_FRACTION = re.compile(r"^(?:(\d+)[\s-]+)?(\d+)/(\d+)$")
+
+
+def _parse_number(text: str) -> float | None:
+    text = text.strip()
+    match = _FRACTION.match(text)
+    if match:
+        whole = int(match.group(1) or 0)
+        den = int(match.group(3))
+        if den == 0:
+            return None
+        return whole + int(match.group(2)) / den
+    try:
+        value = float(text)
+    except ValueError:
+        return None
+    return value if math.isfinite(value) and value > 0 else None
+
+
+def parse_nominal(text: str | None) -> NominalHint | None:
+    """Parse an operator's nominal size hint.
+
+    Understood forms: ``4"``, ``4 in``, ``4in``, ``4 inch``, ``NPS 4``, ``1 1/2"``, ``1-1/2"``,
+    ``3/4``, ``DN100``, ``DN 100``, and a bare number such as ``4`` or ``100`` (read as the
+    catalog's own designation first: NPS for ASME catalogs, DN for EN 10220). Returns None for
+    anything else.
+    """
+    if text is None:
+        return None
+    raw = str(text).strip()
+    lowered = raw.lower().replace("\u201d", '"').replace("''", '"')
+    match = re.match(r"^dn\s*(\d+(?:\.\d+)?)$", lowered)
+    if match:
+        return NominalHint("dn", float(match.group(1)), raw)
+    match = re.match(r"^nps\s*(.+)$", lowered)
+    if match:
+        value = _parse_number(match.group(1))
+        return NominalHint("nps", value, raw) if value else None
+    match = re.match(r'^(.+?)\s*(?:"|in|inch|inches)$', lowered)
+    if match:
+        value = _parse_number(match.group(1))
+        return NominalHint("nps", value, raw) if value else None
+    value = _parse_number(lowered)
+    return NominalHint("number", value, raw) if value else None
+
+
+def _nps_from_text(text: str) -> float | None:
+    return _parse_number(text)
+
+
+# ----------------------------------------------------------------------------------------------
+# loading
+
+
+def catalog_names() -> list[str]:
+    """Names of the catalogs shipped with asbuilt (pipe and fittings), sorted."""
+    root = resources.files("asbuilt.catalogs")
+    return sorted(
+        entry.name[: -len(".csv")] for entry in root.iterdir() if entry.name.endswith(".csv")
+    )
+
+
+def _looks_like_path(name: str) -> bool:
+    return name.endswith(".csv") or "/" in name or "\\" in name or Path(name).is_file()
+
+
+def load_catalog(name_or_path) -> Catalog:
+    """Load a shipped catalog by name (see :func:`catalog_names`) or a user's CSV file by path.
+
+    A pipe catalog whose header names ``fittings`` gets that fittings catalog loaded as
+    :attr:`Catalog.fitting_table` (a name, or a path relative to the catalog file).
+
+    Raises
+    ------
+    CatalogError
+        Unknown name, unreadable file, or malformed content (naming file, line and column).
+    """
+    text = str(name_or_path)
+    if isinstance(name_or_path, Path) or _looks_like_path(text):
+        return _load_path(str(Path(text).resolve()), text)
+    return _load_packaged(text)
+
+
+@functools.cache
+def _load_packaged(name: str) -> Catalog:
+    names = catalog_names()
+    if name not in names:
+        raise CatalogError(
+            f"unknown catalog {name!r}; use one of {', '.join(names)} or a CSV file path",
+            source="--catalog",
+        )
+    resource = resources.files("asbuilt.catalogs") / f"{name}.csv"
+    content = resource.read_text(encoding="utf-8")
+    catalog = parse_catalog(content, source=f"{name}.csv")
+    return _attach_fittings(catalog, base=None)
+
+
+def _load_path(resolved: str, shown: str) -> Catalog:
+    try:
+        content = Path(resolved).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise CatalogError("catalog file not found; check the path", source=shown) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CatalogError(f"cannot read the catalog ({exc})", source=shown) from None
+    catalog = parse_catalog(content, source=shown)
+    return _attach_fittings(catalog, base=Path(resolved).parent)
+
+
+def _attach_fittings(catalog: Catalog, base: Path | None) -> Catalog:
+    ref = catalog.fittings_name
+    if catalog.kind != "pipe" or not ref:
+        return catalog
+    if base is not None and (base / ref).is_file():
+        table = _load_path(str((base / ref).resolve()), str(base / ref))
+    elif _looks_like_path(ref) and base is not None:
+        raise CatalogError(
+            f"fittings catalog {ref!r} not found beside the catalog",
+            source=catalog.path,
+            where="header 'fittings'",
+        )
+    else:
+        try:
+            table = _load_packaged(ref)
+        except CatalogError:
+            raise CatalogError(
+                f"unknown fittings catalog {ref!r}; use one of {', '.join(catalog_names())}",
+                source=catalog.path,
+                where="header 'fittings'",
+            ) from None
+    if table.kind != "fittings":
+        raise CatalogError(
+            f"{ref!r} is a {table.kind} catalog, not a fittings catalog",
+            source=catalog.path,
+            where="header 'fittings'",
+        )
+    return Catalog(**{**_fields(catalog), "fitting_table": table})
+
+
+def _fields(catalog: Catalog) -> dict:
+    return {name: getattr(catalog, name) for name in catalog.__dataclass_fields__}
+
+
+def _number(cell: str, *, source: str, line: int, column: str, scale: float) -> float | None:
+    cell = cell.strip()
+    if not cell:
+        return None
+    try:
+        value = float(cell)
+    except ValueError:
+        raise CatalogError(
+            f"{cell!r} is not a number; write a plain number like 114.3",
+            source=source,
+            where=f"line {line}, column {column!r}",
+        ) from None
+    if not math.isfinite(value) or value <= 0:
+        raise CatalogError(
+            f"{cell!r} must be a positive number",
+            source=source,
+            where=f"line {line}, column {column!r}",
+        )
+    return round(value * scale, 12)
+
+
+def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
+    """Parse catalog CSV text (see the module docstring); ``source`` names it in errors."""
+    header: dict[str, str] = {}
+    table_lines: list[tuple[int, str]] = []
+    for number, line in enumerate(content.splitlines(), start=1):
+        stripped = line.strip()
+        if not stripped:
+            continue
+        if stripped.startswith("#"):
+            if table_lines:
+                continue  # comments inside the table are allowed and ignored
+            body = stripped[1:].strip()
+            if ":" not in body:
+                continue
+            key, value = (part.strip() for part in body.split(":", 1))
+            key = key.lower()
+            if key not in _HEADER_KEYS:
+                raise CatalogError(
+                    f"unknown header key {key!r}; use {', '.join(sorted(_HEADER_KEYS))}",
+                    source=source,
+                    where=f"line {number}",
+                )
+            header[key] = value
+            continue
+        table_lines.append((number, line))
+    for key in ("name", "kind", "units"):
+        if not header.get(key):
+            raise CatalogError(f"missing header line '# {key}: ...'", source=source, where="header")
+    kind = header["kind"].lower()
+    if kind not in _KINDS:
+        raise CatalogError(
+            f"kind must be pipe or fittings, not {header['kind']!r}",
+            source=source,
+            where="header 'kind'",
+        )
+    units = header["units"]
+    if units not in UNITS:
+        raise CatalogError(
+            f"units must be one of {', '.join(UNITS)}, not {units!r}",
+            source=source,
+            where="header 'units'",
+        )
+    scale = UNITS[units]
+    if not table_lines:
+        raise CatalogError("no table: add a header row and one row per size", source=source)
+    rows = list(csv.reader(io.StringIO("\n".join(text for _, text in table_lines))))
+    columns = [c.strip().lower() for c in rows[0]]
+    col_line = table_lines[0][0]
+    for required in ("nominal", "source") + (("od",) if kind == "pipe" else ()):
+        if required not in columns:
+            raise CatalogError(
+                f"missing column {required!r}", source=source, where=f"line {col_line}"
+            )
+    allowed = set(_PIPE_FIXED) | (set(FITTING_COLUMNS) if kind == "fittings" else set())
+    for column in columns:
+        if column in allowed or (kind == "pipe" and column.startswith("wall_") and len(column) > 5):
+            continue
+        raise CatalogError(
+            f"unknown column {column!r}; use nominal, dn, nps, od, source, "
+            + ("wall_<schedule>" if kind == "pipe" else ", ".join(FITTING_COLUMNS)),
+            source=source,
+            where=f"line {col_line}, column {column!r}",
+        )
+    if len(set(columns)) != len(columns):
+        raise CatalogError("a column appears twice", source=source, where=f"line {col_line}")
+
+    sizes: list[PipeSize] = []
+    fittings: list[FittingSize] = []
+    seen: dict[str, int] = {}
+    for (line_no, _), cells in zip(table_lines[1:], rows[1:]):
+        if len(cells) != len(columns):
+            raise CatalogError(
+                f"{len(cells)} cells but {len(columns)} columns",
+                source=source,
+                where=f"line {line_no}",
+            )
+        row = {col: cell.strip() for col, cell in zip(columns, cells)}
+        nominal = row["nominal"]
+        if not nominal:
+            raise CatalogError(
+                "empty nominal size", source=source, where=f"line {line_no}, column 'nominal'"
+            )
+        if nominal in seen:
+            raise CatalogError(
+                f"nominal size {nominal!r} repeats line {seen[nominal]}",
+                source=source,
+                where=f"line {line_no}, column 'nominal'",
+            )
+        seen[nominal] = line_no
+        if not row["source"]:
+            raise CatalogError(
+                "every row needs its source (standard and table it comes from)",
+                source=source,
+                where=f"line {line_no}, column 'source'",
+            )
+        dn = _number(row.get("dn", ""), source=source, line=line_no, column="dn", scale=1.0)
+        nps = None
+        if row.get("nps"):
+            nps = _parse_number(row["nps"])
+            if nps is None:
+                raise CatalogError(
+                    f"{row['nps']!r} is not a size in inches (e.g. 4 or 1 1/2)",
+                    source=source,
+                    where=f"line {line_no}, column 'nps'",
+                )
+        designation = header.get("designation", "").upper()
+        if nps is None and designation != "DN":
+            nps = _nps_from_text(nominal)
+        if dn is None and designation == "DN":
+            dn = _number(nominal, source=source, line=line_no, column="nominal", scale=1.0)
+        od = _number(row.get("od", ""), source=source, line=line_no, column="od", scale=scale)
+        if kind == "pipe":
+            if od is None:
+                raise CatalogError(
+                    "empty outside diameter", source=source, where=f"line {line_no}, column 'od'"
+                )
+            walls = {}
+            for column in columns:
+                if column.startswith("wall_"):
+                    wall = _number(
+                        row[column], source=source, line=line_no, column=column, scale=scale
+                    )
+                    if wall is not None:
+                        if wall >= od / 2:
+                            raise CatalogError(
+                                "the wall must be thinner than half the OD",
+                                source=source,
+                                where=f"line {line_no}, column {column!r}",
+                            )
+                        walls[column[5:].upper()] = wall
+            sizes.append(
+                PipeSize(
+                    nominal=nominal,
+                    od=od,
+                    walls=walls,
+                    nps=nps,
+                    dn=int(dn) if dn else None,
+                    source=row["source"],
+                    line=line_no,
+                )
+            )
+        else:
+            dims = {}
+            for column in FITTING_COLUMNS:
+                if column in row:
+                    value = _number(
+                        row[column], source=source, line=line_no, column=column, scale=scale
+                    )
+                    if value is not None:
+                        dims[column] = value
+            fittings.append(
+                FittingSize(
+                    nominal=nominal,
+                    nps=nps,
+                    dn=int(dn) if dn else None,
+                    od=od,
+                    dims=dims,
+                    source=row["source"],
+                    line=line_no,
+                )
+            )
+    if kind == "pipe":
+        if not sizes:
+            raise CatalogError("the table has no sizes", source=source)
+        sizes.sort(key=lambda s: s.od)
+        for a, b in zip(sizes, sizes[1:]):
+            if abs(a.od - b.od) < 1e-9:
+                raise CatalogError(
+                    f"sizes {a.nominal!r} (line {a.line}) and {b.nominal!r} have the same OD",
+                    source=source,
+                    where=f"line {b.line}, column 'od'",
+                )
+    default_schedule = header.get("default_schedule") or None
+    return Catalog(
+        name=header["name"],
+        title=header.get("title", ""),
+        standard=header.get("standard", ""),
+        kind=kind,
+        units=units,
+        material=header.get("material", ""),
+        designation=header.get("designation", ""),
+        fittings_name=header.get("fittings") or None,
+        default_schedule=default_schedule.upper() if default_schedule else None,
+        sizes=tuple(sizes),
+        fittings=tuple(fittings),
+        path=source,
+        note=header.get("note", ""),
+        schedule_columns=tuple(c[5:].upper() for c in columns if c.startswith("wall_")),
+    )
+
+
+# ----------------------------------------------------------------------------------------------
+# fitting dimensions
+
+
+def fitting_dims(
+    catalog: Catalog, size: PipeSize | None, od: float, elbow_radius: str = "long"
+) -> FittingDims:
+    """Fitting dimensions for one pipe size, from the catalog's fittings table or by rule.
+
+    Parameters
+    ----------
+    catalog : Catalog
+        The pipe catalog (its :attr:`Catalog.fitting_table` is used when it has the size).
+    size : PipeSize or None
+        The snapped size; None when the pipe did not snap (then only rules apply).
+    od : float
+        Outside diameter, metres (used by the rules).
+    elbow_radius : {"long", "short"}
+
+    Returns
+    -------
+    FittingDims
+        Rules of thumb where the table has no value (ASME B16.9 proportions): bend radius
+        1.5 x nominal bore long / 1.0 x short (nominal bore = NPS inches or DN mm, else the
+        OD), tee centre-to-end of run and outlet = OD, reducer length = OD of the large end.
+    """
+    if elbow_radius not in ("long", "short"):
+        raise ValueError(f"elbow_radius must be 'long' or 'short', not {elbow_radius!r}")
+    row = catalog.fitting(size) if size is not None else None
+    dims = dict(row.dims) if row is not None else {}
+    notes: list[str] = []
+    if size is not None and size.nps is not None:
+        bore = size.nps * 0.0254
+    elif size is not None and size.dn is not None:
+        bore = size.dn * _MM
+    else:
+        bore = od
+    factor = 1.5 if elbow_radius == "long" else 1.0
+    column = "elbow90_lr" if elbow_radius == "long" else "elbow90_sr"
+    radius = dims.get(column)
+    if radius is None and elbow_radius == "short" and "elbow90_lr" in dims:
+        radius = dims["elbow90_lr"]
+        notes.append("no short-radius elbow in the table for this size: long radius used")
+    if radius is None:
+        radius = factor * bore
+        notes.append(f"bend radius by rule {factor:g} x nominal bore")
+    radius = max(radius, 0.5 * od * 1.01)
+    tee_run = dims.get("tee_run")
+    tee_outlet = dims.get("tee_outlet", tee_run)
+    if tee_run is None:
+        tee_run = tee_outlet = od
+        notes.append("tee centre-to-end by rule = OD")
+    reducer = dims.get("reducer")
+    if reducer is None:
+        reducer = od
+        notes.append("reducer length by rule = large-end OD")
+    source = catalog.fitting_table.name if row is not None and catalog.fitting_table else "rule"
+    return FittingDims(
+        bend_radius=radius,
+        tee_run=tee_run,
+        tee_outlet=tee_outlet,
+        reducer_length=reducer,
+        source=source,
+        notes=tuple(notes),
+    )
