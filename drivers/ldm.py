@@ -1,0 +1,107 @@
+"""Driver for Jenoptik / ASTECH LDM41 and LDM42 laser distance meters (ASCII protocol).
+
+Protocol (LDM41 / LDM42 operating manuals): 8N1, default 9600 baud; ``DM`` CR LF measures once.
+A distance comes back in the selected output format: d ``004.996`` (metres at scale 1) or s
+``004.996 000985`` (with the signal quality 0-1024); an error as ``Exx`` CR LF, e.g. ``E15``
+(poor reflectance or too short a measuring time). The driver expects the decimal formats d or
+s at scale factor 1 (``SF``), the factory setting; any other reply is a protocol error that
+says so.
+"""
+
+from __future__ import annotations
+
+import re
+
+from asbuilt.errors import DeviceProtocolError
+
+from .rangefinder import (
+    RangeFinderCommandError,
+    RangeFinderError,
+    SignalTooWeak,
+    TemperatureError,
+)
+from .transport import LineChannel, open_port
+
+__all__ = ["LDM4x", "LDM_ERRORS"]
+
+#: Error code -> (exception class, what it means, what to do).
+LDM_ERRORS = {
+    15: (
+        SignalTooWeak,
+        "poor reflectance or too short a measuring time",
+        "aim at a brighter surface or raise the measuring time (ST)",
+    ),
+    16: (SignalTooWeak, "signal too weak or out of range", "aim at a surface or move closer"),
+    17: (
+        RangeFinderCommandError,
+        "measurement aborted or too much light",
+        "shade the target and retry",
+    ),
+    18: (RangeFinderCommandError, "measurement error", "retry; check the target"),
+    19: (TemperatureError, "temperature out of range", "bring the device into its range"),
+}
+
+_DISTANCE = re.compile(r"^([+-]?\d+\.\d+)(?:\s+(\d+))?$")
+_ERROR = re.compile(r"^E(\d{1,3})$")
+
+
+class LDM4x:
+    """A Jenoptik LDM41/42 on a serial port.
+
+    Parameters
+    ----------
+    channel : LineChannel
+        The open channel; use :meth:`open`.
+    """
+
+    def __init__(self, channel: LineChannel):
+        self.channel = channel
+        self.last_quality: int | None = None
+
+    @classmethod
+    def open(cls, url: str, *, baudrate: int = 9600, timeout: float = 3.0) -> LDM4x:
+        """Open the meter at ``url`` (8N1, default 9600 baud)."""
+        port = open_port(url, baudrate=baudrate, timeout=timeout, write_timeout=timeout)
+        return cls(LineChannel(port, f"LDM range finder on {url}", timeout))
+
+    def __enter__(self) -> LDM4x:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Close the port."""
+        self.channel.close()
+
+    def measure(self, timeout: float | None = None) -> float:
+        """One distance (``DM``), metres; :attr:`last_quality` keeps the signal quality if sent.
+
+        Raises
+        ------
+        SignalTooWeak
+            E15 / E16.
+        RangeFinderError
+            Any other ``Exx``.
+        DeviceTimeout, DeviceProtocolError
+            Silence or an unparseable reply.
+        """
+        self.channel.write("DM\r\n")
+        line = self.channel.read_line(timeout, expecting="distance reply")
+        if line.upper().startswith("DM"):
+            line = line[2:].strip() or self.channel.read_line(timeout, expecting="distance reply")
+        m = _ERROR.match(line)
+        if m:
+            code = int(m.group(1))
+            cls, meaning, action = LDM_ERRORS.get(
+                code, (RangeFinderError, "unknown error", "see the device manual")
+            )
+            raise cls(f"{self.channel.name}: E{code:02d} {meaning}; {action}", code=f"E{code:02d}")
+        m = _DISTANCE.match(line)
+        if m is None:
+            raise DeviceProtocolError(
+                f"{self.channel.name}: unexpected reply {line!r} to DM (expected e.g. 004.996); "
+                "set output format d or s and scale 1, check the baud rate"
+            )
+        self.last_quality = int(m.group(2)) if m.group(2) else None
+        return float(m.group(1))

@@ -1,0 +1,200 @@
+"""Serial transport shared by every driver: open a port by URL, read lines against a deadline.
+
+Every driver opens its port with :func:`serial.serial_for_url`, so a device path
+(``/dev/ttyUSB0``), a traffic log (``spy:///dev/ttyUSB0``), a network bridge (``socket://``,
+``rfc2217://``) or one of the simulator URLs (``sim-ptu://``, ``sim-lrf://``, see
+:mod:`asbuilt.drivers.simport`) all work. pyserial finds a URL handler by importing
+``<package>.protocol_<scheme>`` from each package in ``serial.protocol_handler_packages``;
+:func:`register_url_handlers` adds ``asbuilt.drivers`` to that list.
+
+Reads never block past an explicit deadline: a lost or silent device raises
+:class:`~asbuilt.errors.DeviceTimeout` naming the port, what was expected and what to check.
+"""
+
+from __future__ import annotations
+
+import time
+
+import serial
+
+from asbuilt.errors import DeviceError, DeviceProtocolError, DeviceTimeout
+
+__all__ = ["register_url_handlers", "open_port", "LineChannel", "SIM_SCHEMES"]
+
+#: URL schemes this package serves (pyserial lower-cases the scheme before the lookup).
+SIM_SCHEMES = ("sim-ptu", "sim-lrf")
+
+_PACKAGE = "asbuilt.drivers"
+
+
+def register_url_handlers() -> None:
+    """Let :func:`serial.serial_for_url` find the ``sim-ptu://`` and ``sim-lrf://`` handlers.
+
+    Idempotent; called by :func:`open_port` and on importing :mod:`asbuilt.drivers`.
+    """
+    if _PACKAGE not in serial.protocol_handler_packages:
+        serial.protocol_handler_packages.append(_PACKAGE)
+
+
+def open_port(
+    url: str,
+    *,
+    baudrate: int = 9600,
+    bytesize: int = 8,
+    parity: str = "N",
+    stopbits: float = 1,
+    timeout: float = 1.0,
+    write_timeout: float = 1.0,
+) -> serial.SerialBase:
+    """Open ``url`` with :func:`serial.serial_for_url` and explicit timeouts.
+
+    Parameters
+    ----------
+    url : str
+        A device path or any pyserial URL (``spy://``, ``socket://``, ``sim-ptu://``...).
+    baudrate, bytesize, parity, stopbits
+        Line settings (ignored by the simulator URLs).
+    timeout, write_timeout : float
+        Seconds; reads and writes never block longer than this.
+
+    Returns
+    -------
+    serial.SerialBase
+        The open port.
+
+    Raises
+    ------
+    DeviceError
+        The port cannot be opened (missing device, busy, unknown URL scheme).
+    """
+    register_url_handlers()
+    try:
+        return serial.serial_for_url(
+            url,
+            baudrate=baudrate,
+            bytesize=bytesize,
+            parity=parity,
+            stopbits=stopbits,
+            timeout=timeout,
+            write_timeout=write_timeout,
+        )
+    except (serial.SerialException, ValueError, OSError) as exc:
+        raise DeviceError(
+            f"{url}: cannot open the port ({exc}); check the cable, the device path and "
+            "that no other program holds it"
+        ) from None
+
+
+class LineChannel:
+    """Line-oriented ASCII exchange over an open port, with deadlines.
+
+    Replies of the devices here end with CR LF; a bare CR or LF also ends a line, so partial
+    writes, missing LFs and stray blank lines do not desynchronise the reader.
+
+    Parameters
+    ----------
+    port : serial.SerialBase
+        An open port (from :func:`open_port`).
+    name : str
+        Device name for messages (e.g. ``"pan-tilt unit on /dev/ttyUSB0"``).
+    timeout : float
+        Default seconds to wait for one reply line.
+    """
+
+    def __init__(self, port: serial.SerialBase, name: str, timeout: float = 1.0):
+        self.port = port
+        self.name = name
+        self.timeout = float(timeout)
+        self._buffer = bytearray()
+
+    def write(self, text: str) -> None:
+        """Send ``text`` (ASCII) at once; DeviceError if the port fails (cable unplugged)."""
+        try:
+            self.port.write(text.encode("ascii"))
+            self.port.flush()
+        except serial.SerialTimeoutException:
+            raise DeviceTimeout(
+                f"{self.name}: write timed out; check the cable and the device's power"
+            ) from None
+        except (serial.SerialException, OSError) as exc:
+            raise DeviceError(
+                f"{self.name}: write failed ({exc}); the cable may be unplugged"
+            ) from None
+
+    def discard_input(self) -> None:
+        """Forget buffered and pending input (stale replies, power-up banners)."""
+        self._buffer.clear()
+        try:
+            self.port.reset_input_buffer()
+        except (serial.SerialException, OSError) as exc:
+            raise DeviceError(f"{self.name}: cannot reset the input ({exc})") from None
+
+    def _pop_line(self) -> str | None:
+        while True:
+            for i, byte in enumerate(self._buffer):
+                if byte in (10, 13):
+                    raw = bytes(self._buffer[:i])
+                    del self._buffer[: i + 1]
+                    break
+            else:
+                return None
+            if raw.strip():
+                try:
+                    return raw.decode("ascii").strip()
+                except UnicodeDecodeError:
+                    raise DeviceProtocolError(
+                        f"{self.name}: received non-ASCII bytes {raw!r}; check the baud rate "
+                        "and line settings"
+                    ) from None
+
+    def read_line(self, timeout: float | None = None, expecting: str = "a reply") -> str:
+        """Return the next non-empty line without its terminator.
+
+        Parameters
+        ----------
+        timeout : float, optional
+            Seconds to wait (default: the channel's timeout).
+        expecting : str
+            What was awaited, for the timeout message.
+
+        Raises
+        ------
+        DeviceTimeout
+            No complete line arrived before the deadline.
+        DeviceProtocolError
+            The line holds non-ASCII bytes (wrong baud rate, noise).
+        """
+        wait = self.timeout if timeout is None else float(timeout)
+        deadline = time.monotonic() + wait
+        while True:
+            line = self._pop_line()
+            if line is not None:
+                return line
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                partial = f" (partial {bytes(self._buffer)!r})" if self._buffer else ""
+                raise DeviceTimeout(
+                    f"{self.name}: no {expecting} within {wait:g} s{partial}; check the cable, "
+                    "the port, the baud rate and that the device is powered"
+                )
+            try:
+                self.port.timeout = min(remaining, 0.25)
+                waiting = self.port.in_waiting
+                chunk = self.port.read(max(1, waiting))
+            except (serial.SerialException, OSError) as exc:
+                raise DeviceError(
+                    f"{self.name}: read failed ({exc}); the cable may be unplugged"
+                ) from None
+            if chunk:
+                self._buffer.extend(chunk)
+                if len(self._buffer) > 4096:
+                    raise DeviceProtocolError(
+                        f"{self.name}: 4 KiB without a line end; check the baud rate"
+                    )
+
+    def close(self) -> None:
+        """Close the port (idempotent)."""
+        try:
+            self.port.close()
+        except (serial.SerialException, OSError):
+            pass
