@@ -57,6 +57,7 @@ GEOMETRY_TYPES = (
     "plate",
     "sphere",
     "frustum",
+    "elbow",
     "mesh",
     "ground",
 )
@@ -488,6 +489,23 @@ def _geometry(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
         r0 = 0.5 * reader.length(geo, "start_diameter", where, positive=True, required=True)
         r1 = 0.5 * reader.length(geo, "end_diameter", where, positive=True, required=True)
         vertices, faces = frustum_mesh(start, end, r0, r1)
+        return [
+            {
+                "shape": MeshShape(vertices=vertices, faces=faces),
+                "truth": Hull(vertices=vertices, faces=faces),
+            }
+        ]
+    if kind == "elbow":
+        corner = reader.vector(geo, "corner", where)
+        before = reader.vector(geo, "from", where)
+        after = reader.vector(geo, "to", where)
+        bend = reader.length(geo, "bend_radius", where, positive=True, required=True)
+        try:
+            vertices, faces = torus_segment_mesh(
+                corner, before, after, bend, reader.radius(geo, where)
+            )
+        except ValueError as exc:
+            reader.fail(where, f"{exc}; 'from', 'corner' and 'to' must make a turn")
         return [
             {
                 "shape": MeshShape(vertices=vertices, faces=faces),
