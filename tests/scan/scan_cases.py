@@ -1,0 +1,352 @@
+"""Hand-made ``asbuilt-scan`` documents: valid ones (points on known surfaces) and a table of bad ones.
+
+Shared by tests/scan and tests/cli (which loads this file by path).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def surface_points(kind: str) -> np.ndarray:
+    """Deterministic points, shape (n, 3) metres, spread over one surface of ``kind``."""
+    if kind in ("cylinder", "auto"):
+        # a 4" pipe (OD 114.3 mm) along x: 5 stations x 6 angles over a 150 degree arc
+        s, phi = np.meshgrid(np.linspace(-0.9, 0.9, 5), np.radians(np.linspace(-75, 75, 6)))
+        r = 0.05715
+        return np.column_stack(
+            [1.0 + s.ravel(), 2.0 - r * np.cos(phi.ravel()), 0.5 + r * np.sin(phi.ravel())]
+        )
+    if kind == "sphere":
+        k = np.arange(20) + 0.5
+        z = 1 - k / 20  # upper hemisphere, golden-angle spiral
+        phi = np.pi * (1 + 5**0.5) * k
+        rho = np.sqrt(1 - z * z)
+        return np.array([3.0, 0.0, 1.0]) + 0.3 * np.column_stack(
+            [rho * np.cos(phi), rho * np.sin(phi), z]
+        )
+    if kind == "plane":
+        x, y = np.meshgrid(np.linspace(0, 2, 4), np.linspace(0, 1.5, 4))
+        return np.column_stack([x.ravel(), y.ravel(), np.full(16, 2.5)])
+    if kind == "cuboid":
+        u, v = np.meshgrid(np.linspace(-0.4, 0.4, 4), np.linspace(-0.4, 0.4, 4))
+        u, v = u.ravel(), v.ravel()
+        half = 0.5
+        front = np.column_stack([np.full(16, -half), u, v])
+        side = np.column_stack([u, np.full(16, -half), v])
+        top = np.column_stack([u, v, np.full(16, half)])
+        return np.array([5.0, 5.0, 0.5]) + np.vstack([front, side, top])
+    if kind == "hull":
+        rng = np.random.default_rng(7)
+        return rng.uniform([-1, -1, 0], [1, 1, 2], size=(12, 3))
+    raise KeyError(kind)
+
+
+def make_doc(
+    units: str = "m", kinds=("cylinder", "cuboid", "sphere", "plane", "hull", "auto")
+) -> dict:
+    """A valid document with one object per kind (ids K1, K2...), points in ``units``."""
+    from asbuilt.units import UNITS
+
+    objects = [
+        {"id": f"K{i + 1}", "kind": kind, "points": (surface_points(kind) / UNITS[units]).tolist()}
+        for i, kind in enumerate(kinds)
+    ]
+    return {"format": "asbuilt-scan", "version": 1, "units": units, "objects": objects}
+
+
+def _set(path: str, value):
+    """A builder that sets ``doc[path]`` (dotted, with integer indices) to ``value``."""
+
+    def build(doc: dict):
+        *parents, last = [int(p) if p.isdigit() else p for p in path.split(".")]
+        target = doc
+        for key in parents:
+            target = target[key]
+        target[last] = value
+        return doc
+
+    return build
+
+
+def _delete(key: str):
+    def build(doc: dict):
+        del doc[key]
+        return doc
+
+    return build
+
+
+def _delete_in_object(index: int, key: str):
+    def build(doc: dict):
+        del doc["objects"][index][key]
+        return doc
+
+    return build
+
+
+def _text(text: str):
+    return lambda doc: text
+
+
+def _nan_text(literal: str):
+    """The valid document with objects[0].points[17][2] written as a bare JSON ``literal``."""
+
+    def build(doc: dict):
+        doc["objects"][0]["points"][17][2] = 123456.0
+        return json.dumps(doc).replace("123456.0", literal)
+
+    return build
+
+
+def _duplicate_id(doc: dict):
+    doc["objects"][3]["id"] = "K1"
+    return doc
+
+
+def _identical(doc: dict):
+    doc["objects"][0]["points"] = [[1.5, 2.0, 0.25]] * 30
+    return doc
+
+
+def _collinear(doc: dict):
+    doc["objects"][0]["points"] = [[0.1 * i, 0.2 * i, 1.0 - 0.05 * i] for i in range(30)]
+    return doc
+
+
+@dataclass(frozen=True)
+class Bad:
+    """A bad document: how to build it from :func:`make_doc`, and the loader's exact message.
+
+    ``message`` follows ``scan.json: `` (the file's name); ``schema_catches`` says whether the
+    JSON Schema can see the problem too (some rules are beyond JSON Schema: see schema.py).
+    """
+
+    name: str
+    build: Callable[[dict], object]
+    message: str
+    schema_catches: bool = True
+
+
+BAD = (
+    Bad(
+        "malformed JSON",
+        _text('{"format": "asbuilt-scan",\n  "version": 1\n  "units": "m"}'),
+        "line 3 column 3: invalid JSON (Expecting ',' delimiter); fix the syntax there",
+        schema_catches=False,  # not JSON at all
+    ),
+    Bad(
+        "top level not an object",
+        _text("[1, 2, 3]"),
+        "the top level is an array; an asbuilt-scan file is a JSON object starting "
+        '{"format": "asbuilt-scan", "version": 1, ...}',
+    ),
+    Bad(
+        "wrong format",
+        _set("format", "asbuilt-model"),
+        'format: is "asbuilt-model", not "asbuilt-scan"; this is not an asbuilt scan file',
+    ),
+    Bad(
+        "missing format",
+        _delete("format"),
+        'format: missing; this is not an asbuilt scan (start the file with "format": '
+        '"asbuilt-scan", "version": 1)',
+    ),
+    Bad(
+        "wrong version",
+        _set("version", 2),
+        "version: version 2 is not supported; this asbuilt reads version 1 (upgrade asbuilt or "
+        "convert the file)",
+    ),
+    Bad(
+        "version as text", _set("version", "1"), 'version: must be the number 1, not a string ("1")'
+    ),
+    Bad("missing version", _delete("version"), 'version: missing; add "version": 1'),
+    Bad(
+        "missing units",
+        _delete("units"),
+        'units: missing; add "units": one of m, mm, cm, in, ft (e.g. "units": "m")',
+    ),
+    Bad(
+        "unknown units",
+        _set("units", "metres"),
+        'units: unknown unit "metres"; use one of m, mm, cm, in, ft',
+    ),
+    Bad(
+        "duplicate ids",
+        _duplicate_id,
+        'objects[3] (K1).id: duplicate id "K1" (also objects[0]); give every object its own id',
+        schema_catches=False,
+    ),
+    Bad(
+        "link to an unknown id",
+        _set("links", [["K1", "K2"], ["K1", "K9"]]),
+        'links[1]: unknown object id "K9"; link only ids listed in objects',
+        schema_catches=False,
+    ),
+    Bad(
+        "link to itself",
+        _set("links", [["K2", "K2"]]),
+        'links[0]: links "K2" to itself; link two different objects',
+        schema_catches=False,
+    ),
+    Bad(
+        "link not a pair",
+        _set("links", [["K1", "K2", "K3"]]),
+        'links[0]: must be a pair of object ids like ["P1", "P2"], not an array of 3 items',
+    ),
+    Bad(
+        "non-numeric coordinate",
+        _set("objects.3.points.5.1", "2.5"),
+        'objects[3] (K4).points[5]: coordinate is a string ("2.5"), not a number',
+    ),
+    Bad(
+        "null coordinate",
+        _set("objects.0.points.7.0", None),
+        "objects[0] (K1).points[7]: coordinate is null, not a number",
+    ),
+    Bad(
+        "boolean coordinate",
+        _set("objects.0.points.7.0", True),
+        "objects[0] (K1).points[7]: coordinate is true, not a number",
+    ),
+    Bad(
+        "NaN coordinate",
+        _nan_text("NaN"),
+        "objects[0] (K1).points[17]: coordinate is NaN",
+        schema_catches=False,  # JSON has no NaN; Python's parser accepts it
+    ),
+    Bad(
+        "infinite coordinate",
+        _nan_text("-Infinity"),
+        "objects[0] (K1).points[17]: coordinate is infinite",
+        schema_catches=False,
+    ),
+    Bad(
+        "coordinate overflowing to infinity",
+        _nan_text("1e999"),
+        "objects[0] (K1).points[17]: coordinate is infinite",
+        schema_catches=False,
+    ),
+    Bad(
+        "point of 2 numbers",
+        _set("objects.1.points.4", [5.0, 5.0]),
+        "objects[1] (K2).points[4]: a point must be 3 numbers [x, y, z], not 2",
+    ),
+    Bad(
+        "point of 4 numbers",
+        _set("objects.1.points.0", [5.0, 5.0, 1.0, 1.0]),
+        "objects[1] (K2).points[0]: a point must be 3 numbers [x, y, z], not 4",
+    ),
+    Bad(
+        "point not an array",
+        _set("objects.2.points.2", 7),
+        "objects[2] (K3).points[2]: a point must be an array of 3 numbers [x, y, z], not 7",
+    ),
+    Bad(
+        "points not an array",
+        _set("objects.2.points", {"x": 1}),
+        "objects[2] (K3).points: must be an array of points [x, y, z], not an object",
+    ),
+    Bad(
+        "too few points",
+        _set("objects.2.points", [[3.0, 0.0, 1.3], [3.3, 0.0, 1.0], [3.0, 0.3, 1.0]]),
+        "objects[2] (K3).points: has 3 points; a sphere needs at least 4; scan more points on "
+        "the object",
+    ),
+    Bad(
+        "no points",
+        _set("objects.0.points", []),
+        "objects[0] (K1).points: has 0 points; a cylinder needs at least 6; scan more points on "
+        "the object",
+    ),
+    Bad(
+        "all points identical",
+        _identical,
+        "objects[0] (K1).points: all 30 points are identical; a cylinder needs points spread "
+        "across its surface (re-aim and rescan)",
+        schema_catches=False,
+    ),
+    Bad(
+        "collinear points",
+        _collinear,
+        "objects[0] (K1).points: the points are collinear; a cylinder needs points spread across "
+        "its surface (re-aim and rescan)",
+        schema_catches=False,
+    ),
+    Bad(
+        "unknown kind",
+        _set("objects.4.kind", "cone"),
+        'objects[4] (K5).kind: unknown kind "cone"; use one of cylinder, cuboid, sphere, plane, '
+        "hull, auto",
+    ),
+    Bad(
+        "missing kind",
+        _delete_in_object(4, "kind"),
+        "objects[4] (K5).kind: missing; use one of cylinder, cuboid, sphere, plane, hull, auto",
+    ),
+    Bad(
+        "missing id",
+        _delete_in_object(1, "id"),
+        'objects[1].id: missing; give the object an id such as "P1"',
+    ),
+    Bad(
+        "empty id",
+        _set("objects.1.id", ""),
+        'objects[1].id: must be non-empty text, not a string (""); give the object an id such as "P1"',
+    ),
+    Bad(
+        "missing points",
+        _delete_in_object(5, "points"),
+        "objects[5] (K6).points: missing; add the measured points [[x, y, z], ...]",
+    ),
+    Bad(
+        "object not an object",
+        _set("objects.2", "K3"),
+        'objects[2]: must be an object like {"id": "P1", "kind": "cylinder", "points": [...]}, '
+        'not a string ("K3")',
+    ),
+    Bad(
+        "missing objects",
+        _delete("objects"),
+        'objects: missing; add "objects": [{"id": ..., "kind": ..., "points": [...]}]',
+    ),
+    Bad(
+        "label not text",
+        _set("objects.0.label", 12),
+        "objects[0] (K1).label: must be text (a JSON string), not 12",
+    ),
+    Bad(
+        "negative range sigma",
+        _set("sensor", {"range_sigma": -0.002}),
+        "sensor.range_sigma: must be a positive number (the range noise in the file's units), "
+        "not -0.002",
+    ),
+    Bad(
+        "sensor position of 2 numbers",
+        _set("sensor", {"position": [0.0, 0.0]}),
+        "sensor.position: must be 3 finite numbers [x, y, z] in the file's units",
+    ),
+    Bad(
+        "measurements of the wrong length",
+        _set("objects.3.measurements", [[10.0, 5.0, 2.5]] * 3),
+        "objects[3] (K4).measurements: 3 measurements for 16 points; give one "
+        "[pan_deg, tilt_deg, range] per point, in the same order, or leave measurements out",
+        schema_catches=False,
+    ),
+    Bad(
+        "measurement with a zero range",
+        _set("objects.3.measurements", [[10.0, 5.0, 2.5]] * 15 + [[10.0, 5.0, 0]]),
+        "objects[3] (K4).measurements[15]: range must be positive (in the file's units)",
+    ),
+    Bad(
+        "measurement of 2 numbers",
+        _set("objects.3.measurements", [[10.0, 5.0]] * 16),
+        "objects[3] (K4).measurements[0]: a measurement must be 3 numbers "
+        "[pan_deg, tilt_deg, range], not 2",
+    ),
+)
