@@ -13,6 +13,8 @@ on first use: :func:`asbuilt.fit.plane.fit_plane`, :func:`asbuilt.fit.sphere.fit
 
 from __future__ import annotations
 
+import sys
+import types
 from collections.abc import Callable
 from importlib import import_module
 
@@ -173,3 +175,19 @@ def fit(
         if progress is not None:
             progress(done, total, obj.id)
     return FitReport(scan=scan, fits=tuple(fits))
+
+
+class _CallableModule(types.ModuleType):
+    """``asbuilt.fit`` is both this subpackage and the function :func:`fit`.
+
+    Importing any ``asbuilt.fit.*`` module binds the *module* to ``asbuilt.fit``, so the module
+    itself must be callable for ``asbuilt.fit(scan)`` (the documented API) to keep working.
+    """
+
+    def __call__(
+        self, scan: Scan, tolerances: Tolerances = DEFAULT_TOLERANCES, **kwargs
+    ) -> FitReport:
+        return fit(scan, tolerances, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule

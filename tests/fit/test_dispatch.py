@@ -1,0 +1,285 @@
+"""The fit dispatcher: kind -> fit function (lazily imported), sigma and errors located per object.
+
+The unit tests replace the per-kind fits with small stand-ins registered in ``FITTERS`` (so the
+lazy import path is exercised too); the end-to-end tests at the bottom run the real fits on
+exact synthetic surfaces whenever their modules exist.
+"""
+
+from __future__ import annotations
+
+import sys
+import types
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import asbuilt
+from asbuilt.errors import FitError
+from asbuilt.fit import FITTERS, FitReport, FitResult, ObjectFit, fit, fit_object, fit_points
+from asbuilt.primitives import Sphere
+from asbuilt.scan import ScanObject, loads_scan
+from asbuilt.scan.model import Scan, Sensor
+from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
+
+CALLS: list[dict] = []
+
+
+def centroid_sphere(points, *, sigma=None, tolerances=DEFAULT_TOLERANCES) -> FitResult:
+    """A stand-in fit: sphere at the centroid with the mean distance as radius."""
+    CALLS.append({"points": points, "sigma": sigma, "tolerances": tolerances})
+    center = points.mean(axis=0)
+    distances = np.linalg.norm(points - center, axis=1)
+    sphere = Sphere(center, distances.mean())
+    return FitResult(
+        primitive=sphere,
+        residuals=sphere.distance(points),
+        inliers=np.ones(len(points), bool),
+        stderr={"radius": 0.001},
+        sigma=sigma or 0.001,
+        sigma_source="sensor" if sigma else "residuals",
+        method="centroid (test stand-in)",
+    )
+
+
+def refuse(points, *, sigma=None, tolerances=DEFAULT_TOLERANCES) -> FitResult:
+    raise FitError("the points are coplanar; scan the far side too")
+
+
+def refuse_located(points, *, sigma=None, tolerances=DEFAULT_TOLERANCES) -> FitResult:
+    raise FitError("only 2 faces seen", where="faces")
+
+
+@pytest.fixture
+def stand_ins(monkeypatch):
+    """Route every kind to the stand-ins above through a fake module."""
+    module = types.ModuleType("stand_in_fits")
+    module.centroid_sphere = centroid_sphere
+    module.refuse = refuse
+    module.refuse_located = refuse_located
+    monkeypatch.setitem(sys.modules, "stand_in_fits", module)
+    for kind in FITTERS:
+        monkeypatch.setitem(FITTERS, kind, ("stand_in_fits", "centroid_sphere"))
+    CALLS.clear()
+    return module
+
+
+def octahedron(center=(1.0, 2.0, 3.0), radius=0.5) -> np.ndarray:
+    unit = np.vstack([np.eye(3), -np.eye(3)])
+    return np.asarray(center) + radius * unit
+
+
+def scan_of(*kinds: str, units: str = "m", sigma=None) -> Scan:
+    objects = tuple(
+        ScanObject(id=f"P{i + 1}", kind=kind, points=octahedron(), index=i)
+        for i, kind in enumerate(kinds)
+    )
+    return Scan(units=units, objects=objects, sensor=Sensor(range_sigma=sigma), source="scan.json")
+
+
+def test_fit_points_dispatches_by_kind(stand_ins):
+    tolerances = Tolerances(outlier_cutoff_sigma=2.5)
+    result = fit_points("sphere", octahedron().tolist(), sigma=0.003, tolerances=tolerances)
+    assert isinstance(result, FitResult)
+    assert result.primitive.radius == pytest.approx(0.5)
+    (call,) = CALLS
+    assert call["sigma"] == 0.003 and call["tolerances"] is tolerances
+    assert call["points"].dtype == np.float64 and call["points"].shape == (6, 3)
+
+
+@pytest.mark.parametrize("kind", ["cone", "", None, "Cylinder"])
+def test_unknown_kind(kind):
+    with pytest.raises(FitError) as err:
+        fit_points(kind, octahedron())
+    assert str(err.value) == (
+        f"kind: unknown kind {kind!r}; use one of cylinder, cuboid, sphere, plane, hull, auto"
+    )
+
+
+@pytest.mark.parametrize(
+    ("points", "message"),
+    [
+        (np.zeros((5, 2)), "points: The points must have shape (n, 3), not (5, 2)."),
+        ([[0, 0, np.nan]] * 5, "points: The points must be finite."),
+    ],
+)
+def test_bad_points(stand_ins, points, message):
+    with pytest.raises(FitError) as err:
+        fit_points("sphere", points)
+    assert str(err.value) == message
+
+
+def test_every_kind_has_a_fitter_named_in_the_contract():
+    assert set(FITTERS) == set(asbuilt.scan.KINDS)
+    for kind, (module, name) in FITTERS.items():
+        assert module == f"asbuilt.fit.{kind}" and name == f"fit_{kind}"
+
+
+def test_fit_object_keeps_the_object_and_requested_kind(stand_ins):
+    obj = ScanObject(id="X1", kind="auto", points=octahedron(), index=4)
+    item = fit_object(obj, sigma=0.002)
+    assert isinstance(item, ObjectFit)
+    assert item.object is obj and item.requested == "auto" and item.result.kind == "sphere"
+    assert CALLS[0]["sigma"] == 0.002
+
+
+@pytest.mark.parametrize(
+    ("function", "message"),
+    [
+        ("refuse", "objects[2] (P3): the points are coplanar; scan the far side too"),
+        ("refuse_located", "objects[2] (P3): faces: only 2 faces seen"),
+    ],
+)
+def test_fit_errors_are_located_at_the_object(stand_ins, monkeypatch, function, message):
+    monkeypatch.setitem(FITTERS, "cuboid", ("stand_in_fits", function))
+    obj = ScanObject(id="P3", kind="cuboid", points=octahedron(), index=2)
+    with pytest.raises(FitError) as err:
+        fit_object(obj)
+    assert str(err.value) == message
+    with pytest.raises(FitError) as err:
+        fit(scan_of("sphere", "plane", "cuboid", "sphere"))
+    assert str(err.value) == f"scan.json: {message}"
+    assert err.value.source == "scan.json"
+
+
+def test_fit_uses_the_sensor_sigma_in_metres(stand_ins):
+    text = (
+        '{"format": "asbuilt-scan", "version": 1, "units": "mm", "sensor": {"range_sigma": 2},'
+        ' "objects": [{"id": "S1", "kind": "sphere", "points": '
+        + str((octahedron() * 1000).tolist())
+        + "}]}"
+    )
+    report = fit(loads_scan(text))
+    assert CALLS[0]["sigma"] == pytest.approx(0.002)
+    np.testing.assert_allclose(CALLS[0]["points"], octahedron())
+    assert report.get("S1").result.sigma_source == "sensor"
+
+
+def test_fit_without_sensor_sigma_passes_none(stand_ins):
+    fit(scan_of("sphere"))
+    assert CALLS[0]["sigma"] is None
+
+
+def test_fit_reports_every_object_in_order_with_progress(stand_ins):
+    scan = scan_of("cylinder", "sphere", "auto", "hull")
+    seen = []
+    report = fit(scan, progress=lambda done, total, oid: seen.append((done, total, oid)))
+    assert isinstance(report, FitReport) and len(report) == 4
+    assert [item.object.id for item in report] == ["P1", "P2", "P3", "P4"]
+    assert [item.requested for item in report] == ["cylinder", "sphere", "auto", "hull"]
+    assert seen == [(1, 4, "P1"), (2, 4, "P2"), (3, 4, "P3"), (4, 4, "P4")]
+    assert report.scan is scan
+
+
+def test_fit_passes_tolerances_down(stand_ins):
+    tolerances = replace(DEFAULT_TOLERANCES, sigma_floor=5e-4)
+    fit(scan_of("sphere", "plane"), tolerances)
+    assert all(call["tolerances"] is tolerances for call in CALLS)
+
+
+def test_package_level_names(stand_ins):
+    """``asbuilt.fit(scan)`` works although ``asbuilt.fit`` is also the subpackage's name."""
+    assert asbuilt.fit_object is fit_object and asbuilt.fit_points is fit_points
+    assert asbuilt.FitReport is FitReport and asbuilt.FitResult is FitResult
+    report = asbuilt.fit(scan_of("sphere"))
+    assert isinstance(report, FitReport) and report.get("P1").result.kind == "sphere"
+    report = asbuilt.fit(scan_of("plane"), DEFAULT_TOLERANCES, progress=None)
+    assert len(report) == 1
+
+
+# --------------------------------------------------------------------------------------------
+# End to end with the real fits (each runs once its module exists)
+
+
+def _cylinder_points(rng) -> tuple[np.ndarray, dict]:
+    s, phi = np.meshgrid(np.linspace(-0.8, 0.8, 6), np.radians(np.linspace(-70, 70, 6)))
+    r = 0.05715
+    points = np.column_stack(
+        [1.0 + s.ravel(), 2.0 - r * np.cos(phi.ravel()), 0.5 + r * np.sin(phi.ravel())]
+    )
+    return points + rng.normal(0, 2e-4, points.shape), {"radius": r}
+
+
+def _sphere_points(rng):
+    k = np.arange(30) + 0.5
+    z = 1 - k / 30
+    phi = np.pi * (1 + 5**0.5) * k
+    rho = np.sqrt(1 - z * z)
+    unit = np.column_stack([rho * np.cos(phi), rho * np.sin(phi), z])
+    points = np.array([3.0, 0.0, 1.0]) + 0.3 * unit
+    return points + rng.normal(0, 2e-4, points.shape), {"radius": 0.3}
+
+
+def _plane_points(rng):
+    x, y = np.meshgrid(np.linspace(0, 2, 5), np.linspace(0, 1.5, 5))
+    points = np.column_stack([x.ravel(), y.ravel(), np.full(25, 2.5)])
+    return points + rng.normal(0, 2e-4, points.shape), {"normal_z": 1.0}
+
+
+def _cuboid_points(rng):
+    """Three faces seen (-x, -y, +z), each sampled over 90% of its width."""
+    u, v = np.meshgrid(np.linspace(-0.45, 0.45, 4), np.linspace(-0.45, 0.45, 4))
+    u, v = u.ravel(), v.ravel()
+    size = np.array([1.0, 0.8, 0.6])
+    faces = [
+        np.column_stack([np.full(16, -size[0] / 2), u * size[1], v * size[2]]),
+        np.column_stack([u * size[0], np.full(16, -size[1] / 2), v * size[2]]),
+        np.column_stack([u * size[0], v * size[1], np.full(16, size[2] / 2)]),
+    ]
+    points = np.array([5.0, 5.0, 0.3]) + np.vstack(faces)
+    return points + rng.normal(0, 2e-4, points.shape), {"size": size}
+
+
+def _hull_points(rng):
+    return rng.uniform([-1, -1, 0], [1, 1, 2], size=(20, 3)), {}
+
+
+def _real(kind: str):
+    module, _ = FITTERS[kind]
+    try:
+        __import__(module)
+    except ModuleNotFoundError as exc:
+        if exc.name == module:
+            pytest.skip(f"{module} is not written yet")
+        raise
+
+
+@pytest.mark.parametrize(
+    ("kind", "make"),
+    [
+        ("cylinder", _cylinder_points),
+        ("sphere", _sphere_points),
+        ("plane", _plane_points),
+        ("cuboid", _cuboid_points),
+        ("hull", _hull_points),
+    ],
+)
+def test_real_fits_end_to_end(kind, make):
+    _real(kind)
+    rng = np.random.default_rng(11)
+    points, truth = make(rng)
+    objects = (ScanObject(id="A", kind=kind, points=points, index=0),)
+    report = fit(Scan(units="m", objects=objects, sensor=Sensor(range_sigma=2e-4)))
+    result = report.get("A").result
+    assert result.kind == kind and result.n_points == len(points)
+    assert result.sigma_source == "sensor" and result.sigma == pytest.approx(2e-4)
+    if "radius" in truth:
+        assert result.primitive.radius == pytest.approx(truth["radius"], abs=1e-3)
+    if "normal_z" in truth:
+        assert abs(result.primitive.normal[2]) == pytest.approx(1.0, abs=1e-3)
+    if "size" in truth:
+        # one face per axis: no size is measured between two faces, each is bounded below by
+        # the points' extent (90% of the box) and padded by about one shot spacing at most
+        assert result.observed == (False, False, False)
+        fitted, true = np.sort(result.primitive.size), np.sort(truth["size"])
+        assert np.all(fitted >= 0.9 * true - 5e-3) and np.all(fitted <= 1.2 * true)
+    if kind == "hull":
+        assert np.all(result.primitive.distance(points) <= 1e-9)
+
+
+def test_real_auto_end_to_end():
+    _real("auto")
+    points, truth = _cylinder_points(np.random.default_rng(5))
+    item = fit_object(ScanObject(id="X", kind="auto", points=points, index=0))
+    assert item.requested == "auto" and item.result.kind == "cylinder"
+    assert item.result.primitive.radius == pytest.approx(truth["radius"], abs=1e-3)
