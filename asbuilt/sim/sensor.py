@@ -153,7 +153,11 @@ def angular_window(shape, station) -> tuple[float, float, float, float]:
 
 
 def raster_angles(window, n_pan: int, n_tilt: int) -> tuple[np.ndarray, np.ndarray]:
-    """A cell-centred pan-tilt raster over ``window``, row by row, serpentine like a PTU.
+    """A pan-tilt raster from corner to corner of ``window``, row by row, serpentine like a PTU.
+
+    The operator marks the object's extreme directions and the unit sweeps between them; the
+    outer rows and columns sit :data:`EDGE_INSET` of a step inside the marks, close to the
+    silhouette (where footprints straddle edges and mixed returns happen).
 
     Parameters
     ----------
@@ -167,13 +171,22 @@ def raster_angles(window, n_pan: int, n_tilt: int) -> tuple[np.ndarray, np.ndarr
     pan, tilt : ndarray, shape (n_pan * n_tilt,), radians
     """
     pan0, tilt0, pan_ext, tilt_ext = window
-    cols = pan0 + pan_ext * ((np.arange(n_pan) + 0.5) / n_pan - 0.5)
-    rows = tilt0 + tilt_ext * (0.5 - (np.arange(n_tilt) + 0.5) / n_tilt)
+    cols = pan0 + pan_ext * (_steps(n_pan) - 0.5)
+    rows = tilt0 + tilt_ext * (0.5 - _steps(n_tilt))
     pan = np.empty((n_tilt, n_pan))
     pan[:] = cols
     pan[1::2] = cols[::-1]
     tilt = np.repeat(rows, n_pan).reshape(n_tilt, n_pan)
     return pan.ravel(), tilt.ravel()
+
+
+#: The outermost shots sit this fraction of a raster step inside the marked window.
+EDGE_INSET = 0.15
+
+
+def _steps(n: int) -> np.ndarray:
+    """``n`` evenly spaced fractions of [0, 1], the outer ones ``EDGE_INSET`` steps inside."""
+    return (np.arange(n) + EDGE_INSET) / (n - 1 + 2 * EDGE_INSET)
 
 
 def _grid_shape(window, shots: float) -> tuple[int, int]:
@@ -186,11 +199,11 @@ def _grid_shape(window, shots: float) -> tuple[int, int]:
     return n_pan, n_tilt
 
 
-def plan_raster(scene, target: int, station, n_points: int, *, max_rounds: int = 12):
+def plan_raster(scene, target: int, station, n_points: int, *, max_rounds: int = 16):
     """Choose a raster over the object's window with at least ``n_points`` noise-free hits.
 
     The grid's aspect follows the window's; its size is rescaled by the observed hit fraction
-    until the first raster with ``n_points`` to ``1.3 n_points`` hits on the object is found (or
+    until the first raster with ``n_points`` to ``1.15 n_points + 1`` hits on the object is found (or
     the smallest one with enough hits after ``max_rounds``).
 
     Parameters
@@ -229,14 +242,14 @@ def plan_raster(scene, target: int, station, n_points: int, *, max_rounds: int =
         )
         if n_hit >= n_points and (best is None or n_hit < best[2]):
             best = (pan, tilt, n_hit)
-        if n_points <= n_hit <= 1.3 * n_points + 2:
+        if n_points <= n_hit <= 1.15 * n_points + 1:
             break
         if n_hit == 0:
-            shots *= 4
+            shots *= 2
             if shots > 200 * n_points:
                 break
             continue
-        shots = shots * (1.1 * n_points / n_hit)
+        shots = shots * float(np.clip(1.08 * n_points / n_hit, 0.5, 2.0))
     if best is None:
         raise ValueError(
             "too few shots land on it from this station (occluded, too small "
