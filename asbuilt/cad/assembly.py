@@ -1,0 +1,252 @@
+"""The CAD model of an as-built model: one solid per component, grouped, coloured, tessellated.
+
+:func:`prepare` builds every solid once (the expensive part) into a :class:`CadModel`, which the
+exporters share: the assembly for STEP, the meshes for glTF, DXF, STL and OBJ. The tree is
+*scan > group > object*: a component's group is its spool when merging made one, else the
+scan's ``group`` name; ungrouped components hang from the root.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import cadquery as cq
+import numpy as np
+
+from asbuilt.errors import SolidBuildError
+from asbuilt.model import Component, Model
+
+from .colours import colour_for, component_status
+from .mesh import LINEAR_DEFLECTION, Mesh, tessellate
+from .solids import check_solid, solid_for
+
+__all__ = ["CadPart", "CadModel", "prepare", "build_assembly", "fused_spool_solid"]
+
+#: Linear deflection relative to a part's bounding-box diagonal (see :func:`CadModel.mesh`).
+_RELATIVE_DEFLECTION = 2e-3
+
+
+@dataclass(frozen=True, eq=False)
+class CadPart:
+    """One component's solid (metres), colour (RGBA 0..1), worst finding severity and group."""
+
+    component: Component
+    solid: cq.Solid
+    colour: tuple[float, float, float, float]
+    status: str | None = None
+    group: str | None = None
+
+    @property
+    def id(self) -> str:
+        return self.component.id
+
+
+def group_of(component: Component) -> str | None:
+    """The tree node a component hangs from: its spool, else its scan group, else None."""
+    return component.spool or component.group
+
+
+@dataclass(eq=False)
+class CadModel:
+    """Every component's solid, ready for the exporters.
+
+    Attributes
+    ----------
+    model : Model
+    parts : tuple of CadPart
+        In the model's component order.
+    name : str
+        The root node's name (the model's name, else ``"scan"``).
+    plate_thickness : float, metres
+    """
+
+    model: Model
+    parts: tuple[CadPart, ...]
+    name: str
+    plate_thickness: float
+    _meshes: dict = field(default_factory=dict, repr=False)
+    _assembly: cq.Assembly | None = field(default=None, repr=False)
+
+    def groups(self) -> dict[str | None, list[CadPart]]:
+        """Parts by group name, spools first in the model's order, then the scan's groups in order
+        of first appearance; the key ``None`` holds the ungrouped parts."""
+        order: dict[str | None, list[CadPart]] = {spool.id: [] for spool in self.model.spools}
+        for part in self.parts:
+            order.setdefault(part.group, []).append(part)
+        return {key: parts for key, parts in order.items() if parts}
+
+    def group_node_names(self) -> dict[str, str]:
+        """Each group's node name in the tree: the group's name, made distinct from the root's
+        and the ungrouped components' ids by a ``" (group)"`` suffix when they clash."""
+        taken = {self.name} | {part.id for part in self.parts if part.group is None}
+        names = {}
+        for group in self.groups():
+            if group is None:
+                continue
+            name = group
+            while name in taken:
+                name = f"{name} (group)"
+            taken.add(name)
+            names[group] = name
+        return names
+
+    def mesh(self, part: CadPart) -> Mesh:
+        """The part's triangle mesh (metres), tessellated on first use and then reused.
+
+        The chord deviation is the larger of 0.5 mm and 0.2% of the part's bounding-box
+        diagonal (a 1 m sphere gets ~2 mm), with at most 0.25 rad between facets.
+        """
+        mesh = self._meshes.get(part.id)
+        if mesh is None:
+            box = part.solid.BoundingBox()
+            linear = max(LINEAR_DEFLECTION, _RELATIVE_DEFLECTION * box.DiagonalLength)
+            mesh = tessellate(part.solid, linear)
+            self._meshes[part.id] = mesh
+        return mesh
+
+    def assembly(self) -> cq.Assembly:
+        """The CadQuery assembly (built once): root > group > object, each leaf named by its id
+        and coloured by kind or status."""
+        if self._assembly is None:
+            self._assembly = _assemble(self)
+        return self._assembly
+
+    def fused_spool(self, spool_id: str) -> cq.Solid:
+        """The spool's components fused into one valid solid (metres); SolidBuildError when they
+        do not form one connected solid."""
+        members = [part for part in self.parts if part.group == spool_id]
+        if not members:
+            raise SolidBuildError("no components belong to this spool", where=f"spool {spool_id}")
+        shape: cq.Shape = members[0].solid
+        if len(members) > 1:
+            shape = shape.fuse(*(part.solid for part in members[1:])).clean()
+        try:
+            return check_solid(shape, spool_id)
+        except SolidBuildError as exc:
+            raise SolidBuildError(
+                f"its {len(members)} components do not fuse into one valid solid ({exc.message}); "
+                "check that they touch",
+                where=f"spool {spool_id}",
+            ) from None
+
+
+def _cq_colour(colour) -> cq.Color:
+    return cq.Color(*(float(c) for c in colour))
+
+
+def _assemble(cad: CadModel) -> cq.Assembly:
+    root = cq.Assembly(name=cad.name)
+    node_names = cad.group_node_names()
+    for group, parts in cad.groups().items():
+        if group is None:
+            for part in parts:
+                root.add(part.solid, name=part.id, color=_cq_colour(part.colour))
+            continue
+        node = cq.Assembly(name=node_names[group])
+        for part in parts:
+            node.add(part.solid, name=part.id, color=_cq_colour(part.colour))
+        root.add(node)
+    return root
+
+
+def prepare(
+    model: Model,
+    *,
+    plate_thickness: float | None = None,
+    colour_by_status: bool = True,
+    progress: Callable[[int, int], None] | None = None,
+) -> CadModel:
+    """Build every component's solid once.
+
+    Parameters
+    ----------
+    model : Model
+        Metres, scan frame.
+    plate_thickness : float, metres, optional
+        Thickness of plates made from planes (default ``Tolerances.plate_thickness``).
+    colour_by_status : bool
+        Colour components with error findings red and warnings amber.
+    progress : callable(done, total), optional
+        Called after each solid (for a progress display).
+
+    Raises
+    ------
+    SolidBuildError
+        Naming the first object whose solid cannot be built.
+    """
+    from asbuilt.tolerances import DEFAULT_TOLERANCES
+
+    thickness = DEFAULT_TOLERANCES.plate_thickness if plate_thickness is None else plate_thickness
+    status = component_status(model.findings) if colour_by_status else {}
+    ids = [component.id for component in model.components]
+    if len(set(ids)) != len(ids):
+        duplicate = next(i for i in ids if ids.count(i) > 1)
+        raise SolidBuildError(
+            "two components share this id; ids must be unique", where=f"object {duplicate}"
+        )
+    parts = []
+    total = len(model.components)
+    source = model.scan.source if model.scan is not None else None
+    for done, component in enumerate(model.components, start=1):
+        try:
+            solid = solid_for(component, plate_thickness=thickness)
+        except SolidBuildError as exc:
+            if source is None or exc.source is not None:
+                raise
+            raise SolidBuildError(exc.message, source=source, where=exc.where) from None
+        state = status.get(component.id)
+        if state is None:
+            state = next((status[s] for s in component.sources if s in status), None)
+        parts.append(
+            CadPart(
+                component=component,
+                solid=solid,
+                colour=colour_for(component.type, state),
+                status=state,
+                group=group_of(component),
+            )
+        )
+        if progress is not None:
+            progress(done, total)
+    return CadModel(
+        model=model, parts=tuple(parts), name=model.name or "scan", plate_thickness=float(thickness)
+    )
+
+
+def build_assembly(
+    model: Model, *, plate_thickness: float | None = None, colour_by_status: bool = True
+) -> cq.Assembly:
+    """The model as a CadQuery assembly: root (the scan) > group (spool) > object (named by id).
+
+    Parameters
+    ----------
+    model : Model
+    plate_thickness : float, metres, optional
+    colour_by_status : bool
+        Errors red, warnings amber, others by kind (:mod:`asbuilt.cad.colours`).
+    """
+    return prepare(
+        model, plate_thickness=plate_thickness, colour_by_status=colour_by_status
+    ).assembly()
+
+
+def fused_spool_solid(
+    model: Model, spool_id: str, *, plate_thickness: float | None = None
+) -> cq.Solid:
+    """One valid solid fusing the components of spool ``spool_id`` (metres).
+
+    Raises
+    ------
+    SolidBuildError
+        When the spool has no components or they do not fuse into one solid.
+    """
+    return prepare(model, plate_thickness=plate_thickness).fused_spool(spool_id)
+
+
+def part_centroid(part: CadPart) -> np.ndarray:
+    """The centre of a part's bounding box, shape (3,) metres."""
+    box = part.solid.BoundingBox()
+    return np.array(
+        [(box.xmin + box.xmax) / 2, (box.ymin + box.ymax) / 2, (box.zmin + box.zmax) / 2]
+    )

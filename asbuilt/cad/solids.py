@@ -1,0 +1,266 @@
+"""One valid CadQuery solid per model component (metres, scan frame, z up).
+
+Each geometry has its own builder: straights and fitted cylinders are cylinders (an annulus
+extruded along the axis when the wall is known), bends revolve their cross-section about the
+bend axis, reducers are truncated cones, tees fuse the run and branch cylinders (then cut the
+bores), cuboids are transformed boxes, spheres are spheres, planes become plates extruded from
+their outline (centred on the plane), hulls are polyhedra sewn from their triangles. Every
+result is checked with the kernel's validity check (``BRepCheck_Analyzer`` via
+:meth:`cadquery.Shape.isValid`) and must enclose a positive volume.
+"""
+
+from __future__ import annotations
+
+import cadquery as cq
+import numpy as np
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+from OCP.gp import gp_Trsf
+
+from asbuilt.errors import SolidBuildError
+from asbuilt.model import Bend, Component, Reducer, Straight, Tee
+from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+from asbuilt.tolerances import DEFAULT_TOLERANCES
+
+__all__ = ["solid_for", "check_solid", "plate_solid"]
+
+#: Points of an outline closer than this (metres) are merged before building a plate.
+_POINT_MERGE = 1e-7
+
+
+def _v(point) -> cq.Vector:
+    return cq.Vector(float(point[0]), float(point[1]), float(point[2]))
+
+
+def _unit(vector: np.ndarray) -> np.ndarray:
+    return vector / np.linalg.norm(vector)
+
+
+def _cylinder(start: np.ndarray, end: np.ndarray, radius: float, wall: float = 0.0) -> cq.Solid:
+    """A cylinder of ``radius`` (m) from ``start`` to ``end`` (each (3,) m); hollow if ``wall``."""
+    axis = end - start
+    length = float(np.linalg.norm(axis))
+    direction = _v(axis / length)
+    if wall <= 0:
+        return cq.Solid.makeCylinder(radius, length, _v(start), direction)
+    outer = cq.Wire.makeCircle(radius, _v(start), direction)
+    inner = cq.Wire.makeCircle(radius - wall, _v(start), direction)
+    face = cq.Face.makeFromWires(outer, [inner])
+    return cq.Solid.extrudeLinear(face, _v(axis))
+
+
+def _straight(geometry: Straight) -> cq.Shape:
+    return _cylinder(geometry.start, geometry.end, geometry.outer_radius, geometry.wall)
+
+
+def _fitted_cylinder(geometry: Cylinder) -> cq.Shape:
+    start, end = geometry.ends
+    return _cylinder(start, end, geometry.radius)
+
+
+def _bend(geometry: Bend) -> cq.Shape:
+    """Revolve the pipe's cross-section at ``start`` about the bend axis by the bend angle."""
+    r_start = geometry.start - geometry.center
+    r_end = geometry.end - geometry.center
+    normal = np.cross(r_start, r_end)
+    if np.linalg.norm(normal) < 1e-9 * geometry.bend_radius**2:
+        raise ValueError("its ends and centre are collinear, so the bend plane is undefined")
+    if geometry.outer_radius >= geometry.bend_radius:
+        raise ValueError(
+            f"the bend radius {geometry.bend_radius:.4g} m is not larger than the outer radius "
+            f"{geometry.outer_radius:.4g} m"
+        )
+    normal = _unit(normal)
+    tangent = _unit(np.cross(normal, r_start))
+    outer = cq.Wire.makeCircle(geometry.outer_radius, _v(geometry.start), _v(tangent))
+    inner = []
+    if geometry.wall > 0:
+        inner = [
+            cq.Wire.makeCircle(
+                geometry.outer_radius - geometry.wall, _v(geometry.start), _v(tangent)
+            )
+        ]
+    face = cq.Face.makeFromWires(outer, inner)
+    return cq.Solid.revolve(
+        face, geometry.angle_deg, _v(geometry.center), _v(geometry.center + normal)
+    )
+
+
+def _reducer(geometry: Reducer) -> cq.Shape:
+    axis = geometry.end - geometry.start
+    length = float(np.linalg.norm(axis))
+    if length <= 0:
+        raise ValueError("its start and end coincide")
+    direction = _v(axis / length)
+    r1, r2, wall = geometry.outer_radius_start, geometry.outer_radius_end, geometry.wall
+    outer = cq.Solid.makeCone(r1, r2, length, _v(geometry.start), direction)
+    if wall <= 0:
+        return outer
+    inner = cq.Solid.makeCone(r1 - wall, r2 - wall, length, _v(geometry.start), direction)
+    return outer.cut(inner)
+
+
+def _tee(geometry: Tee) -> cq.Shape:
+    run = _cylinder(geometry.run_start, geometry.run_end, geometry.outer_radius)
+    branch = _cylinder(geometry.center, geometry.branch_end, geometry.branch_outer_radius)
+    shape = run.fuse(branch)
+    if geometry.wall > 0:
+        bore = _cylinder(
+            geometry.run_start, geometry.run_end, geometry.outer_radius - geometry.wall
+        )
+        branch_bore = _cylinder(
+            geometry.center, geometry.branch_end, geometry.branch_outer_radius - geometry.wall
+        )
+        shape = shape.cut(bore.fuse(branch_bore))
+    return shape.clean()
+
+
+def _transformed(shape: cq.Shape, rotation: np.ndarray, translation: np.ndarray) -> cq.Shape:
+    """``shape`` mapped by x -> rotation @ x + translation (rotation (3, 3), translation (3,) m)."""
+    trsf = gp_Trsf()
+    r, t = rotation, translation
+    trsf.SetValues(
+        *(float(v) for v in (r[0, 0], r[0, 1], r[0, 2], t[0])),
+        *(float(v) for v in (r[1, 0], r[1, 1], r[1, 2], t[1])),
+        *(float(v) for v in (r[2, 0], r[2, 1], r[2, 2], t[2])),
+    )
+    return cq.Shape.cast(BRepBuilderAPI_Transform(shape.wrapped, trsf, True).Shape())
+
+
+def _cuboid(geometry: Cuboid) -> cq.Shape:
+    sx, sy, sz = (float(s) for s in geometry.size)
+    box = cq.Solid.makeBox(sx, sy, sz, cq.Vector(-sx / 2, -sy / 2, -sz / 2))
+    return _transformed(box, geometry.axes.T, geometry.center)
+
+
+def _sphere(geometry: Sphere) -> cq.Shape:
+    return cq.Solid.makeSphere(
+        geometry.radius, _v(geometry.center), angleDegrees1=-90, angleDegrees2=90
+    )
+
+
+def plate_solid(geometry: Plane, thickness: float) -> cq.Shape:
+    """A plate ``thickness`` metres thick from a plane's outline, centred on the plane.
+
+    Parameters
+    ----------
+    geometry : Plane
+        Its ``outline`` (k, 3) metres (k >= 3) is projected on the plane first.
+    thickness : float, metres
+    """
+    if len(geometry.outline) < 3:
+        raise ValueError("it has no outline (a bounded plate needs at least 3 outline points)")
+    if not thickness > 0:
+        raise ValueError(f"the plate thickness must be positive, not {thickness!r}")
+    normal = geometry.normal
+    rel = geometry.outline - geometry.point
+    flat = geometry.outline - np.outer(rel @ normal, normal)
+    keep = [flat[0]]
+    for point in flat[1:]:
+        if np.linalg.norm(point - keep[-1]) > _POINT_MERGE:
+            keep.append(point)
+    if len(keep) > 1 and np.linalg.norm(keep[-1] - keep[0]) <= _POINT_MERGE:
+        keep.pop()
+    if len(keep) < 3:
+        raise ValueError("its outline has fewer than 3 distinct points")
+    base = np.asarray(keep) - 0.5 * thickness * normal
+    wire = cq.Wire.makePolygon([_v(p) for p in base], close=True)
+    face = cq.Face.makeFromWires(wire)
+    return cq.Solid.extrudeLinear(face, _v(thickness * normal))
+
+
+def _hull(geometry: Hull) -> cq.Shape:
+    faces = []
+    for tri in geometry.vertices[geometry.faces]:
+        if np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0])) <= 1e-14:
+            continue  # a degenerate triangle adds nothing to a closed polyhedron
+        faces.append(cq.Face.makeFromWires(cq.Wire.makePolygon([_v(p) for p in tri], close=True)))
+    shell = cq.Shell.makeShell(faces)
+    if shell.wrapped.ShapeType().name != "TopAbs_SHELL":
+        shells = shell.Shells()
+        if len(shells) != 1:
+            raise ValueError("its triangles do not sew into one closed shell")
+        shell = shells[0]
+    solid = cq.Solid.makeSolid(shell)
+    if solid.Volume() < 0:
+        solid = cq.Solid(solid.wrapped.Reversed())
+    return solid
+
+
+_BUILDERS = {
+    Straight: _straight,
+    Cylinder: _fitted_cylinder,
+    Bend: _bend,
+    Reducer: _reducer,
+    Tee: _tee,
+    Cuboid: _cuboid,
+    Sphere: _sphere,
+    Hull: _hull,
+}
+
+
+def check_solid(shape: cq.Shape, name: str) -> cq.Solid:
+    """Return the one valid, positive-volume solid in ``shape``; SolidBuildError otherwise.
+
+    Parameters
+    ----------
+    shape : cadquery.Shape
+    name : str
+        The object id, for the message.
+    """
+    solids = shape.Solids()
+    if len(solids) != 1:
+        raise SolidBuildError(
+            f"the CAD kernel made {len(solids)} solids instead of one; check the object's "
+            "geometry (parts that should touch may be apart)",
+            where=f"object {name}",
+        )
+    solid = solids[0]
+    if not solid.isValid():
+        raise SolidBuildError(
+            "the CAD kernel's validity check failed for its solid; check its fitted size "
+            "and refit it",
+            where=f"object {name}",
+        )
+    if not solid.Volume() > 0:
+        raise SolidBuildError(
+            "its solid encloses no volume; check its fitted size and refit it",
+            where=f"object {name}",
+        )
+    return solid
+
+
+def solid_for(component: Component, *, plate_thickness: float | None = None) -> cq.Solid:
+    """The valid CadQuery solid of one component, in metres in the scan frame.
+
+    Parameters
+    ----------
+    component : asbuilt.model.Component
+        Its ``geometry`` decides the shape (see the module docstring).
+    plate_thickness : float, metres, optional
+        Thickness of plates made from planes (default ``Tolerances.plate_thickness``, 10 mm).
+
+    Raises
+    ------
+    SolidBuildError
+        Naming the object, when the kernel cannot build a valid solid for it.
+    """
+    geometry = component.geometry
+    if plate_thickness is None:
+        plate_thickness = DEFAULT_TOLERANCES.plate_thickness
+    try:
+        if isinstance(geometry, Plane):
+            shape = plate_solid(geometry, float(plate_thickness))
+        else:
+            builder = _BUILDERS.get(type(geometry))
+            if builder is None:
+                raise ValueError(f"there is no solid for geometry {type(geometry).__name__}")
+            shape = builder(geometry)
+    except SolidBuildError:
+        raise
+    except Exception as exc:  # the OCC kernel raises its own Standard_Failure types
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise SolidBuildError(
+            f"cannot build its {component.type} solid: {reason}; check its fitted geometry",
+            where=f"object {component.id}",
+        ) from None
+    return check_solid(shape, component.id)
