@@ -1,0 +1,240 @@
+"""Exports chosen by the output's suffix: STEP, glTF, DXF, STL, OBJ and the JSON model document.
+
+``export_models(model, paths)`` writes several outputs in one run: every suffix is checked
+first, the solids are built once (only if a CAD format is asked for) and shared, every file is
+written to a temporary file beside its target, and all are renamed into place only when all
+succeeded (:class:`asbuilt.atomic.AtomicBatch`). Importing this package does not load CadQuery;
+the format modules are imported when used.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from importlib import import_module
+from pathlib import Path
+
+from asbuilt.atomic import AtomicBatch
+from asbuilt.errors import AsbuiltError, ExportError, UnknownFormatError
+
+__all__ = [
+    "SUFFIXES",
+    "Exporter",
+    "ExportResult",
+    "exporter_for",
+    "export_model",
+    "export_models",
+]
+
+
+@dataclass(frozen=True)
+class Exporter:
+    """One output format: ``suffix`` (``".step"``), ``name`` (``"STEP"``), a description,
+    whether it needs the CAD solids, and where its writer lives (module, function)."""
+
+    suffix: str
+    name: str
+    description: str
+    needs_cad: bool
+    module: str
+    function: str
+
+    def write(self, source, path, **options) -> None:
+        """Write ``source`` (a CadModel when ``needs_cad``, else a Model) to ``path``."""
+        writer = getattr(import_module(f"{__name__}.{self.module}"), self.function)
+        writer(source, path, **options)
+
+
+_EXPORTERS = (
+    Exporter(
+        ".step",
+        "STEP",
+        "STEP AP214 assembly, millimetres, names and colours",
+        True,
+        "step",
+        "write_step",
+    ),
+    Exporter(
+        ".stp",
+        "STEP",
+        "STEP AP214 assembly, millimetres, names and colours",
+        True,
+        "step",
+        "write_step",
+    ),
+    Exporter(".glb", "glTF", "binary glTF 2.0, metres, Y up", True, "gltf", "write_gltf"),
+    Exporter(
+        ".gltf",
+        "glTF",
+        "glTF 2.0 JSON with embedded buffer, metres, Y up",
+        True,
+        "gltf",
+        "write_gltf",
+    ),
+    Exporter(
+        ".dxf",
+        "DXF",
+        "DXF R2018 meshes with plan and elevation views, millimetres",
+        True,
+        "dxf",
+        "write_dxf",
+    ),
+    Exporter(".stl", "STL", "binary STL mesh in the model's units", True, "mesh", "write_stl"),
+    Exporter(
+        ".obj",
+        "OBJ",
+        "Wavefront OBJ, one object per component, model's units",
+        True,
+        "mesh",
+        "write_obj",
+    ),
+    Exporter(
+        ".json",
+        "JSON",
+        "the asbuilt-model document (metres)",
+        False,
+        "model_json",
+        "_write_document",
+    ),
+)
+
+#: Every suffix an output may have, mapped to its exporter.
+SUFFIXES: dict[str, Exporter] = {exporter.suffix: exporter for exporter in _EXPORTERS}
+
+
+def exporter_for(path) -> Exporter:
+    """The exporter for ``path``'s suffix (case-insensitive).
+
+    Raises
+    ------
+    UnknownFormatError
+        Naming the file and the suffixes that are known.
+    """
+    suffix = Path(path).suffix.lower()
+    try:
+        return SUFFIXES[suffix]
+    except KeyError:
+        known = ", ".join(SUFFIXES)
+        what = f"unknown output format {suffix!r}" if suffix else "the output has no suffix"
+        raise UnknownFormatError(f"{what}; use one of {known}", source=str(path)) from None
+
+
+@dataclass(frozen=True)
+class ExportResult:
+    """A file written: its ``path``, format ``name``, ``size`` in bytes and ``objects`` count."""
+
+    path: Path
+    name: str
+    size: int
+    objects: int
+
+
+def _file_mode() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def _writer_options(exporter: Exporter, step_schema: str, mesh_units: str | None) -> dict:
+    if exporter.module == "step":
+        return {"schema": step_schema}
+    if exporter.module == "gltf":
+        return {"binary": exporter.suffix == ".glb"}
+    if exporter.module == "mesh" and mesh_units is not None:
+        return {"units": mesh_units}
+    return {}
+
+
+def export_models(
+    model,
+    paths: Iterable,
+    *,
+    cad=None,
+    plate_thickness: float | None = None,
+    step_schema: str = "AP214",
+    mesh_units: str | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
+) -> list[ExportResult]:
+    """Write ``model`` to every path, all or nothing.
+
+    Parameters
+    ----------
+    model : asbuilt.model.Model
+        Metres, scan frame.
+    paths : iterable of str or Path
+        Outputs; each suffix picks the format (:data:`SUFFIXES`).
+    cad : asbuilt.cad.CadModel, optional
+        Solids already built for ``model`` (built here when a CAD format needs them).
+    plate_thickness : float, metres, optional
+        Thickness of plates made from planes (default ``Tolerances.plate_thickness``).
+    step_schema : {"AP214", "AP242"}
+    mesh_units : str, optional
+        Unit for STL/OBJ coordinates (default the model's ``units``).
+    progress : callable(task, done, total), optional
+        Told about solids built (``"solids"``) and files written (``"files"``).
+
+    Returns
+    -------
+    list of ExportResult
+        In the order of ``paths``.
+
+    Raises
+    ------
+    UnknownFormatError, ExportError, SolidBuildError
+        Before anything is renamed into place: no output is created or replaced on failure.
+    """
+    targets = [Path(p) for p in paths]
+    exporters = [exporter_for(p) for p in targets]
+    seen: set[Path] = set()
+    for target in targets:
+        key = target.resolve()
+        if key in seen:
+            raise ExportError(
+                "this output is given twice; name each output once", source=str(target)
+            )
+        seen.add(key)
+    mode = _file_mode()
+    with AtomicBatch() as batch:
+        temps = [batch.stage(target) for target in targets]
+        if cad is None and any(exporter.needs_cad for exporter in exporters):
+            from asbuilt.cad import prepare
+
+            def solids_progress(done: int, total: int) -> None:
+                if progress is not None:
+                    progress("solids", done, total)
+
+            cad = prepare(model, plate_thickness=plate_thickness, progress=solids_progress)
+        for done, (exporter, temp, target) in enumerate(zip(exporters, temps, targets), 1):
+            options = _writer_options(exporter, step_schema, mesh_units)
+            try:
+                exporter.write(cad if exporter.needs_cad else model, temp, **options)
+            except AsbuiltError as exc:
+                if getattr(exc, "source", None) in (None, str(temp)) and isinstance(
+                    exc, ExportError
+                ):
+                    raise type(exc)(exc.message, source=str(target), where=exc.where) from None
+                raise
+            except OSError as exc:
+                raise ExportError(
+                    f"cannot write the file ({exc.strerror or exc})", source=str(target)
+                ) from None
+            os.chmod(temp, mode)
+            if progress is not None:
+                progress("files", done, len(targets))
+    count = len(model.components)
+    return [
+        ExportResult(target, exporter.name, target.stat().st_size, count)
+        for exporter, target in zip(exporters, targets)
+    ]
+
+
+def export_model(model, path, **options) -> ExportResult:
+    """Write ``model`` to one ``path`` (format by suffix), atomically; see :func:`export_models`
+    for the options."""
+    return export_models(model, [path], **options)[0]
+
+
+def formats_table() -> Sequence[tuple[str, str, str]]:
+    """``(suffix, format name, description)`` for every known suffix (for help texts)."""
+    return [(e.suffix, e.name, e.description) for e in _EXPORTERS]

@@ -1,0 +1,215 @@
+"""DXF export (ezdxf): 3D meshes per object plus 2D plan and elevation views, in millimetres.
+
+Model space holds, all in millimetres (``$INSUNITS`` = 4):
+
+* each object's tessellated solid as a MESH entity on its own kind/size/group layer, e.g.
+  ``P-PIPE-NPS4-S1`` (piping), ``ASBUILT-CUBOID-COLUMNS`` (fitted objects); components with
+  findings carry the status colour (error red, warning amber) as true colour;
+* a plan view (XY, drawn at z = 0) on the layers ``PLAN-CENTRELINE``, ``PLAN-OUTLINE`` and
+  ``PLAN-TEXT``;
+* an elevation view (XZ, looking along +Y) drawn in the drawing's XY plane below the plan, on
+  ``ELEV-CENTRELINE``, ``ELEV-OUTLINE`` and ``ELEV-TEXT``.
+
+Pipes, bends, reducers, tees and fitted cylinders get centrelines; every other object gets the
+outline of its projection (the convex hull of its mesh, a circle for spheres). Object ids are
+TEXT entities in both views.
+"""
+
+from __future__ import annotations
+
+import re
+
+import ezdxf
+import numpy as np
+from ezdxf import colors as dxf_colors
+from scipy.spatial import ConvexHull, QhullError
+
+from asbuilt import __version__
+from asbuilt.cad.colours import KIND_COLOURS, rgb255
+from asbuilt.model import Bend, Reducer, Straight, Tee
+from asbuilt.primitives import Cylinder, Sphere
+
+__all__ = ["dxf_document", "write_dxf", "layer_name", "VIEW_LAYERS", "PIPING_TYPES"]
+
+#: Component types drawn on ``P-`` (piping) layers; the others go on ``ASBUILT-`` layers.
+PIPING_TYPES = ("pipe", "elbow", "tee", "reducer", "coupling")
+
+#: The 2D view layers with their ACI colour and linetype.
+VIEW_LAYERS = {
+    "PLAN-CENTRELINE": (1, "CENTER"),
+    "PLAN-OUTLINE": (7, "Continuous"),
+    "PLAN-TEXT": (3, "Continuous"),
+    "ELEV-CENTRELINE": (1, "CENTER"),
+    "ELEV-OUTLINE": (7, "Continuous"),
+    "ELEV-TEXT": (3, "Continuous"),
+}
+
+_MM = 1000.0
+_INVALID = re.compile(r"[<>/\\\":;?*|=',`\s]+")
+
+
+def _clean(text: str) -> str:
+    return _INVALID.sub("_", text.strip()).strip("_").upper() or "X"
+
+
+def layer_name(component, group: str | None) -> str:
+    """The 3D layer of a component: discipline, kind, nominal size, group.
+
+    ``P-PIPE-NPS4-S1`` for a 4" pipe of spool S1, ``P-ELBOW-NPS4`` for an ungrouped elbow,
+    ``ASBUILT-CUBOID-COLUMNS`` for a cuboid of group "columns". Characters DXF forbids in layer
+    names become ``_`` (``1-1/2`` -> ``NPS1-1_2``).
+    """
+    prefix = "P" if component.type in PIPING_TYPES else "ASBUILT"
+    parts = [prefix, component.type.upper()]
+    if component.nominal:
+        parts.append("NPS" + _clean(str(component.nominal)))
+    if group:
+        parts.append(_clean(group))
+    return "-".join(parts)
+
+
+def _nearest_aci(rgb: tuple[int, int, int]) -> int:
+    table = np.array([dxf_colors.int2rgb(v) for v in dxf_colors.DXF_DEFAULT_COLORS[1:256]])
+    return int(np.argmin(((table - np.array(rgb)) ** 2).sum(axis=1))) + 1
+
+
+def _centrelines(geometry) -> list[np.ndarray]:
+    """Centreline polylines of a piping geometry, each (k, 3) metres; [] for other shapes."""
+    if isinstance(geometry, (Straight, Reducer)):
+        return [np.array([geometry.start, geometry.end])]
+    if isinstance(geometry, Cylinder):
+        return [np.array(geometry.ends)]
+    if isinstance(geometry, Tee):
+        return [
+            np.array([geometry.run_start, geometry.run_end]),
+            np.array([geometry.center, geometry.branch_end]),
+        ]
+    if isinstance(geometry, Bend):
+        a = geometry.start - geometry.center
+        b = geometry.end - geometry.center
+        angle = np.radians(geometry.angle_deg)
+        steps = max(2, int(np.ceil(geometry.angle_deg / 5.0)) + 1)
+        t = np.linspace(0.0, 1.0, steps)[:, None] * angle
+        # Slerp between the two radius vectors (both of length bend_radius).
+        sin = np.sin(angle)
+        if sin < 1e-12:
+            return [np.array([geometry.start, geometry.end])]
+        points = (np.sin(angle - t) * a + np.sin(t) * b) / sin
+        return [geometry.center + points]
+    return []
+
+
+def _outline(points2d: np.ndarray) -> np.ndarray:
+    """Convex outline (k, 2) of projected points; a 2-point segment when they are collinear."""
+    try:
+        hull = ConvexHull(points2d)
+        return points2d[hull.vertices]
+    except (QhullError, ValueError):
+        centre = points2d.mean(axis=0)
+        rel = points2d - centre
+        _, _, vt = np.linalg.svd(rel, full_matrices=False)
+        s = rel @ vt[0]
+        return np.array([points2d[np.argmin(s)], points2d[np.argmax(s)]])
+
+
+def dxf_document(cad) -> ezdxf.document.Drawing:
+    """The DXF drawing of a CAD model (millimetres), see the module docstring.
+
+    Parameters
+    ----------
+    cad : asbuilt.cad.CadModel
+        Meshes in metres; converted to millimetres here.
+    """
+    doc = ezdxf.new("R2018", setup=True, units=ezdxf.units.MM)
+    doc.header["$MEASUREMENT"] = 1
+    doc.header["$LTSCALE"] = 20.0
+    doc.header["$PROJECTNAME"] = cad.name
+    doc.set_modelspace_vport(height=10_000)
+    msp = doc.modelspace()
+    for name, (colour, linetype) in VIEW_LAYERS.items():
+        doc.layers.add(name, color=colour, linetype=linetype)
+
+    parts = cad.parts
+    meshes = [cad.mesh(part) for part in parts]
+    if meshes:
+        every = np.concatenate([mesh.vertices for mesh in meshes]) * _MM
+        low, high = every.min(axis=0), every.max(axis=0)
+    else:
+        low = high = np.zeros(3)
+    extent = float(max(np.max(high - low), 1000.0))
+    text_height = max(25.0, extent / 150.0)
+    gap = max(1000.0, 0.15 * extent)
+    # The elevation is drawn below the plan: drawing y = z - elevation_shift.
+    elevation_shift = high[2] - low[1] + gap
+
+    def plan(points):  # (k, 3) mm -> (k, 2)
+        return points[:, :2]
+
+    def elevation(points):
+        return np.stack([points[:, 0], points[:, 2] - elevation_shift], axis=1)
+
+    msp.add_text(
+        "PLAN (XY)", height=2 * text_height, dxfattribs={"layer": "PLAN-TEXT"}
+    ).set_placement((low[0], high[1] + 2 * text_height))
+    msp.add_text(
+        "ELEVATION (XZ, looking +Y)", height=2 * text_height, dxfattribs={"layer": "ELEV-TEXT"}
+    ).set_placement((low[0], high[2] - elevation_shift + 2 * text_height))
+
+    for part, mesh in zip(parts, meshes):
+        layer = layer_name(part.component, part.group)
+        if layer not in doc.layers:
+            rgb = rgb255(KIND_COLOURS.get(part.component.type, (0.5, 0.5, 0.5, 1.0)))
+            entry = doc.layers.add(layer, color=_nearest_aci(rgb))
+            entry.rgb = rgb
+        attribs = {"layer": layer}
+        if part.status in ("error", "warning"):
+            attribs["true_color"] = dxf_colors.rgb2int(rgb255(part.colour))
+        vertices, faces = mesh.merged()
+        entity = msp.add_mesh(dxfattribs=attribs)
+        with entity.edit_data() as data:
+            data.vertices = [tuple(v) for v in (vertices * _MM).tolist()]
+            data.faces = [tuple(f) for f in faces.tolist()]
+
+        lines = [line * _MM for line in _centrelines(part.component.geometry)]
+        points = mesh.vertices * _MM
+        for project, prefix in ((plan, "PLAN"), (elevation, "ELEV")):
+            view_attribs = {"layer": f"{prefix}-CENTRELINE"}
+            outline_attribs = {"layer": f"{prefix}-OUTLINE"}
+            if part.status in ("error", "warning"):
+                view_attribs["true_color"] = attribs["true_color"]
+                outline_attribs["true_color"] = attribs["true_color"]
+            drawn = False
+            for line in lines:
+                flat = project(line)
+                if np.linalg.norm(flat[-1] - flat[0]) > 1.0 or len(flat) > 2:
+                    msp.add_lwpolyline(flat.tolist(), dxfattribs=view_attribs)
+                    drawn = True
+            geometry = part.component.geometry
+            if isinstance(geometry, Sphere):
+                centre = project(geometry.center[None, :] * _MM)[0]
+                msp.add_circle(tuple(centre), geometry.radius * _MM, dxfattribs=outline_attribs)
+            elif not drawn or not lines:
+                outline = _outline(project(points))
+                msp.add_lwpolyline(
+                    outline.tolist(), close=len(outline) > 2, dxfattribs=outline_attribs
+                )
+            anchor = project(0.5 * (points.min(axis=0) + points.max(axis=0))[None, :])[0]
+            msp.add_text(
+                part.id, height=text_height, dxfattribs={"layer": f"{prefix}-TEXT"}
+            ).set_placement((anchor[0], anchor[1] + 0.5 * text_height))
+    doc.header["$EXTMIN"] = (float(low[0]), float(high[2] - elevation_shift - extent), 0.0)
+    doc.header["$EXTMAX"] = tuple(float(v) for v in high)
+    doc.ezdxf_metadata()["CREATED_BY"] = f"asbuilt {__version__}"
+    return doc
+
+
+def write_dxf(cad, path) -> None:
+    """Write the CAD model as DXF R2018 to ``path`` (millimetres).
+
+    Parameters
+    ----------
+    cad : asbuilt.cad.CadModel
+    path : str or Path
+        Written directly; callers stage it for atomicity (:mod:`asbuilt.export`).
+    """
+    dxf_document(cad).saveas(str(path))

@@ -1,0 +1,437 @@
+"""The ``asbuilt-model`` JSON document: write it, read it back, rebuild a Model from it.
+
+The document (documented field by field in ``docs/model-format.md``) is plain data built
+first (:func:`model_document`) and then written atomically. Lengths are metres, angles
+degrees, in the scan frame (z up). Reading back (:func:`load_model_document`,
+:func:`model_from_document`) restores ids, types, geometry, sizes, spools, corrections and
+findings; the fits' residual arrays are not stored, only their summaries (``fitted``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from asbuilt.atomic import atomic_write
+from asbuilt.errors import ExportError
+from asbuilt.findings import Finding, Suggestion
+from asbuilt.model import Bend, Component, Correction, Model, Reducer, Spool, Straight, Tee
+from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+
+__all__ = [
+    "FORMAT",
+    "VERSION",
+    "ModelDocumentError",
+    "model_document",
+    "dumps_model",
+    "write_model_json",
+    "load_model_document",
+    "model_from_document",
+    "load_model",
+]
+
+FORMAT = "asbuilt-model"
+VERSION = 1
+
+
+class ModelDocumentError(ExportError):
+    """An ``asbuilt-model`` document is malformed (not JSON, wrong format, bad field)."""
+
+
+def _json(value):
+    """Plain JSON data from numpy arrays, tuples, mappings and non-finite floats (-> None)."""
+    if isinstance(value, Mapping):
+        return {str(k): _json(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return _json(value.tolist())
+    if isinstance(value, (list, tuple)):
+        return [_json(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        number = float(value)
+        return number if math.isfinite(number) else None
+    if value is None or isinstance(value, str):
+        return value
+    return str(value)
+
+
+def _geometry_fields(geometry) -> dict:
+    if isinstance(geometry, Straight):
+        return {
+            "shape": "straight",
+            "start": geometry.start,
+            "end": geometry.end,
+            "od": 2 * geometry.outer_radius,
+            "wall": geometry.wall,
+            "length": geometry.length,
+        }
+    if isinstance(geometry, Bend):
+        return {
+            "shape": "bend",
+            "center": geometry.center,
+            "ends": [geometry.start, geometry.end],
+            "od": 2 * geometry.outer_radius,
+            "wall": geometry.wall,
+            "bend_radius": geometry.bend_radius,
+            "angle_deg": geometry.angle_deg,
+        }
+    if isinstance(geometry, Reducer):
+        return {
+            "shape": "reducer",
+            "start": geometry.start,
+            "end": geometry.end,
+            "od_start": 2 * geometry.outer_radius_start,
+            "od_end": 2 * geometry.outer_radius_end,
+            "wall": geometry.wall,
+        }
+    if isinstance(geometry, Tee):
+        return {
+            "shape": "tee",
+            "center": geometry.center,
+            "run": [geometry.run_start, geometry.run_end],
+            "branch_end": geometry.branch_end,
+            "od": 2 * geometry.outer_radius,
+            "branch_od": 2 * geometry.branch_outer_radius,
+            "wall": geometry.wall,
+        }
+    if isinstance(geometry, Cylinder):
+        start, end = geometry.ends
+        return {
+            "shape": "cylinder",
+            "center": geometry.center,
+            "axis": geometry.axis,
+            "radius": geometry.radius,
+            "length": geometry.length,
+            "od": 2 * geometry.radius,
+            "start": start,
+            "end": end,
+        }
+    if isinstance(geometry, Cuboid):
+        return {
+            "shape": "cuboid",
+            "center": geometry.center,
+            "axes": geometry.axes,
+            "size": geometry.size,
+        }
+    if isinstance(geometry, Sphere):
+        return {"shape": "sphere", "center": geometry.center, "radius": geometry.radius}
+    if isinstance(geometry, Plane):
+        return {
+            "shape": "plane",
+            "point": geometry.point,
+            "normal": geometry.normal,
+            "outline": geometry.outline,
+        }
+    if isinstance(geometry, Hull):
+        return {"shape": "hull", "vertices": geometry.vertices, "faces": geometry.faces}
+    raise TypeError(f"no document form for geometry {type(geometry).__name__}")
+
+
+def _fitted(fit) -> dict | None:
+    if fit is None:
+        return None
+    primitive = fit.primitive
+    summary = {
+        "kind": fit.kind,
+        "method": fit.method,
+        "points": fit.n_points,
+        "inliers": fit.n_inliers,
+        "rms": fit.rms,
+        "max_residual": fit.max_residual,
+        "sigma": fit.sigma,
+        "sigma_source": fit.sigma_source,
+    }
+    if hasattr(primitive, "radius"):
+        summary["radius"] = primitive.radius
+    if isinstance(primitive, Cuboid):
+        summary["size"] = primitive.size
+    summary["stderr"] = dict(fit.stderr)
+    summary["observed"] = list(fit.observed) if fit.observed is not None else None
+    summary["diagnostics"] = dict(fit.diagnostics)
+    summary["notes"] = list(fit.notes)
+    return summary
+
+
+def _component(component: Component) -> dict:
+    entry = {
+        "id": component.id,
+        "type": component.type,
+        "nominal": component.nominal,
+        "schedule": component.schedule,
+        **_geometry_fields(component.geometry),
+        "spool": component.spool,
+        "group": component.group,
+        "label": component.label,
+        "source": component.sources[0] if len(component.sources) == 1 else None,
+        "sources": list(component.sources),
+        "fitted": _fitted(component.fit),
+        "snap": dict(component.snap),
+        "corrections": [
+            {"what": c.what, "before": c.before, "after": c.after, "size": c.size, "unit": c.unit}
+            for c in component.corrections
+        ],
+    }
+    return entry
+
+
+def _finding(finding: Finding) -> dict:
+    return {
+        "code": finding.code,
+        "slug": finding.slug,
+        "severity": finding.severity,
+        "objects": list(finding.objects),
+        "location": finding.location,
+        "message": finding.message,
+        "measured": finding.measured,
+        "allowed": finding.allowed,
+        "stderr": finding.stderr,
+        "unit": finding.unit,
+        "suggestions": [
+            {"description": s.description, "change": dict(s.change), "unambiguous": s.unambiguous}
+            for s in finding.suggestions
+        ],
+        "unverifiable": finding.unverifiable,
+    }
+
+
+def model_document(model: Model) -> dict:
+    """The ``asbuilt-model`` document of a model, as plain JSON-ready data.
+
+    Parameters
+    ----------
+    model : Model
+        Lengths metres; the document keeps metres (``"units": "m"``) and records the model's
+        output unit as ``display_units``.
+    """
+    document = {
+        "format": FORMAT,
+        "version": VERSION,
+        "units": "m",
+        "display_units": model.units,
+        "name": model.name,
+        "source": model.scan.source if model.scan is not None else None,
+        "catalog": model.catalog,
+        "components": [_component(c) for c in model.components],
+        "spools": [
+            {"id": s.id, "components": list(s.components), "pipe_length": s.pipe_length}
+            for s in model.spools
+        ],
+        "findings": [_finding(f) for f in model.findings],
+    }
+    return _json(document)
+
+
+def dumps_model(model: Model) -> str:
+    """The model document as JSON text (2-space indent, keys in the documented order)."""
+    return json.dumps(model_document(model), indent=2, allow_nan=False) + "\n"
+
+
+def write_model_json(model: Model, path) -> None:
+    """Write the model document to ``path`` atomically (temporary file, then rename)."""
+    text = dumps_model(model)
+    with atomic_write(path, "w") as handle:
+        handle.write(text)
+
+
+def load_model_document(path) -> dict:
+    """Read and check an ``asbuilt-model`` JSON document; return it as plain data.
+
+    Raises
+    ------
+    ModelDocumentError
+        When the file is unreadable, not JSON, or not an ``asbuilt-model`` version 1 document.
+    """
+    source = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelDocumentError(f"cannot read the file ({exc.strerror})", source=source) from None
+    except UnicodeDecodeError:
+        raise ModelDocumentError("the file is not UTF-8 text", source=source) from None
+    try:
+        document = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ModelDocumentError(
+            f"not valid JSON (line {exc.lineno}: {exc.msg})", source=source
+        ) from None
+    _check_document(document, source)
+    return document
+
+
+def _check_document(document, source: str | None) -> None:
+    if not isinstance(document, dict):
+        raise ModelDocumentError("the document must be a JSON object", source=source)
+    if document.get("format") != FORMAT:
+        raise ModelDocumentError(
+            f"format is {document.get('format')!r}, expected {FORMAT!r}; is this a model file?",
+            source=source,
+            where="format",
+        )
+    if document.get("version") != VERSION:
+        raise ModelDocumentError(
+            f"version {document.get('version')!r} is not supported; this asbuilt reads "
+            f"version {VERSION}",
+            source=source,
+            where="version",
+        )
+    if document.get("units", "m") != "m":
+        raise ModelDocumentError(
+            "units must be 'm' (documents store metres)", source=source, where="units"
+        )
+    for key in ("components", "spools", "findings"):
+        if not isinstance(document.get(key, []), list):
+            raise ModelDocumentError("must be a list", source=source, where=key)
+
+
+def _geometry(entry: dict):
+    shape = entry.get("shape")
+    if shape == "straight":
+        return Straight(entry["start"], entry["end"], entry["od"] / 2, entry.get("wall") or 0.0)
+    if shape == "bend":
+        start, end = entry["ends"]
+        return Bend(start, end, entry["center"], entry["od"] / 2, entry.get("wall") or 0.0)
+    if shape == "reducer":
+        return Reducer(
+            entry["start"],
+            entry["end"],
+            entry["od_start"] / 2,
+            entry["od_end"] / 2,
+            entry.get("wall") or 0.0,
+        )
+    if shape == "tee":
+        run_start, run_end = entry["run"]
+        return Tee(
+            entry["center"],
+            run_start,
+            run_end,
+            entry["branch_end"],
+            entry["od"] / 2,
+            entry["branch_od"] / 2,
+            entry.get("wall") or 0.0,
+        )
+    if shape == "cylinder":
+        return Cylinder(entry["center"], entry["axis"], entry["radius"], entry["length"])
+    if shape == "cuboid":
+        return Cuboid(entry["center"], entry["axes"], entry["size"])
+    if shape == "sphere":
+        return Sphere(entry["center"], entry["radius"])
+    if shape == "plane":
+        outline = entry.get("outline") or np.zeros((0, 3))
+        return Plane(entry["point"], entry["normal"], outline)
+    if shape == "hull":
+        return Hull(entry["vertices"], entry["faces"])
+    raise ValueError(f"unknown shape {shape!r}")
+
+
+def _optional_float(value):
+    return None if value is None else float(value)
+
+
+def model_from_document(document: dict, *, source: str | None = None) -> Model:
+    """Rebuild a :class:`Model` from an ``asbuilt-model`` document (fits are not restored).
+
+    Raises
+    ------
+    ModelDocumentError
+        Naming the component or finding and field that is wrong.
+    """
+    _check_document(document, source)
+    components = []
+    for index, entry in enumerate(document.get("components", [])):
+        where = f"components[{index}] ({entry.get('id') if isinstance(entry, dict) else '?'})"
+        try:
+            sources = tuple(
+                entry.get("sources") or ([entry["source"]] if entry.get("source") else [])
+            )
+            components.append(
+                Component(
+                    id=str(entry["id"]),
+                    type=entry["type"],
+                    geometry=_geometry(entry),
+                    sources=sources,
+                    spool=entry.get("spool"),
+                    group=entry.get("group"),
+                    label=entry.get("label"),
+                    nominal=entry.get("nominal"),
+                    schedule=entry.get("schedule"),
+                    snap=entry.get("snap") or {},
+                    corrections=tuple(
+                        Correction(
+                            c["what"],
+                            c.get("before"),
+                            c.get("after"),
+                            float(c["size"]),
+                            c.get("unit", ""),
+                        )
+                        for c in entry.get("corrections") or ()
+                    ),
+                )
+            )
+        except KeyError as exc:
+            raise ModelDocumentError(
+                f"missing field {exc.args[0]!r}", source=source, where=where
+            ) from None
+        except (TypeError, ValueError, AttributeError) as exc:
+            raise ModelDocumentError(str(exc), source=source, where=where) from None
+    findings = []
+    for index, entry in enumerate(document.get("findings", [])):
+        try:
+            findings.append(
+                Finding(
+                    code=entry["code"],
+                    slug=entry["slug"],
+                    severity=entry["severity"],
+                    objects=tuple(entry.get("objects") or ()),
+                    message=entry["message"],
+                    location=entry.get("location"),
+                    measured=_optional_float(entry.get("measured")),
+                    allowed=_optional_float(entry.get("allowed")),
+                    stderr=_optional_float(entry.get("stderr")),
+                    unit=entry.get("unit", ""),
+                    suggestions=tuple(
+                        Suggestion(
+                            s["description"],
+                            s.get("change") or {},
+                            bool(s.get("unambiguous", False)),
+                        )
+                        for s in entry.get("suggestions") or ()
+                    ),
+                    unverifiable=bool(entry.get("unverifiable", False)),
+                )
+            )
+        except KeyError as exc:
+            raise ModelDocumentError(
+                f"missing field {exc.args[0]!r}", source=source, where=f"findings[{index}]"
+            ) from None
+        except (TypeError, ValueError, AttributeError) as exc:
+            raise ModelDocumentError(str(exc), source=source, where=f"findings[{index}]") from None
+    spools = tuple(
+        Spool(str(s["id"]), tuple(s.get("components") or ()), float(s.get("pipe_length") or 0.0))
+        for s in document.get("spools", [])
+    )
+    return Model(
+        components=tuple(components),
+        units=document.get("display_units") or "m",
+        name=document.get("name"),
+        catalog=document.get("catalog"),
+        spools=spools,
+        findings=tuple(findings),
+    )
+
+
+def load_model(path) -> Model:
+    """Read an ``asbuilt-model`` file and rebuild the :class:`Model` (see
+    :func:`model_from_document`)."""
+    return model_from_document(load_model_document(path), source=str(path))
+
+
+def _write_document(model: Model, path) -> None:
+    """Registry entry point: write the document to ``path`` directly (the caller stages it)."""
+    Path(path).write_text(dumps_model(model), encoding="utf-8")

@@ -1,0 +1,198 @@
+"""STEP export (AP214 by default, or AP242) with the assembly tree, names, colours, millimetres.
+
+The solids are in metres; the writer is told so (``xstep.cascade.unit = M``) and declares
+millimetres in the file (``write.step.unit = MM``), so OpenCASCADE scales every length by 1000
+on the way out. :func:`read_step` reads a file back through the XCAF document (names, tree,
+colours, volumes) for checks.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from OCP.BRepGProp import BRepGProp
+from OCP.GProp import GProp_GProps
+from OCP.IFSelect import IFSelect_RetDone
+from OCP.Interface import Interface_Static
+from OCP.Quantity import Quantity_Color, Quantity_ColorRGBA
+from OCP.STEPCAFControl import STEPCAFControl_Reader
+from OCP.TCollection import TCollection_ExtendedString
+from OCP.TDataStd import TDataStd_Name
+from OCP.TDF import TDF_Label, TDF_LabelSequence
+from OCP.TDocStd import TDocStd_Document
+from OCP.TopAbs import TopAbs_SOLID
+from OCP.TopExp import TopExp_Explorer
+from OCP.XCAFDoc import (
+    XCAFDoc_ColorGen,
+    XCAFDoc_ColorSurf,
+    XCAFDoc_ColorTool,
+    XCAFDoc_DocumentTool,
+)
+
+from asbuilt.errors import ExportError
+
+__all__ = ["SCHEMAS", "write_step", "read_step", "StepSolid", "declared_length_unit"]
+
+#: Schema names accepted by :func:`write_step` mapped to OpenCASCADE's ``write.step.schema``.
+SCHEMAS = {"AP214": "AP214IS", "AP242": "AP242DIS"}
+
+
+def _set(name: str, value: str) -> str:
+    previous = Interface_Static.CVal_s(name)
+    Interface_Static.SetCVal_s(name, value)
+    return previous
+
+
+def write_step(cad, path, *, schema: str = "AP214") -> None:
+    """Write the CAD model's assembly as STEP to ``path`` (lengths in millimetres).
+
+    Parameters
+    ----------
+    cad : asbuilt.cad.CadModel
+        Solids in metres.
+    path : str or Path
+        Written directly; callers stage it for atomicity (:mod:`asbuilt.export`).
+    schema : {"AP214", "AP242"}
+    """
+    from cadquery.occ_impl.exporters.assembly import exportAssembly
+
+    key = schema.upper()
+    if key not in SCHEMAS:
+        raise ExportError(
+            f"unknown STEP schema {schema!r}; use one of {', '.join(SCHEMAS)}", source=str(path)
+        )
+    previous_schema = _set("write.step.schema", SCHEMAS[key])
+    previous_unit = Interface_Static.CVal_s("xstep.cascade.unit")
+    try:
+        ok = exportAssembly(cad.assembly(), str(path), unit="M", outputUnit="MM")
+    finally:
+        _set("write.step.schema", previous_schema)
+        _set("xstep.cascade.unit", previous_unit)
+    if not ok:
+        raise ExportError("the STEP writer failed; check the disk and try again", source=str(path))
+
+
+@dataclass(frozen=True)
+class StepSolid:
+    """One solid read back from a STEP file.
+
+    ``name`` is its product (instance) name, ``path`` the names from the root down to it,
+    ``volume`` in cubic millimetres, ``colour`` RGBA 0..1 (sRGB, as in the file) or None, ``solids`` the number of
+    solids in the leaf shape.
+    """
+
+    name: str
+    path: tuple[str, ...]
+    volume: float
+    colour: tuple[float, float, float, float] | None
+    solids: int
+
+
+def _name(label: TDF_Label) -> str:
+    attr = TDataStd_Name()
+    if label.FindAttribute(TDataStd_Name.GetID_s(), attr):
+        return str(attr.Get().ToExtString())
+    return ""
+
+
+def _colour(color_tool, label: TDF_Label, shape) -> tuple[float, float, float, float] | None:
+    colour = Quantity_ColorRGBA()
+    found = any(
+        XCAFDoc_ColorTool.GetColor_s(label, kind, colour)
+        for kind in (XCAFDoc_ColorSurf, XCAFDoc_ColorGen)
+    ) or color_tool.GetColor(shape, XCAFDoc_ColorSurf, colour)
+    if not found:
+        return None
+    rgb = colour.GetRGB()
+    srgb = (
+        Quantity_Color.Convert_LinearRGB_To_sRGB_s(c) for c in (rgb.Red(), rgb.Green(), rgb.Blue())
+    )
+    return (*srgb, colour.Alpha())
+
+
+def _count_solids(shape) -> int:
+    explorer = TopExp_Explorer(shape, TopAbs_SOLID)
+    count = 0
+    while explorer.More():
+        count += 1
+        explorer.Next()
+    return count
+
+
+def read_step(path) -> list[StepSolid]:
+    """Read a STEP file's leaf solids with their names, tree paths, volumes and colours.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    list of StepSolid
+        In the file's tree order; volumes in mm^3 whatever unit the file declares.
+    """
+    previous_unit = _set("xstep.cascade.unit", "MM")
+    try:
+        reader = STEPCAFControl_Reader()
+        reader.SetColorMode(True)
+        reader.SetNameMode(True)
+        if reader.ReadFile(str(path)) != IFSelect_RetDone:
+            raise ExportError("not a readable STEP file", source=str(path))
+        doc = TDocStd_Document(TCollection_ExtendedString("XmlXCAF"))
+        reader.Transfer(doc)
+    finally:
+        _set("xstep.cascade.unit", previous_unit)
+    shape_tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    color_tool = XCAFDoc_DocumentTool.ColorTool_s(doc.Main())
+    found: list[StepSolid] = []
+
+    def leaf(label: TDF_Label, instance: TDF_Label, trail: tuple[str, ...]) -> None:
+        shape = shape_tool.GetShape_s(label)
+        props = GProp_GProps()
+        BRepGProp.VolumeProperties_s(shape, props)
+        colour = _colour(color_tool, instance, shape) or _colour(color_tool, label, shape)
+        found.append(StepSolid(trail[-1], trail, props.Mass(), colour, _count_solids(shape)))
+
+    def visit(label: TDF_Label, trail: tuple[str, ...]) -> None:
+        components = TDF_LabelSequence()
+        shape_tool.GetComponents_s(label, components)
+        for i in range(1, components.Length() + 1):
+            comp = components.Value(i)
+            ref = TDF_Label()
+            shape_tool.GetReferredShape_s(comp, ref)
+            name = _name(comp) or _name(ref)
+            if shape_tool.IsAssembly_s(ref):
+                visit(ref, (*trail, _name(ref) or name))
+            else:
+                leaf(ref, comp, (*trail, name))
+
+    roots = TDF_LabelSequence()
+    shape_tool.GetFreeShapes(roots)
+    for i in range(1, roots.Length() + 1):
+        root = roots.Value(i)
+        if shape_tool.IsAssembly_s(root):
+            visit(root, (_name(root),))
+        else:
+            leaf(root, root, (_name(root),))
+    return found
+
+
+_UNIT = re.compile(r"LENGTH_UNIT\(\)\s*NAMED_UNIT\(\*\)\s*SI_UNIT\((\.\w+\.|\$),\s*\.METRE\.\)")
+
+
+def declared_length_unit(path) -> str:
+    """The length unit a STEP file declares: ``"mm"``, ``"m"``, ``"cm"``..., read from its text.
+
+    Raises
+    ------
+    ExportError
+        When the file declares no SI length unit.
+    """
+    text = Path(path).read_text(encoding="latin-1")
+    match = _UNIT.search(text)
+    if match is None:
+        raise ExportError("the STEP file declares no SI length unit", source=str(path))
+    prefix = {"$": "", ".MILLI.": "m", ".CENTI.": "c", ".KILO.": "k", ".DECI.": "d"}
+    return prefix.get(match.group(1), match.group(1).strip(".").lower()) + "m"
