@@ -48,6 +48,7 @@ def register(subparsers) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Load, fit, print; return the exit code (0). Bad input raises an AsbuiltError (exit 2)."""
     import json
+    import os
     import sys
 
     from rich.console import Console
@@ -94,5 +95,8 @@ def run(args: argparse.Namespace) -> int:
         table.add_column(column, no_wrap=column in ("id", "kind", "inliers"))
     for row in fit_table_rows(report, units):
         table.add_row(*row)
-    Console(file=sys.stdout, highlight=False).print(table)
+    out = Console(file=sys.stdout, highlight=False)
+    if not out.is_terminal and "COLUMNS" not in os.environ:
+        out.width = 160  # piped to a file or pager: room for one line per object
+    out.print(table)
     return 0

@@ -1,0 +1,257 @@
+"""``asbuilt fit``: table, ``--json``, ``--units``, ``--output``; every bad input is one line, exit 2.
+
+In-process through :func:`asbuilt.cli.main` (with capsys) and as a subprocess
+(``python -m asbuilt fit ...``). The table of bad documents is shared with tests/scan.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import subprocess
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from asbuilt.cli import main
+from asbuilt.errors import FitError
+from asbuilt.fit import FITTERS
+from asbuilt.fit.result import FitResult
+from asbuilt.primitives import Sphere
+from asbuilt.scan import MAX_FILE_BYTES
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _load_cases():
+    spec = importlib.util.spec_from_file_location(
+        "scan_cases_for_cli", ROOT / "tests" / "scan" / "scan_cases.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+cases = _load_cases()
+BAD = cases.BAD
+make_doc = cases.make_doc
+
+
+def _stand_in(points, *, sigma=None, tolerances=None) -> FitResult:
+    """A deterministic stand-in fit: sphere at the centroid (the CLI is under test, not the fit)."""
+    center = points.mean(axis=0)
+    sphere = Sphere(center, np.linalg.norm(points - center, axis=1).mean())
+    return FitResult(
+        primitive=sphere,
+        residuals=sphere.distance(points),
+        inliers=np.ones(len(points), bool),
+        stderr={"radius": 1e-4},
+        sigma=sigma or 1e-3,
+        sigma_source="sensor" if sigma else "residuals",
+        method="centroid (test stand-in)",
+    )
+
+
+def _refuse(points, *, sigma=None, tolerances=None) -> FitResult:
+    raise FitError("the points are coplanar; a sphere needs points off one plane")
+
+
+@pytest.fixture
+def stand_ins(monkeypatch):
+    module = types.ModuleType("cli_stand_in_fits")
+    module.fit = _stand_in
+    module.refuse = _refuse
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    for kind in FITTERS:
+        monkeypatch.setitem(FITTERS, kind, (module.__name__, "fit"))
+    return module
+
+
+@pytest.fixture
+def scan_file(tmp_path, monkeypatch):
+    """Write a document as tmp_path/scan.json and chdir there; return the file name."""
+    monkeypatch.chdir(tmp_path)
+
+    def write(document, name="scan.json"):
+        text = document if isinstance(document, str) else json.dumps(document)
+        (tmp_path / name).write_text(text, encoding="utf-8")
+        return name
+
+    return write
+
+
+def run_cli(capsys, *argv):
+    code = main(["fit", *argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_table_by_default(stand_ins, scan_file, capsys):
+    code, out, err = run_cli(capsys, scan_file(make_doc("mm")))
+    assert code == 0 and err == ""
+    for object_id in ("K1", "K2", "K3", "K4", "K5", "K6"):
+        assert object_id in out
+    assert "auto→sphere" in out and "6 objects" in out
+    assert "rms" in out and "inliers" in out
+
+
+def test_json_in_the_scan_units(stand_ins, scan_file, capsys):
+    code, out, err = run_cli(capsys, scan_file(make_doc("mm")), "--json")
+    assert code == 0 and err == ""
+    data = json.loads(out)
+    assert data["units"] == "mm"
+    assert [o["id"] for o in data["objects"]] == ["K1", "K2", "K3", "K4", "K5", "K6"]
+    sphere = data["objects"][2]
+    points = cases.surface_points("sphere") * 1000.0  # what the stand-in does, in mm
+    centre = points.mean(axis=0)
+    assert sphere["kind"] == "sphere" and sphere["center"] == pytest.approx(centre.tolist())
+    assert sphere["radius"] == pytest.approx(np.linalg.norm(points - centre, axis=1).mean())
+    auto = data["objects"][5]
+    assert auto["kind"] == "auto" and auto["chosen"] == "sphere"
+
+
+def test_units_option(stand_ins, scan_file, capsys):
+    name = scan_file(make_doc("mm"))
+    _, out_mm, _ = run_cli(capsys, name, "--json")
+    code, out_in, _ = run_cli(capsys, name, "--json", "--units", "in")
+    assert code == 0
+    mm, inch = json.loads(out_mm), json.loads(out_in)
+    assert inch["units"] == "in"
+    for a, b in zip(mm["objects"], inch["objects"]):
+        assert b["center"] == pytest.approx([c / 25.4 for c in a["center"]])
+        assert b["stderr"]["radius"] == pytest.approx(a["stderr"]["radius"] / 25.4)
+
+
+def test_output_file_is_written_instead_of_stdout(stand_ins, scan_file, capsys, tmp_path):
+    name = scan_file(make_doc())
+    _, expected, _ = run_cli(capsys, name, "--json")
+    code, out, err = run_cli(capsys, name, "--json", "--output", "fits.json")
+    assert code == 0 and out == ""
+    assert err.strip() == "wrote fits.json"
+    assert (tmp_path / "fits.json").read_text(encoding="utf-8") == expected
+    assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".part")] == []
+    code, out, _ = run_cli(capsys, name, "-o", "again.json")
+    assert code == 0 and "K1" in out  # without --json the table still goes to stdout
+    assert json.loads((tmp_path / "again.json").read_text(encoding="utf-8")) == json.loads(expected)
+
+
+def test_output_into_a_missing_directory(stand_ins, scan_file, capsys):
+    code, out, err = run_cli(capsys, scan_file(make_doc()), "--json", "-o", "no/such/dir.json")
+    assert code == 2 and out == ""
+    assert err == (
+        "asbuilt: error: no/such/dir.json: directory does not exist; create it or choose "
+        "another --out\n"
+    )
+
+
+@pytest.mark.parametrize("case", BAD, ids=[case.name for case in BAD])
+def test_bad_scan_is_one_line_exit_2_and_no_output(case, scan_file, capsys, tmp_path):
+    name = scan_file(case.build(make_doc()))
+    code, out, err = run_cli(capsys, name, "--json", "--output", "out.json")
+    assert code == 2
+    assert out == ""
+    assert err == f"asbuilt: error: scan.json: {case.message}\n"
+    assert "Traceback" not in err
+    assert not (tmp_path / "out.json").exists()
+
+
+def test_missing_file(scan_file, capsys, tmp_path):
+    code, out, err = run_cli(capsys, "absent.json")
+    assert (code, out) == (2, "")
+    assert err == (
+        "asbuilt: error: absent.json: file does not exist; check the path and the current "
+        "directory\n"
+    )
+
+
+def test_too_large_file(scan_file, capsys, tmp_path):
+    with open(tmp_path / "big.json", "wb") as handle:
+        handle.truncate(MAX_FILE_BYTES + 1)
+    code, out, err = run_cli(capsys, "big.json", "-o", "out.json")
+    assert (code, out) == (2, "")
+    assert err == (
+        "asbuilt: error: big.json: is 64.0 MiB, too large to be a sparse scan (the limit is "
+        "64 MiB and 1,000,000 points); split it into several scans\n"
+    )
+    assert not (tmp_path / "out.json").exists()
+
+
+def test_a_failing_fit_is_located(stand_ins, scan_file, capsys, monkeypatch, tmp_path):
+    monkeypatch.setitem(FITTERS, "sphere", (stand_ins.__name__, "refuse"))
+    code, out, err = run_cli(capsys, scan_file(make_doc()), "--json", "-o", "out.json")
+    assert (code, out) == (2, "")
+    assert err == (
+        "asbuilt: error: scan.json: objects[2] (K3): the points are coplanar; a sphere needs "
+        "points off one plane\n"
+    )
+    assert not (tmp_path / "out.json").exists()
+
+
+def test_unknown_units_option(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["fit", "scan.json", "--units", "yd"])
+    assert exit_.value.code == 2
+    assert "invalid choice: 'yd'" in capsys.readouterr().err
+
+
+def test_help_lists_the_options(capsys):
+    with pytest.raises(SystemExit):
+        main(["fit", "--help"])
+    out = capsys.readouterr().out
+    for option in ("--json", "--units", "--output"):
+        assert option in out
+
+
+# --------------------------------------------------------------------------------------------
+# As a subprocess, with the real fits
+
+
+def _run(*argv, cwd):
+    return subprocess.run(
+        [sys.executable, "-m", "asbuilt", "fit", *argv],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+    )
+
+
+def test_subprocess_bad_input(tmp_path):
+    doc = make_doc()
+    doc["objects"][3]["points"][17 % 16][0] = float("nan")
+    (tmp_path / "scan.json").write_text(json.dumps(doc), encoding="utf-8")
+    done = _run("scan.json", "--json", cwd=tmp_path)
+    assert done.returncode == 2 and done.stdout == ""
+    assert (
+        done.stderr == "asbuilt: error: scan.json: objects[3] (K4).points[1]: coordinate is NaN\n"
+    )
+
+
+def test_subprocess_real_fits(tmp_path):
+    kinds = [k for k in ("cylinder", "cuboid", "sphere", "plane") if _exists(k)]
+    if not kinds:
+        pytest.skip("no real fit module is written yet")
+    doc = make_doc("mm", kinds=kinds)
+    doc["sensor"] = {"range_sigma": 0.5}
+    (tmp_path / "scan.json").write_text(json.dumps(doc), encoding="utf-8")
+    done = _run("scan.json", "--json", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    data = json.loads(done.stdout)
+    assert data["units"] == "mm" and [o["kind"] for o in data["objects"]] == kinds
+    by_kind = {o["kind"]: o for o in data["objects"]}
+    if "cylinder" in by_kind:
+        assert by_kind["cylinder"]["radius"] == pytest.approx(57.15, abs=0.1)
+        assert by_kind["cylinder"]["sigma"] == pytest.approx(0.5)
+    if "sphere" in by_kind:
+        assert by_kind["sphere"]["radius"] == pytest.approx(300.0, abs=0.1)
+    table = _run("scan.json", cwd=tmp_path)
+    assert table.returncode == 0 and "K1" in table.stdout and table.stderr == ""
+
+
+def _exists(kind: str) -> bool:
+    return importlib.util.find_spec(FITTERS[kind][0]) is not None
