@@ -1,0 +1,108 @@
+"""Compliance checking: a spell checker for as-built models.
+
+::
+
+    from asbuilt.rules import check_model, load_rules, apply_fixes, RULES
+    findings = check_model(model)                    # shipped rules (asbuilt/data/rules.toml)
+    findings = check_model(model, load_rules("project-rules.toml"), design="design.json")
+    fixed, changes = apply_fixes(model, findings)    # accept every unambiguous suggestion
+
+Findings are data (:class:`asbuilt.findings.Finding`), sorted by severity then position. Each
+rule is uncertainty-aware: a violation is an error only when it exceeds the allowed value by more
+than ``k_sigma`` (2) standard errors; a measurement too uncertain to decide gives an
+``unverifiable`` warning that says what to scan. docs/rules.md documents every rule.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from asbuilt.findings import SEVERITIES, Finding
+from asbuilt.model import Model
+
+from . import alignment, clash, joints, quality, sizes
+from . import design as design_rules
+from ._catalog import SizeTable, size_table
+from ._context import Context
+from .config import RulesConfig, load_rules, loads_rules
+from .fixes import apply_fixes
+from .registry import RULES, Rule, match_rules, rule
+
+__all__ = [
+    "RULES",
+    "Rule",
+    "RulesConfig",
+    "SizeTable",
+    "load_rules",
+    "loads_rules",
+    "check_model",
+    "apply_fixes",
+    "sort_findings",
+    "rule",
+    "match_rules",
+]
+
+_NEEDS_TABLE = {"sizes", "joints"}
+_FAMILIES = {
+    "sizes": sizes,
+    "alignment": alignment,
+    "joints": joints,
+    "quality": quality,
+    "clash": clash,
+}
+_DESIGN_SLUGS = ("design-deviation", "missing-component", "extra-component")
+
+
+def _sort_key(finding: Finding):
+    loc = finding.location
+    position = (0, *np.round(loc, 6)) if loc is not None else (1, 0.0, 0.0, 0.0)
+    return (SEVERITIES.index(finding.severity), position, finding.code, finding.objects)
+
+
+def sort_findings(findings) -> tuple[Finding, ...]:
+    """Findings sorted by severity (errors first), then position (x, y, z), code and objects."""
+    return tuple(sorted(findings, key=_sort_key))
+
+
+def check_model(
+    model: Model, config: RulesConfig | None = None, design=None, *, catalog=None
+) -> tuple[Finding, ...]:
+    """Check a model against the rules.
+
+    Parameters
+    ----------
+    model : Model
+        Lengths in metres; pipes ideally merged and snapped (``component.snap``).
+    config : RulesConfig, optional
+        From :func:`load_rules`; None uses the shipped defaults.
+    design : asbuilt.design.Design or path, optional
+        The design to compare with (``design-deviation``, ``missing-component``,
+        ``extra-component`` run only with one).
+    catalog : SizeTable, catalog object or catalog name, optional
+        The pipe catalog for the size rules; defaults to ``model.catalog``.
+
+    Returns
+    -------
+    tuple of Finding
+        Sorted by severity, then position.
+    """
+    config = config or load_rules()
+    if design is not None and isinstance(design, (str, Path)):
+        from asbuilt.design import load_design
+
+        design = load_design(design)
+    table = size_table(catalog if catalog is not None else model.catalog)
+    ctx = Context(model=model, config=config, design=design, catalog=table)
+    for r in config.active_rules():
+        if r.slug in _DESIGN_SLUGS:
+            continue
+        check = _FAMILIES[r.family].CHECKS[r.slug]
+        if r.family in _NEEDS_TABLE:
+            check(ctx, table)
+        else:
+            check(ctx)
+    if design is not None and any(config.is_active(s) for s in _DESIGN_SLUGS):
+        design_rules.CHECKS["design-deviation"](ctx)
+    return sort_findings(ctx.findings)

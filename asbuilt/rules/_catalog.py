@@ -1,0 +1,128 @@
+"""The few catalog facts the rules need, read through one small adapter.
+
+:class:`SizeTable` holds a pipe catalog's sizes (nominal, DN, outside diameter in metres) and,
+when known, the 90 degree long-radius elbow centre-to-end of each size. :func:`size_table` builds
+one from a :class:`SizeTable`, a catalog object of :mod:`asbuilt.catalog`, or a catalog name.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+import numpy as np
+
+__all__ = ["SizeTable", "size_table", "nps_value"]
+
+
+def nps_value(nominal: str) -> float | None:
+    """The numeric value of a nominal size written like ``"1 1/2"``, ``"1-1/2"`` or ``"4"``."""
+    text = str(nominal).strip().replace("-", " ")
+    try:
+        return float(sum(Fraction(part) for part in text.split()))
+    except (ValueError, ZeroDivisionError):
+        return None
+
+
+@dataclass(frozen=True)
+class SizeTable:
+    """A pipe catalog's sizes.
+
+    Attributes
+    ----------
+    standard : str
+        The catalog's standard, for messages (``"ASME B36.10M"``).
+    designation : str
+        How sizes are written (``"NPS"``, ``"DN"``...).
+    sizes : tuple of (str, int or None, float)
+        ``(nominal, dn, od)``, the OD in metres, sorted by OD.
+    elbow_lr : dict
+        Nominal to the 90 degree long-radius elbow centre-to-end, metres (may be empty).
+    """
+
+    standard: str
+    designation: str
+    sizes: tuple[tuple[str, int | None, float], ...]
+    elbow_lr: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        object.__setattr__(self, "sizes", tuple(sorted(self.sizes, key=lambda s: s[2])))
+
+    def label(self, nominal: str) -> str:
+        """``"NPS 4"`` for nominal ``"4"``."""
+        return f"{self.designation} {nominal}".strip()
+
+    def od(self, nominal: str) -> float | None:
+        """The OD (metres) of a nominal size or an operator's hint (``4"``, ``NPS 4``, ``DN100``)."""
+        text = str(nominal).strip().lower().replace('"', "").replace("''", "")
+        text = re.sub(r"\s*(in|inch|inches)$", "", text).strip()
+        dn = re.fullmatch(r"dn\s*(\d+)", text)
+        if dn:
+            for _, size_dn, od in self.sizes:
+                if size_dn is not None and int(size_dn) == int(dn.group(1)):
+                    return od
+            return None
+        text = re.sub(rf"^{re.escape(self.designation.lower())}\s*", "", text)
+        text = re.sub(r"^nps\s*", "", text)
+        value = nps_value(text)
+        for size_nominal, _, od in self.sizes:
+            if size_nominal.strip().lower() == text or (
+                value is not None and nps_value(size_nominal) == value
+            ):
+                return od
+        return None
+
+    def nominal_for(self, od: float) -> str | None:
+        """The nominal size whose OD equals ``od`` within 0.05 mm."""
+        for nominal, _, size_od in self.sizes:
+            if abs(size_od - od) < 5e-5:
+                return nominal
+        return None
+
+    def nearest(self, od: float, count: int = 2) -> list[tuple[str, float, float]]:
+        """The ``count`` sizes nearest to ``od`` (metres): ``(nominal, od, od - size od)``."""
+        ranked = sorted(self.sizes, key=lambda s: abs(s[2] - od))[: max(int(count), 0)]
+        return [(n, s, od - s) for n, _, s in ranked]
+
+    def within(self, od: float, tolerance: float) -> list[tuple[str, float]]:
+        """Sizes whose OD is within ``tolerance`` metres of ``od``: ``(nominal, od)``."""
+        return [(n, s) for n, _, s in self.sizes if abs(s - od) <= tolerance]
+
+
+def _from_catalog(catalog) -> SizeTable | None:
+    """Conversion of an :class:`asbuilt.catalog.Catalog` (sizes in metres, fittings by size)."""
+    rows = getattr(catalog, "sizes", None)
+    if not rows:
+        return None
+    sizes, elbows = [], {}
+    fitting = getattr(catalog, "fitting", None)
+    for row in rows:
+        nominal, od = getattr(row, "nominal", None), getattr(row, "od", None)
+        if nominal is None or od is None:
+            continue
+        dn = getattr(row, "dn", None)
+        sizes.append((str(nominal), None if dn is None else int(dn), float(od)))
+        fit_row = fitting(row) if callable(fitting) else None
+        elbow = (getattr(fit_row, "dims", None) or {}).get("elbow90_lr") if fit_row else None
+        if elbow is not None and np.isfinite(elbow):
+            elbows[str(nominal)] = float(elbow)
+    if not sizes:
+        return None
+    standard = getattr(catalog, "standard", None) or getattr(catalog, "name", "the catalog")
+    designation = getattr(catalog, "designation", None) or "NPS"
+    return SizeTable(str(standard), str(designation), tuple(sizes), elbows)
+
+
+def size_table(catalog) -> SizeTable | None:
+    """A :class:`SizeTable` from a SizeTable, a catalog object or a catalog name (None if none)."""
+    if catalog is None or isinstance(catalog, SizeTable):
+        return catalog
+    if isinstance(catalog, str):
+        from asbuilt.catalog import load_catalog
+
+        catalog = load_catalog(catalog)
+    table = _from_catalog(catalog)
+    if table is not None and not np.all(np.isfinite([s[2] for s in table.sizes])):
+        return None
+    return table

@@ -1,0 +1,106 @@
+"""Which components are joined: touching ends, scan links, and ends near enough to be inferred.
+
+Used by the size, joint and clash rules. End points come from :func:`._context.ends_of`; a
+cKDTree finds close ends in O(n log n).
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from asbuilt.model import Component, Model
+
+from ._context import ends_of
+
+__all__ = ["end_pairs", "linked_pairs", "adjacency", "FITTING_PASS"]
+
+#: Fittings a size passes through unchanged (a reducer or a tee branch may change it).
+FITTING_PASS = ("elbow", "coupling")
+
+
+def end_pairs(components, distance: float) -> dict[frozenset, float]:
+    """Pairs of components with ends within ``distance`` metres: ``{frozenset(ids): gap m}``."""
+    points, owners = [], []
+    for comp in components:
+        for end in ends_of(comp.geometry):
+            points.append(end)
+            owners.append(comp.id)
+    found: dict[frozenset, float] = {}
+    if len(points) < 2:
+        return found
+    points = np.asarray(points)
+    tree = cKDTree(points)
+    for i, j in tree.query_pairs(distance):
+        if owners[i] == owners[j]:
+            continue
+        key = frozenset((owners[i], owners[j]))
+        gap = float(np.linalg.norm(points[i] - points[j]))
+        found[key] = min(gap, found.get(key, np.inf))
+    return found
+
+
+def linked_pairs(model: Model) -> set[frozenset]:
+    """Pairs of component ids joined by the scan's ``links`` (through their source objects)."""
+    if model.scan is None or not model.scan.links:
+        return set()
+    by_source = defaultdict(list)
+    for comp in model.components:
+        for source in comp.sources:
+            by_source[source].append(comp.id)
+    pairs = set()
+    for a, b in model.scan.links:
+        for ca in by_source.get(a, ()):
+            for cb in by_source.get(b, ()):
+                if ca != cb:
+                    pairs.add(frozenset((ca, cb)))
+    return pairs
+
+
+def adjacency(model: Model, touch: float, infer: float | None = None) -> dict[str, set[str]]:
+    """Component id to the ids it is joined to.
+
+    Joined: ends within ``touch`` metres, linked in the scan, or (pipes only, when ``infer`` is
+    given) ends within ``infer`` metres of each other.
+    """
+    graph: dict[str, set[str]] = defaultdict(set)
+    pairs = set(end_pairs(model.components, touch)) | linked_pairs(model)
+    if infer:
+        pipes = [c for c in model.components if c.type in ("pipe", "cylinder")]
+        pairs |= set(end_pairs(pipes, infer))
+    for pair in pairs:
+        a, b = tuple(pair)
+        graph[a].add(b)
+        graph[b].add(a)
+    return graph
+
+
+def contiguous_pipes(model: Model, graph: dict[str, set[str]], pipe_ids) -> list[tuple]:
+    """Pairs of pipes joined directly or through elbows and couplings only.
+
+    Returns ``(first id, second id, intermediate fitting ids)`` once per pair.
+    """
+    types = {c.id: c.type for c in model.components}
+    pipe_ids = set(pipe_ids)
+    result = {}
+    for start in sorted(pipe_ids):
+        stack = [(start, ())]
+        seen = {start}
+        while stack:
+            node, path = stack.pop()
+            for nxt in sorted(graph.get(node, ())):
+                if nxt in seen:
+                    continue
+                seen.add(nxt)
+                if nxt in pipe_ids:
+                    key = tuple(sorted((start, nxt)))
+                    result.setdefault(key, path)
+                elif types.get(nxt) in FITTING_PASS:
+                    stack.append((nxt, (*path, nxt)))
+    return [(a, b, path) for (a, b), path in sorted(result.items())]
+
+
+def component_map(model: Model) -> dict[str, Component]:
+    return {c.id: c for c in model.components}

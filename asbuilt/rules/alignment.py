@@ -1,0 +1,333 @@
+"""Alignment rules: misaligned-axis, out-of-plumb, slope.
+
+``misaligned-axis`` judges the *model's* axes (what merging regularised, and what ``--fix``
+can regularise further); ``out-of-plumb`` and ``slope`` judge the *measured* axes (the fitted
+primitive), because regularisation snaps axes within ``angle_snap_deg`` (2 degrees), far more
+than a plumb tolerance of 1:500 (0.11 degree) or a drainage slope of 1% (0.57 degree).
+
+Axis standard errors come from the fit (``stderr["axis_deg"]`` for cylinders, ``"axes_deg"``
+for cuboids); without them they are estimated as for a straight-line fit,
+``sigma / (L * sqrt(n / 12))`` radians for ``n`` points spread evenly over a length ``L``.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from asbuilt.findings import Suggestion
+from asbuilt.model import Component
+from asbuilt.primitives import Cuboid
+
+from ._catalog import nps_value
+from ._context import Context, axis_of, centre_of, deg, mm, stderr_value, verdict, verdict_min
+from ._graph import adjacency
+
+__all__ = ["CHECKS", "measured_axis", "axis_stderr_deg", "rotation_between", "material_of"]
+
+_Z = np.array([0.0, 0.0, 1.0])
+
+
+def measured_axis(component: Component, measured: bool = True):
+    """(unit axis (3,), length m, centre (3,) m) of the fitted primitive when ``measured`` and a
+    fit exists, else of the model geometry; None for geometries without one axis."""
+    if measured and component.fit is not None:
+        found = axis_of(component.fit.primitive)
+        if found is not None:
+            return found
+    return axis_of(component.geometry)
+
+
+def axis_stderr_deg(component: Component) -> float | None:
+    """Standard error (degrees) of a component's main axis direction, or None without a fit."""
+    fit = component.fit
+    if fit is None:
+        return None
+    prim = fit.primitive
+    if isinstance(prim, Cuboid):
+        value = stderr_value(fit.stderr, "axes_deg", int(np.argmax(prim.size)))
+    else:
+        value = stderr_value(fit.stderr, "axis_deg")
+    if value is not None and np.isfinite(value):
+        return value
+    found = axis_of(prim)
+    if found is None or fit.n_inliers < 3:
+        return None
+    length = max(found[1], 1e-9)
+    return float(np.degrees(fit.sigma / (length * np.sqrt(fit.n_inliers / 12.0))))
+
+
+def rotation_between(a, b) -> np.ndarray:
+    """The smallest rotation (3, 3) taking unit vector ``a`` to unit vector ``b`` (Rodrigues)."""
+    a = np.asarray(a, float) / np.linalg.norm(a)
+    b = np.asarray(b, float) / np.linalg.norm(b)
+    v = np.cross(a, b)
+    c = float(np.dot(a, b))
+    if np.linalg.norm(v) < 1e-12:
+        if c > 0:
+            return np.eye(3)
+        perp = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
+        perp /= np.linalg.norm(perp)
+        return 2 * np.outer(perp, perp) - np.eye(3)
+    vx = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + vx + vx @ vx * (1.0 / (1.0 + c))
+
+
+def _rot_z(angle_deg: float) -> np.ndarray:
+    t = np.radians(angle_deg)
+    return np.array([[np.cos(t), -np.sin(t), 0], [np.sin(t), np.cos(t), 0], [0, 0, 1.0]])
+
+
+def _elevation_deg(axis) -> float:
+    """Angle (degrees) between an axis and the horizontal plane, in [0, 90]."""
+    return float(np.degrees(np.arcsin(min(abs(float(axis[2])), 1.0))))
+
+
+def material_of(ctx: Context, component: Component) -> str:
+    """``"steel"`` or ``"concrete"`` from label/group keywords, else the rules' default."""
+    words = set(
+        re.split(
+            r"[^a-z0-9-]+",
+            " ".join(filter(None, (component.label, component.group, component.id))).lower(),
+        )
+    )
+    for material in ("concrete", "steel"):
+        if words & {k.lower() for k in ctx.general(f"{material}_keywords")}:
+            return material
+    return str(ctx.general("default_material"))
+
+
+def _plan_azimuth(component: Component) -> float | None:
+    """Plan direction (degrees, modulo 90) of a component's horizontal axis or a vertical box's
+    face; None when it has none."""
+    found = axis_of(component.geometry)
+    if found is None:
+        return None
+    axis = found[0]
+    intended = 45.0
+    if _elevation_deg(axis) < intended and np.hypot(axis[0], axis[1]) > 0:
+        return float(np.degrees(np.arctan2(axis[1], axis[0])) % 90.0)
+    geom = component.geometry
+    if isinstance(geom, Cuboid):
+        for row in geom.axes:
+            if abs(row[2]) < 0.5:
+                return float(np.degrees(np.arctan2(row[1], row[0])) % 90.0)
+    return None
+
+
+def check_misaligned(ctx: Context) -> None:
+    slug = "misaligned-axis"
+    snap = float(ctx.general("angle_snap_deg"))
+    intended = float(ctx.general("intended_angle_deg"))
+    comps = {c.id: c for c in ctx.model.components}
+    for comp in ctx.model.components:
+        found = axis_of(comp.geometry)
+        if found is None:
+            continue
+        axis, _, centre = found
+        elev = _elevation_deg(axis)
+        dev, direction = (90.0 - elev, "vertical") if elev > 45 else (elev, "horizontal")
+        if not snap < dev < intended:
+            continue
+        se = axis_stderr_deg(comp)
+        target = (
+            (np.sign(axis[2]) or 1.0) * _Z
+            if direction == "vertical"
+            else (np.array([axis[0], axis[1], 0.0]) / np.hypot(axis[0], axis[1]))
+        )
+        rot = rotation_between(axis, target)
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"axis is {deg(dev)} off {direction} (regularised within {deg(snap)}, intended "
+            f"beyond {deg(intended)})",
+            location=centre,
+            measured=dev,
+            allowed=snap,
+            stderr=se,
+            unit="deg",
+            outcome=verdict(dev, snap, se, ctx.k),
+            rescan=f"scan {comp.id} over a longer stretch to measure its axis better",
+            suggestions=(
+                Suggestion(
+                    f"make {comp.id}'s axis {direction} (rotate it {deg(dev)} about its centre)",
+                    {
+                        "object": comp.id,
+                        "field": "rotation",
+                        "value": rot.tolist(),
+                        "about": [float(x) for x in centre],
+                    },
+                    unambiguous=True,
+                ),
+            ),
+        )
+    if not ctx.opt(slug, "compare_in_plan"):
+        return
+    graph = adjacency(
+        ctx.model, float(ctx.opt("clash", "touch_distance")), float(ctx.general("joint_distance"))
+    )
+    done = set()
+    for a in sorted(graph):
+        for b in sorted(graph[a]):
+            pair = tuple(sorted((a, b)))
+            if pair in done or a not in comps or b not in comps:
+                continue
+            done.add(pair)
+            za, zb = _plan_azimuth(comps[pair[0]]), _plan_azimuth(comps[pair[1]])
+            if za is None or zb is None:
+                continue
+            diff = (zb - za) % 90.0
+            dev = min(diff, 90.0 - diff)
+            if not snap < dev < intended:
+                continue
+            sa, sb = axis_stderr_deg(comps[pair[0]]), axis_stderr_deg(comps[pair[1]])
+            se = float(np.hypot(sa or 0.0, sb or 0.0)) if (sa or sb) else None
+            turn = -diff if diff < 45 else 90.0 - diff
+            second = comps[pair[1]]
+            centre = centre_of(second.geometry)
+            ctx.emit(
+                slug,
+                list(pair),
+                f"axis is {deg(dev)} off parallel/perpendicular to {pair[0]} in plan "
+                f"(regularised within {deg(snap)}, intended beyond {deg(intended)})",
+                location=centre,
+                measured=dev,
+                allowed=snap,
+                stderr=se,
+                unit="deg",
+                outcome=verdict(dev, snap, se, ctx.k),
+                rescan=f"scan {pair[0]} and {pair[1]} over longer stretches",
+                suggestions=(
+                    Suggestion(
+                        f"turn {pair[1]} {deg(abs(turn))} about the vertical to line up with "
+                        f"{pair[0]}",
+                        {
+                            "object": pair[1],
+                            "field": "rotation",
+                            "value": _rot_z(turn).tolist(),
+                            "about": [float(x) for x in centre],
+                        },
+                        unambiguous=True,
+                    ),
+                ),
+            )
+
+
+def check_plumb(ctx: Context) -> None:
+    slug = "out-of-plumb"
+    intended = float(ctx.general("intended_angle_deg"))
+    for comp in ctx.model.components:
+        if comp.type not in ("cuboid", "cylinder", "pipe"):
+            continue
+        found = measured_axis(comp)
+        if found is None:
+            continue
+        axis, height, centre = found
+        lean_deg = 90.0 - _elevation_deg(axis)
+        if lean_deg >= intended:
+            continue
+        se_deg = axis_stderr_deg(comp)
+        if comp.type == "cuboid":
+            material = material_of(ctx, comp)
+        else:
+            material = "pipe"
+        if material == "steel":
+            ratio = float(ctx.opt(slug, "steel_ratio"))
+            allowed = height / ratio
+            standard = "AISC 303-16 7.13.1.1"
+        elif material == "concrete":
+            allowed = min(
+                float(ctx.opt(slug, "concrete_fraction")) * height,
+                float(ctx.opt(slug, "concrete_max")),
+            )
+            ratio = height / allowed
+            standard = "ACI 117-10"
+        else:
+            ratio = float(ctx.opt(slug, "pipe_ratio"))
+            allowed = height / ratio
+            standard = "rules file pipe_ratio"
+        lean = height * np.tan(np.radians(lean_deg))
+        se = None if se_deg is None else height * np.radians(se_deg)
+        outcome = verdict(lean, allowed, se, ctx.k)
+        if material == "pipe" and outcome == "unverifiable":
+            continue  # no plumb standard for pipes: only clear leans are reported
+        shown = f"1:{height / lean:.0f}" if lean > 0 else "plumb"
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"leans {mm(lean)} over {height:.2f} m ({shown}), allowed {mm(allowed)} "
+            f"(1:{ratio:.0f}, {standard})"
+            + (
+                f"; the lean is known to +- {mm(se)} only"
+                if outcome == "unverifiable" and se
+                else ""
+            ),
+            location=centre,
+            measured=lean,
+            allowed=allowed,
+            stderr=se,
+            unit="m",
+            outcome=outcome,
+            rescan=f"scan more points on {comp.id} over a longer stretch of its height (near the "
+            "top and the bottom) and on a second face",
+            suggestions=()
+            if outcome == "unverifiable"
+            else (Suggestion(f"survey {comp.id}'s plumb and realign or shim it"),),
+        )
+
+
+def _required_slope(ctx: Context, comp: Component) -> float:
+    required = float(ctx.opt("slope", "required"))
+    if ctx.opt("slope", "use_ipc_704") and comp.nominal:
+        nps = nps_value(comp.nominal)
+        if nps is not None:
+            return 0.02 if nps <= 2.5 else 0.01 if nps <= 6 else 0.005
+    return required
+
+
+def check_slope(ctx: Context) -> None:
+    slug = "slope"
+    intended = float(ctx.general("intended_angle_deg"))
+    keywords = [k.lower() for k in ctx.opt(slug, "keywords")]
+    for comp in ctx.pipes:
+        if keywords:
+            text = " ".join(filter(None, (comp.label, comp.group))).lower()
+            if not any(k in text for k in keywords):
+                continue
+        required = _required_slope(ctx, comp)
+        if required <= 0:
+            continue
+        found = measured_axis(comp)
+        if found is None:
+            continue
+        axis, _, centre = found
+        elev = _elevation_deg(axis)
+        if elev >= intended:
+            continue
+        slope = float(np.tan(np.radians(elev)))
+        se_deg = axis_stderr_deg(comp)
+        se = None if se_deg is None else float(np.radians(se_deg))
+        outcome = verdict_min(slope, required, se, ctx.k)
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"slope {slope * 100:.2f}% is below the required drainage slope {required * 100:.2f}%",
+            location=centre,
+            measured=slope,
+            allowed=required,
+            stderr=se,
+            unit="ratio",
+            outcome=outcome,
+            rescan=f"scan {comp.id} over a longer stretch to measure its slope better",
+            suggestions=()
+            if outcome == "unverifiable"
+            else (Suggestion(f"regrade {comp.id} to at least {required * 100:.2f}%"),),
+        )
+
+
+CHECKS = {
+    "misaligned-axis": check_misaligned,
+    "out-of-plumb": check_plumb,
+    "slope": check_slope,
+}

@@ -1,0 +1,276 @@
+"""Design comparison rules: design-deviation, missing-component, extra-component.
+
+Matching is :func:`asbuilt.design.match_design`. For each matched pair: pipes are checked for
+size (the as-built nominal against the designed one), length (PFI ES-3 spool length tolerance by
+NPS), position (largest distance of the as-built ends from the designed axis line) and direction;
+columns for position (the axis's plan offset at the designed base height) and section (ACI 117,
++10 / -6 mm); boxes for centre position and edge sizes. Standard errors come from the fit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from asbuilt.design import built_axis, match_design
+from asbuilt.findings import Suggestion
+from asbuilt.model import Straight
+from asbuilt.primitives import Cuboid, Cylinder
+
+from ._catalog import nps_value
+from ._context import Context, centre_of, deg, mm, stderr_value, verdict
+from .alignment import axis_stderr_deg
+
+__all__ = ["CHECKS"]
+
+
+def _length_tolerance(ctx: Context, nominal: str | None) -> tuple[float, str]:
+    rows = ctx.opt("design-deviation", "length_tolerance")
+    nps = nps_value(nominal) if nominal else None
+    if nps is None:
+        return float(rows[0][1]), "PFI ES-3, size unknown"
+    for limit, tol in rows:
+        if nps <= limit:
+            return float(tol), f"PFI ES-3, NPS {nominal}"
+    return float(ctx.opt("design-deviation", "length_tolerance_above")), f"PFI ES-3, NPS {nominal}"
+
+
+def _ends(geometry):
+    if isinstance(geometry, Straight):
+        return np.array(geometry.start), np.array(geometry.end)
+    if isinstance(geometry, Cylinder):
+        return tuple(np.array(e) for e in geometry.ends)
+    if isinstance(geometry, Cuboid):
+        i = int(np.argmax(geometry.size))
+        half = 0.5 * geometry.size[i] * geometry.axes[i]
+        return geometry.center - half, geometry.center + half
+    return None
+
+
+def _line_distance(points, start, axis) -> float:
+    rel = np.asarray(points) - start
+    return float(np.max(np.linalg.norm(rel - np.outer(rel @ axis, axis), axis=1)))
+
+
+def _emit(
+    ctx,
+    comp,
+    designed,
+    aspect,
+    measured_text,
+    measured,
+    allowed,
+    se,
+    unit,
+    standard,
+    outcome,
+    suggestion=None,
+):
+    ctx.emit(
+        "design-deviation",
+        [comp.id],
+        f"{aspect} deviates from design {designed.id}: {measured_text}, allowed {standard}",
+        location=centre_of(comp.geometry),
+        measured=measured,
+        allowed=allowed,
+        stderr=se,
+        unit=unit,
+        outcome=outcome,
+        rescan=f"scan {comp.id} with more points to measure its {aspect} better",
+        suggestions=(suggestion,) if suggestion else (),
+    )
+
+
+def _check_pipe(ctx, designed, comp):
+    fit = comp.fit
+    ends = _ends(comp.geometry)
+    if ends is None:
+        return
+    if designed.nominal and comp.nominal and nps_value(designed.nominal) != nps_value(comp.nominal):
+        ctx.emit(
+            "design-deviation",
+            [comp.id],
+            f"size deviates from design {designed.id}: NPS {comp.nominal} built, NPS "
+            f"{designed.nominal} designed",
+            location=centre_of(comp.geometry),
+            unit="",
+            suggestions=(Suggestion(f"check which size {comp.id} really is (rescan with a hint)"),),
+        )
+    length = float(np.linalg.norm(ends[1] - ends[0]))
+    tol, standard = _length_tolerance(ctx, designed.nominal or comp.nominal)
+    off = abs(length - designed.length)
+    se = stderr_value(fit.stderr, "length") if fit is not None else None
+    _emit(
+        ctx,
+        comp,
+        designed,
+        "length",
+        f"{length * 1000:.1f} mm built, {designed.length * 1000:.1f} mm designed ({mm(off)} off)",
+        off,
+        tol,
+        se,
+        "m",
+        f"+-{mm(tol)} ({standard})",
+        verdict(off, tol, se, ctx.k),
+    )
+    pos_tol = float(ctx.opt("design-deviation", "position_tolerance"))
+    offset = _line_distance(ends, designed.start, designed.axis)
+    se_pos = stderr_value(fit.stderr, "center") if fit is not None else None
+    _emit(
+        ctx,
+        comp,
+        designed,
+        "position",
+        f"axis {mm(offset)} off the designed axis",
+        offset,
+        pos_tol,
+        se_pos,
+        "m",
+        mm(pos_tol),
+        verdict(offset, pos_tol, se_pos, ctx.k),
+    )
+    _check_direction(ctx, designed, comp)
+
+
+def _check_direction(ctx, designed, comp):
+    _, axis = built_axis(comp)
+    if axis is None:
+        return
+    angle = float(np.degrees(np.arccos(min(abs(float(np.dot(axis, designed.axis))), 1.0))))
+    tol = float(ctx.opt("design-deviation", "direction_tolerance_deg"))
+    se = axis_stderr_deg(comp)
+    _emit(
+        ctx,
+        comp,
+        designed,
+        "direction",
+        f"axis {deg(angle)} off the designed one",
+        angle,
+        tol,
+        se,
+        "deg",
+        deg(tol),
+        verdict(angle, tol, se, ctx.k),
+    )
+
+
+def _section(geometry):
+    if isinstance(geometry, Cuboid):
+        i = int(np.argmax(geometry.size))
+        return np.sort(np.delete(np.asarray(geometry.size), i))
+    if isinstance(geometry, Cylinder):
+        return np.array([2 * geometry.radius])
+    return None
+
+
+def _check_section(ctx, designed, comp, built, wanted, se_value):
+    plus = float(ctx.opt("design-deviation", "section_plus"))
+    minus = float(ctx.opt("design-deviation", "section_minus"))
+    for b, w in zip(built, wanted):
+        diff = float(b - w)
+        allowed = plus if diff >= 0 else minus
+        _emit(
+            ctx,
+            comp,
+            designed,
+            "section",
+            f"{b * 1000:.1f} mm built, {w * 1000:.1f} mm designed ({diff * 1000:+.1f} mm)",
+            abs(diff),
+            allowed,
+            se_value,
+            "m",
+            f"+{mm(plus)} / -{mm(minus)} (ACI 117)",
+            verdict(abs(diff), allowed, se_value, ctx.k),
+        )
+
+
+def _check_column(ctx, designed, comp):
+    centre, axis = built_axis(comp)
+    if centre is None:
+        return
+    # plan offset of the as-built axis where it crosses the designed base's height
+    t = (designed.start[2] - centre[2]) / axis[2] if abs(axis[2]) > 1e-9 else 0.0
+    at_base = centre + t * axis
+    offset = float(np.hypot(*(at_base - designed.start)[:2]))
+    tol = float(ctx.opt("design-deviation", "position_tolerance"))
+    fit = comp.fit
+    se = stderr_value(fit.stderr, "center") if fit is not None else None
+    _emit(
+        ctx,
+        comp,
+        designed,
+        "position",
+        f"axis {mm(offset)} off the designed one in plan",
+        offset,
+        tol,
+        se,
+        "m",
+        mm(tol),
+        verdict(offset, tol, se, ctx.k),
+    )
+    built = _section(comp.geometry)
+    if built is not None and designed.size is not None and len(built) == len(designed.size):
+        se_size = stderr_value(fit.stderr, "size") if fit is not None else None
+        _check_section(ctx, designed, comp, built, np.sort(designed.size), se_size)
+
+
+def _check_box(ctx, designed, comp):
+    g = comp.geometry
+    if not isinstance(g, Cuboid):
+        return
+    fit = comp.fit
+    offset = float(np.linalg.norm(g.center - designed.center))
+    tol = float(ctx.opt("design-deviation", "position_tolerance"))
+    se = stderr_value(fit.stderr, "center") if fit is not None else None
+    _emit(
+        ctx,
+        comp,
+        designed,
+        "position",
+        f"centre {mm(offset)} off the designed one",
+        offset,
+        tol,
+        se,
+        "m",
+        mm(tol),
+        verdict(offset, tol, se, ctx.k),
+    )
+    se_size = stderr_value(fit.stderr, "size") if fit is not None else None
+    _check_section(ctx, designed, comp, np.sort(g.size), np.sort(designed.size), se_size)
+
+
+def check_design(ctx: Context) -> None:
+    """All three design rules in one pass (one matching)."""
+    design = ctx.design
+    if design is None:
+        return
+    radius = float(ctx.opt("missing-component", "match_radius"))
+    match = match_design(ctx.model, design, radius)
+    if ctx.config.is_active("design-deviation"):
+        for designed, comp in match.pairs:
+            {"pipe": _check_pipe, "column": _check_column, "box": _check_box}[designed.kind](
+                ctx, designed, comp
+            )
+    if ctx.config.is_active("missing-component"):
+        for designed in match.missing:
+            ctx.emit(
+                "missing-component",
+                [designed.id],
+                f"designed {designed.kind} {designed.id} has no as-built counterpart within "
+                f"{radius:.2f} m",
+                location=designed.center,
+                unit="",
+                suggestions=(Suggestion(f"check whether {designed.id} was built; if so, scan it"),),
+            )
+    if ctx.config.is_active("extra-component"):
+        for comp in match.extra:
+            ctx.emit(
+                "extra-component",
+                [comp.id],
+                f"as-built {comp.type} matches no designed component within {radius:.2f} m",
+                location=centre_of(comp.geometry),
+                unit="",
+                suggestions=(Suggestion(f"add {comp.id} to the design or record it as a change"),),
+            )
+
+
+CHECKS = {"design-deviation": check_design}

@@ -1,0 +1,173 @@
+"""Accept every unambiguous suggestion, like a spell checker's "accept all".
+
+A suggestion's ``change`` is data; two kinds are understood:
+
+- ``{"object": id | "objects": [ids], "field": "nominal", "value": "4", "od": 0.1143}``: set the
+  nominal size and the outside diameter (metres) of components (``reject_hint: true`` records
+  that the operator's hint was overridden);
+- ``{"object": id, "field": "rotation", "value": 3x3 matrix, "about": [x, y, z]}``: rotate a
+  component's geometry about a point (metres).
+
+Each applied change is recorded on the component as a :class:`~asbuilt.model.Correction`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from asbuilt.model import Bend, Component, Correction, Model, Reducer, Straight, Tee
+from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+
+__all__ = ["apply_fixes", "rotate_geometry", "resize_geometry"]
+
+
+def rotate_geometry(geometry, rotation, about):
+    """``geometry`` rotated by ``rotation`` (3, 3) about the point ``about`` (3,) metres."""
+    r = np.asarray(rotation, dtype=np.float64)
+    p = np.asarray(about, dtype=np.float64)
+
+    def point(x):
+        return p + r @ (np.asarray(x) - p)
+
+    def vector(v):
+        v = r @ np.asarray(v)
+        return v / np.linalg.norm(v)
+
+    g = geometry
+    if isinstance(g, (Straight, Reducer)):
+        return dataclasses.replace(g, start=point(g.start), end=point(g.end))
+    if isinstance(g, Bend):
+        return dataclasses.replace(
+            g, start=point(g.start), end=point(g.end), center=point(g.center)
+        )
+    if isinstance(g, Tee):
+        return dataclasses.replace(
+            g,
+            center=point(g.center),
+            run_start=point(g.run_start),
+            run_end=point(g.run_end),
+            branch_end=point(g.branch_end),
+        )
+    if isinstance(g, Cylinder):
+        return dataclasses.replace(g, center=point(g.center), axis=vector(g.axis))
+    if isinstance(g, Cuboid):
+        axes = (r @ np.asarray(g.axes).T).T
+        u, _, vt = np.linalg.svd(axes)  # re-orthonormalise against rounding
+        return dataclasses.replace(g, center=point(g.center), axes=u @ vt)
+    if isinstance(g, Sphere):
+        return dataclasses.replace(g, center=point(g.center))
+    if isinstance(g, Plane):
+        outline = np.array([point(x) for x in g.outline]).reshape(-1, 3)
+        return dataclasses.replace(
+            g, point=point(g.point), normal=vector(g.normal), outline=outline
+        )
+    if isinstance(g, Hull):
+        return dataclasses.replace(g, vertices=np.array([point(x) for x in g.vertices]))
+    raise TypeError(f"cannot rotate {type(g).__name__}")
+
+
+def resize_geometry(geometry, od: float):
+    """``geometry`` with outside diameter ``od`` (metres); a wall too thick for it becomes 0."""
+    radius = 0.5 * float(od)
+    g = geometry
+    if isinstance(g, (Straight, Bend)):
+        wall = g.wall if g.wall < radius else 0.0
+        return dataclasses.replace(g, outer_radius=radius, wall=wall)
+    if isinstance(g, Cylinder):
+        return dataclasses.replace(g, radius=radius)
+    return g
+
+
+def _od(geometry) -> float | None:
+    if hasattr(geometry, "outer_radius"):
+        return 2 * geometry.outer_radius
+    if isinstance(geometry, Cylinder):
+        return 2 * geometry.radius
+    return None
+
+
+def _axis(geometry):
+    if isinstance(geometry, (Straight, Reducer)):
+        d = geometry.end - geometry.start
+        return d / np.linalg.norm(d)
+    if isinstance(geometry, Cylinder):
+        return np.array(geometry.axis)
+    if isinstance(geometry, Cuboid):
+        return np.array(geometry.axes[int(np.argmax(geometry.size))])
+    return None
+
+
+def _apply(component: Component, change) -> Component:
+    field = change.get("field")
+    if field == "nominal":
+        od = change.get("od")
+        before_od = _od(component.geometry)
+        geometry = component.geometry if od is None else resize_geometry(component.geometry, od)
+        snap = dict(component.snap or {})
+        snap.update(status="snapped", reason="accepted with asbuilt check --fix")
+        if od is not None:
+            snap["od_catalog"] = float(od)
+        if change.get("reject_hint"):
+            snap["hint_rejected"] = True
+        size = abs(float(od) - before_od) if od is not None and before_od is not None else 0.0
+        fix = Correction(
+            "size set by check --fix", component.nominal, str(change["value"]), size, "m"
+        )
+        return dataclasses.replace(
+            component,
+            geometry=geometry,
+            nominal=str(change["value"]),
+            snap=snap,
+            corrections=(*component.corrections, fix),
+        )
+    if field == "rotation":
+        before = _axis(component.geometry)
+        geometry = rotate_geometry(component.geometry, change["value"], change["about"])
+        after = _axis(geometry)
+        angle = 0.0
+        if before is not None and after is not None:
+            angle = float(np.degrees(np.arccos(np.clip(np.dot(before, after), -1, 1))))
+        fix = Correction(
+            "axis regularised by check --fix",
+            None if before is None else [float(x) for x in before],
+            None if after is None else [float(x) for x in after],
+            angle,
+            "deg",
+        )
+        return dataclasses.replace(
+            component, geometry=geometry, corrections=(*component.corrections, fix)
+        )
+    raise ValueError(f"unknown change field {field!r}")
+
+
+def apply_fixes(model: Model, findings) -> tuple[Model, list[str]]:
+    """Apply the first unambiguous suggestion of every finding.
+
+    Parameters
+    ----------
+    model : Model
+    findings : iterable of Finding
+
+    Returns
+    -------
+    (Model, list of str)
+        The corrected model (its findings cleared: run :func:`check_model` again) and one line
+        per applied change, e.g. ``"P3: make P3's axis vertical (rotate it 3.1 deg ...)"``.
+    """
+    components = {c.id: c for c in model.components}
+    changes: list[str] = []
+    for finding in findings:
+        chosen = next((s for s in finding.suggestions if s.unambiguous and s.change), None)
+        if chosen is None:
+            continue
+        change = dict(chosen.change)
+        targets = change.get("objects") or [change.get("object")]
+        applied = [t for t in targets if t in components]
+        for target in applied:
+            components[target] = _apply(components[target], change)
+        if applied:
+            changes.append(f"{', '.join(applied)}: {chosen.description} ({finding.slug})")
+    fixed = tuple(components[c.id] for c in model.components)
+    return model.replace(components=fixed, findings=()), changes

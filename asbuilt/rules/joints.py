@@ -1,0 +1,167 @@
+"""Joint rule: joint-gap.
+
+Two pipes are *contiguous* when the scan links them or their ends lie within
+``Tolerances.joint_distance``; merged spools join such pipes end to end or through a fitting.
+A pair still apart after merging is explained only when the gap is within the rule's tolerance
+(collinear pipes) or when the pipes' axes meet where an ASME B16.9 elbow of their size and angle
+would put its ends (centre-to-end ``R tan(theta / 2)``, ``R`` the 90 degree long-radius
+centre-to-end; 1.5 x NPS inches when the catalog has no fittings).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from asbuilt.findings import Suggestion
+
+from ._catalog import SizeTable, nps_value
+from ._context import Context, mm, stderr_value, verdict
+from ._graph import adjacency, end_pairs, linked_pairs
+
+__all__ = ["CHECKS", "joint_geometry"]
+
+
+def _ends(geometry):
+    """(start, end, unit axis, radius) of a straight pipe geometry."""
+    if hasattr(geometry, "start"):
+        start, end = np.array(geometry.start), np.array(geometry.end)
+        radius = geometry.outer_radius
+    else:
+        start, end = (np.array(e) for e in geometry.ends)
+        radius = geometry.radius
+    axis = (end - start) / np.linalg.norm(end - start)
+    return start, end, axis, float(radius)
+
+
+def joint_geometry(ga, gb) -> dict:
+    """How two straight pipes' facing ends relate.
+
+    Returns a dict with ``ea``, ``eb`` (the facing end points, (3,) m), ``angle_deg`` between the
+    axes (0 = collinear direction), ``gap`` (m; axial gap for collinear pipes, negative when they
+    overlap), ``offset`` (m; closest distance between the two axis lines) and, for meeting axes,
+    ``corner`` ((3,) m) with ``da``, ``db`` the distances from each end to it.
+    """
+    sa, fa, ua, ra = _ends(ga)
+    sb, fb, ub, rb = _ends(gb)
+    # facing ends: the closest pair of ends
+    options = [
+        (np.linalg.norm(pa - pb), pa, qa, pb, qb)
+        for pa, qa in ((sa, fa), (fa, sa))
+        for pb, qb in ((sb, fb), (fb, sb))
+    ]
+    _, ea, oa, eb, ob = min(options, key=lambda t: t[0])
+    out_a = (ea - oa) / np.linalg.norm(ea - oa)  # pointing out of pipe a at its facing end
+    out_b = (eb - ob) / np.linalg.norm(eb - ob)
+    cos = float(np.clip(np.dot(out_a, -out_b), -1.0, 1.0))
+    angle = float(np.degrees(np.arccos(cos)))
+    result = {"ea": ea, "eb": eb, "angle_deg": angle, "radius": max(ra, rb)}
+    w = eb - ea
+    cross = np.cross(out_a, out_b)
+    if np.linalg.norm(cross) < 1e-9:
+        lateral = w - np.dot(w, out_a) * out_a
+        result.update(gap=float(np.dot(w, out_a)), offset=float(np.linalg.norm(lateral)))
+        return result
+    # closest points of the two lines ea + s*out_a and eb + t*out_b
+    a, b, c = 1.0, float(np.dot(out_a, out_b)), 1.0
+    d, e = float(np.dot(out_a, w)), float(np.dot(out_b, w))
+    den = a * c - b * b
+    s = (d * c - b * e) / den
+    t = (b * d - a * e) / den
+    pa, pb = ea + s * out_a, eb + t * out_b
+    result.update(
+        gap=float(np.dot(w, out_a)),
+        offset=float(np.linalg.norm(pa - pb)),
+        corner=0.5 * (pa + pb),
+        da=float(s),
+        db=float(t),
+    )
+    return result
+
+
+def _elbow_centre_to_end(
+    table: SizeTable | None, nominal: str | None, od: float, angle_deg: float
+) -> float | None:
+    """Centre-to-end (m) of a long-radius elbow turning ``angle_deg`` (None if size unknown)."""
+    radius = None
+    if table is not None:
+        nominal = nominal or table.nominal_for(od)
+        if nominal is not None and nominal in table.elbow_lr:
+            radius = table.elbow_lr[nominal]
+    if radius is None and nominal is not None:
+        nps = nps_value(nominal)
+        if nps is not None and nps >= 1:
+            radius = 1.5 * nps * 0.0254
+    if radius is None:
+        return None
+    return radius * float(np.tan(np.radians(angle_deg) / 2.0))
+
+
+def _length_se(comp) -> float:
+    if comp.fit is None:
+        return 0.0
+    se = stderr_value(comp.fit.stderr, "length")
+    return 0.0 if se is None else se
+
+
+def check_joint_gap(ctx: Context, table: SizeTable | None) -> None:
+    slug = "joint-gap"
+    tol = float(ctx.opt(slug, "tolerance"))
+    snap = float(ctx.general("angle_snap_deg"))
+    touch = float(ctx.opt("clash", "touch_distance"))
+    pipes = {c.id: c for c in ctx.pipes}
+    near = set(end_pairs(list(pipes.values()), float(ctx.general("joint_distance"))))
+    near |= {p for p in linked_pairs(ctx.model) if p <= set(pipes)}
+    joined = adjacency(ctx.model, touch)
+    for pair in sorted(near, key=sorted):
+        a, b = sorted(pair)
+        if b in joined.get(a, ()) or any(b in joined.get(f, ()) for f in joined.get(a, ())):
+            continue  # joined directly or through one fitting
+        ca, cb = pipes[a], pipes[b]
+        geo = joint_geometry(ca.geometry, cb.geometry)
+        se = float(np.hypot(_length_se(ca), _length_se(cb)))
+        if geo["angle_deg"] <= snap:
+            if geo["offset"] > geo["radius"]:
+                kind, size = "offset", geo["offset"]
+            else:
+                kind = "gap" if geo["gap"] >= 0 else "overlap"
+                size = abs(geo["gap"])
+            explained = kind != "offset" and size <= tol
+        else:
+            if "corner" not in geo or geo["offset"] > geo["radius"]:
+                kind, size = "offset", geo["offset"]
+                explained = False
+            else:
+                od = 2 * geo["radius"]
+                expected = _elbow_centre_to_end(
+                    table, ca.nominal or cb.nominal, od, geo["angle_deg"]
+                )
+                if expected is None:
+                    continue  # size unknown: no fitting can be looked up
+                size = max(abs(geo["da"] - expected), abs(geo["db"] - expected))
+                kind = "gap" if min(geo["da"], geo["db"]) > expected else "overlap"
+                explained = size <= tol
+        if explained:
+            continue
+        outcome = verdict(size, tol, se, ctx.k)
+        if outcome == "pass":
+            continue
+        ctx.emit(
+            slug,
+            [a, b],
+            f"{kind} of {mm(size)} between the ends of {a} and {b}, which no catalog fitting "
+            "explains",
+            location=0.5 * (geo["ea"] + geo["eb"]),
+            measured=size,
+            allowed=tol,
+            stderr=se,
+            unit="m",
+            outcome=outcome,
+            rescan=f"scan the ends of {a} and {b} near the joint",
+            suggestions=(
+                Suggestion(f"look for a missing part (valve, flange, fitting) between {a} and {b}"),
+                Suggestion(f"scan {a} and {b} up to the joint"),
+            ),
+        )
+
+
+CHECKS = {"joint-gap": check_joint_gap}

@@ -1,0 +1,185 @@
+"""Scan quality rules: too-few-points, weak-geometry, poor-fit, outliers.
+
+They judge the fit each component comes from (``component.fit``); merged fittings have none.
+The residual test is a chi-square one in disguise: for ``d`` degrees of freedom the RMS of
+Gaussian residuals over the sensor sigma has a standard error of about ``1 / sqrt(2 d)`` of itself.
+The outlier share's standard error is the binomial ``sqrt(p (1 - p) / n)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from asbuilt.findings import Suggestion
+
+from ._context import Context, centre_of, stderr_value, verdict
+
+__all__ = ["CHECKS"]
+
+#: Parameters per fitted kind (degrees of freedom are points minus these).
+_PARAMETERS = {"cylinder": 5, "cuboid": 9, "sphere": 4, "plane": 3, "hull": 0}
+
+
+def _fitted(ctx: Context):
+    seen = set()
+    for comp in ctx.model.components:
+        if comp.fit is None or id(comp.fit) in seen:
+            continue
+        seen.add(id(comp.fit))
+        yield comp
+
+
+def check_points(ctx: Context) -> None:
+    slug = "too-few-points"
+    for comp in _fitted(ctx):
+        kind = comp.fit.kind
+        if kind in ("cylinder", "cuboid"):
+            needed = int(ctx.general(f"recommended_points_{kind}"))
+        else:
+            needed = int(ctx.opt(slug, kind))
+        count = comp.fit.n_points
+        if count >= needed:
+            continue
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"{count} points for a {kind}; the paper's accuracy needs at least {needed}",
+            location=centre_of(comp.geometry),
+            measured=count,
+            allowed=needed,
+            unit="points",
+            suggestions=(Suggestion(f"scan at least {needed - count} more points on {comp.id}"),),
+        )
+
+
+def check_weak(ctx: Context) -> None:
+    slug = "weak-geometry"
+    min_arc = float(ctx.opt(slug, "min_arc_deg"))
+    min_ld = float(ctx.opt(slug, "min_length_over_diameter"))
+    min_faces = int(ctx.opt(slug, "min_faces"))
+    max_rel = float(ctx.opt(slug, "max_relative_stderr"))
+    for comp in _fitted(ctx):
+        fit, prim = comp.fit, comp.fit.primitive
+        diag = fit.diagnostics or {}
+        reasons, advice = [], []
+        worst = None
+        if fit.kind == "cylinder":
+            arc = diag.get("arc_deg")
+            if arc is not None and float(arc) < min_arc:
+                reasons.append(f"visible arc {float(arc):.0f} deg < {min_arc:.0f}")
+                advice.append("shots across a wider arc (from a second position)")
+            ld = diag.get("length_over_diameter", prim.length / (2 * prim.radius))
+            if float(ld) < min_ld:
+                reasons.append(f"length/diameter {float(ld):.2f} < {min_ld:.2f}")
+                advice.append("shots along a longer stretch")
+            r_se = stderr_value(fit.stderr, "radius")
+            if r_se is not None:
+                worst = r_se / prim.radius
+        elif fit.kind == "cuboid":
+            faces = diag.get("faces")
+            if faces is not None and int(faces) < min_faces:
+                reasons.append(f"{int(faces)} face seen, {min_faces} needed")
+                advice.append("shots on a second face")
+            size_se = fit.stderr.get("size") if fit.stderr else None
+            if size_se is not None:
+                rel = np.asarray(size_se, float).ravel() / np.asarray(prim.size, float)
+                observed = np.asarray(fit.observed if fit.observed is not None else [True] * 3)
+                rel = rel[observed[: rel.size]] if rel.size == 3 else rel
+                worst = float(rel.max()) if rel.size else None
+        elif fit.kind == "sphere":
+            r_se = stderr_value(fit.stderr, "radius")
+            if r_se is not None:
+                worst = r_se / prim.radius
+        if worst is not None and np.isfinite(worst) and worst > max_rel:
+            reasons.append(f"size known to +-{worst * 100:.1f}% > {max_rel * 100:.0f}%")
+            advice.append("more points")
+        if not reasons:
+            continue
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"the fit is too weak to trust: {'; '.join(reasons)}",
+            location=centre_of(comp.geometry),
+            measured=worst,
+            allowed=max_rel,
+            unit="ratio",
+            suggestions=(Suggestion(f"rescan {comp.id} with {', '.join(dict.fromkeys(advice))}"),),
+        )
+
+
+def _sensor_sigma(ctx: Context, fit) -> float | None:
+    if fit.sigma_source == "sensor" and fit.sigma > 0:
+        return float(fit.sigma)
+    scan = ctx.model.scan
+    if scan is not None and scan.sensor.range_sigma:
+        return float(scan.sensor.range_sigma)
+    return None
+
+
+def check_poor_fit(ctx: Context) -> None:
+    slug = "poor-fit"
+    allowed = float(ctx.opt(slug, "max_rms_ratio"))
+    for comp in _fitted(ctx):
+        fit = comp.fit
+        sigma = _sensor_sigma(ctx, fit)
+        if sigma is None or fit.n_inliers < 2 or not np.isfinite(fit.rms):
+            continue
+        ratio = fit.rms / sigma
+        dof = max(fit.n_inliers - _PARAMETERS.get(fit.kind, 0), 1)
+        se = ratio / np.sqrt(2.0 * dof)
+        outcome = verdict(ratio, allowed, se, ctx.k)
+        if outcome != "violation":
+            continue  # the sensor's sigma is a nominal value: only clear excesses are reported
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"residual RMS {fit.rms * 1000:.1f} mm is {ratio:.1f} times the sensor sigma "
+            f"{sigma * 1000:.1f} mm",
+            location=centre_of(comp.geometry),
+            measured=ratio,
+            allowed=allowed,
+            stderr=se,
+            unit="sigma",
+            suggestions=(
+                Suggestion(f"check that {comp.id} is a {fit.kind} (or fit it as auto/hull)"),
+                Suggestion(f"inspect {comp.id} for bends or damage"),
+            ),
+        )
+
+
+def check_outliers(ctx: Context) -> None:
+    slug = "outliers"
+    allowed = float(ctx.opt(slug, "max_share"))
+    for comp in _fitted(ctx):
+        fit = comp.fit
+        n = fit.n_points
+        if n == 0:
+            continue
+        rejected = n - fit.n_inliers
+        share = rejected / n
+        se = float(np.sqrt(max(share * (1 - share), 1.0 / n) / n))
+        if share <= allowed:
+            continue
+        outcome = verdict(share, allowed, se, ctx.k)
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"{rejected} of {n} points ({share * 100:.0f}%) were rejected as outliers",
+            location=centre_of(comp.geometry),
+            measured=share,
+            allowed=allowed,
+            stderr=se,
+            unit="ratio",
+            outcome="violation" if outcome == "unverifiable" else outcome,
+            suggestions=(
+                Suggestion(f"rescan {comp.id} aiming away from its edges and the background"),
+            ),
+        )
+
+
+CHECKS = {
+    "too-few-points": check_points,
+    "weak-geometry": check_weak,
+    "poor-fit": check_poor_fit,
+    "outliers": check_outliers,
+}

@@ -1,0 +1,275 @@
+"""Size rules: nonstandard-diameter, ambiguous-size, hint-mismatch, contiguous-diameter-mismatch.
+
+A pipe's measured outside diameter (``snap["od_fit"]`` or twice the fitted radius) with its
+standard error is compared with the catalog's sizes; a size is a candidate when within
+``max(3 standard errors, Tolerances.diameter_tolerance)``, the test merging snaps with.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from asbuilt.findings import Suggestion
+from asbuilt.model import Component
+
+from ._catalog import SizeTable
+from ._context import Context, centre_of, mm, stderr_value, verdict
+from ._graph import adjacency, component_map, contiguous_pipes
+
+__all__ = ["CHECKS", "measured_od", "size_status"]
+
+
+def measured_od(component: Component) -> tuple[float | None, float | None]:
+    """The measured OD and its standard error (metres) of a pipe, or (None, None)."""
+    snap = component.snap or {}
+    if snap.get("od_fit") is not None:
+        od = float(snap["od_fit"])
+        s = snap.get("od_stderr")
+        return od, None if s is None else float(s)
+    if component.fit is not None and component.fit.kind == "cylinder":
+        r_se = stderr_value(component.fit.stderr, "radius")
+        return 2 * float(component.fit.primitive.radius), None if r_se is None else 2 * r_se
+    return None, None
+
+
+def _window(ctx: Context, stderr: float | None) -> float:
+    return max(3.0 * (stderr or 0.0), float(ctx.general("diameter_tolerance")))
+
+
+def size_status(ctx: Context, component: Component, table: SizeTable | None) -> str | None:
+    """``"snapped"``, ``"no-size"``, ``"ambiguous"`` or ``"hint"`` (from merging when recorded,
+    else from the catalog), or None when it cannot be known."""
+    status = (component.snap or {}).get("status")
+    if status:
+        return str(status)
+    od, se = measured_od(component)
+    if table is None or od is None:
+        return None
+    found = table.within(od, _window(ctx, se))
+    return {0: "no-size", 1: "snapped"}.get(len(found), "ambiguous")
+
+
+def _candidates(component: Component, table: SizeTable | None, od: float, window: float):
+    """(nominal, od) pairs from the snap mapping's ``candidates``, else from the catalog."""
+    out = []
+    for cand in (component.snap or {}).get("candidates") or ():
+        if isinstance(cand, dict):
+            nominal, cand_od = cand.get("nominal"), cand.get("od", cand.get("od_catalog"))
+        else:
+            nominal, cand_od = (tuple(cand) + (None, None))[:2]
+        if nominal is not None and cand_od is not None:
+            out.append((str(nominal), float(cand_od)))
+    if not out and table is not None:
+        return table.within(od, window)
+    return out
+
+
+def _label(table: SizeTable | None, nominal: str) -> str:
+    return table.label(nominal) if table is not None else f"NPS {nominal}"
+
+
+def check_nonstandard(ctx: Context, table: SizeTable | None) -> None:
+    slug = "nonstandard-diameter"
+    for comp in ctx.pipes:
+        if size_status(ctx, comp, table) != "no-size":
+            continue
+        od, se = measured_od(comp)
+        if od is None:
+            continue
+        where = centre_of(comp.geometry)
+        catalog = table.standard if table is not None else (ctx.model.catalog or "catalog")
+        if table is None:
+            ctx.emit(
+                slug,
+                [comp.id],
+                f"OD {mm(od)} is no {catalog} size",
+                location=where,
+                measured=od,
+                unit="m",
+                stderr=se,
+            )
+            continue
+        nearest = table.nearest(od, max(int(ctx.opt(slug, "suggest")), 1))
+        name, size_od, off = nearest[0]
+        tol = float(ctx.general("diameter_tolerance"))
+        outcome = verdict(abs(off), tol, se, ctx.k)
+        suggestions = tuple(
+            Suggestion(
+                f"use {_label(table, n)} ({mm(s)}, {mm(abs(d))} {'smaller' if d > 0 else 'larger'} "
+                "than measured) if the catalog and material are right",
+                {"object": comp.id, "field": "nominal", "value": n, "od": s},
+                unambiguous=False,
+            )
+            for n, s, d in nearest
+        ) + (Suggestion("check the material and catalog (--catalog), or rescan the pipe"),)
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"OD {mm(od)} is no {catalog} size (nearest {_label(table, name)} = {mm(size_od)}, "
+            f"{mm(abs(off))} off)",
+            location=where,
+            measured=abs(off),
+            allowed=tol,
+            stderr=se,
+            unit="m",
+            suggestions=suggestions,
+            outcome="violation" if outcome == "pass" else outcome,
+            rescan="scan more points over a wider arc of the pipe to shrink the OD's uncertainty",
+        )
+
+
+def check_ambiguous(ctx: Context, table: SizeTable | None) -> None:
+    slug = "ambiguous-size"
+    for comp in ctx.pipes:
+        if size_status(ctx, comp, table) != "ambiguous":
+            continue
+        od, se = measured_od(comp)
+        if od is None:
+            continue
+        cands = _candidates(comp, table, od, _window(ctx, se))
+        sizes = ", ".join(f"{_label(table, n)} = {mm(s)}" for n, s in cands)
+        suggestions = (
+            Suggestion(
+                f"scan more points over a wider arc of {comp.id} to shrink the OD's uncertainty"
+            ),
+            Suggestion(f'give {comp.id} a size hint ("nominal") in the scan'),
+        ) + tuple(
+            Suggestion(
+                f"use {_label(table, n)} ({mm(s)})",
+                {"object": comp.id, "field": "nominal", "value": n, "od": s},
+            )
+            for n, s in cands
+        )
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"OD {mm(od)} +- {mm(se or 0.0)} fits {len(cands)} sizes ({sizes}); the size cannot "
+            "be decided",
+            location=centre_of(comp.geometry),
+            measured=od,
+            stderr=se,
+            unit="m",
+            suggestions=suggestions,
+        )
+
+
+def check_hint(ctx: Context, table: SizeTable | None) -> None:
+    slug = "hint-mismatch"
+    for comp in ctx.pipes:
+        snap = comp.snap or {}
+        info = snap.get("hint") if isinstance(snap.get("hint"), dict) else {}
+        hint = info.get("nominal") or ctx.hint(comp)
+        if not hint or snap.get("hint_rejected"):
+            continue
+        hint_od = info.get("od")
+        if hint_od is None and table is not None:
+            hint_od = table.od(hint)
+        od, se = measured_od(comp)
+        if hint_od is None or od is None:
+            continue
+        tol = float(ctx.general("diameter_tolerance"))
+        off = abs(od - float(hint_od))
+        if verdict(off, tol, se, ctx.k) != "violation":
+            continue  # a hint is given because fits can be weak: only a clear disagreement counts
+        fitted = table.within(od, _window(ctx, se)) if table is not None else []
+        suggestions = [Suggestion(f"check the hint {hint!r} on the object, or rescan it")]
+        if len(fitted) == 1:
+            n, s = fitted[0]
+            suggestions.insert(
+                0,
+                Suggestion(
+                    f"use the fitted size {_label(table, n)} ({mm(s)}) instead of the hint",
+                    {
+                        "object": comp.id,
+                        "field": "nominal",
+                        "value": n,
+                        "od": s,
+                        "reject_hint": True,
+                    },
+                    unambiguous=True,
+                ),
+            )
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"the hint {hint} ({mm(hint_od)}) disagrees with the fitted OD {mm(od)} by {mm(off)}",
+            location=centre_of(comp.geometry),
+            measured=off,
+            allowed=tol,
+            stderr=se,
+            unit="m",
+            suggestions=tuple(suggestions),
+        )
+
+
+def _size_of(comp: Component, table: SizeTable | None) -> tuple[str | None, float | None]:
+    od = 2 * comp.geometry.outer_radius if hasattr(comp.geometry, "outer_radius") else None
+    if od is None and hasattr(comp.geometry, "radius"):
+        od = 2 * comp.geometry.radius
+    nominal = comp.nominal
+    if nominal is None and table is not None and od is not None:
+        nominal = table.nominal_for(od)
+    return nominal, od
+
+
+def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
+    slug = "contiguous-diameter-mismatch"
+    comps = component_map(ctx.model)
+    pipes = [c.id for c in ctx.pipes]
+    graph = adjacency(
+        ctx.model, float(ctx.opt("clash", "touch_distance")), float(ctx.general("joint_distance"))
+    )
+    tol = float(ctx.general("diameter_tolerance"))
+    for a, b, path in contiguous_pipes(ctx.model, graph, pipes):
+        ca, cb = comps[a], comps[b]
+        (na, oda), (nb, odb) = _size_of(ca, table), _size_of(cb, table)
+        if oda is None or odb is None:
+            continue
+        if na is not None and nb is not None:
+            if na == nb:
+                continue
+        elif abs(oda - odb) <= tol:
+            continue
+        # the shared size: the inverse-variance mean of the two measured ODs, snapped
+        measures = [measured_od(ca), measured_od(cb)]
+        suggestions = []
+        if table is not None and all(m[0] is not None for m in measures):
+            weights = np.array([1.0 / max(m[1] or tol, 1e-6) ** 2 for m in measures])
+            values = np.array([m[0] for m in measures])
+            mean = float(weights @ values / weights.sum())
+            mean_se = float(1.0 / np.sqrt(weights.sum()))
+            shared = table.within(mean, _window(ctx, mean_se))
+            if len(shared) == 1:
+                n, s = shared[0]
+                targets = [c for c in (a, *path, b) if _size_of(comps[c], table)[1] != s]
+                suggestions.append(
+                    Suggestion(
+                        f"make {', '.join(targets)} {_label(table, n)} ({mm(s)}), the size both fits "
+                        "agree on",
+                        {"objects": targets, "field": "nominal", "value": n, "od": s},
+                        unambiguous=True,
+                    )
+                )
+        suggestions.append(
+            Suggestion(f"if the size really changes, add a reducer between {a} and {b}")
+        )
+        la = _label(table, na) if na else mm(oda)
+        lb = _label(table, nb) if nb else mm(odb)
+        ctx.emit(
+            slug,
+            [a, *path, b],
+            f"{a} is {la} but the contiguous {b} is {lb} with no reducer",
+            location=0.5 * (centre_of(ca.geometry) + centre_of(cb.geometry)),
+            measured=abs(oda - odb),
+            allowed=tol,
+            unit="m",
+            suggestions=tuple(suggestions),
+        )
+
+
+CHECKS = {
+    "nonstandard-diameter": check_nonstandard,
+    "ambiguous-size": check_ambiguous,
+    "hint-mismatch": check_hint,
+    "contiguous-diameter-mismatch": check_contiguous,
+}
