@@ -1,0 +1,466 @@
+"""Merging: fitted cylinders become pipes of standard sizes joined by real fittings.
+
+``merge_model(report)`` runs, in order (each step its own module):
+
+1. **which cylinders are pipes** (:func:`is_pipe`): no vessel word (tank, vessel, column...) in
+   the object's label or group, and either linked in the scan, given a nominal hint, or with a
+   fitted OD within ``[smallest catalog OD - tolerance, largest catalog OD x 1.1]``. Other
+   cylinders stay ``cylinder`` components, unchanged;
+2. **joints** between pipes (:mod:`.contiguity`), from ``links`` and inferred from geometry;
+3. **runs and joint diameter estimates** (:mod:`.joint`), then **snapping** each run's estimate
+   to the catalog (:mod:`.snap`);
+4. **orientation regularisation** (:mod:`.regularize`, after GlobFit) and line alignment so
+   joined axes meet exactly;
+5. **fittings and spools** (:mod:`.spool`): elbows/bends, tees, reducers and couplings, pipes
+   trimmed to them, everything grouped into spools.
+
+Every change to a fitted value is recorded on the component as a
+:class:`~asbuilt.model.Correction` (diameter snapped, axis regularised, made coaxial, axis
+shifted, end trimmed/extended), the way a spell checker lists what it corrected.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from asbuilt.catalog import DEFAULT_CATALOG, Catalog, fitting_dims, load_catalog
+from asbuilt.errors import CatalogError
+from asbuilt.fit.result import FitReport
+from asbuilt.model import Component, Correction, Model, model_from_fits
+from asbuilt.primitives import Cylinder
+from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
+
+from .contiguity import Joint, find_joints, joint_pairs
+from .joint import find_runs, joint_estimate
+from .regularize import align_lines, regularize_directions
+from .snap import SnapResult, snap_diameter
+from .spool import PipeSpec, build_spools
+
+__all__ = ["merge_model", "is_pipe", "VESSEL_WORDS", "resolve_catalog", "resolve_schedule"]
+
+#: Words in an object's label or group that mark a cylinder as a vessel or structure, not a pipe.
+VESSEL_WORDS = (
+    "tank",
+    "vessel",
+    "column",
+    "chimney",
+    "stack",
+    "silo",
+    "drum",
+    "pile",
+    "pier",
+    "pillar",
+    "pole",
+    "post",
+    "tower",
+)
+_VESSEL = re.compile(r"\b(" + "|".join(VESSEL_WORDS) + r")s?\b", re.IGNORECASE)
+
+
+def is_pipe(
+    cylinder: Cylinder,
+    *,
+    label: str | None,
+    group: str | None,
+    linked: bool,
+    hinted: bool,
+    catalog: Catalog,
+    tolerance: float,
+) -> tuple[bool, str]:
+    """Decide whether a fitted cylinder is a pipe; return (answer, reason).
+
+    A cylinder is a pipe unless its label or group contains one of :data:`VESSEL_WORDS`; and
+    then only when it is linked to another object, carries a nominal hint, or its fitted OD
+    (metres) lies within ``[min catalog OD - tolerance, max catalog OD x 1.1]``.
+    """
+    for text in (label, group):
+        if text and _VESSEL.search(text):
+            word = _VESSEL.search(text).group(1).lower()
+            return False, f"labelled {word!r}: a vessel or structure, not a pipe"
+    if linked:
+        return True, "linked to another object in the scan"
+    if hinted:
+        return True, "has a nominal size hint"
+    od = 2 * cylinder.radius
+    low, high = catalog.od_range
+    if low - tolerance <= od <= high * 1.1:
+        return True, "OD within the catalog's range"
+    return False, (
+        f"OD {od * 1000:.0f} mm is outside {catalog.name}'s range "
+        f"{low * 1000:.1f}-{high * 1000:.0f} mm: kept as a cylinder"
+    )
+
+
+def resolve_catalog(catalog) -> Catalog:
+    """``None`` -> the default catalog; a name or path -> loaded; a Catalog -> itself."""
+    if catalog is None:
+        return load_catalog(DEFAULT_CATALOG)
+    if isinstance(catalog, Catalog):
+        return catalog
+    if isinstance(catalog, str | Path):
+        return load_catalog(catalog)
+    raise TypeError(f"catalog must be a Catalog, a name or a path, not {type(catalog).__name__}")
+
+
+def resolve_schedule(catalog: Catalog, schedule: str | None) -> str | None:
+    """The schedule to build with: the given one (checked), else the catalog's default, else
+    ``STD`` when the catalog lists it; None when the catalog has no walls."""
+    if schedule:
+        wanted = schedule.upper()
+        if wanted not in catalog.schedules:
+            raise CatalogError(
+                f"schedule {schedule!r} is not in catalog {catalog.name}; use one of "
+                f"{', '.join(catalog.schedules) or '(none: this catalog lists no walls)'}",
+                source="--schedule",
+            )
+        return wanted
+    if catalog.default_schedule and catalog.default_schedule in catalog.schedules:
+        return catalog.default_schedule
+    return "STD" if "STD" in catalog.schedules else None
+
+
+def _stderr_od(result) -> float:
+    se = result.stderr.get("radius") if result.stderr else None
+    try:
+        se = float(se)
+    except (TypeError, ValueError):
+        return float("nan")
+    return 2.0 * se if np.isfinite(se) else float("nan")
+
+
+def _vec(x) -> tuple[float, ...]:
+    return tuple(float(v) for v in x)
+
+
+def merge_model(
+    report: FitReport,
+    *,
+    catalog: Catalog | str | None = None,
+    tolerances: Tolerances = DEFAULT_TOLERANCES,
+    schedule: str | None = None,
+    elbow_radius: str = "long",
+) -> Model:
+    """Merge fitted primitives into an as-built model of pipes, fittings and spools.
+
+    Parameters
+    ----------
+    report : FitReport
+        Every object's fit (cylinders become pipes; other primitives pass through).
+    catalog : Catalog, str or None
+        Pipe catalog (name or path accepted); None = ASME B36.10M.
+    tolerances : Tolerances
+        ``diameter_tolerance`` (snapping window floor, metres), ``angle_snap_deg`` (orientation
+        regularisation), ``intended_angle_deg`` and ``joint_distance`` (contiguity).
+    schedule : str, optional
+        Wall schedule of the pipes (e.g. ``"STD"``, ``"40"``, ``"10S"``); default: the
+        catalog's ``default_schedule``, else STD.
+    elbow_radius : {"long", "short"}
+        Elbow bend radius from the fittings table.
+
+    Returns
+    -------
+    Model
+        ``components``: pipes (``Straight``), elbows (``Bend``), tees (``Tee``), reducers
+        (``Reducer``), couplings (``Straight``) and the unchanged non-pipe components; each
+        pipe's ``snap`` says how its size was chosen and ``corrections`` what merging changed.
+        ``spools`` lists the connected groups. All in metres.
+
+    Raises
+    ------
+    CatalogError
+        Unknown catalog or schedule.
+    """
+    if elbow_radius not in ("long", "short"):
+        raise ValueError(f"elbow_radius must be 'long' or 'short', not {elbow_radius!r}")
+    catalog = resolve_catalog(catalog)
+    if catalog.kind != "pipe":
+        raise CatalogError(
+            f"{catalog.name} is a {catalog.kind} catalog; give a pipe catalog", source="--catalog"
+        )
+    sched = resolve_schedule(catalog, schedule)
+    base = model_from_fits(report)
+    tol = tolerances
+    scan = report.scan
+    linked_ids = {obj_id for link in scan.links for obj_id in link}
+
+    # 1. which cylinders are pipes
+    pipe_idx: list[int] = []
+    others: dict[int, Component] = {}
+    for k, (item, comp) in enumerate(zip(report.fits, base.components)):
+        prim = item.result.primitive
+        if not isinstance(prim, Cylinder):
+            continue
+        obj = item.object
+        ok, why = is_pipe(
+            prim,
+            label=obj.label,
+            group=obj.group,
+            linked=obj.id in linked_ids,
+            hinted=bool(obj.nominal),
+            catalog=catalog,
+            tolerance=tol.diameter_tolerance,
+        )
+        if ok:
+            pipe_idx.append(k)
+        else:
+            others[k] = Component(
+                id=comp.id,
+                type="cylinder",
+                geometry=prim,
+                sources=comp.sources,
+                group=comp.group,
+                label=comp.label,
+                fit=comp.fit,
+                snap={"status": "not-pipe", "reason": why},
+            )
+    if not pipe_idx:
+        comps = tuple(others.get(k, c) for k, c in enumerate(base.components))
+        return base.replace(components=comps, catalog=catalog.name)
+
+    items = [report.fits[k] for k in pipe_idx]
+    cyls = [item.result.primitive for item in items]
+    ids = [item.object.id for item in items]
+    index_of = {obj_id: n for n, obj_id in enumerate(ids)}
+    centers = np.array([c.center for c in cyls])
+    axes = np.array([c.axis for c in cyls])
+    lengths = np.array([c.length for c in cyls])
+    ods = np.array([2 * c.radius for c in cyls])
+    ses = np.array([_stderr_od(item.result) for item in items])
+    links = [(index_of[a], index_of[b]) for a, b in scan.links if a in index_of and b in index_of]
+
+    # 2. joints
+    joints = find_joints(centers, axes, lengths, ods, links=links, tolerances=tol)
+
+    # 3. runs, joint estimates, snapping
+    runs = find_runs(ods, ses, joint_pairs(joints), tol.diameter_tolerance)
+    run_of = np.zeros(len(ids), int)
+    snaps: list[SnapResult] = [None] * len(ids)  # type: ignore[list-item]
+    member_hint: list[dict] = [{} for _ in ids]
+    run_info: list[dict] = [{} for _ in ids]
+    for r, members in enumerate(runs):
+        run_of[members] = r
+        od_run, se_run = joint_estimate(ods[members], ses[members], floor=tol.sigma_floor)
+        if len(members) == 1:
+            od_run, se_run = float(ods[members[0]]), float(ses[members[0]])
+        hints = [items[m].object.nominal for m in members if items[m].object.nominal]
+        chosen_hint = None
+        for hint in hints:
+            trial = snap_diameter(
+                od_run, se_run, catalog, tolerance=tol.diameter_tolerance, hint=hint
+            )
+            if trial.hint.get("agrees"):
+                chosen_hint = hint
+                break
+        result = snap_diameter(
+            od_run, se_run, catalog, tolerance=tol.diameter_tolerance, hint=chosen_hint
+        )
+        for m in members:
+            snaps[m] = result
+            own = items[m].object.nominal
+            if own:
+                member_hint[m] = snap_diameter(
+                    od_run, se_run, catalog, tolerance=tol.diameter_tolerance, hint=own
+                ).hint
+            run_info[m] = {
+                "run": [ids[k] for k in members],
+                "od_joint": od_run,
+                "od_joint_stderr": se_run,
+            }
+
+    # 4. orientation regularisation and alignment
+    parallel_groups = []
+    for joint in joints:
+        if joint.kind == "inline":
+            parallel_groups.append([joint.ends[0][0], joint.ends[1][0]])
+        elif joint.kind == "tee" and joint.through is None:
+            parallel_groups.append([joint.ends[0][0], joint.ends[1][0]])
+    directions = regularize_directions(
+        axes, lengths, tol_deg=tol.angle_snap_deg, parallel_groups=parallel_groups, names=ids
+    )
+    new_axes = directions.axes
+    meets, coaxial = _constraints(joints)
+    new_centers = centers.copy()
+    for group in _components(len(ids), joints):
+        local = {g: n for n, g in enumerate(group)}
+        lm = [(local[a], local[b]) for a, b in meets if a in local]
+        lc = [(local[a], local[b]) for a, b in coaxial if a in local]
+        if lm or lc:
+            new_centers[group] = align_lines(
+                centers[group], new_axes[group], lm, lc, weights=np.maximum(lengths[group], 0.05)
+            )
+
+    partners: dict[int, set[int]] = {}
+    on_coaxial: set[int] = set()
+    for a, b in meets + coaxial:
+        partners.setdefault(a, set()).add(b)
+        partners.setdefault(b, set()).add(a)
+    for a, b in coaxial:
+        on_coaxial.update((a, b))
+
+    # 5. pipe specs and spools
+    specs = []
+    for m, comp in enumerate(base.components[k] for k in pipe_idx):
+        snap = snaps[m]
+        size = snap.size
+        od = snap.od
+        wall = 0.0
+        schedule_used = None
+        notes: list[str] = []
+        if size is not None and sched is not None:
+            w = size.wall(sched)
+            if w is not None:
+                wall, schedule_used = w, sched
+            else:
+                notes.append(
+                    f"{catalog.label(size.nominal)} has no {sched} wall in "
+                    f"{catalog.name}: built solid"
+                )
+        corrections = []
+        if size is not None:
+            corrections.append(
+                Correction(
+                    "diameter snapped",
+                    before=float(ods[m]),
+                    after=float(size.od),
+                    size=float(abs(size.od - ods[m]) * 1000.0),
+                    unit="mm",
+                )
+            )
+        elif abs(od - ods[m]) > 1e-9:
+            corrections.append(
+                Correction(
+                    "diameter equalised over run",
+                    before=float(ods[m]),
+                    after=float(od),
+                    size=float(abs(od - ods[m]) * 1000.0),
+                    unit="mm",
+                )
+            )
+        if directions.angles_deg[m] > 1e-6:
+            what = "axis regularised"
+            if directions.relations[m]:
+                what += ": " + ", ".join(dict.fromkeys(directions.relations[m]))
+            corrections.append(
+                Correction(
+                    what,
+                    before=_vec(axes[m]),
+                    after=_vec(new_axes[m]),
+                    size=float(directions.angles_deg[m]),
+                    unit="deg",
+                )
+            )
+        shift = new_centers[m] - centers[m]
+        shift -= (shift @ new_axes[m]) * new_axes[m]
+        if np.linalg.norm(shift) > 1e-7:
+            label = "made coaxial with" if m in on_coaxial else "axis shifted to meet"
+            names = sorted(ids[k] for k in partners.get(m, ()))
+            corrections.append(
+                Correction(
+                    f"{label} {', '.join(names)}",
+                    before=_vec(centers[m]),
+                    after=_vec(new_centers[m]),
+                    size=float(np.linalg.norm(shift)) * 1000.0,
+                    unit="mm",
+                )
+            )
+        snap_map = snap.as_mapping(catalog)
+        snap_map["od_fit"] = float(ods[m])
+        snap_map["od_stderr"] = float(ses[m])
+        snap_map.update(run_info[m])
+        if member_hint[m]:
+            snap_map["hint"] = member_hint[m]
+        elif "hint" in snap_map:
+            del snap_map["hint"]
+        if notes:
+            snap_map["notes"] = notes
+        dims = fitting_dims(catalog, size, od, elbow_radius)
+        pipe_comp = Component(
+            id=comp.id,
+            type="pipe",
+            geometry=comp.geometry,
+            sources=comp.sources,
+            group=comp.group,
+            label=comp.label,
+            nominal=size.nominal if size else None,
+            schedule=schedule_used,
+            fit=comp.fit,
+            snap=snap_map,
+            corrections=tuple(corrections),
+        )
+        specs.append(
+            PipeSpec(
+                id=comp.id,
+                center=new_centers[m],
+                axis=new_axes[m],
+                length=float(lengths[m]),
+                od=float(od),
+                wall=float(wall),
+                dims=dims,
+                run=int(run_of[m]),
+                component=pipe_comp,
+                nominal=size.nominal if size else None,
+                schedule=schedule_used,
+            )
+        )
+    group_of = [item.object.group for item in items]
+    pipe_components, spools = build_spools(specs, joints, group_of)
+
+    # assemble in scan order: each pipe's components where the pipe was
+    by_source: dict[str, list[Component]] = {}
+    for comp in pipe_components:
+        key = comp.sources[0] if comp.sources else None
+        if key is not None:
+            by_source.setdefault(key, []).append(comp)
+            last = key
+        else:
+            by_source[last].append(comp)
+    ordered: list[Component] = []
+    pipe_set = set(pipe_idx)
+    for k, comp in enumerate(base.components):
+        if k in pipe_set:
+            ordered.extend(by_source.get(comp.id, []))
+        else:
+            ordered.append(others.get(k, comp))
+    return base.replace(components=tuple(ordered), spools=tuple(spools), catalog=catalog.name)
+
+
+def _constraints(joints: tuple[Joint, ...]):
+    meets: list[tuple[int, int]] = []
+    coaxial: list[tuple[int, int]] = []
+    for joint in joints:
+        if joint.kind == "elbow":
+            meets.append((joint.ends[0][0], joint.ends[1][0]))
+        elif joint.kind == "inline":
+            coaxial.append((joint.ends[0][0], joint.ends[1][0]))
+        elif joint.kind == "tee":
+            branch = joint.ends[-1][0]
+            if joint.through is None:
+                coaxial.append((joint.ends[0][0], joint.ends[1][0]))
+                meets.append((branch, joint.ends[0][0]))
+            else:
+                meets.append((branch, joint.through))
+    return meets, coaxial
+
+
+def _components(n: int, joints) -> list[list[int]]:
+    parent = list(range(n))
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for joint in joints:
+        pipes = joint.pipes
+        for p in pipes[1:]:
+            ra, rb = find(pipes[0]), find(p)
+            if ra != rb:
+                parent[max(ra, rb)] = min(ra, rb)
+    groups: dict[int, list[int]] = {}
+    for i in range(n):
+        groups.setdefault(find(i), []).append(i)
+    return list(groups.values())

@@ -1,0 +1,359 @@
+"""Which pipes are joined, and how: from the scan's ``links`` and inferred from geometry.
+
+Pipes are lines with two ends. Two pipe ends are a joint when
+
+* their axes are nearly parallel (within ``Tolerances.intended_angle_deg``), nearly the same line
+  (lateral offset within the skew tolerance) and the ends face each other with a gap no larger
+  than ``joint_distance`` plus the larger OD (room for a reducer): an **inline** joint (butt
+  weld, coupling or reducer);
+* or their axes are nearly coplanar (closest distance within the skew tolerance) and meet at a
+  point that lies ahead of both ends by no more than the bend's centre-to-end plus
+  ``joint_distance``: an **elbow** (the bend's centre-to-end is estimated with a long-radius bend,
+  ``R = 1.5 x OD``, before sizes are known).
+
+The skew tolerance is ``max(0.5 x the smaller outer radius, 10 mm)``: sparse fits place an axis
+to a few millimetres, and pipes that miss each other by more than half a radius do not meet.
+
+Candidates come from a k-d tree on the end points (so 1,000 pipes merge in well under a
+second), best first; each end joins at most one other end. A pipe end left over whose axis meets
+an inline joint square-on becomes the branch of a **tee** there; one whose axis meets the inside
+of another pipe square-on (within ``intended_angle_deg`` of 90 degrees) becomes the branch of a
+tee that splits that pipe. ``links`` in the scan are honoured first and without the distance
+limits; a linked pair whose geometry fits no joint is still reported (kind ``contact``) so the
+pair is estimated jointly.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
+
+__all__ = ["End", "Joint", "find_joints", "line_closest_points", "pipe_ends", "skew_tolerance"]
+
+#: A pipe end: (pipe index, 0 for the start end / 1 for the end end).
+End = tuple[int, int]
+
+
+@dataclass(frozen=True)
+class Joint:
+    """A connection found between pipes (indices into the pipe list).
+
+    Attributes
+    ----------
+    kind : str
+        ``"elbow"``, ``"inline"``, ``"tee"`` or ``"contact"`` (contiguous, no fitting).
+    ends : tuple of End
+        elbow/inline/contact: the two joined ends; tee: the run ends (two for a tee at an inline
+        joint, none for a tee in the middle of a pipe) followed by the branch end.
+    through : int or None
+        Tee in the middle of a pipe: that pipe's index.
+    explicit : bool
+        True when the scan's ``links`` named the pair.
+    """
+
+    kind: str
+    ends: tuple[End, ...]
+    through: int | None = None
+    explicit: bool = False
+
+    @property
+    def pipes(self) -> tuple[int, ...]:
+        """Indices of every pipe in the joint."""
+        out = [pipe for pipe, _ in self.ends]
+        if self.through is not None:
+            out.insert(0, self.through)
+        return tuple(out)
+
+    @property
+    def branch(self) -> End | None:
+        """The branch end of a tee."""
+        return self.ends[-1] if self.kind == "tee" else None
+
+
+def pipe_ends(centers: np.ndarray, axes: np.ndarray, lengths: np.ndarray):
+    """End points and outward directions of pipes.
+
+    Parameters
+    ----------
+    centers : ndarray, shape (n, 3), metres
+    axes : ndarray, shape (n, 3), unit
+    lengths : ndarray, shape (n,), metres
+
+    Returns
+    -------
+    points : ndarray, shape (n, 2, 3), metres
+        ``points[i, 0] = c - L/2 a`` and ``points[i, 1] = c + L/2 a``.
+    outward : ndarray, shape (n, 2, 3)
+        Unit vectors pointing out of the pipe at each end (``-a`` and ``+a``).
+    """
+    half = 0.5 * lengths[:, None] * axes
+    points = np.stack([centers - half, centers + half], axis=1)
+    outward = np.stack([-axes, axes], axis=1)
+    return points, outward
+
+
+def line_closest_points(p1, d1, p2, d2):
+    """Closest points of two lines ``p1 + s d1`` and ``p2 + t d2`` (points (3,) m, unit d).
+
+    Returns ``(s, t, q1, q2)``; for parallel lines ``s = 0`` and ``t`` projects ``p1``.
+    """
+    w = p1 - p2
+    b = float(d1 @ d2)
+    d = float(d1 @ w)
+    e = float(d2 @ w)
+    denom = 1.0 - b * b
+    if denom < 1e-12:
+        s, t = 0.0, e
+    else:
+        s = (b * e - d) / denom
+        t = (e - b * d) / denom
+    return s, t, p1 + s * d1, p2 + t * d2
+
+
+def skew_tolerance(radius_a: float, radius_b: float) -> float:
+    """How far apart (metres) two axes may pass and still meet: max(0.5 r_min, 10 mm)."""
+    return max(0.5 * min(radius_a, radius_b), 0.010)
+
+
+@dataclass(frozen=True)
+class _Candidate:
+    cost: float
+    kind: str
+    a: End
+    b: End
+    explicit: bool
+
+
+def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: bool):
+    """Classify the pair of ends; return a _Candidate or None."""
+    ei, ej = pts[i, ki], pts[j, kj]
+    oi, oj = out[i, ki], out[j, kj]
+    ri, rj = 0.5 * ods[i], 0.5 * ods[j]
+    skew_tol = skew_tolerance(ri, rj)
+    jd = tol.joint_distance
+    cos = abs(float(axes[i] @ axes[j]))
+    angle = float(np.degrees(np.arccos(min(1.0, cos))))
+    if angle <= tol.intended_angle_deg:
+        if float(oi @ oj) >= 0:  # both ends point the same way: not facing each other
+            return None
+        rel = ej - ei
+        gap = float(oi @ rel)
+        lateral = max(
+            float(np.linalg.norm(rel - (rel @ axes[i]) * axes[i])),
+            float(np.linalg.norm(rel - (rel @ axes[j]) * axes[j])),
+        )
+        if lateral > skew_tol:
+            return None
+        if not relaxed and not (-jd <= gap <= jd + max(ods[i], ods[j])):
+            return None
+        return _Candidate(abs(gap) + lateral, "inline", (i, ki), (j, kj), relaxed)
+    s, t, qi, qj = line_closest_points(ei, oi, ej, oj)
+    skew = float(np.linalg.norm(qi - qj))
+    if skew > skew_tol:
+        return None
+    bend = float(np.degrees(np.arccos(np.clip(-(oi @ oj), -1.0, 1.0))))
+    if bend >= 180.0 - tol.intended_angle_deg:
+        return None
+    reach = 1.5 * max(ods[i], ods[j]) * np.tan(np.radians(bend) / 2) + jd
+    if relaxed:
+        if s < -jd - 0.5 * np.linalg.norm(ei - ej) or t < -jd - 0.5 * np.linalg.norm(ei - ej):
+            return None
+    elif not (-jd <= s <= reach and -jd <= t <= reach):
+        return None
+    return _Candidate(abs(s) + abs(t) + skew, "elbow", (i, ki), (j, kj), relaxed)
+
+
+def _best_for_link(i, j, pts, out, axes, ods, tol):
+    best = None
+    for ki in (0, 1):
+        for kj in (0, 1):
+            cand = _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol, relaxed=True)
+            if cand is not None:
+                # prefer the ends nearest each other among valid configurations
+                cost = cand.cost + float(np.linalg.norm(pts[i, ki] - pts[j, kj]))
+                if best is None or cost < best[0]:
+                    best = (cost, cand)
+    return None if best is None else best[1]
+
+
+def _tee_at_inline(joint: Joint, b: End, pts, out, axes, ods, lengths, tol) -> float | None:
+    (i, ki), (j, kj) = joint.ends
+    point = 0.5 * (pts[i, ki] + pts[j, kj])
+    return _branch_cost(b, point, axes[i], ods[i], pts, out, axes, ods, tol)
+
+
+def _branch_cost(b: End, point, run_axis, run_od, pts, out, axes, ods, tol) -> float | None:
+    pipe, k = b
+    eb, ob = pts[pipe, k], out[pipe, k]
+    cos = abs(float(axes[pipe] @ run_axis))
+    if (
+        np.degrees(np.arcsin(min(1.0, np.sqrt(max(0.0, 1 - cos * cos)))))
+        < 90 - tol.intended_angle_deg
+    ):
+        return None
+    s, _, q, _ = line_closest_points(eb, ob, point, run_axis)
+    rel = q - point
+    lateral_on_run = float(np.linalg.norm(rel - (rel @ run_axis) * run_axis))
+    skew_tol = skew_tolerance(0.5 * run_od, 0.5 * ods[pipe])
+    if lateral_on_run > skew_tol:
+        return None
+    along = abs(float(rel @ run_axis))
+    if along > skew_tol + tol.joint_distance:
+        return None
+    if not (-tol.joint_distance <= s <= run_od + tol.joint_distance):
+        return None
+    return abs(s) + along + lateral_on_run
+
+
+def find_joints(
+    centers,
+    axes,
+    lengths,
+    ods,
+    *,
+    links: Iterable[tuple[int, int]] = (),
+    tolerances: Tolerances = DEFAULT_TOLERANCES,
+) -> tuple[Joint, ...]:
+    """Find the joints between pipes (see the module docstring for the rules).
+
+    Parameters
+    ----------
+    centers : array_like, shape (n, 3), metres
+    axes : array_like, shape (n, 3), unit vectors
+    lengths : array_like, shape (n,), metres
+    ods : array_like, shape (n,), metres
+        Outside diameter estimates.
+    links : iterable of (int, int)
+        Pairs of pipe indices the scan says are contiguous.
+    tolerances : Tolerances
+
+    Returns
+    -------
+    tuple of Joint
+    """
+    centers = np.asarray(centers, float).reshape(-1, 3)
+    axes = np.asarray(axes, float).reshape(-1, 3)
+    lengths = np.asarray(lengths, float).reshape(-1)
+    ods = np.asarray(ods, float).reshape(-1)
+    n = len(centers)
+    if n == 0:
+        return ()
+    pts, out = pipe_ends(centers, axes, lengths)
+    tol = tolerances
+
+    used: set[End] = set()
+    joints: list[Joint] = []
+    linked_pairs = set()
+    for i, j in links:
+        if i == j:
+            continue
+        key = (min(i, j), max(i, j))
+        if key in linked_pairs:
+            continue
+        linked_pairs.add(key)
+
+    # 1. explicit links first (no distance limits)
+    contacts = []
+    for i, j in sorted(linked_pairs):
+        cand = _best_for_link(i, j, pts, out, axes, ods, tol)
+        if cand is None or cand.a in used or cand.b in used:
+            contacts.append((i, j))
+            continue
+        used.update((cand.a, cand.b))
+        joints.append(Joint(cand.kind, (cand.a, cand.b), explicit=True))
+
+    # 2. inferred end-to-end joints, best first
+    flat = pts.reshape(-1, 3)
+    radius = 2 * tol.joint_distance + 1.5 * float(ods.max()) * 2.5 + float(ods.max())
+    tree = cKDTree(flat)
+    candidates: list[_Candidate] = []
+    for a, b in tree.query_pairs(radius, output_type="ndarray"):
+        i, ki = divmod(int(a), 2)
+        j, kj = divmod(int(b), 2)
+        if i == j or (min(i, j), max(i, j)) in linked_pairs:
+            continue
+        cand = _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol, relaxed=False)
+        if cand is not None:
+            candidates.append(cand)
+    candidates.sort(key=lambda c: c.cost)
+    for cand in candidates:
+        if cand.a in used or cand.b in used:
+            continue
+        used.update((cand.a, cand.b))
+        joints.append(Joint(cand.kind, (cand.a, cand.b)))
+
+    # 3. tees: leftover ends meeting an inline joint or the inside of a pipe
+    free = [(i, k) for i in range(n) for k in (0, 1) if (i, k) not in used]
+    if free:
+        joints = _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol)
+    for i, j in contacts:
+        joints.append(Joint("contact", ((i, 0), (j, 0)), explicit=True))
+    return tuple(joints)
+
+
+def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol):
+    joints = list(joints)
+    inline_idx = [k for k, jt in enumerate(joints) if jt.kind == "inline"]
+    inline_points = (
+        np.array([0.5 * (pts[joints[k].ends[0]] + pts[joints[k].ends[1]]) for k in inline_idx])
+        if inline_idx
+        else np.zeros((0, 3))
+    )
+    inline_tree = cKDTree(inline_points) if len(inline_idx) else None
+    center_tree = cKDTree(centers)
+    reach = float(lengths.max()) / 2 + 2 * tol.joint_distance + 2 * float(ods.max())
+    taken_inline: set[int] = set()
+    for b in free:
+        if b in used:
+            continue
+        pipe, k = b
+        best = None
+        if inline_tree is not None:
+            near = inline_tree.query_ball_point(
+                pts[pipe, k], 2 * float(ods.max()) + 2 * tol.joint_distance
+            )
+            for m in near:
+                idx = inline_idx[m]
+                if idx in taken_inline or pipe in joints[idx].pipes:
+                    continue
+                cost = _tee_at_inline(joints[idx], b, pts, out, axes, ods, lengths, tol)
+                if cost is not None and (best is None or cost < best[0]):
+                    best = (cost, "inline", idx)
+        for other in center_tree.query_ball_point(pts[pipe, k], reach):
+            if other == pipe:
+                continue
+            s, t, q_run, _ = line_closest_points(
+                centers[other], axes[other], pts[pipe, k], out[pipe, k]
+            )
+            if abs(s) > 0.5 * lengths[other] - ods[other]:
+                continue  # not inside the run pipe with room for the tee
+            cost = _branch_cost(b, q_run, axes[other], ods[other], pts, out, axes, ods, tol)
+            if cost is not None and (best is None or cost < best[0]):
+                best = (cost, "through", other)
+        if best is None:
+            continue
+        _, how, ref = best
+        used.add(b)
+        if how == "inline":
+            taken_inline.add(ref)
+            run = joints[ref]
+            joints[ref] = Joint("tee", run.ends + (b,), explicit=run.explicit)
+        else:
+            joints.append(Joint("tee", (b,), through=ref))
+    return joints
+
+
+def joint_pairs(joints: Sequence[Joint]) -> list[tuple[int, int]]:
+    """Every pair of pipe indices joined directly (for runs and spools)."""
+    pairs = []
+    for joint in joints:
+        pipes = joint.pipes
+        for a in range(len(pipes)):
+            for b in range(a + 1, len(pipes)):
+                pairs.append((pipes[a], pipes[b]))
+    return pairs

@@ -1,0 +1,288 @@
+"""Orientation regularisation and line alignment, in the spirit of GlobFit.
+
+GlobFit (Li, Wu, Chrysathou, Sharf, Cohen-Or, Mitra, "GlobFit: consistently fitting primitives
+by discovering global relations", SIGGRAPH 2011) detects near-relations between fitted
+primitives (parallel, orthogonal, coaxial...) within a tolerance and refits so that they hold
+exactly. Here, for pipe axes:
+
+1. **Parallel**: axes within ``angle_snap_deg`` of each other (and pipes joined inline, which
+   must share an axis) are clustered; each cluster gets one direction, the principal direction of
+   its members' axes weighted by length.
+2. **Vertical / horizontal**: a cluster within ``angle_snap_deg`` of the vertical becomes exactly
+   vertical; one within ``angle_snap_deg`` of horizontal loses its vertical component.
+3. **Perpendicular**: clusters are fixed in order of weight (the vertical first); a cluster within
+   ``angle_snap_deg`` of perpendicular to fixed directions is projected onto their orthogonal
+   complement (the smallest rotation making it exactly perpendicular).
+
+Then :func:`align_lines` moves each pipe's line sideways (never rotating it again) by the
+smallest weighted amount that makes joined lines meet exactly: elbows and tee branches
+intersect their partner's axis, inline segments become coaxial. The constraints are linear in
+the sideways offsets and the meeting parameters; they are solved together with a small penalty
+on the offsets by one least-squares system per call (equality constraints weighted 1e6).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["DirectionResult", "regularize_directions", "align_lines", "perpendicular_basis"]
+
+_Z = np.array([0.0, 0.0, 1.0])
+
+
+@dataclass(frozen=True)
+class DirectionResult:
+    """Regularised axes and why each changed.
+
+    Attributes
+    ----------
+    axes : ndarray, shape (n, 3)
+        New unit axes (same sense as the inputs).
+    relations : tuple of tuple of str
+        Per pipe, the relations made exact (``"vertical"``, ``"horizontal"``,
+        ``"parallel to P2"``, ``"perpendicular to P3"``, ``"coaxial run"``).
+    angles_deg : ndarray, shape (n,)
+        Angle between each old and new axis, degrees.
+    cluster : ndarray, shape (n,), int
+        Cluster index of each pipe (pipes in one cluster are exactly parallel).
+    """
+
+    axes: np.ndarray
+    relations: tuple[tuple[str, ...], ...]
+    angles_deg: np.ndarray
+    cluster: np.ndarray
+
+
+def _angle(a: np.ndarray, b: np.ndarray) -> float:
+    """Angle in degrees between two lines (sign-free), in [0, 90]."""
+    return float(np.degrees(np.arccos(np.clip(abs(float(a @ b)), 0.0, 1.0))))
+
+
+def _principal(axes: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    scatter = (axes * weights[:, None]).T @ axes
+    values, vectors = np.linalg.eigh(scatter)
+    d = vectors[:, -1]
+    return d / np.linalg.norm(d)
+
+
+def regularize_directions(
+    axes,
+    weights,
+    *,
+    tol_deg: float,
+    parallel_groups: Sequence[Sequence[int]] = (),
+    names: Sequence[str] | None = None,
+) -> DirectionResult:
+    """Make near-parallel, near-vertical, near-horizontal and near-perpendicular axes exact.
+
+    Parameters
+    ----------
+    axes : array_like, shape (n, 3)
+        Unit axes (sign arbitrary).
+    weights : array_like, shape (n,)
+        Weight of each axis (e.g. pipe length in metres; longer fits are steadier).
+    tol_deg : float
+        ``Tolerances.angle_snap_deg``.
+    parallel_groups : sequence of sequence of int
+        Pipes that must end up parallel whatever their angle (pipes joined inline).
+    names : sequence of str, optional
+        Pipe ids for the relation texts (default ``"#i"``).
+
+    Returns
+    -------
+    DirectionResult
+    """
+    axes = np.asarray(axes, float).reshape(-1, 3)
+    n = len(axes)
+    weights = np.maximum(np.asarray(weights, float).reshape(-1), 1e-9)
+    names = list(names) if names is not None else [f"#{i}" for i in range(n)]
+    if n == 0:
+        return DirectionResult(np.zeros((0, 3)), (), np.zeros(0), np.zeros(0, int))
+
+    # clusters: forced groups first, then greedy merge of near-parallel clusters
+    parent = list(range(n))
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    forced = np.zeros(n, bool)
+    for group in parallel_groups:
+        group = list(group)
+        for member in group[1:]:
+            ra, rb = find(group[0]), find(member)
+            if ra != rb:
+                parent[max(ra, rb)] = min(ra, rb)
+        if len(group) > 1:
+            forced[group] = True
+    clusters: dict[int, list[int]] = {}
+    for i in range(n):
+        clusters.setdefault(find(i), []).append(i)
+    groups = sorted(clusters.values(), key=lambda g: -weights[g].sum())
+    dirs = [_principal(axes[g], weights[g]) for g in groups]
+    merged: list[list[int]] = []
+    merged_dirs: list[np.ndarray] = []
+    for group, d in zip(groups, dirs):
+        for k, md in enumerate(merged_dirs):
+            if _angle(d, md) <= tol_deg:
+                merged[k] = merged[k] + group
+                merged_dirs[k] = _principal(axes[merged[k]], weights[merged[k]])
+                break
+        else:
+            merged.append(list(group))
+            merged_dirs.append(d)
+    order = np.argsort([-weights[g].sum() for g in merged])
+    merged = [merged[k] for k in order]
+    merged_dirs = [merged_dirs[k] for k in order]
+
+    cluster_of = np.zeros(n, int)
+    relations: list[list[str]] = [[] for _ in range(n)]
+    fixed: list[tuple[np.ndarray, str]] = [(_Z, "vertical")]
+    final_dirs = []
+    for index, (group, d) in enumerate(zip(merged, merged_dirs)):
+        cluster_of[group] = index
+        rel: list[str] = []
+        if len(group) > 1:
+            lead = names[max(group, key=lambda m: weights[m])]
+            for member in group:
+                if forced[member] and any(forced[o] for o in group if o != member):
+                    relations[member].append("coaxial run")
+                elif names[member] != lead:
+                    relations[member].append(f"parallel to {lead}")
+        # parallel to a fixed direction (vertical, or an earlier cluster)?
+        snapped = False
+        for f, label in fixed:
+            if _angle(d, f) <= tol_deg:
+                d = f * np.sign(float(d @ f) or 1.0)
+                rel.append(label if label == "vertical" else f"parallel to {label}")
+                snapped = True
+                break
+        if not snapped:
+            near_perp = [(f, label) for f, label in fixed if abs(90.0 - _angle(d, f)) <= tol_deg]
+            if near_perp:
+                basis: list[np.ndarray] = []
+                for f, _ in near_perp:
+                    g = f - sum((f @ b) * b for b in basis)
+                    norm = np.linalg.norm(g)
+                    if norm > 1e-9:
+                        basis.append(g / norm)
+                projected = d - sum((d @ b) * b for b in basis)
+                norm = np.linalg.norm(projected)
+                if norm > 1e-9:
+                    d = projected / norm
+                    for _, label in near_perp:
+                        rel.append(
+                            "horizontal" if label == "vertical" else f"perpendicular to {label}"
+                        )
+        lead_name = names[max(group, key=lambda m: weights[m])]
+        fixed.append((d, lead_name))
+        final_dirs.append(d)
+        for member in group:
+            relations[member].extend(rel)
+
+    new_axes = np.empty_like(axes)
+    angles = np.empty(n)
+    for i in range(n):
+        d = final_dirs[cluster_of[i]]
+        d = d if float(d @ axes[i]) >= 0 else -d
+        new_axes[i] = d
+        angles[i] = float(np.degrees(np.arccos(np.clip(float(d @ axes[i]), -1.0, 1.0))))
+    return DirectionResult(new_axes, tuple(tuple(r) for r in relations), angles, cluster_of)
+
+
+def perpendicular_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors (3,) perpendicular to ``axis`` and to each other."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = np.cross(axis, helper)
+    u /= np.linalg.norm(u)
+    v = np.cross(axis, u)
+    return u, v
+
+
+def align_lines(
+    centers,
+    axes,
+    meets: Sequence[tuple[int, int]],
+    coaxial: Sequence[tuple[int, int]],
+    weights=None,
+    *,
+    big: float = 1e6,
+) -> np.ndarray:
+    """Shift lines sideways so that joined lines meet exactly.
+
+    Parameters
+    ----------
+    centers : array_like, shape (n, 3), metres
+        A point on each line.
+    axes : array_like, shape (n, 3)
+        Unit directions (kept as they are).
+    meets : sequence of (int, int)
+        Pairs of lines that must intersect (elbows, tee branches and runs).
+    coaxial : sequence of (int, int)
+        Pairs of parallel lines that must coincide (inline joints).
+    weights : array_like, shape (n,), optional
+        Resistance of each line to moving (default 1).
+    big : float
+        Weight of the constraint rows against the offset penalty.
+
+    Returns
+    -------
+    ndarray, shape (n, 3), metres
+        The new points; each moved perpendicular to its own axis only.
+    """
+    centers = np.asarray(centers, float).reshape(-1, 3)
+    axes = np.asarray(axes, float).reshape(-1, 3)
+    n = len(centers)
+    if n == 0 or (not meets and not coaxial):
+        return centers.copy()
+    weights = np.ones(n) if weights is None else np.asarray(weights, float).reshape(-1)
+    involved = sorted({i for pair in list(meets) + list(coaxial) for i in pair})
+    col = {i: 2 * k for k, i in enumerate(involved)}
+    bases = {i: perpendicular_basis(axes[i]) for i in involved}
+    n_off = 2 * len(involved)
+    n_par = 2 * len(meets)
+    rows: list[np.ndarray] = []
+    rhs: list[float] = []
+
+    def offset_row(i, vector):
+        row = np.zeros(n_off + n_par)
+        u, v = bases[i]
+        row[col[i]] = float(u @ vector)
+        row[col[i] + 1] = float(v @ vector)
+        return row
+
+    # meets: c_i + t_i + s_i a_i = c_j + t_j + s_j a_j  (3 rows each)
+    for m, (i, j) in enumerate(meets):
+        for axis_k in range(3):
+            e = np.zeros(3)
+            e[axis_k] = 1.0
+            row = offset_row(i, e) - offset_row(j, e)
+            row[n_off + 2 * m] = axes[i][axis_k]
+            row[n_off + 2 * m + 1] = -axes[j][axis_k]
+            rows.append(big * row)
+            rhs.append(big * (centers[j][axis_k] - centers[i][axis_k]))
+    # coaxial: (c_j + t_j - c_i - t_i) . u_i = 0 and . v_i = 0
+    for i, j in coaxial:
+        for w in bases[i]:
+            row = offset_row(j, w) - offset_row(i, w)
+            rows.append(big * row)
+            rhs.append(big * float(w @ (centers[i] - centers[j])))
+    # penalty: sqrt(weight) * offset
+    for i in involved:
+        for k in range(2):
+            row = np.zeros(n_off + n_par)
+            row[col[i] + k] = np.sqrt(weights[i])
+            rows.append(row)
+            rhs.append(0.0)
+    matrix = np.vstack(rows)
+    solution, *_ = np.linalg.lstsq(matrix, np.asarray(rhs), rcond=None)
+    new = centers.copy()
+    for i in involved:
+        u, v = bases[i]
+        new[i] = centers[i] + solution[col[i]] * u + solution[col[i] + 1] * v
+    return new

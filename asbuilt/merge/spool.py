@@ -1,0 +1,551 @@
+"""Spools with real fittings: elbows, tees, reducers and couplings placed at the joints.
+
+Input: pipes as lines already regularised and aligned (:mod:`asbuilt.merge.regularize`), their
+sizes and fitting dimensions, and the joints (:mod:`asbuilt.merge.contiguity`). Output: the pipe
+and fitting components, every neighbour sharing its end point and direction exactly.
+
+Geometry at each joint (``o`` is a pipe end's outward direction, ``P`` the meeting point of the
+axes):
+
+* **elbow** of bend angle ``theta`` (between ``o_1`` and ``-o_2``) and bend radius ``R``
+  (catalog long or short radius): centre-to-end ``R tan(theta/2)``; ends
+  ``T_k = P - R tan(theta/2) o_k``; the curvature centre is ``T_1 + R n`` with ``n`` the unit
+  vector perpendicular to ``o_1`` towards ``-o_2``. Both pipes are trimmed (or extended) to
+  ``T_k``.
+* **inline**, one size: ends within 5 mm (or overlapping) meet at their midpoint (a butt weld);
+  a larger gap is filled by a **coupling** (a straight of the pipe size).
+* **inline**, two sizes: a concentric **reducer** of the catalog length (by its large end)
+  centred on the gap; both pipes end at its ends.
+* **tee**: centre ``J`` where the branch axis meets the run axis; run ends ``J -+ C d``,
+  branch end ``J + M b`` (``C``, ``M``: catalog centre-to-end of run and outlet). A tee in the
+  middle of a pipe splits it into pieces ``<id>.1``, ``<id>.2``...
+
+A fitting that would leave a pipe shorter than 1 mm is not built (the joint is reported in the
+pipes' ``snap["merge_notes"]``) and the pipes keep their ends there.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from asbuilt.catalog import FittingDims
+from asbuilt.model import Bend, Component, Correction, Reducer, Spool, Straight, Tee
+
+from .contiguity import Joint, line_closest_points
+
+__all__ = [
+    "PipeSpec",
+    "build_spools",
+    "ports",
+    "connection_mismatches",
+    "BUTT_GAP",
+    "MIN_PIPE_LENGTH",
+]
+
+#: Inline ends closer than this (metres) meet at their midpoint rather than get a coupling.
+BUTT_GAP = 0.005
+#: Shortest pipe piece left after trimming, metres.
+MIN_PIPE_LENGTH = 0.001
+
+
+@dataclass(frozen=True, eq=False)
+class PipeSpec:
+    """One pipe ready for spool building.
+
+    Attributes
+    ----------
+    id : str
+    center : ndarray, shape (3,), metres
+        A point of the (aligned) axis: the mid-point of the fitted extent.
+    axis : ndarray, shape (3,)
+        Unit axis (regularised).
+    length : float
+        Fitted length, metres.
+    od : float
+        Outside diameter to build with, metres.
+    wall : float
+        Wall thickness, metres (0 = solid).
+    dims : FittingDims
+        Fitting dimensions for this pipe's size.
+    run : int
+        Index of its run of one size.
+    component : Component
+        The pipe component so far (snap, corrections...); geometry is replaced here.
+    """
+
+    id: str
+    center: np.ndarray
+    axis: np.ndarray
+    length: float
+    od: float
+    wall: float
+    dims: FittingDims
+    run: int
+    component: Component
+    nominal: str | None = None
+    schedule: str | None = None
+    notes: list = field(default_factory=list)
+
+
+def _vec(x) -> tuple[float, float, float]:
+    return tuple(float(v) for v in x)
+
+
+def _unit(v):
+    return v / np.linalg.norm(v)
+
+
+class _Builder:
+    def __init__(self, pipes: Sequence[PipeSpec]):
+        self.pipes = pipes
+        n = len(pipes)
+        self.base = np.zeros((n, 2, 3))
+        self.out = np.zeros((n, 2, 3))
+        for i, p in enumerate(pipes):
+            half = 0.5 * p.length * p.axis
+            self.base[i] = (p.center - half, p.center + half)
+            self.out[i] = (-p.axis, p.axis)
+        self.ends = self.base.copy()
+        self.splits: dict[int, list[tuple[float, float]]] = {}
+
+    def reset(self):
+        self.ends = self.base.copy()
+        self.splits = {}
+
+    def param(self, i: int, point) -> float:
+        """Position of ``point`` along pipe i's axis from its start end, metres."""
+        return float((np.asarray(point) - self.base[i, 0]) @ self.pipes[i].axis)
+
+
+def _same_size(a: PipeSpec, b: PipeSpec) -> bool:
+    return a.run == b.run or abs(a.od - b.od) < 1e-9
+
+
+def _elbow(b: _Builder, joint: Joint):
+    (i, ki), (j, kj) = joint.ends
+    pi, pj = b.pipes[i], b.pipes[j]
+    oi, oj = b.out[i, ki], b.out[j, kj]
+    _, _, qi, qj = line_closest_points(b.base[i, ki], oi, b.base[j, kj], oj)
+    point = 0.5 * (qi + qj)
+    cos = float(np.clip(-(oi @ oj), -1.0, 1.0))
+    theta = float(np.arccos(cos))
+    if np.degrees(theta) < 1e-6:
+        return _inline(b, Joint("inline", joint.ends, explicit=joint.explicit))
+    big = pi if pi.od >= pj.od else pj
+    radius = max(pi.dims.bend_radius, pj.dims.bend_radius)
+    reach = radius * np.tan(theta / 2)
+    ti = point - reach * oi
+    tj = point - reach * oj
+    inward = (-oj) - ((-oj) @ oi) * oi
+    center = ti + radius * _unit(inward)
+    geometry = Bend(
+        start=ti,
+        end=tj,
+        center=center,
+        outer_radius=0.5 * big.od,
+        wall=min(pi.wall, pj.wall) if pi.wall and pj.wall else 0.0,
+    )
+    b.ends[i, ki] = ti
+    b.ends[j, kj] = tj
+    notes = list(big.dims.notes)
+    if not _same_size(pi, pj):
+        notes.append("pipes of different sizes meet at this elbow: built at the larger size")
+    snap = {
+        "status": "fitting",
+        "dimensions": big.dims.source,
+        "bend_radius": radius,
+        "angle_deg": float(np.degrees(theta)),
+        "connects": [pi.id, pj.id],
+        "notes": notes,
+    }
+    return [("elbow", f"{pi.id}-{pj.id}", geometry, big, snap)]
+
+
+def _inline(b: _Builder, joint: Joint):
+    (i, ki), (j, kj) = joint.ends
+    pi, pj = b.pipes[i], b.pipes[j]
+    ei, ej = b.base[i, ki], b.base[j, kj]
+    oi = b.out[i, ki]
+    gap = float(oi @ (ej - ei))
+    if _same_size(pi, pj):
+        if gap <= BUTT_GAP:
+            mid = 0.5 * (ei + ej)
+            b.ends[i, ki] = mid
+            b.ends[j, kj] = mid
+            return []
+        geometry = Straight(start=ei, end=ej, outer_radius=0.5 * pi.od, wall=pi.wall)
+        snap = {
+            "status": "fitting",
+            "dimensions": "gap",
+            "connects": [pi.id, pj.id],
+            "notes": [f"fills a {gap * 1000:.0f} mm gap between collinear pipes"],
+        }
+        return [("coupling", f"{pi.id}-{pj.id}", geometry, pi, snap)]
+    large = pi if pi.od > pj.od else pj
+    length = large.dims.reducer_length
+    mid = 0.5 * (ei + ej)
+    start = mid - 0.5 * length * oi
+    end = mid + 0.5 * length * oi
+    b.ends[i, ki] = start
+    b.ends[j, kj] = end
+    wall = min(pi.wall, pj.wall) if pi.wall and pj.wall else 0.0
+    geometry = Reducer(
+        start=start,
+        end=end,
+        outer_radius_start=0.5 * pi.od,
+        outer_radius_end=0.5 * pj.od,
+        wall=wall,
+    )
+    snap = {
+        "status": "fitting",
+        "dimensions": large.dims.source,
+        "length": length,
+        "connects": [pi.id, pj.id],
+        "notes": list(large.dims.notes),
+    }
+    return [("reducer", f"{pi.id}-{pj.id}", geometry, large, snap)]
+
+
+def _tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
+    c_run = run.dims.tee_run
+    c_out = run.dims.tee_outlet
+    wall = min(run.wall, branch.wall) if run.wall and branch.wall else 0.0
+    geometry = Tee(
+        center=center,
+        run_start=center - c_run * run_dir,
+        run_end=center + c_run * run_dir,
+        branch_end=center + c_out * branch_dir,
+        outer_radius=0.5 * run.od,
+        branch_outer_radius=0.5 * branch.od,
+        wall=wall,
+    )
+    return geometry
+
+
+def _tee(b: _Builder, joint: Joint):
+    branch_i, branch_k = joint.ends[-1]
+    pb = b.pipes[branch_i]
+    ob = b.out[branch_i, branch_k]
+    if joint.through is None:
+        (i, ki), (j, kj) = joint.ends[:2]
+        pi, pj = b.pipes[i], b.pipes[j]
+        run_dir = b.out[i, ki]
+        anchor = b.base[i, ki]
+    else:
+        i = joint.through
+        pi = pj = b.pipes[i]
+        run_dir = pi.axis
+        anchor = b.base[i, 0]
+    _, t, _, center = line_closest_points(b.base[branch_i, branch_k], ob, anchor, run_dir)
+    center = anchor + t * run_dir
+    geometry = _tee_geometry(center, run_dir, -ob, pi, pb)
+    b.ends[branch_i, branch_k] = geometry.branch_end
+    notes = list(pi.dims.notes)
+    if not _same_size(pi, pb):
+        notes.append("reducing outlet: built with the equal tee's dimensions of the run size")
+    if joint.through is None:
+        b.ends[i, ki] = geometry.run_start
+        b.ends[j, kj] = geometry.run_end
+        name = f"{pi.id}-{pj.id}-{pb.id}"
+        connects = [pi.id, pj.id, pb.id]
+    else:
+        at = b.param(i, center)
+        b.splits.setdefault(i, []).append((at, pi.dims.tee_run))
+        name = None  # named after the pieces are known
+        connects = [pi.id, pb.id]
+    snap = {"status": "fitting", "dimensions": pi.dims.source, "connects": connects, "notes": notes}
+    at_param = b.param(i, center) if joint.through is not None else None
+    return [("tee", name, geometry, pi, snap, joint.through, at_param)]
+
+
+def _pieces(b: _Builder, i: int):
+    """The (start, end) point pairs of pipe i after trimming and splitting."""
+    p = b.pipes[i]
+    start, end = b.ends[i, 0], b.ends[i, 1]
+    cuts = sorted(b.splits.get(i, []))
+    if not cuts:
+        return [(start, end)]
+    pieces = []
+    prev = start
+    for at, half in cuts:
+        pieces.append((prev, b.base[i, 0] + (at - half) * p.axis))
+        prev = b.base[i, 0] + (at + half) * p.axis
+    pieces.append((prev, end))
+    return pieces
+
+
+def _piece_ok(b: _Builder, i: int) -> bool:
+    for start, end in _pieces(b, i):
+        if b.param(i, end) - b.param(i, start) < MIN_PIPE_LENGTH:
+            return False
+    return True
+
+
+def build_spools(
+    pipes: Sequence[PipeSpec],
+    joints: Sequence[Joint],
+    group_of: Sequence[str | None],
+) -> tuple[list[Component], list[Spool]]:
+    """Place fittings at the joints, trim pipes and group everything into spools.
+
+    Parameters
+    ----------
+    pipes : sequence of PipeSpec
+    joints : sequence of Joint
+        Indices refer to ``pipes``.
+    group_of : sequence of str or None
+        Each pipe's scan group (a spool takes the group's name when all its pipes share it).
+
+    Returns
+    -------
+    components : list of Component
+        Pipes (or their pieces) and fittings, in pipe order with each fitting after the first
+        pipe it joins.
+    spools : list of Spool
+    """
+    b = _Builder(pipes)
+    active = [jt for jt in joints if jt.kind != "contact"]
+    failed: list[Joint] = []
+    for _ in range(len(active) + 1):
+        b.reset()
+        built = []
+        for joint in active:
+            if joint.kind == "elbow":
+                built.extend((joint, item) for item in _elbow(b, joint))
+            elif joint.kind == "inline":
+                built.extend((joint, item) for item in _inline(b, joint))
+            elif joint.kind == "tee":
+                built.extend((joint, item) for item in _tee(b, joint))
+        bad = [i for i in range(len(pipes)) if not _piece_ok(b, i)]
+        if not bad:
+            break
+        worst = bad[0]
+        # drop the joints at that pipe, one at a time, largest fitting first
+        culprit = next(jt for jt in reversed(active) if worst in jt.pipes)
+        active.remove(culprit)
+        failed.append(culprit)
+    for joint in failed:
+        names = ", ".join(pipes[k].id for k in joint.pipes)
+        for k in joint.pipes:
+            pipes[k].notes.append(
+                f"no {joint.kind} built between {names}: the fitting would not fit on the pipe"
+            )
+
+    # pipe components (with pieces)
+    components: list[Component] = []
+    piece_ids: dict[int, list[str]] = {}
+    by_pipe: dict[int, list[Component]] = {}
+    for i, p in enumerate(pipes):
+        pieces = _pieces(b, i)
+        ids = [p.id] if len(pieces) == 1 else [f"{p.id}.{k + 1}" for k in range(len(pieces))]
+        piece_ids[i] = ids
+        comps = []
+        for (start, end), pid in zip(pieces, ids):
+            comps.append((pid, start, end))
+        by_pipe[i] = comps
+
+    fittings_after: dict[int, list[tuple[str, str, object, PipeSpec, dict]]] = {}
+    for joint, item in built:
+        kind, name, geometry, size_of, snap = item[:5]
+        if kind == "tee" and joint.through is not None:
+            i = joint.through
+            at = item[6]
+            cuts = sorted(b.splits[i])
+            k = next(n for n, (pos, _) in enumerate(cuts) if abs(pos - at) < 1e-9)
+            branch = pipes[joint.ends[-1][0]]
+            name = f"{piece_ids[i][k]}-{piece_ids[i][k + 1]}-{branch.id}"
+            snap = {**snap, "connects": [piece_ids[i][k], piece_ids[i][k + 1], branch.id]}
+        first = min(joint.pipes)
+        fittings_after.setdefault(first, []).append((kind, name, geometry, size_of, snap))
+
+    # spools: union-find over pipes joined by any joint (including contacts and failed ones)
+    parent = list(range(len(pipes)))
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for joint in joints:
+        members = joint.pipes
+        for m in members[1:]:
+            ra, rb = find(members[0]), find(m)
+            if ra != rb:
+                parent[max(ra, rb)] = min(ra, rb)
+    roots: dict[int, list[int]] = {}
+    for i in range(len(pipes)):
+        roots.setdefault(find(i), []).append(i)
+    spool_of: dict[int, str] = {}
+    used_names: set[str] = {p.id for p in pipes}
+    groups_count: dict[str, int] = {}
+    for members in roots.values():
+        names = {group_of[m] for m in members}
+        if len(names) == 1 and None not in names:
+            groups_count[next(iter(names))] = groups_count.get(next(iter(names)), 0) + 1
+    counter = 0
+    spool_names: dict[int, str] = {}
+    for root, members in sorted(roots.items()):
+        names = {group_of[m] for m in members}
+        name = None
+        if len(names) == 1 and None not in names:
+            candidate = next(iter(names))
+            if groups_count[candidate] == 1 and candidate not in used_names:
+                name = candidate
+        if name is None:
+            counter += 1
+            while f"S{counter}" in used_names:
+                counter += 1
+            name = f"S{counter}"
+        used_names.add(name)
+        spool_names[root] = name
+        for m in members:
+            spool_of[m] = name
+
+    seen_ids: set[str] = set()
+
+    def unique(name: str) -> str:
+        out, k = name, 2
+        while out in seen_ids:
+            out = f"{name}~{k}"
+            k += 1
+        seen_ids.add(out)
+        return out
+
+    spool_members: dict[str, list[str]] = {name: [] for name in spool_names.values()}
+    pipe_length: dict[str, float] = {name: 0.0 for name in spool_names.values()}
+    for i, p in enumerate(pipes):
+        spool = spool_of[i]
+        base = p.component
+        corrections = list(base.corrections)
+        for k, label in ((0, "start"), (1, "end")):
+            moved = float((b.ends[i, k] - b.base[i, k]) @ b.out[i, k])
+            if abs(moved) > 1e-7:
+                corrections.append(
+                    Correction(
+                        what=f"{'extended' if moved > 0 else 'trimmed'} at {label}",
+                        before=_vec(b.base[i, k]),
+                        after=_vec(b.ends[i, k]),
+                        size=abs(moved) * 1000.0,
+                        unit="mm",
+                    )
+                )
+        snap = dict(base.snap)
+        if p.notes:
+            snap["merge_notes"] = list(p.notes)
+        for pid, start, end in by_pipe[i]:
+            geometry = Straight(start=start, end=end, outer_radius=0.5 * p.od, wall=p.wall)
+            comp = Component(
+                id=unique(pid),
+                type="pipe",
+                geometry=geometry,
+                sources=base.sources,
+                spool=spool,
+                group=base.group,
+                label=base.label,
+                nominal=p.nominal,
+                schedule=p.schedule,
+                fit=base.fit,
+                snap=snap,
+                corrections=tuple(corrections),
+            )
+            components.append(comp)
+            spool_members[spool].append(comp.id)
+            pipe_length[spool] += geometry.length
+        for kind, name, geometry, size_of, snap in fittings_after.get(i, []):
+            comp = Component(
+                id=unique(name),
+                type=kind,
+                geometry=geometry,
+                sources=(),
+                spool=spool,
+                group=base.group if kind != "coupling" else base.group,
+                nominal=size_of.nominal,
+                schedule=size_of.schedule,
+                snap=snap,
+            )
+            components.append(comp)
+            spool_members[spool].append(comp.id)
+    spools = [
+        Spool(id=name, components=tuple(spool_members[name]), pipe_length=pipe_length[name])
+        for name in spool_names.values()
+    ]
+    return components, spools
+
+
+def ports(component: Component) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The connection ports of a piping component.
+
+    Returns
+    -------
+    list of (point, direction)
+        Each ``point`` (3,) metres is an open end; ``direction`` (3,) the unit vector pointing
+        out of the component there. Pipes and couplings (``Straight``), reducers: start and end;
+        elbows (``Bend``): the two ends with their tangents; tees: run start, run end and branch
+        end. Other components have no ports (empty list).
+    """
+    g = component.geometry
+    if isinstance(g, Straight | Reducer):
+        d = _unit(g.end - g.start)
+        return [(g.start, -d), (g.end, d)]
+    if isinstance(g, Bend):
+        s = g.start - g.center
+        e = g.end - g.center
+        us, ue = _unit(s), _unit(e)
+        travel_start = _unit(e - (e @ us) * us)
+        travel_end = _unit(-(s - (s @ ue) * ue))
+        return [(g.start, -travel_start), (g.end, travel_end)]
+    if isinstance(g, Tee):
+        return [
+            (g.run_start, _unit(g.run_start - g.center)),
+            (g.run_end, _unit(g.run_end - g.center)),
+            (g.branch_end, _unit(g.branch_end - g.center)),
+        ]
+    return []
+
+
+def connection_mismatches(components: Sequence[Component], tolerance: float = 1e-4):
+    """Check that neighbouring components share end points and directions.
+
+    Every port of every piping component is paired with the nearest port of another component
+    of the same spool; a pair closer than 10 x ``tolerance`` is a connection. A connection is a
+    mismatch when the points differ by more than ``tolerance`` (metres) or the directions are not
+    opposite within ``tolerance`` (radians, as the length of their sum).
+
+    Returns
+    -------
+    connections : int
+        Number of port pairs found.
+    mismatches : list of (str, str, float, float)
+        Component ids, point gap (metres) and direction error, for each bad pair.
+    """
+    entries = []
+    for comp in components:
+        for point, direction in ports(comp):
+            entries.append((comp.id, comp.spool, np.asarray(point), np.asarray(direction)))
+    if not entries:
+        return 0, []
+    tree = cKDTree(np.array([e[2] for e in entries]))
+    connections = 0
+    bad = []
+    for id_a, spool_a, pa, da in entries:
+        best = None
+        for b in tree.query_ball_point(pa, 10 * tolerance):
+            id_b, spool_b, pb, db = entries[b]
+            if id_b == id_a or spool_b != spool_a:
+                continue
+            gap = float(np.linalg.norm(pa - pb))
+            if best is None or gap < best[0]:
+                best = (gap, id_b, db)
+        if best is None:
+            continue
+        connections += 1
+        gap, id_b, db = best
+        turn = float(np.linalg.norm(da + db))
+        if gap > tolerance or turn > tolerance:
+            bad.append((id_a, id_b, gap, turn))
+    return connections // 2, bad
