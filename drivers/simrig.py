@@ -42,6 +42,7 @@ __all__ = [
     "get_rig",
     "register_rig",
     "forget_rigs",
+    "station_defaults",
     "D46_RESOLUTION",
     "D46_LIMITS",
 ]
@@ -355,28 +356,45 @@ def get_rig(name: str, options: dict[str, str]) -> SimulatedRig:
         return rig
 
 
+def station_defaults(world) -> tuple[Calibration, dict]:
+    """Base position and noise defaults from a scene's first station (empty for other worlds).
+
+    Returns
+    -------
+    (Calibration, dict)
+        An ideal chain standing at the station, and ``SimNoise`` keyword defaults
+        (``range_sigma``, ``angle_sigma``, ``dropout``, ``max_range``, ``divergence`` as the
+        half-angle of the station's full beam divergence).
+    """
+    stations = getattr(world, "stations", None)
+    if not stations:
+        return Calibration(), {}
+    st = stations[0]
+    noise = {
+        "range_sigma": float(st.range_sigma),
+        "angle_sigma": float(st.angular_sigma),
+        "dropout": float(st.dropout),
+        "max_range": float(st.max_range),
+        "divergence": 0.5 * float(st.beam_divergence),
+    }
+    return Calibration(base_position=tuple(float(v) for v in st.position)), noise
+
+
 def _rig_from_options(opts: dict[str, str]) -> SimulatedRig:
     from .calibration import load_calibration
 
+    world = load_world(opts["scene"])
+    calibration, noise_kwargs = station_defaults(world)
     try:
-        noise = SimNoise(
-            **{
-                key: (int(opts[key]) if key == "seed" else float(opts[key]))
-                for key in (
-                    "range_sigma",
-                    "angle_sigma",
-                    "dropout",
-                    "divergence",
-                    "min_cos",
-                    "max_range",
-                    "seed",
-                )
-                if key in opts
-            }
-        )
+        for key in ("range_sigma", "angle_sigma", "dropout", "divergence", "min_cos", "max_range"):
+            if key in opts:
+                noise_kwargs[key] = float(opts[key])
+        if "seed" in opts:
+            noise_kwargs["seed"] = int(opts["seed"])
+        noise = SimNoise(**noise_kwargs)
         speed = float(opts.get("speed", 0.0))
     except ValueError as exc:
         raise DeviceError(f"simulated rig: bad option value ({exc})") from None
-    calibration = load_calibration(opts["calibration"]) if "calibration" in opts else Calibration()
-    world = load_world(opts["scene"])
+    if "calibration" in opts:
+        calibration = load_calibration(opts["calibration"])
     return SimulatedRig(world, calibration, noise, speed=speed, options=dict(opts))

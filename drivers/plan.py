@@ -1,0 +1,303 @@
+"""Scan targets and plan files (the scripted mode of ``asbuilt scan --plan``).
+
+A target is what the operator says and points at: an id, a kind and a window of unit angles
+(two corner directions). A plan file lists targets for repeatable runs::
+
+    {"format": "asbuilt-scan-plan", "version": 1,
+     "settings": {"retries": 2, "edge_pairs": 4, "edge_depth": 2},
+     "targets": [
+       {"id": "P1", "kind": "cylinder", "window_deg": [-10, -3, 12, 4],
+        "points": 24, "group": "line-1", "nominal": "4\\""}]}
+
+``window_deg`` is ``[pan1, tilt1, pan2, tilt2]``: two opposite corners in the pan-tilt unit's
+own degrees (as its position readout shows them); ``points`` is optional (default: the paper's
+minimum for the kind). Settings are optional and override the command-line defaults.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from asbuilt.errors import ScanError
+from asbuilt.scan.model import KINDS
+from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
+
+__all__ = [
+    "Window",
+    "Target",
+    "Plan",
+    "SessionSettings",
+    "DEFAULT_SETTINGS",
+    "required_points",
+    "load_plan",
+    "plan_to_dict",
+]
+
+
+@dataclass(frozen=True)
+class Window:
+    """A rectangle of unit angles, radians (``pan_min < pan_max``, ``tilt_min < tilt_max``)."""
+
+    pan_min: float
+    pan_max: float
+    tilt_min: float
+    tilt_max: float
+
+    def __post_init__(self) -> None:
+        values = (self.pan_min, self.pan_max, self.tilt_min, self.tilt_max)
+        if not all(math.isfinite(v) for v in values):
+            raise ValueError("window angles must be finite")
+        if self.pan_max <= self.pan_min or self.tilt_max <= self.tilt_min:
+            raise ValueError("a window needs two different pan and two different tilt angles")
+
+    @classmethod
+    def from_corners(cls, pan1: float, tilt1: float, pan2: float, tilt2: float) -> Window:
+        """The window spanned by two corner directions (radians, any order)."""
+        return cls(min(pan1, pan2), max(pan1, pan2), min(tilt1, tilt2), max(tilt1, tilt2))
+
+    @classmethod
+    def from_degrees(cls, corners) -> Window:
+        """From ``[pan1, tilt1, pan2, tilt2]`` in degrees."""
+        return cls.from_corners(*(math.radians(float(v)) for v in corners))
+
+    def degrees(self) -> list[float]:
+        """``[pan_min, tilt_min, pan_max, tilt_max]`` in degrees."""
+        return [math.degrees(v) for v in (self.pan_min, self.tilt_min, self.pan_max, self.tilt_max)]
+
+    @property
+    def width(self) -> float:
+        """Pan extent, radians."""
+        return self.pan_max - self.pan_min
+
+    @property
+    def height(self) -> float:
+        """Tilt extent, radians."""
+        return self.tilt_max - self.tilt_min
+
+
+def required_points(kind: str, tolerances: Tolerances = DEFAULT_TOLERANCES) -> int:
+    """Points an object of ``kind`` needs on its surface (at least the paper's minimums).
+
+    Cylinders 20 and cuboids 30 (Kwon et al.: ``Tolerances.recommended_points_*``); spheres
+    like cylinders; planes 12; hulls and "auto" like cuboids.
+    """
+    paper = {
+        "cylinder": tolerances.recommended_points_cylinder,
+        "sphere": tolerances.recommended_points_cylinder,
+        "cuboid": tolerances.recommended_points_cuboid,
+        "hull": tolerances.recommended_points_cuboid,
+        "auto": tolerances.recommended_points_cuboid,
+        "plane": 12,
+    }
+    return max(paper.get(kind, tolerances.recommended_points_cuboid), MIN_POINTS.get(kind, 7))
+
+
+@dataclass(frozen=True)
+class Target:
+    """One object to scan.
+
+    Attributes
+    ----------
+    id : str
+    kind : str
+        One of :data:`asbuilt.scan.KINDS`.
+    window : Window
+        Unit angles to cover.
+    points : int or None
+        Points wanted on the object (None: :func:`required_points`).
+    group, label, nominal : str or None
+        Copied to the scan object.
+    """
+
+    id: str
+    kind: str
+    window: Window
+    points: int | None = None
+    group: str | None = None
+    label: str | None = None
+    nominal: str | None = None
+
+    def wanted(self, tolerances: Tolerances = DEFAULT_TOLERANCES) -> int:
+        """Points to collect: ``points`` but never fewer than :func:`required_points`."""
+        return max(self.points or 0, required_points(self.kind, tolerances))
+
+    def to_dict(self) -> dict:
+        """JSON form (as in a plan file)."""
+        d = {"id": self.id, "kind": self.kind, "window_deg": self.window.degrees()}
+        for key in ("points", "group", "label", "nominal"):
+            if getattr(self, key) is not None:
+                d[key] = getattr(self, key)
+        return d
+
+    @classmethod
+    def from_dict(cls, raw, *, source: str | None = None, where: str = "target") -> Target:
+        """Parse the JSON form; ScanError naming the field on any problem."""
+        if not isinstance(raw, dict):
+            raise ScanError("must be an object", source=source, where=where)
+        tid = raw.get("id")
+        if not isinstance(tid, str) or not tid.strip():
+            raise ScanError("needs a non-empty string id", source=source, where=f"{where}.id")
+        where = f"{where} ({tid})"
+        kind = raw.get("kind")
+        if kind not in KINDS:
+            raise ScanError(
+                f"kind {kind!r} is not one of {', '.join(KINDS)}",
+                source=source,
+                where=f"{where}.kind",
+            )
+        corners = raw.get("window_deg")
+        if (
+            not isinstance(corners, list)
+            or len(corners) != 4
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in corners)
+        ):
+            raise ScanError(
+                "must be [pan1, tilt1, pan2, tilt2] in degrees",
+                source=source,
+                where=f"{where}.window_deg",
+            )
+        try:
+            window = Window.from_degrees(corners)
+        except ValueError as exc:
+            raise ScanError(str(exc), source=source, where=f"{where}.window_deg") from None
+        points = raw.get("points")
+        if points is not None and (
+            not isinstance(points, int) or isinstance(points, bool) or points < 1
+        ):
+            raise ScanError("must be a positive integer", source=source, where=f"{where}.points")
+        extra = {}
+        for key in ("group", "label", "nominal"):
+            value = raw.get(key)
+            if value is not None and not isinstance(value, str):
+                raise ScanError("must be a string", source=source, where=f"{where}.{key}")
+            extra[key] = value
+        return cls(tid, kind, window, points, **extra)
+
+
+@dataclass(frozen=True)
+class SessionSettings:
+    """How a session shoots.
+
+    Attributes
+    ----------
+    retries : int
+        Extra attempts for a shot that fails with a device error, before it is skipped.
+    edge_pairs : int
+        Hit/miss neighbour pairs refined per object by bisection.
+    edge_depth : int
+        Bisection steps per pair (each halves the angular uncertainty of the boundary).
+    fill_rounds : int
+        Denser rasters over the object's angular extent when the first raster put too few
+        points on it.
+    lost_after : int
+        Consecutive shots that time out before the device is declared lost.
+    keep_background : bool
+        Also put returns judged to be background (beyond the range gap) into the object.
+    """
+
+    retries: int = 2
+    edge_pairs: int = 4
+    edge_depth: int = 2
+    fill_rounds: int = 2
+    lost_after: int = 3
+    keep_background: bool = False
+
+    def __post_init__(self) -> None:
+        for name in ("retries", "edge_pairs", "edge_depth", "fill_rounds"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be >= 0")
+        if self.lost_after < 1:
+            raise ValueError("lost_after must be >= 1")
+
+
+#: The default settings (module-level so functions can default to it).
+DEFAULT_SETTINGS = SessionSettings()
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A plan file: targets in order and optional settings overrides."""
+
+    targets: tuple[Target, ...]
+    settings: dict = field(default_factory=dict)
+
+
+_SETTING_TYPES = {
+    "retries": int,
+    "edge_pairs": int,
+    "edge_depth": int,
+    "fill_rounds": int,
+    "lost_after": int,
+    "keep_background": bool,
+}
+
+
+def load_plan(path) -> Plan:
+    """Read a plan file; ScanError (one located line) on any problem."""
+    path = Path(path)
+    source = str(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ScanError(
+            f"cannot read the plan ({exc.strerror}); check the path", source=source
+        ) from None
+    except json.JSONDecodeError as exc:
+        raise ScanError(f"not valid JSON (line {exc.lineno}: {exc.msg})", source=source) from None
+    if not isinstance(doc, dict) or doc.get("format") != "asbuilt-scan-plan":
+        raise ScanError(
+            'not a plan file; start it with {"format": "asbuilt-scan-plan", "version": 1}',
+            source=source,
+        )
+    if doc.get("version") != 1:
+        raise ScanError("version must be 1", source=source, where="version")
+    raw_targets = doc.get("targets")
+    if not isinstance(raw_targets, list) or not raw_targets:
+        raise ScanError("needs a non-empty array of targets", source=source, where="targets")
+    targets = tuple(
+        Target.from_dict(t, source=source, where=f"targets[{i}]") for i, t in enumerate(raw_targets)
+    )
+    seen: set[str] = set()
+    for i, t in enumerate(targets):
+        if t.id in seen:
+            raise ScanError(
+                "duplicate id; ids must be unique", source=source, where=f"targets[{i}] ({t.id})"
+            )
+        seen.add(t.id)
+    settings = doc.get("settings", {})
+    if not isinstance(settings, dict):
+        raise ScanError("must be an object", source=source, where="settings")
+    for key, value in settings.items():
+        kind = _SETTING_TYPES.get(key)
+        if kind is None:
+            raise ScanError(
+                f"unknown setting; use {', '.join(_SETTING_TYPES)}",
+                source=source,
+                where=f"settings.{key}",
+            )
+        if (
+            not isinstance(value, kind)
+            or (kind is int and isinstance(value, bool))
+            or (kind is int and value < 0)
+        ):
+            raise ScanError(
+                f"must be {'true or false' if kind is bool else 'an integer >= 0'}",
+                source=source,
+                where=f"settings.{key}",
+            )
+    return Plan(targets, dict(settings))
+
+
+def plan_to_dict(plan: Plan) -> dict:
+    """The JSON document of ``plan``."""
+    doc = {
+        "format": "asbuilt-scan-plan",
+        "version": 1,
+        "targets": [t.to_dict() for t in plan.targets],
+    }
+    if plan.settings:
+        doc["settings"] = dict(plan.settings)
+    return doc

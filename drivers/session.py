@@ -1,0 +1,775 @@
+"""Scan sessions: raster and edge-seeking shots per object, a journal per shot, resume, scan file.
+
+Per object (:func:`scan_target`, deterministic given the measured ranges):
+
+1. **Raster.** A cell-centred grid over the window with at least the points the kind needs
+   (:meth:`Target.wanted`), columns and rows in proportion to the window's width and height,
+   shot row by row in serpentine order (short head moves); never fewer than 3 rows and 3 columns, so a thin object
+   (a pipe seen side-on) cannot fall between two rows of a loose window.
+2. **Foreground.** Valid returns are split at the largest gap in sorted range when it exceeds
+   ``max(0.1 m, 5 %)``: the nearer cluster is the object the operator aimed at, the farther one
+   the background behind it. Misses (no return, device errors) are background too.
+3. **Fill.** If fewer than the wanted points landed on the object, a denser raster over the
+   object's angular extent (its foreground cells, widened by half a cell) adds them
+   (``fill_rounds`` times at most).
+4. **Edges.** Neighbouring raster cells of which one is on the object and the other not bracket
+   the object's silhouette; ``edge_pairs`` of them, spread over the boundary, are bisected
+   ``edge_depth`` times (shoot the midpoint, keep the half that still brackets the edge), which
+   pins the boundary to a quarter cell with two shots per pair.
+
+Every shot is appended to a JSON-lines journal beside the output (``<out>.journal``) and
+flushed to disk (fsync) before the next one, so nothing measured is lost; after each object the
+scan file is rewritten atomically with every finished object. ``--resume`` replays the journal:
+finished objects come back as they were and the interrupted object's algorithm is re-run with
+its recorded shots served from the journal until it needs new ones.
+
+Shots with device errors are retried ``retries`` times, then skipped and counted; a range finder
+that times out on ``lost_after`` consecutive shots, or a port that fails, ends the session with
+a :class:`~asbuilt.errors.DeviceError` (the journal keeps everything up to that shot).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+from asbuilt.atomic import atomic_write
+from asbuilt.errors import DeviceProtocolError, DeviceTimeout, ScanError
+from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
+from asbuilt.units import unit_factor
+
+from .kinematics import Calibration, forward
+from .plan import DEFAULT_SETTINGS, SessionSettings, Target, Window
+
+__all__ = [
+    "Shot",
+    "ObjectScan",
+    "DeviceShooter",
+    "grid",
+    "foreground_threshold",
+    "scan_target",
+    "Journal",
+    "read_journal",
+    "ScanSession",
+    "journal_path_for",
+]
+
+Shoot = Callable[[float, float, str], "Shot"]
+
+
+@dataclass(frozen=True)
+class Shot:
+    """One shot.
+
+    Attributes
+    ----------
+    pan_req, tilt_req : float
+        Requested unit angles, radians.
+    pan, tilt : float
+        Unit angles the head reached (whole counts), radians.
+    range : float or None
+        Raw range, metres; None when no valid return (see ``error``).
+    error : str or None
+        Last device error code (``"E255"``, ``"timeout"``, ``"limit"``...) when ``range`` is None.
+    attempts : int
+        Measurements tried.
+    phase : str
+        ``"raster"``, ``"fill"`` or ``"edge"``.
+    """
+
+    pan_req: float
+    tilt_req: float
+    pan: float
+    tilt: float
+    range: float | None
+    error: str | None = None
+    attempts: int = 1
+    phase: str = "raster"
+
+    def to_record(self, object_id: str, seq: int) -> dict:
+        """The journal line for this shot."""
+        return {
+            "type": "shot",
+            "object": object_id,
+            "seq": seq,
+            "phase": self.phase,
+            "req": [self.pan_req, self.tilt_req],
+            "pan": self.pan,
+            "tilt": self.tilt,
+            "range": self.range,
+            "error": self.error,
+            "attempts": self.attempts,
+        }
+
+    @classmethod
+    def from_record(cls, rec: dict) -> Shot:
+        """Inverse of :meth:`to_record`."""
+        return cls(
+            pan_req=float(rec["req"][0]),
+            tilt_req=float(rec["req"][1]),
+            pan=float(rec["pan"]),
+            tilt=float(rec["tilt"]),
+            range=None if rec.get("range") is None else float(rec["range"]),
+            error=rec.get("error"),
+            attempts=int(rec.get("attempts", 1)),
+            phase=str(rec.get("phase", "raster")),
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class ObjectScan:
+    """The shots of one object and which of them lie on it.
+
+    Attributes
+    ----------
+    target : Target
+    shots : tuple of Shot
+        Every shot, in order.
+    on_object : ndarray of bool, shape (len(shots),)
+        Shots kept as the object's points.
+    """
+
+    target: Target
+    shots: tuple[Shot, ...]
+    on_object: np.ndarray
+
+    @property
+    def skipped(self) -> int:
+        """Shots without a valid return after their retries (misses and device errors)."""
+        return sum(1 for s in self.shots if s.range is None)
+
+    def measurements(self) -> np.ndarray:
+        """Unit pan (rad), tilt (rad) and raw range (m) of the object's points, shape (n, 3)."""
+        kept = [s for s, k in zip(self.shots, self.on_object) if k]
+        if not kept:
+            return np.zeros((0, 3))
+        return np.array([[s.pan, s.tilt, s.range] for s in kept], dtype=float)
+
+    def points(self, calibration: Calibration) -> np.ndarray:
+        """The object's points in the scan frame, shape (n, 3), metres."""
+        m = self.measurements()
+        if not len(m):
+            return np.zeros((0, 3))
+        return forward(calibration, m[:, 0], m[:, 1], m[:, 2])
+
+
+class DeviceShooter:
+    """Shoots with a real (or simulated) pan-tilt unit and range finder, with retries.
+
+    Parameters
+    ----------
+    ptu : PanTiltUnit
+    lrf : object with ``measure() -> float``
+    settings : SessionSettings
+    """
+
+    def __init__(self, ptu, lrf, settings: SessionSettings = DEFAULT_SETTINGS):
+        self.ptu = ptu
+        self.lrf = lrf
+        self.settings = settings
+        self.timeouts_in_a_row = 0
+
+    def __call__(self, pan: float, tilt: float, phase: str) -> Shot:
+        from .ptu import PTULimitError
+        from .rangefinder import RangeFinderError
+
+        try:
+            pan_at, tilt_at = self._move(pan, tilt)
+        except PTULimitError:
+            return Shot(pan, tilt, pan, tilt, None, "limit", 0, phase)
+        error = None
+        attempts = 0
+        for _ in range(1 + self.settings.retries):
+            attempts += 1
+            try:
+                value = float(self.lrf.measure())
+            except RangeFinderError as exc:
+                error = exc.code or type(exc).__name__
+                continue
+            except DeviceTimeout:
+                error = "timeout"
+                continue
+            except DeviceProtocolError:
+                error = "protocol"
+                discard = getattr(getattr(self.lrf, "channel", None), "discard_input", None)
+                if discard is not None:
+                    discard()
+                continue
+            if not math.isfinite(value) or value <= 0:
+                error = "range<=0"
+                continue
+            self.timeouts_in_a_row = 0
+            return Shot(pan, tilt, pan_at, tilt_at, value, None, attempts, phase)
+        if error == "timeout":
+            self.timeouts_in_a_row += 1
+            if self.timeouts_in_a_row >= self.settings.lost_after:
+                raise DeviceTimeout(
+                    f"range finder silent on {self.timeouts_in_a_row} shots in a row; check its "
+                    "cable and power, then continue with asbuilt scan --resume"
+                )
+        else:
+            self.timeouts_in_a_row = 0
+        return Shot(pan, tilt, pan_at, tilt_at, None, error, attempts, phase)
+
+    def _move(self, pan: float, tilt: float) -> tuple[float, float]:
+        for attempt in range(1 + self.settings.retries):
+            try:
+                return self.ptu.move_to(pan, tilt)
+            except DeviceTimeout:
+                if attempt == self.settings.retries:
+                    raise
+        raise AssertionError("unreachable")
+
+
+def grid(
+    window: Window, n: int, min_cells: int = 3
+) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
+    """A cell-centred raster of at least ``n`` shots over ``window``, serpentine row order.
+
+    Parameters
+    ----------
+    window : Window
+    n : int
+        Minimum number of shots.
+    min_cells : int
+        Fewest rows and fewest columns.
+
+    Returns
+    -------
+    pan, tilt : ndarray, shape (rows * cols,), radians
+        Shot directions (unit angles), in shooting order.
+    shape : (int, int)
+        ``(rows, cols)``; shot ``k`` is cell ``(k // cols, k % cols)`` with odd rows reversed.
+    """
+    aspect = window.width / window.height
+    cols = max(min_cells, int(round(math.sqrt(n * aspect))))
+    rows = max(min_cells, math.ceil(n / cols))
+    pans = window.pan_min + (np.arange(cols) + 0.5) * window.width / cols
+    tilts = window.tilt_min + (np.arange(rows) + 0.5) * window.height / rows
+    pan = np.empty(rows * cols)
+    tilt = np.empty(rows * cols)
+    for r in range(rows):
+        order = pans if r % 2 == 0 else pans[::-1]
+        pan[r * cols : (r + 1) * cols] = order
+        tilt[r * cols : (r + 1) * cols] = tilts[r]
+    return pan, tilt, (rows, cols)
+
+
+def _cell_index(rows: int, cols: int) -> np.ndarray:
+    """Shot index of each grid cell, shape (rows, cols) (undoes the serpentine order)."""
+    idx = np.arange(rows * cols).reshape(rows, cols)
+    idx[1::2] = idx[1::2, ::-1]
+    return idx
+
+
+def foreground_threshold(ranges: Iterable[float | None]) -> float:
+    """Range separating the aimed-at object from the background behind it, metres.
+
+    The valid ranges are sorted and split at their largest gap when that gap exceeds
+    ``max(0.1 m, 5 % of the range before it)``; ``inf`` when there is no such gap (everything
+    valid is on the object).
+    """
+    valid = np.sort([r for r in ranges if r is not None])
+    if len(valid) < 2:
+        return math.inf
+    gaps = np.diff(valid)
+    i = int(np.argmax(gaps))
+    if gaps[i] > max(0.1, 0.05 * valid[i]):
+        return float(0.5 * (valid[i] + valid[i + 1]))
+    return math.inf
+
+
+def scan_target(
+    target: Target,
+    shoot: Shoot,
+    settings: SessionSettings = DEFAULT_SETTINGS,
+    tolerances: Tolerances = DEFAULT_TOLERANCES,
+) -> ObjectScan:
+    """Shoot one object: raster, fill, edge bisection (see the module docstring).
+
+    Parameters
+    ----------
+    target : Target
+    shoot : callable ``(pan_rad, tilt_rad, phase) -> Shot``
+        Moves, measures (with retries) and journals one shot.
+    settings : SessionSettings
+    tolerances : Tolerances
+        Source of the paper's minimum point counts.
+
+    Returns
+    -------
+    ObjectScan
+    """
+    wanted = target.wanted(tolerances)
+    shots: list[Shot] = []
+
+    def on_object(threshold: float) -> np.ndarray:
+        return np.array(
+            [
+                s.range is not None and (settings.keep_background or s.range < threshold)
+                for s in shots
+            ],
+            dtype=bool,
+        )
+
+    pan, tilt, (rows, cols) = grid(target.window, wanted)
+    shots.extend(shoot(p, t, "raster") for p, t in zip(pan, tilt))
+    grids = [(0, rows, cols, target.window)]
+    for _ in range(settings.fill_rounds):
+        threshold = foreground_threshold(s.range for s in shots)
+        fg = on_object(threshold)
+        if fg.sum() >= wanted:
+            break
+        start, r0, c0, win0 = grids[-1]
+        cells = fg[start : start + r0 * c0][_cell_index(r0, c0)]
+        if not cells.any():
+            break
+        rr, cc = np.nonzero(cells)
+        dp, dt = win0.width / c0, win0.height / r0
+        box = Window(
+            win0.pan_min + (cc.min() - 0.5) * dp,
+            win0.pan_min + (cc.max() + 1.5) * dp,
+            win0.tilt_min + (rr.min() - 0.5) * dt,
+            win0.tilt_min + (rr.max() + 1.5) * dt,
+        )
+        density = max(cells.mean() * (r0 * c0) * dp * dt / (box.width * box.height), 0.25)
+        need = wanted - int(fg.sum())
+        pan, tilt, (r1, c1) = grid(box, max(4, math.ceil(need / density)), min_cells=2)
+        grids.append((len(shots), r1, c1, box))
+        shots.extend(shoot(p, t, "fill") for p, t in zip(pan, tilt))
+
+    threshold = foreground_threshold(s.range for s in shots)
+    fg = on_object(threshold)
+    pairs = []
+    for start, r0, c0, win0 in reversed(grids):  # finest grid first
+        cells = fg[start : start + r0 * c0][_cell_index(r0, c0)]
+        dp, dt = win0.width / c0, win0.height / r0
+        for inside, outside in _boundary_pairs(cells):
+            pairs.append(
+                tuple(
+                    np.array([win0.pan_min + (c + 0.5) * dp, win0.tilt_min + (r + 0.5) * dt])
+                    for r, c in (inside, outside)
+                )
+            )
+    if pairs and settings.edge_pairs and settings.edge_depth:
+        pick = np.unique(
+            np.linspace(0, len(pairs) - 1, min(settings.edge_pairs, len(pairs))).round()
+        )
+        for k in pick.astype(int):
+            inside, outside = pairs[k]
+            for _ in range(settings.edge_depth):
+                mid = 0.5 * (inside + outside)
+                shot = shoot(float(mid[0]), float(mid[1]), "edge")
+                shots.append(shot)
+                hit = shot.range is not None and (
+                    settings.keep_background or shot.range < threshold
+                )
+                if hit:
+                    inside = mid
+                else:
+                    outside = mid
+    return ObjectScan(target, tuple(shots), on_object(threshold))
+
+
+def _boundary_pairs(cells: np.ndarray) -> list[tuple[tuple[int, int], tuple[int, int]]]:
+    """(inside cell, outside cell) for every pair of neighbours that straddles the boundary.
+
+    Horizontal neighbours first (row by row), then vertical ones (column by column).
+    """
+    rows, cols = cells.shape
+    pairs = []
+    for r in range(rows):
+        for c in range(cols - 1):
+            a, b = cells[r, c], cells[r, c + 1]
+            if a != b:
+                pairs.append(((r, c), (r, c + 1)) if a else ((r, c + 1), (r, c)))
+    for c in range(cols):
+        for r in range(rows - 1):
+            a, b = cells[r, c], cells[r + 1, c]
+            if a != b:
+                pairs.append(((r, c), (r + 1, c)) if a else ((r + 1, c), (r, c)))
+    return pairs
+
+
+# -- journal --------------------------------------------------------------------------------------
+def journal_path_for(out) -> Path:
+    """The journal beside an output scan: ``scan.json`` -> ``scan.json.journal``."""
+    out = Path(out)
+    return out.with_name(out.name + ".journal")
+
+
+class Journal:
+    """Append-only JSON-lines file; every record is flushed and fsynced before returning."""
+
+    def __init__(self, path):
+        self.path = Path(path)
+        try:
+            self._f = open(self.path, "a", encoding="utf-8")  # noqa: SIM115 (kept open)
+        except OSError as exc:
+            raise ScanError(
+                f"cannot write the journal ({exc.strerror}); choose a writable --out directory",
+                source=str(self.path),
+            ) from None
+
+    def append(self, record: dict) -> None:
+        """Write one record durably."""
+        self._f.write(json.dumps(record, separators=(",", ":")) + "\n")
+        self._f.flush()
+        os.fsync(self._f.fileno())
+
+    def close(self) -> None:
+        """Close the file."""
+        self._f.close()
+
+
+def read_journal(path) -> list[dict]:
+    """Every complete record of a journal; a torn last line (crash mid-write) is ignored.
+
+    Raises
+    ------
+    ScanError
+        A line other than the last is not JSON (the journal was edited or corrupted).
+    """
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except OSError as exc:
+        raise ScanError(f"cannot read the journal ({exc.strerror})", source=str(path)) from None
+    records = []
+    for i, line in enumerate(lines):
+        if not line.strip():
+            continue
+        try:
+            records.append(json.loads(line))
+        except json.JSONDecodeError:
+            if i == len(lines) - 1:
+                break  # torn write at the crash
+            raise ScanError(
+                "corrupt line; the journal cannot be resumed",
+                source=str(path),
+                where=f"line {i + 1}",
+            ) from None
+    return records
+
+
+# -- session --------------------------------------------------------------------------------------
+@dataclass
+class _Resumed:
+    done: dict = field(default_factory=dict)  # id -> ObjectScan
+    order: list = field(default_factory=list)  # ids in journal order (done or failed)
+    pending: Target | None = None
+    pending_shots: list = field(default_factory=list)
+    failed: dict = field(default_factory=dict)  # id -> reason
+
+
+class ScanSession:
+    """An acquisition session writing one scan file.
+
+    Parameters
+    ----------
+    shooter : callable ``(pan, tilt, phase) -> Shot``
+        Usually a :class:`DeviceShooter`.
+    calibration : Calibration
+        Turns the measurements into points.
+    out : str or Path
+        The scan file (rewritten atomically after each object); the journal goes beside it.
+    units : str
+        Length unit of the scan file.
+    settings : SessionSettings
+    resume : bool
+        Continue from an existing journal (else refuse to overwrite one).
+    on_shot : callable ``(target, shot, taken, planned)``, optional
+        Progress callback after every shot (``planned`` is an estimate for the object).
+    name : str, optional
+        The scan's name.
+    tolerances : Tolerances
+
+    Raises
+    ------
+    ScanError
+        A journal exists and ``resume`` is False, or ``resume`` without a journal.
+    """
+
+    def __init__(
+        self,
+        shooter: Shoot,
+        calibration: Calibration,
+        out,
+        *,
+        units: str = "m",
+        settings: SessionSettings = DEFAULT_SETTINGS,
+        resume: bool = False,
+        on_shot=None,
+        name: str | None = None,
+        tolerances: Tolerances = DEFAULT_TOLERANCES,
+    ):
+        from .calibration import calibration_to_dict
+
+        unit_factor(units)
+        self.shooter = shooter
+        self.calibration = calibration
+        self.out = Path(out)
+        self.units = units
+        self.settings = settings
+        self.on_shot = on_shot
+        self.name = name
+        self.tolerances = tolerances
+        self.journal_path = journal_path_for(self.out)
+        self.objects: dict[str, ObjectScan] = {}
+        self.failed: dict[str, str] = {}
+        self._resumed = _Resumed()
+        exists = self.journal_path.exists() and self.journal_path.stat().st_size > 0
+        if resume:
+            if not exists:
+                raise ScanError(
+                    "no journal to resume from; start without --resume",
+                    source=str(self.journal_path),
+                )
+            self._load_journal()
+        elif exists:
+            raise ScanError(
+                "a journal of an earlier session is here; continue it with --resume or choose "
+                "another --out",
+                source=str(self.journal_path),
+            )
+        self.journal = Journal(self.journal_path)
+        if not resume:
+            self.journal.append(
+                {
+                    "type": "session",
+                    "version": 1,
+                    "units": units,
+                    "name": name,
+                    "started": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+                    "calibration": calibration_to_dict(calibration),
+                    "settings": dataclasses.asdict(settings),
+                }
+            )
+        else:
+            self.journal.append(
+                {"type": "resume", "at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+            )
+        self.objects.update(self._resumed.done)
+        self.failed.update(self._resumed.failed)
+        if self.objects:
+            self.write_scan()
+
+    # -- resume ----------------------------------------------------------------------------
+    def _load_journal(self) -> None:
+        recs = read_journal(self.journal_path)
+        source = str(self.journal_path)
+        if not recs or recs[0].get("type") != "session":
+            raise ScanError(
+                "does not start with a session record; not a scan journal", source=source
+            )
+        try:
+            self.settings = SessionSettings(**recs[0].get("settings", {}))
+        except (TypeError, ValueError) as exc:
+            raise ScanError(
+                f"bad session settings ({exc})", source=source, where="line 1"
+            ) from None
+        if recs[0].get("units", self.units) != self.units:
+            raise ScanError(
+                f"the session wrote {recs[0].get('units')!r}; resume with --units "
+                f"{recs[0].get('units')}",
+                source=source,
+            )
+        targets: dict[str, Target] = {}
+        shots: dict[str, list[Shot]] = {}
+        current = None
+        r = self._resumed
+        for i, rec in enumerate(recs):
+            kind = rec.get("type")
+            try:
+                if kind == "object":
+                    target = Target.from_dict(rec["target"], source=source, where=f"line {i + 1}")
+                    targets[target.id] = target
+                    shots[target.id] = []
+                    current = target.id
+                elif kind == "shot":
+                    shots[rec["object"]].append(Shot.from_record(rec))
+                elif kind in ("done", "failed"):
+                    oid = rec["id"]
+                    if kind == "done":
+                        r.done[oid] = self._finish(targets[oid], shots[oid])
+                        r.failed.pop(oid, None)
+                    else:
+                        r.failed[oid] = rec.get("reason", "")
+                    r.order.append(oid)
+                    current = None
+            except (KeyError, TypeError, ValueError, IndexError) as exc:
+                raise ScanError(
+                    f"unreadable record ({exc})", source=source, where=f"line {i + 1}"
+                ) from None
+        if current is not None:
+            r.pending = targets[current]
+            r.pending_shots = shots[current]
+
+    def _finish(self, target: Target, shots: list[Shot]) -> ObjectScan:
+        """Re-run the planner over recorded shots (no device) to rebuild a finished object."""
+        replay = _Replay(shots, None)
+        return scan_target(target, replay, self.settings, self.tolerances)
+
+    @property
+    def pending(self) -> Target | None:
+        """The object a resumed journal was in the middle of (scan it first), or None."""
+        return self._resumed.pending
+
+    def is_done(self, object_id: str) -> bool:
+        """Whether an object with this id is already in the scan."""
+        return object_id in self.objects
+
+    # -- scanning --------------------------------------------------------------------------
+    def scan(self, target: Target) -> ObjectScan | None:
+        """Shoot ``target``, journal every shot, add it to the scan file.
+
+        Returns
+        -------
+        ObjectScan or None
+            None when too few shots landed on the object (recorded in :attr:`failed`; the
+            shots stay in the journal).
+        """
+        if target.id in self.objects:
+            raise ScanError(
+                f"object id {target.id!r} is already in the scan; choose another id",
+                source=str(self.out),
+            )
+        recorded: list[Shot] = []
+        if self._resumed.pending is not None and self._resumed.pending.id == target.id:
+            recorded = self._resumed.pending_shots
+            target = self._resumed.pending
+            self._resumed.pending = None
+        else:
+            self.journal.append({"type": "object", "target": target.to_dict()})
+        seq = len(recorded)
+        planned = (
+            target.wanted(self.tolerances) + self.settings.edge_pairs * self.settings.edge_depth
+        )
+        taken = 0
+
+        def live(pan: float, tilt: float, phase: str) -> Shot:
+            nonlocal seq
+            shot = self.shooter(pan, tilt, phase)
+            self.journal.append(shot.to_record(target.id, seq))
+            seq += 1
+            return shot
+
+        replay = _Replay(recorded, live)
+
+        def counted(pan: float, tilt: float, phase: str) -> Shot:
+            nonlocal taken, planned
+            shot = replay(pan, tilt, phase)
+            taken += 1
+            planned = max(planned, taken)
+            if self.on_shot is not None:
+                self.on_shot(target, shot, taken, planned)
+            return shot
+
+        result = scan_target(target, counted, self.settings, self.tolerances)
+        n = int(result.on_object.sum())
+        minimum = MIN_POINTS.get(target.kind, 7)
+        if n < minimum:
+            reason = f"{n} shots on the object, {minimum} needed at least; re-aim the window"
+            self.journal.append({"type": "failed", "id": target.id, "reason": reason})
+            self.failed[target.id] = reason
+            return None
+        self.journal.append({"type": "done", "id": target.id, "points": n})
+        self.objects[target.id] = result
+        self.failed.pop(target.id, None)
+        self.write_scan()
+        return result
+
+    def close(self) -> None:
+        """Close the journal."""
+        self.journal.close()
+
+    def __enter__(self) -> ScanSession:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # -- output ----------------------------------------------------------------------------
+    def document(self) -> dict:
+        """The ``asbuilt-scan`` document of every finished object (file units)."""
+        k = unit_factor(self.units)
+        objects = []
+        for result in self.objects.values():
+            t = result.target
+            m = result.measurements()
+            pts = result.points(self.calibration) / k
+            obj = {
+                "id": t.id,
+                "kind": t.kind,
+                "points": np.round(pts, 9).tolist(),
+                "measurements": [
+                    [math.degrees(p), math.degrees(q), r / k] for p, q, r in m.tolist()
+                ],
+            }
+            for key in ("group", "label", "nominal"):
+                if getattr(t, key) is not None:
+                    obj[key] = getattr(t, key)
+            obj["acquisition"] = {
+                "window_deg": t.window.degrees(),
+                "shots": len(result.shots),
+                "skipped": result.skipped,
+                "background": int(
+                    sum(
+                        1
+                        for s, on in zip(result.shots, result.on_object)
+                        if s.range is not None and not on
+                    )
+                ),
+            }
+            objects.append(obj)
+        doc = {"format": "asbuilt-scan", "version": 1, "units": self.units}
+        if self.name:
+            doc["name"] = self.name
+        doc["sensor"] = {"position": [v / k for v in self.calibration.base_position]}
+        doc["objects"] = objects
+        from .calibration import calibration_to_dict
+
+        doc["acquisition"] = {
+            "journal": self.journal_path.name,
+            "calibration": calibration_to_dict(self.calibration),
+            "failed": dict(self.failed),
+        }
+        return doc
+
+    def write_scan(self) -> None:
+        """Rewrite the scan file atomically with every finished object."""
+        with atomic_write(self.out, "w") as f:
+            json.dump(self.document(), f, indent=1)
+            f.write("\n")
+
+
+class _Replay:
+    """Serves recorded shots while the planner asks for the same directions, then goes live."""
+
+    def __init__(self, recorded: list[Shot], live: Shoot | None):
+        self.recorded = list(recorded)
+        self.live = live
+        self.i = 0
+        self.diverged = False
+
+    def __call__(self, pan: float, tilt: float, phase: str) -> Shot:
+        if not self.diverged and self.i < len(self.recorded):
+            rec = self.recorded[self.i]
+            if abs(rec.pan_req - pan) < 1e-12 and abs(rec.tilt_req - tilt) < 1e-12:
+                self.i += 1
+                return rec
+            self.diverged = True
+        if self.live is None:
+            raise ScanError(
+                "the journal does not match the planner (edited journal or another "
+                "version); rescan this object"
+            )
+        return self.live(pan, tilt, phase)
