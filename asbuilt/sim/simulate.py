@@ -131,7 +131,7 @@ def simulate_scan(
         "name": scene.name or "simulated scan",
         "sensor": {
             "position": _round(main.position / scale, decimals),
-            "range_sigma": round(main.range_sigma / scale, decimals + 2),
+            "range_sigma": float(f"{main.range_sigma / scale:.6g}"),
         },
         "objects": objects,
         "links": links,

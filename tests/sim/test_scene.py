@@ -1,0 +1,150 @@
+"""Scene loading: geometry expansion, unit conversion, truths, and one-line errors."""
+
+import json
+
+import numpy as np
+import pytest
+
+from asbuilt.errors import SceneError
+from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+from asbuilt.sim.scene import load_scene, loads_scene, scene_from_dict
+
+
+def test_loads_and_truths(scene_doc):
+    scene = scene_from_dict(scene_doc, source="t.json")
+    assert [o.id for o in scene.objects] == ["P1", "C1", "S1", "wall", "floor"]
+    pipe = scene.object("P1").truth
+    assert isinstance(pipe, Cylinder)
+    assert pipe.radius == pytest.approx(0.05715)
+    assert pipe.length == pytest.approx(2.0)
+    column = scene.object("C1").truth
+    assert isinstance(column, Cuboid)
+    assert sorted(column.size) == pytest.approx([0.3, 0.4, 3.0])
+    np.testing.assert_allclose(column.center, [2.0, 6.0, 1.5])
+    assert isinstance(scene.object("S1").truth, Sphere)
+    wall = scene.object("wall").truth
+    assert isinstance(wall, Plane)
+    np.testing.assert_allclose(wall.point, [0.0, 7.9, 2.0])  # the face towards -y
+    assert not scene.object("wall").scan and scene.object("P1").scan
+    assert [o.index for o in scene.objects] == list(range(5))
+
+
+def test_units_are_converted_once(scene_doc):
+    scene_doc["units"] = "mm"
+    scene_doc["stations"][0]["position"] = [0.0, 0.0, 1500.0]
+    scene_doc["objects"] = [
+        {
+            "id": "P",
+            "kind": "cylinder",
+            "geometry": {
+                "type": "cylinder",
+                "start": [-1000, 5000, 1000],
+                "end": [1000, 5000, 1000],
+                "od": 114.3,
+            },
+        }
+    ]
+    scene = scene_from_dict(scene_doc)
+    assert scene.units == "mm"
+    assert scene.object("P").truth.radius == pytest.approx(0.05715)
+    assert scene.stations[0].range_sigma == pytest.approx(0.002)  # default stays 2 mm
+    np.testing.assert_allclose(scene.stations[0].position, [0, 0, 1.5])
+
+
+def test_pipe_run_stops_short_by_centre_to_end(scene_doc):
+    scene_doc["objects"] = [
+        {
+            "id": "R",
+            "kind": "cylinder",
+            "nominal": '4"',
+            "geometry": {
+                "type": "pipe_run",
+                "path": [[0, 5, 1], [2, 5, 1], [2, 5, 3], [4, 5, 3]],
+                "od": 0.1143,
+                "bend_radius": 0.152,
+            },
+        }
+    ]
+    scene = scene_from_dict(scene_doc)
+    ids = [o.id for o in scene.objects]
+    assert ids == ["R-1", "R-2", "R-3", "R-E1", "R-E2"]
+    assert scene.links == (("R-1", "R-2"), ("R-2", "R-3"))
+    lengths = [scene.object(i).truth.length for i in ("R-1", "R-2", "R-3")]
+    # 90-degree elbows: centre-to-end = bend radius
+    assert lengths == pytest.approx([2 - 0.152, 2 - 2 * 0.152, 2 - 0.152])
+    assert not scene.object("R-E1").scan and scene.object("R-E1").kind is None
+    # the elbow mesh fills the gap: a ray through its centre line's 45-degree point hits it
+    # (bend centre (2 - 0.152, 1 + 0.152) in x, z)
+    s = 0.152 * np.sqrt(0.5)
+    hits = scene.raycast(np.array([1.848 + s, 0.0, 1.152 - s]), np.array([[0.0, 1.0, 0.0]]))
+    assert hits.object_index[0] == ids.index("R-E1")
+    assert hits.range[0] == pytest.approx(5.0 - 0.05715, abs=2e-3)
+
+
+def test_mesh_file_and_elbow(tmp_path, scene_doc):
+    obj = tmp_path / "box.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    scene_doc["objects"].append(
+        {
+            "id": "H",
+            "kind": "hull",
+            "geometry": {"type": "mesh", "file": "box.obj", "translate": [0, 10, 0], "scale": 2.0},
+        }
+    )
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(scene_doc))
+    scene = load_scene(path)
+    hull = scene.object("H").truth
+    assert isinstance(hull, Hull)
+    np.testing.assert_allclose(hull.vertices.max(axis=0), [2, 12, 2])
+
+
+BAD = [
+    (lambda d: d.update(units="furlong"), "units: unknown unit 'furlong'"),
+    (lambda d: d.update(stations=[]), "stations: give a list"),
+    (lambda d: d["objects"][0].pop("kind"), "objects[0] (P1): missing field 'kind'"),
+    (
+        lambda d: d["objects"][0]["geometry"].update(type="torus"),
+        "objects[0] (P1).geometry.type: unknown geometry type 'torus'",
+    ),
+    (
+        lambda d: d["objects"][0]["geometry"].update(start=[0, 0]),
+        "objects[0] (P1).geometry.start: must be a list of 3 numbers",
+    ),
+    (
+        lambda d: d["objects"][0]["geometry"].update(radius=0.05),
+        "give exactly one of 'radius', 'diameter' or 'od'",
+    ),
+    (
+        lambda d: d["objects"][0]["geometry"].update(od=-1),
+        "objects[0] (P1).geometry.od: must be positive",
+    ),
+    (lambda d: d["objects"][0].update(points=3), "a cylinder needs at least 6 points"),
+    (lambda d: d["objects"][0].update(station="S9"), "unknown station 'S9'"),
+    (
+        lambda d: d["objects"][4].update(scan=True, kind="plane"),
+        "an unbounded ground plane cannot be scanned",
+    ),
+    (lambda d: d["objects"][1].update(id="P1"), "object ids must be unique"),
+    (lambda d: d.update(links=[["P1", "nope"]]), "links[0]: must be a pair of object ids"),
+    (lambda d: d["stations"][0].update(dropout=1.5), "stations[0].dropout: must be at most 0.9"),
+    (lambda d: d.update(format="asbuilt-scan"), "format: format is 'asbuilt-scan'"),
+]
+
+
+@pytest.mark.parametrize("mutate, message", BAD)
+def test_bad_scene_one_located_line(scene_doc, mutate, message):
+    mutate(scene_doc)
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(scene_doc, source="bad.json")
+    text = str(info.value)
+    assert "\n" not in text
+    assert text.startswith("bad.json: ")
+    assert message in text
+
+
+def test_bad_json_and_missing_file(tmp_path):
+    with pytest.raises(SceneError, match=r"x.json: not valid JSON \(line 1"):
+        loads_scene("{nope", source="x.json")
+    with pytest.raises(SceneError, match="file not found"):
+        load_scene(tmp_path / "missing.json")

@@ -1,0 +1,254 @@
+"""The pan-tilt sensor model: raster, noise statistics, dropouts, mixed returns, determinism."""
+
+import math
+
+import numpy as np
+import pytest
+
+from asbuilt.sim.raycast import direction_from_angles
+from asbuilt.sim.scene import scene_from_dict
+from asbuilt.sim.sensor import angular_window, plan_raster, raster_angles, scan_object, shoot
+
+
+def plate_scene(yaw_deg=0.0, **station):
+    """A 4 m x 4 m plate 5 m in front of the station (turned by yaw about z), nothing else."""
+    normal = [-math.cos(math.radians(yaw_deg)), -math.sin(math.radians(yaw_deg)), 0.0]
+    return scene_from_dict(
+        {
+            "units": "m",
+            "stations": [{"id": "S", "position": [0, 0, 0], **station}],
+            "objects": [
+                {
+                    "id": "W",
+                    "kind": "plane",
+                    "geometry": {
+                        "type": "plate",
+                        "center": [5.0, 0, 0],
+                        "normal": normal,
+                        "size": [4.0, 4.0],
+                        "thickness": 0.1,
+                    },
+                }
+            ],
+        }
+    )
+
+
+def front_face(scene, shots):
+    """The shots that landed on the plate's front face (not its thin edges)."""
+    return shots.subset(shots.normals @ scene.objects[0].truth.normal > 0.999)
+
+
+def normal_errors(scene, shots):
+    return scene.objects[0].truth.distance(shots.points)
+
+
+def test_raster_covers_window_serpentine():
+    pan, tilt = raster_angles((0.0, 0.0, 0.2, 0.1), 5, 3)
+    assert pan.shape == (15,)
+    assert pan[:5].tolist() == sorted(pan[:5].tolist())
+    assert pan[5:10].tolist() == sorted(pan[5:10].tolist(), reverse=True)
+    assert tilt[0] > tilt[-1]
+    assert -0.1 < pan.min() < -0.09 and 0.09 < pan.max() < 0.1
+
+
+def test_angular_window_of_sphere():
+    scene = scene_from_dict(
+        {
+            "units": "m",
+            "stations": [{"position": [0, 0, 0]}],
+            "objects": [
+                {
+                    "id": "B",
+                    "kind": "sphere",
+                    "geometry": {"type": "sphere", "center": [0, 10, 0], "radius": 1.0},
+                }
+            ],
+        }
+    )
+    pan0, tilt0, pan_ext, tilt_ext = angular_window(scene.objects[0].shape, np.zeros(3))
+    assert pan0 == pytest.approx(np.pi / 2, abs=1e-3)
+    assert tilt0 == pytest.approx(0.0, abs=1e-3)
+    # the silhouette's half-angle is asin(r / d)
+    assert 0.5 * pan_ext == pytest.approx(math.asin(0.1), rel=0.02)
+    assert 0.5 * tilt_ext == pytest.approx(math.asin(0.1), rel=0.02)
+
+
+@pytest.mark.parametrize("n", [20, 30, 40])
+def test_plan_raster_lands_about_n(scene_doc, n):
+    scene = scene_from_dict(scene_doc)
+    for target in (0, 1, 2):
+        pan, tilt, hits = plan_raster(scene, target, scene.stations[0], n)
+        assert n <= hits <= 1.35 * n + 2
+        shots = scan_object(scene, target, n_points=n, rng=np.random.default_rng(3), exact=True)
+        assert len(shots) == n
+
+
+def test_same_seed_same_shots(scene_doc):
+    scene = scene_from_dict(scene_doc)
+    a = scan_object(scene, 0, rng=np.random.default_rng(42))
+    b = scan_object(scene, 0, rng=np.random.default_rng(42))
+    c = scan_object(scene, 0, rng=np.random.default_rng(43))
+    np.testing.assert_array_equal(a.points, b.points)
+    assert a.points.shape != c.points.shape or not np.array_equal(a.points, c.points)
+
+
+def test_range_noise_statistics_head_on():
+    scene = plate_scene(range_sigma=0.002, angular_sigma_deg=0.0, mixed_return=0.0)
+    shots = front_face(scene, scan_object(scene, 0, n_points=900, rng=np.random.default_rng(0)))
+    err = normal_errors(scene, shots)
+    # the normal error is the range error times cos(incidence) (close to 1 here)
+    cos_i = np.abs(np.einsum("ij,ij->i", shots.normals, shots.directions))
+    expected = 0.002 * np.sqrt(np.mean(cos_i**2))
+    assert abs(err.mean()) < 4 * expected / np.sqrt(len(err))
+    assert err.std() == pytest.approx(expected, rel=0.12)
+
+
+@pytest.mark.parametrize("yaw", [40.0, 60.0])
+def test_pointing_noise_moves_points_off_an_inclined_surface(yaw):
+    sigma_a = math.radians(0.05)
+    scene = plate_scene(yaw, range_sigma=0.0, angular_sigma_deg=0.05, mixed_return=0.0)
+    shots = front_face(scene, scan_object(scene, 0, n_points=900, rng=np.random.default_rng(1)))
+    err = normal_errors(scene, shots)
+    # first order: the point moves across the beam by range * e; its normal component is
+    # range * e * sin(incidence) (pan noise, the plate is turned about the vertical axis):
+    # the sigma_eff of benchmarks/crb.py with no range noise
+    cos_i = np.abs(np.einsum("ij,ij->i", shots.normals, shots.directions))
+    sin_i = np.sqrt(1 - cos_i**2)
+    predicted = np.sqrt(np.mean((shots.true_range * sigma_a * sin_i) ** 2))
+    assert err.std() == pytest.approx(predicted, rel=0.12)
+
+
+def test_dropout_rate():
+    scene = plate_scene(dropout=0.3, mixed_return=0.0)
+    station = scene.stations[0]
+    pan, tilt, hits = plan_raster(scene, 0, station, 2000)
+    shots = shoot(scene, 0, station, pan, tilt, np.random.default_rng(2))
+    kept = len(shots) / hits
+    sd = math.sqrt(0.3 * 0.7 / hits)
+    assert abs(kept - 0.7) < 4 * sd
+
+
+def edge_scene(with_background: bool):
+    objects = [
+        {
+            "id": "P",
+            "kind": "cylinder",
+            "geometry": {
+                "type": "cylinder",
+                "start": [-1.0, 5.0, 0.0],
+                "end": [1.0, 5.0, 0.0],
+                "od": 0.2,
+            },
+        }
+    ]
+    if with_background:
+        objects.append(
+            {
+                "id": "wall",
+                "scan": False,
+                "geometry": {
+                    "type": "plate",
+                    "center": [0, 7.0, 0],
+                    "normal": [0, -1, 0],
+                    "size": [10, 10],
+                },
+            }
+        )
+    return scene_from_dict(
+        {
+            "units": "m",
+            "stations": [
+                {
+                    "position": [0, 0, 0],
+                    "mixed_return": 1.0,
+                    "beam_divergence_mrad": 4.0,
+                    "range_sigma": 0.001,
+                }
+            ],
+            "objects": objects,
+        }
+    )
+
+
+def test_mixed_returns_land_between_object_and_background():
+    scene = edge_scene(True)
+    shots = scan_object(scene, 0, n_points=400, rng=np.random.default_rng(4))
+    assert shots.edge.any() and not shots.edge.all()
+    np.testing.assert_array_equal(shots.mixed, shots.edge)  # probability 1
+    m = shots.mixed
+    assert np.all(shots.range[m] > shots.true_range[m] - 0.005)
+    assert np.all(shots.range[m] < shots.background_range[m] + 0.005)
+    # both kinds occur: full background returns and in-between ones
+    at_wall = np.abs(shots.range[m] - shots.background_range[m]) < 0.005
+    assert at_wall.any() and not at_wall.all()
+    clean = ~m
+    assert np.abs(shots.range[clean] - shots.true_range[clean]).max() < 0.006
+
+
+def test_mixed_return_with_nothing_behind_is_a_dropout():
+    scene = edge_scene(False)
+    station = scene.stations[0]
+    pan, tilt, _ = plan_raster(scene, 0, station, 400)
+    full = shoot(scene, 0, station, pan, tilt, np.random.default_rng(5))
+    assert not full.mixed.any() and not full.edge.any()
+    assert full.planned == len(pan)
+    # the same raster with a wall behind keeps the edge shots as mixed returns
+    with_wall = shoot(
+        edge_scene(True), 0, edge_scene(True).stations[0], pan, tilt, np.random.default_rng(5)
+    )
+    assert len(with_wall) == len(full) + with_wall.mixed.sum()
+
+
+def test_mixed_return_probability():
+    scene = scene_from_dict(
+        {
+            "units": "m",
+            "stations": [{"position": [0, 0, 0], "mixed_return": 0.4, "beam_divergence_mrad": 6.0}],
+            "objects": [
+                {
+                    "id": "B",
+                    "kind": "cuboid",
+                    "geometry": {"type": "box", "center": [0, 5, 0], "size": [0.3, 0.3, 0.3]},
+                },
+                {
+                    "id": "bg",
+                    "scan": False,
+                    "geometry": {"type": "ground", "point": [0, 9, 0], "normal": [0, 1, 0]},
+                },
+            ],
+        }
+    )
+    shots = scan_object(scene, 0, n_points=3000, rng=np.random.default_rng(6))
+    edges = shots.edge.sum()
+    assert edges > 200
+    rate = shots.mixed.sum() / edges
+    assert abs(rate - 0.4) < 4 * math.sqrt(0.24 / edges)
+
+
+def test_points_use_nominal_angles(scene_doc):
+    scene = scene_from_dict(scene_doc)
+    shots = scan_object(scene, 1, rng=np.random.default_rng(7))
+    recomputed = scene.stations[0].position + shots.range[:, None] * direction_from_angles(
+        shots.pan, shots.tilt
+    )
+    np.testing.assert_allclose(shots.points, recomputed)
+
+
+def test_hidden_object_raises(scene_doc):
+    scene_doc["objects"].insert(
+        0,
+        {
+            "id": "screen",
+            "scan": False,
+            "geometry": {
+                "type": "plate",
+                "center": [0, 2.0, 1.5],
+                "normal": [0, -1, 0],
+                "size": [20, 10],
+            },
+        },
+    )
+    scene = scene_from_dict(scene_doc)
+    with pytest.raises(ValueError, match="too few shots land on it"):
+        scan_object(scene, 1)
