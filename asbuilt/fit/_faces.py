@@ -1,0 +1,479 @@
+"""Face segmentation for cuboid fitting: local normals, plane hypotheses, an orthogonal frame.
+
+Private helpers of :mod:`asbuilt.fit.cuboid`. Everything is numpy (metres, unit vectors) and
+deterministic: the random plane hypotheses come from a fixed-seed generator.
+
+The segmentation is the paper's normal-based method (Kwon et al. 2004, step 1: normals of small
+neighbourhoods group the points by face) made robust for sparse rasters whose neighbourhoods
+often straddle an edge: each point's local normal and random point triples propose candidate
+planes scored by consensus (RANSAC, Fischler and Bolles 1981); the best few first faces are
+grown into a cuboid frame (a second face constrained perpendicular to the first and proposed by
+point pairs, further faces along the remaining axis or opposite the seen ones), and the frame
+explaining the most points wins.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "Frame",
+    "knn",
+    "local_normals",
+    "noise_scale",
+    "min_area_rectangle",
+    "segment",
+]
+
+_RNG_SEED = 20040601
+_TRIPLES = 150
+_MAX_FIRST = 6
+_MAX_PAIRS = 400
+_MIN_FACE_POINTS = 3
+#: A face's points must be spread off a line by this many consensus thresholds (RMS): a raster
+#: line lies in every plane through it and would otherwise pass for a face.
+_MIN_SPREAD = 1.5
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """A segmentation hypothesis: an orthonormal frame and the seen faces.
+
+    Attributes
+    ----------
+    axes : ndarray, shape (3, 3)
+        Rows are orthonormal directions (unit vectors).
+    face_axis : ndarray, shape (m,), int
+        The row of ``axes`` each face is normal to.
+    face_sign : ndarray, shape (m,), float
+        +1 or -1: the face's outward normal is ``face_sign * axes[face_axis]``.
+    face_offset : ndarray, shape (m,), metres
+        Plane offsets: a point x on face f has ``outward_normal . x == face_offset``.
+    labels : ndarray, shape (n,), int
+        Face index of each point within the consensus threshold of a face, else -1.
+    """
+
+    axes: np.ndarray
+    face_axis: np.ndarray
+    face_sign: np.ndarray
+    face_offset: np.ndarray
+    labels: np.ndarray
+
+    @property
+    def n_faces(self) -> int:
+        return int(self.face_axis.shape[0])
+
+
+def knn(points: np.ndarray, k: int) -> np.ndarray:
+    """Indices of each point's ``k`` nearest neighbours (itself excluded).
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    k : int
+        Clipped to ``n - 1``.
+
+    Returns
+    -------
+    ndarray, shape (n, k), int
+    """
+    n = points.shape[0]
+    k = max(1, min(k, n - 1))
+    if n > 256:
+        from scipy.spatial import cKDTree
+
+        _, index = cKDTree(points).query(points, k=k + 1)
+        return index[:, 1:]
+    d2 = ((points[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
+    np.fill_diagonal(d2, np.inf)
+    index = np.argpartition(d2, k - 1, axis=1)[:, :k]
+    order = np.take_along_axis(d2, index, axis=1).argsort(axis=1)
+    return np.take_along_axis(index, order, axis=1)
+
+
+def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Unoriented unit normals and plane RMS of each point's k-neighbourhood (PCA).
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    k : int
+        Neighbours per point (the point itself is added).
+
+    Returns
+    -------
+    normals : ndarray, shape (n, 3)
+        Eigenvector of the smallest eigenvalue of the neighbourhood covariance.
+    rms : ndarray, shape (n,), metres
+        Root of that eigenvalue, corrected for the 3 fitted parameters.
+    """
+    index = knn(points, k)
+    hood = np.concatenate([points[:, None, :], points[index]], axis=1)
+    centred = hood - hood.mean(axis=1, keepdims=True)
+    cov = np.einsum("nki,nkj->nij", centred, centred) / hood.shape[1]
+    values, vectors = np.linalg.eigh(cov)
+    dof = max(hood.shape[1] - 3, 1)
+    rms = np.sqrt(np.clip(values[:, 0], 0.0, None) * hood.shape[1] / dof)
+    return vectors[:, :, 0], rms
+
+
+def noise_scale(rms: np.ndarray, floor: float) -> float:
+    """Noise level (metres) from local plane RMS values (n,): their lower quartile, floored.
+
+    The lower quartile keeps neighbourhoods that straddle an edge (large RMS) out of the estimate.
+    """
+    return float(max(np.percentile(rms, 25.0), floor))
+
+
+def _unit_rows(vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    norms = np.linalg.norm(vectors, axis=1)
+    ok = norms > 1e-12
+    out = np.zeros_like(vectors)
+    out[ok] = vectors[ok] / norms[ok, None]
+    return out, ok
+
+
+def _tls_plane(points: np.ndarray, within: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+    """Total least squares plane of points (k, 3): unit normal (3,), offset (m).
+
+    With ``within`` (3, q) the normal is restricted to the span of its columns (q = 2 gives a
+    plane perpendicular to the missing direction).
+    """
+    centroid = points.mean(axis=0)
+    centred = points - centroid
+    if within is None:
+        _, _, vt = np.linalg.svd(centred, full_matrices=False)
+        normal = vt[-1]
+    else:
+        coords = centred @ within
+        values, vectors = np.linalg.eigh(coords.T @ coords)
+        normal = within @ vectors[:, 0]
+        normal /= np.linalg.norm(normal)
+    return normal, float(normal @ centroid)
+
+
+def _refine(points, normal, offset, threshold, within=None, rounds=2):
+    """Re-fit a candidate plane to its consensus set; return normal, offset, inlier mask."""
+    mask = np.abs(points @ normal - offset) < threshold
+    for _ in range(rounds):
+        if np.count_nonzero(mask) < 3:
+            break
+        normal, offset = _tls_plane(points[mask], within)
+        mask = np.abs(points @ normal - offset) < threshold
+    return normal, offset, mask
+
+
+def _spread(points: np.ndarray) -> float:
+    """RMS distance (metres) of points (k, 3) from their best-fit line: 0 for collinear points."""
+    if points.shape[0] < 3:
+        return 0.0
+    values = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
+    return float(values[1] / np.sqrt(points.shape[0]))
+
+
+def _perpendicular_basis(direction: np.ndarray) -> np.ndarray:
+    """Two unit columns, shape (3, 2), perpendicular to ``direction`` and to each other."""
+    helper = np.eye(3)[int(np.argmin(np.abs(direction)))]
+    first = np.cross(direction, helper)
+    first /= np.linalg.norm(first)
+    return np.stack([first, np.cross(direction, first)], axis=1)
+
+
+def _first_planes(points, normals, threshold, cos_face, rng):
+    """Up to ``_MAX_FIRST`` distinct refined planes with the largest consensus."""
+    n = points.shape[0]
+    seeds = np.arange(n) if n <= 200 else rng.choice(n, 200, replace=False)
+    tri = rng.integers(0, n, size=(_TRIPLES, 3))
+    a, b, c = points[tri[:, 0]], points[tri[:, 1]], points[tri[:, 2]]
+    cross = np.cross(b - a, c - a)
+    scale = np.linalg.norm(b - a, axis=1) * np.linalg.norm(c - a, axis=1)
+    good = np.linalg.norm(cross, axis=1) > 0.05 * np.maximum(scale, 1e-300)
+    tri_normals, ok = _unit_rows(cross[good])
+    cand_n = np.concatenate([normals[seeds], tri_normals[ok]])
+    cand_p = np.concatenate([points[seeds], a[good][ok]])
+    offsets = np.einsum("ij,ij->i", cand_n, cand_p)
+    counts = (np.abs(cand_n @ points.T - offsets[:, None]) < threshold).sum(axis=1)
+    picks: list[tuple[np.ndarray, float, np.ndarray]] = []
+    for i in np.argsort(-counts, kind="stable"):
+        if counts[i] < _MIN_FACE_POINTS or len(picks) >= _MAX_FIRST:
+            break
+        if any(
+            abs(cand_n[i] @ nrm) > cos_face and abs(cand_n[i] @ cand_p[i] - off) < 2 * threshold
+            for nrm, off, _ in picks
+        ):
+            continue
+        normal, offset, mask = _refine(points, cand_n[i], offsets[i], threshold)
+        if (
+            np.count_nonzero(mask) < _MIN_FACE_POINTS
+            or _spread(points[mask]) < _MIN_SPREAD * threshold
+        ):
+            continue
+        if any(
+            abs(normal @ nrm) > cos_face and abs(offset - off) < 2 * threshold
+            for nrm, off, _ in picks
+        ):
+            continue
+        picks.append((normal, offset, mask))
+    return picks
+
+
+def _second_plane(points, normals, first, threshold, gap, rng):
+    """The best plane perpendicular to ``first`` among the points off it, contiguous with it."""
+    d1, o1, mask1 = first
+    rest = np.flatnonzero(~mask1)
+    if rest.size < _MIN_FACE_POINTS:
+        return None
+    sub = points[rest]
+    basis = _perpendicular_basis(d1)
+    # Point pairs: the plane through both that contains d1 (exactly perpendicular to face 1).
+    r = rest.size
+    i, j = np.triu_indices(r, 1)
+    if i.size > _MAX_PAIRS:
+        keep = rng.choice(i.size, _MAX_PAIRS, replace=False)
+        i, j = i[keep], j[keep]
+    pair_n, ok = _unit_rows(np.cross(d1, sub[j] - sub[i]))
+    ok &= np.linalg.norm(np.cross(d1, sub[j] - sub[i]), axis=1) > 2 * threshold
+    # Local normals made perpendicular to d1.
+    loc = normals[rest] - np.outer(normals[rest] @ d1, d1)
+    loc_n, loc_ok = _unit_rows(loc)
+    cand_n = np.concatenate([pair_n[ok], loc_n[loc_ok]])
+    cand_p = np.concatenate([sub[i[ok]], sub[loc_ok]])
+    if cand_n.shape[0] == 0:
+        return None
+    offsets = np.einsum("ij,ij->i", cand_n, cand_p)
+    counts = (np.abs(cand_n @ sub.T - offsets[:, None]) < threshold).sum(axis=1)
+    tried: list[np.ndarray] = []
+    for c in np.argsort(-counts, kind="stable")[:12]:
+        if counts[c] < _MIN_FACE_POINTS:
+            break
+        normal, offset, mask_sub = _refine(sub, cand_n[c], offsets[c], threshold, within=basis)
+        if np.count_nonzero(mask_sub) < _MIN_FACE_POINTS:
+            continue
+        if any(abs(normal @ t) > 0.999 for t in tried):
+            continue
+        tried.append(normal)
+        mask = np.zeros(points.shape[0], bool)
+        mask[rest[mask_sub]] = True
+        if _contiguous(points, (d1, o1, mask1), (normal, offset, mask), threshold, gap):
+            return normal, offset, mask
+    return None
+
+
+def _contiguous(points, face_a, face_b, threshold, gap) -> bool:
+    """Whether two perpendicular faces' points meet at their common edge like a convex corner.
+
+    Each face's points must lie on one side of the other face's plane (within the threshold) and
+    come within ``gap`` of it.
+    """
+    for (na, oa, _), (_, _, mb) in ((face_a, face_b), (face_b, face_a)):
+        dist = points[mb] @ na - oa
+        near = np.abs(dist) <= threshold
+        far = dist[~near]
+        if far.size and np.any(far > 0) and np.any(far < 0):
+            return False
+        if np.min(np.abs(dist)) > gap:
+            return False
+    return True
+
+
+def _orient(axis_vec, offset, inside_points):
+    """Sign making the face's outward normal point away from the other faces' points."""
+    if inside_points.shape[0] == 0:
+        return 1.0
+    return -1.0 if np.median(inside_points @ axis_vec) > offset else 1.0
+
+
+def _extra_faces(points, axes, faces, threshold, gap):
+    """Add faces along the frame's axes (third face, opposite faces) while they pass the checks.
+
+    ``faces`` is a list of (axis, unsigned offset, mask); returns the grown list.
+    """
+    while True:
+        explained = np.zeros(points.shape[0], bool)
+        for _, _, mask in faces:
+            explained |= mask
+        free = np.flatnonzero(~explained)
+        if free.size < _MIN_FACE_POINTS:
+            return faces
+        best = None
+        proj_all = points @ axes.T
+        for k in range(3):
+            proj = proj_all[free, k]
+            counts = (np.abs(proj[:, None] - proj[None, :]) < threshold).sum(axis=1)
+            c = int(np.argmax(counts))
+            if counts[c] < _MIN_FACE_POINTS or (best is not None and counts[c] <= best[0]):
+                continue
+            members = free[np.abs(proj - proj[c]) < threshold]
+            offset = float(np.mean(proj_all[members, k]))
+            mask = np.zeros(points.shape[0], bool)
+            mask[free[np.abs(proj - offset) < threshold]] = True
+            if _spread(points[mask]) < _MIN_SPREAD * threshold:
+                continue
+            if _acceptable(proj_all, explained, faces, k, offset, mask, threshold, gap):
+                best = (int(np.count_nonzero(mask)), k, offset, mask)
+        if best is None:
+            return faces
+        faces = faces + [(best[1], best[2], best[3])]
+
+
+def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap) -> bool:
+    """A new face along axis k: not on an occupied side, inside the box, contiguous with a face."""
+    body = proj[explained]
+    inside = body[:, k] - offset
+    side = -1.0 if np.median(inside) > 0 else 1.0
+    for axis, off, fmask in faces:
+        if axis != k:
+            continue
+        other_side = -1.0 if np.median(proj[fmask, k]) < np.median(body[:, k]) else 1.0
+        if other_side == side or abs(off - offset) < 2 * threshold:
+            return False
+    for j in range(3):
+        if j == k:
+            continue
+        lo, hi = body[:, j].min() - gap, body[:, j].max() + gap
+        if np.any(proj[mask, j] < lo) or np.any(proj[mask, j] > hi):
+            return False
+    for axis, off, fmask in faces:
+        if axis == k:
+            continue
+        if np.min(np.abs(proj[fmask, k] - offset)) > gap:
+            continue
+        if np.min(np.abs(proj[mask, axis] - off)) > gap:
+            continue
+        return True
+    return False
+
+
+def _frame_from(points, axes, faces, threshold, viewpoint) -> Frame:
+    """Signs, offsets and labels for faces given as (axis, unsigned offset, mask)."""
+    m = len(faces)
+    face_axis = np.array([f[0] for f in faces], dtype=np.int64)
+    face_sign = np.ones(m)
+    face_offset = np.zeros(m)
+    for idx, (k, off, mask) in enumerate(faces):
+        others = np.zeros(points.shape[0], bool)
+        for jdx, (_, _, omask) in enumerate(faces):
+            if jdx != idx:
+                others |= omask
+        others &= ~mask
+        if np.any(others):
+            sign = _orient(axes[k], off, points[others])
+        else:
+            view = np.zeros(3) if viewpoint is None else viewpoint
+            sign = 1.0 if axes[k] @ view - off >= 0 else -1.0
+        face_sign[idx] = sign
+        face_offset[idx] = sign * off
+    normals = face_sign[:, None] * axes[face_axis]
+    dist = np.abs(points @ normals.T - face_offset[None, :])
+    labels = np.argmin(dist, axis=1)
+    labels[dist[np.arange(points.shape[0]), labels] >= threshold] = -1
+    return Frame(axes, face_axis, face_sign, face_offset, labels)
+
+
+def _score(points, frame: Frame, threshold) -> tuple[int, float]:
+    normals = frame.face_sign[:, None] * frame.axes[frame.face_axis]
+    dist = np.abs(points @ normals.T - frame.face_offset[None, :]).min(axis=1)
+    kept = dist < threshold
+    return int(np.count_nonzero(kept)), -float(np.sum(dist[kept] ** 2))
+
+
+def segment(
+    points: np.ndarray,
+    normals: np.ndarray,
+    threshold: float,
+    gap: float,
+    face_angle_deg: float,
+    viewpoint: np.ndarray | None = None,
+) -> Frame | None:
+    """Find the cuboid frame and seen faces that explain the most points.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    normals : ndarray, shape (n, 3)
+        Unoriented local normals (:func:`local_normals`).
+    threshold : float, metres
+        Consensus distance of a point to its face plane.
+    gap : float, metres
+        How far apart two adjacent faces' points may stop short of their common edge.
+    face_angle_deg : float, degrees
+        Normals closer than this are the same direction (distinct first-face hypotheses).
+    viewpoint : ndarray, shape (3,), metres, or None
+        Where the sensor was; only orients a single seen face (default: the origin).
+
+    Returns
+    -------
+    Frame or None
+        None when no plane has three points.
+    """
+    rng = np.random.default_rng(_RNG_SEED)
+    cos_face = float(np.cos(np.radians(face_angle_deg)))
+    best, best_score = None, None
+    for first in _first_planes(points, normals, threshold, cos_face, rng):
+        d1, o1, mask1 = first
+        second = _second_plane(points, normals, first, threshold, gap, rng)
+        if second is None:
+            axes = np.vstack([d1, _perpendicular_basis(d1).T])
+            faces = [(0, o1, mask1)]
+        else:
+            d2, o2, mask2 = second
+            d2 = d2 - (d2 @ d1) * d1
+            d2 /= np.linalg.norm(d2)
+            axes = np.vstack([d1, d2, np.cross(d1, d2)])
+            faces = [(0, o1, mask1), (1, float(d2 @ points[mask2].mean(axis=0)), mask2)]
+            faces = _extra_faces(points, axes, faces, threshold, gap)
+        frame = _frame_from(points, axes, faces, threshold, viewpoint)
+        score = _score(points, frame, threshold)
+        if best_score is None or score > best_score:
+            best, best_score = frame, score
+    return best
+
+
+def _hull_2d(xy: np.ndarray) -> np.ndarray:
+    """Convex hull (Andrew's monotone chain) of points (n, 2); vertices (h, 2) counter-clockwise."""
+    pts = np.unique(xy, axis=0)
+    if pts.shape[0] < 3:
+        return pts
+
+    def half(seq):
+        out: list[np.ndarray] = []
+        for p in seq:
+            while len(out) >= 2:
+                a, b = out[-2], out[-1]
+                if (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) > 0:
+                    break
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def min_area_rectangle(xy: np.ndarray) -> np.ndarray:
+    """Direction of the minimum-area bounding rectangle of points (n, 2) (rotating calipers).
+
+    One rectangle side is collinear with a hull edge (Freeman and Shapira 1975), so every hull
+    edge direction is tried.
+
+    Returns
+    -------
+    ndarray, shape (2, 2)
+        Rows: the rectangle's two unit side directions (right-handed).
+    """
+    hull = _hull_2d(xy)
+    if hull.shape[0] < 3:
+        spread = xy - xy.mean(axis=0)
+        _, _, vt = np.linalg.svd(spread, full_matrices=True)
+        first = vt[0]
+    else:
+        edges, ok = _unit_rows(np.roll(hull, -1, axis=0) - hull)
+        edges = edges[ok]
+        perp = np.stack([-edges[:, 1], edges[:, 0]], axis=1)
+        u = hull @ edges.T
+        v = hull @ perp.T
+        area = (u.max(axis=0) - u.min(axis=0)) * (v.max(axis=0) - v.min(axis=0))
+        first = edges[int(np.argmin(area))]
+    return np.array([first, [-first[1], first[0]]])
