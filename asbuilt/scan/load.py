@@ -93,10 +93,6 @@ def _article(kind: str) -> str:
     return "an object" if kind == "auto" else f"a {kind}"
 
 
-def _size_text(n_bytes: int) -> str:
-    return f"{n_bytes / (1024 * 1024):.1f} MiB"
-
-
 class _Context:
     """What every check needs to raise a located error: the source and a fast-path flag."""
 
@@ -158,34 +154,37 @@ def load_scan(path) -> Scan:
         ) from None
     if len(data) > MAX_FILE_BYTES:
         raise ScanReadError(_too_large(source, len(data)))
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise ScanError(
-            f"is not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
-            "save the scan as UTF-8 JSON",
-            source=source,
-        ) from None
-    return loads_scan(text, source=source)
+    return loads_scan(data, source=source)
 
 
 def _too_large(source: str | None, size: int) -> str:
     return located(
         source,
         None,
-        f"is {_size_text(size)}, too large to be a sparse scan (the limit is "
+        f"is {size:,} bytes, too large to be a sparse scan (the limit is "
         f"{MAX_FILE_BYTES // (1024 * 1024)} MiB and {MAX_POINTS:,} points); "
         "split it into several scans",
     )
 
 
-def loads_scan(text: str, source: str | None = None) -> Scan:
+def _decode(data: bytes, source: str | None) -> str:
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ScanError(
+            f"is not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
+            "save the scan as UTF-8 JSON",
+            source=source,
+        ) from None
+
+
+def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
     """Validate an ``asbuilt-scan`` document given as JSON text.
 
     Parameters
     ----------
-    text : str
-        The JSON document.
+    text : str or bytes
+        The JSON document (bytes are decoded as UTF-8).
     source : str, optional
         Name used in messages (a file path); ``Scan.source`` keeps it.
 
@@ -203,6 +202,8 @@ def loads_scan(text: str, source: str | None = None) -> Scan:
     """
     if len(text) > MAX_FILE_BYTES:
         raise ScanReadError(_too_large(source, len(text)))
+    if isinstance(text, (bytes, bytearray)):
+        text = _decode(bytes(text), source)
     try:
         document = json.loads(text)
     except json.JSONDecodeError as exc:
@@ -370,9 +371,7 @@ def _object(index: int, raw, factor: float, ctx: _Context) -> ScanObject:
     if "kind" not in raw:
         raise ctx.error(f"{where}.kind", f"missing; use one of {_KINDS_TEXT}")
     if not isinstance(kind, str) or kind not in KINDS:
-        raise ctx.error(
-            f"{where}.kind", f"unknown kind {_shown(kind)}; use one of {_KINDS_TEXT}"
-        )
+        raise ctx.error(f"{where}.kind", f"unknown kind {_shown(kind)}; use one of {_KINDS_TEXT}")
     if "points" not in raw:
         raise ctx.error(f"{where}.points", "missing; add the measured points [[x, y, z], ...]")
     points = _triples(raw["points"], f"{where}.points", "point", "[x, y, z]", ctx) * factor

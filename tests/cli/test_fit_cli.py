@@ -174,7 +174,7 @@ def test_too_large_file(scan_file, capsys, tmp_path):
     code, out, err = run_cli(capsys, "big.json", "-o", "out.json")
     assert (code, out) == (2, "")
     assert err == (
-        "asbuilt: error: big.json: is 64.0 MiB, too large to be a sparse scan (the limit is "
+        "asbuilt: error: big.json: is 67,108,865 bytes, too large to be a sparse scan (the limit is "
         "64 MiB and 1,000,000 points); split it into several scans\n"
     )
     assert not (tmp_path / "out.json").exists()

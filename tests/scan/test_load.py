@@ -150,7 +150,7 @@ def test_too_large_file_is_refused_before_reading(tmp_path, monkeypatch):
     with pytest.raises(ScanReadError) as err:
         load_scan("huge.json")
     assert str(err.value) == (
-        "huge.json: is 64.0 MiB, too large to be a sparse scan (the limit is 64 MiB and "
+        "huge.json: is 67,108,865 bytes, too large to be a sparse scan (the limit is 64 MiB and "
         "1,000,000 points); split it into several scans"
     )
 
@@ -261,4 +261,16 @@ def test_unreadable_file_even_as_root(write, tmp_path, monkeypatch):
         load_scan("scan.json")
     assert str(err.value) == (
         "scan.json: cannot be read (Permission denied); check the file's permissions"
+    )
+
+
+def test_loads_scan_accepts_bytes():
+    doc = make_doc(kinds=("plane",))
+    doc["name"] = "Süd"
+    scan = loads_scan(json.dumps(doc, ensure_ascii=False).encode("utf-8"), source="b.json")
+    assert scan.name == "Süd" and scan.source == "b.json"
+    with pytest.raises(ScanError) as err:
+        loads_scan(b'{"name": "\xff"}', source="b.json")
+    assert str(err.value) == (
+        "b.json: is not UTF-8 text (byte 0xff at offset 10); save the scan as UTF-8 JSON"
     )
