@@ -132,7 +132,8 @@ class FittingDims:
 
     ``bend_radius`` is the centre-line radius of elbows (long or short radius as asked);
     ``tee_run``/``tee_outlet`` the equal tee's centre-to-end of run and outlet;
-    ``reducer_length`` the concentric reducer's length by its large end; ``source`` is the
+    ``reducer_length`` the concentric reducer's length by its large end; ``elbow45_end`` the
+    long-radius 45 degree elbow's centre-to-end when the table lists it; ``source`` is the
     fittings catalog's name, or ``"rule"`` when a rule of thumb stood in (see :func:`fitting_dims`);
     ``notes`` say which values came from a rule.
     """
@@ -143,6 +144,7 @@ class FittingDims:
     reducer_length: float
     source: str
     notes: tuple[str, ...] = ()
+    elbow45_end: float | None = None
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,8 @@ Geometry at each joint (``o`` is a pipe end's outward direction, ``P`` the meeti
 axes):
 
 * **elbow** of bend angle ``theta`` (between ``o_1`` and ``-o_2``) and bend radius ``R``
-  (catalog long or short radius): centre-to-end ``R tan(theta/2)``; ends
+  (catalog long or short radius): centre-to-end ``R tan(theta/2)`` (within 2 degrees of 45 the
+  catalog's 45 degree centre-to-end ``B`` instead, with ``R = B / tan(theta/2)``); ends
   ``T_k = P - R tan(theta/2) o_k``; the curvature centre is ``T_1 + R n`` with ``n`` the unit
   vector perpendicular to ``o_1`` towards ``-o_2``. Both pipes are trimmed (or extended) to
   ``T_k``.
@@ -48,6 +49,8 @@ __all__ = [
 
 #: Inline ends closer than this (metres) meet at their midpoint rather than get a coupling.
 BUTT_GAP = 0.005
+#: Bends within this many degrees of 45 use the catalog's 45 degree elbow centre-to-end.
+ELBOW45_WINDOW_DEG = 2.0
 #: Shortest pipe piece left after trimming, metres.
 MIN_PIPE_LENGTH = 0.001
 
@@ -138,6 +141,10 @@ def _elbow(b: _Builder, joint: Joint):
     big = pi if pi.od >= pj.od else pj
     radius = max(pi.dims.bend_radius, pj.dims.bend_radius)
     reach = radius * np.tan(theta / 2)
+    if big.dims.elbow45_end is not None and abs(np.degrees(theta) - 45.0) <= ELBOW45_WINDOW_DEG:
+        # a catalog 45 degree elbow: keep its centre-to-end, the radius follows
+        reach = big.dims.elbow45_end
+        radius = reach / np.tan(theta / 2)
     ti = point - reach * oi
     tj = point - reach * oj
     inward = (-oj) - ((-oj) @ oi) * oi

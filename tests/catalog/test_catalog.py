@@ -1,0 +1,331 @@
+"""Catalog data against independent tables, the loader's errors and nominal-size hints.
+
+Truth values are copied by hand from the project's standards reference
+(/work/shared/reference/standards.md: B36.10M/B36.19M tables via CalebBell/fluids cross-checked
+with manufacturer tables; B16.9 from public fitting tables), not read from the catalog files.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from asbuilt.catalog import (
+    DEFAULT_CATALOG,
+    catalog_names,
+    fitting_dims,
+    load_catalog,
+    parse_catalog,
+    parse_nominal,
+)
+from asbuilt.errors import CatalogError
+
+INCH = 25.4
+
+
+def test_shipped_catalogs_are_listed():
+    assert set(catalog_names()) >= {
+        "asme-b36.10m",
+        "asme-b36.19m",
+        "en-10220",
+        "astm-b88",
+        "astm-d1785",
+        "asme-b16.9",
+    }
+    assert DEFAULT_CATALOG == "asme-b36.10m"
+
+
+@pytest.mark.parametrize(
+    "name", ["asme-b36.10m", "asme-b36.19m", "en-10220", "astm-b88", "astm-d1785", "asme-b16.9"]
+)
+def test_every_row_has_a_source_and_header(name):
+    cat = load_catalog(name)
+    assert cat.name == name and cat.standard and cat.title
+    rows = cat.sizes if cat.kind == "pipe" else cat.fittings
+    assert len(rows) > 10
+    assert all(row.source for row in rows)
+    if cat.kind == "pipe":
+        ods = [s.od for s in cat.sizes]
+        assert ods == sorted(ods) and len(set(ods)) == len(ods)
+
+
+# (NPS, DN, OD mm, STD, 40, XS, 80) from the standards reference table
+B36_10M = [
+    ("1/8", 6, 10.3, 1.73, 1.73, 2.41, 2.41),
+    ("1/2", 15, 21.3, 2.77, 2.77, 3.73, 3.73),
+    ("1", 25, 33.4, 3.38, 3.38, 4.55, 4.55),
+    ("2", 50, 60.3, 3.91, 3.91, 5.54, 5.54),
+    ("3", 80, 88.9, 5.49, 5.49, 7.62, 7.62),
+    ("4", 100, 114.3, 6.02, 6.02, 8.56, 8.56),
+    ("6", 150, 168.3, 7.11, 7.11, 10.97, 10.97),
+    ("10", 250, 273.0, 9.27, 9.27, 12.70, 15.09),
+    ("12", 300, 323.8, 9.53, 10.31, 12.70, 17.48),
+    ("16", 400, 406.4, 9.53, 12.70, 12.70, 21.44),
+    ("24", 600, 610.0, 9.53, 17.48, 12.70, 30.96),
+]
+
+
+@pytest.mark.parametrize(("nps", "dn", "od", "std", "s40", "xs", "s80"), B36_10M)
+def test_b36_10m_spot_checks(nps, dn, od, std, s40, xs, s80):
+    cat = load_catalog("asme-b36.10m")
+    size = cat.size(nps)
+    assert size.dn == dn
+    assert size.od == pytest.approx(od / 1000)
+    for schedule, wall in (("STD", std), ("40", s40), ("XS", xs), ("80", s80)):
+        assert size.wall(schedule) == pytest.approx(wall / 1000), schedule
+
+
+def test_b36_10m_reaches_nps_48_with_od_equal_to_nps_from_14_up():
+    cat = load_catalog("asme-b36.10m")
+    assert cat.size("48").od == pytest.approx(1.219)
+    for size in cat.sizes:
+        if size.nps >= 14:
+            assert size.od == pytest.approx(size.nps * INCH / 1000, abs=0.6e-3)
+
+
+def test_b36_10m_smallest_od_gap_from_half_inch_up_is_5_4_mm():
+    sizes = [s for s in load_catalog("asme-b36.10m").sizes if s.nps >= 0.5]
+    gaps = [b.od - a.od for a, b in zip(sizes, sizes[1:])]
+    assert min(gaps) == pytest.approx(0.0054)
+
+
+@pytest.mark.parametrize(
+    ("nps", "od", "s5", "s10"),
+    [
+        ("1/2", 21.3, 1.65, 2.11),
+        ("4", 114.3, 2.11, 3.05),
+        ("10", 273.1, 3.40, 4.19),
+        ("12", 323.9, 3.96, 4.57),
+        ("24", 610.0, 5.54, 6.35),
+    ],
+)
+def test_b36_19m_spot_checks(nps, od, s5, s10):
+    size = load_catalog("asme-b36.19m").size(nps)
+    assert size.od == pytest.approx(od / 1000)
+    assert size.wall("5s") == pytest.approx(s5 / 1000)
+    assert size.wall("10S") == pytest.approx(s10 / 1000)
+
+
+@pytest.mark.parametrize(
+    ("dn", "od"), [(20, 26.9), (25, 33.7), (65, 76.1), (100, 114.3), (125, 139.7), (300, 323.9)]
+)
+def test_en_10220_metric_ods(dn, od):
+    cat = load_catalog("en-10220")
+    assert cat.size(str(dn)).od == pytest.approx(od / 1000)
+    assert cat.size(f"DN{dn}").od == pytest.approx(od / 1000)
+
+
+def test_b88_od_is_nominal_plus_an_eighth():
+    for size in load_catalog("astm-b88").sizes:
+        assert size.od == pytest.approx((size.nps + 0.125) * INCH / 1000)
+
+
+@pytest.mark.parametrize(
+    ("nominal", "k", "l", "m"),
+    [
+        ("1/2", 0.049, 0.040, 0.028),
+        ("3/4", 0.065, 0.045, 0.032),
+        ("1", 0.065, 0.050, 0.035),
+        ("2", 0.083, 0.070, 0.058),
+        ("4", 0.134, 0.110, 0.095),
+        ("6", 0.192, 0.140, 0.122),
+    ],
+)
+def test_b88_walls(nominal, k, l, m):  # noqa: E741
+    size = load_catalog("astm-b88").size(nominal)
+    for schedule, wall in (("K", k), ("L", l), ("M", m)):
+        assert size.wall(schedule) == pytest.approx(wall * INCH / 1000)
+
+
+def test_pvc_has_steel_ods_and_steel_schedule_40_walls():
+    steel = load_catalog("asme-b36.10m")
+    for size in load_catalog("astm-d1785").sizes:
+        other = steel.size(size.nominal)
+        assert size.od == pytest.approx(other.od, abs=0.5e-3)  # IPS 24.000 in = 609.6 mm
+        assert size.wall("40") == pytest.approx(other.wall("40"), abs=0.05e-3)
+
+
+# (NPS, 90 LR, 90 SR, 45 LR, tee, reducer) from the standards reference, mm
+B16_9 = [
+    ("1", 38, 25, 22, 38, 51),
+    ("1 1/2", 57, 38, 29, 57, 64),
+    ("2", 76, 51, 35, 64, 76),
+    ("3", 114, 76, 51, 86, 89),
+    ("4", 152, 102, 64, 105, 102),
+    ("6", 229, 152, 95, 143, 140),
+    ("8", 305, 203, 127, 178, 152),
+    ("10", 381, 254, 159, 216, 178),
+    ("12", 457, 305, 190, 254, 203),
+    ("16", 610, 406, 254, 305, 356),
+    ("24", 914, 610, 381, 432, 508),
+]
+
+
+@pytest.mark.parametrize(("nps", "lr", "sr", "l45", "tee", "red"), B16_9)
+def test_b16_9_spot_checks(nps, lr, sr, l45, tee, red):
+    pipe = load_catalog("asme-b36.10m")
+    row = pipe.fitting(pipe.size(nps))
+    assert row is not None
+    assert row.dims["elbow90_lr"] == pytest.approx(lr / 1000)
+    assert row.dims["elbow90_sr"] == pytest.approx(sr / 1000)
+    assert row.dims["elbow45_lr"] == pytest.approx(l45 / 1000)
+    assert row.dims["tee_run"] == pytest.approx(tee / 1000)
+    assert row.dims["reducer"] == pytest.approx(red / 1000)
+
+
+def test_b16_9_rows_follow_the_elbow_rules():
+    """LR = 1.5 x NPS and SR = 1.0 x NPS (NPS 1 up); the 45 degree centre-to-end B is within
+    5 mm of R tan(22.5 deg) or longer (small 45 degree elbows have longer ends), and within 3 mm
+    (B is rounded to 1/8 in) for NPS 4 to 20."""
+    for row in load_catalog("asme-b16.9").fittings:
+        lr = row.dims["elbow90_lr"]
+        tangent = lr * math.tan(math.radians(22.5))
+        assert row.dims["elbow45_lr"] >= tangent - 5e-3
+        if 4 <= row.nps <= 20:
+            assert row.dims["elbow45_lr"] == pytest.approx(tangent, abs=3e-3)
+        if row.nps >= 1:
+            assert lr == pytest.approx(1.5 * row.nps * INCH / 1000, abs=1e-3)
+            assert row.dims["elbow90_sr"] == pytest.approx(row.nps * INCH / 1000, abs=1e-3)
+
+
+def test_fitting_dims_from_table_and_by_rule():
+    steel = load_catalog("asme-b36.10m")
+    four = steel.size("4")
+    dims = fitting_dims(steel, four, four.od)
+    assert (dims.bend_radius, dims.tee_run, dims.reducer_length, dims.source) == (
+        pytest.approx(0.152),
+        pytest.approx(0.105),
+        pytest.approx(0.102),
+        "asme-b16.9",
+    )
+    assert fitting_dims(steel, four, four.od, "short").bend_radius == pytest.approx(0.102)
+    half = steel.size("1/2")
+    short = fitting_dims(steel, half, half.od, "short")
+    assert short.bend_radius == pytest.approx(0.038) and "long radius used" in short.notes[0]
+    copper = load_catalog("astm-b88")
+    two = copper.size("2")
+    ruled = fitting_dims(copper, two, two.od)
+    assert ruled.source == "rule"
+    assert ruled.bend_radius == pytest.approx(1.5 * 2 * INCH / 1000)
+    assert ruled.tee_run == pytest.approx(two.od)
+    with pytest.raises(ValueError):
+        fitting_dims(steel, four, four.od, "medium")
+
+
+@pytest.mark.parametrize(
+    ("text", "system", "value", "steel", "metric"),
+    [
+        ('4"', "nps", 4.0, "4", "100"),
+        ("4 in", "nps", 4.0, "4", "100"),
+        ("4in", "nps", 4.0, "4", "100"),
+        ("NPS 4", "nps", 4.0, "4", "100"),
+        ("nps 1 1/2", "nps", 1.5, "1 1/2", "40"),
+        ('1-1/2"', "nps", 1.5, "1 1/2", "40"),
+        ("DN100", "dn", 100.0, "4", "100"),
+        ("DN 150", "dn", 150.0, "6", "150"),
+        ("100", "number", 100.0, "4", "100"),
+        ("4", "number", 4.0, "4", "100"),
+        ("3/4", "number", 0.75, "3/4", "20"),
+    ],
+)
+def test_nominal_hints(text, system, value, steel, metric):
+    hint = parse_nominal(text)
+    assert (hint.system, hint.value) == (system, value)
+    assert load_catalog("asme-b36.10m").match_hint(hint).nominal == steel
+    assert load_catalog("en-10220").match_hint(hint).nominal == metric
+
+
+@pytest.mark.parametrize("text", ["", "abc", "DN", "NPS", "-4", "4/0", None])
+def test_nominal_hints_not_understood(text):
+    assert parse_nominal(text) is None
+
+
+def test_bare_number_reads_the_catalogs_own_designation_first():
+    # "6" is NPS 6 for an NPS catalog and DN 6 for a DN catalog
+    hint = parse_nominal("6")
+    assert load_catalog("asme-b36.10m").match_hint(hint).od == pytest.approx(0.1683)
+    assert load_catalog("en-10220").match_hint(hint).od == pytest.approx(0.0102)
+
+
+GOOD = """# name: mine
+# title: Test pipe
+# standard: none
+# kind: pipe
+# units: mm
+nominal,od,wall_std,source
+2,60.3,3.91,table A
+4,114.3,6.02,table A
+"""
+
+
+def test_user_catalog_by_path(tmp_path):
+    path = tmp_path / "mine.csv"
+    path.write_text(GOOD)
+    cat = load_catalog(str(path))
+    assert cat.name == "mine" and [s.nominal for s in cat.sizes] == ["2", "4"]
+    assert cat.wall("4", "std") == pytest.approx(0.00602)
+    assert load_catalog(path).sizes[0].od == pytest.approx(0.0603)
+
+
+def test_user_catalog_with_fittings_beside_it(tmp_path):
+    (tmp_path / "fit.csv").write_text(
+        "# name: fit\n# kind: fittings\n# units: in\n"
+        "nominal,elbow90_lr,tee_run,source\n4,6,4.12,my table\n"
+    )
+    (tmp_path / "mine.csv").write_text(
+        GOOD.replace("# units: mm", "# units: mm\n# fittings: fit.csv")
+    )
+    cat = load_catalog(tmp_path / "mine.csv")
+    dims = fitting_dims(cat, cat.size("4"), 0.1143)
+    assert dims.bend_radius == pytest.approx(0.1524) and dims.source == "fit"
+
+
+@pytest.mark.parametrize(
+    ("text", "where", "message"),
+    [
+        (GOOD.replace("114.3", "abc"), "line 8, column 'od'", "not a number"),
+        (GOOD.replace("6.02", "-1"), "line 8, column 'wall_std'", "positive"),
+        (GOOD.replace("6.02", "60"), "line 8, column 'wall_std'", "thinner"),
+        (GOOD.replace(",table A\n4", ",\n4"), "line 7, column 'source'", "source"),
+        (GOOD.replace("2,60.3", "4,60.3"), "line 8, column 'nominal'", "repeats line 7"),
+        (GOOD.replace("4,114.3,6.02,table A", "4,114.3,table A"), "line 8", "3 cells but 4"),
+        (GOOD.replace("wall_std", "colour"), "line 6, column 'colour'", "unknown column"),
+        (GOOD.replace("nominal,od", "nominal,odd"), "line 6", "missing column 'od'"),
+        (GOOD.replace("# kind: pipe", "# kind: valve"), "header 'kind'", "pipe or fittings"),
+        (GOOD.replace("# units: mm", "# units: furlong"), "header 'units'", "units must be"),
+        (GOOD.replace("# name: mine\n", ""), "header", "name"),
+        (GOOD.replace("# title", "# colour"), "line 2", "unknown header key"),
+        (GOOD.replace("114.3", "60.3"), "line 8, column 'od'", "same OD"),
+    ],
+)
+def test_malformed_catalog_names_file_line_and_column(tmp_path, text, where, message):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(CatalogError) as info:
+        load_catalog(str(path))
+    line = str(info.value)
+    assert line.startswith(f"{path}: {where}: ")
+    assert message in line
+    assert "\n" not in line
+
+
+def test_unknown_catalog_name_and_missing_file(tmp_path):
+    with pytest.raises(CatalogError, match="unknown catalog 'nope'; use one of"):
+        load_catalog("nope")
+    with pytest.raises(CatalogError, match="not found"):
+        load_catalog(str(tmp_path / "missing.csv"))
+
+
+def test_parse_catalog_needs_a_table():
+    with pytest.raises(CatalogError, match="no table"):
+        parse_catalog("# name: x\n# kind: pipe\n# units: mm\n", source="x.csv")
+
+
+def test_lookup_errors():
+    cat = load_catalog("asme-b36.10m")
+    with pytest.raises(KeyError):
+        cat.size("7")
+    assert cat.wall("22", "40") is None  # B36.10M lists no schedule 40 at NPS 22
+    assert cat.label("4") == "NPS 4"
+    assert [s.nominal for s in cat.nearest(0.110)] == ["4", "3 1/2"]
