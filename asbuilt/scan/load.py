@@ -77,7 +77,12 @@ def _describe(value) -> str:
         return "an array"
     if isinstance(value, dict):
         return "an object"
-    return repr(value)
+    if isinstance(value, float) and math.isnan(value):
+        return "NaN"
+    if isinstance(value, float) and math.isinf(value):
+        return "infinite"
+    text = repr(value)
+    return text if len(text) <= 20 else text[:17] + "..."
 
 
 def _shown(value) -> str:
@@ -87,6 +92,16 @@ def _shown(value) -> str:
 
 def _is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _is_finite_number(value) -> bool:
+    """A JSON number that is a finite float (False for huge integers, NaN, infinities)."""
+    if not _is_number(value):
+        return False
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:
+        return False
 
 
 def _article(kind: str) -> str:
@@ -302,7 +317,7 @@ def _sensor(raw, factor: float, ctx: _Context) -> Sensor:
         if (
             not isinstance(position, list)
             or len(position) != 3
-            or not all(_is_number(c) and math.isfinite(float(c)) for c in position)
+            or not all(_is_finite_number(c) for c in position)
         ):
             raise ctx.error(
                 "sensor.position", "must be 3 finite numbers [x, y, z] in the file's units"
@@ -311,7 +326,7 @@ def _sensor(raw, factor: float, ctx: _Context) -> Sensor:
         position.setflags(write=False)
     sigma = raw.get("range_sigma")
     if sigma is not None:
-        if not _is_number(sigma) or not math.isfinite(float(sigma)) or sigma <= 0:
+        if not _is_finite_number(sigma) or sigma <= 0:
             raise ctx.error(
                 "sensor.range_sigma",
                 f"must be a positive number (the range noise in the file's units), "

@@ -274,3 +274,35 @@ def test_loads_scan_accepts_bytes():
     assert str(err.value) == (
         "b.json: is not UTF-8 text (byte 0xff at offset 10); save the scan as UTF-8 JSON"
     )
+
+
+@pytest.mark.parametrize(
+    ("sensor", "message"),
+    [
+        (
+            {"position": [10**400, 0, 0]},
+            "sensor.position: must be 3 finite numbers [x, y, z] in the file's units",
+        ),
+        (
+            {"range_sigma": 10**400},
+            "sensor.range_sigma: must be a positive number (the range "
+            "noise in the file's units), not 10000000000000000...",
+        ),
+        (
+            {"range_sigma": float("nan")},
+            "sensor.range_sigma: must be a positive number (the "
+            "range noise in the file's units), not NaN",
+        ),
+        (
+            "laser",
+            'sensor: must be an object like {"position": [x, y, z], "range_sigma": 0.002}, '
+            'not a string ("laser")',
+        ),
+    ],
+)
+def test_bad_sensor_values(sensor, message):
+    doc = make_doc(kinds=("plane",))
+    doc["sensor"] = sensor
+    with pytest.raises(ScanError) as err:
+        loads_scan(json.dumps(doc))
+    assert str(err.value) == message
