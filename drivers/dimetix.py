@@ -73,12 +73,7 @@ class DimetixDLS:
     ) -> DimetixDLS:
         """Open the sensor at ``url`` (default 19200 baud 7E1, the common factory setting)."""
         port = open_port(
-            url,
-            baudrate=baudrate,
-            bytesize=bytesize,
-            parity=parity,
-            timeout=timeout,
-            write_timeout=timeout,
+            url, baudrate=baudrate, bytesize=bytesize, parity=parity, write_timeout=timeout
         )
         return cls(LineChannel(port, f"Dimetix range finder on {url}", timeout), device_id)
 

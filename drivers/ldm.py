@@ -61,7 +61,7 @@ class LDM4x:
     @classmethod
     def open(cls, url: str, *, baudrate: int = 9600, timeout: float = 3.0) -> LDM4x:
         """Open the meter at ``url`` (8N1, default 9600 baud)."""
-        port = open_port(url, baudrate=baudrate, timeout=timeout, write_timeout=timeout)
+        port = open_port(url, baudrate=baudrate, write_timeout=timeout)
         return cls(LineChannel(port, f"LDM range finder on {url}", timeout))
 
     def __enter__(self) -> LDM4x:

@@ -124,7 +124,7 @@ class PanTiltUnit:
         initialize : bool
             Send ``FT``/``ED`` and read resolution and limits.
         """
-        port = open_port(url, baudrate=baudrate, timeout=timeout, write_timeout=timeout)
+        port = open_port(url, baudrate=baudrate, write_timeout=timeout)
         unit = cls(LineChannel(port, f"pan-tilt unit on {url}", timeout), move_timeout=move_timeout)
         if initialize:
             try:

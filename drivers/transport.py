@@ -26,6 +26,13 @@ SIM_SCHEMES = ("sim-ptu", "sim-lrf")
 
 _PACKAGE = "asbuilt.drivers"
 
+try:  # POSIX: tty attribute errors are not OSError subclasses
+    from termios import error as _TermiosError
+except ImportError:  # pragma: no cover - Windows
+
+    class _TermiosError(Exception):
+        pass
+
 
 def register_url_handlers() -> None:
     """Let :func:`serial.serial_for_url` find the ``sim-ptu://`` and ``sim-lrf://`` handlers.
@@ -43,7 +50,7 @@ def open_port(
     bytesize: int = 8,
     parity: str = "N",
     stopbits: float = 1,
-    timeout: float = 1.0,
+    timeout: float = 0.05,
     write_timeout: float = 1.0,
 ) -> serial.SerialBase:
     """Open ``url`` with :func:`serial.serial_for_url` and explicit timeouts.
@@ -54,8 +61,12 @@ def open_port(
         A device path or any pyserial URL (``spy://``, ``socket://``, ``sim-ptu://``...).
     baudrate, bytesize, parity, stopbits
         Line settings (ignored by the simulator URLs).
-    timeout, write_timeout : float
-        Seconds; reads and writes never block longer than this.
+    timeout : float
+        Seconds one low-level read may block: the polling interval of :class:`LineChannel`,
+        which enforces the real reply deadline itself (the port's timeout is never changed
+        after opening: on some ttys that reconfiguration fails).
+    write_timeout : float
+        Seconds a write may block.
 
     Returns
     -------
@@ -78,7 +89,7 @@ def open_port(
             timeout=timeout,
             write_timeout=write_timeout,
         )
-    except (serial.SerialException, ValueError, OSError) as exc:
+    except (serial.SerialException, ValueError, OSError, _TermiosError) as exc:
         raise DeviceError(
             f"{url}: cannot open the port ({exc}); check the cable, the device path and "
             "that no other program holds it"
@@ -116,7 +127,7 @@ class LineChannel:
             raise DeviceTimeout(
                 f"{self.name}: write timed out; check the cable and the device's power"
             ) from None
-        except (serial.SerialException, OSError) as exc:
+        except (serial.SerialException, OSError, _TermiosError) as exc:
             raise DeviceError(
                 f"{self.name}: write failed ({exc}); the cable may be unplugged"
             ) from None
@@ -178,10 +189,9 @@ class LineChannel:
                     "the port, the baud rate and that the device is powered"
                 )
             try:
-                self.port.timeout = min(remaining, 0.25)
                 waiting = self.port.in_waiting
                 chunk = self.port.read(max(1, waiting))
-            except (serial.SerialException, OSError) as exc:
+            except (serial.SerialException, OSError, _TermiosError) as exc:
                 raise DeviceError(
                     f"{self.name}: read failed ({exc}); the cable may be unplugged"
                 ) from None

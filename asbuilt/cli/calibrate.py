@@ -1,0 +1,131 @@
+"""``asbuilt calibrate SCAN --targets TARGETS --out CAL [--initial CAL] [--free ...] [--fix ...]``.
+
+Estimates the pan-tilt/range finder calibration by least squares from a scan of known targets
+(planes, spheres, surveyed points; docs/calibration.md). The scan must carry each object's raw
+``measurements`` (``asbuilt scan`` writes them). Prints the residual before and after, each
+estimated parameter with its standard error, and the parameters held fixed because the targets
+cannot tell them apart; writes the calibration file atomically.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["register", "run"]
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``calibrate`` subcommand to ``subparsers``."""
+    parser = subparsers.add_parser(
+        "calibrate",
+        help="estimate the scanner's calibration from scans of known targets",
+        description="Fit the kinematic chain's parameters (axis zeros and scales, tilt axis "
+        "offset, lever arm, beam misalignment, range offset and scale, base pose) to shots at "
+        "known targets by least squares.",
+        epilog="Example: asbuilt calibrate room.json --targets room.targets.json --out rig.cal.json",
+    )
+    parser.add_argument("scan", metavar="SCAN", help="asbuilt-scan file with measurements")
+    parser.add_argument(
+        "--targets",
+        required=True,
+        metavar="FILE",
+        help="asbuilt-targets file: object id -> known plane/sphere/point",
+    )
+    parser.add_argument(
+        "--initial",
+        metavar="FILE",
+        help="starting calibration (signs are taken from it; default ideal)",
+    )
+    parser.add_argument(
+        "--out", "-o", required=True, metavar="FILE", help="calibration file to write"
+    )
+    parser.add_argument(
+        "--free",
+        metavar="NAMES",
+        help="comma-separated parameters to estimate (default: the observable ones)",
+    )
+    parser.add_argument(
+        "--fix",
+        metavar="NAMES",
+        default="",
+        help="comma-separated parameters to hold at their initial values",
+    )
+    parser.add_argument(
+        "--robust", action="store_true", help="soft-L1 loss: resist a few stray shots"
+    )
+    parser.set_defaults(handler=run)
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    """Load, estimate, print, write; return 0."""
+    import math
+
+    import numpy as np
+    from rich.console import Console
+    from rich.table import Table
+
+    from asbuilt.drivers.calibration import (
+        TargetShots,
+        estimate_calibration,
+        load_calibration,
+        load_targets,
+        save_calibration,
+    )
+    from asbuilt.drivers.kinematics import Calibration
+    from asbuilt.errors import CalibrationError
+    from asbuilt.scan import load_scan
+
+    scan = load_scan(args.scan)
+    targets = load_targets(args.targets)
+    initial = load_calibration(args.initial) if args.initial else Calibration()
+    shots = []
+    for name, target in targets.items():
+        try:
+            obj = scan.object(name)
+        except KeyError:
+            raise CalibrationError(
+                "no object with this id in the scan; scan it or remove it from the targets",
+                source=args.targets,
+                where=f"targets.{name}",
+            ) from None
+        if obj.measurements is None:
+            raise CalibrationError(
+                "has no raw measurements; scan it with asbuilt scan (which records them)",
+                source=args.scan,
+                where=obj.where,
+            )
+        m = np.asarray(obj.measurements, float)
+        shots.append(TargetShots(name, target, m[:, 0], m[:, 1], m[:, 2]))
+    free = [n.strip() for n in args.free.split(",") if n.strip()] if args.free else None
+    fix = [n.strip() for n in args.fix.split(",") if n.strip()]
+    result = estimate_calibration(
+        shots, initial, free=free, fixed=fix, loss="soft_l1" if args.robust else "linear"
+    )
+    save_calibration(result.calibration, args.out, estimate=result.summary())
+
+    out = Console()
+    table = Table(title=f"calibration from {result.n_shots} shots at {len(shots)} targets")
+    for col in ("parameter", "initial", "estimate", "stderr"):
+        table.add_column(col, justify="left" if col == "parameter" else "right")
+    for name in result.free:
+        angle = not any(k in name for k in ("offset", "position", "scale"))
+        conv = math.degrees if angle else float
+        unit = " deg" if angle else ("" if "scale" in name else " m")
+        table.add_row(
+            name,
+            f"{conv(initial.get(name)):.6g}{unit}",
+            f"{conv(result.calibration.get(name)):.6g}{unit}",
+            f"{conv(result.stderr[name]):.2g}{unit}",
+        )
+    out.print(table)
+    out.print(
+        f"residual RMS: {result.initial_rms * 1000:.2f} mm before, "
+        f"{result.residual_rms * 1000:.2f} mm after"
+    )
+    for name, rms in result.per_target_rms.items():
+        out.print(f"  {name}: {rms * 1000:.2f} mm")
+    if result.fixed:
+        out.print("held fixed (not observable from these targets): " + ", ".join(result.fixed))
+    out.print(f"wrote {args.out}")
+    return 0

@@ -1,0 +1,332 @@
+"""``asbuilt scan --ptu URL --lrf URL --out scan.json [--plan plan.json] [--resume]``.
+
+Runs an acquisition session with a FLIR/DP pan-tilt unit and a range finder (any pyserial URL:
+a device path, ``spy://`` for a traffic log, ``sim-ptu://`` / ``sim-lrf://`` simulators). For each
+object the operator gives an id, a kind and a window (two corners in the unit's degrees, or
+"aim" to jog the head to each corner); the session shoots a raster, fills it where the object
+is, and bisects hit/miss pairs to pin the object's edges. Every shot is journaled beside the
+output as it is taken; the scan file is rewritten atomically after each object; Ctrl-C stops
+cleanly and ``--resume`` continues. ``--plan`` takes the targets from a plan file instead of
+prompting.
+
+Exit codes: 0 done; 1 some objects got too few points (listed); 2 bad input or a device error
+(one line; the journal keeps every shot); 130 interrupted (resumable).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+__all__ = ["register", "run"]
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``scan`` subcommand to ``subparsers``."""
+    parser = subparsers.add_parser(
+        "scan",
+        help="scan objects with a pan-tilt unit and a laser range finder",
+        description="Run an operator (or scripted) scan session over serial devices and write "
+        "an asbuilt-scan file; every shot is journaled so an interrupted session resumes.",
+        epilog="Example: asbuilt scan --ptu /dev/ttyUSB0 --lrf /dev/ttyUSB1 --calibration "
+        "rig.cal.json --out site.json   (add --plan plan.json for a scripted run)",
+    )
+    parser.add_argument(
+        "--ptu",
+        metavar="URL",
+        required=True,
+        help="pan-tilt unit: device path or pyserial URL (sim-ptu://RIG?scene=...)",
+    )
+    parser.add_argument(
+        "--lrf",
+        metavar="URL",
+        required=True,
+        help="range finder: device path or pyserial URL (sim-lrf://RIG)",
+    )
+    parser.add_argument(
+        "--lrf-protocol",
+        choices=("dimetix", "ldm"),
+        default="dimetix",
+        help="range finder protocol (default dimetix)",
+    )
+    parser.add_argument("--ptu-baud", type=int, default=9600, help="pan-tilt baud rate (9600)")
+    parser.add_argument(
+        "--lrf-baud",
+        type=int,
+        default=None,
+        help="range finder baud rate (dimetix 19200 7E1, ldm 9600 8N1)",
+    )
+    parser.add_argument(
+        "--lrf-8n1",
+        action="store_true",
+        help="open a Dimetix sensor 8N1 instead of 7E1 (reconfigured units, ptys)",
+    )
+    parser.add_argument(
+        "--calibration",
+        metavar="FILE",
+        help="asbuilt-calibration file (default: an ideal chain at the origin)",
+    )
+    parser.add_argument(
+        "--out",
+        "-o",
+        metavar="FILE",
+        required=True,
+        help="scan file to write; the journal goes beside it (FILE.journal)",
+    )
+    parser.add_argument("--plan", metavar="FILE", help="asbuilt-scan-plan file (scripted mode)")
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the session recorded in the journal beside --out",
+    )
+    parser.add_argument("--units", default="m", help="length unit of the scan file (m)")
+    parser.add_argument("--name", help="scan name")
+    parser.add_argument(
+        "--retries",
+        type=int,
+        default=None,
+        help="extra attempts per failing shot before it is skipped (2)",
+    )
+    parser.add_argument(
+        "--edge-pairs", type=int, default=None, help="hit/miss pairs bisected per object (4)"
+    )
+    parser.add_argument("--edge-depth", type=int, default=None, help="bisection steps per pair (2)")
+    parser.add_argument(
+        "--keep-background",
+        action="store_true",
+        help="keep returns beyond the range gap in the object too",
+    )
+    parser.add_argument(
+        "--timeout", type=float, default=3.0, help="seconds to wait for a reply (3)"
+    )
+    parser.add_argument(
+        "--move-timeout", type=float, default=30.0, help="seconds to wait for a move to finish (30)"
+    )
+    parser.set_defaults(handler=run)
+    return parser
+
+
+def _settings(args, plan):
+    from asbuilt.drivers.plan import SessionSettings
+
+    values = dict(plan.settings) if plan is not None else {}
+    for key in ("retries", "edge_pairs", "edge_depth"):
+        value = getattr(args, key)
+        if value is not None:
+            if value < 0:
+                from asbuilt.errors import ScanError
+
+                raise ScanError(f"--{key.replace('_', '-')} must be >= 0")
+            values[key] = value
+    if args.keep_background:
+        values["keep_background"] = True
+    return SessionSettings(**values)
+
+
+def _ask(prompt: str) -> str | None:
+    """Prompt on stderr, read one line from stdin; None at end of input."""
+    sys.stderr.write(prompt)
+    sys.stderr.flush()
+    line = sys.stdin.readline()
+    if not line:
+        return None
+    return line.strip()
+
+
+def _aim_corner(ptu, label: str):
+    """Jog the head with 'pan tilt' (degrees) lines until 'ok'; return the unit angles (rad)."""
+    import math
+
+    from asbuilt.drivers.ptu import PTUError
+
+    while True:
+        pan, tilt = ptu.position()
+        answer = _ask(
+            f"  {label}: head at pan {math.degrees(pan):.3f} tilt {math.degrees(tilt):.3f} deg; "
+            "type 'PAN TILT' (deg) to move, 'ok' to take it: "
+        )
+        if answer is None:
+            return None
+        if answer.lower() in ("ok", "y", ""):
+            return pan, tilt
+        try:
+            p, t = (math.radians(float(v)) for v in answer.split())
+        except ValueError:
+            sys.stderr.write("  give two numbers (degrees) or 'ok'\n")
+            continue
+        try:
+            ptu.move_to(p, t)
+        except PTUError as exc:
+            sys.stderr.write(f"  {exc}\n")
+
+
+def _interactive_targets(ptu, session):
+    """Prompt for targets until an empty id or end of input."""
+    from asbuilt.drivers.plan import Target, Window
+    from asbuilt.scan.model import KINDS
+
+    while True:
+        oid = _ask("object id (empty to finish): ")
+        if not oid:
+            return
+        if session.is_done(oid):
+            sys.stderr.write(f"  {oid} is already in the scan; choose another id\n")
+            continue
+        kind = _ask(f"  kind ({'/'.join(KINDS)}): ")
+        if kind is None:
+            return
+        if kind not in KINDS:
+            sys.stderr.write(f"  unknown kind {kind!r}\n")
+            continue
+        text = _ask("  window 'PAN1 TILT1 PAN2 TILT2' (deg) or 'aim': ")
+        if text is None:
+            return
+        try:
+            if text.lower() == "aim":
+                c1 = _aim_corner(ptu, "corner 1")
+                c2 = _aim_corner(ptu, "corner 2") if c1 is not None else None
+                if c2 is None:
+                    return
+                window = Window.from_corners(c1[0], c1[1], c2[0], c2[1])
+            else:
+                window = Window.from_degrees([float(v) for v in text.split()][:4])
+                if len(text.split()) != 4:
+                    raise ValueError("give four numbers")
+        except (ValueError, TypeError) as exc:
+            sys.stderr.write(f"  bad window ({exc})\n")
+            continue
+        nominal = _ask("  nominal size (optional): ")
+        yield Target(oid, kind, window, nominal=nominal or None)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Open the devices, run the session, print a summary; see the module docstring."""
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+    from rich.table import Table
+
+    from asbuilt.drivers.calibration import load_calibration
+    from asbuilt.drivers.kinematics import Calibration
+    from asbuilt.drivers.plan import load_plan
+    from asbuilt.drivers.ptu import PanTiltUnit
+    from asbuilt.drivers.rangefinder import open_range_finder
+    from asbuilt.drivers.session import DeviceShooter, ScanSession
+    from asbuilt.errors import DeviceError
+    from asbuilt.units import unit_factor
+
+    err = Console(stderr=True)
+    try:
+        unit_factor(args.units)
+    except ValueError as exc:
+        from asbuilt.errors import ScanError
+
+        raise ScanError(str(exc), where="--units") from None
+    plan = load_plan(args.plan) if args.plan else None
+    settings = _settings(args, plan)
+    if args.calibration:
+        calibration = load_calibration(args.calibration)
+    else:
+        calibration = Calibration()
+        err.print("[yellow]no --calibration: using an ideal chain at the origin[/]")
+
+    lrf_options = {}
+    if args.lrf_baud:
+        lrf_options["baudrate"] = args.lrf_baud
+    if args.lrf_8n1 and args.lrf_protocol == "dimetix":
+        lrf_options.update(bytesize=8, parity="N")
+    ptu = PanTiltUnit.open(
+        args.ptu, baudrate=args.ptu_baud, timeout=args.timeout, move_timeout=args.move_timeout
+    )
+    lrf = None
+    session = None
+    progress = Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("skipped {task.fields[skipped]}"),
+        console=err,
+        transient=False,
+    )
+    tasks: dict[str, int] = {}
+
+    def on_shot(target, shot, taken, planned):
+        if target.id not in tasks:
+            tasks[target.id] = progress.add_task(
+                f"{target.id} ({target.kind})", total=planned, skipped=0
+            )
+        task = tasks[target.id]
+        skipped = progress.tasks[task].fields["skipped"] + (shot.range is None)
+        progress.update(task, completed=taken, total=planned, skipped=skipped)
+
+    def finish(object_id, result):
+        if object_id in tasks:
+            done = progress.tasks[tasks[object_id]].completed
+            progress.update(tasks[object_id], total=done)
+        if result is None:
+            err.print(f"[red]{object_id}: {session.failed.get(object_id, 'failed')}[/]")
+
+    try:
+        lrf = open_range_finder(args.lrf, args.lrf_protocol, timeout=args.timeout, **lrf_options)
+        shooter = DeviceShooter(ptu, lrf, settings)
+        session = ScanSession(
+            shooter,
+            calibration,
+            args.out,
+            units=args.units,
+            settings=settings,
+            resume=args.resume,
+            on_shot=on_shot,
+            name=args.name,
+        )
+        with progress:
+            if session.pending is not None:
+                err.print(f"resuming {session.pending.id} from the journal")
+                finish(session.pending.id, session.scan(session.pending))
+            if plan is not None:
+                targets = plan.targets
+            else:
+                targets = _interactive_targets(ptu, session)
+            for target in targets:
+                if session.is_done(target.id):
+                    continue
+                finish(target.id, session.scan(target))
+    except KeyboardInterrupt:
+        err.print(
+            f"stopped: every shot is in {session.journal_path if session else 'the journal'};"
+            " continue with --resume"
+        )
+        return 130
+    except DeviceError as exc:
+        if session is None:
+            raise
+        raise DeviceError(
+            f"{exc} (every shot so far is in {session.journal_path}; "
+            "continue with asbuilt scan --resume)"
+        ) from None
+    finally:
+        if session is not None:
+            session.close()
+        if lrf is not None:
+            lrf.close()
+        ptu.close()
+
+    table = Table(title=f"scan {args.out}")
+    for col in ("id", "kind", "points", "shots", "skipped", "background"):
+        table.add_column(col, justify="left" if col in ("id", "kind") else "right")
+    for result in session.objects.values():
+        n = int(result.on_object.sum())
+        background = sum(
+            1 for s, on in zip(result.shots, result.on_object) if s.range is not None and not on
+        )
+        table.add_row(
+            result.target.id,
+            result.target.kind,
+            str(n),
+            str(len(result.shots)),
+            str(result.skipped),
+            str(background),
+        )
+    err.print(table)
+    for oid, reason in session.failed.items():
+        err.print(f"[red]{oid}: not in the scan: {reason}[/]")
+    return 1 if session.failed else 0

@@ -1,0 +1,145 @@
+"""Serve the device simulators on pseudo-terminals, so real drivers talk to them over a real tty.
+
+:class:`PtyServer` opens two pseudo-terminal pairs (:func:`os.openpty`), puts the slave ends in
+raw mode and runs the pan-tilt and range finder simulators on the master ends in a thread.
+A driver opens the slave paths (``/dev/pts/N``) like any serial device; ``asbuilt
+simulate-device`` prints them and serves until Ctrl-C. POSIX only.
+"""
+
+from __future__ import annotations
+
+import os
+import select
+import threading
+import time
+import tty
+
+from asbuilt.errors import DeviceError
+
+from .simport import make_device
+
+__all__ = ["PtyServer"]
+
+
+class _Endpoint:
+    def __init__(self, device):
+        self.device = device
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        self.path = os.ttyname(self.slave)
+        self.outbox: list[tuple[float, bytes]] = list(device.startup())
+
+
+class PtyServer:
+    """Both simulators of one rig on two pseudo-terminals.
+
+    Parameters
+    ----------
+    rig : SimulatedRig
+    lrf_protocol : {"dimetix", "ldm"}
+    device_id : int
+        Dimetix device id.
+
+    Attributes
+    ----------
+    ptu_path, lrf_path : str
+        The tty paths to give the drivers (valid after :meth:`start`).
+    """
+
+    def __init__(self, rig, lrf_protocol: str = "dimetix", device_id: int = 0):
+        self.rig = rig
+        self.lrf_protocol = lrf_protocol
+        self.device_id = device_id
+        self._endpoints: list[_Endpoint] = []
+        self._thread: threading.Thread | None = None
+        self._wake_r = self._wake_w = -1
+        self._stop = threading.Event()
+        self.error: BaseException | None = None
+
+    @property
+    def ptu_path(self) -> str:
+        return self._endpoints[0].path
+
+    @property
+    def lrf_path(self) -> str:
+        return self._endpoints[1].path
+
+    def start(self) -> PtyServer:
+        """Open the pseudo-terminals and start serving in a daemon thread."""
+        try:
+            self._endpoints = [
+                _Endpoint(make_device("sim-ptu", self.rig, {})),
+                _Endpoint(
+                    make_device(
+                        "sim-lrf",
+                        self.rig,
+                        {"protocol": self.lrf_protocol, "device_id": str(self.device_id)},
+                    )
+                ),
+            ]
+        except OSError as exc:
+            raise DeviceError(f"cannot open pseudo-terminals ({exc.strerror})") from None
+        except Exception as exc:  # serial.SerialException for a bad protocol name
+            raise DeviceError(str(exc)) from None
+        self._wake_r, self._wake_w = os.pipe()
+        self._thread = threading.Thread(target=self._serve, name="asbuilt-pty-sim", daemon=True)
+        self._thread.start()
+        return self
+
+    def _serve(self) -> None:
+        try:
+            while not self._stop.is_set():
+                now = time.monotonic()
+                due = [at for ep in self._endpoints for at, _ in ep.outbox]
+                timeout = max(0.0, min(due) - now) if due else None
+                fds = [ep.master for ep in self._endpoints] + [self._wake_r]
+                readable, _, _ = select.select(fds, [], [], timeout)
+                if self._wake_r in readable:
+                    break
+                for ep in self._endpoints:
+                    if ep.master in readable:
+                        try:
+                            data = os.read(ep.master, 4096)
+                        except OSError:
+                            data = b""
+                        if data:
+                            with self.rig.lock:
+                                ep.outbox.extend(ep.device.feed(data))
+                            ep.outbox.sort(key=lambda item: item[0])
+                    now = time.monotonic()
+                    ready = b""
+                    while ep.outbox and ep.outbox[0][0] <= now:
+                        ready += ep.outbox.pop(0)[1]
+                    if ready:
+                        os.write(ep.master, ready)
+        except BaseException as exc:  # kept for the caller; the thread must not die silently
+            self.error = exc
+
+    def stop(self) -> None:
+        """Stop serving and close every file descriptor (idempotent)."""
+        self._stop.set()
+        if self._wake_w >= 0:
+            os.write(self._wake_w, b"x")
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+            self._thread = None
+        for ep in self._endpoints:
+            for fd in (ep.master, ep.slave):
+                try:
+                    os.close(fd)
+                except OSError:
+                    pass
+        self._endpoints = []
+        for fd in (self._wake_r, self._wake_w):
+            if fd >= 0:
+                try:
+                    os.close(fd)
+                except OSError:
+                    pass
+        self._wake_r = self._wake_w = -1
+
+    def __enter__(self) -> PtyServer:
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
