@@ -19,12 +19,10 @@ from asbuilt.model import Component, Model
 
 from .colours import colour_for, component_status
 from .mesh import LINEAR_DEFLECTION, Mesh, tessellate
+from .meshgen import mesh_for
 from .solids import check_solid, solid_for
 
 __all__ = ["CadPart", "CadModel", "prepare", "build_assembly", "fused_spool_solid"]
-
-#: Linear deflection relative to a part's bounding-box diagonal (see :func:`CadModel.mesh`).
-_RELATIVE_DEFLECTION = 2e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,16 +90,16 @@ class CadModel:
         return names
 
     def mesh(self, part: CadPart) -> Mesh:
-        """The part's triangle mesh (metres), tessellated on first use and then reused.
+        """The part's triangle mesh (metres), made on first use and then reused.
 
-        The chord deviation is the larger of 0.5 mm and 0.2% of the part's bounding-box
-        diagonal (a 1 m sphere gets ~2 mm), with at most 0.25 rad between facets.
+        Computed in closed form (:mod:`asbuilt.cad.meshgen`) for every geometry but tees,
+        whose solid the kernel tessellates (0.5 mm chord deviation, 0.25 rad between facets).
         """
         mesh = self._meshes.get(part.id)
         if mesh is None:
-            box = part.solid.BoundingBox()
-            linear = max(LINEAR_DEFLECTION, _RELATIVE_DEFLECTION * box.DiagonalLength)
-            mesh = tessellate(part.solid, linear)
+            mesh = mesh_for(part.component.geometry, plate_thickness=self.plate_thickness)
+            if mesh is None:
+                mesh = tessellate(part.solid, LINEAR_DEFLECTION)
             self._meshes[part.id] = mesh
         return mesh
 

@@ -1,7 +1,8 @@
 """Triangle meshes of the solids, tessellated once and shared by the mesh-based exporters.
 
 The kernel's incremental mesher (``BRepMesh_IncrementalMesh``) triangulates each B-rep face;
-the nodes are gathered into numpy arrays. Vertices are kept per B-rep face (not merged across
+the nodes are gathered into numpy arrays. The kernel is imported only when :func:`tessellate`
+runs, so :class:`Mesh` and :mod:`asbuilt.cad.meshgen` stay plain numpy. Vertices are kept per B-rep face (not merged across
 edges) so that vertex normals, averaged from the triangles of one face only, stay smooth on
 curved faces and sharp at edges.
 """
@@ -10,16 +11,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cadquery as cq
 import numpy as np
-from OCP.BRep import BRep_Tool
-from OCP.BRepMesh import BRepMesh_IncrementalMesh
-from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
-from OCP.TopExp import TopExp_Explorer
-from OCP.TopLoc import TopLoc_Location
-from OCP.TopoDS import TopoDS
 
-__all__ = ["Mesh", "tessellate", "LINEAR_DEFLECTION", "ANGULAR_DEFLECTION"]
+__all__ = ["Mesh", "tessellate", "vertex_normals", "LINEAR_DEFLECTION", "ANGULAR_DEFLECTION"]
 
 #: Largest distance (metres) between a triangle and the true surface: 0.5 mm, well below the
 #: fits' uncertainty (a few mm), so the mesh does not add visible error.
@@ -60,7 +54,9 @@ class Mesh:
         return unique, inverse.reshape(-1)[self.faces]
 
 
-def _vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Unit vertex normals, shape (n, 3): the area-weighted mean of the adjacent triangles'
+    normals (vertices (n, 3) metres, faces (m, 3) counter-clockwise from outside)."""
     tri = vertices[faces]
     weighted = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])  # area-weighted
     normals = np.zeros_like(vertices)
@@ -74,7 +70,7 @@ def _vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def tessellate(
-    shape: cq.Shape,
+    shape,
     linear: float = LINEAR_DEFLECTION,
     angular: float = ANGULAR_DEFLECTION,
 ) -> Mesh:
@@ -94,6 +90,13 @@ def tessellate(
     Mesh
         Vertices in metres, per B-rep face (see the module docstring).
     """
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS
+
     BRepMesh_IncrementalMesh(shape.wrapped, linear, False, angular, True)
     vertex_blocks: list[np.ndarray] = []
     face_blocks: list[np.ndarray] = []
@@ -129,4 +132,4 @@ def tessellate(
         return Mesh(empty, np.zeros((0, 3), dtype=np.int64), empty)
     vertices = np.concatenate(vertex_blocks)
     faces = np.concatenate(face_blocks)
-    return Mesh(vertices, faces, _vertex_normals(vertices, faces))
+    return Mesh(vertices, faces, vertex_normals(vertices, faces))
