@@ -68,6 +68,8 @@ class Shots:
         Range to the next surface behind the object along the actual beam (``inf``: none).
     planned : int
         Shots in the raster (hits, misses and dropouts).
+    index : ndarray, shape (n,), int
+        Each shot's position in the raster it came from.
     """
 
     station: np.ndarray
@@ -81,6 +83,7 @@ class Shots:
     mixed: np.ndarray
     background_range: np.ndarray
     planned: int
+    index: np.ndarray
 
     def __len__(self) -> int:
         return int(self.range.shape[0])
@@ -107,6 +110,7 @@ class Shots:
             "edge",
             "mixed",
             "background_range",
+            "index",
         )
         values = {name: getattr(self, name)[keep] for name in fields}
         return Shots(station=self.station, planned=self.planned, **values)
@@ -329,6 +333,7 @@ def shoot(scene, target: int, station, pan, tilt, rng) -> Shots:
         mixed=mixed,
         background_range=background,
         planned=m,
+        index=idx,
     )
     return shots.subset(keep)
 
