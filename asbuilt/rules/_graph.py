@@ -15,26 +15,48 @@ from asbuilt.model import Component, Model
 
 from ._context import ends_of
 
-__all__ = ["end_pairs", "linked_pairs", "adjacency", "FITTING_PASS"]
+__all__ = [
+    "end_pairs",
+    "linked_pairs",
+    "adjacency",
+    "inferred_pairs",
+    "contiguous_pipes",
+    "FITTING_PASS",
+]
 
 #: Fittings a size passes through unchanged (a reducer or a tee branch may change it).
 FITTING_PASS = ("elbow", "coupling")
 
 
-def end_pairs(components, distance: float) -> dict[frozenset, float]:
-    """Pairs of components with ends within ``distance`` metres: ``{frozenset(ids): gap m}``."""
+def _ends(components):
     points, owners = [], []
     for comp in components:
         for end in ends_of(comp.geometry):
             points.append(end)
             owners.append(comp.id)
+    return np.asarray(points, dtype=np.float64).reshape(-1, 3), owners
+
+
+def end_pairs(
+    components, distance: float, free_only_touch: float | None = None
+) -> dict[frozenset, float]:
+    """Pairs of components with ends within ``distance`` metres: ``{frozenset(ids): gap m}``.
+
+    With ``free_only_touch``, ends already within that distance of another component's end
+    (joined) are left out.
+    """
+    points, owners = _ends(components)
     found: dict[frozenset, float] = {}
     if len(points) < 2:
         return found
-    points = np.asarray(points)
     tree = cKDTree(points)
+    free = np.ones(len(points), bool)
+    if free_only_touch is not None:
+        for i, j in tree.query_pairs(free_only_touch):
+            if owners[i] != owners[j]:
+                free[i] = free[j] = False
     for i, j in tree.query_pairs(distance):
-        if owners[i] == owners[j]:
+        if owners[i] == owners[j] or not (free[i] and free[j]):
             continue
         key = frozenset((owners[i], owners[j]))
         gap = float(np.linalg.norm(points[i] - points[j]))
@@ -68,13 +90,35 @@ def adjacency(model: Model, touch: float, infer: float | None = None) -> dict[st
     graph: dict[str, set[str]] = defaultdict(set)
     pairs = set(end_pairs(model.components, touch)) | linked_pairs(model)
     if infer:
-        pipes = [c for c in model.components if c.type in ("pipe", "cylinder")]
-        pairs |= set(end_pairs(pipes, infer))
+        pairs |= inferred_pairs(model, touch, infer)
     for pair in pairs:
         a, b = tuple(pair)
         graph[a].add(b)
         graph[b].add(a)
     return graph
+
+
+def inferred_pairs(model: Model, touch: float, infer: float) -> set[frozenset]:
+    """Pipes whose *free* ends (joined to nothing within ``touch``) lie within ``infer`` metres."""
+    points, owners = _ends(model.components)
+    if len(points) < 2:
+        return set()
+    tree = cKDTree(points)
+    free = np.ones(len(points), bool)
+    for i, j in tree.query_pairs(touch):
+        if owners[i] != owners[j]:
+            free[i] = free[j] = False
+    types = {c.id: c.type for c in model.components}
+    pairs = set()
+    for i, j in tree.query_pairs(infer):
+        if (
+            owners[i] != owners[j]
+            and free[i]
+            and free[j]
+            and all(types[owners[k]] in ("pipe", "cylinder") for k in (i, j))
+        ):
+            pairs.add(frozenset((owners[i], owners[j])))
+    return pairs
 
 
 def contiguous_pipes(model: Model, graph: dict[str, set[str]], pipe_ids) -> list[tuple]:

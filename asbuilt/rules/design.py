@@ -46,6 +46,22 @@ def _ends(geometry):
     return None
 
 
+def _length_stderr(comp) -> float | None:
+    """Standard error of a pipe's length, metres.
+
+    A merged pipe (in a spool) ends where its fittings are, placed by the neighbouring axes: each
+    end is known to about the fit's centre standard error, so the length to ``sqrt(2)`` times it.
+    A free pipe's length is its scanned extent: the fit's ``stderr["length"]``.
+    """
+    fit = comp.fit
+    if fit is None:
+        return None
+    centre = stderr_value(fit.stderr, "center")
+    if comp.spool is not None and centre is not None:
+        return float(np.sqrt(2.0) * centre)
+    return stderr_value(fit.stderr, "length")
+
+
 def _line_distance(points, start, axis) -> float:
     rel = np.asarray(points) - start
     return float(np.max(np.linalg.norm(rel - np.outer(rel @ axis, axis), axis=1)))
@@ -98,7 +114,7 @@ def _check_pipe(ctx, designed, comp):
     length = float(np.linalg.norm(ends[1] - ends[0]))
     tol, standard = _length_tolerance(ctx, designed.nominal or comp.nominal)
     off = abs(length - designed.length)
-    se = stderr_value(fit.stderr, "length") if fit is not None else None
+    se = _length_stderr(comp)
     _emit(
         ctx,
         comp,

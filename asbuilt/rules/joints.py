@@ -16,7 +16,7 @@ from asbuilt.findings import Suggestion
 
 from ._catalog import SizeTable, nps_value
 from ._context import Context, mm, stderr_value, verdict
-from ._graph import adjacency, end_pairs, linked_pairs
+from ._graph import adjacency, inferred_pairs, linked_pairs
 
 __all__ = ["CHECKS", "joint_geometry"]
 
@@ -109,7 +109,7 @@ def check_joint_gap(ctx: Context, table: SizeTable | None) -> None:
     snap = float(ctx.general("angle_snap_deg"))
     touch = float(ctx.opt("clash", "touch_distance"))
     pipes = {c.id: c for c in ctx.pipes}
-    near = set(end_pairs(list(pipes.values()), float(ctx.general("joint_distance"))))
+    near = inferred_pairs(ctx.model, touch, float(ctx.general("joint_distance")))
     near |= {p for p in linked_pairs(ctx.model) if p <= set(pipes)}
     joined = adjacency(ctx.model, touch)
     for pair in sorted(near, key=sorted):

@@ -1,0 +1,211 @@
+"""Alignment rules: limits computed by hand from AISC 303 (H/500), ACI 117-10 and IPC 704.1."""
+
+import numpy as np
+import pytest
+from rules_builders import B36, column, model, pipe, tilted
+
+from asbuilt.rules import check_model, load_rules, loads_rules
+
+
+def only(findings, slug):
+    return [f for f in findings if f.slug == slug]
+
+
+def run(*components, config=None):
+    return check_model(model(*components), config or load_rules(), catalog=B36)
+
+
+# -- out-of-plumb --------------------------------------------------------------------------------
+
+H = 3.0
+STEEL = H / 500  # 6 mm
+
+
+def lean_deg(lean_m, height=H):
+    return float(np.degrees(np.arctan(lean_m / height)))
+
+
+@pytest.mark.parametrize(
+    "lean_m, axes_deg, expected",
+    [
+        (0.0, 0.02, None),  # plumb, well measured
+        (0.005, 0.02, None),  # 5 mm < 6 mm
+        (0.0069, 0.02, "unverifiable"),  # over by 0.9 mm < 2 x 1.05 mm
+        (0.0085, 0.02, "error"),  # over by 2.5 mm > 2 x 1.05 mm
+        (0.0, 0.1, "unverifiable"),  # +-5.2 mm: cannot resolve 6 mm (the paper's sparse case)
+        (0.030, 0.1, "error"),  # a clear 1:100 lean is an error even from a sparse scan
+    ],
+)
+def test_steel_column_plumb_edges(lean_m, axes_deg, expected):
+    comp = column("C1", [0, 0, 0], lean_deg(lean_m), H, axes_deg=axes_deg)
+    found = only(run(comp), "out-of-plumb")
+    if expected is None:
+        assert not found
+        return
+    (f,) = found
+    assert f.measured == pytest.approx(lean_m, abs=1e-9)
+    assert f.allowed == pytest.approx(STEEL)
+    assert f.stderr == pytest.approx(H * np.radians(axes_deg))
+    assert f.unit == "m"
+    if expected == "error":
+        assert f.severity == "error" and not f.unverifiable
+        assert "1:500" in f.message and "AISC 303" in f.message
+    else:
+        assert f.severity == "warning" and f.unverifiable
+        assert f.message.startswith("cannot verify out-of-plumb:")
+        assert "second face" in f.suggestions[0].description
+
+
+@pytest.mark.parametrize(
+    "label, height, lean_m, allowed",
+    [
+        ("concrete column", 3.0, 0.0085, 0.009),  # 0.3% x 3 m = 9 mm: passes where steel fails
+        ("RC pier", 12.0, 0.026, 0.025),  # 0.3% x 12 m = 36 mm, capped at 25 mm
+        ("steel HSS", 3.0, 0.0085, 0.006),
+    ],
+)
+def test_material_from_label(label, height, lean_m, allowed):
+    comp = column("C1", [0, 0, 0], lean_deg(lean_m, height), height, axes_deg=0.001, label=label)
+    found = only(run(comp), "out-of-plumb")
+    if lean_m <= allowed:
+        assert not found
+    else:
+        assert found[0].allowed == pytest.approx(allowed)
+
+
+def test_default_material_from_rules_file():
+    comp = column("C1", [0, 0, 0], lean_deg(0.0085), H, axes_deg=0.001)
+    config = loads_rules('[general]\ndefault_material = "concrete"')
+    assert not only(run(comp, config=config), "out-of-plumb")
+
+
+def test_plumb_uses_the_measured_axis_not_the_regularised_one():
+    from dataclasses import replace
+
+    from asbuilt.primitives import Cuboid
+
+    comp = column("C1", [0, 0, 0], lean_deg(0.02), H, axes_deg=0.01)
+    snapped = Cuboid(center=[0, 0, 1.5], axes=np.eye(3), size=[0.3, 0.3, H])
+    comp = replace(comp, geometry=snapped)  # merging made it vertical; the fit still leans
+    assert only(run(comp), "out-of-plumb")[0].severity == "error"
+
+
+def test_far_off_vertical_is_not_a_column():
+    comp = column("C1", [0, 0, 0], 30.0, H, axes_deg=0.01)
+    assert not only(run(comp), "out-of-plumb")
+
+
+def test_vertical_pipe_reports_only_clear_leans():
+    stub = pipe("P1", [0, 0, 0], [0, 0.0, 1.0], 0.1143, axis_deg=0.3)  # unresolvable
+    bent = pipe("P2", [1, 0, 0], [1.05, 0, 1.0], 0.1143, axis_deg=0.3)  # 50 mm in 1 m
+    found = only(run(stub, bent), "out-of-plumb")
+    assert [f.objects for f in found] == [("P2",)]
+
+
+# -- misaligned-axis -----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "angle, expected",
+    [(1.0, None), (1.99, None), (3.0, "warning"), (9.9, "warning"), (10.5, None), (45.0, None)],
+)
+def test_misaligned_off_vertical(angle, expected):
+    comp = column("C1", [0, 0, 0], angle, H, axes_deg=0.05)
+    found = only(run(comp), "misaligned-axis")
+    if expected is None:
+        assert not found
+    else:
+        (f,) = found
+        assert f.measured == pytest.approx(angle)
+        assert "off vertical" in f.message
+        assert f.suggestions[0].unambiguous
+
+
+def test_misaligned_uncertain_angle_is_unverifiable():
+    comp = column("C1", [0, 0, 0], 2.5, H, axes_deg=0.5)
+    (f,) = only(run(comp), "misaligned-axis")
+    assert f.unverifiable
+
+
+def test_misaligned_off_horizontal():
+    end = np.array([3 * np.cos(np.radians(4)), 0, 1 + 3 * np.sin(np.radians(4))])
+    (f,) = only(run(pipe("P1", [0, 0, 1], end, 0.1143, axis_deg=0.1)), "misaligned-axis")
+    assert "off horizontal" in f.message and f.measured == pytest.approx(4.0)
+
+
+def test_misaligned_in_plan_between_joined_pipes():
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", axis_deg=0.1)
+    t = np.radians(86.0)
+    b = pipe("P2", [2.05, 0, 1], [2.05 + 2 * np.cos(t), 2 * np.sin(t), 1], 0.1143, nominal="4",
+             axis_deg=0.1)
+    (f,) = only(run(a, b), "misaligned-axis")
+    assert f.objects == ("P1", "P2")
+    assert f.measured == pytest.approx(4.0)
+    assert "plan" in f.message
+
+
+def test_in_plan_check_can_be_switched_off():
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", axis_deg=0.1)
+    t = np.radians(86.0)
+    b = pipe("P2", [2.05, 0, 1], [2.05 + 2 * np.cos(t), 2 * np.sin(t), 1], 0.1143, nominal="4")
+    config = loads_rules("[misaligned-axis]\ncompare_in_plan = false")
+    assert not only(run(a, b, config=config), "misaligned-axis")
+
+
+def test_snap_tolerance_comes_from_the_rules_file():
+    comp = column("C1", [0, 0, 0], 3.0, H, axes_deg=0.05)
+    config = loads_rules("[general]\nangle_snap_deg = 4.0")
+    assert not only(run(comp, config=config), "misaligned-axis")
+
+
+# -- slope ---------------------------------------------------------------------------------------
+
+
+def sloped(cid, slope, nominal="4", axis_deg=0.02, label=None):
+    length = 4.0
+    return pipe(cid, [0, 0, 1], [length, 0, 1 + slope * length], 0.1143, nominal=nominal,
+                axis_deg=axis_deg, label=label)
+
+
+def test_slope_is_silent_without_a_spec():
+    assert not only(run(sloped("P1", 0.0)), "slope")
+
+
+@pytest.mark.parametrize(
+    "slope, axis_deg, expected",
+    [
+        (0.012, 0.02, None),
+        (0.010, 0.02, None),
+        (0.0095, 0.02, "unverifiable"),
+        (0.005, 0.02, "error"),
+        (0.020, 0.5, "unverifiable"),  # 2 x 8.7 mm/m > 10 mm/m: cannot verify 1%
+    ],
+)
+def test_required_slope(slope, axis_deg, expected):
+    config = loads_rules("[slope]\nrequired = 0.01")
+    found = only(run(sloped("P1", slope, axis_deg=axis_deg), config=config), "slope")
+    if expected is None:
+        assert not found
+    else:
+        (f,) = found
+        assert f.unverifiable == (expected == "unverifiable")
+        assert f.measured == pytest.approx(slope, rel=1e-6)
+
+
+@pytest.mark.parametrize("nominal, slope, flagged", [("2", 0.015, True), ("4", 0.015, False),
+                                                    ("8", 0.006, False), ("8", 0.003, True)])
+def test_ipc_704_by_size(nominal, slope, flagged):
+    config = loads_rules("[slope]\nuse_ipc_704 = true")
+    found = only(run(sloped("P1", slope, nominal=nominal), config=config), "slope")
+    assert bool(found) == flagged
+
+
+def test_slope_keywords_limit_the_rule_to_drains():
+    config = loads_rules('[slope]\nrequired = 0.01\nkeywords = ["drain"]')
+    found = only(run(sloped("P1", 0.0), sloped("P2", 0.0, label="drain line"), config=config),
+                 "slope")
+    assert [f.objects for f in found] == [("P2",)]
+
+
+def test_tilted_helper_is_a_unit_vector():
+    assert np.linalg.norm(tilted(3.0, 40.0)) == pytest.approx(1.0)

@@ -1,0 +1,127 @@
+"""clash: overlap volumes against closed forms (Steinmetz solid, lens, slab of a cylinder)."""
+
+import numpy as np
+import pytest
+from rules_builders import model, pipe
+
+from asbuilt.model import Bend, Component, Straight, Tee
+from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+from asbuilt.rules import check_model, loads_rules
+from asbuilt.rules.clash import bounds, candidate_pairs, inside, overlap_volume
+
+
+def volume(ga, gb, samples=1 << 14):
+    return overlap_volume(ga, gb, bounds(ga), bounds(gb), samples)
+
+
+def test_steinmetz_solid():
+    r = 0.05
+    a = Straight([-1, 0, 0], [1, 0, 0], r)
+    b = Straight([0, -1, 0], [0, 1, 0], r)
+    v, se, centroid = volume(a, b)
+    truth = 16 * r**3 / 3
+    assert abs(v - truth) < max(3 * se, 0.02 * truth)
+    np.testing.assert_allclose(centroid, 0, atol=0.005)
+
+
+def test_sphere_lens():
+    r, d = 0.5, 0.6
+    a, b = Sphere([0, 0, 0], r), Sphere([d, 0, 0], r)
+    truth = np.pi * (4 * r + d) * (2 * r - d) ** 2 / 12
+    v, se, _ = volume(a, b)
+    assert abs(v - truth) < max(3 * se, 0.02 * truth)
+
+
+def test_cylinder_through_box():
+    r, w = 0.1, 0.3
+    pipe_geom = Cylinder([0, 0, 0], [1, 0, 0], r, 4.0)
+    box = Cuboid([0, 0, 0], np.eye(3), [w, 1.0, 1.0])
+    v, se, _ = volume(pipe_geom, box)
+    truth = np.pi * r**2 * w
+    assert abs(v - truth) < max(3 * se, 0.02 * truth)
+
+
+def test_disjoint_boxes_have_no_volume():
+    a = Cuboid([0, 0, 0], np.eye(3), [1, 1, 1])
+    b = Cuboid([2, 0, 0], np.eye(3), [1, 1, 1])
+    assert volume(a, b)[0] == 0.0
+
+
+@pytest.mark.parametrize(
+    "geometry, point, expected",
+    [
+        (Straight([0, 0, 0], [1, 0, 0], 0.1), [0.5, 0.05, 0], True),
+        (Straight([0, 0, 0], [1, 0, 0], 0.1), [1.05, 0, 0], False),
+        (Bend([1, 0, 0], [0, 1, 0], [0, 0, 0], 0.1), [np.sqrt(0.5), np.sqrt(0.5), 0], True),
+        (Bend([1, 0, 0], [0, 1, 0], [0, 0, 0], 0.1), [-np.sqrt(0.5), np.sqrt(0.5), 0], False),
+        (Tee([0, 0, 0], [-1, 0, 0], [1, 0, 0], [0, 1, 0], 0.1, 0.05), [0, 0.5, 0.04], True),
+        (Tee([0, 0, 0], [-1, 0, 0], [1, 0, 0], [0, 1, 0], 0.1, 0.05), [0, 0.5, 0.07], False),
+        (Hull(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]),
+              [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]), [0.1, 0.1, 0.1], True),
+        (Plane([0, 0, 0], [0, 0, 1], [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]),
+         [0.5, 0.5, 0.004], True),
+        (Plane([0, 0, 0], [0, 0, 1], [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]),
+         [0.5, 0.5, 0.006], False),
+    ],
+)
+def test_inside(geometry, point, expected):
+    assert bool(inside(geometry, np.array([point]))[0]) == expected
+
+
+def test_clash_between_crossing_pipes_is_an_error():
+    a = pipe("P1", [-1, 0, 1], [1, 0, 1], 0.1143)
+    b = pipe("P2", [0, -1, 1.02], [0, 1, 1.02], 0.1143)
+    (f,) = [f for f in check_model(model(a, b)) if f.slug == "clash"]
+    assert f.severity == "error" and f.objects == ("P1", "P2")
+    assert f.unit == "m3" and f.measured > 1e-4
+    assert "cm3" in f.message
+
+
+def test_pipes_clear_of_each_other_do_not_clash():
+    a = pipe("P1", [-1, 0, 1], [1, 0, 1], 0.1143)
+    b = pipe("P2", [0, -1, 1.116], [0, 1, 1.116], 0.1143)  # 1.7 mm of clearance
+    assert not [f for f in check_model(model(a, b)) if f.slug == "clash"]
+
+
+def test_touching_at_a_fitting_is_not_a_clash():
+    r = 0.1143 / 2
+    a = pipe("P1", [0, 0, 1], [1.848, 0, 1], 0.1143)
+    elbow = Component(id="E1", type="elbow", geometry=Bend([1.848, 0, 1], [2, 0.152, 1],
+                                                            [1.848, 0.152, 1], r))
+    b = pipe("P2", [2, 0.152, 1], [2, 2, 1], 0.1143)
+    assert not [f for f in check_model(model(a, elbow, b)) if f.slug == "clash"]
+
+
+def test_min_volume_is_configurable():
+    a = pipe("P1", [-1, 0, 1], [1, 0, 1], 0.1143)
+    b = pipe("P2", [0, -1, 1.11], [0, 1, 1.11], 0.1143)  # a shallow graze
+    config = loads_rules("[clash]\nmin_volume = 0.001")
+    assert not [f for f in check_model(model(a, b), config) if f.slug == "clash"]
+
+
+def brute_pairs(boxes):
+    out = []
+    for i in range(len(boxes)):
+        for j in range(i + 1, len(boxes)):
+            if np.all(boxes[i, 0] <= boxes[j, 1]) and np.all(boxes[j, 0] <= boxes[i, 1]):
+                out.append((i, j))
+    return out
+
+
+def test_broad_phase_matches_brute_force():
+    rng = np.random.default_rng(3)
+    lo = rng.uniform(0, 10, (300, 3))
+    boxes = np.stack([lo, lo + rng.uniform(0.05, 1.0, (300, 3))], axis=1)
+    assert sorted(candidate_pairs(boxes)) == brute_pairs(boxes)
+
+
+def test_thousand_objects_grid_has_no_clash():
+    comps = []
+    for i in range(10):
+        for j in range(10):
+            for k in range(10):
+                c = [i * 0.5, j * 0.5, k * 0.5]
+                comps.append(Component(id=f"B{i}-{j}-{k}", type="cuboid",
+                                       geometry=Cuboid(c, np.eye(3), [0.3, 0.3, 0.3])))
+    config = loads_rules('select = ["clash"]')
+    assert check_model(model(*comps), config) == ()

@@ -1,0 +1,102 @@
+"""design-deviation, missing-component, extra-component; PFI ES-3 length tolerances."""
+
+import json
+
+import numpy as np
+import pytest
+from rules_builders import column, model, pipe
+
+from asbuilt.design import loads_design
+from asbuilt.rules import check_model
+
+
+def design(**lists):
+    return loads_design(json.dumps({"units": "mm", **lists}))
+
+
+def findings(built, the_design, slug=None):
+    out = check_model(built, None, the_design)
+    return [f for f in out if slug is None or f.slug == slug]
+
+
+@pytest.mark.parametrize(
+    "nominal, built_length, expected",
+    [
+        ("4", 2.0025, None),  # 2.5 mm within +-3 mm (NPS <= 10)
+        ("4", 2.006, "error"),  # 6 mm off: beyond 3 + 2 x 1 mm
+        ("12", 2.0045, None),  # 4.5 mm within +-5 mm (NPS 12-24)
+        ("12", 2.009, "error"),
+    ],
+)
+def test_spool_length_pfi_es3(nominal, built_length, expected):
+    od = {"4": 0.1143, "12": 0.3238}[nominal]
+    built = model(pipe("P1", [0, 0, 1], [built_length, 0, 1], od, nominal=nominal,
+                       length_se=0.001))
+    d = design(pipes=[{"id": "D1", "nominal": nominal, "start": [0, 0, 1000],
+                       "end": [2000, 0, 1000]}])
+    found = [f for f in findings(built, d, "design-deviation") if "length" in f.message]
+    if expected is None:
+        assert not found
+    else:
+        (f,) = found
+        assert f.severity == "error"
+        assert "PFI ES-3" in f.message and f"NPS {nominal}" in f.message
+
+
+def test_perfect_spool_matches_design_without_findings():
+    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.001),
+                  pipe("P2", [2, 0, 1], [2, 2, 1], 0.1143, nominal="4", length_se=0.001))
+    d = design(pipes=[
+        {"id": "D1", "nominal": "4", "start": [0, 0, 1000], "end": [2000, 0, 1000]},
+        {"id": "D2", "nominal": "4", "start": [2000, 0, 1000], "end": [2000, 2000, 1000]},
+    ])
+    assert not [f for f in findings(built, d) if f.slug in ("design-deviation",
+                                                            "missing-component",
+                                                            "extra-component")]
+
+
+def test_offset_size_and_direction_deviations():
+    end = [2 * np.cos(np.radians(3)), 2 * np.sin(np.radians(3)), 1.05]
+    built = model(pipe("P1", [0, 0, 1.05], end, 0.0889, nominal="3", axis_deg=0.05))
+    d = design(pipes=[{"id": "D1", "nominal": "4", "start": [0, 0, 1000],
+                       "end": [2000, 0, 1000]}])
+    messages = " | ".join(f.message for f in findings(built, d, "design-deviation"))
+    assert "size deviates from design D1: NPS 3 built, NPS 4 designed" in messages
+    assert "position deviates" in messages
+    assert "direction deviates" in messages
+
+
+def test_missing_and_extra_components():
+    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4"),
+                  pipe("PX", [5, 5, 1], [6, 5, 1], 0.1143, nominal="4"))
+    d = design(pipes=[
+        {"id": "D1", "nominal": "4", "start": [0, 0, 1000], "end": [2000, 0, 1000]},
+        {"id": "D9", "nominal": "4", "start": [0, 3000, 1000], "end": [2000, 3000, 1000]},
+    ])
+    out = findings(built, d)
+    (missing,) = [f for f in out if f.slug == "missing-component"]
+    (extra,) = [f for f in out if f.slug == "extra-component"]
+    assert missing.objects == ("D9",) and missing.severity == "error"
+    assert extra.objects == ("PX",) and extra.severity == "warning"
+
+
+def test_column_position_and_section():
+    built = model(column("C1", [0.05, 0, 0], 0.0, 3.0, section=(0.32, 0.3), size_se=0.001))
+    d = design(columns=[{"id": "DC1", "base": [0, 0, 0], "top": [0, 0, 3000],
+                         "size": [300, 300]}])
+    messages = [f.message for f in findings(built, d, "design-deviation")]
+    assert any(m.startswith("position deviates from design DC1: axis 50.0 mm") for m in messages)
+    assert any("section" in m and "+20.0 mm" in m for m in messages)
+
+
+def test_design_rules_need_a_design():
+    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4"))
+    assert not [f for f in check_model(built) if f.code.startswith("AB6")]
+
+
+def test_design_may_be_a_path(tmp_path):
+    path = tmp_path / "d.json"
+    path.write_text(json.dumps({"pipes": []}), encoding="utf-8")
+    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4"))
+    assert [f.slug for f in check_model(built, design=str(path))
+            if f.code.startswith("AB6")] == ["extra-component"]

@@ -1,0 +1,104 @@
+"""--fix semantics: accept every unambiguous suggestion; re-checking finds none of what it fixed."""
+
+import numpy as np
+import pytest
+from rules_builders import B36, column, model, pipe
+from test_sizes import scan_with_hint
+
+from asbuilt.rules import apply_fixes, check_model
+from asbuilt.rules.fixes import rotate_geometry
+
+
+def slugs(findings):
+    return sorted(f.slug for f in findings)
+
+
+def fix_and_recheck(built):
+    before = check_model(built, catalog=B36)
+    fixed, changes = apply_fixes(built, before)
+    after = check_model(fixed, catalog=B36)
+    return before, fixed, changes, after
+
+
+@pytest.mark.parametrize("angle", [3.0, 6.0, 9.0])
+def test_misaligned_column_is_made_vertical(angle):
+    built = model(column("C1", [0, 0, 0], angle, 3.0, axes_deg=0.05))
+    before, fixed, changes, after = fix_and_recheck(built)
+    assert "misaligned-axis" in slugs(before)
+    assert "misaligned-axis" not in slugs(after)
+    geom = fixed.component("C1").geometry
+    long_axis = geom.axes[int(np.argmax(geom.size))]
+    assert abs(long_axis[2]) == pytest.approx(1.0)
+    np.testing.assert_allclose(geom.center, built.component("C1").geometry.center)
+    assert len(changes) == 1 and changes[0].startswith("C1: make C1's axis vertical")
+    (corr,) = fixed.component("C1").corrections
+    assert corr.size == pytest.approx(angle) and corr.unit == "deg"
+    # the column still leans as measured: the fix changed the model, not the measurement
+    assert "out-of-plumb" in slugs(after)
+
+
+def test_misaligned_horizontal_pipe_is_levelled():
+    t = np.radians(5)
+    built = model(pipe("P1", [0, 0, 1], [2 * np.cos(t), 0, 1 + 2 * np.sin(t)], 0.1143,
+                       nominal="4", axis_deg=0.1))
+    before, fixed, _, after = fix_and_recheck(built)
+    assert "misaligned-axis" in slugs(before) and "misaligned-axis" not in slugs(after)
+    geom = fixed.component("P1").geometry
+    assert geom.start[2] == pytest.approx(geom.end[2])
+    assert geom.length == pytest.approx(2.0)
+
+
+def test_plan_misalignment_is_fixed():
+    t = np.radians(85.0)
+    built = model(
+        pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", axis_deg=0.1),
+        pipe("P2", [2.05, 0, 1], [2.05 + 2 * np.cos(t), 2 * np.sin(t), 1], 0.1143, nominal="4",
+             axis_deg=0.1),
+    )
+    before, fixed, _, after = fix_and_recheck(built)
+    assert "misaligned-axis" in slugs(before) and "misaligned-axis" not in slugs(after)
+    np.testing.assert_allclose(fixed.component("P2").geometry.direction, [0, 1, 0], atol=1e-9)
+
+
+def test_contiguous_size_is_shared():
+    built = model(
+        pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", od_fit=0.1146, status="snapped",
+             od_stderr=0.0004),
+        pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.0889, nominal="3", od_fit=0.1120, status="snapped",
+             od_stderr=0.004),
+    )
+    before, fixed, changes, after = fix_and_recheck(built)
+    assert "contiguous-diameter-mismatch" in slugs(before)
+    assert "contiguous-diameter-mismatch" not in slugs(after)
+    p2 = fixed.component("P2")
+    assert p2.nominal == "4" and 2 * p2.geometry.outer_radius == pytest.approx(0.1143)
+    assert p2.snap["status"] == "snapped"
+    assert any("P2" in c and "NPS 4" in c for c in changes)
+
+
+def test_hint_mismatch_fix_keeps_the_fitted_size():
+    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143), scan=scan_with_hint("P1", '3"'))
+    before, fixed, _, after = fix_and_recheck(built)
+    assert "hint-mismatch" in slugs(before) and "hint-mismatch" not in slugs(after)
+    assert fixed.component("P1").nominal == "4"
+    assert fixed.component("P1").snap["hint_rejected"] is True
+
+
+def test_ambiguous_suggestions_are_not_applied():
+    built = model(pipe("P3", [0, 0, 1], [2, 0, 1], 0.1182, status="no-size"))
+    before, fixed, changes, after = fix_and_recheck(built)
+    assert changes == []
+    assert slugs(before) == slugs(after)
+    assert fixed.component("P3").nominal is None
+
+
+def test_rotation_is_rigid():
+    from asbuilt.model import Bend
+
+    bend = Bend([1, 0, 0], [0, 1, 0], [0, 0, 0], 0.05)
+    t = np.radians(30)
+    r = np.array([[np.cos(t), -np.sin(t), 0], [np.sin(t), np.cos(t), 0], [0, 0, 1]])
+    turned = rotate_geometry(bend, r, [0, 0, 0])
+    assert turned.bend_radius == pytest.approx(1.0)
+    assert turned.angle_deg == pytest.approx(90.0)
+    np.testing.assert_allclose(turned.start, [np.cos(t), np.sin(t), 0])

@@ -1,0 +1,70 @@
+"""joint-gap: gaps measured by hand; elbow centre-to-end from ASME B16.9 (NPS 4 LR: 152 mm)."""
+
+import numpy as np
+import pytest
+from rules_builders import B36, model, pipe
+
+from asbuilt.model import Bend, Component
+from asbuilt.rules import check_model
+from asbuilt.rules.joints import joint_geometry
+
+
+def gaps(*components):
+    return [f for f in check_model(model(*components), catalog=B36) if f.slug == "joint-gap"]
+
+
+@pytest.mark.parametrize(
+    "gap, expected",
+    [(0.0, None), (0.002, None), (0.0029, None), (0.05, "gap"), (0.12, "gap"), (-0.04, "overlap")],
+)
+def test_collinear_gap(gap, expected):
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    b = pipe("P2", [2 + gap, 0, 1], [4, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    found = gaps(a, b)
+    if expected is None:
+        assert not found
+        return
+    (f,) = found
+    assert f.message.startswith(f"{expected} of {abs(gap) * 1000:.1f} mm")
+    assert f.measured == pytest.approx(abs(gap))
+    assert f.objects == ("P1", "P2")
+
+
+def test_uncertain_ends_make_a_small_gap_unverifiable():
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.01)
+    b = pipe("P2", [2.02, 0, 1], [4, 0, 1], 0.1143, nominal="4", length_se=0.01)
+    (f,) = gaps(a, b)
+    assert f.unverifiable and f.severity == "warning"
+
+
+def test_elbow_distance_explains_a_corner():
+    # two NPS 4 pipes at 90 degrees whose ends stop 152 mm from the corner: an LR elbow fits
+    a = pipe("P1", [0, 0, 1], [2 - 0.152, 0, 1], 0.1143, nominal="4")
+    b = pipe("P2", [2, 0.152, 1], [2, 2, 1], 0.1143, nominal="4")
+    assert not gaps(a, b)
+
+
+def test_corner_without_room_for_an_elbow_is_flagged():
+    a = pipe("P1", [0, 0, 1], [2 - 0.06, 0, 1], 0.1143, nominal="4", length_se=0.001)
+    b = pipe("P2", [2, 0.06, 1], [2, 2, 1], 0.1143, nominal="4", length_se=0.001)
+    (f,) = gaps(a, b)
+    assert f.measured == pytest.approx(0.152 - 0.06)
+    assert f.message.startswith("overlap")
+
+
+def test_pipes_joined_through_a_fitting_are_not_checked():
+    a = pipe("P1", [0, 0, 1], [2 - 0.152, 0, 1], 0.1143, nominal="4")
+    elbow = Component(id="P1-P2", type="elbow", geometry=Bend(
+        [2 - 0.152, 0, 1], [2, 0.152, 1], [2 - 0.152, 0.152, 1], 0.1143 / 2))
+    b = pipe("P2", [2, 0.152, 1], [2, 2, 1], 0.1143, nominal="4")
+    assert not gaps(a, elbow, b)
+
+
+def test_joint_geometry_of_a_corner():
+    from asbuilt.model import Straight
+
+    geo = joint_geometry(Straight([0, 0, 0], [1, 0, 0], 0.05), Straight([1.2, 0.3, 0], [1.2, 2, 0],
+                                                                          0.05))
+    assert geo["angle_deg"] == pytest.approx(90.0)
+    np.testing.assert_allclose(geo["corner"], [1.2, 0, 0], atol=1e-12)
+    assert geo["da"] == pytest.approx(0.2) and geo["db"] == pytest.approx(0.3)

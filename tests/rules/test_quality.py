@@ -1,0 +1,82 @@
+import pytest
+from rules_builders import B36, column, cuboid_fit, model, pipe
+
+from asbuilt.model import Component
+from asbuilt.rules import check_model, loads_rules
+
+
+def only(comp, slug, config=None):
+    return [f for f in check_model(model(comp), config, catalog=B36) if f.slug == slug]
+
+
+@pytest.mark.parametrize("n, flagged", [(19, True), (20, False), (40, False)])
+def test_too_few_points_cylinder(n, flagged):
+    found = only(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, n=n), "too-few-points")
+    assert bool(found) == flagged
+    if flagged:
+        assert found[0].measured == n and found[0].allowed == 20
+        assert "1 more points" in found[0].suggestions[0].description
+
+
+@pytest.mark.parametrize("n, flagged", [(29, True), (30, False)])
+def test_too_few_points_cuboid(n, flagged):
+    assert bool(only(column("C1", [0, 0, 0], n=n), "too-few-points")) == flagged
+
+
+def test_point_counts_come_from_tolerances_overrides():
+    config = loads_rules("[general]\nrecommended_points_cylinder = 30")
+    assert only(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, n=24), "too-few-points", config)
+
+
+@pytest.mark.parametrize(
+    "options, reason",
+    [
+        ({"arc_deg": 60.0}, "visible arc 60 deg"),
+        ({"radius_se": 0.004}, "size known to"),
+    ],
+)
+def test_weak_cylinder(options, reason):
+    (f,) = only(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, **options), "weak-geometry")
+    assert reason in f.message
+
+
+def test_short_cylinder_is_weak():
+    (f,) = only(pipe("P1", [0, 0, 1], [0.08, 0, 1], 0.1143), "weak-geometry")
+    assert "length/diameter 0.70" in f.message
+
+
+def test_good_cylinder_is_not_weak():
+    assert not only(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143), "weak-geometry")
+
+
+def test_one_face_cuboid_is_weak():
+    (f,) = only(column("C1", [0, 0, 0], faces=1), "weak-geometry")
+    assert "1 face seen" in f.message and "second face" in f.suggestions[0].description
+
+
+@pytest.mark.parametrize("rms_sigmas, flagged", [(1.0, False), (2.0, False), (4.0, True)])
+def test_poor_fit(rms_sigmas, flagged):
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, n=30, rms=0.002 * rms_sigmas)
+    found = only(comp, "poor-fit")
+    assert bool(found) == flagged
+    if flagged:
+        assert found[0].measured == pytest.approx(rms_sigmas)
+
+
+def test_poor_fit_needs_a_sensor_sigma():
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, rms=0.02, sigma_source="residuals")
+    assert not only(comp, "poor-fit")
+
+
+@pytest.mark.parametrize("rejected, flagged", [(0, False), (4, False), (5, False), (10, True)])
+def test_outliers(rejected, flagged):
+    found = only(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, n=25, rejected=rejected), "outliers")
+    assert bool(found) == flagged
+    if flagged:
+        assert "10 of 25 points (40%)" in found[0].message
+
+
+def test_components_without_fits_are_skipped():
+    fit = cuboid_fit([0, 0, 1], [0, 0, 1], (0.3, 0.3, 2.0), n=5)
+    comp = Component(id="X", type="cuboid", geometry=fit.primitive)
+    assert not only(comp, "too-few-points")
