@@ -1,0 +1,83 @@
+"""Synthetic fits for merge tests: FitResult objects built directly (no fitter needed)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from asbuilt.fit.result import FitReport, FitResult, ObjectFit
+from asbuilt.primitives import Cuboid, Cylinder
+from asbuilt.scan.model import Scan, ScanObject
+
+
+@dataclass
+class Pipe:
+    """A pipe as a test describes it: a segment (metres) and a fitted OD with its error."""
+
+    id: str
+    start: tuple
+    end: tuple
+    od: float
+    se_radius: float = 0.0005
+    nominal: str | None = None
+    group: str | None = None
+    label: str | None = None
+
+
+def cylinder_fit(start, end, od, se_radius=0.0005) -> FitResult:
+    start, end = np.asarray(start, float), np.asarray(end, float)
+    axis = (end - start) / np.linalg.norm(end - start)
+    cyl = Cylinder(
+        center=(start + end) / 2,
+        axis=axis,
+        radius=od / 2,
+        length=float(np.linalg.norm(end - start)),
+    )
+    n = 20
+    return FitResult(
+        primitive=cyl,
+        residuals=np.zeros(n),
+        inliers=np.ones(n, bool),
+        stderr={"radius": se_radius, "axis_deg": 0.2, "center": 0.001, "length": 0.01},
+        sigma=0.002,
+        sigma_source="sensor",
+        method="synthetic",
+    )
+
+
+def report_of(pipes, links=(), extra=()) -> FitReport:
+    """A FitReport of the given Pipe descriptions (plus extra (ScanObject, FitResult) pairs)."""
+    objects, fits = [], []
+    for k, p in enumerate(pipes):
+        obj = ScanObject(
+            id=p.id,
+            kind="cylinder",
+            points=np.zeros((6, 3)),
+            index=k,
+            group=p.group,
+            label=p.label,
+            nominal=p.nominal,
+        )
+        objects.append(obj)
+        fits.append(ObjectFit(obj, cylinder_fit(p.start, p.end, p.od, p.se_radius), "cylinder"))
+    for obj, result in extra:
+        objects.append(obj)
+        fits.append(ObjectFit(obj, result, obj.kind))
+    scan = Scan(units="m", objects=tuple(objects), links=tuple(links), name="test")
+    return FitReport(scan=scan, fits=tuple(fits))
+
+
+def box_fit() -> tuple[ScanObject, FitResult]:
+    box = Cuboid(center=[5, 5, 1], axes=np.eye(3), size=[0.4, 0.4, 2.0])
+    obj = ScanObject(id="C1", kind="cuboid", points=np.zeros((8, 3)), index=99)
+    res = FitResult(
+        primitive=box,
+        residuals=np.zeros(8),
+        inliers=np.ones(8, bool),
+        stderr={},
+        sigma=0.002,
+        sigma_source="sensor",
+        method="synthetic",
+    )
+    return obj, res

@@ -1,0 +1,121 @@
+"""Joints between pipes: inferred from geometry and taken from the scan's links."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from asbuilt.merge.contiguity import find_joints, joint_pairs, line_closest_points, pipe_ends
+
+OD = 0.1143
+
+
+def segments(*pairs):
+    """centers, axes, lengths of pipes given as (start, end) pairs."""
+    starts = np.array([p[0] for p in pairs], float)
+    ends = np.array([p[1] for p in pairs], float)
+    vec = ends - starts
+    lengths = np.linalg.norm(vec, axis=1)
+    return (starts + ends) / 2, vec / lengths[:, None], lengths
+
+
+def joints_of(*pairs, links=(), ods=None):
+    c, a, l = segments(*pairs)  # noqa: E741
+    ods = np.full(len(c), OD) if ods is None else np.asarray(ods)
+    return find_joints(c, a, l, ods, links=links)
+
+
+def test_pipe_ends():
+    c, a, l = segments(((0, 0, 0), (2, 0, 0)))  # noqa: E741
+    points, outward = pipe_ends(c, a, l)
+    assert np.allclose(points[0], [[0, 0, 0], [2, 0, 0]])
+    assert np.allclose(outward[0], [[-1, 0, 0], [1, 0, 0]])
+
+
+def test_line_closest_points():
+    s, t, q1, q2 = line_closest_points(
+        np.zeros(3), np.array([1.0, 0, 0]), np.array([2.0, -1, 0.1]), np.array([0, 1.0, 0])
+    )
+    assert (s, t) == pytest.approx((2.0, 1.0))
+    assert q1 == pytest.approx([2, 0, 0]) and q2 == pytest.approx([2, 0, 0.1])
+
+
+def test_elbow_inferred_with_a_gap_before_the_fitting():
+    joints = joints_of(((0, 0, 0), (1.8, 0, 0)), ((2, 0.2, 0), (2, 2, 0)))
+    assert [(j.kind, j.ends) for j in joints] == [("elbow", ((0, 1), (1, 0)))]
+
+
+@pytest.mark.parametrize(
+    "pairs",
+    [
+        # too far from the meeting point (0.6 m each)
+        (((0, 0, 0), (1.4, 0, 0)), ((2, 0.6, 0), (2, 2, 0))),
+        # axes pass 0.1 m apart (skew), beyond half a radius
+        (((0, 0, 0), (1.8, 0, 0)), ((2, 0.2, 0.1), (2, 2, 0.1))),
+        # parallel pipes side by side in a rack
+        (((0, 0, 0), (2, 0, 0)), ((0, 0.3, 0), (2, 0.3, 0))),
+        # collinear but both ends point the same way (overlapping side by side)
+        (((0, 0, 0), (2, 0, 0)), ((1, 0, 0), (3, 0, 0))),
+    ],
+)
+def test_no_joint(pairs):
+    assert joints_of(*pairs) == ()
+
+
+def test_inline_joint_and_its_gap_limit():
+    assert joints_of(((0, 0, 0), (1.9, 0, 0)), ((2.1, 0, 0), (4, 0, 0)))[0].kind == "inline"
+    assert joints_of(((0, 0, 0), (1.0, 0, 0)), ((2.1, 0, 0), (4, 0, 0))) == ()
+
+
+def test_a_link_joins_pipes_beyond_the_distance_limits():
+    pairs = (((0, 0, 0), (1.4, 0, 0)), ((2, 0.6, 0), (2, 2, 0)))
+    joints = joints_of(*pairs, links=[(0, 1)])
+    assert len(joints) == 1 and joints[0].kind == "elbow" and joints[0].explicit
+
+
+def test_a_link_without_meeting_geometry_is_still_a_contact():
+    pairs = (((0, 0, 0), (2, 0, 0)), ((0, 0.3, 0), (2, 0.3, 0)))
+    joints = joints_of(*pairs, links=[(1, 0)])
+    assert [j.kind for j in joints] == ["contact"]
+    assert joint_pairs(joints) == [(0, 1)]
+
+
+def test_tee_at_an_inline_joint():
+    joints = joints_of(
+        ((0, 0, 0), (1.9, 0, 0)), ((2.1, 0, 0), (4, 0, 0)), ((2, 0.15, 0), (2, 2, 0))
+    )
+    assert len(joints) == 1
+    tee = joints[0]
+    assert tee.kind == "tee" and tee.through is None
+    assert tee.branch == (2, 0)
+    assert set(tee.pipes) == {0, 1, 2}
+
+
+def test_tee_in_the_middle_of_a_pipe():
+    joints = joints_of(((0, 0, 0), (4, 0, 0)), ((2, 0.15, 0), (2, 2, 0)))
+    assert [(j.kind, j.through, j.ends) for j in joints] == [("tee", 0, ((1, 0),))]
+
+
+def test_a_slanted_branch_is_not_a_tee():
+    joints = joints_of(((0, 0, 0), (4, 0, 0)), ((2.1, 0.1, 0), (3.5, 1.5, 0)))
+    assert all(j.kind != "tee" for j in joints)
+
+
+def test_the_straight_pair_is_the_run_and_the_third_pipe_the_branch():
+    # P2 ends where P1 and P3 meet: P1-P3 (straight on, nearest) is the run, P2 the branch
+    joints = joints_of(
+        ((0, 0, 0), (1.95, 0, 0)), ((2.0, -1.8, 0), (2.0, -0.2, 0)), ((2.05, 0, 0), (4, 0, 0))
+    )
+    assert [(j.kind, j.ends) for j in joints] == [("tee", ((0, 1), (2, 0), (1, 1)))]
+
+
+def test_many_pipes_are_paired_locally():
+    """A grid of 200 separate L-pairs: exactly 200 elbows and no cross-talk."""
+    pairs = []
+    for k in range(200):
+        ox, oy = (k % 20) * 5.0, (k // 20) * 5.0
+        pairs.append(((ox, oy, 0), (ox + 1.8, oy, 0)))
+        pairs.append(((ox + 2, oy + 0.2, 0), (ox + 2, oy + 2, 0)))
+    joints = joints_of(*pairs)
+    assert len(joints) == 200
+    assert all(j.kind == "elbow" and j.pipes[1] - j.pipes[0] == 1 for j in joints)

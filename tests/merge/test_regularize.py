@@ -1,0 +1,128 @@
+"""Orientation regularisation (GlobFit-style relations made exact) and line alignment."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from asbuilt.merge.contiguity import line_closest_points
+from asbuilt.merge.regularize import align_lines, perpendicular_basis, regularize_directions
+
+
+def tilted(base, towards, degrees):
+    """Unit vector ``base`` rotated by ``degrees`` towards ``towards`` (both unit, orthogonal)."""
+    a = np.radians(degrees)
+    return np.cos(a) * np.asarray(base, float) + np.sin(a) * np.asarray(towards, float)
+
+
+X, Y, Z = np.eye(3)
+
+
+@pytest.mark.parametrize(
+    ("axis", "expected", "relation", "angle"),
+    [
+        (tilted(Z, X, 1.5), Z, "vertical", 1.5),
+        (tilted(X, Z, 1.0), X, "horizontal", 1.0),
+        (tilted(X, Z, -1.9), X, "horizontal", 1.9),
+        (tilted(Z, X, 3.0), tilted(Z, X, 3.0), None, 0.0),  # beyond 2 degrees: left alone
+        (tilted(X, Z, 5.0), tilted(X, Z, 5.0), None, 0.0),
+    ],
+)
+def test_single_axis(axis, expected, relation, angle):
+    result = regularize_directions([axis], [1.0], tol_deg=2.0, names=["P1"])
+    assert result.axes[0] == pytest.approx(expected, abs=1e-12)
+    assert result.angles_deg[0] == pytest.approx(angle, abs=1e-9)
+    assert (relation in result.relations[0]) if relation else not result.relations[0]
+
+
+def test_tolerance_is_configurable():
+    axis = tilted(Z, X, 3.0)
+    result = regularize_directions([axis], [1.0], tol_deg=5.0)
+    assert result.axes[0] == pytest.approx(Z)
+
+
+def test_near_parallel_axes_become_exactly_parallel():
+    a = tilted(tilted(X, Y, 30), Z, 5)
+    b = tilted(tilted(X, Y, 31), Z, 5)
+    result = regularize_directions([a, b], [2.0, 1.0], tol_deg=2.0, names=["P1", "P2"])
+    assert abs(result.axes[0] @ result.axes[1]) == pytest.approx(1.0, abs=1e-12)
+    assert "parallel to P1" in result.relations[1]
+    # the longer pipe moves less
+    assert result.angles_deg[0] < result.angles_deg[1]
+
+
+def test_opposite_senses_are_parallel_and_keep_their_sense():
+    result = regularize_directions([X, -tilted(X, Y, 1)], [1, 1], tol_deg=2.0)
+    assert result.axes[0] @ result.axes[1] == pytest.approx(-1.0)
+    assert result.axes[1] @ -X > 0.999
+    assert result.angles_deg == pytest.approx([0.5, 0.5])
+
+
+def test_near_perpendicular_horizontal_axes_become_exactly_perpendicular():
+    a = tilted(X, Y, 10)
+    b = tilted(X, Y, 98.5)  # 88.5 degrees from a
+    result = regularize_directions([a, b], [3.0, 1.0], tol_deg=2.0, names=["P1", "P2"])
+    assert result.axes[0] @ result.axes[1] == pytest.approx(0.0, abs=1e-12)
+    assert result.axes[1][2] == pytest.approx(0.0)
+    assert result.axes[0] == pytest.approx(a)  # the heavier one is the reference
+    assert "perpendicular to P1" in result.relations[1]
+
+
+def test_parallel_groups_are_forced_together_beyond_the_tolerance():
+    a, b = X, tilted(X, Y, 6.0)
+    loose = regularize_directions([a, b], [1, 1], tol_deg=2.0)
+    assert loose.axes[1] == pytest.approx(b)
+    forced = regularize_directions([a, b], [1, 1], tol_deg=2.0, parallel_groups=[[0, 1]])
+    assert forced.axes[0] @ forced.axes[1] == pytest.approx(1.0)
+    assert forced.cluster[0] == forced.cluster[1]
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.lists(
+        st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)), min_size=1, max_size=12
+    )
+)
+def test_regularised_axes_stay_unit_and_move_little(raw):
+    axes = np.array([v for v in raw if np.linalg.norm(v) > 0.1], float)
+    if len(axes) == 0:
+        return
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    result = regularize_directions(axes, np.ones(len(axes)), tol_deg=2.0)
+    assert np.allclose(np.linalg.norm(result.axes, axis=1), 1.0)
+    assert np.all(np.einsum("ij,ij->i", result.axes, axes) > 0)  # same sense
+    # clusters chain at most a few tolerances; nothing turns by a large angle
+    assert result.angles_deg.max() < 10.0
+
+
+def test_perpendicular_basis():
+    for axis in (X, Y, Z, np.array([1, 1, 1]) / np.sqrt(3)):
+        u, v = perpendicular_basis(axis)
+        assert np.allclose([u @ axis, v @ axis, u @ v], 0)
+        assert np.allclose([u @ u, v @ v], 1)
+
+
+def test_align_lines_makes_skew_lines_meet_and_moves_sideways_only():
+    centers = np.array([[0, 0, 0.0], [2, 1, 0.004]])
+    axes = np.array([X, Y])
+    new = align_lines(centers, axes, meets=[(0, 1)], coaxial=[])
+    _, _, q1, q2 = line_closest_points(new[0], axes[0], new[1], axes[1])
+    assert np.linalg.norm(q1 - q2) < 1e-9
+    for k in range(2):
+        assert (new[k] - centers[k]) @ axes[k] == pytest.approx(0.0, abs=1e-12)
+    # equal weights share the 4 mm
+    assert np.linalg.norm(new[0] - centers[0]) == pytest.approx(0.002, abs=1e-6)
+
+
+def test_align_lines_makes_parallel_lines_coaxial_weighted():
+    centers = np.array([[0, 0, 0.0], [3, 0.003, 0.0]])
+    new = align_lines(centers, np.array([X, X]), meets=[], coaxial=[(0, 1)], weights=[3.0, 1.0])
+    assert new[0][1] == pytest.approx(new[1][1], abs=1e-9)
+    assert new[0][1] == pytest.approx(0.00075, abs=1e-7)  # the heavier line moves a quarter
+
+
+def test_align_lines_without_constraints_changes_nothing():
+    centers = np.array([[1.0, 2, 3]])
+    assert np.array_equal(align_lines(centers, np.array([Z]), [], []), centers)
