@@ -158,7 +158,7 @@ class LineChannel:
                         "and line settings"
                     ) from None
 
-    def read_line(self, timeout: float | None = None, expecting: str = "a reply") -> str:
+    def read_line(self, timeout: float | None = None, expecting: str = "reply") -> str:
         """Return the next non-empty line without its terminator.
 
         Parameters

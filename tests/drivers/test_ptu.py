@@ -1,0 +1,158 @@
+"""FLIR/DP pan-tilt driver against scripted replies and against the simulator."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from asbuilt.drivers.ptu import PanTiltUnit, PTUCommandError, PTULimitError, PTULimits
+from asbuilt.drivers.simrig import register_rig
+from driver_helpers import wall_rig
+
+from asbuilt.errors import DeviceProtocolError, DeviceTimeout
+
+ARCSEC = math.pi / 180 / 3600
+
+# An E-series-like unit: not the D46's resolution or limits, verbose feedback and echo on.
+INIT_VERBOSE_ECHO = [
+    ("FT", b"FT *\r\n"),  # echo on: the command comes back before the reply
+    ("ED", b"ED *\r\n"),
+    ("I", b"*\r\n"),
+    ("PN", b"* -7000\r\n"),
+    ("PX", b"* 7000\r\n"),
+    ("TN", [b"* -3", b"000\r\n"]),  # a reply split in pieces
+    ("TX", b"* 1500\r\n"),
+    ("PR", b"* 46.2857\r\n"),
+    ("TR", b"* 11.5714\r\n"),
+]
+
+
+def _unit(scripted, script, timeout=0.3):
+    channel, port = scripted(script, timeout=timeout)
+    return PanTiltUnit(channel, move_timeout=timeout), port
+
+
+def test_initialize_reads_resolution_and_limits_from_the_unit(scripted):
+    ptu, port = _unit(scripted, INIT_VERBOSE_ECHO)
+    limits = ptu.initialize()
+    assert limits == PTULimits(-7000, 7000, -3000, 1500, 46.2857, 11.5714)
+    assert port.written[:2] == ["FT", "ED"]  # terse feedback and echo off first
+
+
+def test_verbose_replies_are_parsed(scripted):
+    script = [
+        ("FT", b"*\r\n"),
+        ("ED", b"*\r\n"),
+        ("I", b"*\r\n"),
+        ("PN", b"* Minimum Pan position is -3090\r\n"),
+        ("PX", b"* Maximum Pan position is 3090\r\n"),
+        ("TN", b"* Minimum Tilt position is -907\r\n"),
+        ("TX", b"* Maximum Tilt position is 604\r\n"),
+        ("PR", b"* 185.1428 seconds arc per Pan position\r\n"),
+        ("TR", b"* 185.1428 seconds arc per Tilt position\r\n"),
+        ("PP", b"* Current Pan position is 120\r\n"),
+        ("TP", b"* Current Tilt position is -40\r\n"),
+    ]
+    ptu, _ = _unit(scripted, script)
+    ptu.initialize()
+    assert ptu.position_counts() == (120, -40)
+    pan, tilt = ptu.to_angles(120, -40)
+    assert pan == pytest.approx(120 * 185.1428 * ARCSEC)
+    assert tilt == pytest.approx(-40 * 185.1428 * ARCSEC)
+
+
+def test_move_sends_absolute_counts_and_awaits(scripted):
+    script = INIT_VERBOSE_ECHO + [("PP2000", b"*\r\n"), ("TP-1000", b"*\r\n"), ("A", b"*\r\n")]
+    ptu, port = _unit(scripted, script)
+    ptu.initialize()
+    pan, tilt = ptu.move_to(2000 * 46.2857 * ARCSEC, -1000 * 11.5714 * ARCSEC)
+    assert port.written[-3:] == ["PP2000", "TP-1000", "A"]
+    assert pan == pytest.approx(2000 * 46.2857 * ARCSEC)
+    assert tilt == pytest.approx(-1000 * 11.5714 * ARCSEC)
+
+
+@pytest.mark.parametrize("pan_counts, tilt_counts", [(7001, 0), (-7001, 0), (0, 1501), (0, -3001)])
+def test_targets_outside_the_limits_are_refused_before_sending(scripted, pan_counts, tilt_counts):
+    ptu, port = _unit(scripted, INIT_VERBOSE_ECHO)
+    ptu.initialize()
+    sent = len(port.written)
+    with pytest.raises(PTULimitError, match="outside the unit's limits"):
+        ptu.move_to(pan_counts * 46.2857 * ARCSEC, tilt_counts * 11.5714 * ARCSEC)
+    assert len(port.written) == sent
+
+
+def test_error_reply_becomes_a_command_error(scripted):
+    script = INIT_VERBOSE_ECHO + [("PP10", b"! Maximum allowable Pan position is 5\r\n")]
+    ptu, _ = _unit(scripted, script)
+    ptu.initialize()
+    with pytest.raises(
+        PTUCommandError, match="'PP10' refused: Maximum allowable Pan position is 5"
+    ):
+        ptu.command("PP10")
+
+
+@pytest.mark.parametrize(
+    "notice, axis", [(b"!P\r\n", "pan"), (b"!T\r\n", "tilt"), (b"!P!T\r\n", "pan and tilt")]
+)
+def test_asynchronous_limit_notice_becomes_a_limit_error(scripted, notice, axis):
+    script = INIT_VERBOSE_ECHO + [("A", notice + b"*\r\n")]
+    ptu, _ = _unit(scripted, script)
+    ptu.initialize()
+    with pytest.raises(PTULimitError, match=f"the {axis} axis hit its limit"):
+        ptu.await_completion()
+
+
+def test_reset_accepts_the_calibration_sweep_notices(scripted):
+    ptu, _ = _unit(scripted, [("R", b"!T!T!P!P*\r\n")])
+    assert ptu.command("R") == ""
+
+
+@pytest.mark.parametrize("reply", [b"hello\r\n", b"# 12\r\n"])
+def test_garbage_reply_is_a_protocol_error(scripted, reply):
+    ptu, _ = _unit(scripted, [("V", reply)])
+    with pytest.raises(DeviceProtocolError, match="neither"):
+        ptu.command("V")
+
+
+def test_query_without_number_is_a_protocol_error(scripted):
+    ptu, _ = _unit(scripted, [("PR", b"* lots\r\n")])
+    with pytest.raises(DeviceProtocolError, match="holds no number"):
+        ptu.query_number("PR")
+
+
+def test_silent_unit_times_out(scripted):
+    ptu, _ = _unit(scripted, [], timeout=0.2)
+    with pytest.raises(DeviceTimeout, match="no reply to 'FT'"):
+        ptu.initialize()
+
+
+# -- against the simulator over the sim-ptu:// URL ----------------------------------------------
+def test_driver_over_the_simulator_url(wall):
+    with PanTiltUnit.open("sim-ptu://wall", timeout=1.0) as ptu:
+        assert ptu.limits == PTULimits(-3090, 3090, -907, 604, 185.1428, 185.1428)
+        pan, tilt = ptu.move_to(math.radians(10), math.radians(-5))
+        assert ptu.position() == pytest.approx((pan, tilt))
+        assert ptu.position_counts() == (
+            round(math.radians(10) / (185.1428 * ARCSEC)),
+            round(math.radians(-5) / (185.1428 * ARCSEC)),
+        )
+        assert "Pan-Tilt" in ptu.version()
+
+
+def test_disabled_limits_let_the_unit_report_a_limit_hit(wall):
+    with PanTiltUnit.open("sim-ptu://wall", timeout=1.0) as ptu:
+        ptu.set_limit_enforcement(False)
+        ptu.command("PP3000")
+        with pytest.raises(PTULimitError, match="pan axis hit its limit"):
+            ptu.command("PO500")
+            ptu.await_completion()
+        assert ptu.position_counts()[0] == 3090
+
+
+def test_await_waits_for_a_finite_speed_move():
+    rig = register_rig("slow", wall_rig())
+    rig.speed = 20000.0  # positions per second: 0.1 s for 2000 positions
+    with PanTiltUnit.open("sim-ptu://slow", timeout=1.0, move_timeout=5.0) as ptu:
+        ptu.command("PP2000")
+        ptu.await_completion()
+        assert ptu.position_counts()[0] == 2000
