@@ -684,6 +684,7 @@ def fitting_dims(
         reducer = od
         notes.append("reducer length by rule = large-end OD")
     source = catalog.fitting_table.name if row is not None and catalog.fitting_table else "rule"
+    elbow45 = dims.get("elbow45_lr") if elbow_radius == "long" else None
     return FittingDims(
         bend_radius=radius,
         tee_run=tee_run,
@@ -691,4 +692,5 @@ def fitting_dims(
         reducer_length=reducer,
         source=source,
         notes=tuple(notes),
+        elbow45_end=elbow45,
     )

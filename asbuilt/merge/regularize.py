@@ -165,20 +165,9 @@ def regularize_directions(
         if not snapped:
             near_perp = [(f, label) for f, label in fixed if abs(90.0 - _angle(d, f)) <= tol_deg]
             if near_perp:
-                basis: list[np.ndarray] = []
-                for f, _ in near_perp:
-                    g = f - sum((f @ b) * b for b in basis)
-                    norm = np.linalg.norm(g)
-                    if norm > 1e-9:
-                        basis.append(g / norm)
-                projected = d - sum((d @ b) * b for b in basis)
-                norm = np.linalg.norm(projected)
-                if norm > 1e-9:
-                    d = projected / norm
-                    for _, label in near_perp:
-                        rel.append(
-                            "horizontal" if label == "vertical" else f"perpendicular to {label}"
-                        )
+                d, kept = _make_perpendicular(d, near_perp, tol_deg)
+                for label in kept:
+                    rel.append("horizontal" if label == "vertical" else f"perpendicular to {label}")
         lead_name = names[max(group, key=lambda m: weights[m])]
         fixed.append((d, lead_name))
         final_dirs.append(d)
@@ -193,6 +182,30 @@ def regularize_directions(
         new_axes[i] = d
         angles[i] = float(np.degrees(np.arccos(np.clip(float(d @ axes[i]), -1.0, 1.0))))
     return DirectionResult(new_axes, tuple(tuple(r) for r in relations), angles, cluster_of)
+
+
+def _project_out(d: np.ndarray, directions: list[np.ndarray]) -> np.ndarray | None:
+    basis: list[np.ndarray] = []
+    for f in directions:
+        g = f - sum((f @ b) * b for b in basis)
+        norm = np.linalg.norm(g)
+        if norm > 1e-9:
+            basis.append(g / norm)
+    projected = d - sum((d @ b) * b for b in basis)
+    norm = np.linalg.norm(projected)
+    return projected / norm if norm > 1e-9 else None
+
+
+def _make_perpendicular(d, near_perp, tol_deg):
+    """Project ``d`` to be exactly perpendicular to as many of the fixed directions as possible
+    (all of them, else the single first one that works) without turning it by more than
+    ``tol_deg``; return the new direction and the labels it was made perpendicular to."""
+    options = [near_perp] + [[item] for item in near_perp]
+    for option in options:
+        new = _project_out(d, [f for f, _ in option])
+        if new is not None and _angle(new, d) <= tol_deg + 1e-9:
+            return new, [label for _, label in option]
+    return d, []
 
 
 def perpendicular_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
