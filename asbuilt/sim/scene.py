@@ -377,10 +377,10 @@ def _load_mesh(reader: _Reader, geo, where) -> tuple[np.ndarray, np.ndarray]:
     return vertices + translate, faces
 
 
-def _cylinder_object(start, end, radius) -> tuple[Shape, Primitive]:
+def _cylinder_object(start, end, radius, capped: bool = True) -> tuple[Shape, Primitive]:
     axis = end - start
     length = float(np.linalg.norm(axis))
-    shape = CylinderShape(start=start, end=end, radius=radius)
+    shape = CylinderShape(start=start, end=end, radius=radius, capped=capped)
     truth = Cylinder(center=0.5 * (start + end), axis=axis / length, radius=radius, length=length)
     return shape, truth
 
@@ -403,9 +403,11 @@ def _geometry(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
         end = reader.vector(geo, "end", where)
         if np.linalg.norm(end - start) <= 0:
             reader.fail(where, "'start' and 'end' must differ")
-        return [
-            dict(zip(("shape", "truth"), _cylinder_object(start, end, reader.radius(geo, where))))
-        ]
+        capped = geo.get("capped", True)
+        if not isinstance(capped, bool):
+            reader.fail(f"{where}.capped", f"must be true or false, not {capped!r}")
+        radius = reader.radius(geo, where)
+        return [dict(zip(("shape", "truth"), _cylinder_object(start, end, radius, capped)))]
     if kind == "tank":
         base = reader.vector(geo, "base", where)
         height = reader.length(geo, "height", where, positive=True, required=True)

@@ -157,11 +157,11 @@ def angular_window(shape, station) -> tuple[float, float, float, float]:
 
 
 def raster_angles(window, n_pan: int, n_tilt: int) -> tuple[np.ndarray, np.ndarray]:
-    """A pan-tilt raster from corner to corner of ``window``, row by row, serpentine like a PTU.
+    """A cell-centred pan-tilt raster over ``window``, row by row, serpentine like a PTU.
 
-    The operator marks the object's extreme directions and the unit sweeps between them; the
-    outer rows and columns sit :data:`EDGE_INSET` of a step inside the marks, close to the
-    silhouette (where footprints straddle edges and mixed returns happen).
+    The operator marks the object's extreme directions; the unit splits that window into equal
+    cells and shoots at each cell's centre (:data:`EDGE_INSET`), so the outer shots fall half a
+    raster step inside the silhouette's bounding window.
 
     Parameters
     ----------
@@ -184,8 +184,11 @@ def raster_angles(window, n_pan: int, n_tilt: int) -> tuple[np.ndarray, np.ndarr
     return pan.ravel(), tilt.ravel()
 
 
-#: The outermost shots sit this fraction of a raster step inside the marked window.
-EDGE_INSET = 0.15
+#: The outermost shots sit this fraction of a raster step inside the marked window: 0.5 is a
+#: cell-centred raster (the window split into equal cells, one shot at each cell's centre), so
+#: points stop short of a silhouette edge by half a raster spacing, which is what
+#: ``asbuilt.fit.cuboid`` adds back to extent-bounded sizes.
+EDGE_INSET = 0.5
 
 
 def _steps(n: int) -> np.ndarray:
@@ -193,13 +196,18 @@ def _steps(n: int) -> np.ndarray:
     return (np.arange(n) + EDGE_INSET) / (n - 1 + 2 * EDGE_INSET)
 
 
+#: Fewest raster lines in either direction: an operator covers an object's width with at least
+#: four lines of shots however thin it looks, so every face or arc gets more than one line.
+MIN_LINES = 4
+
+
 def _grid_shape(window, shots: float) -> tuple[int, int]:
     _, tilt0, pan_ext, tilt_ext = window
     width = max(pan_ext * np.cos(tilt0), 1e-6)
     height = max(tilt_ext, 1e-6)
     aspect = width / height
-    n_tilt = max(2, int(round(np.sqrt(shots / aspect))))
-    n_pan = max(2, int(round(shots / n_tilt)))
+    n_tilt = max(MIN_LINES, int(round(np.sqrt(shots / aspect))))
+    n_pan = max(MIN_LINES, int(round(shots / n_tilt)))
     return n_pan, n_tilt
 
 

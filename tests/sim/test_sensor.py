@@ -49,7 +49,9 @@ def test_raster_covers_window_serpentine():
     assert pan[:5].tolist() == sorted(pan[:5].tolist())
     assert pan[5:10].tolist() == sorted(pan[5:10].tolist(), reverse=True)
     assert tilt[0] > tilt[-1]
-    assert -0.1 < pan.min() < -0.09 and 0.09 < pan.max() < 0.1
+    # cell-centred: the outer shots are half a step (0.2 / 5 / 2) inside the window
+    assert pan.min() == pytest.approx(-0.08) and pan.max() == pytest.approx(0.08)
+    assert sorted(set(np.round(tilt, 9))) == pytest.approx([-1 / 30, 0.0, 1 / 30])
 
 
 def test_angular_window_of_sphere():
