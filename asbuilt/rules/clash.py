@@ -8,7 +8,9 @@ estimated by quasi-Monte Carlo inside the intersection of the two boxes: scrambl
 and a hit share ``p`` the volume's standard error is bounded by the Monte Carlo one,
 ``V_box * sqrt(p (1 - p) / N)`` (Sobol points converge faster; the bound is conservative).
 Components joined end to end (ends within ``touch_distance``) or linked in the scan are never
-a clash.
+a clash; nor, with ``end_connections`` (the default), is a member whose axis *ends* inside the
+other solid: a beam framing into a column or a nozzle into a tank is a connection. A clash is
+one member passing through another.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from asbuilt.findings import Suggestion
 from asbuilt.model import Bend, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
-from ._context import Context
+from ._context import Context, axis_of, ends_of
 from ._graph import end_pairs, linked_pairs
 
 __all__ = ["CHECKS", "inside", "bounds", "candidate_pairs", "overlap_volume"]
@@ -190,6 +192,60 @@ def overlap_volume(
     return volume, stderr, centroid
 
 
+def member_ends(geometry) -> np.ndarray:
+    """Where a member ends, shape (k, 3) metres: the axis end points of pipes, cylinders, cuboids
+    (long axis) and reducers, a bend's ends and a tee's three ends; empty for the rest."""
+    found = axis_of(geometry)
+    if found is not None:
+        axis, length, centre = found
+        return np.array([centre - 0.5 * length * axis, centre + 0.5 * length * axis])
+    ends = ends_of(geometry)
+    return np.array(ends).reshape(-1, 3)
+
+
+def _half_section(geometry) -> float:
+    """Half the largest cross-section size of a member, metres (0 when it has none)."""
+    if isinstance(geometry, (Straight, Bend)):
+        return float(geometry.outer_radius)
+    if isinstance(geometry, Reducer):
+        return float(max(geometry.outer_radius_start, geometry.outer_radius_end))
+    if isinstance(geometry, Tee):
+        return float(geometry.outer_radius)
+    if isinstance(geometry, Cylinder):
+        return float(geometry.radius)
+    if isinstance(geometry, Cuboid):
+        return 0.5 * float(np.sort(geometry.size)[1])
+    return 0.0
+
+
+#: Directions probing a ball around a member's end (the 26 neighbours of a cube, normalised).
+_PROBE = np.array(
+    [
+        [x, y, z]
+        for x in (-1, 0, 1)
+        for y in (-1, 0, 1)
+        for z in (-1, 0, 1)
+        if (x, y, z) != (0, 0, 0)
+    ],
+    dtype=np.float64,
+)
+_PROBE /= np.linalg.norm(_PROBE, axis=1)[:, None]
+
+
+def ends_into(ga, gb, thickness: float = 0.01) -> bool:
+    """Whether member ``ga`` ends in or at solid ``gb`` (a beam framing into a column or meeting
+    another beam at a corner, a nozzle into a tank): a connection, not a clash.
+
+    An end counts when it, or a point of the ball of ``ga``'s half section around it, is inside.
+    """
+    ends = member_ends(ga)
+    if not len(ends):
+        return False
+    radius = _half_section(ga)
+    probes = np.concatenate([ends] + [ends + radius * d for d in _PROBE])
+    return bool(inside(gb, probes, thickness).any())
+
+
 def check_clash(ctx: Context) -> None:
     slug = "clash"
     comps = list(ctx.model.components)
@@ -197,6 +253,7 @@ def check_clash(ctx: Context) -> None:
     touch = float(ctx.opt(slug, "touch_distance"))
     min_volume = float(ctx.opt(slug, "min_volume"))
     samples = int(ctx.opt(slug, "samples"))
+    connections = bool(ctx.opt(slug, "end_connections"))
     keep, boxes = [], []
     for comp in comps:
         box = bounds(comp.geometry, thickness)
@@ -210,6 +267,11 @@ def check_clash(ctx: Context) -> None:
     for i, j in candidate_pairs(boxes):
         a, b = keep[i], keep[j]
         if frozenset((a.id, b.id)) in joined:
+            continue
+        if connections and (
+            ends_into(a.geometry, b.geometry, thickness)
+            or ends_into(b.geometry, a.geometry, thickness)
+        ):
             continue
         volume, se, centroid = overlap_volume(
             a.geometry,

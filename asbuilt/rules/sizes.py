@@ -220,15 +220,26 @@ def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
         ctx.model, float(ctx.opt("clash", "touch_distance")), float(ctx.general("joint_distance"))
     )
     tol = float(ctx.general("diameter_tolerance"))
+    touching = adjacency(ctx.model, float(ctx.opt("clash", "touch_distance")))
     for a, b, path in contiguous_pipes(ctx.model, graph, pipes):
+        if any(
+            comps[x].type in ("reducer", "tee")
+            for x in touching.get(a, set()) & touching.get(b, set())
+        ):
+            continue  # a reducer or a (reducing) tee joins them: sizes may differ
         ca, cb = comps[a], comps[b]
         (na, oda), (nb, odb) = _size_of(ca, table), _size_of(cb, table)
         if oda is None or odb is None:
             continue
-        if na is not None and nb is not None:
-            if na == nb:
-                continue
-        elif abs(oda - odb) <= tol:
+        (fa, sa), (fb, sb) = measured_od(ca), measured_od(cb)
+        diff = abs((fa if fa is not None else oda) - (fb if fb is not None else odb))
+        se = float(np.hypot(sa or 0.0, sb or 0.0))
+        outcome = verdict(diff, tol, se, ctx.k)
+        if na is not None and nb is not None and na != nb:
+            outcome = "unverifiable" if outcome == "pass" else outcome  # sizes differ, fits agree
+        elif na is not None and na == nb:
+            continue
+        if outcome == "pass":
             continue
         # the shared size: the inverse-variance mean of the two measured ODs, snapped
         measures = [measured_od(ca), measured_od(cb)]
@@ -260,8 +271,11 @@ def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
             [a, *path, b],
             f"{a} is {la} but the contiguous {b} is {lb} with no reducer",
             location=0.5 * (centre_of(ca.geometry) + centre_of(cb.geometry)),
-            measured=abs(oda - odb),
+            measured=diff,
             allowed=tol,
+            stderr=se,
+            outcome=outcome,
+            rescan=f"scan {a} and {b} over wider arcs to measure both diameters better",
             unit="m",
             suggestions=tuple(suggestions),
         )

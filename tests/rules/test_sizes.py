@@ -135,7 +135,7 @@ def test_merge_hint_record_is_used():
 def test_contiguous_mismatch_suggests_shared_size():
     a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", od_fit=0.1146, status="snapped",
              od_stderr=0.0004)
-    b = pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.0889, nominal="3", od_fit=0.1120,
+    b = pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.0889, nominal="3", od_fit=0.0905,
              status="snapped", od_stderr=0.004)
     (f,) = only(run(a, b), "contiguous-diameter-mismatch")
     assert f.severity == "error" and f.objects == ("P1", "P2")

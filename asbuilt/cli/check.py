@@ -1,0 +1,227 @@
+"""``asbuilt check SCAN``: the compliance checker, a spell checker for as-built models.
+
+Fits and merges the scan (as ``asbuilt model`` does), runs the rules and prints the findings like
+a linter, one per line, sorted by severity then position, then a summary line. Exit code 0 when
+no finding is an error, 1 when one is, 2 for bad input, so it runs in a QA pipeline.
+``--fix OUT`` accepts every unambiguous suggestion, writes the corrected model (any export
+format) and lists what it changed; the findings printed are then those left after the fixes.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["register", "run", "finding_dict"]
+
+
+def _selectors(text: str) -> list[str]:
+    items = [item.strip() for item in text.split(",") if item.strip()]
+    if not items:
+        raise argparse.ArgumentTypeError("give rule codes or slugs, e.g. AB202,too-few-points")
+    return items
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``check`` subcommand to ``subparsers``."""
+    parser = subparsers.add_parser(
+        "check",
+        help="check a scan's as-built model against the compliance rules (exit 1 on errors)",
+        description="Fit and merge a scan (or read an asbuilt-model JSON document), check it "
+        "against the compliance rules and print one finding per line, errors first. Exit code "
+        "0: no errors; 1: at least one error; 2: bad input.",
+        epilog="Example: asbuilt check samples/spool.json --design spool-design.json "
+        "--rules project-rules.toml --fix spool-fixed.step",
+    )
+    parser.add_argument(
+        "scan", metavar="SCAN", help="an asbuilt-scan JSON file (or an asbuilt-model document)"
+    )
+    parser.add_argument(
+        "--design",
+        metavar="FILE",
+        default=None,
+        help="design file (asbuilt-design JSON) to compare with: deviations, missing, extra",
+    )
+    parser.add_argument(
+        "--rules",
+        metavar="FILE",
+        default=None,
+        help="rules file (TOML) overriding the shipped defaults per key (see docs/rules.md)",
+    )
+    parser.add_argument(
+        "--select",
+        metavar="RULES",
+        type=_selectors,
+        action="append",
+        default=None,
+        help="only these rules: codes, code prefixes or slugs, comma separated (AB2,clash)",
+    )
+    parser.add_argument(
+        "--ignore",
+        metavar="RULES",
+        type=_selectors,
+        action="append",
+        default=None,
+        help="skip these rules (same forms as --select)",
+    )
+    parser.add_argument(
+        "--format",
+        choices=("text", "json"),
+        default="text",
+        help="text: one finding per line and a summary (default); json: the list of findings",
+    )
+    parser.add_argument(
+        "--fix",
+        metavar="OUT",
+        default=None,
+        help="accept every unambiguous suggestion and write the corrected model to OUT "
+        "(.step, .glb, .gltf, .dxf, .stl, .obj or .json)",
+    )
+    parser.add_argument(
+        "--catalog",
+        metavar="NAME|FILE",
+        default=None,
+        help="pipe catalog for sizes (default asme-b36.10m; see 'asbuilt catalog')",
+    )
+    parser.add_argument(
+        "--no-merge",
+        action="store_true",
+        help="check the fitted objects as they are, without merging pipes into spools",
+    )
+    parser.set_defaults(handler=run)
+    return parser
+
+
+def finding_dict(finding) -> dict:
+    """A finding as JSON-ready data, in the shape of the model document's ``findings``."""
+    location = None if finding.location is None else [float(x) for x in finding.location]
+    return {
+        "code": finding.code,
+        "slug": finding.slug,
+        "severity": finding.severity,
+        "objects": list(finding.objects),
+        "location": location,
+        "message": finding.message,
+        "measured": finding.measured,
+        "allowed": finding.allowed,
+        "stderr": finding.stderr,
+        "unit": finding.unit,
+        "suggestions": [
+            {"description": s.description, "change": dict(s.change), "unambiguous": s.unambiguous}
+            for s in finding.suggestions
+        ],
+        "unverifiable": finding.unverifiable,
+    }
+
+
+def _is_model_document(path) -> bool:
+    import json
+
+    try:
+        with open(path, encoding="utf-8") as handle:
+            head = handle.read(4096)
+    except (OSError, UnicodeDecodeError):
+        return False  # the scan loader reports it properly
+    if '"asbuilt-model"' not in head:
+        return False
+    try:
+        with open(path, encoding="utf-8") as handle:
+            return json.load(handle).get("format") == "asbuilt-model"
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def _load(args, config, design):
+    from asbuilt.rules import check_model
+
+    if _is_model_document(args.scan):
+        from asbuilt.export.model_json import load_model
+
+        model = load_model(args.scan)
+        options = {"catalog": args.catalog} if args.catalog else {}
+        findings = check_model(model, config, design, **options)
+        return model.replace(findings=findings)
+    from asbuilt.pipeline import build_model
+    from asbuilt.scan import load_scan
+
+    scan = load_scan(args.scan)
+    return build_model(
+        scan,
+        catalog=args.catalog,
+        tolerances=config.tolerances,
+        rules=config,
+        design=design,
+        merge=not args.no_merge,
+        check=True,
+    )
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Check the scan; print the findings; return 1 if any is an error, else 0."""
+    import json
+    import sys
+    from pathlib import Path
+
+    from rich.console import Console
+    from rich.markup import escape
+
+    from asbuilt.rules import apply_fixes, check_model, load_rules
+
+    config = load_rules(args.rules)
+    select = [s for group in args.select or () for s in group]
+    ignore = [s for group in args.ignore or () for s in group]
+    if select or ignore:
+        config = config.with_selection(select=select or None, ignore=ignore)
+    design = None
+    if args.design:
+        from asbuilt.design import load_design
+
+        design = load_design(args.design)
+    if args.fix:
+        from asbuilt.export import exporter_for
+
+        exporter_for(args.fix)  # an unknown suffix fails before any work
+
+    model = _load(args, config, design)
+    findings = model.findings
+    changes: list[str] = []
+    if args.fix:
+        from asbuilt.export import export_model
+
+        fixed, changes = apply_fixes(model, findings)
+        options = {"catalog": args.catalog} if args.catalog else {}
+        findings = check_model(fixed, config, design, **options)
+        export_model(fixed.replace(findings=findings), Path(args.fix))
+
+    out = Console(file=sys.stdout, highlight=False, soft_wrap=True)
+    err = Console(file=sys.stderr, highlight=False, soft_wrap=True)
+    if args.format == "json":
+        sys.stdout.write(json.dumps([finding_dict(f) for f in findings], indent=2) + "\n")
+        for change in changes:
+            err.print(f"fixed: {escape(change)}")
+        if args.fix:
+            err.print(f"wrote {escape(str(args.fix))} ({_plural(len(changes), 'fix')})")
+    else:
+        colours = {"error": "red", "warning": "yellow", "info": "blue"}
+        for f in findings:
+            where = ",".join(f.objects) or "-"
+            out.print(
+                f"{escape(args.scan)}: {escape(where)}: [{colours[f.severity]}]{f.severity}"
+                f"[/] {f.slug}: {escape(f.message)}"
+            )
+        for change in changes:
+            out.print(f"fixed: {escape(change)}")
+        counts = {s: sum(1 for f in findings if f.severity == s) for s in colours}
+        unverifiable = sum(1 for f in findings if f.unverifiable)
+        summary = (
+            f"{_plural(counts['error'], 'error')}, {_plural(counts['warning'], 'warning')}"
+            f" ({unverifiable} unverifiable), {counts['info']} info in "
+            f"{_plural(len(model.components), 'component')}"
+        )
+        if args.fix:
+            summary += f"; {_plural(len(changes), 'fix')} written to {args.fix}"
+        out.print(escape(summary))
+    return 1 if any(f.severity == "error" for f in findings) else 0
