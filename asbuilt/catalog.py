@@ -361,8 +361,7 @@ def _load_packaged(name: str) -> Catalog:
     names = catalog_names()
     if name not in names:
         raise CatalogError(
-            f"unknown catalog {name!r}; use one of {', '.join(names)} or a CSV file path",
-            source="--catalog",
+            f"unknown catalog {name!r}; use one of {', '.join(names)} or a CSV file path"
         )
     resource = resources.files("asbuilt.catalogs") / f"{name}.csv"
     content = resource.read_text(encoding="utf-8")
