@@ -1,0 +1,112 @@
+"""The CAD model: tree, names, colours by status, fused spools, progress, errors."""
+
+from __future__ import annotations
+
+import pytest
+from zoo import R4, W4, expected_volumes, zoo_model
+
+from asbuilt.cad import build_assembly, fused_spool_solid, prepare
+from asbuilt.cad.colours import KIND_COLOURS, STATUS_COLOURS
+from asbuilt.errors import SolidBuildError
+from asbuilt.model import Component, Model, Spool, Straight
+from asbuilt.primitives import Plane, Sphere
+
+
+def test_parts_keep_the_model_order_and_colours_follow_status(zoo_cad):
+    ids = [part.id for part in zoo_cad.parts]
+    assert ids == [c.id for c in zoo_cad.model.components]
+    by_id = {part.id: part for part in zoo_cad.parts}
+    assert by_id["C1"].colour == STATUS_COLOURS["error"] and by_id["C1"].status == "error"
+    assert by_id["SP"].colour == STATUS_COLOURS["warning"]
+    assert by_id["H"].colour == KIND_COLOURS["hull"] and by_id["H"].status == "info"
+    assert by_id["P1"].colour == KIND_COLOURS["pipe"]
+
+
+def test_colour_by_status_can_be_turned_off(zoo):
+    cad = prepare(zoo, colour_by_status=False)
+    assert {part.id: part.colour for part in cad.parts}["C1"] == KIND_COLOURS["cuboid"]
+
+
+def test_groups_spools_first_then_scan_groups_then_ungrouped(zoo_cad):
+    groups = zoo_cad.groups()
+    assert list(groups) == ["S1", "S2", "frame", None]
+    assert [p.id for p in groups["S1"]] == ["P1", "E1", "P2"]
+    assert [p.id for p in groups[None]] == ["SP", "PL", "H"]
+
+
+def test_assembly_tree_is_scan_group_object(zoo_cad):
+    assembly = zoo_cad.assembly()
+    assert assembly.name == "zoo"
+    assert [child.name for child in assembly.children] == ["S1", "S2", "frame", "SP", "PL", "H"]
+    spool = assembly.children[0]
+    assert [leaf.name for leaf in spool.children] == ["P1", "E1", "P2"]
+    assert zoo_cad.assembly() is assembly  # built once
+
+
+def test_group_named_like_an_object_gets_a_distinct_node_name():
+    model = Model(
+        components=(
+            Component("S1", "sphere", Sphere([0, 0, 0], 1.0)),
+            Component("P1", "pipe", Straight([3, 0, 0], [4, 0, 0], 0.05), spool="S1"),
+        ),
+        name="S1 (group)",
+    )
+    cad = prepare(model)
+    assert cad.group_node_names() == {"S1": "S1 (group) (group)"}
+    names = [child.name for child in cad.assembly().children]
+    assert len(set(names)) == len(names)
+
+
+def test_build_assembly_one_call(zoo):
+    assembly = build_assembly(zoo)
+    assert {"S1/P1", "S1/E1", "S2/T1", "frame/C1", "SP", "H"} <= set(assembly.objects)
+    assert {name.split("/")[-1] for name in assembly.objects} >= {c.id for c in zoo.components}
+
+
+def test_fused_spool_is_one_valid_solid_of_the_summed_volume(zoo):
+    solid = fused_spool_solid(zoo, "S1")
+    assert solid.isValid()
+    volumes = expected_volumes()
+    # Pipe, elbow and pipe only touch at their end faces: no overlap.
+    assert solid.Volume() == pytest.approx(volumes["P1"] + volumes["E1"] + volumes["P2"], rel=1e-6)
+
+
+def test_spool_with_a_gap_does_not_fuse_into_one_solid():
+    model = Model(
+        components=(
+            Component("A", "pipe", Straight([0, 0, 0], [1, 0, 0], R4, W4), spool="G"),
+            Component("B", "pipe", Straight([1.5, 0, 0], [2, 0, 0], R4, W4), spool="G"),
+        ),
+        spools=(Spool("G", ("A", "B")),),
+    )
+    with pytest.raises(SolidBuildError, match=r"^spool G: its 2 components do not fuse"):
+        fused_spool_solid(model, "G")
+    with pytest.raises(SolidBuildError, match="no components belong"):
+        fused_spool_solid(model, "missing")
+
+
+def test_progress_reports_every_solid(zoo):
+    calls = []
+    prepare(zoo, progress=lambda done, total: calls.append((done, total)))
+    n = len(zoo.components)
+    assert calls == [(i, n) for i in range(1, n + 1)]
+
+
+def test_first_bad_object_is_named_with_the_scan_file():
+    bad = Component("F9", "plane", Plane([0, 0, 0], [0, 0, 1]))
+    model = zoo_model().replace(components=(*zoo_model().components, bad))
+    with pytest.raises(SolidBuildError, match=r"^object F9: .*no outline"):
+        prepare(model)
+
+
+def test_duplicate_ids_are_refused():
+    pipe = Component("P", "pipe", Straight([0, 0, 0], [1, 0, 0], 0.05))
+    with pytest.raises(SolidBuildError, match="object P: two components share this id"):
+        prepare(Model(components=(pipe, pipe)))
+
+
+def test_plate_thickness_reaches_plates(zoo):
+    thick = prepare(zoo, plate_thickness=0.05)
+    plate = {p.id: p for p in thick.parts}["PL"]
+    assert plate.solid.Volume() == pytest.approx(4.0 * 0.05)
+    assert thick.mesh(plate).volume == pytest.approx(4.0 * 0.05)

@@ -1,0 +1,104 @@
+"""Closed-form meshes: closed, outward, unit normals, and the same volume as the solids."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from zoo import expected_volumes, zoo_components
+
+from asbuilt.cad.meshgen import SEGMENTS, mesh_for
+from asbuilt.model import Bend, Reducer, Straight
+from asbuilt.primitives import Cylinder, Plane
+
+ZOO = {c.id: c for c in zoo_components()}
+VOLUMES = expected_volumes()
+MESHED = sorted(cid for cid, c in ZOO.items() if c.type != "tee")
+
+
+def _closed(mesh) -> trimesh.Trimesh:
+    vertices, faces = mesh.merged()
+    return trimesh.Trimesh(vertices, faces, process=False)
+
+
+@pytest.mark.parametrize("cid", MESHED)
+def test_meshes_are_closed_outward_and_match_the_volume(cid):
+    mesh = mesh_for(ZOO[cid].geometry, plate_thickness=0.010)
+    closed = _closed(mesh)
+    assert closed.is_watertight
+    assert closed.is_winding_consistent
+    assert mesh.volume > 0  # outward winding
+    assert mesh.volume == pytest.approx(VOLUMES[cid], rel=1e-9)
+    assert np.allclose(np.linalg.norm(mesh.normals, axis=1), 1.0)
+
+
+def test_tee_has_no_closed_form_mesh():
+    assert mesh_for(ZOO["T1"].geometry, plate_thickness=0.01) is None
+
+
+def test_vertices_stay_near_the_true_surface():
+    pipe = Straight([0, 0, 0], [2, 0, 0], 0.1)
+    mesh = mesh_for(pipe, plate_thickness=0.01)
+    radial = np.linalg.norm(mesh.vertices[:, 1:], axis=1)
+    on_wall = radial > 1e-9
+    # Equal-area polygon: vertices 0.32% outside the circle at 32 segments.
+    expected = 0.1 * math.sqrt(2 * math.pi / (SEGMENTS * math.sin(2 * math.pi / SEGMENTS)))
+    assert radial[on_wall] == pytest.approx(expected, rel=1e-12)
+    assert expected / 0.1 - 1 < 0.004
+
+
+def test_normals_point_outwards_on_a_cylinder_wall():
+    mesh = mesh_for(Cylinder([0, 0, 0], [0, 0, 1], 0.5, 2.0), plate_thickness=0.01)
+    radial = mesh.vertices.copy()
+    radial[:, 2] = 0
+    side = np.linalg.norm(radial, axis=1) > 1e-9
+    side &= np.abs(mesh.normals[:, 2]) < 0.5
+    cosines = np.einsum("ij,ij->i", mesh.normals[side], radial[side]) / np.linalg.norm(
+        radial[side], axis=1
+    )
+    assert cosines.min() > 0.99
+
+
+@given(
+    angle=st.floats(5.0, 175.0),
+    bend_radius=st.floats(0.1, 1.0),
+    hollow=st.booleans(),
+)
+@settings(max_examples=30, deadline=None)
+def test_bend_meshes_keep_pappus_volume(angle, bend_radius, hollow):
+    a = math.radians(angle)
+    wall = 0.01 if hollow else 0.0
+    bend = Bend(
+        [bend_radius, 0, 0],
+        [bend_radius * math.cos(a), bend_radius * math.sin(a), 0],
+        [0, 0, 0],
+        0.05,
+        wall,
+    )
+    mesh = mesh_for(bend, plate_thickness=0.01)
+    area = math.pi * (0.05**2 - (0.05 - wall) ** 2) if hollow else math.pi * 0.05**2
+    assert mesh.volume == pytest.approx(area * bend_radius * a, rel=1e-9)
+    assert _closed(mesh).is_watertight
+
+
+@given(
+    r1=st.floats(0.01, 0.5),
+    r2=st.floats(0.01, 0.5),
+    direction=st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1),
+)
+@settings(max_examples=30, deadline=None)
+def test_reducer_meshes_keep_frustum_volume(r1, r2, direction):
+    end = np.array(direction) / np.linalg.norm(direction) * 0.3
+    mesh = mesh_for(Reducer([0, 0, 0], end, r1, r2), plate_thickness=0.01)
+    assert mesh.volume == pytest.approx(math.pi * 0.3 * (r1 * r1 + r1 * r2 + r2 * r2) / 3, rel=1e-9)
+
+
+def test_clockwise_outline_gives_the_same_plate():
+    square = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+    ccw = mesh_for(Plane([0.5, 0.5, 0], [0, 0, 1], square), plate_thickness=0.02)
+    cw = mesh_for(Plane([0.5, 0.5, 0], [0, 0, 1], square[::-1]), plate_thickness=0.02)
+    assert ccw.volume == pytest.approx(0.02) and cw.volume == pytest.approx(0.02)

@@ -1,0 +1,161 @@
+"""Solids: valid, right volume (from formulas), right place; clear errors naming the object."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial import ConvexHull
+from scipy.spatial.transform import Rotation
+from zoo import expected_volumes, zoo_components
+
+from asbuilt.cad.solids import plate_solid, solid_for
+from asbuilt.errors import ExportError, SolidBuildError
+from asbuilt.model import Bend, Component, Straight
+from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+
+ZOO = {c.id: c for c in zoo_components()}
+VOLUMES = expected_volumes()
+
+
+@pytest.mark.parametrize("cid", sorted(ZOO))
+def test_every_geometry_gives_one_valid_solid_with_the_formula_volume(cid):
+    solid = solid_for(ZOO[cid])
+    assert solid.isValid()
+    assert len(solid.Solids()) == 1
+    assert solid.Volume() == pytest.approx(VOLUMES[cid], rel=1e-5)
+
+
+@pytest.mark.parametrize(
+    ("cid", "low", "high"),
+    [
+        ("P1", (0, -0.05715, -0.05715), (1, 0.05715, 0.05715)),
+        ("CY", (4.85, -0.15, 0.0), (5.15, 0.15, 3.0)),
+        ("SP", (6.5, -0.5, 0.5), (7.5, 0.5, 1.5)),
+        ("PL", (7, -1, -0.005), (9, 1, 0.005)),
+    ],
+)
+def test_solids_sit_where_the_geometry_says(cid, low, high):
+    box = solid_for(ZOO[cid]).BoundingBox()
+    assert (box.xmin, box.ymin, box.zmin) == pytest.approx(low, abs=2e-4)
+    assert (box.xmax, box.ymax, box.zmax) == pytest.approx(high, abs=2e-4)
+
+
+def test_hollow_pipe_is_an_annulus_and_solid_bar_without_wall():
+    hollow = solid_for(Component("P", "pipe", Straight([0, 0, 0], [0, 0, 2], 0.1, 0.01)))
+    bar = solid_for(Component("P", "pipe", Straight([0, 0, 0], [0, 0, 2], 0.1)))
+    assert hollow.Volume() == pytest.approx(math.pi * (0.1**2 - 0.09**2) * 2, rel=1e-9)
+    assert bar.Volume() == pytest.approx(math.pi * 0.1**2 * 2, rel=1e-9)
+    assert len(hollow.Faces()) > len(bar.Faces())  # the bore adds a face
+
+
+@pytest.mark.parametrize("thickness", [0.001, 0.010, 0.05])
+def test_plate_thickness_is_configurable_and_centred_on_the_plane(thickness):
+    plane = Plane([0, 0, 1], [0, 0, 1], [[0, 0, 1], [2, 0, 1], [2, 3, 1], [0, 3, 1]])
+    solid = plate_solid(plane, thickness)
+    assert solid.Volume() == pytest.approx(6 * thickness, rel=1e-9)
+    box = solid.BoundingBox()
+    assert (box.zmin, box.zmax) == pytest.approx((1 - thickness / 2, 1 + thickness / 2))
+
+
+def test_plate_from_an_outline_slightly_off_the_plane_is_projected():
+    outline = [[0, 0, 0.001], [1, 0, -0.001], [1, 1, 0.002], [0, 1, 0]]
+    plane = Plane([0.5, 0.5, 0], [0, 0, 1], outline)
+    solid = solid_for(Component("F", "plane", plane), plate_thickness=0.02)
+    assert solid.Volume() == pytest.approx(0.02, rel=1e-9)
+
+
+@given(
+    axis=st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1),
+    radius=st.floats(0.01, 1.0),
+    length=st.floats(0.05, 10.0),
+)
+@settings(max_examples=25, deadline=None)
+def test_cylinders_in_any_direction(axis, radius, length):
+    axis = np.array(axis) / np.linalg.norm(axis)
+    solid = solid_for(Component("C", "cylinder", Cylinder([1, 2, 3], axis, radius, length)))
+    assert solid.isValid()
+    assert solid.Volume() == pytest.approx(math.pi * radius**2 * length, rel=1e-6)
+    centre = solid.Center()
+    assert (centre.x, centre.y, centre.z) == pytest.approx((1, 2, 3), abs=1e-6 * length + 1e-9)
+
+
+@given(
+    angles=st.tuples(*[st.floats(-180, 180)] * 3),
+    size=st.tuples(*[st.floats(0.01, 5.0)] * 3),
+)
+@settings(max_examples=25, deadline=None)
+def test_cuboids_in_any_orientation_have_their_corners(angles, size):
+    axes = Rotation.from_euler("xyz", angles, degrees=True).as_matrix().T
+    cuboid = Cuboid([0.5, -1, 2], axes, size)
+    solid = solid_for(Component("B", "cuboid", cuboid))
+    assert solid.Volume() == pytest.approx(np.prod(size), rel=1e-9)
+    vertices = np.array([v.toTuple() for v in solid.Vertices()])
+    corners = cuboid.corners
+    distance = np.linalg.norm(vertices[:, None, :] - corners[None, :, :], axis=2).min(axis=0)
+    assert distance.max() < 1e-9
+
+
+@given(seed=st.integers(0, 10_000), count=st.integers(6, 40))
+@settings(max_examples=20, deadline=None)
+def test_hulls_sew_into_a_closed_solid_of_qhull_volume(seed, count):
+    points = np.random.default_rng(seed).uniform(-1, 1, size=(count, 3))
+    hull = ConvexHull(points)
+    # Qhull's triangles are not oriented; the builder must cope with any winding.
+    solid = solid_for(Component("H", "hull", Hull(points, hull.simplices)))
+    assert solid.isValid()
+    assert solid.Volume() == pytest.approx(hull.volume, rel=1e-9)
+
+
+@pytest.mark.parametrize("angle", [15.0, 45.0, 90.0, 135.0])
+def test_bends_follow_pappus(angle):
+    a = math.radians(angle)
+    bend = Bend([0.3, 0, 0], [0.3 * math.cos(a), 0.3 * math.sin(a), 0], [0, 0, 0], 0.05, 0.004)
+    solid = solid_for(Component("E", "elbow", bend))
+    area = math.pi * (0.05**2 - 0.046**2)
+    assert solid.Volume() == pytest.approx(area * 0.3 * a, rel=1e-7)
+
+
+@pytest.mark.parametrize(
+    ("component", "words"),
+    [
+        (Component("F7", "plane", Plane([0, 0, 0], [0, 0, 1])), "no outline"),
+        (
+            Component(
+                "F8", "plane", Plane([0, 0, 0], [0, 0, 1], [[0, 0, 0], [1, 0, 0], [1, 0, 0]])
+            ),
+            "fewer than 3",
+        ),
+        (
+            Component("E3", "elbow", Bend([0.05, 0, 0], [0, 0.05, 0], [0, 0, 0], 0.06)),
+            "not larger than the outer radius",
+        ),
+        (
+            Component("E4", "elbow", Bend([1, 0, 0], [-1, 0, 0], [0, 0, 0], 0.06)),
+            "bend plane is undefined",
+        ),
+    ],
+)
+def test_impossible_solids_raise_one_line_naming_the_object(component, words):
+    with pytest.raises(SolidBuildError) as info:
+        solid_for(component)
+    message = str(info.value)
+    assert message.startswith(f"object {component.id}: ")
+    assert words in message
+    assert "\n" not in message
+    assert isinstance(info.value, ExportError)
+
+
+def test_degenerate_hull_is_a_solid_build_error():
+    flat = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
+    hull = Hull(flat, [[0, 1, 2], [1, 3, 2], [0, 2, 1], [1, 2, 3]])
+    with pytest.raises(SolidBuildError, match="object HX"):
+        solid_for(Component("HX", "hull", hull))
+
+
+def test_sphere_solid_is_whole():
+    solid = solid_for(Component("S", "sphere", Sphere([0, 0, 0], 2.0)))
+    assert solid.Volume() == pytest.approx(4 / 3 * math.pi * 8, rel=1e-9)
