@@ -1,0 +1,201 @@
+"""``asbuilt model SCAN --out FILE [--out FILE ...]``: scan to as-built CAD in one run.
+
+Fits every object, merges pipes into spools with fittings, checks the compliance rules, then
+writes every ``--out`` (format by suffix: .step/.stp, .glb/.gltf, .dxf, .stl, .obj, .json),
+all or nothing. Progress goes to standard error; one summary line per file and the findings
+counts go to standard output.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["register", "run"]
+
+_SUFFIXES = ".step .stp .glb .gltf .dxf .stl .obj .json"
+
+
+def _thickness_mm(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value < 1e5):
+        raise argparse.ArgumentTypeError(f"must be a positive thickness in mm, not {text}")
+    return value
+
+
+def _report_available() -> bool:
+    from importlib.util import find_spec
+
+    return find_spec("asbuilt.report") is not None
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``model`` subcommand to ``subparsers``."""
+    parser = subparsers.add_parser(
+        "model",
+        help="fit, merge and check a scan, then write CAD (STEP, glTF, DXF, STL, OBJ, JSON)",
+        description="Turn an asbuilt-scan file into an as-built model: fit every object, merge "
+        "pipes into spools with standard fittings, check the compliance rules, and write each "
+        f"--out file in the format its suffix names ({_SUFFIXES}). Either every file is "
+        "written or none is.",
+        epilog="Example: asbuilt model samples/spool.json --out spool.step --out spool.glb "
+        "--out spool.dxf --out spool.json",
+    )
+    parser.add_argument("scan", metavar="SCAN", help="the asbuilt-scan JSON file")
+    parser.add_argument(
+        "--out",
+        "-o",
+        metavar="FILE",
+        action="append",
+        required=True,
+        help=f"an output file; give --out several times for several formats ({_SUFFIXES})",
+    )
+    parser.add_argument(
+        "--plate-thickness",
+        metavar="MM",
+        type=_thickness_mm,
+        default=None,
+        help="thickness of the plates made from fitted planes, in millimetres (default 10)",
+    )
+    parser.add_argument(
+        "--catalog",
+        metavar="NAME|FILE",
+        default=None,
+        help="pipe catalog for snapping sizes (default asme-b36.10m; see 'asbuilt catalog')",
+    )
+    parser.add_argument(
+        "--schedule",
+        metavar="S",
+        default=None,
+        help="pipe wall schedule, e.g. STD, 40, 10S: pipes become hollow (default: the "
+        "catalog's default schedule)",
+    )
+    parser.add_argument(
+        "--rules", metavar="FILE", default=None, help="compliance rules file (TOML)"
+    )
+    parser.add_argument(
+        "--design", metavar="FILE", default=None, help="design file to compare the model with"
+    )
+    parser.add_argument(
+        "--no-merge",
+        action="store_true",
+        help="keep one component per fitted object (no pipe snapping, spools or fittings)",
+    )
+    parser.add_argument("--no-check", action="store_true", help="skip the compliance rules")
+    parser.add_argument(
+        "--step-schema",
+        choices=("AP214", "AP242"),
+        default="AP214",
+        help="STEP application protocol (default AP214)",
+    )
+    if _report_available():
+        parser.add_argument(
+            "--report",
+            metavar="FILE",
+            default=None,
+            help="also write a report (.html, .csv or .json by suffix)",
+        )
+    parser.add_argument(
+        "--quiet", "-q", action="store_true", help="print nothing but errors"
+    )
+    parser.set_defaults(handler=run)
+    return parser
+
+
+def _size(n: int) -> str:
+    for unit in ("B", "kB", "MB", "GB"):
+        if n < 1000 or unit == "GB":
+            return f"{n} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1000
+    return f"{n} B"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Build the model and write the outputs; return 0. Bad input raises AsbuiltError (exit 2)."""
+    import sys
+    from pathlib import Path
+
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    from asbuilt.export import export_models, exporter_for
+    from asbuilt.pipeline import build_model
+    from asbuilt.scan import load_scan
+
+    outputs = [Path(p) for p in args.out]
+    report_path = getattr(args, "report", None)
+    for path in outputs:
+        exporter_for(path)  # an unknown suffix fails before any work
+    if report_path is not None and Path(report_path).suffix.lower() not in (".html", ".csv",
+                                                                             ".json"):
+        from asbuilt.errors import UnknownFormatError
+
+        raise UnknownFormatError(
+            "unknown report format; use .html, .csv or .json", source=str(report_path)
+        )
+
+    scan = load_scan(args.scan)
+    err = Console(file=sys.stderr)
+    with Progress(
+        TextColumn("{task.fields[stage]:<8}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.description}"),
+        console=err,
+        transient=True,
+        disable=args.quiet or not err.is_terminal,
+    ) as bar:
+        task = bar.add_task("", total=len(scan.objects), stage="fitting")
+        model = build_model(
+            scan,
+            catalog=args.catalog,
+            schedule=args.schedule,
+            rules=args.rules,
+            design=args.design,
+            merge=not args.no_merge,
+            check=not args.no_check,
+            progress=lambda done, total, oid: bar.update(task, completed=done, description=oid),
+        )
+        bar.update(task, completed=0, total=len(model.components), description="",
+                   stage="solids")
+
+        def progress(stage: str, done: int, total: int) -> None:
+            label = "solids" if stage == "solids" else "writing"
+            bar.update(task, completed=done, total=total, stage=label)
+
+        thickness = None if args.plate_thickness is None else args.plate_thickness / 1000.0
+        results = export_models(
+            model,
+            outputs,
+            plate_thickness=thickness,
+            step_schema=args.step_schema,
+            progress=progress,
+        )
+        if report_path is not None:
+            from asbuilt.report import write_report
+
+            write_report(model, report_path)
+
+    if args.quiet:
+        return 0
+    out = Console(file=sys.stdout, highlight=False, soft_wrap=True)
+    for result in results:
+        out.print(
+            f"wrote {result.path} ({result.name}, {_size(result.size)}, "
+            f"{result.objects} object{'s' if result.objects != 1 else ''})"
+        )
+    if report_path is not None:
+        out.print(f"wrote {report_path} (report)")
+    counts = {severity: 0 for severity in ("error", "warning", "info")}
+    for finding in model.findings:
+        counts[finding.severity] += 1
+    spools = f", {len(model.spools)} spool{'s' if len(model.spools) != 1 else ''}"
+    out.print(
+        f"{len(model.components)} components{spools if model.spools else ''}; findings: "
+        f"{counts['error']} error{'s' if counts['error'] != 1 else ''}, "
+        f"{counts['warning']} warning{'s' if counts['warning'] != 1 else ''}, "
+        f"{counts['info']} info"
+    )
+    return 0
