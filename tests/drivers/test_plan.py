@@ -1,0 +1,145 @@
+"""Plan files, targets and windows."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+from asbuilt.drivers.plan import (
+    Plan,
+    Target,
+    Window,
+    load_plan,
+    plan_to_dict,
+    required_points,
+)
+
+from asbuilt.errors import ScanError
+from asbuilt.tolerances import MIN_POINTS
+
+
+def test_window_from_corners_in_any_order():
+    w = Window.from_degrees([10, 5, -10, -5])
+    assert w.degrees() == pytest.approx([-10, -5, 10, 5])
+    assert w.width == pytest.approx(math.radians(20))
+    assert w.height == pytest.approx(math.radians(10))
+
+
+@pytest.mark.parametrize("corners", [[0, 0, 0, 5], [0, 0, 5, 0], [0, 0, float("nan"), 1]])
+def test_degenerate_windows(corners):
+    with pytest.raises(ValueError):
+        Window.from_degrees(corners)
+
+
+@pytest.mark.parametrize(
+    "kind, paper",
+    [("cylinder", 20), ("cuboid", 30), ("sphere", 20), ("plane", 12), ("hull", 30), ("auto", 30)],
+)
+def test_required_points_meet_the_papers_minimums(kind, paper):
+    assert required_points(kind) == paper
+    assert required_points(kind) >= MIN_POINTS[kind]
+
+
+def test_target_wants_at_least_the_minimum():
+    w = Window.from_degrees([0, 0, 1, 1])
+    assert Target("a", "cylinder", w, points=5).wanted() == 20
+    assert Target("a", "cylinder", w, points=35).wanted() == 35
+
+
+def test_plan_round_trip(tmp_path):
+    plan = Plan(
+        (
+            Target(
+                "P1",
+                "cylinder",
+                Window.from_degrees([-10, -3, 12, 4]),
+                points=24,
+                group="line-1",
+                nominal='4"',
+            ),
+            Target("C1", "cuboid", Window.from_degrees([20, -10, 30, 10])),
+        ),
+        {"retries": 1},
+    )
+    path = tmp_path / "plan.json"
+    path.write_text(json.dumps(plan_to_dict(plan)))
+    back = load_plan(path)
+    assert back.settings == {"retries": 1}
+    assert [t.id for t in back.targets] == ["P1", "C1"]
+    assert back.targets[0].points == 24 and back.targets[0].nominal == '4"'
+    assert back.targets[0].window.degrees() == pytest.approx([-10, -3, 12, 4])
+
+
+GOOD = {"id": "P1", "kind": "cylinder", "window_deg": [0, 0, 10, 5]}
+
+
+@pytest.mark.parametrize(
+    "doc, where",
+    [
+        ({"format": "x"}, "not a plan file"),
+        ({"format": "asbuilt-scan-plan", "version": 2, "targets": [GOOD]}, "version"),
+        ({"format": "asbuilt-scan-plan", "version": 1, "targets": []}, "targets"),
+        (
+            {"format": "asbuilt-scan-plan", "version": 1, "targets": [{**GOOD, "kind": "cone"}]},
+            "targets[0] (P1).kind",
+        ),
+        (
+            {"format": "asbuilt-scan-plan", "version": 1, "targets": [{**GOOD, "window_deg": [1]}]},
+            "targets[0] (P1).window_deg",
+        ),
+        (
+            {
+                "format": "asbuilt-scan-plan",
+                "version": 1,
+                "targets": [{**GOOD, "window_deg": [1, 1, 1, 2]}],
+            },
+            "targets[0] (P1).window_deg",
+        ),
+        (
+            {"format": "asbuilt-scan-plan", "version": 1, "targets": [{**GOOD, "points": 0}]},
+            "targets[0] (P1).points",
+        ),
+        (
+            {"format": "asbuilt-scan-plan", "version": 1, "targets": [{**GOOD, "id": ""}]},
+            "targets[0].id",
+        ),
+        (
+            {"format": "asbuilt-scan-plan", "version": 1, "targets": [GOOD, GOOD]},
+            "targets[1] (P1): duplicate id",
+        ),
+        (
+            {
+                "format": "asbuilt-scan-plan",
+                "version": 1,
+                "targets": [GOOD],
+                "settings": {"retry": 1},
+            },
+            "settings.retry",
+        ),
+        (
+            {
+                "format": "asbuilt-scan-plan",
+                "version": 1,
+                "targets": [GOOD],
+                "settings": {"retries": -1},
+            },
+            "settings.retries",
+        ),
+    ],
+)
+def test_bad_plans_name_the_place(tmp_path, doc, where):
+    path = tmp_path / "plan.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ScanError) as info:
+        load_plan(path)
+    assert where in str(info.value)
+    assert str(info.value).startswith(str(path))
+
+
+def test_unreadable_plan(tmp_path):
+    with pytest.raises(ScanError, match="cannot read the plan"):
+        load_plan(tmp_path / "missing.json")
+    (tmp_path / "bad.json").write_text("{")
+    with pytest.raises(ScanError, match="not valid JSON"):
+        load_plan(tmp_path / "bad.json")

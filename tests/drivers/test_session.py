@@ -1,0 +1,272 @@
+"""Scan sessions: rasters, foreground, edge bisection, retries, journal, crash and resume."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from asbuilt.drivers.kinematics import Calibration
+from asbuilt.drivers.plan import SessionSettings, Target, Window
+from asbuilt.drivers.ptu import PanTiltUnit, PTULimitError
+from asbuilt.drivers.rangefinder import SignalTooWeak, open_range_finder
+from asbuilt.drivers.session import (
+    DeviceShooter,
+    ScanSession,
+    Shot,
+    foreground_threshold,
+    grid,
+    journal_path_for,
+    read_journal,
+    scan_target,
+)
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from asbuilt.errors import DeviceError, DeviceTimeout, ScanError
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    p0=st.floats(-1, 1),
+    t0=st.floats(-0.5, 0.5),
+    w=st.floats(0.01, 1.0),
+    h=st.floats(0.01, 1.0),
+    n=st.integers(1, 60),
+)
+def test_grid_covers_the_window_with_enough_shots(p0, t0, w, h, n):
+    window = Window(p0, p0 + w, t0, t0 + h)
+    pan, tilt, (rows, cols) = grid(window, n)
+    assert len(pan) == rows * cols >= n
+    assert rows >= 3 and cols >= 3
+    assert np.all((pan > window.pan_min) & (pan < window.pan_max))
+    assert np.all((tilt > window.tilt_min) & (tilt < window.tilt_max))
+    assert len(set(zip(pan.round(12), tilt.round(12)))) == len(pan)
+    # serpentine: consecutive shots in a row are one cell apart
+    assert np.abs(np.diff(pan[:cols])).max() == pytest.approx(w / cols)
+
+
+@pytest.mark.parametrize(
+    "ranges, threshold",
+    [
+        ([3.0, 3.01, 3.02, 6.0, 6.1], 4.51),
+        ([3.0, 3.01, None, 3.02], math.inf),
+        ([], math.inf),
+        ([5.0, 5.2], math.inf),  # 0.2 m at 5 m is under 5 %: one surface
+        ([1.0, 1.05, 1.3], 1.175),  # 0.25 m gap above 0.1 m
+    ],
+)
+def test_foreground_threshold(ranges, threshold):
+    assert foreground_threshold(ranges) == pytest.approx(threshold)
+
+
+def disc_world(radius=0.05, near=3.0, far=6.0):
+    """A fake shooter: a disc of angular radius ``radius`` at ``near`` metres, a wall behind."""
+    log = []
+
+    def shoot(pan, tilt, phase):
+        inside = math.hypot(pan, tilt) < radius
+        shot = Shot(pan, tilt, pan, tilt, near if inside else far, None, 1, phase)
+        log.append(shot)
+        return shot
+
+    return shoot, log
+
+
+def test_scan_target_puts_enough_points_on_the_object_and_pins_its_edges():
+    shoot, log = disc_world()
+    target = Target("D", "cylinder", Window(-0.08, 0.08, -0.08, 0.08))
+    result = scan_target(target, shoot, SessionSettings(edge_pairs=4, edge_depth=3))
+    assert len(result.shots) == len(log)
+    on = result.on_object
+    assert on.sum() >= 20
+    assert all(s.range == 3.0 for s, k in zip(result.shots, on) if k)
+    edge = [s for s in result.shots if s.phase == "edge"]
+    assert len(edge) == 12
+    # each bisection shot is the midpoint of a hit/miss pair that straddles the silhouette, so
+    # it lies within half a raster cell (0.04 x 0.032 rad here) of the disc's edge
+    _, _, (rows, cols) = grid(target.window, 20)
+    half_cell = 0.5 * max(0.16 / cols, 0.16 / rows)
+    assert max(abs(0.05 - math.hypot(s.pan, s.tilt)) for s in edge) <= half_cell + 1e-12
+
+
+def test_fill_adds_points_when_the_object_is_small_in_the_window():
+    shoot, _ = disc_world(radius=0.07)
+    target = Target("D", "cuboid", Window(-0.2, 0.2, -0.2, 0.2))
+    result = scan_target(target, shoot, SessionSettings(edge_pairs=0))
+    phases = [s.phase for s in result.shots]
+    first = sum(1 for s, k in zip(result.shots, result.on_object) if k and s.phase == "raster")
+    assert first < 30  # the raster alone falls short ...
+    assert "fill" in phases
+    assert result.on_object.sum() >= 30  # ... the fill raster over the object makes it up
+
+
+def test_keep_background_keeps_every_return():
+    shoot, _ = disc_world()
+    target = Target("D", "plane", Window(-0.08, 0.08, -0.08, 0.08))
+    result = scan_target(target, shoot, SessionSettings(keep_background=True, edge_pairs=0))
+    assert result.on_object.all()
+
+
+class FakePTU:
+    def __init__(self, limit=10.0):
+        self.limit = limit
+        self.moves = []
+
+    def move_to(self, pan, tilt):
+        if abs(pan) > self.limit:
+            raise PTULimitError("outside")
+        self.moves.append((pan, tilt))
+        return round(pan, 3), round(tilt, 3)
+
+
+class FakeLRF:
+    def __init__(self, outcomes):
+        self.outcomes = list(outcomes)
+
+    def measure(self):
+        outcome = self.outcomes.pop(0)
+        if isinstance(outcome, Exception):
+            raise outcome
+        return outcome
+
+
+def test_device_shooter_retries_then_measures():
+    lrf = FakeLRF([SignalTooWeak("weak", code="E255"), DeviceTimeout("silent"), 4.2])
+    shot = DeviceShooter(FakePTU(), lrf, SessionSettings(retries=2))(0.1234, 0.0, "raster")
+    assert shot.range == 4.2 and shot.attempts == 3 and shot.error is None
+    assert (shot.pan, shot.pan_req) == (0.123, 0.1234)
+
+
+def test_device_shooter_skips_after_the_retries():
+    lrf = FakeLRF([SignalTooWeak("weak", code="E255")] * 3)
+    shot = DeviceShooter(FakePTU(), lrf, SessionSettings(retries=2))(0.0, 0.0, "raster")
+    assert shot.range is None and shot.error == "E255" and shot.attempts == 3
+
+
+def test_device_shooter_skips_targets_beyond_the_limits():
+    shot = DeviceShooter(FakePTU(limit=1.0), FakeLRF([]))(2.0, 0.0, "edge")
+    assert shot.range is None and shot.error == "limit"
+
+
+def test_a_silent_range_finder_is_declared_lost():
+    lrf = FakeLRF([DeviceTimeout("silent")] * 10)
+    shooter = DeviceShooter(FakePTU(), lrf, SessionSettings(retries=0, lost_after=3))
+    assert shooter(0, 0, "raster").error == "timeout"
+    assert shooter(0, 0, "raster").error == "timeout"
+    with pytest.raises(DeviceTimeout, match="3 shots in a row.*--resume"):
+        shooter(0, 0, "raster")
+
+
+# -- sessions over the simulated devices -------------------------------------------------------
+STATION = Calibration(base_position=(0.0, 0.0, 1.5))
+PIPE = Target("P1", "cylinder", Window.from_degrees([72, -6.5, 108, -1.5]))
+COLUMN = Target("C1", "cuboid", Window.from_degrees([63.5, -8, 73, 10]))
+
+
+def _devices(scene_file, rig, lrf_options=""):
+    ptu = PanTiltUnit.open(f"sim-ptu://{rig}?scene={scene_file}&range_sigma=0", timeout=1.0)
+    lrf = open_range_finder(f"sim-lrf://{rig}{lrf_options}", timeout=0.5)
+    return ptu, lrf
+
+
+def _run(scene_file, out, rig, targets, lrf_options="", resume=False):
+    ptu, lrf = _devices(scene_file, rig, lrf_options)
+    try:
+        with ScanSession(DeviceShooter(ptu, lrf), STATION, out, resume=resume) as session:
+            for target in targets:
+                if not session.is_done(target.id):
+                    session.scan(target)
+            return session
+    finally:
+        ptu.close()
+        lrf.close()
+
+
+def test_session_writes_scan_and_journal(scene_file, tmp_path):
+    out = tmp_path / "scan.json"
+    session = _run(scene_file, out, "s1", [PIPE, COLUMN])
+    doc = json.loads(out.read_text())
+    assert doc["format"] == "asbuilt-scan" and doc["units"] == "m"
+    assert [o["id"] for o in doc["objects"]] == ["P1", "C1"]
+    for obj in doc["objects"]:
+        assert len(obj["points"]) == len(obj["measurements"]) >= 20
+    records = read_journal(journal_path_for(out))
+    shots = [r for r in records if r["type"] == "shot"]
+    assert len(shots) == sum(len(r.shots) for r in session.objects.values())
+    assert [r["type"] for r in records if r["type"] != "shot"] == [
+        "session",
+        "object",
+        "done",
+        "object",
+        "done",
+    ]
+    # the raw measurements recompute the points through the chain
+    from asbuilt.drivers.kinematics import forward
+
+    m = np.array(doc["objects"][0]["measurements"])
+    pts = forward(STATION, np.radians(m[:, 0]), np.radians(m[:, 1]), m[:, 2])
+    assert pts == pytest.approx(np.array(doc["objects"][0]["points"]), abs=1e-8)
+
+
+def test_crash_mid_object_then_resume_gives_the_uninterrupted_scan(scene_file, tmp_path):
+    whole = tmp_path / "whole.json"
+    _run(scene_file, whole, "w", [PIPE, COLUMN])
+
+    out = tmp_path / "crash.json"
+    with pytest.raises(DeviceError, match="unplugged"):
+        _run(scene_file, out, "c1", [PIPE, COLUMN], lrf_options="?unplug_after=70")
+    # the scan holds what was finished, the journal every shot up to the crash
+    partial = json.loads(out.read_text())
+    assert [o["id"] for o in partial["objects"]] == ["P1"]
+    taken = [r for r in read_journal(journal_path_for(out)) if r["type"] == "shot"]
+    assert len(taken) == 70
+    with pytest.raises(ScanError, match="--resume"):
+        _run(scene_file, out, "c2", [PIPE, COLUMN])
+    _run(scene_file, out, "c3", [PIPE, COLUMN], resume=True)
+    assert json.loads(out.read_text())["objects"] == json.loads(whole.read_text())["objects"]
+    shots = [r for r in read_journal(journal_path_for(out)) if r["type"] == "shot"]
+    whole_shots = [r for r in read_journal(journal_path_for(whole)) if r["type"] == "shot"]
+    assert len(shots) == len(whole_shots)  # no shot was taken twice
+
+
+def test_torn_last_journal_line_is_ignored(scene_file, tmp_path):
+    out = tmp_path / "torn.json"
+    with pytest.raises(DeviceError):
+        _run(scene_file, out, "t1", [PIPE], lrf_options="?unplug_after=10")
+    journal = journal_path_for(out)
+    with open(journal, "a") as f:
+        f.write('{"type":"shot","obj')  # the crash hit mid-write
+    assert len([r for r in read_journal(journal) if r["type"] == "shot"]) == 10
+    session = _run(scene_file, out, "t2", [PIPE], resume=True)
+    assert "P1" in session.objects
+
+
+def test_corrupt_journal_is_refused(tmp_path):
+    journal = tmp_path / "x.json.journal"
+    journal.write_text('{"type":"session"}\nnot json\n{"type":"resume"}\n')
+    with pytest.raises(ScanError, match="line 2: corrupt line"):
+        read_journal(journal)
+
+
+def test_resume_without_journal(tmp_path):
+    with pytest.raises(ScanError, match="no journal to resume"):
+        ScanSession(lambda *a: None, STATION, tmp_path / "s.json", resume=True)
+
+
+def test_object_that_misses_everything_is_reported_not_added(scene_file, tmp_path):
+    nothing = Target("X", "cylinder", Window.from_degrees([-100, 40, -90, 44]))  # the open sky
+    out = tmp_path / "sky.json"
+    session = _run(scene_file, out, "sky", [nothing, PIPE])
+    assert "X" in session.failed and "re-aim" in session.failed["X"]
+    assert list(session.objects) == ["P1"]
+    assert json.loads(out.read_text())["acquisition"]["failed"] == {"X": session.failed["X"]}
+
+
+def test_duplicate_object_ids_are_refused(scene_file, tmp_path):
+    ptu, lrf = _devices(scene_file, "dup")
+    with ScanSession(DeviceShooter(ptu, lrf), STATION, tmp_path / "d.json") as session:
+        session.scan(PIPE)
+        with pytest.raises(ScanError, match="already in the scan"):
+            session.scan(PIPE)
