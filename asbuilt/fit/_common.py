@@ -1,0 +1,627 @@
+"""Shared numerics for the primitive fits: validation, robust scales, normals, Gauss-Newton.
+
+Everything here is a pure numpy function on float64 arrays in metres. The fits in
+:mod:`asbuilt.fit.plane`, :mod:`.sphere` and :mod:`.cylinder` share one robust scheme
+(:func:`robust_geometric_fit`):
+
+1. several starts are each refined by a few iteratively reweighted Gauss-Newton steps with
+   Tukey's biweight (Beaton & Tukey 1974) on the residuals, scaled by the median absolute
+   residual (MAD x 1.4826, Hampel 1974);
+2. the start with the smallest least-trimmed-squares cost (Rousseeuw 1984; the sum of the
+   ``h`` smallest squared residuals, ``h`` = the points a fit must keep) wins and is iterated to
+   convergence;
+3. points with ``|r| <= outlier_cutoff_sigma * scale`` are the inliers, and the final estimate is
+   plain geometric least squares on the inliers only (so clean data gets the efficient
+   estimate), repeated until the inlier set is stable.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from asbuilt.errors import FitError
+from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
+
+__all__ = [
+    "validate_points",
+    "principal_axes",
+    "require_spread",
+    "orthonormal_basis",
+    "orient",
+    "robust_scale",
+    "tukey_weights",
+    "trimmed_cost",
+    "keep_count",
+    "noise_level",
+    "covariance_from_jacobian",
+    "stderr_of",
+    "local_normals",
+    "circle_fit_2d",
+    "arc_coverage_deg",
+    "GeometricModel",
+    "RobustFit",
+    "robust_geometric_fit",
+    "TUKEY_C",
+    "DESIGN_CONTAMINATION",
+]
+
+#: Tukey biweight tuning constant: 95% efficiency at the Gaussian (Holland & Welsch 1977).
+TUKEY_C = 4.685
+#: MAD to Gaussian sigma.
+_MAD_TO_SIGMA = 1.482602218505602
+
+
+def validate_points(points, kind: str) -> np.ndarray:
+    """Return ``points`` as a float64 array, raising FitError when they cannot be fitted at all.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3), metres
+    kind : str
+        The primitive being fitted (a key of :data:`asbuilt.tolerances.MIN_POINTS`).
+
+    Returns
+    -------
+    ndarray, shape (n, 3), metres
+        A float64 copy.
+    """
+    try:
+        array = np.array(points, dtype=np.float64, copy=True)
+    except (TypeError, ValueError):
+        raise FitError("The points must be numbers in an (n, 3) array.") from None
+    if array.ndim != 2 or array.shape[1] != 3:
+        raise FitError(f"The points must have shape (n, 3), not {array.shape}.")
+    if not np.all(np.isfinite(array)):
+        raise FitError("The points must be finite (a coordinate is NaN or infinite).")
+    need = MIN_POINTS[kind]
+    if len(array) < need:
+        raise FitError(
+            f"A {kind} needs at least {need} points, got {len(array)}; measure more points."
+        )
+    return array
+
+
+def principal_axes(points: np.ndarray, weights: np.ndarray | None = None):
+    """Weighted centroid and principal directions of points.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    weights : ndarray, shape (n,), optional
+        Non-negative weights; uniform when None.
+
+    Returns
+    -------
+    centroid : ndarray, shape (3,), metres
+    spread : ndarray, shape (3,), metres
+        Root-mean-square extent along each direction, descending.
+    directions : ndarray, shape (3, 3)
+        Rows are the unit principal directions, matching ``spread``.
+    """
+    if weights is None:
+        centroid = points.mean(axis=0)
+        centred = points - centroid
+        total = float(len(points))
+    else:
+        total = float(weights.sum())
+        centroid = (weights @ points) / total
+        centred = (points - centroid) * np.sqrt(weights)[:, None]
+    _, singular, vt = np.linalg.svd(centred, full_matrices=False)
+    spread = np.zeros(3)
+    spread[: len(singular)] = singular / np.sqrt(max(total, 1.0))
+    if vt.shape[0] < 3:
+        vt = np.vstack([vt, np.cross(vt[0], vt[1]) if vt.shape[0] == 2 else np.eye(3)[1:]])
+    return centroid, spread, vt
+
+
+def require_spread(points: np.ndarray, kind: str, dimensions: int) -> np.ndarray:
+    """Raise FitError unless the points span ``dimensions`` independent directions.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    kind : str
+        Named in the message.
+    dimensions : int
+        1 (not all identical), 2 (not collinear) or 3 (not coplanar).
+
+    Returns
+    -------
+    ndarray, shape (3,), metres
+        The RMS spread along the three principal directions, descending.
+    """
+    _, spread, _ = principal_axes(points)
+    size = spread[0]
+    relative = 1e-9
+    if size <= 1e-12:
+        raise FitError(f"The points are all identical; a {kind} needs points spread over it.")
+    if dimensions >= 2 and spread[1] <= relative * size:
+        raise FitError(
+            f"The points must not be collinear; a {kind} needs points spread over a surface."
+        )
+    if dimensions >= 3 and spread[2] <= relative * size:
+        raise FitError(
+            f"The points must not be coplanar; a {kind} needs points on a curved surface."
+        )
+    return spread
+
+
+def orthonormal_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors ``u``, ``v`` completing ``axis`` to a right-handed frame.
+
+    Deterministic: ``u`` is ``axis`` x e, with e the coordinate axis least aligned with ``axis``,
+    normalised; ``v = axis x u``. The fits' covariances are expressed in this basis.
+
+    Parameters
+    ----------
+    axis : ndarray, shape (3,)
+        Unit vector.
+
+    Returns
+    -------
+    u, v : ndarray, shape (3,)
+    """
+    ax, ay, az = (float(value) for value in axis)
+    magnitudes = (abs(ax), abs(ay), abs(az))
+    least = magnitudes.index(min(magnitudes))
+    # u = axis x e_least, written out (np.cross is slow on single 3-vectors).
+    if least == 0:
+        ux, uy, uz = 0.0, az, -ay
+    elif least == 1:
+        ux, uy, uz = -az, 0.0, ax
+    else:
+        ux, uy, uz = ay, -ax, 0.0
+    norm = (ux * ux + uy * uy + uz * uz) ** 0.5
+    ux, uy, uz = ux / norm, uy / norm, uz / norm
+    v = (ay * uz - az * uy, az * ux - ax * uz, ax * uy - ay * ux)
+    return np.array((ux, uy, uz)), np.array(v)
+
+
+def orient(direction: np.ndarray) -> np.ndarray:
+    """Give a sign-free direction its canonical sign: +z, else +x, else +y.
+
+    The first of the z, x, y components whose magnitude exceeds 1e-9 is made positive.
+
+    Parameters
+    ----------
+    direction : ndarray, shape (3,)
+
+    Returns
+    -------
+    ndarray, shape (3,)
+    """
+    for index in (2, 0, 1):
+        if abs(direction[index]) > 1e-9:
+            return direction if direction[index] > 0 else -direction
+    return direction
+
+
+def robust_scale(residuals: np.ndarray, floor: float) -> float:
+    """Gaussian-consistent scale of residuals: 1.4826 x median |r|, at least ``floor``.
+
+    The median is taken about zero because fit residuals are centred on the surface.
+
+    Parameters
+    ----------
+    residuals : ndarray, shape (n,), metres
+    floor : float, metres
+
+    Returns
+    -------
+    float, metres
+    """
+    size = residuals.size
+    if size == 0:
+        return float(floor)
+    magnitudes = np.abs(residuals)
+    half = size // 2
+    if size % 2:
+        median = float(np.partition(magnitudes, half)[half])
+    else:
+        part = np.partition(magnitudes, (half - 1, half))
+        median = 0.5 * float(part[half - 1] + part[half])
+    return max(_MAD_TO_SIGMA * median, float(floor))
+
+
+def tukey_weights(residuals: np.ndarray, scale: float, c: float = TUKEY_C) -> np.ndarray:
+    """Tukey biweight IRLS weights ``(1 - (r / (c s))^2)^2`` inside ``c s``, else 0.
+
+    Parameters
+    ----------
+    residuals : ndarray, shape (n,), metres
+    scale : float, metres
+    c : float
+        Tuning constant in units of ``scale``.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    u = residuals / (c * scale)
+    return np.where(np.abs(u) < 1.0, (1.0 - u * u) ** 2, 0.0)
+
+
+#: Outlier fraction the start selection is designed for: the product promises to cope with 20%
+#: edge outliers; trimming only that much (plus margin) keeps a wrong surface that happens to
+#: fit half of a sparse scan from beating the right one that fits all of it.
+DESIGN_CONTAMINATION = 0.25
+
+
+def keep_count(n: int, tolerances: Tolerances) -> int:
+    """Points a trimmed cost sums over: ``n`` less the design contamination (at least 1).
+
+    The design contamination is ``DESIGN_CONTAMINATION`` (25%), or
+    ``tolerances.max_outlier_fraction`` when that is smaller.
+    """
+    fraction = min(DESIGN_CONTAMINATION, tolerances.max_outlier_fraction)
+    return max(1, n - int(np.floor(fraction * n)))
+
+
+def trimmed_cost(residuals: np.ndarray, keep: int) -> float:
+    """Least-trimmed-squares cost: sum of the ``keep`` smallest squared residuals, metres^2."""
+    squares = residuals * residuals
+    if keep >= squares.size:
+        return float(squares.sum())
+    return float(np.partition(squares, keep - 1)[:keep].sum())
+
+
+def noise_level(
+    residuals: np.ndarray, n_params: int, sigma: float | None, tolerances: Tolerances
+) -> tuple[float, str]:
+    """The noise level standard errors are scaled by, and where it comes from.
+
+    Parameters
+    ----------
+    residuals : ndarray, shape (m,), metres
+        Inlier residuals of the final fit.
+    n_params : int
+        Parameters estimated by the fit.
+    sigma : float or None, metres
+        The sensor's range sigma when known.
+    tolerances : Tolerances
+
+    Returns
+    -------
+    sigma : float, metres
+        The sensor's sigma, else ``sqrt(sum r^2 / (m - n_params))`` floored by
+        ``tolerances.sigma_floor``.
+    source : str
+        ``"sensor"`` or ``"residuals"``.
+    """
+    if sigma is not None:
+        return float(sigma), "sensor"
+    dof = residuals.size - n_params
+    if dof <= 0:
+        return float(tolerances.sigma_floor), "residuals"
+    estimate = float(np.sqrt(np.sum(residuals * residuals) / dof))
+    return max(estimate, float(tolerances.sigma_floor)), "residuals"
+
+
+def stderr_of(variance: float) -> float:
+    """Standard error from a variance: its root, or infinity when the variance is negative or
+    not finite (a parameter the points do not determine, e.g. the radius of a nearly flat patch).
+
+    Parameters
+    ----------
+    variance : float, metres^2 or radians^2
+
+    Returns
+    -------
+    float
+    """
+    variance = float(variance)
+    if not np.isfinite(variance) or variance < 0.0:
+        return float("inf")
+    return float(np.sqrt(variance))
+
+
+def covariance_from_jacobian(jacobian: np.ndarray, sigma: float) -> np.ndarray:
+    """Gauss-Newton covariance ``sigma^2 (J^T J)^-1`` (pseudo-inverse when rank deficient).
+
+    Parameters
+    ----------
+    jacobian : ndarray, shape (m, p)
+        Derivatives of the inlier residuals (metres) by the parameters.
+    sigma : float, metres
+
+    Returns
+    -------
+    ndarray, shape (p, p)
+    """
+    normal = jacobian.T @ jacobian
+    try:
+        inverse = np.linalg.inv(normal)
+        if not np.all(np.isfinite(inverse)):
+            raise np.linalg.LinAlgError
+    except np.linalg.LinAlgError:
+        inverse = np.linalg.pinv(normal)
+    return sigma * sigma * inverse
+
+
+def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Surface normals from the PCA of each point's ``k`` nearest neighbours (Hoppe et al. 1992).
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    k : int
+        Neighbours including the point itself (clipped to ``[3, n]``).
+
+    Returns
+    -------
+    normals : ndarray, shape (n, 3)
+        Unit normals (sign arbitrary).
+    flatness : ndarray, shape (n,)
+        Smallest over middle eigenvalue of each neighbourhood (0 for a perfect plane patch).
+    """
+    n = len(points)
+    k = int(min(max(k, 3), n))
+    if n <= 600:
+        diff = points[:, None, :] - points[None, :, :]
+        dist = np.einsum("ijk,ijk->ij", diff, diff)
+        index = np.argpartition(dist, k - 1, axis=1)[:, :k]
+    else:
+        from scipy.spatial import cKDTree
+
+        _, index = cKDTree(points).query(points, k=k)
+    hood = points[index]
+    hood = hood - hood.mean(axis=1, keepdims=True)
+    scatter = np.einsum("nki,nkj->nij", hood, hood)
+    values, vectors = np.linalg.eigh(scatter)
+    flatness = values[:, 0] / np.maximum(values[:, 1], 1e-300)
+    return vectors[:, :, 0], flatness
+
+
+def circle_fit_2d(xy: np.ndarray, weights: np.ndarray | None = None):
+    """Algebraic circle fit (Kasa 1976): least squares on ``x^2 + y^2 + D x + E y + F = 0``.
+
+    Only an initial value: it is biased on partial arcs, so the fits refine it geometrically.
+
+    Parameters
+    ----------
+    xy : ndarray, shape (n, 2), metres
+    weights : ndarray, shape (n,), optional
+
+    Returns
+    -------
+    center : ndarray, shape (2,), metres
+    radius : float, metres
+        Both NaN when the system is singular.
+    """
+    offset = xy.mean(axis=0)
+    local = xy - offset
+    design = np.column_stack([local, np.ones(len(local))])
+    rhs = -(local * local).sum(axis=1)
+    if weights is not None:
+        root = np.sqrt(weights)
+        design = design * root[:, None]
+        rhs = rhs * root
+    try:
+        solution, *_ = np.linalg.lstsq(design, rhs, rcond=None)
+    except np.linalg.LinAlgError:
+        return np.full(2, np.nan), float("nan")
+    center = -0.5 * solution[:2]
+    squared = center @ center - solution[2]
+    radius = float(np.sqrt(squared)) if squared > 0 else float("nan")
+    return center + offset, radius
+
+
+def arc_coverage_deg(angles: np.ndarray) -> float:
+    """Angular coverage of directions about an axis: 360 degrees less the largest gap.
+
+    Parameters
+    ----------
+    angles : ndarray, shape (n,), radians
+
+    Returns
+    -------
+    float, degrees
+    """
+    if angles.size < 2:
+        return 0.0
+    ordered = np.sort(np.mod(angles, 2 * np.pi))
+    gaps = np.diff(np.concatenate([ordered, ordered[:1] + 2 * np.pi]))
+    return float(np.degrees(2 * np.pi - gaps.max()))
+
+
+@dataclass(frozen=True)
+class GeometricModel:
+    """The three functions a geometric least-squares fit needs.
+
+    ``residuals(state, points) -> (n,)`` metres; ``jacobian(state, points) -> (r (n,), J (n, p))``;
+    ``update(state, delta (p,), points, weights) -> state``. ``state`` is any value.
+    """
+
+    residuals: Callable[[Any, np.ndarray], np.ndarray]
+    jacobian: Callable[[Any, np.ndarray], tuple[np.ndarray, np.ndarray]]
+    update: Callable[[Any, np.ndarray, np.ndarray, np.ndarray], Any]
+    n_params: int
+
+
+@dataclass(frozen=True)
+class RobustFit:
+    """What :func:`robust_geometric_fit` returns.
+
+    Attributes
+    ----------
+    state : Any
+        The model's final state (least squares on the inliers).
+    residuals : ndarray, shape (n,), metres
+        Every point's residual at ``state``.
+    inliers : ndarray, shape (n,), bool
+    jacobian : ndarray, shape (m, p)
+        The inliers' Jacobian at ``state``.
+    scale : float, metres
+        The noise scale inliers were judged by.
+    """
+
+    state: Any
+    residuals: np.ndarray
+    inliers: np.ndarray
+    jacobian: np.ndarray
+    scale: float
+
+
+def _iterate(model, state, points, weigh, iterations, tolerance, current=None):
+    """Gauss-Newton with step halving; ``weigh(residuals) -> weights`` is re-evaluated each step.
+
+    Returns (state, residuals, jacobian); stops when a step lowers the weighted cost by less
+    than ``tolerance`` times the cost.
+    """
+    residuals, jacobian = model.jacobian(state, points) if current is None else current
+    for _ in range(iterations):
+        weights = weigh(residuals)
+        if np.count_nonzero(weights) < model.n_params:
+            break
+        cost = float(weights @ (residuals * residuals))
+        if cost <= 0.0:
+            break
+        weighted = jacobian * weights[:, None]
+        normal = weighted.T @ jacobian
+        gradient = weighted.T @ residuals
+        try:
+            delta = -np.linalg.solve(normal, gradient)
+        except np.linalg.LinAlgError:
+            delta = -np.linalg.lstsq(normal, gradient, rcond=None)[0]
+        accepted = False
+        for _ in range(8):
+            trial = model.update(state, delta, points, weights)
+            trial_residuals, trial_jacobian = model.jacobian(trial, points)
+            trial_cost = float(weights @ (trial_residuals * trial_residuals))
+            if np.isfinite(trial_cost) and trial_cost <= cost:
+                accepted = True
+                break
+            delta = 0.5 * delta
+        if not accepted:
+            break
+        state, residuals, jacobian = trial, trial_residuals, trial_jacobian
+        if cost - trial_cost <= tolerance * cost:
+            break
+    return state, residuals, jacobian
+
+
+def robust_geometric_fit(
+    points: np.ndarray,
+    starts: Sequence[Any],
+    model: GeometricModel,
+    *,
+    kind: str,
+    sigma: float | None = None,
+    tolerances: Tolerances = DEFAULT_TOLERANCES,
+    start_iterations: int = 4,
+    always_refine: int = 3,
+    max_starts: int = 4,
+    max_iterations: int = 50,
+) -> RobustFit:
+    """Robust start selection, Tukey IRLS, then least squares on the inliers.
+
+    The first start and the ``always_refine - 1`` others with the smallest least-trimmed-squares
+    cost are refined (``start_iterations`` Tukey IRLS steps each); further starts, in
+    increasing order of that cost, only while it is below the best refined one, at most
+    ``max_starts`` in all. The refined candidates are compared by their MSAC cost
+    (Torr & Zisserman 2000: ``sum min(r^2, (c s)^2)`` with ``c = outlier_cutoff_sigma`` and
+    ``s`` the smallest robust scale among them, or the sensor sigma if larger), which, unlike
+    the trimmed cost, does not let a subset of the points win by fitting a few points less.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    starts : sequence
+        Initial model states (at least one); the first is the most trusted.
+    model : GeometricModel
+    kind : str
+        Named in errors.
+    sigma : float or None, metres
+        Sensor range sigma; the inlier threshold uses ``max(sigma, robust scale)`` so that a
+        surface that is rougher than the sensor is not mistaken for outliers.
+    tolerances : Tolerances
+    start_iterations : int
+    always_refine : int
+    max_starts : int
+    max_iterations : int
+
+    Returns
+    -------
+    RobustFit
+
+    Raises
+    ------
+    FitError
+        No start gives finite residuals, or more than ``tolerances.max_outlier_fraction`` of
+        the points are outliers to the best fit.
+    """
+    n = len(points)
+    keep = keep_count(n, tolerances)
+    floor = float(tolerances.sigma_floor)
+
+    def tukey(residuals):
+        return tukey_weights(residuals, robust_scale(residuals, floor))
+
+    ranked = []
+    for order, start in enumerate(starts):
+        residuals = model.residuals(start, points)
+        cost = trimmed_cost(residuals, keep)
+        if np.isfinite(cost):
+            ranked.append((0.0 if order == 0 else cost, order, start))
+    if not ranked:
+        raise FitError(f"No {kind} fits these points; check that they lie on one {kind}.")
+    ranked.sort(key=lambda item: (item[0], item[1]))
+    refined = []
+    bound = np.inf
+    for cost, _, start in ranked:
+        if len(refined) >= max_starts or (len(refined) >= always_refine and cost >= bound):
+            break
+        state, residuals, jacobian = _iterate(model, start, points, tukey, start_iterations, 0.0)
+        if not np.all(np.isfinite(residuals)):
+            continue
+        bound = min(bound, trimmed_cost(residuals, keep))
+        refined.append((state, residuals, jacobian))
+    if not refined:
+        raise FitError(f"No {kind} fits these points; check that they lie on one {kind}.")
+    reference = min(robust_scale(item[1], floor) for item in refined)
+    if sigma is not None:
+        reference = max(reference, float(sigma))
+    cap = (tolerances.outlier_cutoff_sigma * reference) ** 2
+    scores = [float(np.minimum(item[1] * item[1], cap).sum()) for item in refined]
+    state, residuals, jacobian = refined[int(np.argmin(scores))]
+    # Iterate the robust (Tukey) estimate to convergence.
+    state, residuals, jacobian = _iterate(
+        model, state, points, tukey, max_iterations, 1e-8, (residuals, jacobian)
+    )
+    # Inliers, then plain least squares on them until the inlier set is stable.
+    mask = None
+    for _ in range(5):
+        scale = robust_scale(residuals, floor)
+        if mask is not None:
+            # Once outliers are out, the inliers' standard deviation (with the degrees of
+            # freedom the fit used up) is a consistent scale; the MAD alone underestimates it
+            # when the noise varies from point to point (incidence angles).
+            dof = max(int(np.count_nonzero(mask)) - model.n_params, 1)
+            scale = max(scale, float(np.sqrt(np.sum(residuals[mask] ** 2) / dof)))
+        if sigma is not None:
+            scale = max(scale, float(sigma))
+        new_mask = np.abs(residuals) <= tolerances.outlier_cutoff_sigma * scale
+        if mask is not None and np.array_equal(new_mask, mask):
+            break
+        mask = new_mask
+        kept = int(np.count_nonzero(mask))
+        if n - kept > tolerances.max_outlier_fraction * n or kept <= model.n_params:
+            raise FitError(
+                f"{n - kept} of {n} points are outliers to the best {kind} (more than "
+                f"{tolerances.max_outlier_fraction:.0%}); check that the points are one {kind}."
+            )
+        weights = mask.astype(np.float64)
+        state, residuals, jacobian = _iterate(
+            model,
+            state,
+            points,
+            lambda _r, w=weights: w,
+            max_iterations,
+            1e-10,
+            (residuals, jacobian),
+        )
+    return RobustFit(state, residuals, mask, jacobian[mask], scale)

@@ -1,0 +1,178 @@
+"""Automatic kind: fit a plane, sphere, cylinder and cuboid, keep the one the evidence favours.
+
+Criterion
+---------
+The Bayesian information criterion (Schwarz 1978), ``-2 ln L + p ln n``, of each candidate's
+orthogonal residuals, with outliers handled the same way for every model (a mixture of Gaussian
+inliers and uniform outliers, as in Torr's robust GRIC, Torr 1998, "Geometric motion
+segmentation and model selection"). ``p`` is the kind's parameter count (plane 3, sphere 4,
+cylinder 5, cuboid 9: centre, orientation, sizes) and ``n`` the number of points.
+
+* Sensor sigma ``s`` known: ``-2 ln L = sum_i min((r_i / s)^2, c^2)`` (+ a constant common to all
+  models), ``c`` = ``tolerances.outlier_cutoff_sigma``: a point beyond ``c s`` costs every model
+  the same.
+* Unknown: each model's inliers are Gaussian with its own maximum-likelihood sigma
+  ``s_k^2 = sum_inliers r^2 / m_k`` and its rejected points uniform over the points' extent
+  ``W`` (bounding-box diagonal): ``-2 ln L = m_k (1 + ln(2 pi s_k^2)) + (n - m_k) 2 ln W``.
+  Only the ratio ``s_k / W`` matters, so the score does not depend on the unit.
+
+A more complex model must win by *strong* evidence, a BIC difference of at least 6 (Kass &
+Raftery 1995: 0-2 barely worth mentioning, 2-6 positive, 6-10 strong): among the candidates
+within 6 of the best, the simplest (fewest parameters) is chosen. With 20-40 points a flat wall
+otherwise passes for a 1 km sphere now and then (a chance drop of the residuals by a few
+sigma^2), while real curved or boxy objects win by tens to hundreds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from asbuilt.errors import FitError
+from asbuilt.fit._common import require_spread, validate_points
+from asbuilt.fit.result import FitResult
+from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
+
+__all__ = ["fit_auto", "CANDIDATES", "PARAMETERS", "WEAK_EVIDENCE", "information_scores"]
+
+#: Kinds tried, simplest first.
+CANDIDATES = ("plane", "sphere", "cylinder", "cuboid")
+#: Free parameters of each kind's surface (what the BIC penalises).
+PARAMETERS = {"plane": 3, "sphere": 4, "cylinder": 5, "cuboid": 9}
+#: BIC difference a more complex model must beat to be chosen ("strong", Kass & Raftery 1995).
+WEAK_EVIDENCE = 6.0
+
+
+def _fitter(kind: str):
+    """The fit function of a kind, imported on use (the cuboid fit may not be installed)."""
+    if kind == "plane":
+        from asbuilt.fit.plane import fit_plane
+
+        return fit_plane
+    if kind == "sphere":
+        from asbuilt.fit.sphere import fit_sphere
+
+        return fit_sphere
+    if kind == "cylinder":
+        from asbuilt.fit.cylinder import fit_cylinder
+
+        return fit_cylinder
+    from asbuilt.fit.cuboid import fit_cuboid
+
+    return fit_cuboid
+
+
+def information_scores(
+    results: dict[str, FitResult],
+    sigma: float | None,
+    extent: float,
+    tolerances: Tolerances = DEFAULT_TOLERANCES,
+) -> dict[str, float]:
+    """BIC of each fit of the same points (see the module docstring).
+
+    Parameters
+    ----------
+    results : dict of kind -> FitResult
+        Fits of the same ``n`` points.
+    sigma : float or None, metres
+        The sensor's range sigma, or None to use each model's own inlier sigma.
+    extent : float, metres
+        Width ``W`` of the uniform outlier density (the points' bounding-box diagonal).
+    tolerances : Tolerances
+        ``outlier_cutoff_sigma`` truncates residuals when ``sigma`` is known;
+        ``sigma_floor`` floors the estimated sigmas.
+
+    Returns
+    -------
+    dict of kind -> float
+    """
+    scores = {}
+    cutoff = tolerances.outlier_cutoff_sigma
+    for kind, result in results.items():
+        residuals = np.asarray(result.residuals, dtype=np.float64)
+        n = residuals.size
+        if sigma is not None:
+            scaled = residuals / sigma
+            data = float(np.minimum(scaled * scaled, cutoff * cutoff).sum())
+        else:
+            inliers = residuals[np.asarray(result.inliers, dtype=bool)]
+            m = inliers.size
+            variance = max(float(np.mean(inliers * inliers)), tolerances.sigma_floor**2)
+            data = m * (1.0 + math.log(2.0 * math.pi * variance))
+            data += (n - m) * 2.0 * math.log(max(extent, tolerances.sigma_floor))
+        scores[kind] = data + PARAMETERS[kind] * math.log(n)
+    return scores
+
+
+def fit_auto(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES) -> FitResult:
+    """Fit every candidate kind and return the one a robust BIC prefers, saying why.
+
+    Algorithm: plane, sphere, cylinder and cuboid fits of the same points, compared by the
+    Bayesian information criterion (Schwarz 1978) of their orthogonal residuals with outliers
+    scored alike for every model (as in Torr's GRIC, 1998), preferring the simplest model
+    unless the evidence against it is strong (a BIC difference of 6, Kass & Raftery 1995);
+    see the module docstring.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3), metres
+    sigma : float, optional, metres
+        The sensor's range sigma; the common noise level of the criterion when given.
+    tolerances : Tolerances
+
+    Returns
+    -------
+    FitResult
+        The chosen kind's own result, with a note giving every candidate's score (or why it
+        could not be fitted) and the reason for the choice appended to ``notes``.
+
+    Raises
+    ------
+    FitError
+        Too few, identical or collinear points, or no candidate kind fits.
+    """
+    pts = validate_points(points, "auto")
+    require_spread(pts, "auto", 2)
+    results: dict[str, FitResult] = {}
+    failures: dict[str, str] = {}
+    for kind in CANDIDATES:
+        try:
+            fitter = _fitter(kind)
+        except ImportError:
+            failures[kind] = "not available"
+            continue
+        try:
+            results[kind] = fitter(pts, sigma=sigma, tolerances=tolerances)
+        except FitError as exc:
+            failures[kind] = exc.message
+    if not results:
+        reasons = "; ".join(f"{kind}: {why}" for kind, why in failures.items())
+        raise FitError(f"No kind fits these points ({reasons}); choose a kind or hull.")
+    extent = float(np.linalg.norm(np.ptp(pts, axis=0)))
+    scores = information_scores(results, sigma, extent, tolerances)
+    if sigma is not None:
+        basis = f"sensor sigma {float(sigma) * 1000:.3g} mm"
+    else:
+        basis = "each model's own inlier sigma"
+    best = min(scores, key=lambda kind: (scores[kind], PARAMETERS[kind]))
+    close = [kind for kind in scores if scores[kind] <= scores[best] + WEAK_EVIDENCE]
+    chosen = min(close, key=lambda kind: (PARAMETERS[kind], scores[kind]))
+    others = ", ".join(
+        f"{kind} {scores[kind]:.1f}" for kind in CANDIDATES if kind in scores and kind != chosen
+    )
+    why = f"auto chose {chosen}: BIC {scores[chosen]:.1f}"
+    if others:
+        why += f" (lower is better; {others})"
+    why += f"; {basis}."
+    if chosen != best:
+        why += (
+            f" {best} scored {scores[chosen] - scores[best]:.1f} lower, not strong evidence"
+            f" (< {WEAK_EVIDENCE:g}); the simpler {chosen} is preferred."
+        )
+    notes = [why]
+    for kind, reason in failures.items():
+        notes.append(f"auto could not fit a {kind}: {reason}")
+    result = results[chosen]
+    return dataclasses.replace(result, notes=tuple(result.notes) + tuple(notes))

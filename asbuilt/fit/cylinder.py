@@ -1,0 +1,450 @@
+"""Cylinder fit for sparse scans of pipes and columns: partial arcs, short stubs, edge outliers.
+
+Method
+------
+1. Axis starts: the direction most perpendicular to the local surface normals (smallest
+   eigenvector of ``sum n n^T`` over k-nearest-neighbour PCA normals, Hoppe et al. 1992, with a
+   Tukey reweighting against normals spoiled by outliers), its other eigenvectors, the points'
+   principal directions, and cross products of the most different normals (short stubs, whose
+   principal direction is across the axis).
+2. For each start, an algebraic circle (Kasa 1976) in the plane perpendicular to the axis gives
+   the centre and radius.
+3. Geometric least squares over five parameters (two axis tilts, two across-axis centre
+   offsets, the radius) minimising the orthogonal distances ``|P_perp (p - c)| - r``
+   (Lukacs, Marshall & Martin 1998, "Faithful least-squares fitting of spheres, cylinders,
+   cones and tori"; Eberly, "Fitting 3D data with a cylinder"), by Gauss-Newton with an
+   analytic Jacobian, wrapped in the robust scheme of :func:`asbuilt.fit._common.robust_geometric_fit`
+   (Tukey IRLS from every start, least-trimmed-squares choice, least squares on the inliers).
+
+The geometric estimate is the final one: algebraic circle fits alone are biased on partial arcs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from asbuilt.errors import FitError
+from asbuilt.fit._common import (
+    GeometricModel,
+    arc_coverage_deg,
+    covariance_from_jacobian,
+    keep_count,
+    local_normals,
+    noise_level,
+    orient,
+    orthonormal_basis,
+    principal_axes,
+    require_spread,
+    robust_geometric_fit,
+    robust_scale,
+    stderr_of,
+    tukey_weights,
+    validate_points,
+)
+from asbuilt.fit.result import FitResult
+from asbuilt.primitives import Cylinder
+from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
+
+__all__ = ["fit_cylinder", "METHOD"]
+
+METHOD = (
+    "normal-based axis starts + Kasa circle + robust geometric Gauss-Newton on orthogonal "
+    "distances (Lukacs, Marshall & Martin 1998)"
+)
+
+
+# State: (axis (3,), centre on the axis (3,), radius).
+
+
+def _residuals(state, points):
+    axis, center, radius = state
+    rel = points - center
+    along = rel @ axis
+    radial = rel - along[:, None] * axis
+    return np.sqrt(np.einsum("ij,ij->i", radial, radial)) - radius
+
+
+def _jacobian(state, points):
+    axis, center, radius = state
+    u, v = orthonormal_basis(axis)
+    rel = points - center
+    along = rel @ axis
+    radial = rel - along[:, None] * axis
+    rho = np.maximum(np.sqrt(np.einsum("ij,ij->i", radial, radial)), 1e-300)
+    eu = (radial @ u) / rho
+    ev = (radial @ v) / rho
+    jac = np.empty((len(points), 5))
+    jac[:, 0] = -along * eu
+    jac[:, 1] = -along * ev
+    jac[:, 2] = -eu
+    jac[:, 3] = -ev
+    jac[:, 4] = -1.0
+    return rho - radius, jac
+
+
+def _update(state, delta, points, weights):
+    axis, center, radius = state
+    u, v = orthonormal_basis(axis)
+    new_axis = axis + delta[0] * u + delta[1] * v
+    new_axis = new_axis / np.linalg.norm(new_axis)
+    new_center = center + delta[2] * u + delta[3] * v
+    # Slide the centre along the axis to the weighted centroid's foot (residuals unchanged),
+    # which keeps the axis tilts and the centre offsets uncorrelated.
+    total = weights.sum()
+    centroid = (weights @ points) / total if total > 0 else points.mean(axis=0)
+    new_center = new_center + ((centroid - new_center) @ new_axis) * new_axis
+    return new_axis, new_center, abs(radius + delta[4])
+
+
+_MODEL = GeometricModel(_residuals, _jacobian, _update, 5)
+
+
+def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
+    """Axis as the direction most perpendicular to the normals, Tukey-reweighted; and the eigvecs."""
+    weights = 1.0 / (1.0 + flatness / max(float(np.median(flatness)), 1e-12))
+    vectors = None
+    for _ in range(4):
+        scatter = (normals * weights[:, None]).T @ normals
+        _, vectors = np.linalg.eigh(scatter)
+        cosines = normals @ vectors[:, 0]
+        scale = robust_scale(cosines, 0.02)
+        weights = tukey_weights(cosines, scale)
+        if np.count_nonzero(weights) < 3:
+            break
+    return vectors.T
+
+
+def _axis_starts(points: np.ndarray, normals, flatness) -> list[np.ndarray]:
+    candidates = list(_normal_axis(normals, flatness))
+    _, _, directions = principal_axes(points)
+    candidates.extend(directions)
+    unique: list[np.ndarray] = []
+    for axis in candidates:
+        if all(abs(float(axis @ other)) < 0.995 for other in unique):
+            unique.append(axis)
+    return unique
+
+
+def _kasa_batch(xy: np.ndarray, weights: np.ndarray):
+    """Weighted Kasa circles (Kasa 1976) for a batch of projections.
+
+    Parameters
+    ----------
+    xy : ndarray, shape (a, n, 2), metres
+    weights : ndarray, shape (a, n)
+
+    Returns
+    -------
+    center : ndarray, shape (a, 2), metres
+    radius : ndarray, shape (a,), metres (NaN where undefined)
+    """
+    design = np.concatenate([xy, np.ones(xy.shape[:2] + (1,))], axis=2)
+    rhs = -(xy * xy).sum(axis=2)
+    weighted = design * weights[:, :, None]
+    normal = np.einsum("ani,anj->aij", weighted, design)
+    right = np.einsum("ani,an->ai", weighted, rhs)
+    try:
+        solution = np.linalg.solve(normal, right[:, :, None])[:, :, 0]
+    except np.linalg.LinAlgError:
+        solution = (np.linalg.pinv(normal) @ right[:, :, None])[:, :, 0]
+    center = -0.5 * solution[:, :2]
+    squared = (center * center).sum(axis=1) - solution[:, 2]
+    with np.errstate(invalid="ignore"):
+        radius = np.where(squared > 0, np.sqrt(np.abs(squared)), np.nan)
+    return center, radius
+
+
+def _circle_starts(points: np.ndarray, axes: list, keep: int, rng, samples: int = 48):
+    """Centre and radius for each candidate axis, robust to background shots.
+
+    For every axis (all at once, vectorised), the points are projected on the plane across it;
+    the Kasa circle of all of them and the best circumcircle of random point triples (by
+    trimmed cost, a RANSAC-style start: Fischler & Bolles 1981) compete by trimmed cost, and the
+    winner is polished by two least-trimmed-squares concentration steps (Rousseeuw & Van
+    Driessen 2006: the Kasa circle of the ``keep`` points closest to the current circle).
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres (centred)
+    axes : list of ndarray, shape (3,)
+    keep : int
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    list of (axis, center (3,), radius) states
+    """
+    n = len(points)
+    keep = min(keep, n)
+    bases = [orthonormal_basis(axis) for axis in axes]
+    u = np.array([basis[0] for basis in bases])
+    v = np.array([basis[1] for basis in bases])
+    xy = np.stack([points @ u.T, points @ v.T], axis=2).transpose(1, 0, 2)  # (a, n, 2)
+    count = len(axes)
+    rows = np.arange(count)
+
+    def trimmed(center, radius):
+        distance = np.abs(
+            np.hypot(xy[:, :, 0] - center[:, None, 0], xy[:, :, 1] - center[:, None, 1])
+            - radius[:, None]
+        )
+        squared = np.where(np.isfinite(distance), distance * distance, np.inf)
+        return np.partition(squared, keep - 1, axis=1)[:, :keep].sum(axis=1), distance
+
+    center, radius = _kasa_batch(xy, np.ones((count, n)))
+    cost, _ = trimmed(center, radius)
+    # Circumcircles of random triples, shared across axes.
+    index = rng.integers(0, n, (samples, 3))
+    pa, pb, pc = xy[:, index[:, 0]], xy[:, index[:, 1]], xy[:, index[:, 2]]  # (a, t, 2)
+    det = 2.0 * (
+        pa[..., 0] * (pb[..., 1] - pc[..., 1])
+        + pb[..., 0] * (pc[..., 1] - pa[..., 1])
+        + pc[..., 0] * (pa[..., 1] - pb[..., 1])
+    )
+    sa, sb, sc = (pa * pa).sum(-1), (pb * pb).sum(-1), (pc * pc).sum(-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ux = (
+            sa * (pb[..., 1] - pc[..., 1])
+            + sb * (pc[..., 1] - pa[..., 1])
+            + sc * (pa[..., 1] - pb[..., 1])
+        ) / det
+        uy = (
+            sa * (pc[..., 0] - pb[..., 0])
+            + sb * (pa[..., 0] - pc[..., 0])
+            + sc * (pb[..., 0] - pa[..., 0])
+        ) / det
+        tr = np.hypot(pa[..., 0] - ux, pa[..., 1] - uy)
+        dist = np.hypot(xy[:, None, :, 0] - ux[..., None], xy[:, None, :, 1] - uy[..., None])
+        sq = (dist - tr[..., None]) ** 2
+    sq = np.where(np.isfinite(sq), sq, np.inf)
+    tcost = np.partition(sq, keep - 1, axis=2)[:, :, :keep].sum(axis=2)  # (a, t)
+    best = np.argmin(tcost, axis=1)
+    better = tcost[rows, best] < np.where(np.isfinite(cost), cost, np.inf)
+    center = np.where(better[:, None], np.stack([ux[rows, best], uy[rows, best]], 1), center)
+    radius = np.where(better, tr[rows, best], radius)
+    for _ in range(2):
+        _, distance = trimmed(center, radius)
+        distance = np.where(np.isfinite(distance), distance, np.inf)
+        closest = np.argpartition(distance, keep - 1, axis=1)[:, :keep]
+        weights = np.zeros((count, n))
+        weights[rows[:, None], closest] = 1.0
+        new_center, new_radius = _kasa_batch(xy, weights)
+        ok = np.isfinite(new_radius)
+        center = np.where(ok[:, None], new_center, center)
+        radius = np.where(ok, new_radius, radius)
+    centroid = points.mean(axis=0)
+    states = []
+    for k, axis in enumerate(axes):
+        if np.isfinite(radius[k]) and radius[k] > 0 and np.all(np.isfinite(center[k])):
+            middle = center[k, 0] * u[k] + center[k, 1] * v[k] + (centroid @ axis) * axis
+            states.append((axis, middle, float(radius[k])))
+    return states
+
+
+def _line_axis(points: np.ndarray, keep: int, rng, samples: int = 48, steps: int = 2):
+    """Robust principal direction: the best line through two points by trimmed cost, then
+    concentration steps (principal direction of the ``keep`` points closest to the line).
+
+    A long pipe's points lie within a radius of its axis, so this is its axis even when
+    background shots far behind it spoil the ordinary principal directions.
+    """
+    n = len(points)
+    first = rng.integers(0, n, samples)
+    second = rng.integers(0, n, samples)
+    direction = points[second] - points[first]
+    norm = np.linalg.norm(direction, axis=1)
+    good = norm > 1e-12
+    if not np.any(good):
+        return None
+    direction = direction[good] / norm[good, None]
+    base = points[first[good]]
+    rel = points[None, :, :] - base[:, None, :]
+    along = np.einsum("snk,sk->sn", rel, direction)
+    distance = np.einsum("snk,snk->sn", rel, rel) - along * along
+    cost = np.partition(distance, keep - 1, axis=1)[:, :keep].sum(axis=1)
+    best = int(np.argmin(cost))
+    axis, point = direction[best], base[best]
+    for _ in range(steps):
+        rel = points - point
+        along = rel @ axis
+        distance = np.einsum("ij,ij->i", rel, rel) - along * along
+        closest = np.argpartition(distance, keep - 1)[:keep]
+        point, _, directions = principal_axes(points[closest])
+        axis = directions[0]
+    return axis
+
+
+def _pair_starts(points, normals, keep: int, count: int, samples: int = 96):
+    """Minimal-sample starts (Schnabel, Wahl & Klein 2007): two points and their normals.
+
+    The axis is the cross product of the normals, the centre the closest approach of the two
+    normal lines, the radius the mean distance of the two points from that axis. Every sample
+    is scored by its least-trimmed-squares cost over all points; the ``count`` best are kept.
+    Shots on the background spoil their own normals, so samples of two clean points (most of
+    them with 20% outliers) give starts near the true cylinder even when a fit on all points
+    is dragged away.
+    """
+    n = len(points)
+    rng = np.random.default_rng(n)
+    first = rng.integers(0, n, samples)
+    second = rng.integers(0, n, samples)
+    d1, d2 = normals[first], normals[second]
+    b = np.einsum("ij,ij->i", d1, d2)
+    good = (first != second) & (np.abs(b) < np.cos(np.radians(10.0)))
+    if not np.any(good):
+        return []
+    first, second, d1, d2, b = first[good], second[good], d1[good], d2[good], b[good]
+    p1, p2 = points[first], points[second]
+    axis = np.cross(d1, d2)
+    axis /= np.linalg.norm(axis, axis=1)[:, None]
+    w = p1 - p2
+    d = np.einsum("ij,ij->i", d1, w)
+    e = np.einsum("ij,ij->i", d2, w)
+    denom = 1.0 - b * b
+    s = (b * e - d) / denom
+    t = (e - b * d) / denom
+    center = 0.5 * (p1 + s[:, None] * d1 + p2 + t[:, None] * d2)
+    rel = points[None, :, :] - center[:, None, :]
+    along = np.einsum("snk,sk->sn", rel, axis)
+    rho = np.sqrt(np.maximum(np.einsum("snk,snk->sn", rel, rel) - along * along, 0.0))
+    radius = 0.5 * (rho[np.arange(len(first)), first] + rho[np.arange(len(first)), second])
+    residuals = rho - radius[:, None]
+    keep = min(keep, n)
+    cost = np.partition(residuals * residuals, keep - 1, axis=1)[:, :keep].sum(axis=1)
+    order = np.argsort(cost)[:count]
+    return [axis[i] for i in order if radius[i] > 0]
+
+
+def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES) -> FitResult:
+    """Fit a bounded circular cylinder to points on its visible side.
+
+    Works on partial arcs down to about 90 degrees and on stubs shorter than their diameter;
+    up to ``tolerances.max_outlier_fraction`` of edge outliers are rejected and reported. See
+    the module docstring for the algorithm (normal-based starts, Kasa initial circle, robust
+    geometric Gauss-Newton after Lukacs, Marshall & Martin 1998, least squares on the inliers).
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3), metres
+    sigma : float, optional, metres
+        The sensor's range sigma; scales the standard errors when given.
+    tolerances : Tolerances
+
+    Returns
+    -------
+    FitResult
+        ``primitive`` is a :class:`~asbuilt.primitives.Cylinder` whose ``center`` is the
+        mid-point of the inliers' extent along the axis and ``length`` that extent. The axis
+        sign follows :func:`asbuilt.fit._common.orient` (+z, else +x, else +y). Residuals are
+        positive outside. ``covariance`` (5 x 5) is over (tilt of the axis towards ``u``,
+        tilt towards ``v`` (radians, about ``center``), centre offset along ``u``, along ``v``
+        (metres), radius (metres)) with ``u, v = orthonormal_basis(axis)``. ``stderr``:
+        ``radius``; ``axis_deg`` (RMS axis angle error, the root of the two tilt variances);
+        ``center`` (across-axis position, root of the two offset variances); ``length``
+        (end-point uncertainty: each end lies somewhere between the last shot and the next
+        one, so ``s / sqrt(6)`` with ``s`` the median nearest-neighbour spacing of the
+        points, plus the axis-tilt effect, in quadrature). Diagnostics: ``arc_deg`` (angular
+        coverage of the inliers about the axis), ``length_over_diameter``, ``cost_starts``.
+
+    Raises
+    ------
+    FitError
+        Too few points, identical, collinear or coplanar points, or too many outliers.
+    """
+    pts = validate_points(points, "cylinder")
+    require_spread(pts, "cylinder", 3)
+    offset = pts.mean(axis=0)
+    local = pts - offset
+    normals, flatness = local_normals(local, tolerances.normal_neighbours)
+    keep = keep_count(len(local), tolerances)
+    starts = []
+    rng = np.random.default_rng(len(local))
+    axes = _axis_starts(local, normals, flatness) + _pair_starts(local, normals, keep, 3)
+    line = _line_axis(local, keep, rng)
+    if line is not None:
+        axes.append(line)
+    starts = _circle_starts(local, axes, keep, rng)
+    robust = robust_geometric_fit(
+        local, starts, _MODEL, kind="cylinder", sigma=sigma, tolerances=tolerances
+    )
+    axis, center, radius = robust.state
+    kept = local[robust.inliers]
+    along = (kept - center) @ axis
+    low, high = float(along.min()), float(along.max())
+    length = high - low
+    if length <= 0:
+        raise FitError("The points must spread along the cylinder's axis to give it a length.")
+    mid = center + 0.5 * (low + high) * axis
+    noise, source = noise_level(robust.residuals[robust.inliers], 5, sigma, tolerances)
+    # Re-express the Jacobian about the mid-point (the reported centre): shift the along-axis
+    # coordinate used by the tilt columns.
+    jac = robust.jacobian.copy()
+    shift = 0.5 * (low + high)
+    jac[:, 0] -= shift * jac[:, 2]
+    jac[:, 1] -= shift * jac[:, 3]
+    covariance = covariance_from_jacobian(jac, noise)
+    tilt_var = covariance[0, 0] + covariance[1, 1]
+    spacing = _median_spacing(kept)
+    length_se = stderr_of(spacing**2 / 6.0 + 2.0 * noise**2 + (radius**2) * tilt_var)
+    oriented = orient(axis)
+    cylinder = Cylinder(mid + offset, oriented, radius, length)
+    u, v = orthonormal_basis(axis)
+    rel = kept - center
+    angles = np.arctan2(rel @ v, rel @ u)
+    stderr = {
+        "radius": stderr_of(covariance[4, 4]),
+        "axis_deg": float(np.degrees(stderr_of(tilt_var))),
+        "center": stderr_of(covariance[2, 2] + covariance[3, 3]),
+        "length": length_se,
+    }
+    if oriented is not axis:
+        covariance = _flip_covariance(covariance, axis, oriented)
+    notes = []
+    outliers = int(len(pts) - robust.inliers.sum())
+    if outliers:
+        notes.append(
+            f"{outliers} outlier point(s) rejected (beyond {tolerances.outlier_cutoff_sigma:g}"
+            f" x {robust.scale * 1000:.3g} mm)."
+        )
+    diagnostics = {
+        "arc_deg": arc_coverage_deg(angles),
+        "length_over_diameter": length / (2.0 * radius),
+        "starts": float(len(starts)),
+    }
+    return FitResult(
+        primitive=cylinder,
+        residuals=cylinder.distance(pts),
+        inliers=robust.inliers,
+        stderr=stderr,
+        sigma=noise,
+        sigma_source=source,
+        method=METHOD,
+        covariance=covariance,
+        diagnostics=diagnostics,
+        notes=tuple(notes),
+    )
+
+
+def _median_spacing(points: np.ndarray) -> float:
+    if len(points) < 2:
+        return 0.0
+    if len(points) <= 600:
+        diff = points[:, None, :] - points[None, :, :]
+        dist = np.einsum("ijk,ijk->ij", diff, diff)
+        np.fill_diagonal(dist, np.inf)
+        return float(np.sqrt(np.median(dist.min(axis=1))))
+    from scipy.spatial import cKDTree
+
+    distance, _ = cKDTree(points).query(points, k=2)
+    return float(np.median(distance[:, 1]))
+
+
+def _flip_covariance(covariance, axis, oriented):
+    """Express the covariance in the basis of the oriented (possibly negated) axis."""
+    u_old, v_old = orthonormal_basis(axis)
+    u_new, v_new = orthonormal_basis(oriented)
+    rotation = np.array([[u_new @ u_old, u_new @ v_old], [v_new @ u_old, v_new @ v_old]])
+    transform = np.eye(5)
+    transform[0:2, 0:2] = -rotation
+    transform[2:4, 2:4] = rotation
+    return transform @ covariance @ transform.T

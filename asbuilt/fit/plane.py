@@ -1,0 +1,250 @@
+"""Plane fit: total least squares (orthogonal distances), robust to edge outliers.
+
+Method
+------
+The plane minimising the sum of squared *orthogonal* distances passes through the centroid and
+is normal to the smallest right-singular vector of the centred points (Pearson 1901, "On lines
+and planes of closest fit"; orthogonal regression). Unlike ``z = A x + B y + C`` it treats the
+three coordinates alike, so vertical walls are fitted as well as floors.
+
+Robustness: starts from the all-points plane and from the best of random point triples by
+trimmed cost (Fischler & Bolles 1981), Tukey IRLS, then the exact SVD plane of the inliers (see
+:func:`asbuilt.fit._common.robust_geometric_fit`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import ConvexHull, QhullError
+
+from asbuilt.errors import FitError
+from asbuilt.fit._common import (
+    GeometricModel,
+    covariance_from_jacobian,
+    keep_count,
+    noise_level,
+    orient,
+    orthonormal_basis,
+    principal_axes,
+    require_spread,
+    robust_geometric_fit,
+    stderr_of,
+    validate_points,
+)
+from asbuilt.fit.result import FitResult
+from asbuilt.primitives import Plane
+from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
+
+__all__ = ["fit_plane", "plane_outline", "METHOD"]
+
+METHOD = "total least squares by SVD (Pearson 1901) with robust Tukey IRLS start"
+
+
+# State: (unit normal (3,), point on the plane (3,)).
+
+
+def _residuals(state, points):
+    normal, point = state
+    return (points - point) @ normal
+
+
+def _jacobian(state, points):
+    normal, point = state
+    u, v = orthonormal_basis(normal)
+    rel = points - point
+    jac = np.empty((len(points), 3))
+    jac[:, 0] = rel @ u
+    jac[:, 1] = rel @ v
+    jac[:, 2] = -1.0
+    return rel @ normal, jac
+
+
+def _update(state, delta, points, weights):
+    normal, point = state
+    u, v = orthonormal_basis(normal)
+    new_normal = normal + delta[0] * u + delta[1] * v
+    new_normal = new_normal / np.linalg.norm(new_normal)
+    new_point = point + delta[2] * normal
+    total = weights.sum()
+    centroid = (weights @ points) / total if total > 0 else points.mean(axis=0)
+    # Slide the point within the plane to the foot of the weighted centroid.
+    new_point = centroid - ((centroid - new_point) @ new_normal) * new_normal
+    return new_normal, new_point
+
+
+_MODEL = GeometricModel(_residuals, _jacobian, _update, 3)
+
+
+def _triple_start(points: np.ndarray, keep: int, samples: int = 48):
+    n = len(points)
+    rng = np.random.default_rng(n)
+    index = rng.integers(0, n, (samples, 3))
+    a, b, c = points[index[:, 0]], points[index[:, 1]], points[index[:, 2]]
+    normal = np.cross(b - a, c - a)
+    norm = np.linalg.norm(normal, axis=1)
+    good = norm > 1e-12 * max(float(np.ptp(points, axis=0).max()), 1e-12) ** 2
+    if not np.any(good):
+        return None
+    normal, a = normal[good] / norm[good, None], a[good]
+    distance = np.einsum("snk,sk->sn", points[None, :, :] - a[:, None, :], normal)
+    cost = np.partition(distance * distance, keep - 1, axis=1)[:, :keep].sum(axis=1)
+    best = int(np.argmin(cost))
+    return normal[best], a[best]
+
+
+def plane_outline(points: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Convex outline of points projected on a plane, counter-clockwise about the normal.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    point : ndarray, shape (3,), metres
+        A point on the plane.
+    normal : ndarray, shape (3,)
+        Unit normal.
+
+    Returns
+    -------
+    ndarray, shape (k, 3), metres
+        The outline's corners, on the plane (scipy.spatial.ConvexHull of the 2D projections).
+
+    Raises
+    ------
+    FitError
+        The projected points are collinear (no area).
+    """
+    u, v = orthonormal_basis(normal)  # u x v = normal: counter-clockwise in (u, v) is CCW about n
+    rel = points - point
+    xy = np.column_stack([rel @ u, rel @ v])
+    try:
+        hull = ConvexHull(xy)
+    except (QhullError, ValueError):
+        raise FitError(
+            "The points must not be collinear; a plane needs points spread over an area."
+        ) from None
+    corners = xy[hull.vertices]
+    area = 0.5 * float(
+        np.sum(
+            corners[:, 0] * np.roll(corners[:, 1], -1) - np.roll(corners[:, 0], -1) * corners[:, 1]
+        )
+    )
+    if area < 0:
+        corners = corners[::-1]
+    return point + np.outer(corners[:, 0], u) + np.outer(corners[:, 1], v)
+
+
+def _oriented_normal(normal: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """Normal pointing from the plane towards the coordinate origin (the station of a scan)."""
+    offset = float(point @ normal)
+    scale = max(float(np.linalg.norm(point)), 1.0)
+    if abs(offset) <= 1e-9 * scale:
+        return orient(normal)
+    return -normal if offset > 0 else normal
+
+
+def fit_plane(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES) -> FitResult:
+    """Fit a bounded plane by total least squares (orthogonal distances), robust to outliers.
+
+    Algorithm: the SVD plane of the centred inliers (Pearson 1901, orthogonal regression), after
+    a robust start (random triples by trimmed cost, Tukey IRLS); see the module docstring.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3), metres
+    sigma : float, optional, metres
+        The sensor's range sigma; scales the standard errors when given.
+    tolerances : Tolerances
+
+    Returns
+    -------
+    FitResult
+        ``primitive`` is a :class:`~asbuilt.primitives.Plane` through the inliers' centroid.
+        Its normal points from the plane towards the coordinate origin (the scanner station
+        in a scan's frame), or, for a plane through the origin, follows
+        :func:`asbuilt.fit._common.orient` (+z, else +x, else +y). The outline is the
+        convex hull of the inliers projected on the plane, counter-clockwise about the
+        normal. Residuals are signed distances along the normal. ``covariance`` (3 x 3) is
+        over (tilt of the normal towards ``u``, towards ``v`` (radians, about the centroid),
+        offset along the normal (metres)) with ``u, v = orthonormal_basis(normal)``.
+        ``stderr``: ``normal_deg`` (RMS normal angle error), ``offset`` (metres, at the
+        centroid). Diagnostics: ``extent`` (largest distance across the outline, metres),
+        ``area`` (outline area, m^2), ``thickness`` (RMS inlier distance, metres).
+
+    Raises
+    ------
+    FitError
+        Too few points, identical or collinear points, or too many outliers.
+    """
+    pts = validate_points(points, "plane")
+    require_spread(pts, "plane", 2)
+    offset = pts.mean(axis=0)
+    local = pts - offset
+    centroid, _, directions = principal_axes(local)
+    starts = [(directions[2], centroid)]
+    triple = _triple_start(local, keep_count(len(local), tolerances))
+    if triple is not None:
+        starts.append(triple)
+    robust = robust_geometric_fit(
+        local,
+        starts,
+        _MODEL,
+        kind="plane",
+        sigma=sigma,
+        tolerances=tolerances,
+        always_refine=2,
+        max_starts=2,
+    )
+    kept = local[robust.inliers]
+    # The exact total-least-squares plane of the inliers.
+    point, _, directions = principal_axes(kept)
+    normal = directions[2]
+    residuals_local, jacobian = _jacobian((normal, point), kept)
+    noise, source = noise_level(residuals_local, 3, sigma, tolerances)
+    covariance = covariance_from_jacobian(jacobian, noise)
+    world_point = point + offset
+    oriented = _oriented_normal(normal, world_point)
+    if oriented @ normal < 0:
+        # Negating the normal negates the offset and swaps the basis (u, v): re-express.
+        u_old, v_old = orthonormal_basis(normal)
+        u_new, v_new = orthonormal_basis(oriented)
+        rotation = -np.array([[u_new @ u_old, u_new @ v_old], [v_new @ u_old, v_new @ v_old]])
+        transform = np.eye(3)
+        transform[:2, :2] = rotation
+        transform[2, 2] = -1.0
+        covariance = transform @ covariance @ transform.T
+    outline = plane_outline(kept + offset, world_point, oriented)
+    plane = Plane(world_point, oriented, outline)
+    residuals = plane.distance(pts)
+    rel = outline - world_point
+    u, v = orthonormal_basis(oriented)
+    xy = np.column_stack([rel @ u, rel @ v])
+    area = 0.5 * float(np.sum(xy[:, 0] * np.roll(xy[:, 1], -1) - np.roll(xy[:, 0], -1) * xy[:, 1]))
+    diff = outline[:, None, :] - outline[None, :, :]
+    extent = float(np.sqrt(np.einsum("ijk,ijk->ij", diff, diff).max()))
+    stderr = {
+        "normal_deg": float(np.degrees(stderr_of(covariance[0, 0] + covariance[1, 1]))),
+        "offset": stderr_of(covariance[2, 2]),
+    }
+    notes = []
+    outliers = int(len(pts) - np.count_nonzero(robust.inliers))
+    if outliers:
+        notes.append(
+            f"{outliers} outlier point(s) rejected (beyond {tolerances.outlier_cutoff_sigma:g}"
+            f" x {robust.scale * 1000:.3g} mm)."
+        )
+    return FitResult(
+        primitive=plane,
+        residuals=residuals,
+        inliers=robust.inliers,
+        stderr=stderr,
+        sigma=noise,
+        sigma_source=source,
+        method=METHOD,
+        covariance=covariance,
+        diagnostics={
+            "extent": extent,
+            "area": area,
+            "thickness": float(np.sqrt(np.mean(residuals[robust.inliers] ** 2))),
+        },
+        notes=tuple(notes),
+    )
