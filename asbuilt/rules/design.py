@@ -2,7 +2,7 @@
 
 Matching is :func:`asbuilt.design.match_design`. For each matched pair: pipes are checked for
 size (the as-built nominal against the designed one), length (PFI ES-3 spool length tolerance by
-NPS), position (largest distance of the as-built ends from the designed axis line) and direction;
+NPS; a pipe with a free end, where the scan stopped short, only for being too long), position (largest distance of the as-built ends from the designed axis line) and direction;
 columns for position (the axis's plan offset at the designed base height) and section (ACI 117,
 +10 / -6 mm); boxes for centre position and edge sizes. Standard errors come from the fit.
 """
@@ -17,7 +17,7 @@ from asbuilt.model import Straight
 from asbuilt.primitives import Cuboid, Cylinder
 
 from ._catalog import nps_value
-from ._context import Context, centre_of, deg, mm, stderr_value, verdict
+from ._context import Context, centre_of, deg, ends_of, mm, stderr_value, verdict
 from .alignment import axis_stderr_deg
 
 __all__ = ["CHECKS"]
@@ -44,6 +44,22 @@ def _ends(geometry):
         half = 0.5 * geometry.size[i] * geometry.axes[i]
         return geometry.center - half, geometry.center + half
     return None
+
+
+def _both_ends_joined(ctx: Context, comp) -> bool:
+    """Whether both ends of a pipe meet another component (a fitting or a joint).
+
+    A free end is where the scan stopped, short of the real end (shots near an edge miss or
+    are rejected), so a pipe with a free end can only be checked for being too long.
+    """
+    touch = float(ctx.opt("clash", "touch_distance"))
+    others = [e for c in ctx.model.components if c.id != comp.id for e in ends_of(c.geometry)]
+    if not others:
+        return False
+    others = np.asarray(others)
+    return all(
+        np.min(np.linalg.norm(others - end, axis=1)) <= touch for end in ends_of(comp.geometry)
+    )
 
 
 def _length_stderr(comp) -> float | None:
@@ -113,21 +129,23 @@ def _check_pipe(ctx, designed, comp):
         )
     length = float(np.linalg.norm(ends[1] - ends[0]))
     tol, standard = _length_tolerance(ctx, designed.nominal or comp.nominal)
-    off = abs(length - designed.length)
+    off = length - designed.length
     se = _length_stderr(comp)
-    _emit(
-        ctx,
-        comp,
-        designed,
-        "length",
-        f"{length * 1000:.1f} mm built, {designed.length * 1000:.1f} mm designed ({mm(off)} off)",
-        off,
-        tol,
-        se,
-        "m",
-        f"+-{mm(tol)} ({standard})",
-        verdict(off, tol, se, ctx.k),
-    )
+    if off >= 0 or _both_ends_joined(ctx, comp):
+        _emit(
+            ctx,
+            comp,
+            designed,
+            "length",
+            f"{length * 1000:.1f} mm built, {designed.length * 1000:.1f} mm designed "
+            f"({mm(abs(off))} {'long' if off >= 0 else 'short'})",
+            abs(off),
+            tol,
+            se,
+            "m",
+            f"+-{mm(tol)} ({standard})",
+            verdict(abs(off), tol, se, ctx.k),
+        )
     pos_tol = float(ctx.opt("design-deviation", "position_tolerance"))
     offset = _line_distance(ends, designed.start, designed.axis)
     se_pos = stderr_value(fit.stderr, "center") if fit is not None else None

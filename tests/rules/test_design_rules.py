@@ -100,3 +100,29 @@ def test_design_may_be_a_path(tmp_path):
     built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4"))
     assert [f.slug for f in check_model(built, design=str(path))
             if f.code.startswith("AB6")] == ["extra-component"]
+
+
+def test_free_pipe_is_only_checked_for_being_too_long():
+    # the scan stopped 150 mm short of each end: a lower bound, not a deviation
+    d = design(pipes=[{"id": "D1", "nominal": "4", "start": [0, 0, 1000],
+                       "end": [3000, 0, 1000]}])
+    short = model(pipe("P1", [0.15, 0, 1], [2.85, 0, 1], 0.1143, nominal="4", length_se=0.001))
+    assert not [f for f in findings(short, d, "design-deviation") if "length" in f.message]
+    long = model(pipe("P1", [-0.01, 0, 1], [3.01, 0, 1], 0.1143, nominal="4", length_se=0.001))
+    (f,) = [f for f in findings(long, d, "design-deviation") if "length" in f.message]
+    assert "20.0 mm long" in f.message
+
+
+def test_joined_pipe_that_is_short_is_flagged():
+    from asbuilt.model import Bend, Component
+
+    d = design(pipes=[{"id": "D1", "nominal": "4", "start": [0, 0, 1000],
+                       "end": [2000, 0, 1000]}])
+    elbow_a = Component(id="E1", type="elbow", geometry=Bend([0, 0, 1], [-0.1, 0, 1.1],
+                                                             [-0.1, 0, 1], 0.057))
+    p = pipe("P1", [0, 0, 1], [1.99, 0, 1], 0.1143, nominal="4", length_se=0.001)
+    elbow_b = Component(id="E2", type="elbow", geometry=Bend([1.99, 0, 1], [2.09, 0, 1.1],
+                                                             [2.09, 0, 1], 0.057))
+    (f,) = [f for f in findings(model(elbow_a, p, elbow_b), d, "design-deviation")
+            if "length" in f.message]
+    assert "10.0 mm short" in f.message and f.severity == "error"

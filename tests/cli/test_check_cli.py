@@ -1,0 +1,168 @@
+"""``asbuilt check``: linter output, JSON, exit codes, --rules/--select/--ignore, --design, --fix.
+
+Scans are simulated (asbuilt.sim) from small scenes with the paper's point counts and 2 mm noise.
+"""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from asbuilt.cli import main
+from asbuilt.sim.scene import scene_from_dict
+from asbuilt.sim.simulate import simulate_scan
+
+STATION = {"id": "S1", "position": [0, 0, 1.5], "range_sigma": 0.002}
+PIPE = {"id": "P1", "kind": "cylinder", "points": 30, "nominal": '4"',
+        "geometry": {"type": "cylinder", "start": [-1.5, 4, 1.0], "end": [1.5, 4, 1.0],
+                     "od": 0.1143}}
+CROSSING = {"id": "P2", "kind": "cylinder", "points": 30,
+            "geometry": {"type": "cylinder", "start": [0.0, 2.5, 1.02], "end": [0.0, 5.5, 1.02],
+                         "od": 0.1143}}
+t = np.radians(5.0)
+TILTED = {"id": "P9", "kind": "cylinder", "points": 30,
+          "geometry": {"type": "cylinder", "start": [-1.5, 6, 1.0],
+                       "end": [-1.5 + 3 * np.cos(t), 6, 1.0 + 3 * np.sin(t)], "od": 0.1143}}
+
+
+def scan_file(tmp_path, *objects, name="scan.json", seed=3):
+    scene = {"format": "asbuilt-scene", "version": 1, "units": "m", "seed": seed,
+             "stations": [STATION], "objects": list(objects)}
+    path = tmp_path / name
+    path.write_text(json.dumps(simulate_scan(scene_from_dict(scene), seed=seed)),
+                    encoding="utf-8")
+    return path
+
+
+def run(argv, capsys):
+    code = main(["check", *map(str, argv)])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_clean_scan_exits_0_with_a_summary(tmp_path, capsys):
+    path = scan_file(tmp_path, PIPE)
+    code, out, _ = run([path], capsys)
+    assert code == 0
+    assert out.splitlines()[-1].startswith("0 errors, ")
+    assert "in 1 component" in out
+
+
+def test_clash_exits_1_and_reads_like_a_linter(tmp_path, capsys):
+    path = scan_file(tmp_path, PIPE, CROSSING)
+    code, out, _ = run([path], capsys)
+    assert code == 1
+    first = out.splitlines()[0]
+    assert first.startswith(f"{path}: P1,P2: error clash: P1 and P2 intersect: ")
+    assert "1 error" in out.splitlines()[-1]
+
+
+def test_json_is_the_model_document_shape(tmp_path, capsys):
+    path = scan_file(tmp_path, PIPE, CROSSING)
+    code, out, _ = run([path, "--format", "json"], capsys)
+    assert code == 1
+    findings = json.loads(out)
+    assert isinstance(findings, list) and findings
+    clash = next(f for f in findings if f["slug"] == "clash")
+    assert set(clash) == {"code", "slug", "severity", "objects", "location", "message",
+                          "measured", "allowed", "stderr", "unit", "suggestions", "unverifiable"}
+    assert clash["code"] == "AB501" and clash["unit"] == "m3" and len(clash["location"]) == 3
+    assert all(set(f) == set(clash) for f in findings)
+
+
+def test_json_keys_equal_the_model_documents():
+    from asbuilt.cli.check import finding_dict
+    from asbuilt.export.model_json import model_document
+    from asbuilt.findings import Finding, Suggestion
+    from asbuilt.model import Component, Model, Straight
+
+    finding = Finding("AB501", "clash", "error", ("A", "B"), "m", location=[1.0, 2.0, 3.0],
+                      measured=1.0, allowed=0.5, stderr=0.1, unit="m3",
+                      suggestions=(Suggestion("x", {"object": "A"}, True),))
+    comp = Component(id="A", type="pipe", geometry=Straight([0, 0, 0], [1, 0, 0], 0.05))
+    document = model_document(Model(components=(comp,), findings=(finding,)))
+    assert finding_dict(finding) == document["findings"][0]
+
+
+@pytest.mark.parametrize("option", [["--ignore", "clash"], ["--select", "AB4,AB2"],
+                                    ["--ignore", "AB5"]])
+def test_select_and_ignore(tmp_path, capsys, option):
+    path = scan_file(tmp_path, PIPE, CROSSING)
+    code, out, _ = run([path, *option], capsys)
+    assert code == 0 and " clash:" not in out
+
+
+def test_rules_file_changes_severity(tmp_path, capsys):
+    path = scan_file(tmp_path, PIPE, CROSSING)
+    rules = tmp_path / "rules.toml"
+    rules.write_text('[clash]\nseverity = "warning"\n', encoding="utf-8")
+    code, out, _ = run([path, "--rules", rules], capsys)
+    assert code == 0 and "warning clash:" in out
+
+
+@pytest.mark.parametrize(
+    "argv_tail, message",
+    [
+        (["--rules", "{tmp}/missing.toml"], "no such file"),
+        (["--rules", "{tmp}/bad.toml"], "[no-such-rule]: unknown rule"),
+        (["--design", "{tmp}/bad.json"], "not valid JSON"),
+        (["--select", "AB999"], "unknown rule 'AB999'"),
+        (["--fix", "{tmp}/out.xyz"], "unknown output format"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line(tmp_path, capsys, argv_tail, message):
+    path = scan_file(tmp_path, PIPE)
+    (tmp_path / "bad.toml").write_text("[no-such-rule]\nx = 1\n", encoding="utf-8")
+    (tmp_path / "bad.json").write_text("{", encoding="utf-8")
+    argv = [path, *(a.format(tmp=tmp_path) for a in argv_tail)]
+    code, out, err = run(argv, capsys)
+    assert code == 2
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0] and "Traceback" not in err
+    assert not (tmp_path / "out.xyz").exists()
+
+
+def test_missing_scan_exits_2(tmp_path, capsys):
+    code, _, err = run([tmp_path / "nope.json"], capsys)
+    assert code == 2 and "nope.json" in err
+
+
+def test_design_missing_and_extra(tmp_path, capsys):
+    path = scan_file(tmp_path, PIPE)
+    design = tmp_path / "design.json"
+    design.write_text(json.dumps({
+        "format": "asbuilt-design", "version": 1, "units": "mm",
+        "pipes": [{"id": "D1", "nominal": "4", "start": [-1500, 4000, 1000],
+                   "end": [1500, 4000, 1000]},
+                  {"id": "D2", "nominal": "4", "start": [-1500, 9000, 1000],
+                   "end": [1500, 9000, 1000]}],
+    }), encoding="utf-8")
+    code, out, _ = run([path, "--design", design], capsys)
+    assert code == 1
+    assert "D2: error missing-component: designed pipe D2" in out
+    assert "P1: error" not in out  # the built pipe matches D1
+
+
+def test_fix_writes_model_and_recheck_is_clean(tmp_path, capsys):
+    path = scan_file(tmp_path, PIPE, TILTED)
+    code, out, _ = run([path, "--select", "misaligned-axis"], capsys)
+    assert "P9: warning misaligned-axis: axis is" in out
+    fixed = tmp_path / "fixed.json"
+    code, out, _ = run([path, "--select", "misaligned-axis", "--fix", fixed], capsys)
+    assert code == 0
+    assert "fixed: P9: make P9's axis horizontal" in out
+    assert "misaligned-axis:" not in out.replace("fixed:", "")
+    assert fixed.exists()
+    # the written model document, checked again, has nothing left to fix
+    code, out, _ = run([fixed, "--select", "misaligned-axis"], capsys)
+    assert code == 0 and out.splitlines()[-1].startswith("0 errors, 0 warnings")
+
+
+def test_subprocess_exit_code(tmp_path):
+    path = scan_file(tmp_path, PIPE, CROSSING)
+    proc = subprocess.run([sys.executable, "-m", "asbuilt", "check", str(path)],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1 and "error clash" in proc.stdout
