@@ -1,0 +1,297 @@
+"""``asbuilt scan`` and ``asbuilt simulate-device`` end to end over the simulated devices."""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from asbuilt.drivers.simrig import forget_rigs
+
+from asbuilt.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+PIPE_OD = 0.3239  # NPS 12
+SCENE = {
+    "format": "asbuilt-scene",
+    "version": 1,
+    "units": "m",
+    "seed": 1,
+    "stations": [
+        {"id": "S1", "position": [0.0, 0.0, 1.5], "range_sigma": 0.001, "angular_sigma_deg": 0.005}
+    ],
+    "objects": [
+        {
+            "id": "P1",
+            "kind": "cylinder",
+            "geometry": {
+                "type": "cylinder",
+                "start": [-1.0, 4.0, 1.2],
+                "end": [1.0, 4.0, 1.2],
+                "od": PIPE_OD,
+            },
+        },
+        {
+            "id": "C1",
+            "kind": "cuboid",
+            "geometry": {
+                "type": "member",
+                "start": [2.0, 5.0, 0.0],
+                "end": [2.0, 5.0, 3.0],
+                "section": [0.4, 0.4],
+            },
+        },
+        {
+            "id": "wall",
+            "scan": False,
+            "geometry": {
+                "type": "plate",
+                "center": [0.0, 8.0, 2.0],
+                "normal": [0, -1, 0],
+                "size": [14.0, 5.0],
+                "thickness": 0.2,
+            },
+        },
+        {"id": "floor", "scan": False, "geometry": {"type": "ground"}},
+    ],
+}
+PLAN = {
+    "format": "asbuilt-scan-plan",
+    "version": 1,
+    "targets": [
+        {"id": "P1", "kind": "cylinder", "window_deg": [72, -6.5, 108, -1.5], "nominal": '12"'},
+        {"id": "C1", "kind": "cuboid", "window_deg": [63.5, -8, 73, 10]},
+    ],
+}
+
+
+#: No random noise: a resumed session must reproduce an uninterrupted one exactly.
+EXACT = "&range_sigma=0&angle_sigma=0"
+
+
+@pytest.fixture(autouse=True)
+def _fresh_rigs():
+    forget_rigs()
+    yield
+    forget_rigs()
+
+
+@pytest.fixture
+def site(tmp_path):
+    """Scene, plan and calibration (an ideal chain at the scene's station) files."""
+    (tmp_path / "scene.json").write_text(json.dumps(SCENE))
+    (tmp_path / "plan.json").write_text(json.dumps(PLAN))
+    (tmp_path / "cal.json").write_text(
+        json.dumps(
+            {"format": "asbuilt-calibration", "version": 1, "base": {"position_m": [0, 0, 1.5]}}
+        )
+    )
+    return tmp_path
+
+
+def _args(site, rig, out="scan.json", extra_ptu="", extra_lrf="", more=()):
+    return [
+        "scan",
+        "--ptu",
+        f"sim-ptu://{rig}?scene={site / 'scene.json'}{extra_ptu}",
+        "--lrf",
+        f"sim-lrf://{rig}{extra_lrf}",
+        "--calibration",
+        str(site / "cal.json"),
+        "--out",
+        str(site / out),
+        *more,
+    ]
+
+
+def test_full_simulated_session_fits_the_true_dimensions(site, capsys):
+    from asbuilt.fit import fit_points
+    from asbuilt.scan import load_scan
+
+    assert main(_args(site, "full", more=["--plan", str(site / "plan.json")])) == 0
+    err = capsys.readouterr().err
+    assert "P1" in err and "C1" in err
+    scan = load_scan(site / "scan.json")
+    pipe = scan.object("P1")
+    assert pipe.nominal == '12"'
+    assert 20 <= len(pipe.points) <= 60  # sparse: the paper's 20-40 points, not a dense cloud
+    assert pipe.measurements.shape == pipe.points.shape
+    cyl = fit_points("cylinder", pipe.points).primitive
+    assert cyl.radius == pytest.approx(PIPE_OD / 2, rel=0.03)
+    assert abs(cyl.axis[0]) == pytest.approx(1.0, abs=1e-3)
+    assert cyl.center[1:] == pytest.approx([4.0, 1.2], abs=0.01)
+    column = scan.object("C1")
+    assert len(column.points) >= 30
+    box = fit_points("cuboid", column.points).primitive
+    assert box.center[:2] == pytest.approx([2.0, 5.0], abs=0.05)
+    assert max(sorted(box.size)[:2]) == pytest.approx(0.4, rel=0.05)
+
+
+def test_interactive_session_with_typed_and_aimed_windows(site, monkeypatch, capsys):
+    answers = (
+        "\n".join(
+            [
+                "P1",
+                "cylinder",
+                "72 -6.5 108 -1.5",
+                '12"',
+                "C1",
+                "cuboid",
+                "aim",
+                "63.5 -8",
+                "ok",
+                "73 10",
+                "ok",
+                "",
+                "",
+            ]
+        )
+        + "\n"
+    )
+    monkeypatch.setattr(sys, "stdin", io.StringIO(answers))
+    assert main(_args(site, "typed")) == 0
+    doc = json.loads((site / "scan.json").read_text())
+    assert [o["id"] for o in doc["objects"]] == ["P1", "C1"]
+    assert doc["objects"][0]["nominal"] == '12"'
+    window = doc["objects"][1]["acquisition"]["window_deg"]
+    assert window == pytest.approx([63.5, -8, 73, 10], abs=0.06)  # whole counts of 0.0514 deg
+    err = capsys.readouterr().err
+    assert "object id" in err and "corner 1" in err
+
+
+def test_ctrl_c_stops_cleanly_and_resume_finishes(site, monkeypatch, capsys):
+    from asbuilt.drivers import session as session_module
+
+    plan = ["--plan", str(site / "plan.json")]
+    assert main(_args(site, "ref", out="ref.json", extra_ptu=EXACT, more=plan)) == 0
+
+    real_call = session_module.DeviceShooter.__call__
+    count = {"n": 0}
+
+    def interrupted(self, pan, tilt, phase):
+        count["n"] += 1
+        if count["n"] > 50:
+            raise KeyboardInterrupt
+        return real_call(self, pan, tilt, phase)
+
+    monkeypatch.setattr(session_module.DeviceShooter, "__call__", interrupted)
+    assert main(_args(site, "c1", extra_ptu=EXACT, more=plan)) == 130
+    assert "--resume" in capsys.readouterr().err
+    journal = (site / "scan.json.journal").read_text().splitlines()
+    assert sum('"type":"shot"' in line for line in journal) == 50
+    monkeypatch.setattr(session_module.DeviceShooter, "__call__", real_call)
+    assert main(_args(site, "c2", extra_ptu=EXACT, more=[*plan, "--resume"])) == 0
+    done = json.loads((site / "scan.json").read_text())["objects"]
+    assert done == json.loads((site / "ref.json").read_text())["objects"]
+
+
+def test_unplugged_cable_is_one_line_and_resumable(site, capsys):
+    plan = ["--plan", str(site / "plan.json")]
+    code = main(_args(site, "u1", extra_lrf="?unplug_after=30", more=plan))
+    err = capsys.readouterr().err
+    assert code == 2
+    last = err.strip().splitlines()[-1]  # after the progress lines
+    assert last.startswith("asbuilt: error:") and "unplugged" in last and "--resume" in last
+    assert "Traceback" not in err
+    assert main(_args(site, "u2", more=[*plan, "--resume"])) == 0
+    assert len(json.loads((site / "scan.json").read_text())["objects"]) == 2
+
+
+def test_silent_unit_fails_within_the_timeout(site, capsys):
+    start = time.monotonic()
+    code = main(
+        _args(
+            site,
+            "quiet",
+            extra_ptu="&silent=1",
+            more=["--plan", str(site / "plan.json"), "--timeout", "0.3"],
+        )
+    )
+    assert code == 2
+    assert time.monotonic() - start < 10  # generous: it must not hang
+    assert "no reply to 'FT' within 0.3 s" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "more, message",
+    [
+        (["--plan", "missing-plan.json"], "cannot read the plan"),
+        (["--units", "furlong"], "unknown unit"),
+        (["--retries", "-1"], "--retries must be >= 0"),
+    ],
+)
+def test_bad_input_is_one_line(site, capsys, more, message):
+    assert main(_args(site, "bad", more=more)) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_existing_journal_needs_resume(site, capsys):
+    (site / "scan.json.journal").write_text('{"type":"session","version":1}\n')
+    assert main(_args(site, "j", more=["--plan", str(site / "plan.json")])) == 2
+    assert "--resume" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs POSIX pseudo-terminals")
+def test_simulate_device_serves_ptys_that_asbuilt_scan_uses(site):
+    server = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "asbuilt",
+            "simulate-device",
+            "--scene",
+            str(site / "scene.json"),
+            "--range-sigma",
+            "0.001",
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        paths = dict(server.stdout.readline().split() for _ in range(2))
+        assert set(paths) == {"ptu", "lrf"}
+        scan = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "asbuilt",
+                "scan",
+                "--ptu",
+                paths["ptu"],
+                "--lrf",
+                paths["lrf"],
+                "--lrf-8n1",
+                "--calibration",
+                str(site / "cal.json"),
+                "--plan",
+                str(site / "plan.json"),
+                "--out",
+                str(site / "tty.json"),
+            ],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert scan.returncode == 0, scan.stderr
+    finally:
+        server.send_signal(signal.SIGINT)
+        server.wait(timeout=10)
+    assert server.returncode == 0
+    doc = json.loads((site / "tty.json").read_text())
+    pipe = np.array(doc["objects"][0]["points"])
+    radius = np.linalg.norm(pipe[:, 1:] - [4.0, 1.2], axis=1)
+    assert radius.mean() == pytest.approx(PIPE_OD / 2, abs=0.003)
+    assert math.isfinite(radius.std())

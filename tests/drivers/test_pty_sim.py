@@ -1,0 +1,45 @@
+"""The real drivers over a real tty: simulators served on pseudo-terminals."""
+
+from __future__ import annotations
+
+import math
+import os
+
+import pytest
+from asbuilt.drivers.dimetix import DimetixDLS
+from asbuilt.drivers.ldm import LDM4x
+from asbuilt.drivers.ptu import PanTiltUnit
+from asbuilt.drivers.pty_sim import PtyServer
+from driver_helpers import wall_rig
+
+from asbuilt.errors import DeviceError
+
+pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs POSIX pseudo-terminals")
+
+
+@pytest.mark.parametrize("protocol", ["dimetix", "ldm"])
+def test_drivers_over_pseudo_terminals(protocol):
+    with PtyServer(wall_rig(4.0), protocol) as server:
+        assert server.ptu_path.startswith("/dev/")
+        with PanTiltUnit.open(server.ptu_path, timeout=2.0) as ptu:
+            if protocol == "dimetix":
+                lrf = DimetixDLS.open(server.lrf_path, bytesize=8, parity="N", timeout=2.0)
+            else:
+                lrf = LDM4x.open(server.lrf_path, timeout=2.0)
+            with lrf:
+                assert ptu.limits.pan_max == 3090
+                for pan_deg in (0, 15, -25):
+                    pan, tilt = ptu.move_to(math.radians(pan_deg), math.radians(3))
+                    expected = 4.0 / (math.cos(pan) * math.cos(tilt))
+                    assert lrf.measure() == pytest.approx(expected, abs=1e-3)
+        assert server.error is None
+
+
+def test_stopped_server_leaves_the_driver_with_a_clear_error():
+    server = PtyServer(wall_rig()).start()
+    ptu = PanTiltUnit.open(server.ptu_path, timeout=0.5)
+    server.stop()
+    with pytest.raises(DeviceError):
+        ptu.position()
+    ptu.close()
+    server.stop()  # idempotent
