@@ -6,7 +6,8 @@
    the object's label or group, and either linked in the scan, given a nominal hint, or with a
    fitted OD within ``[smallest catalog OD - tolerance, largest catalog OD x 1.1]``. Other
    cylinders stay ``cylinder`` components, unchanged;
-2. **joints** between pipes (:mod:`.contiguity`), from ``links`` and inferred from geometry;
+2. **joints** between pipes (:mod:`.contiguity`), from ``links`` and inferred from geometry
+   (each pipe's allowance grows by its coarsest shot spacing, :func:`shot_spacing`);
 3. **runs and joint diameter estimates** (:mod:`.joint`), then **snapping** each run's estimate
    to the catalog (:mod:`.snap`);
 4. **orientation regularisation** (:mod:`.regularize`, after GlobFit) and line alignment so
@@ -39,7 +40,14 @@ from .regularize import align_lines, regularize_directions
 from .snap import SnapResult, snap_diameter
 from .spool import PipeSpec, build_spools
 
-__all__ = ["merge_model", "is_pipe", "VESSEL_WORDS", "resolve_catalog", "resolve_schedule"]
+__all__ = [
+    "merge_model",
+    "is_pipe",
+    "shot_spacing",
+    "VESSEL_WORDS",
+    "resolve_catalog",
+    "resolve_schedule",
+]
 
 #: Words in an object's label or group that mark a cylinder as a vessel or structure, not a pipe.
 VESSEL_WORDS = (
@@ -129,6 +137,23 @@ def _stderr_od(result) -> float:
     except (TypeError, ValueError):
         return float("nan")
     return 2.0 * se if np.isfinite(se) else float("nan")
+
+
+def shot_spacing(points, inliers, center, axis) -> float:
+    """The coarsest spacing (metres) of a pipe's inlier shots along its axis.
+
+    ``points`` (n, 3) metres, ``inliers`` (n,) bool, ``center`` (3,) metres, ``axis`` (3,) unit.
+    The largest gap between consecutive sorted axial positions: the scan's last shot may be up
+    to this far from the pipe's real end. 0 with fewer than two points.
+    """
+    pts = np.asarray(points, float)
+    mask = np.asarray(inliers, bool)
+    if mask.shape == (len(pts),):
+        pts = pts[mask]
+    if len(pts) < 2:
+        return 0.0
+    along = np.sort((pts - np.asarray(center)) @ np.asarray(axis))
+    return float(np.max(np.diff(along)))
 
 
 def _vec(x) -> tuple[float, ...]:
@@ -231,8 +256,13 @@ def merge_model(
     ses = np.array([_stderr_od(item.result) for item in items])
     links = [(index_of[a], index_of[b]) for a, b in scan.links if a in index_of and b in index_of]
 
+    slack = np.array([
+        shot_spacing(item.object.points, item.result.inliers, c.center, c.axis)
+        for item, c in zip(items, cyls)
+    ])
+
     # 2. joints
-    joints = find_joints(centers, axes, lengths, ods, links=links, tolerances=tol)
+    joints = find_joints(centers, axes, lengths, ods, links=links, tolerances=tol, slack=slack)
 
     # 3. runs, joint estimates, snapping
     runs = find_runs(ods, ses, joint_pairs(joints), tol.diameter_tolerance)

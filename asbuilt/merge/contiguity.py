@@ -11,6 +11,10 @@ Pipes are lines with two ends. Two pipe ends are a joint when
   ``joint_distance``: an **elbow** (the bend's centre-to-end is estimated with a long-radius bend,
   ``R = 1.5 x OD``, before sizes are known).
 
+Each allowance grows by the pipe's ``slack``: how far its fitted end may fall short of the real
+end because the scan's shots are sparse (merge passes the coarsest spacing of the pipe's inlier
+shots along its axis: the last shot may be up to one spacing from the end).
+
 The skew tolerance is ``max(0.5 x the smaller outer radius, 10 mm)``: sparse fits place an axis
 to a few millimetres, and pipes that miss each other by more than half a radius do not meet.
 
@@ -129,13 +133,15 @@ class _Candidate:
     explicit: bool
 
 
-def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: bool):
+def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: bool, slack=None):
     """Classify the pair of ends; return a _Candidate or None."""
     ei, ej = pts[i, ki], pts[j, kj]
     oi, oj = out[i, ki], out[j, kj]
     ri, rj = 0.5 * ods[i], 0.5 * ods[j]
     skew_tol = skew_tolerance(ri, rj)
     jd = tol.joint_distance
+    si = 0.0 if slack is None else float(slack[i])
+    sj = 0.0 if slack is None else float(slack[j])
     cos = abs(float(axes[i] @ axes[j]))
     angle = float(np.degrees(np.arccos(min(1.0, cos))))
     if angle <= tol.intended_angle_deg:
@@ -149,7 +155,7 @@ def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: 
         )
         if lateral > skew_tol:
             return None
-        if not relaxed and not (-jd <= gap <= jd + max(ods[i], ods[j])):
+        if not relaxed and not (-jd <= gap <= jd + max(ods[i], ods[j]) + si + sj):
             return None
         return _Candidate(abs(gap) + lateral, "inline", (i, ki), (j, kj), relaxed)
     s, t, qi, qj = line_closest_points(ei, oi, ej, oj)
@@ -163,7 +169,7 @@ def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: 
     if relaxed:
         if s < -jd - 0.5 * np.linalg.norm(ei - ej) or t < -jd - 0.5 * np.linalg.norm(ei - ej):
             return None
-    elif not (-jd <= s <= reach and -jd <= t <= reach):
+    elif not (-jd <= s <= reach + si and -jd <= t <= reach + sj):
         return None
     return _Candidate(abs(s) + abs(t) + skew, "elbow", (i, ki), (j, kj), relaxed)
 
@@ -181,13 +187,13 @@ def _best_for_link(i, j, pts, out, axes, ods, tol):
     return None if best is None else best[1]
 
 
-def _tee_at_inline(joint: Joint, b: End, pts, out, axes, ods, lengths, tol) -> float | None:
+def _tee_at_inline(joint: Joint, b: End, pts, out, axes, ods, tol, slack) -> float | None:
     (i, ki), (j, kj) = joint.ends
     point = 0.5 * (pts[i, ki] + pts[j, kj])
-    return _branch_cost(b, point, axes[i], ods[i], pts, out, axes, ods, tol)
+    return _branch_cost(b, point, axes[i], ods[i], pts, out, axes, ods, tol, slack)
 
 
-def _branch_cost(b: End, point, run_axis, run_od, pts, out, axes, ods, tol) -> float | None:
+def _branch_cost(b: End, point, run_axis, run_od, pts, out, axes, ods, tol, slack) -> float | None:
     pipe, k = b
     eb, ob = pts[pipe, k], out[pipe, k]
     cos = abs(float(axes[pipe] @ run_axis))
@@ -205,7 +211,7 @@ def _branch_cost(b: End, point, run_axis, run_od, pts, out, axes, ods, tol) -> f
     along = abs(float(rel @ run_axis))
     if along > skew_tol + tol.joint_distance:
         return None
-    if not (-tol.joint_distance <= s <= run_od + tol.joint_distance):
+    if not (-tol.joint_distance <= s <= run_od + tol.joint_distance + float(slack[pipe])):
         return None
     return abs(s) + along + lateral_on_run
 
@@ -218,6 +224,7 @@ def find_joints(
     *,
     links: Iterable[tuple[int, int]] = (),
     tolerances: Tolerances = DEFAULT_TOLERANCES,
+    slack=None,
 ) -> tuple[Joint, ...]:
     """Find the joints between pipes (see the module docstring for the rules).
 
@@ -231,6 +238,9 @@ def find_joints(
     links : iterable of (int, int)
         Pairs of pipe indices the scan says are contiguous.
     tolerances : Tolerances
+    slack : array_like, shape (n,), metres, optional
+        How far each pipe's fitted ends may fall short of its real ends beyond
+        ``joint_distance`` (e.g. its coarsest shot spacing along the axis); default 0.
 
     Returns
     -------
@@ -245,6 +255,7 @@ def find_joints(
         return ()
     pts, out = pipe_ends(centers, axes, lengths)
     tol = tolerances
+    slack = np.zeros(n) if slack is None else np.asarray(slack, float).reshape(-1)
 
     used: set[End] = set()
     joints: list[Joint] = []
@@ -269,7 +280,12 @@ def find_joints(
 
     # 2. inferred end-to-end joints, best first
     flat = pts.reshape(-1, 3)
-    radius = 2 * tol.joint_distance + 1.5 * float(ods.max()) * 2.5 + float(ods.max())
+    radius = (
+        2 * tol.joint_distance
+        + 1.5 * float(ods.max()) * 2.5
+        + float(ods.max())
+        + 2 * float(slack.max())
+    )
     tree = cKDTree(flat)
     candidates: list[_Candidate] = []
     for a, b in tree.query_pairs(radius, output_type="ndarray"):
@@ -277,7 +293,7 @@ def find_joints(
         j, kj = divmod(int(b), 2)
         if i == j or (min(i, j), max(i, j)) in linked_pairs:
             continue
-        cand = _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol, relaxed=False)
+        cand = _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol, relaxed=False, slack=slack)
         if cand is not None:
             candidates.append(cand)
     candidates.sort(key=lambda c: c.cost)
@@ -290,13 +306,13 @@ def find_joints(
     # 3. tees: leftover ends meeting an inline joint or the inside of a pipe
     free = [(i, k) for i in range(n) for k in (0, 1) if (i, k) not in used]
     if free:
-        joints = _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol)
+        joints = _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, slack)
     for i, j in contacts:
         joints.append(Joint("contact", ((i, 0), (j, 0)), explicit=True))
     return tuple(joints)
 
 
-def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol):
+def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, slack):
     joints = list(joints)
     inline_idx = [k for k, jt in enumerate(joints) if jt.kind == "inline"]
     inline_points = (
@@ -306,7 +322,12 @@ def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol):
     )
     inline_tree = cKDTree(inline_points) if len(inline_idx) else None
     center_tree = cKDTree(centers)
-    reach = float(lengths.max()) / 2 + 2 * tol.joint_distance + 2 * float(ods.max())
+    reach = (
+        float(lengths.max()) / 2
+        + 2 * tol.joint_distance
+        + 2 * float(ods.max())
+        + float(slack.max())
+    )
     taken_inline: set[int] = set()
     for b in free:
         if b in used:
@@ -321,7 +342,7 @@ def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol):
                 idx = inline_idx[m]
                 if idx in taken_inline or pipe in joints[idx].pipes:
                     continue
-                cost = _tee_at_inline(joints[idx], b, pts, out, axes, ods, lengths, tol)
+                cost = _tee_at_inline(joints[idx], b, pts, out, axes, ods, tol, slack)
                 if cost is not None and (best is None or cost < best[0]):
                     best = (cost, "inline", idx)
         for other in center_tree.query_ball_point(pts[pipe, k], reach):
@@ -332,7 +353,7 @@ def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol):
             )
             if abs(s) > 0.5 * lengths[other] - ods[other]:
                 continue  # not inside the run pipe with room for the tee
-            cost = _branch_cost(b, q_run, axes[other], ods[other], pts, out, axes, ods, tol)
+            cost = _branch_cost(b, q_run, axes[other], ods[other], pts, out, axes, ods, tol, slack)
             if cost is not None and (best is None or cost < best[0]):
                 best = (cost, "through", other)
         if best is None:
