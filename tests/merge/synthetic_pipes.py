@@ -81,3 +81,23 @@ def box_fit() -> tuple[ScanObject, FitResult]:
         method="synthetic",
     )
     return obj, res
+
+
+def raster_points(start, end, od, n, station, rng, sigma=0.002, margin=0.03):
+    """n noisy shots (n, 3) m on the side of a pipe facing ``station`` (4 columns, n/4 rows
+    along the pipe), each moved along its ray by Gaussian range noise ``sigma`` metres."""
+    start, end, station = (np.asarray(v, float) for v in (start, end, station))
+    axis = (end - start) / np.linalg.norm(end - start)
+    length = float(np.linalg.norm(end - start))
+    rows = int(np.ceil(n / 4))
+    t = np.repeat(np.linspace(margin, length - margin, rows), 4)[:n]
+    centres = start + t[:, None] * axis
+    facing = station - centres
+    facing -= (facing @ axis)[:, None] * axis
+    facing /= np.linalg.norm(facing, axis=1)[:, None]
+    side = np.cross(axis, facing)
+    phi = np.tile(np.radians([-52.5, -17.5, 17.5, 52.5]), rows)[:n]
+    surface = centres + 0.5 * od * (np.cos(phi)[:, None] * facing + np.sin(phi)[:, None] * side)
+    rays = surface - station
+    rays /= np.linalg.norm(rays, axis=1)[:, None]
+    return surface + rng.normal(0, sigma, n)[:, None] * rays
