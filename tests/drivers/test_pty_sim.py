@@ -43,3 +43,12 @@ def test_stopped_server_leaves_the_driver_with_a_clear_error():
         ptu.position()
     ptu.close()
     server.stop()  # idempotent
+
+
+def test_spy_url_logs_the_traffic(tmp_path):
+    log = tmp_path / "traffic.txt"
+    with PtyServer(wall_rig()) as server:
+        with PanTiltUnit.open(f"spy://{server.ptu_path}?file={log}", timeout=2.0) as ptu:
+            ptu.move_to(0.05, 0.0)
+    text = log.read_text()
+    assert "FT" in text and "PP" in text  # pyserial's spy handler recorded the exchange

@@ -1,0 +1,39 @@
+"""The example files in drivers/examples load, and the example plan scans the example scene."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from asbuilt.drivers.calibration import PlaneTarget, SphereTarget, load_calibration, load_targets
+from asbuilt.drivers.plan import load_plan
+from asbuilt.drivers.ptu import PanTiltUnit
+from asbuilt.drivers.rangefinder import open_range_finder
+from asbuilt.drivers.session import DeviceShooter, ScanSession
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "drivers" / "examples"
+
+
+def test_example_calibration():
+    cal = load_calibration(EXAMPLES / "ptu-d46.cal.json")
+    assert cal.tilt_axis_offset == (0.0, 0.0, 0.047)
+
+
+def test_example_targets():
+    targets = load_targets(EXAMPLES / "room.targets.json")
+    assert targets["front"] == PlaneTarget((1.0, 0.0, 0.0), 4.0)
+    assert targets["ball"] == SphereTarget(0.15)
+
+
+def test_example_plan_scans_the_example_scene(tmp_path):
+    plan = load_plan(EXAMPLES / "site.plan.json")
+    cal = load_calibration(EXAMPLES / "ptu-d46.cal.json")
+    scene = EXAMPLES / "site.scene.json"
+    ptu = PanTiltUnit.open(f"sim-ptu://example?scene={scene}")
+    lrf = open_range_finder("sim-lrf://example")
+    with ScanSession(DeviceShooter(ptu, lrf), cal, tmp_path / "site.json") as session:
+        for target in plan.targets:
+            assert session.scan(target) is not None
+    ptu.close()
+    lrf.close()
+    assert set(session.objects) == {"P1", "C1"}
+    assert all(r.on_object.sum() >= 20 for r in session.objects.values())
