@@ -233,7 +233,7 @@ def test_subprocess_bad_input(tmp_path):
 
 
 def test_subprocess_real_fits(tmp_path):
-    kinds = [k for k in ("cylinder", "cuboid", "sphere", "plane") if _exists(k)]
+    kinds = [k for k in ("cylinder", "cuboid", "sphere", "plane", "hull", "auto") if _exists(k)]
     if not kinds:
         pytest.skip("no real fit module is written yet")
     doc = make_doc("mm", kinds=kinds)
@@ -249,9 +249,36 @@ def test_subprocess_real_fits(tmp_path):
         assert by_kind["cylinder"]["sigma"] == pytest.approx(0.5)
     if "sphere" in by_kind:
         assert by_kind["sphere"]["radius"] == pytest.approx(300.0, abs=0.1)
+    if "plane" in by_kind:
+        assert [abs(c) for c in by_kind["plane"]["normal"]] == pytest.approx([0, 0, 1], abs=1e-9)
+        assert by_kind["plane"]["point"][2] == pytest.approx(2500.0)
+    if "hull" in by_kind:
+        assert len(by_kind["hull"]["vertices"]) >= 4 and len(by_kind["hull"]["faces"]) >= 4
+    if "auto" in by_kind:  # the auto object's points are the same pipe's
+        assert by_kind["auto"]["chosen"] == "cylinder"
+        assert by_kind["auto"]["radius"] == pytest.approx(57.15, abs=0.1)
     table = _run("scan.json", cwd=tmp_path)
     assert table.returncode == 0 and "K1" in table.stdout and table.stderr == ""
 
 
 def _exists(kind: str) -> bool:
     return importlib.util.find_spec(FITTERS[kind][0]) is not None
+
+
+SAMPLES = sorted((ROOT / "samples").glob("*.json"))
+
+
+@pytest.mark.parametrize("sample", SAMPLES, ids=[p.name for p in SAMPLES])
+def test_samples_fit_in_process(sample, capsys):
+    """Every shipped sample fits with the real fits; the JSON names every object once."""
+    if not all(_exists(kind) for kind in FITTERS):
+        pytest.skip("not every fit module is written yet")
+    document = json.loads(sample.read_text(encoding="utf-8"))
+    code, out, err = run_cli(capsys, str(sample), "--json", "--units", "mm")
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["units"] == "mm"
+    assert [o["id"] for o in data["objects"]] == [o["id"] for o in document["objects"]]
+    for obj, raw in zip(data["objects"], document["objects"]):
+        assert obj["kind"] == raw["kind"] and obj["n_points"] == len(raw["points"])
+        assert obj["rms"] is not None and obj["rms"] < 10.0  # mm: range noise is 2 mm
