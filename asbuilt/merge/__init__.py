@@ -256,10 +256,12 @@ def merge_model(
     ses = np.array([_stderr_od(item.result) for item in items])
     links = [(index_of[a], index_of[b]) for a, b in scan.links if a in index_of and b in index_of]
 
-    slack = np.array([
-        shot_spacing(item.object.points, item.result.inliers, c.center, c.axis)
-        for item, c in zip(items, cyls)
-    ])
+    slack = np.array(
+        [
+            shot_spacing(item.object.points, item.result.inliers, c.center, c.axis)
+            for item, c in zip(items, cyls)
+        ]
+    )
 
     # 2. joints
     joints = find_joints(centers, axes, lengths, ods, links=links, tolerances=tol, slack=slack)
@@ -322,13 +324,12 @@ def merge_model(
                 centers[group], new_axes[group], lm, lc, weights=np.maximum(lengths[group], 0.05)
             )
 
-    partners: dict[int, set[int]] = {}
-    on_coaxial: set[int] = set()
-    for a, b in meets + coaxial:
-        partners.setdefault(a, set()).add(b)
-        partners.setdefault(b, set()).add(a)
-    for a, b in coaxial:
-        on_coaxial.update((a, b))
+    coaxial_with: dict[int, set[int]] = {}
+    meets_with: dict[int, set[int]] = {}
+    for pairs, table in ((coaxial, coaxial_with), (meets, meets_with)):
+        for a, b in pairs:
+            table.setdefault(a, set()).add(b)
+            table.setdefault(b, set()).add(a)
 
     # 5. pipe specs and spools
     specs = []
@@ -385,11 +386,16 @@ def merge_model(
         shift = new_centers[m] - centers[m]
         shift -= (shift @ new_axes[m]) * new_axes[m]
         if np.linalg.norm(shift) > 1e-7:
-            label = "made coaxial with" if m in on_coaxial else "axis shifted to meet"
-            names = sorted(ids[k] for k in partners.get(m, ()))
+            parts = []
+            if coaxial_with.get(m):
+                parts.append(
+                    "made coaxial with " + ", ".join(sorted(ids[k] for k in coaxial_with[m]))
+                )
+            if meets_with.get(m):
+                parts.append("shifted to meet " + ", ".join(sorted(ids[k] for k in meets_with[m])))
             corrections.append(
                 Correction(
-                    f"{label} {', '.join(names)}",
+                    "axis " + "; ".join(parts),
                     before=_vec(centers[m]),
                     after=_vec(new_centers[m]),
                     size=float(np.linalg.norm(shift)) * 1000.0,
@@ -398,7 +404,7 @@ def merge_model(
             )
         snap_map = snap.as_mapping(catalog)
         snap_map["od_fit"] = float(ods[m])
-        snap_map["od_stderr"] = float(ses[m])
+        snap_map["od_stderr"] = float(ses[m]) if np.isfinite(ses[m]) else None
         snap_map.update(run_info[m])
         if member_hint[m]:
             snap_map["hint"] = member_hint[m]

@@ -67,7 +67,7 @@ class SnapResult:
         out = {
             "status": self.status,
             "od_fit": self.od_fit,
-            "od_stderr": self.od_stderr,
+            "od_stderr": self.od_stderr if np.isfinite(self.od_stderr) else None,
             "od_catalog": self.size.od if self.size is not None else None,
             "nominal": self.size.nominal if self.size is not None else None,
             "candidates": [{"nominal": c.nominal, "od": c.od} for c in self.candidates],

@@ -211,6 +211,7 @@ def _inline(b: _Builder, joint: Joint):
         "status": "fitting",
         "dimensions": large.dims.source,
         "length": length,
+        "sizes": [pi.nominal, pj.nominal],
         "connects": [pi.id, pj.id],
         "notes": list(large.dims.notes),
     }
