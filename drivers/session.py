@@ -220,13 +220,15 @@ class DeviceShooter:
         return Shot(pan, tilt, pan_at, tilt_at, None, error, attempts, phase)
 
     def _move(self, pan: float, tilt: float) -> tuple[float, float]:
-        for attempt in range(1 + self.settings.retries):
+        """Move with retries on timeouts; the last timeout propagates (the unit is lost)."""
+        attempts = 0
+        while True:
+            attempts += 1
             try:
                 return self.ptu.move_to(pan, tilt)
             except DeviceTimeout:
-                if attempt == self.settings.retries:
+                if attempts > self.settings.retries:
                     raise
-        raise AssertionError("unreachable")
 
 
 def grid(
@@ -412,7 +414,7 @@ class Journal:
     def __init__(self, path):
         self.path = Path(path)
         try:
-            self._f = open(self.path, "a", encoding="utf-8")  # noqa: SIM115 (kept open)
+            self._f = open(self.path, "a", encoding="utf-8")  # kept open for the session
         except OSError as exc:
             raise ScanError(
                 f"cannot write the journal ({exc.strerror}); choose a writable --out directory",

@@ -160,7 +160,19 @@ def _aim_corner(ptu, label: str):
             sys.stderr.write(f"  {exc}\n")
 
 
-def _interactive_targets(ptu, session):
+def _laser(lrf, on: bool) -> None:
+    """Laser pointer on/off while aiming, when the range finder has one (Dimetix)."""
+    from asbuilt.errors import DeviceError
+
+    switch = getattr(lrf, "laser", None)
+    if switch is not None:
+        try:
+            switch(on)
+        except DeviceError as exc:
+            sys.stderr.write(f"  (laser pointer: {exc})\n")
+
+
+def _interactive_targets(ptu, lrf, session):
     """Prompt for targets until an empty id or end of input."""
     from asbuilt.drivers.plan import Target, Window
     from asbuilt.scan.model import KINDS
@@ -183,8 +195,12 @@ def _interactive_targets(ptu, session):
             return
         try:
             if text.lower() == "aim":
-                c1 = _aim_corner(ptu, "corner 1")
-                c2 = _aim_corner(ptu, "corner 2") if c1 is not None else None
+                _laser(lrf, True)
+                try:
+                    c1 = _aim_corner(ptu, "corner 1")
+                    c2 = _aim_corner(ptu, "corner 2") if c1 is not None else None
+                finally:
+                    _laser(lrf, False)
                 if c2 is None:
                     return
                 window = Window.from_corners(c1[0], c1[1], c2[0], c2[1])
@@ -285,7 +301,7 @@ def run(args: argparse.Namespace) -> int:
             if plan is not None:
                 targets = plan.targets
             else:
-                targets = _interactive_targets(ptu, session)
+                targets = _interactive_targets(ptu, lrf, session)
             for target in targets:
                 if session.is_done(target.id):
                     continue
