@@ -14,8 +14,11 @@ sigma = 2 mm. The real fit (``asbuilt.fit.fit_points("cylinder", ...)``) and
 * end-point error: distance from each merged pipe end at an elbow to the true elbow tangent
   point (mean and maximum, mm; the target is under 5 mm).
 
-Run: ``python benchmarks/merge_accuracy.py [--trials 10] [--seed 1]`` (about a minute on two
-cores); it prints a Markdown table for benchmarks/RESULTS.md.
+It also times ``merge_model`` on 1,000 synthetic pipes (250 four-pipe spools with three
+elbows each, fits built directly), the median of three runs.
+
+Run: ``python benchmarks/merge_accuracy.py [--trials 10] [--seed 1]`` (under a minute on two
+cores); it prints Markdown for benchmarks/RESULTS.md.
 """
 
 from __future__ import annotations
@@ -117,6 +120,42 @@ def run_trial(nps, n_points, rng):
     return report, model, parts, size
 
 
+def time_thousand_pipes(rng) -> tuple[float, int]:
+    """Median wall time (s) of merge_model on 1,000 pipes, and the number of elbows built."""
+    from asbuilt.fit.result import FitResult
+    from asbuilt.primitives import Cylinder
+
+    objects, fits = [], []
+    for s in range(250):
+        origin = np.array([(s % 16) * 8.0, (s // 16) * 8.0, 0.0])
+        corners = origin + np.array([[0, 0, 0], [3, 0, 0], [3, 3, 0], [3, 3, 2.5], [6, 3, 2.5]])
+        for k in range(4):
+            a, b = corners[k], corners[k + 1]
+            d = (b - a) / np.linalg.norm(b - a)
+            a = a + (0.19 * d if k else 0) + rng.normal(0, 0.002, 3)
+            b = b - 0.19 * d + rng.normal(0, 0.002, 3)
+            axis = (b - a) / np.linalg.norm(b - a)
+            cyl = Cylinder(
+                (a + b) / 2, axis, 0.05715 + rng.normal(0, 0.0005), float(np.linalg.norm(b - a))
+            )
+            obj = ScanObject(
+                id=f"S{s}P{k}", kind="cylinder", points=np.zeros((4, 3)), index=len(objects)
+            )
+            res = FitResult(
+                cyl, np.zeros(4), np.ones(4, bool), {"radius": 0.0005}, SIGMA, "sensor", "synthetic"
+            )
+            objects.append(obj)
+            fits.append(ObjectFit(obj, res, "cylinder"))
+    report = FitReport(Scan(units="m", objects=tuple(objects)), tuple(fits))
+    times = []
+    for _ in range(3):
+        started = time.perf_counter()
+        model = merge_model(report)
+        times.append(time.perf_counter() - started)
+    elbows = sum(c.type == "elbow" for c in model.components)
+    return float(np.median(times)), elbows
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=10, help="spools per size and count")
@@ -144,8 +183,12 @@ def main(argv=None) -> int:
                     cell["ambiguous"].append(status == "ambiguous")
                     cell["nosize"].append(status == "no-size")
                     cyl = item.result.primitive
-                    alone = snap_diameter(2 * cyl.radius, 2 * item.result.stderr["radius"],
-                                          catalog, tolerance=DEFAULT_TOLERANCES.diameter_tolerance)
+                    alone = snap_diameter(
+                        2 * cyl.radius,
+                        2 * item.result.stderr["radius"],
+                        catalog,
+                        tolerance=DEFAULT_TOLERANCES.diameter_tolerance,
+                    )
                     got = alone.size.nominal if alone.size else None
                     cell["alone_right"].append(got == size.nominal)
                     cell["alone_wrong"].append(got is not None and got != size.nominal)
@@ -161,10 +204,14 @@ def main(argv=None) -> int:
     def pct(values):
         return f"{100 * np.mean(values):.0f}%" if values else "-"
 
-    print(f"Simulated spools: 3 pipes + 2 LR elbows, sigma {SIGMA * 1000:.0f} mm, "
-          f"{args.trials} spools per cell, seed {args.seed}; {elapsed:.0f} s.\n")
-    print("| NPS | points/pipe | right (joint) | wrong (joint) | ambiguous | no size | "
-          "right (alone) | wrong (alone) | end error mean / max (mm) |")
+    print(
+        f"Simulated spools: 3 pipes + 2 LR elbows, sigma {SIGMA * 1000:.0f} mm, "
+        f"{args.trials} spools per cell, seed {args.seed}; {elapsed:.0f} s.\n"
+    )
+    print(
+        "| NPS | points/pipe | right (joint) | wrong (joint) | ambiguous | no size | "
+        "right (alone) | wrong (alone) | end error mean / max (mm) |"
+    )
     print("|---|---|---|---|---|---|---|---|---|")
     totals = defaultdict(list)
     for nps in SIZES:
@@ -172,19 +219,29 @@ def main(argv=None) -> int:
             c = stats[(nps, n)]
             errs = np.array(c["end_err"]) * 1000
             err = f"{errs.mean():.1f} / {errs.max():.1f}" if errs.size else "-"
-            print(f"| {nps} | {n} | {pct(c['right'])} | {pct(c['wrong'])} | "
-                  f"{pct(c['ambiguous'])} | {pct(c['nosize'])} | {pct(c['alone_right'])} | "
-                  f"{pct(c['alone_wrong'])} | {err} |")
+            print(
+                f"| {nps} | {n} | {pct(c['right'])} | {pct(c['wrong'])} | "
+                f"{pct(c['ambiguous'])} | {pct(c['nosize'])} | {pct(c['alone_right'])} | "
+                f"{pct(c['alone_wrong'])} | {err} |"
+            )
             for key in ("right", "wrong", "alone_right", "alone_wrong", "end_err"):
-                totals[(key, n >= 20 and float(load_catalog('asme-b36.10m').size(nps).nps) >= 3)]\
-                    .extend(c[key])
+                totals[
+                    (key, n >= 20 and float(load_catalog("asme-b36.10m").size(nps).nps) >= 3)
+                ].extend(c[key])
             totals[("fit_failed", True)].extend(c["fit_failed"])
     big = {k[0]: v for k, v in totals.items() if k[1]}
     errs = np.array(big["end_err"]) * 1000
-    print(f"\nNPS 3 and up: right {pct(big['right'])} (alone {pct(big['alone_right'])}), "
-          f"wrong {pct(big['wrong'])} (alone {pct(big['alone_wrong'])}), end error mean "
-          f"{errs.mean():.1f} mm, 95th percentile {np.percentile(errs, 95):.1f} mm, max "
-          f"{errs.max():.1f} mm; fits failed: {len(big.get('fit_failed', []))}.")
+    print(
+        f"\nNPS 3 and up: right {pct(big['right'])} (alone {pct(big['alone_right'])}), "
+        f"wrong {pct(big['wrong'])} (alone {pct(big['alone_wrong'])}), end error mean "
+        f"{errs.mean():.1f} mm, 95th percentile {np.percentile(errs, 95):.1f} mm, max "
+        f"{errs.max():.1f} mm; fits failed: {len(big.get('fit_failed', []))}."
+    )
+    seconds, elbows = time_thousand_pipes(rng)
+    print(
+        f"\nmerge_model on 1,000 pipes (250 spools, {elbows} elbows built): "
+        f"{seconds:.2f} s (median of 3)."
+    )
     return 0
 
 

@@ -315,10 +315,20 @@ def merge_model(
     new_axes = directions.axes
     meets, coaxial = _constraints(joints)
     new_centers = centers.copy()
-    for group in _components(len(ids), joints):
-        local = {g: n for n, g in enumerate(group)}
-        lm = [(local[a], local[b]) for a, b in meets if a in local]
-        lc = [(local[a], local[b]) for a, b in coaxial if a in local]
+    groups = _components(len(ids), joints)
+    group_of_pipe = np.zeros(len(ids), int)
+    local = np.zeros(len(ids), int)
+    for g, group in enumerate(groups):
+        group_of_pipe[group] = g
+        local[group] = np.arange(len(group))
+    group_meets: dict[int, list] = {}
+    group_coaxial: dict[int, list] = {}
+    for pairs, table in ((meets, group_meets), (coaxial, group_coaxial)):
+        for a, b in pairs:
+            table.setdefault(int(group_of_pipe[a]), []).append((int(local[a]), int(local[b])))
+    for g, group in enumerate(groups):
+        lm = group_meets.get(g, [])
+        lc = group_coaxial.get(g, [])
         if lm or lc:
             new_centers[group] = align_lines(
                 centers[group], new_axes[group], lm, lc, weights=np.maximum(lengths[group], 0.05)

@@ -124,18 +124,23 @@ def regularize_directions(
     for i in range(n):
         clusters.setdefault(find(i), []).append(i)
     groups = sorted(clusters.values(), key=lambda g: -weights[g].sum())
-    dirs = [_principal(axes[g], weights[g]) for g in groups]
+    dirs = [_principal(axes[g], weights[g]) if len(g) > 1 else axes[g[0]] for g in groups]
+    # leader clustering: groups (heaviest first) join the first cluster whose leading direction
+    # is within the tolerance; each cluster's direction is computed once its members are known
     merged: list[list[int]] = []
-    merged_dirs: list[np.ndarray] = []
+    leaders = np.zeros((0, 3))
+    cos_tol = np.cos(np.radians(tol_deg))
     for group, d in zip(groups, dirs):
-        for k, md in enumerate(merged_dirs):
-            if _angle(d, md) <= tol_deg:
-                merged[k] = merged[k] + group
-                merged_dirs[k] = _principal(axes[merged[k]], weights[merged[k]])
-                break
+        close = np.nonzero(np.abs(leaders @ d) >= cos_tol)[0] if len(leaders) else []
+        if len(close):
+            merged[int(close[0])].extend(group)
         else:
             merged.append(list(group))
-            merged_dirs.append(d)
+            leaders = np.vstack([leaders, d])
+    merged_dirs = [
+        _principal(axes[g], weights[g]) if len(g) > 1 else axes[g[0]] / np.linalg.norm(axes[g[0]])
+        for g in merged
+    ]
     order = np.argsort([-weights[g].sum() for g in merged])
     merged = [merged[k] for k in order]
     merged_dirs = [merged_dirs[k] for k in order]
@@ -210,10 +215,13 @@ def _make_perpendicular(d, near_perp, tol_deg):
 
 def perpendicular_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit vectors (3,) perpendicular to ``axis`` and to each other."""
-    helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = np.cross(axis, helper)
-    u /= np.linalg.norm(u)
-    v = np.cross(axis, u)
+    x, y, z = (float(c) for c in axis)
+    if abs(x) < 0.9:  # cross with (1, 0, 0)
+        u = np.array([0.0, z, -y])
+    else:  # cross with (0, 1, 0)
+        u = np.array([-z, 0.0, x])
+    u /= np.sqrt(u @ u)
+    v = np.array([y * u[2] - z * u[1], z * u[0] - x * u[2], x * u[1] - y * u[0]])
     return u, v
 
 
