@@ -4,9 +4,17 @@ from __future__ import annotations
 
 import copy
 import json
+import sys
+from pathlib import Path
 
 import pytest
-from scan_cases import make_doc
+
+# scan_cases.py (beside this file) is shared with tests/cli; make it importable by name whatever
+# pytest's import mode or package layout.
+if str(Path(__file__).parent) not in sys.path:
+    sys.path.insert(0, str(Path(__file__).parent))
+
+from scan_cases import make_doc  # noqa: E402
 
 
 @pytest.fixture
