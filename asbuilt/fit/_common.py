@@ -182,9 +182,11 @@ def orthonormal_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def orient(direction: np.ndarray) -> np.ndarray:
-    """Give a sign-free direction its canonical sign: +z, else +x, else +y.
+    """Give a sign-free direction its canonical sign: its largest component positive.
 
-    The first of the z, x, y components whose magnitude exceeds 1e-9 is made positive.
+    Ties (within 1e-9) go to z, then x, then y, so a vertical axis points up and a horizontal
+    pipe along x or y points along +x or +y; a small slope or measurement noise never flips it
+    (the sign changes only near 45 degrees between two coordinate axes).
 
     Parameters
     ----------
@@ -194,8 +196,10 @@ def orient(direction: np.ndarray) -> np.ndarray:
     -------
     ndarray, shape (3,)
     """
+    magnitudes = np.abs(direction)
+    largest = float(magnitudes.max())
     for index in (2, 0, 1):
-        if abs(direction[index]) > 1e-9:
+        if magnitudes[index] >= largest - 1e-9:
             return direction if direction[index] > 0 else -direction
     return direction
 
@@ -401,8 +405,10 @@ def circle_fit_2d(xy: np.ndarray, weights: np.ndarray | None = None):
         design = design * root[:, None]
         rhs = rhs * root
     try:
-        solution, *_ = np.linalg.lstsq(design, rhs, rcond=None)
+        solution, _, rank, _ = np.linalg.lstsq(design, rhs, rcond=None)
     except np.linalg.LinAlgError:
+        return np.full(2, np.nan), float("nan")
+    if rank < 3:
         return np.full(2, np.nan), float("nan")
     center = -0.5 * solution[:2]
     squared = center @ center - solution[2]
@@ -536,8 +542,9 @@ def robust_geometric_fit(
     kind : str
         Named in errors.
     sigma : float or None, metres
-        Sensor range sigma; the inlier threshold uses ``max(sigma, robust scale)`` so that a
-        surface that is rougher than the sensor is not mistaken for outliers.
+        Sensor range sigma: the inlier threshold is ``outlier_cutoff_sigma * sigma`` when given,
+        else ``outlier_cutoff_sigma`` times the larger of the robust scale (MAD) and the inliers'
+        degrees-of-freedom-corrected RMS.
     tolerances : Tolerances
     start_iterations : int
     always_refine : int
@@ -596,14 +603,14 @@ def robust_geometric_fit(
     mask = None
     for _ in range(5):
         scale = robust_scale(residuals, floor)
-        if mask is not None:
+        if sigma is not None:
+            scale = float(sigma)
+        elif mask is not None:
             # Once outliers are out, the inliers' standard deviation (with the degrees of
             # freedom the fit used up) is a consistent scale; the MAD alone underestimates it
             # when the noise varies from point to point (incidence angles).
             dof = max(int(np.count_nonzero(mask)) - model.n_params, 1)
             scale = max(scale, float(np.sqrt(np.sum(residuals[mask] ** 2) / dof)))
-        if sigma is not None:
-            scale = max(scale, float(sigma))
         new_mask = np.abs(residuals) <= tolerances.outlier_cutoff_sigma * scale
         if mask is not None and np.array_equal(new_mask, mask):
             break

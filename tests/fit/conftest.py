@@ -180,6 +180,8 @@ def raster_scan(
         if hit.sum() >= n_points:
             break
     index = np.flatnonzero(hit)
+    if len(index) < n_points:
+        raise ValueError("The sensor cannot see the primitive (does the axis point at it?).")
     index = index[np.round(np.linspace(0, len(index) - 1, n_points)).astype(int)]
     pans, tilts = pans[index], tilts[index]
     nominal = _directions(pans, tilts)

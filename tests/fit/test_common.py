@@ -1,0 +1,209 @@
+"""Shared fitting numerics: validation, scales, bases, normals, circle fits, the robust loop."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from asbuilt.errors import FitError
+from asbuilt.fit import _common as common
+from asbuilt.fit import sphere as sphere_module
+from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS
+
+
+@pytest.mark.parametrize(
+    "points, message",
+    [
+        (np.zeros((5, 2)), "shape (n, 3)"),
+        (np.zeros(9), "shape (n, 3)"),
+        ([[0, 0, 0], [1, 1, np.nan], [2, 0, 0], [0, 2, 0]], "finite"),
+        ([["a", 0, 0]] * 4, "numbers"),
+    ],
+)
+def test_validate_points_rejects_bad_arrays(points, message):
+    with pytest.raises(FitError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        common.validate_points(points, "plane")
+
+
+@pytest.mark.parametrize("kind", sorted(MIN_POINTS))
+def test_validate_points_needs_the_kinds_minimum(kind):
+    need = MIN_POINTS[kind]
+    points = np.random.default_rng(1).normal(size=(need - 1, 3))
+    with pytest.raises(FitError, match=f"at least {need} points, got {need - 1}"):
+        common.validate_points(points, kind)
+    assert common.validate_points(np.vstack([points, [0, 0, 0]]), kind).shape == (need, 3)
+
+
+@pytest.mark.parametrize(
+    "points, dimensions, message",
+    [
+        (np.ones((6, 3)), 1, "identical"),
+        (np.outer(np.arange(6.0), [1, 2, 3]), 2, "collinear"),
+        (np.column_stack([np.arange(6.0), np.arange(6.0) ** 2, np.zeros(6)]), 3, "coplanar"),
+    ],
+)
+def test_require_spread_names_the_degeneracy(points, dimensions, message):
+    with pytest.raises(FitError, match=message):
+        common.require_spread(points, "cylinder", dimensions)
+
+
+def test_require_spread_accepts_a_tetrahedron():
+    spread = common.require_spread(np.vstack([np.zeros(3), np.eye(3)]), "sphere", 3)
+    assert np.all(spread > 0) and np.all(np.diff(spread) <= 0)
+
+
+@pytest.mark.parametrize(
+    "axis", [[0, 0, 1], [1, 0, 0], [0, 1, 0], [1, 1, 1], [-0.3, 0.2, -0.9], [1e-12, 1, 0]]
+)
+def test_orthonormal_basis_is_a_right_handed_frame(axis):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    u, v = common.orthonormal_basis(axis)
+    frame = np.array([u, v, axis])
+    np.testing.assert_allclose(frame @ frame.T, np.eye(3), atol=1e-12)
+    assert np.linalg.det(frame) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize(
+    "direction, expected",
+    [
+        ([0.1, 0.2, -0.9], [-0.1, -0.2, 0.9]),
+        ([-1, 0.5, 0.001], [1, -0.5, -0.001]),
+        ([0.01, -1, 0], [-0.01, 1, 0]),
+        ([0.5, -0.5, 0.5], [0.5, -0.5, 0.5]),
+        ([-0.5, 0.5, 0], [0.5, -0.5, 0]),
+    ],
+)
+def test_orient_makes_the_largest_component_positive(direction, expected):
+    np.testing.assert_allclose(common.orient(np.array(direction, float)), expected)
+
+
+def test_robust_scale_estimates_a_gaussian_sigma_and_ignores_gross_outliers():
+    rng = np.random.default_rng(3)
+    residuals = rng.normal(0, 0.002, 4000)
+    residuals[:800] += 5.0
+    assert common.robust_scale(residuals, 1e-4) == pytest.approx(0.002 * 1.35, rel=0.1)
+    assert common.robust_scale(rng.normal(0, 0.002, 4001), 1e-4) == pytest.approx(0.002, rel=0.05)
+
+
+@pytest.mark.parametrize("residuals", [np.zeros(10), np.zeros(0)])
+def test_robust_scale_is_floored(residuals):
+    assert common.robust_scale(residuals, 1e-4) == 1e-4
+
+
+def test_tukey_weights_shape():
+    weights = common.tukey_weights(np.array([0.0, 1.0, -4.685, 10.0]), 1.0)
+    np.testing.assert_allclose(weights, [1.0, (1 - (1 / 4.685) ** 2) ** 2, 0.0, 0.0])
+
+
+def test_trimmed_cost_sums_the_smallest_squares():
+    residuals = np.array([3.0, -1.0, 2.0, 10.0])
+    assert common.trimmed_cost(residuals, 2) == 5.0
+    assert common.trimmed_cost(residuals, 9) == 114.0
+
+
+@pytest.mark.parametrize("n, keep", [(40, 30), (20, 15), (7, 6), (1, 1)])
+def test_keep_count_trims_the_design_contamination(n, keep):
+    assert common.keep_count(n, DEFAULT_TOLERANCES) == keep
+
+
+def test_noise_level_prefers_the_sensor_and_corrects_for_degrees_of_freedom():
+    residuals = np.array([1.0, -1.0, 1.0, -1.0, 1.0, -1.0]) * 0.003
+    assert common.noise_level(residuals, 2, 0.002, DEFAULT_TOLERANCES) == (0.002, "sensor")
+    sigma, source = common.noise_level(residuals, 2, None, DEFAULT_TOLERANCES)
+    assert source == "residuals"
+    assert sigma == pytest.approx(0.003 * np.sqrt(6 / 4))
+    assert common.noise_level(residuals[:2], 2, None, DEFAULT_TOLERANCES)[0] == 1e-4
+
+
+def test_covariance_from_jacobian_matches_the_straight_line_textbook_formula():
+    # y = a + b x with x = 0..4: Var(b) = sigma^2 / sum (x - mean)^2, Var(a) = sigma^2 (1/n + ...)
+    x = np.arange(5.0)
+    jacobian = np.column_stack([np.ones(5), x])
+    covariance = common.covariance_from_jacobian(jacobian, 0.5)
+    sxx = np.sum((x - x.mean()) ** 2)
+    assert covariance[1, 1] == pytest.approx(0.25 / sxx)
+    assert covariance[0, 0] == pytest.approx(0.25 * (1 / 5 + x.mean() ** 2 / sxx))
+
+
+def test_covariance_from_a_rank_deficient_jacobian_is_finite():
+    jacobian = np.column_stack([np.ones(4), np.ones(4)])
+    assert np.all(np.isfinite(common.covariance_from_jacobian(jacobian, 1.0)))
+
+
+@pytest.mark.parametrize("value, expected", [(4.0, 2.0), (-1e-30, np.inf), (np.nan, np.inf)])
+def test_stderr_of(value, expected):
+    assert common.stderr_of(value) == expected
+
+
+def test_local_normals_on_a_plane_are_the_plane_normal():
+    rng = np.random.default_rng(4)
+    normal = np.array([1.0, 2.0, 2.0]) / 3.0
+    u, v = common.orthonormal_basis(normal)
+    points = rng.uniform(-1, 1, (30, 1)) * u + rng.uniform(-1, 1, (30, 1)) * v
+    normals, flatness = common.local_normals(points, 6)
+    np.testing.assert_allclose(np.abs(normals @ normal), 1.0, atol=1e-9)
+    assert np.all(flatness < 1e-12)
+
+
+def test_local_normals_on_many_points_use_the_tree():
+    rng = np.random.default_rng(5)
+    points = np.column_stack([rng.uniform(0, 1, (700, 2)), np.zeros(700)])
+    normals, _ = common.local_normals(points, 6)
+    np.testing.assert_allclose(np.abs(normals[:, 2]), 1.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("start, stop", [(0.0, 2 * np.pi), (0.3, 0.3 + np.pi / 2)])
+def test_circle_fit_2d_recovers_an_exact_circle(start, stop):
+    angles = np.linspace(start, stop, 12, endpoint=False)
+    xy = np.column_stack([3 + 2 * np.cos(angles), -1 + 2 * np.sin(angles)])
+    center, radius = common.circle_fit_2d(xy)
+    np.testing.assert_allclose(center, [3, -1], atol=1e-9)
+    assert radius == pytest.approx(2.0)
+
+
+def test_circle_fit_2d_of_collinear_points_is_undefined_not_an_exception():
+    xy = np.column_stack([np.arange(5.0), np.zeros(5)])
+    center, radius = common.circle_fit_2d(xy)
+    assert not np.isfinite(radius) or radius > 1e6
+
+
+@pytest.mark.parametrize(
+    "angles_deg, expected",
+    [([0, 45, 90], 90.0), ([350, 10], 20.0), (np.arange(0, 360, 30), 330.0), ([5], 0.0)],
+)
+def test_arc_coverage_deg(angles_deg, expected):
+    assert common.arc_coverage_deg(np.radians(angles_deg)) == pytest.approx(expected)
+
+
+def test_robust_geometric_fit_rejects_background_points_and_refits_the_rest():
+    rng = np.random.default_rng(6)
+    directions = rng.normal(size=(40, 3))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    points = 1.5 * directions + rng.normal(0, 0.001, (40, 3))
+    points[:8] *= 1.5  # pushed 0.75 m outwards
+    start = (np.zeros(3) + 0.1, 1.2)
+    fit = common.robust_geometric_fit(
+        points, [start], sphere_module._MODEL, kind="sphere", tolerances=DEFAULT_TOLERANCES
+    )
+    assert fit.state[1] == pytest.approx(1.5, abs=0.002)
+    np.testing.assert_array_equal(fit.inliers, np.arange(40) >= 8)
+    assert fit.jacobian.shape == (32, 4)
+
+
+def test_robust_geometric_fit_refuses_when_most_points_are_outliers():
+    rng = np.random.default_rng(7)
+    directions = rng.normal(size=(20, 3))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    points = directions + rng.normal(0, 0.0005, (20, 3))
+    points[:10] = rng.uniform(-3, 3, (10, 3))
+    with pytest.raises(FitError, match=r"outliers to the best sphere"):
+        common.robust_geometric_fit(
+            points, [(np.zeros(3), 1.0)], sphere_module._MODEL, kind="sphere", sigma=0.0005
+        )
+
+
+def test_robust_geometric_fit_needs_a_finite_start():
+    with pytest.raises(FitError, match="No sphere fits"):
+        common.robust_geometric_fit(
+            np.eye(4, 3), [(np.full(3, np.nan), 1.0)], sphere_module._MODEL, kind="sphere"
+        )

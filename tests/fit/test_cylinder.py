@@ -1,0 +1,198 @@
+"""Cylinder fits of simulated pan-tilt scans: full and partial arcs, stubs, outliers, errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import angle_deg, raster_scan
+
+from asbuilt.errors import FitError
+from asbuilt.fit._common import orthonormal_basis
+from asbuilt.fit.cylinder import fit_cylinder
+from asbuilt.primitives import Cylinder
+
+SENSOR = np.zeros(3)
+
+
+def _pipe(od, length_over_d, distance, axis, height=0.5):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    return Cylinder([distance, 0.3 * distance, height], axis, od / 2, od * length_over_d)
+
+
+# od (m), L/D, points, distance (m), axis, visible arc (deg or None)
+CASES = [
+    (0.0603, 3, 40, 3, [1, 0.4, 0.2], None),
+    (0.1143, 10, 20, 8, [0.2, 1, 0.1], None),
+    (0.2191, 3, 30, 5, [0, 0, 1], None),  # vertical column
+    (0.3239, 1, 30, 4, [1, -1, 0], None),
+    (0.6096, 0.5, 30, 4, [0.3, 1, 0], None),  # short stub, L < D
+    (0.6096, 0.4, 20, 3, [0, 0, 1], None),  # squat vertical tank stub
+    (0.2191, 3, 30, 5, [1, 0.5, 0.3], 90.0),  # quarter arc
+    (0.4064, 2, 40, 6, [0.1, 1, 0], 100.0),
+]
+
+
+@pytest.mark.parametrize("od, ld, n, distance, axis, arc", CASES)
+def test_recovers_a_simulated_pipe(rng, od, ld, n, distance, axis, arc):
+    pipe = _pipe(od, ld, distance, axis)
+    sample = raster_scan(pipe, SENSOR, n, rng, arc_deg=arc)
+    fit = fit_cylinder(sample.points)
+    got = fit.primitive
+    assert fit.kind == "cylinder" and fit.n_points == n
+    # Within 4.5 of the fit's own standard errors (and physically close).
+    assert abs(got.radius - pipe.radius) <= 4.5 * fit.stderr["radius"] + 1e-4
+    assert abs(got.radius - pipe.radius) < 0.01
+    axis_error = angle_deg(got.axis, pipe.axis)
+    assert axis_error <= 4.5 * fit.stderr["axis_deg"] + 0.01
+    assert axis_error < 5.0
+    # The centre lies on the true axis (across it) and the length spans the points.
+    rel = got.center - pipe.center
+    across = rel - (rel @ pipe.axis) * pipe.axis
+    assert np.linalg.norm(across) <= 4.5 * fit.stderr["center"] + 1e-3
+    assert got.length <= pipe.length + 0.02
+    if arc is not None:
+        assert fit.diagnostics["arc_deg"] == pytest.approx(arc, abs=20)
+    else:
+        assert 90 < fit.diagnostics["arc_deg"] < 185
+    assert fit.diagnostics["length_over_diameter"] == pytest.approx(got.length / (2 * got.radius))
+
+
+@pytest.mark.parametrize(
+    "od, ld, n, distance, axis",
+    [
+        (0.2191, 3, 40, 5, [1, 0.5, 0.3]),
+        (0.6096, 1, 40, 8, [0.1, 1, 0]),
+        (0.1143, 10, 30, 6, [0, 0, 1]),
+    ],
+)
+def test_twenty_percent_edge_outliers_are_rejected_and_reported(rng, od, ld, n, distance, axis):
+    pipe = _pipe(od, ld, distance, axis)
+    sample = raster_scan(pipe, SENSOR, n, rng, outlier_fraction=0.2)
+    fit = fit_cylinder(sample.points)
+    # Every background shot off the surface by more than 10 sigma is rejected (a shot pushed a
+    # few centimetres along a grazing ray can land back within noise of the pipe).
+    detectable = sample.outliers & (np.abs(pipe.distance(sample.points)) > 0.02)
+    assert np.count_nonzero(detectable) >= 0.7 * np.count_nonzero(sample.outliers)
+    assert not np.any(fit.inliers & detectable)
+    assert np.count_nonzero(~fit.inliers & ~sample.outliers) <= 2  # few good shots lost
+    assert abs(fit.primitive.radius - pipe.radius) <= 4.5 * fit.stderr["radius"] + 1e-4
+    assert angle_deg(fit.primitive.axis, pipe.axis) < 2.0
+    assert any("outlier" in note for note in fit.notes)
+    # Rejection is a threshold on the residual: every rejected point is farther than any kept one.
+    assert np.abs(fit.residuals[~fit.inliers]).min() > np.abs(fit.residuals[fit.inliers]).max()
+
+
+def test_noise_free_points_fit_exactly():
+    pipe = Cylinder([2, 1, 3], np.array([1.0, 2, 2]) / 3, 0.25, 1.2)
+    u, v = orthonormal_basis(pipe.axis)
+    angles = np.linspace(-1.2, 1.2, 8)
+    along = np.linspace(-0.5, 0.5, 4)
+    a, s = np.meshgrid(angles, along)
+    points = (
+        pipe.center
+        + 0.25 * (np.cos(a.ravel())[:, None] * u + np.sin(a.ravel())[:, None] * v)
+        + s.ravel()[:, None] * pipe.axis
+    )
+    fit = fit_cylinder(points)
+    assert fit.primitive.radius == pytest.approx(0.25, abs=1e-9)
+    assert angle_deg(fit.primitive.axis, pipe.axis) < 1e-6
+    assert fit.primitive.length == pytest.approx(1.0, abs=1e-9)
+    np.testing.assert_allclose(fit.primitive.center, pipe.center, atol=1e-9)
+    assert fit.rms < 1e-9 and fit.n_inliers == len(points)
+    assert fit.diagnostics["arc_deg"] == pytest.approx(np.degrees(2.4))
+
+
+def test_residuals_are_positive_outside_and_cover_every_point(rng):
+    pipe = _pipe(0.2191, 3, 5, [0, 1, 0])
+    sample = raster_scan(pipe, SENSOR, 30, rng, outlier_fraction=0.2)
+    fit = fit_cylinder(sample.points)
+    assert fit.residuals.shape == (30,)
+    np.testing.assert_allclose(fit.residuals, fit.primitive.distance(sample.points))
+    far = sample.outliers & (np.abs(pipe.distance(sample.points)) > 0.02)
+    assert np.all(fit.residuals[far] > 0)  # the wall behind is outside the pipe
+
+
+@pytest.mark.parametrize(
+    "axis, expected",
+    [([0, 0, -1], [0, 0, 1]), ([0.2, -1, 0], [-0.2, 1, 0]), ([-1, -0.4, 0.01], [1, 0.4, 0])],
+)
+def test_axis_sign_follows_the_documented_rule(rng, axis, expected):
+    pipe = _pipe(0.3239, 3, 5, axis)
+    fit = fit_cylinder(raster_scan(pipe, SENSOR, 30, rng).points)
+    expected = np.asarray(expected, float) / np.linalg.norm(expected)
+    assert fit.primitive.axis @ expected > 0.999
+
+
+def test_standard_errors_and_covariance_are_consistent(rng):
+    pipe = _pipe(0.2191, 3, 5, [-0.3, 1, 0.1])
+    points = raster_scan(pipe, SENSOR, 40, rng).points
+    fit = fit_cylinder(points)
+    assert set(fit.stderr) == {"radius", "axis_deg", "center", "length"}
+    cov = fit.covariance
+    assert cov.shape == (5, 5)
+    np.testing.assert_allclose(cov, cov.T, atol=1e-18)
+    assert np.all(np.linalg.eigvalsh(cov) > 0)
+    assert fit.stderr["radius"] == pytest.approx(np.sqrt(cov[4, 4]))
+    assert fit.stderr["axis_deg"] == pytest.approx(np.degrees(np.sqrt(cov[0, 0] + cov[1, 1])))
+    assert fit.stderr["center"] == pytest.approx(np.sqrt(cov[2, 2] + cov[3, 3]))
+    assert fit.stderr["length"] > 0
+    assert fit.sigma_source == "residuals"
+    given = fit_cylinder(points, sigma=0.004)
+    assert given.sigma_source == "sensor" and given.sigma == 0.004
+    twice = fit_cylinder(points, sigma=0.008)
+    # Standard errors scale with the noise level they are computed from.
+    for key in ("radius", "axis_deg", "center"):
+        assert twice.stderr[key] == pytest.approx(2 * given.stderr[key], rel=1e-9)
+
+
+def test_standard_errors_match_the_scatter_of_repeated_scans(rng):
+    pipe = _pipe(0.2191, 3, 5, [-0.3, 1, 0.1])
+    errors, predicted, axis_errors, axis_predicted = [], [], [], []
+    for _ in range(60):
+        fit = fit_cylinder(raster_scan(pipe, SENSOR, 40, rng).points)
+        errors.append(fit.primitive.radius - pipe.radius)
+        predicted.append(fit.stderr["radius"])
+        axis_errors.append(angle_deg(fit.primitive.axis, pipe.axis))
+        axis_predicted.append(fit.stderr["axis_deg"])
+    rmse = np.sqrt(np.mean(np.square(errors)))
+    # (J^T J)^-1 sigma^2 with the average residual sigma is conservative for the radius: the
+    # grazing shots at the pipe's edges, which fix the radius, are more precise than average
+    # (range noise lies along the beam). Measured about 0.65-0.85 at 3-5 m.
+    assert 0.55 < rmse / np.sqrt(np.mean(np.square(predicted))) < 1.3
+    # Geometric least squares is (nearly) unbiased: the mean error is within noise of zero.
+    assert abs(np.mean(errors)) < 3 * rmse / np.sqrt(len(errors))
+    axis_rms = np.sqrt(np.mean(np.square(axis_errors)))
+    assert 0.7 < axis_rms / np.sqrt(np.mean(np.square(axis_predicted))) < 1.4
+
+
+@pytest.mark.parametrize(
+    "points, message",
+    [
+        (np.zeros((5, 3)), "at least 6 points"),
+        (np.ones((8, 3)), "identical"),
+        (np.outer(np.arange(8.0), [1, 1, 0]), "collinear"),
+        (
+            np.column_stack([np.cos(np.arange(8.0)), np.sin(np.arange(8.0)), np.zeros(8)]),
+            "coplanar",
+        ),
+    ],
+)
+def test_degenerate_points_raise_fit_errors(points, message):
+    with pytest.raises(FitError, match=message):
+        fit_cylinder(points)
+
+
+def test_mostly_background_points_raise_a_fit_error(rng):
+    pipe = _pipe(0.2191, 3, 5, [1, 0.5, 0.3])
+    sample = raster_scan(pipe, SENSOR, 20, rng)
+    points = sample.points.copy()
+    points[:10] = rng.uniform(-3, 3, (10, 3)) + pipe.center
+    with pytest.raises(FitError, match="outliers to the best cylinder"):
+        fit_cylinder(points, sigma=0.002)
+
+
+def test_the_input_is_not_modified(rng):
+    points = raster_scan(_pipe(0.2191, 3, 5, [1, 0, 0]), SENSOR, 30, rng).points
+    before = points.copy()
+    fit_cylinder(points)
+    np.testing.assert_array_equal(points, before)

@@ -1,0 +1,95 @@
+"""Sphere fits: recovery from simulated scans, small caps, outliers, errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import raster_scan
+
+from asbuilt.errors import FitError
+from asbuilt.fit.sphere import algebraic_sphere, fit_sphere
+from asbuilt.primitives import Sphere
+
+SENSOR = np.zeros(3)
+
+
+@pytest.mark.parametrize(
+    "center, radius, n",
+    [([3, 0.5, 0.5], 0.05, 20), ([5, -1, 1], 0.3, 30), ([8, 2, 0], 1.2, 40), ([10, 0, 2], 0.1, 40)],
+)
+def test_recovers_a_simulated_sphere(rng, center, radius, n):
+    sphere = Sphere(center, radius)
+    sample = raster_scan(sphere, SENSOR, n, rng)
+    fit = fit_sphere(sample.points)
+    assert fit.kind == "sphere"
+    assert abs(fit.primitive.radius - radius) <= 4.5 * fit.stderr["radius"] + 1e-4
+    distance = np.linalg.norm(fit.primitive.center - sphere.center)
+    assert distance <= 4.5 * fit.stderr["center"] + 1e-4
+    # One station sees at most a hemisphere.
+    assert 60 < fit.diagnostics["cap_deg"] <= 181
+
+
+def test_noise_free_cap_is_exact_where_the_algebraic_fit_is_not():
+    rng = np.random.default_rng(2)
+    directions = rng.normal(size=(25, 3))
+    directions[:, 2] = np.abs(directions[:, 2]) * 4  # a cap around +z
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    points = np.array([1.0, 2.0, 3.0]) + 0.5 * directions
+    fit = fit_sphere(points)
+    assert fit.primitive.radius == pytest.approx(0.5, abs=1e-9)
+    np.testing.assert_allclose(fit.primitive.center, [1, 2, 3], atol=1e-9)
+    assert fit.rms < 1e-9
+    center, radius = algebraic_sphere(points)
+    assert radius == pytest.approx(0.5, abs=1e-9)  # exact data: the algebraic fit agrees
+    noisy = points + rng.normal(0, 0.002, points.shape)
+    assert abs(fit_sphere(noisy).primitive.radius - 0.5) < 0.01
+
+
+def test_twenty_percent_edge_outliers_are_rejected(rng):
+    sphere = Sphere([5, 1, 1], 0.4)
+    sample = raster_scan(sphere, SENSOR, 30, rng, outlier_fraction=0.2)
+    fit = fit_sphere(sample.points)
+    far = sample.outliers & (np.abs(sphere.distance(sample.points)) > 0.02)
+    assert not np.any(fit.inliers & far)
+    assert abs(fit.primitive.radius - 0.4) <= 4.5 * fit.stderr["radius"] + 1e-4
+    assert any("outlier" in note for note in fit.notes)
+
+
+def test_covariance_and_standard_errors(rng):
+    points = raster_scan(Sphere([5, 1, 1], 0.4), SENSOR, 30, rng).points
+    fit = fit_sphere(points)
+    assert set(fit.stderr) == {"radius", "center"}
+    assert fit.covariance.shape == (4, 4)
+    assert fit.stderr["radius"] == pytest.approx(np.sqrt(fit.covariance[3, 3]))
+    assert fit.stderr["center"] == pytest.approx(np.sqrt(np.trace(fit.covariance[:3, :3])))
+    one = fit_sphere(points, sigma=0.002)
+    two = fit_sphere(points, sigma=0.004)
+    assert two.sigma_source == "sensor"
+    assert two.stderr["radius"] == pytest.approx(2 * one.stderr["radius"])
+
+
+def test_radius_error_matches_repeated_scans_and_is_unbiased(rng):
+    sphere = Sphere([6, 1, 1], 0.3)
+    errors, predicted = [], []
+    for _ in range(150):
+        fit = fit_sphere(raster_scan(sphere, SENSOR, 30, rng).points)
+        errors.append(fit.primitive.radius - 0.3)
+        predicted.append(fit.stderr["radius"])
+    rmse = np.sqrt(np.mean(np.square(errors)))
+    assert 0.55 < rmse / np.sqrt(np.mean(np.square(predicted))) < 1.3
+    # The product's bias target (a quarter of the scatter), allowing for the sampling error.
+    assert abs(np.mean(errors)) < 0.25 * rmse + 2 * rmse / np.sqrt(len(errors))
+
+
+@pytest.mark.parametrize(
+    "points, message",
+    [
+        (np.zeros((3, 3)), "at least 4 points"),
+        (np.ones((6, 3)), "identical"),
+        (np.outer(np.arange(6.0), [1, 0, 1]), "collinear"),
+        (np.column_stack([np.cos(np.arange(6.0)), np.sin(np.arange(6.0)), np.ones(6)]), "coplanar"),
+    ],
+)
+def test_degenerate_points_raise(points, message):
+    with pytest.raises(FitError, match=message):
+        fit_sphere(points)
