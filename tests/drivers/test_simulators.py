@@ -201,3 +201,30 @@ def test_registered_rig_is_reused():
     port.read(100)
     assert rig.counts()[0] == 300
     port.close()
+
+
+def test_exported_model_is_a_world(tmp_path):
+    import trimesh
+    from asbuilt.drivers.simrig import load_world
+
+    box = trimesh.creation.box(extents=[1.0, 1.0, 1.0])
+    box.apply_translation([3.5, 0.0, 0.0])  # near face at x = 3
+    path = tmp_path / "model.stl"
+    box.export(path)
+    rig = SimulatedRig(load_world(path))
+    assert rig.measure() == pytest.approx(3.0, abs=1e-6)
+    rig.move(3000, 0)  # about 154 degrees: looking away from the model
+    assert rig.measure() is None
+
+
+@pytest.mark.parametrize("content", [b"", b"solid x\nendsolid x\n"])
+def test_empty_models_are_scene_errors(tmp_path, content):
+    from asbuilt.drivers.simrig import load_world
+
+    from asbuilt.errors import SceneError
+
+    path = tmp_path / "empty.stl"
+    path.write_bytes(content)
+    with pytest.raises(SceneError) as info:
+        load_world(path)
+    assert str(info.value).startswith(str(path))
