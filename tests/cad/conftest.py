@@ -1,5 +1,5 @@
 import pytest
-from zoo import zoo_model
+from cad_zoo import zoo_model
 
 
 @pytest.fixture(scope="session")

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from zoo import R4, W4, expected_volumes, zoo_model
+from cad_zoo import R4, W4, expected_volumes, zoo_model
 
 from asbuilt.cad import build_assembly, fused_spool_solid, prepare
 from asbuilt.cad.colours import KIND_COLOURS, STATUS_COLOURS

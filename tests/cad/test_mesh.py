@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-from zoo import expected_volumes, zoo_components
+from cad_zoo import expected_volumes, zoo_components
 
 from asbuilt.cad.mesh import Mesh, tessellate, vertex_normals
 from asbuilt.cad.solids import solid_for

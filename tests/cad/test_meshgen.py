@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 import trimesh
+from cad_zoo import expected_volumes, zoo_components
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from zoo import expected_volumes, zoo_components
 
 from asbuilt.cad.meshgen import SEGMENTS, mesh_for
 from asbuilt.model import Bend, Reducer, Straight

@@ -6,11 +6,11 @@ import math
 
 import numpy as np
 import pytest
+from cad_zoo import expected_volumes, zoo_components
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
-from zoo import expected_volumes, zoo_components
 
 from asbuilt.cad.solids import plate_solid, solid_for
 from asbuilt.errors import ExportError, SolidBuildError

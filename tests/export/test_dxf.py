@@ -1,0 +1,128 @@
+"""DXF: audit-clean, millimetres, one layer per kind/size/group, meshes and 2D views."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import ezdxf
+import numpy as np
+import pytest
+from ezdxf.lldxf.validator import is_valid_layer_name
+
+from asbuilt.cad.colours import STATUS_COLOURS, rgb255
+from asbuilt.export.dxf import VIEW_LAYERS, dxf_document, layer_name, write_dxf
+from asbuilt.model import Component, Straight
+
+
+def _counts(doc) -> Counter:
+    return Counter((e.dxf.layer, e.dxftype()) for e in doc.modelspace())
+
+
+@pytest.fixture(scope="module")
+def written(zoo_cad, tmp_path_factory):
+    path = tmp_path_factory.mktemp("dxf") / "zoo.dxf"
+    write_dxf(zoo_cad, path)
+    return path
+
+
+def test_audit_has_no_errors_and_reopens_with_the_same_layers_and_counts(zoo_cad, written):
+    in_memory = dxf_document(zoo_cad)
+    doc = ezdxf.readfile(written)
+    auditor = doc.audit()
+    assert not auditor.has_errors, [str(e) for e in auditor.errors]
+    assert {layer.dxf.name for layer in doc.layers} == {
+        layer.dxf.name for layer in in_memory.layers
+    }
+    assert _counts(doc) == _counts(in_memory)
+
+
+def test_units_are_millimetres(written):
+    doc = ezdxf.readfile(written)
+    assert doc.header["$INSUNITS"] == 4
+    assert doc.header["$MEASUREMENT"] == 1
+
+
+def test_one_mesh_per_object_on_kind_size_group_layers(zoo_cad, written):
+    doc = ezdxf.readfile(written)
+    meshes = [e for e in doc.modelspace() if e.dxftype() == "MESH"]
+    assert len(meshes) == len(zoo_cad.parts)
+    layers = [m.dxf.layer for m in meshes]
+    assert layers == [
+        "P-PIPE-NPS4-S1",
+        "P-ELBOW-NPS4-S1",
+        "P-PIPE-NPS4-S1",
+        "P-TEE-S2",
+        "P-REDUCER-S2",
+        "ASBUILT-CYLINDER-FRAME",
+        "ASBUILT-CUBOID-FRAME",
+        "ASBUILT-SPHERE",
+        "ASBUILT-PLANE",
+        "ASBUILT-HULL",
+    ]
+
+
+def test_mesh_vertices_are_the_model_in_millimetres(zoo_cad, written):
+    doc = ezdxf.readfile(written)
+    meshes = [e for e in doc.modelspace() if e.dxftype() == "MESH"]
+    for part, entity in zip(zoo_cad.parts, meshes):
+        vertices = np.array(list(entity.vertices))
+        expected = zoo_cad.mesh(part).vertices * 1000.0
+        assert vertices.min(axis=0) == pytest.approx(expected.min(axis=0), abs=1e-6)
+        assert vertices.max(axis=0) == pytest.approx(expected.max(axis=0), abs=1e-6)
+
+
+def test_findings_colour_the_entities(written):
+    doc = ezdxf.readfile(written)
+    mesh = next(
+        e for e in doc.modelspace().query("MESH") if e.dxf.layer.startswith("ASBUILT-CUBOID")
+    )
+    assert mesh.rgb == rgb255(STATUS_COLOURS["error"])
+
+
+def test_plan_and_elevation_views_with_centrelines_outlines_and_ids(zoo_cad, written):
+    doc = ezdxf.readfile(written)
+    msp = doc.modelspace()
+    for layer in VIEW_LAYERS:
+        assert layer in doc.layers
+    # Centrelines seen in plan: P1, E1, P2, R1 and T1's run (its branch and the column CY are
+    # vertical and collapse to points); in elevation: P1, E1, T1's run and branch, R1 and CY
+    # (P2 runs along y and collapses).
+    for prefix, count in (("PLAN", 5), ("ELEV", 6)):
+        texts = {e.dxf.text for e in msp.query(f'TEXT[layer=="{prefix}-TEXT"]')}
+        assert {part.id for part in zoo_cad.parts} <= texts
+        centrelines = msp.query(f'LWPOLYLINE[layer=="{prefix}-CENTRELINE"]')
+        assert len(centrelines) == count
+    # The vertical column gets its outline (a 300 mm circle's polygon) in plan instead.
+    outlines = msp.query('LWPOLYLINE[layer=="PLAN-OUTLINE"]')
+    column = [
+        e
+        for e in outlines
+        if np.allclose(np.mean([p[:2] for p in e.get_points()], axis=0), [5000, 0], atol=1.0)
+    ]
+    assert len(column) == 1 and column[0].closed
+    assert doc.layers.get("PLAN-CENTRELINE").dxf.linetype == "CENTER"
+    # The elbow's plan centreline is a quarter arc of radius 200 mm about (1000, 200).
+    elbow = [e for e in msp.query('LWPOLYLINE[layer=="PLAN-CENTRELINE"]') if len(e) > 2]
+    points = np.array([p[:2] for p in elbow[0].get_points()])
+    assert np.linalg.norm(points - [1000, 200], axis=1) == pytest.approx(200.0, abs=1e-6)
+    # A sphere is a circle in both views.
+    circles = msp.query("CIRCLE")
+    assert sorted(c.dxf.layer for c in circles) == ["ELEV-OUTLINE", "PLAN-OUTLINE"]
+    assert all(c.dxf.radius == pytest.approx(500.0) for c in circles)
+
+
+@pytest.mark.parametrize(
+    ("type_", "nominal", "group", "expected"),
+    [
+        ("pipe", "4", "S1", "P-PIPE-NPS4-S1"),
+        ("pipe", "4", None, "P-PIPE-NPS4"),
+        ("elbow", "1-1/2", "line 7", "P-ELBOW-NPS1-1_2-LINE_7"),
+        ("cuboid", None, "columns", "ASBUILT-CUBOID-COLUMNS"),
+        ("cylinder", None, None, "ASBUILT-CYLINDER"),
+    ],
+)
+def test_layer_names(type_, nominal, group, expected):
+    component = Component("X", type_, Straight([0, 0, 0], [1, 0, 0], 0.05), nominal=nominal)
+    name = layer_name(component, group)
+    assert name == expected
+    assert is_valid_layer_name(name)

@@ -1,0 +1,141 @@
+"""The suffix registry and all-or-nothing batches of outputs."""
+
+from __future__ import annotations
+
+import os
+import stat
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from asbuilt.errors import ExportError, SolidBuildError, UnknownFormatError
+from asbuilt.export import SUFFIXES, export_model, export_models, exporter_for
+from asbuilt.model import Component
+from asbuilt.primitives import Plane
+
+ALL = ["zoo.step", "zoo.stp", "zoo.glb", "zoo.gltf", "zoo.dxf", "zoo.stl", "zoo.obj", "zoo.json"]
+
+
+@pytest.mark.parametrize(
+    ("name", "format_"),
+    [
+        ("a.step", "STEP"),
+        ("a.STP", "STEP"),
+        ("a.glb", "glTF"),
+        ("a.gltf", "glTF"),
+        ("a.Dxf", "DXF"),
+        ("a.stl", "STL"),
+        ("a.obj", "OBJ"),
+        ("dir.v2/a.json", "JSON"),
+    ],
+)
+def test_exporter_for_suffix(name, format_):
+    assert exporter_for(name).name == format_
+
+
+@pytest.mark.parametrize(
+    ("name", "message"),
+    [
+        ("model.ifc", "unknown output format '.ifc'; use one of .step, .stp"),
+        ("model", "the output has no suffix; use one of"),
+    ],
+)
+def test_unknown_suffix_is_one_clear_line(name, message):
+    with pytest.raises(UnknownFormatError) as info:
+        exporter_for(name)
+    assert str(info.value).startswith(f"{name}: {message}")
+    assert "\n" not in str(info.value)
+
+
+def test_every_suffix_is_registered_once():
+    assert set(SUFFIXES) == {Path(n).suffix for n in ALL}
+
+
+def test_all_formats_in_one_run(zoo, tmp_path):
+    calls = []
+    results = export_models(
+        zoo,
+        [tmp_path / n for n in ALL],
+        progress=lambda task, done, total: calls.append((task, done, total)),
+    )
+    assert [r.path.name for r in results] == ALL
+    for result in results:
+        assert result.size == result.path.stat().st_size > 0
+        assert result.objects == len(zoo.components)
+    assert ("files", len(ALL), len(ALL)) in calls
+    assert ("solids", len(zoo.components), len(zoo.components)) in calls
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(ALL)  # no temporary leftovers
+
+
+def test_written_files_respect_the_umask(zoo, tmp_path):
+    old = os.umask(0o022)
+    try:
+        result = export_model(zoo, tmp_path / "zoo.json")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(result.path.stat().st_mode) == 0o644
+
+
+def test_a_failing_writer_leaves_no_new_file_and_keeps_old_ones(zoo, tmp_path, monkeypatch):
+    import asbuilt.export.dxf as dxf
+
+    old = tmp_path / "zoo.step"
+    old.write_text("previous version")
+
+    def broken(cad, path):
+        Path(path).write_text("half a DXF")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(dxf, "write_dxf", broken)
+    outputs = [tmp_path / "zoo.step", tmp_path / "zoo.glb", tmp_path / "zoo.dxf"]
+    with pytest.raises(ExportError) as info:
+        export_models(zoo, outputs)
+    assert (
+        str(info.value)
+        == f"{tmp_path / 'zoo.dxf'}: cannot write the file (No space left on device)"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["zoo.step"]
+    assert old.read_text() == "previous version"
+
+
+def test_an_object_without_a_solid_is_named_and_nothing_is_written(zoo, tmp_path):
+    bad = Component("F9", "plane", Plane([0, 0, 0], [0, 0, 1]))
+    model = zoo.replace(components=(*zoo.components, bad))
+    with pytest.raises(SolidBuildError, match=r"^object F9: "):
+        export_models(model, [tmp_path / "a.step", tmp_path / "a.json"])
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_unknown_suffix_fails_before_anything_is_written(zoo, tmp_path):
+    with pytest.raises(UnknownFormatError):
+        export_models(zoo, [tmp_path / "a.json", tmp_path / "a.ifc"])
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("parent", ["missing-dir", "a-file"])
+def test_unusable_directory(zoo, tmp_path, parent):
+    (tmp_path / "a-file").write_text("x")
+    target = tmp_path / parent / "zoo.json"
+    with pytest.raises(ExportError, match=r"directory does not exist"):
+        export_model(zoo, target)
+
+
+def test_the_same_output_twice_is_refused(zoo, tmp_path):
+    with pytest.raises(ExportError, match="given twice"):
+        export_models(zoo, [tmp_path / "a.json", tmp_path / "." / "a.json"])
+
+
+def test_json_alone_does_not_load_the_cad_kernel(tmp_path):
+    code = (
+        "import sys; sys.path.insert(0, 'tests/cad'); from cad_zoo import zoo_model;"
+        "from asbuilt.export import export_model;"
+        f"export_model(zoo_model(), {str(tmp_path / 'z.json')!r});"
+        "print('cadquery' in sys.modules, 'OCP' in sys.modules)"
+    )
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=root, check=True
+    )
+    assert out.stdout.split() == ["False", "False"]

@@ -1,0 +1,172 @@
+"""The asbuilt-model document: shape, round trip through the reader, clear errors."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from asbuilt.export.model_json import (
+    FORMAT,
+    ModelDocumentError,
+    dumps_model,
+    load_model,
+    load_model_document,
+    model_document,
+    model_from_document,
+    write_model_json,
+)
+from asbuilt.model import Correction
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_document_head_and_component_fields(zoo):
+    document = model_document(zoo)
+    assert (document["format"], document["version"], document["units"]) == (FORMAT, 1, "m")
+    assert document["display_units"] == "mm" and document["catalog"] == "asme-b36.10m"
+    pipe = document["components"][0]
+    assert pipe["id"] == "P1" and pipe["type"] == "pipe" and pipe["shape"] == "straight"
+    assert pipe["nominal"] == "4" and pipe["schedule"] == "STD"
+    assert pipe["od"] == pytest.approx(0.1143) and pipe["start"] == [0, 0, 0]
+    assert pipe["spool"] == "S1" and pipe["source"] == "P1" and pipe["sources"] == ["P1"]
+    elbow = document["components"][1]
+    assert elbow["type"] == "elbow" and elbow["angle_deg"] == pytest.approx(90.0)
+    assert elbow["bend_radius"] == pytest.approx(0.2) and len(elbow["ends"]) == 2
+    assert elbow["source"] is None
+    assert document["spools"] == [
+        {"id": "S1", "components": ["P1", "E1", "P2"], "pipe_length": 2.0}
+    ]
+
+
+def test_findings_have_the_documented_shape(zoo):
+    findings = model_document(zoo)["findings"]
+    assert [f["severity"] for f in findings] == ["error", "warning", "info"]
+    assert set(findings[0]) == {
+        "code",
+        "slug",
+        "severity",
+        "objects",
+        "location",
+        "message",
+        "measured",
+        "allowed",
+        "stderr",
+        "unit",
+        "suggestions",
+        "unverifiable",
+    }
+    assert findings[0]["location"] == [6, 2, 1]
+    assert findings[1]["measured"] == 1.5 and findings[1]["unit"] == "deg"
+
+
+def test_round_trip_restores_everything_but_fits(zoo, tmp_path):
+    path = tmp_path / "zoo.json"
+    write_model_json(zoo, path)
+    again = load_model(path)
+    assert model_document(again) == model_document(zoo)
+    for before, after in zip(zoo.components, again.components):
+        assert type(after.geometry) is type(before.geometry)
+    assert path.read_text() == dumps_model(again)  # stable text
+
+
+def test_document_is_strict_json(zoo):
+    text = dumps_model(zoo)
+    json.loads(text, parse_constant=lambda name: pytest.fail(f"non-standard {name}"))
+
+
+def test_corrections_and_snap_survive(zoo):
+    pipe = zoo.components[0]
+    changed = zoo.replace(
+        components=(
+            type(pipe)(
+                **{
+                    **pipe.__dict__,
+                    "corrections": (Correction("diameter snapped", 0.1139, 0.1143, 0.0004, "m"),),
+                    "snap": {
+                        "status": "snapped",
+                        "od_fit": np.float64(0.1139),
+                        "candidates": ("4", "3-1/2"),
+                    },
+                }
+            ),
+            *zoo.components[1:],
+        )
+    )
+    entry = model_document(changed)["components"][0]
+    assert entry["corrections"] == [
+        {"what": "diameter snapped", "before": 0.1139, "after": 0.1143, "size": 0.0004, "unit": "m"}
+    ]
+    assert entry["snap"] == {"status": "snapped", "od_fit": 0.1139, "candidates": ["4", "3-1/2"]}
+    again = model_from_document(model_document(changed))
+    assert again.components[0].corrections[0].what == "diameter snapped"
+
+
+def test_real_pipeline_model_round_trips(tmp_path):
+    from asbuilt.pipeline import build_model
+    from asbuilt.scan import load_scan
+
+    model = build_model(load_scan(ROOT / "samples" / "spool.json"))
+    path = tmp_path / "spool.json"
+    write_model_json(model, path)
+    document = load_model_document(path)
+    assert document["source"].endswith("spool.json")
+    fitted = [c for c in document["components"] if c["fitted"] is not None]
+    assert fitted and all({"method", "rms", "stderr", "points"} <= set(c["fitted"]) for c in fitted)
+    assert (
+        model_document(model_from_document(document))["components"][0]["id"]
+        == document["components"][0]["id"]
+    )
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("{", "not valid JSON (line 1"),
+        ("[]", "the document must be a JSON object"),
+        ('{"format": "asbuilt-scan", "version": 1}', "format: format is 'asbuilt-scan'"),
+        ('{"format": "asbuilt-model", "version": 9}', "version: version 9 is not supported"),
+        ('{"format": "asbuilt-model", "version": 1, "units": "mm"}', "units: units must be 'm'"),
+        ('{"format": "asbuilt-model", "version": 1, "components": {}}', "components: must be"),
+    ],
+)
+def test_bad_documents_name_the_file_and_field(tmp_path, text, message):
+    path = tmp_path / "bad.json"
+    path.write_text(text)
+    with pytest.raises(ModelDocumentError) as info:
+        load_model_document(path)
+    assert str(info.value).startswith(f"{path}: ")
+    assert message in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("component", "message"),
+    [
+        (
+            {"id": "P1", "type": "pipe", "shape": "straight", "start": [0, 0, 0]},
+            "missing field 'end'",
+        ),
+        ({"id": "P1", "type": "pipe", "shape": "blob"}, "unknown shape 'blob'"),
+        (
+            {"id": "P1", "type": "bolt", "shape": "sphere", "center": [0, 0, 0], "radius": 1},
+            "component type must be one of",
+        ),
+        (
+            {"id": "S", "type": "sphere", "shape": "sphere", "center": [0, 0], "radius": 1},
+            "center must have shape (3,)",
+        ),
+    ],
+)
+def test_bad_components_are_located(component, message):
+    document = {"format": FORMAT, "version": 1, "components": [component]}
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value).startswith(f"m.json: components[0] ({component['id']}): ")
+    assert message in str(info.value)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(ModelDocumentError, match="cannot read the file"):
+        load_model_document(tmp_path / "nope.json")

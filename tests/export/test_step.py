@@ -1,0 +1,95 @@
+"""STEP round trips through the OpenCASCADE reader: names, tree, solids, volumes, colours, mm."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from asbuilt.cad import prepare
+from asbuilt.cad.colours import KIND_COLOURS, STATUS_COLOURS
+from asbuilt.errors import ExportError
+from asbuilt.export import export_model
+from asbuilt.export.step import declared_length_unit, read_step, write_step
+from asbuilt.model import Component, Model, Straight
+
+
+@pytest.fixture(scope="module")
+def step_file(zoo_cad, tmp_path_factory):
+    path = tmp_path_factory.mktemp("step") / "zoo.step"
+    write_step(zoo_cad, path)
+    return path
+
+
+def test_same_solids_names_and_volumes_within_0_1_percent(zoo_cad, step_file):
+    solids = read_step(step_file)
+    assert [s.name for s in solids] == [part.id for part in zoo_cad.parts]
+    assert all(s.solids == 1 for s in solids)
+    for part, read in zip(zoo_cad.parts, solids):
+        in_memory_mm3 = part.solid.Volume() * 1e9
+        assert read.volume == pytest.approx(in_memory_mm3, rel=1e-3), part.id
+
+
+def test_tree_is_scan_group_object(step_file):
+    paths = {s.name: s.path for s in read_step(step_file)}
+    assert paths["P1"] == ("zoo", "S1", "P1")
+    assert paths["T1"] == ("zoo", "S2", "T1")
+    assert paths["C1"] == ("zoo", "frame", "C1")
+    assert paths["SP"] == ("zoo", "SP")
+
+
+def test_colours_are_by_kind_and_status(step_file):
+    colours = {s.name: s.colour for s in read_step(step_file)}
+    assert colours["P1"][:3] == pytest.approx(KIND_COLOURS["pipe"][:3], abs=1e-6)
+    assert colours["C1"][:3] == pytest.approx(STATUS_COLOURS["error"][:3], abs=1e-6)
+    assert colours["SP"][:3] == pytest.approx(STATUS_COLOURS["warning"][:3], abs=1e-6)
+
+
+def test_golden_the_file_declares_millimetres_and_ap214(step_file):
+    text = step_file.read_text(encoding="latin-1")
+    assert "SI_UNIT(.MILLI.,.METRE.)" in text
+    assert "AUTOMOTIVE_DESIGN" in text  # the AP214 schema name
+    assert declared_length_unit(step_file) == "mm"
+    for name in ("P1", "E1", "T1", "C1", "H"):
+        assert f"PRODUCT('{name}','{name}'" in text
+
+
+def test_ap242_schema(zoo_cad, tmp_path):
+    path = tmp_path / "zoo.stp"
+    write_step(zoo_cad, path, schema="AP242")
+    text = path.read_text(encoding="latin-1")
+    assert "AP242_MANAGED_MODEL_BASED_3D_ENGINEERING" in text
+    assert declared_length_unit(path) == "mm"
+    assert len(read_step(path)) == len(zoo_cad.parts)
+
+
+def test_unknown_schema_is_refused(zoo_cad, tmp_path):
+    with pytest.raises(ExportError, match="unknown STEP schema 'AP203'"):
+        write_step(zoo_cad, tmp_path / "x.step", schema="AP203")
+
+
+@pytest.mark.parametrize("units", ["m", "mm", "in"])
+def test_millimetres_whatever_the_scan_units(units, tmp_path):
+    pipe = Component("P1", "pipe", Straight([0, 0, 0], [0.5, 0, 0], 0.05))
+    model = Model(components=(pipe,), units=units, name="one")
+    path = tmp_path / "one.step"
+    export_model(model, path)
+    assert declared_length_unit(path) == "mm"
+    (solid,) = read_step(path)
+    assert solid.volume == pytest.approx(math.pi * 50.0**2 * 500.0, rel=1e-6)
+
+
+def test_reading_leaves_the_kernel_unit_setting_alone(zoo_cad, tmp_path):
+    from OCP.Interface import Interface_Static
+
+    before = Interface_Static.CVal_s("xstep.cascade.unit")
+    write_step(prepare(Model(components=zoo_cad.model.components[:1])), tmp_path / "a.step")
+    read_step(tmp_path / "a.step")
+    assert Interface_Static.CVal_s("xstep.cascade.unit") == before
+
+
+def test_not_a_step_file(tmp_path):
+    path = tmp_path / "bad.step"
+    path.write_text("hello")
+    with pytest.raises(ExportError, match="not a readable STEP file"):
+        read_step(path)
