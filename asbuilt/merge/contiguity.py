@@ -4,8 +4,8 @@ Pipes are lines with two ends. Two pipe ends are a joint when
 
 * their axes are nearly parallel (within ``Tolerances.intended_angle_deg``), nearly the same line
   (lateral offset within the skew tolerance) and the ends face each other with a gap no larger
-  than ``joint_distance`` plus the larger OD (room for a reducer): an **inline** joint (butt
-  weld, coupling or reducer);
+  than twice ``joint_distance`` plus twice the larger OD (room for a reducer or the run of a tee): an
+  **inline** joint (butt weld, coupling, reducer or the run of a tee);
 * or their axes are nearly coplanar (closest distance within the skew tolerance) and meet at a
   point that lies ahead of both ends by no more than the bend's centre-to-end plus
   ``joint_distance``: an **elbow** (the bend's centre-to-end is estimated with a long-radius bend,
@@ -18,9 +18,11 @@ shots along its axis: the last shot may be up to one spacing from the end).
 The skew tolerance is ``max(0.5 x the smaller outer radius, 10 mm)``: sparse fits place an axis
 to a few millimetres, and pipes that miss each other by more than half a radius do not meet.
 
-Candidates come from a k-d tree on the end points (so 1,000 pipes merge in well under a
-second), best first; each end joins at most one other end. A pipe end left over whose axis meets
-an inline joint square-on becomes the branch of a **tee** there; one whose axis meets the inside
+Candidates come from a k-d tree on the end points (so 1,000 pipes merge in about a second),
+best first; each end joins at most one other end. An inline pair with a third end whose axis
+meets it square-on is taken first, as a **tee** (stronger evidence than an elbow between two of
+those ends); then the other pairs. A pipe end left over whose axis meets an inline joint
+square-on becomes the branch of a **tee** there; one whose axis meets the inside
 of another pipe square-on (within ``intended_angle_deg`` of 90 degrees) becomes the branch of a
 tee that splits that pipe. ``links`` in the scan are honoured first and without the distance
 limits; a linked pair whose geometry fits no joint is still reported (kind ``contact``) so the
@@ -155,7 +157,7 @@ def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: 
         )
         if lateral > skew_tol:
             return None
-        if not relaxed and not (-jd <= gap <= jd + max(ods[i], ods[j]) + si + sj):
+        if not relaxed and not (-jd <= gap <= 2 * jd + 2 * max(ods[i], ods[j]) + si + sj):
             return None
         return _Candidate(abs(gap) + lateral, "inline", (i, ki), (j, kj), relaxed)
     s, t, qi, qj = line_closest_points(ei, oi, ej, oj)
@@ -297,6 +299,32 @@ def find_joints(
         if cand is not None:
             candidates.append(cand)
     candidates.sort(key=lambda c: c.cost)
+
+    # 2a. tees first: an inline pair with a third end meeting it square-on is stronger evidence
+    # than any elbow between two of those ends
+    tees = []
+    for cand in candidates:
+        if cand.kind != "inline":
+            continue
+        point = 0.5 * (pts[cand.a] + pts[cand.b])
+        run_axis = axes[cand.a[0]]
+        best = None
+        for e in tree.query_ball_point(point, radius):
+            b = divmod(int(e), 2)
+            if b[0] in (cand.a[0], cand.b[0]):
+                continue
+            cost = _branch_cost(b, point, run_axis, ods[cand.a[0]], pts, out, axes, ods, tol, slack)
+            if cost is not None and (best is None or cost < best[0]):
+                best = (cost, b)
+        if best is not None:
+            tees.append((cand.cost + best[0], cand, best[1]))
+    tees.sort(key=lambda t: t[0])
+    for _, cand, b in tees:
+        if cand.a in used or cand.b in used or b in used:
+            continue
+        used.update((cand.a, cand.b, b))
+        joints.append(Joint("tee", (cand.a, cand.b, b)))
+
     for cand in candidates:
         if cand.a in used or cand.b in used:
             continue

@@ -119,3 +119,23 @@ def test_many_pipes_are_paired_locally():
     joints = joints_of(*pairs)
     assert len(joints) == 200
     assert all(j.kind == "elbow" and j.pipes[1] - j.pipes[0] == 1 for j in joints)
+
+
+def test_a_tee_wins_over_an_elbow_when_the_branch_ends_nearer():
+    # the branch stops 5 cm from the run axis, the run pipes 20 cm from the centre
+    joints = joints_of(
+        ((0, 0, 0), (1.8, 0, 0)), ((2.2, 0, 0), (4, 0, 0)), ((2, 0.05, 0), (2, 2, 0))
+    )
+    assert [(j.kind, j.ends) for j in joints] == [("tee", ((0, 1), (1, 0), (2, 0)))]
+
+
+def test_a_four_way_cross_is_a_tee_and_one_unjoined_pipe():
+    """No cross fitting is built: one straight pair and one branch make a tee."""
+    joints = joints_of(
+        ((0, 0, 0), (1.8, 0, 0)),
+        ((2.2, 0, 0), (4, 0, 0)),
+        ((2, 0.2, 0), (2, 2, 0)),
+        ((2, -0.2, 0), (2, -2, 0)),
+    )
+    assert [j.kind for j in joints] == ["tee"]
+    assert len(joints[0].pipes) == 3
