@@ -2,10 +2,11 @@
 
 ``merge_model(report)`` runs, in order (each step its own module):
 
-1. **which cylinders are pipes** (:func:`is_pipe`): no vessel word (tank, vessel, column...) in
-   the object's label or group, and either linked in the scan, given a nominal hint, or with a
-   fitted OD within ``[smallest catalog OD - tolerance, largest catalog OD x 1.1]``. Other
-   cylinders stay ``cylinder`` components, unchanged;
+1. **which cylinders are pipes** (:func:`is_pipe`): a label (else group) naming a vessel
+   (tank, vessel, column...) and no pipe word (pipe, line, header...) excludes it; otherwise it
+   is a pipe when linked in the scan, given a nominal hint, or with a fitted OD within
+   ``[smallest catalog OD - tolerance, largest catalog OD x 1.1]``. Other cylinders stay
+   ``cylinder`` components, unchanged;
 2. **joints** between pipes (:mod:`.contiguity`), from ``links`` and inferred from geometry
    (each pipe's allowance grows by its coarsest shot spacing, :func:`shot_spacing`);
 3. **runs and joint diameter estimates** (:mod:`.joint`), then **snapping** each run's estimate
@@ -43,6 +44,7 @@ from .spool import PipeSpec, build_spools
 __all__ = [
     "merge_model",
     "is_pipe",
+    "PIPE_WORDS",
     "shot_spacing",
     "VESSEL_WORDS",
     "resolve_catalog",
@@ -67,6 +69,41 @@ VESSEL_WORDS = (
 )
 _VESSEL = re.compile(r"\b(" + "|".join(VESSEL_WORDS) + r")s?\b", re.IGNORECASE)
 
+#: Words that mark a label as naming a pipe; they win over vessel words ("line from the tank").
+PIPE_WORDS = (
+    "pipe",
+    "piping",
+    "line",
+    "header",
+    "riser",
+    "drop",
+    "run",
+    "spool",
+    "branch",
+    "nps",
+    "dn",
+    "elbow",
+    "tee",
+    "bypass",
+    "drain",
+    "vent",
+    "duct",
+)
+_PIPE = re.compile(r"\b(" + "|".join(PIPE_WORDS) + r")(s|\d+)?\b", re.IGNORECASE)
+
+
+def _label_says(text: str | None) -> tuple[str | None, str | None]:
+    """("pipe" | "vessel" | None, the deciding word) for a label or group text."""
+    if not text:
+        return None, None
+    pipe = _PIPE.search(text)
+    if pipe:
+        return "pipe", pipe.group(1).lower()
+    vessel = _VESSEL.search(text)
+    if vessel:
+        return "vessel", vessel.group(1).lower()
+    return None, None
+
 
 def is_pipe(
     cylinder: Cylinder,
@@ -80,14 +117,17 @@ def is_pipe(
 ) -> tuple[bool, str]:
     """Decide whether a fitted cylinder is a pipe; return (answer, reason).
 
-    A cylinder is a pipe unless its label or group contains one of :data:`VESSEL_WORDS`; and
-    then only when it is linked to another object, carries a nominal hint, or its fitted OD
-    (metres) lies within ``[min catalog OD - tolerance, max catalog OD x 1.1]``.
+    The label decides first (the group when there is no label): a word of :data:`PIPE_WORDS`
+    ("NPS 8 line from the tank") marks a pipe candidate, else a word of :data:`VESSEL_WORDS`
+    ("vertical tank", "column C-3") marks a vessel or structure, which is never a pipe. A
+    candidate is a pipe when it is linked to another object, carries a nominal hint, or its
+    fitted OD (metres) lies within ``[min catalog OD - tolerance, max catalog OD x 1.1]``.
     """
-    for text in (label, group):
-        if text and _VESSEL.search(text):
-            word = _VESSEL.search(text).group(1).lower()
-            return False, f"labelled {word!r}: a vessel or structure, not a pipe"
+    says, word = _label_says(label)
+    if says is None:
+        says, word = _label_says(group)
+    if says == "vessel":
+        return False, f"labelled {word!r}: a vessel or structure, not a pipe"
     if linked:
         return True, "linked to another object in the scan"
     if hinted:
@@ -415,6 +455,11 @@ def merge_model(
         snap_map = snap.as_mapping(catalog)
         snap_map["od_fit"] = float(ods[m])
         snap_map["od_stderr"] = float(ses[m]) if np.isfinite(ses[m]) else None
+        run_ids = run_info[m]["run"]
+        if len(run_ids) > 1:
+            snap_map["reason"] = (
+                f"joint estimate of the run {', '.join(run_ids)}: " + snap_map["reason"]
+            )
         snap_map.update(run_info[m])
         if member_hint[m]:
             snap_map["hint"] = member_hint[m]

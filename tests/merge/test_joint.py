@@ -64,6 +64,7 @@ def test_three_pipes_decide_together_what_none_decides_alone():
     for comp in pipes_out:
         assert comp.snap["status"] == "snapped"
         assert comp.snap["run"] == ["P1", "P2", "P3"]
+        assert comp.snap["reason"].startswith("joint estimate of the run P1, P2, P3: ")
         assert comp.snap["od_joint"] == pytest.approx(np.mean(fits))
         assert comp.snap["od_joint_stderr"] == pytest.approx(se / np.sqrt(3))
         assert min(abs(comp.snap["od_fit"] - f) for f in fits) < 1e-12

@@ -202,6 +202,10 @@ def test_axis_regularisation_is_recorded():
         ("chimney", None, 0.6, "cylinder"),
         (None, None, 3.0, "cylinder"),  # far beyond the largest pipe
         ("cooling water", None, 0.3238, "pipe"),
+        ("NPS 8 line from the tank", "Tank farm", 0.2191, "pipe"),
+        ("tank drain", None, 0.0603, "pipe"),
+        (None, "tank farm", 0.0603, "cylinder"),
+        ("vertical tank", "SP-1 line", 0.0603, "cylinder"),
         (None, None, 0.0103, "pipe"),
     ],
 )
