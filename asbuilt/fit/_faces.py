@@ -29,7 +29,7 @@ __all__ = [
 
 _RNG_SEED = 20040601
 _TRIPLES = 150
-_MAX_FIRST = 6
+_MAX_FIRST = 3
 _MAX_PAIRS = 400
 _MIN_FACE_POINTS = 3
 #: A face's points must be spread off a line by this many consensus thresholds (RMS): a raster
@@ -127,6 +127,24 @@ def noise_scale(rms: np.ndarray, floor: float) -> float:
     return float(max(np.percentile(rms, 25.0), floor))
 
 
+def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of (k, 3) arrays (or a (3,) vector with a (k, 3) array)."""
+    a = np.broadcast_to(a, np.broadcast_shapes(np.shape(a), np.shape(b)))
+    b = np.broadcast_to(b, a.shape)
+    out = np.empty(a.shape)
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
+def cross3(a, b) -> np.ndarray:
+    """Cross product of two (3,) vectors (faster than ``np.cross`` for one pair)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
 def _unit_rows(vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     norms = np.linalg.norm(vectors, axis=1)
     ok = norms > 1e-12
@@ -135,34 +153,47 @@ def _unit_rows(vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return out, ok
 
 
-def _tls_plane(points: np.ndarray, within: np.ndarray | None = None) -> tuple[np.ndarray, float]:
-    """Total least squares plane of points (k, 3): unit normal (3,), offset (m).
+def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
+    """Re-fit many candidate planes to their consensus sets at once (total least squares).
 
-    With ``within`` (3, q) the normal is restricted to the span of its columns (q = 2 gives a
-    plane perpendicular to the missing direction).
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    normals : ndarray, shape (c, 3)
+        Candidate unit normals.
+    offsets : ndarray, shape (c,), metres
+    threshold : float, metres
+    basis : ndarray, shape (3, 2), or None
+        When given, normals stay in the span of its columns (planes containing the missing
+        direction).
+
+    Returns
+    -------
+    normals (c, 3), offsets (c,), masks (c, n) bool, spread (c,) metres
+        ``spread`` is the RMS distance of each consensus set from its best-fit line (0 for
+        collinear points, which lie in every plane through their line).
     """
-    centroid = points.mean(axis=0)
-    centred = points - centroid
-    if within is None:
-        _, _, vt = np.linalg.svd(centred, full_matrices=False)
-        normal = vt[-1]
-    else:
-        coords = centred @ within
-        values, vectors = np.linalg.eigh(coords.T @ coords)
-        normal = within @ vectors[:, 0]
-        normal /= np.linalg.norm(normal)
-    return normal, float(normal @ centroid)
-
-
-def _refine(points, normal, offset, threshold, within=None, rounds=2):
-    """Re-fit a candidate plane to its consensus set; return normal, offset, inlier mask."""
-    mask = np.abs(points @ normal - offset) < threshold
-    for _ in range(rounds):
-        if np.count_nonzero(mask) < 3:
+    coords = points if basis is None else points @ basis
+    for _ in range(rounds + 1):
+        masks = np.abs(normals @ points.T - offsets[:, None]) < threshold
+        weight = masks.astype(np.float64)
+        count = np.maximum(weight.sum(axis=1), 1.0)
+        mean = weight @ coords / count[:, None]
+        second = np.einsum("cn,ni,nj->cij", weight, coords, coords) / count[:, None, None]
+        cov = second - mean[:, :, None] * mean[:, None, :]
+        values, vectors = np.linalg.eigh(cov)
+        if _ == rounds:
             break
-        normal, offset = _tls_plane(points[mask], within)
-        mask = np.abs(points @ normal - offset) < threshold
-    return normal, offset, mask
+        fresh = vectors[:, :, 0] if basis is None else vectors[:, :, 0] @ basis.T
+        ok = count >= 3
+        normals = np.where(ok[:, None], fresh, normals)
+        centre = mean if basis is None else mean @ basis.T
+        offsets = np.where(ok, np.einsum("ij,ij->i", normals, centre), offsets)
+    if basis is None:
+        spread = np.sqrt(np.clip(values[:, 1], 0.0, None))
+    else:
+        spread = np.full(normals.shape[0], np.inf)
+    return normals, offsets, masks, spread
 
 
 def _spread(points: np.ndarray) -> float:
@@ -176,9 +207,30 @@ def _spread(points: np.ndarray) -> float:
 def _perpendicular_basis(direction: np.ndarray) -> np.ndarray:
     """Two unit columns, shape (3, 2), perpendicular to ``direction`` and to each other."""
     helper = np.eye(3)[int(np.argmin(np.abs(direction)))]
-    first = np.cross(direction, helper)
+    first = cross3(direction, helper)
     first /= np.linalg.norm(first)
-    return np.stack([first, np.cross(direction, first)], axis=1)
+    return np.stack([first, cross3(direction, first)], axis=1)
+
+
+def _distinct(normals, offsets, order, cos_face, threshold, limit):
+    """Indices (in ``order``) of up to ``limit`` planes differing in direction or offset."""
+    chosen: list[int] = []
+    order = np.asarray(order, dtype=np.int64)[: 8 * limit]
+    if order.size == 0:
+        return chosen
+    sub_n, sub_o = normals[order], offsets[order]
+    same = (np.abs(sub_n @ sub_n.T) > cos_face) & (
+        np.abs(sub_o[:, None] - sub_o[None, :]) < 2 * threshold
+    )
+    alive = np.ones(order.size, bool)
+    while len(chosen) < limit:
+        free = np.flatnonzero(alive)
+        if free.size == 0:
+            break
+        pos = int(free[0])
+        chosen.append(int(order[pos]))
+        alive &= ~same[pos]
+    return chosen
 
 
 def _first_planes(points, normals, threshold, cos_face, rng):
@@ -187,7 +239,7 @@ def _first_planes(points, normals, threshold, cos_face, rng):
     seeds = np.arange(n) if n <= 200 else rng.choice(n, 200, replace=False)
     tri = rng.integers(0, n, size=(_TRIPLES, 3))
     a, b, c = points[tri[:, 0]], points[tri[:, 1]], points[tri[:, 2]]
-    cross = np.cross(b - a, c - a)
+    cross = cross_rows(b - a, c - a)
     scale = np.linalg.norm(b - a, axis=1) * np.linalg.norm(c - a, axis=1)
     good = np.linalg.norm(cross, axis=1) > 0.05 * np.maximum(scale, 1e-300)
     tri_normals, ok = _unit_rows(cross[good])
@@ -195,28 +247,17 @@ def _first_planes(points, normals, threshold, cos_face, rng):
     cand_p = np.concatenate([points[seeds], a[good][ok]])
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = (np.abs(cand_n @ points.T - offsets[:, None]) < threshold).sum(axis=1)
-    picks: list[tuple[np.ndarray, float, np.ndarray]] = []
-    for i in np.argsort(-counts, kind="stable"):
-        if counts[i] < _MIN_FACE_POINTS or len(picks) >= _MAX_FIRST:
-            break
-        if any(
-            abs(cand_n[i] @ nrm) > cos_face and abs(cand_n[i] @ cand_p[i] - off) < 2 * threshold
-            for nrm, off, _ in picks
-        ):
-            continue
-        normal, offset, mask = _refine(points, cand_n[i], offsets[i], threshold)
-        if (
-            np.count_nonzero(mask) < _MIN_FACE_POINTS
-            or _spread(points[mask]) < _MIN_SPREAD * threshold
-        ):
-            continue
-        if any(
-            abs(normal @ nrm) > cos_face and abs(offset - off) < 2 * threshold
-            for nrm, off, _ in picks
-        ):
-            continue
-        picks.append((normal, offset, mask))
-    return picks
+    order = np.argsort(-counts, kind="stable")
+    top = _distinct(cand_n, offsets, order, cos_face, threshold, 4 * _MAX_FIRST)
+    top = [i for i in top if counts[i] >= _MIN_FACE_POINTS]
+    if not top:
+        return []
+    ref_n, ref_o, masks, spread = _batch_refine(points, cand_n[top], offsets[top], threshold)
+    sizes = masks.sum(axis=1)
+    usable = (sizes >= _MIN_FACE_POINTS) & (spread >= _MIN_SPREAD * threshold)
+    order = [i for i in np.argsort(-sizes, kind="stable") if usable[i]]
+    keep = _distinct(ref_n, ref_o, order, cos_face, threshold, _MAX_FIRST)
+    return [(ref_n[i], float(ref_o[i]), masks[i]) for i in keep]
 
 
 def _second_plane(points, normals, first, threshold, gap, rng):
@@ -233,31 +274,31 @@ def _second_plane(points, normals, first, threshold, gap, rng):
     if i.size > _MAX_PAIRS:
         keep = rng.choice(i.size, _MAX_PAIRS, replace=False)
         i, j = i[keep], j[keep]
-    pair_n, ok = _unit_rows(np.cross(d1, sub[j] - sub[i]))
-    ok &= np.linalg.norm(np.cross(d1, sub[j] - sub[i]), axis=1) > 2 * threshold
+    raw = cross_rows(d1, sub[j] - sub[i])
+    pair_n, ok = _unit_rows(raw)
+    ok &= np.linalg.norm(raw, axis=1) > 2 * threshold
     # Local normals made perpendicular to d1.
-    loc = normals[rest] - np.outer(normals[rest] @ d1, d1)
-    loc_n, loc_ok = _unit_rows(loc)
+    loc_n, loc_ok = _unit_rows(normals[rest] - np.outer(normals[rest] @ d1, d1))
     cand_n = np.concatenate([pair_n[ok], loc_n[loc_ok]])
     cand_p = np.concatenate([sub[i[ok]], sub[loc_ok]])
     if cand_n.shape[0] == 0:
         return None
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = (np.abs(cand_n @ sub.T - offsets[:, None]) < threshold).sum(axis=1)
-    tried: list[np.ndarray] = []
-    for c in np.argsort(-counts, kind="stable")[:12]:
-        if counts[c] < _MIN_FACE_POINTS:
-            break
-        normal, offset, mask_sub = _refine(sub, cand_n[c], offsets[c], threshold, within=basis)
-        if np.count_nonzero(mask_sub) < _MIN_FACE_POINTS:
-            continue
-        if any(abs(normal @ t) > 0.999 for t in tried):
-            continue
-        tried.append(normal)
+    order = np.argsort(-counts, kind="stable")
+    top = _distinct(cand_n, offsets, order, 0.999, threshold, 12)
+    top = [c for c in top if counts[c] >= _MIN_FACE_POINTS]
+    if not top:
+        return None
+    ref_n, ref_o, masks, _ = _batch_refine(sub, cand_n[top], offsets[top], threshold, basis)
+    sizes = masks.sum(axis=1)
+    order = [c for c in np.argsort(-sizes, kind="stable") if sizes[c] >= _MIN_FACE_POINTS]
+    for c in _distinct(ref_n, ref_o, order, 0.999, threshold, 8):
         mask = np.zeros(points.shape[0], bool)
-        mask[rest[mask_sub]] = True
-        if _contiguous(points, (d1, o1, mask1), (normal, offset, mask), threshold, gap):
-            return normal, offset, mask
+        mask[rest[masks[c]]] = True
+        face = (ref_n[c], float(ref_o[c]), mask)
+        if _contiguous(points, (d1, o1, mask1), face, threshold, gap):
+            return face
     return None
 
 
@@ -421,7 +462,7 @@ def segment(
             d2, o2, mask2 = second
             d2 = d2 - (d2 @ d1) * d1
             d2 /= np.linalg.norm(d2)
-            axes = np.vstack([d1, d2, np.cross(d1, d2)])
+            axes = np.vstack([d1, d2, cross3(d1, d2)])
             faces = [(0, o1, mask1), (1, float(d2 @ points[mask2].mean(axis=0)), mask2)]
             faces = _extra_faces(points, axes, faces, threshold, gap)
         frame = _frame_from(points, axes, faces, threshold, viewpoint)

@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit import _faces
+from asbuilt.fit import _faces, _silhouette
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cuboid, as_points, as_vector
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
@@ -88,7 +88,7 @@ class _Model:
         normal = self.normals()[label]
         q = self.rot_basis.shape[1]
         jac = np.zeros((x.shape[0], q + self.offset.shape[0]))
-        jac[:, :q] = np.cross(normal, x) @ self.rot_basis
+        jac[:, :q] = _faces.cross_rows(normal, x) @ self.rot_basis
         jac[np.arange(x.shape[0]), q + label] = -1.0
         return jac
 
@@ -109,8 +109,17 @@ def _tukey(u: np.ndarray) -> np.ndarray:
     return np.where(np.abs(u) < 1.0, (1.0 - u**2) ** 2, 0.0)
 
 
+def _median(values: np.ndarray) -> float:
+    """Median of a 1-D array (np.partition; cheaper than np.median for small arrays)."""
+    k = values.shape[0]
+    if k == 0:
+        return float("nan")
+    part = np.partition(values, [(k - 1) // 2, k // 2])
+    return 0.5 * float(part[(k - 1) // 2] + part[k // 2])
+
+
 def _robust_scale(residual: np.ndarray, floor: float) -> float:
-    return max(_MAD_TO_SIGMA * float(np.median(np.abs(residual))), floor)
+    return max(_MAD_TO_SIGMA * _median(np.abs(residual)), floor)
 
 
 def _validate(points) -> np.ndarray:
@@ -143,18 +152,18 @@ def _spacing(coords: np.ndarray, noise: float) -> float:
     return float(np.median(big)) if big.size else 0.0
 
 
-def _bounds(x, label, inliers, model, noise, half_spacing):
+def _bounds(x, label, inliers, model, noise, edge_pad):
     """Per-axis (lo, hi) bounds in the centred frame, which come from faces, and the extreme points.
 
     Returns lo (3,), hi (3,), lo_face (3,) bool, hi_face (3,) bool, lo_point (3,) int, hi_point
-    (3,) int (index of the extreme inlier defining an extent bound, -1 for face bounds), pad (3,)
-    metres (the half-spacing added to extent bounds).
+    (3,) int (index of the extreme inlier defining an extent bound, -1 for face bounds), pad
+    (2, 3) metres (what was added beyond the extreme point: row 0 below lo, row 1 above hi).
     """
     proj = x @ model.axes.T
     lo, hi = np.zeros(3), np.zeros(3)
     lo_face, hi_face = np.zeros(3, bool), np.zeros(3, bool)
     lo_pt, hi_pt = -np.ones(3, np.int64), -np.ones(3, np.int64)
-    pads = np.zeros(3)
+    pads = np.zeros((2, 3))
     index = np.flatnonzero(inliers)
     for k in range(3):
         for f in np.flatnonzero(model.face_axis == k):
@@ -164,8 +173,8 @@ def _bounds(x, label, inliers, model, noise, half_spacing):
                 lo[k], lo_face[k] = -model.offset[f], True
         along = proj[index, k]
         lines = index[model.face_axis[label[index]] != k]
-        pad = 0.5 * _spacing(proj[lines, k], noise) if half_spacing else 0.0
-        pads[k] = pad
+        pad = edge_pad * _spacing(proj[lines, k], noise)
+        pads[:, k] = pad
         if not hi_face[k]:
             hi_pt[k] = index[int(np.argmax(along))]
             hi[k] = along.max() + pad
@@ -173,6 +182,37 @@ def _bounds(x, label, inliers, model, noise, half_spacing):
             lo_pt[k] = index[int(np.argmin(along))]
             lo[k] = along.min() - pad
     return lo, hi, lo_face, hi_face, lo_pt, hi_pt, pads
+
+
+def _silhouette_bounds(pts, x, origin, model, lo, hi, lo_pt, hi_pt, pad, view, tol) -> bool:
+    """Replace extent bounds (in place: lo, hi, pad) by the raster silhouette solution.
+
+    Used only when the points are a pan-tilt raster seen from ``view`` (default: the origin) and
+    the solution keeps every inlier inside the box; returns whether it was used.
+    """
+    viewpoint = np.zeros(3) if view is None else view
+    found = _silhouette.raster_window(pts, viewpoint)
+    if found is None:
+        return False
+    pan0, window = found
+    free = [(k, 0) for k in range(3) if lo_pt[k] >= 0] + [(k, 1) for k in range(3) if hi_pt[k] >= 0]
+    new_lo, new_hi = _silhouette.solve_bounds(
+        lo, hi, free, model.axes, origin, viewpoint, pan0, window
+    )
+    proj = x @ model.axes.T
+    for k, side in free:
+        extreme = proj[hi_pt[k], k] if side else proj[lo_pt[k], k]
+        beyond = new_hi[k] - extreme if side else extreme - new_lo[k]
+        if not np.isfinite(beyond) or beyond < -tol or beyond > 2.0 * (hi[k] - lo[k]):
+            return False
+    for k, side in free:
+        if side:
+            pad[1, k] = max(new_hi[k] - proj[hi_pt[k], k], 0.0)
+            hi[k] = proj[hi_pt[k], k] + pad[1, k]
+        else:
+            pad[0, k] = max(proj[lo_pt[k], k] - new_lo[k], 0.0)
+            lo[k] = proj[lo_pt[k], k] - pad[0, k]
+    return True
 
 
 def _one_face_depth(lo, hi, lo_face, hi_face, model):
@@ -198,9 +238,9 @@ def _derived(model, x, lo_pt, hi_pt, lo_face, hi_face, pad, one_face):
             else:
                 lo[k] = -model.offset[f]
         if not hi_face[k]:
-            hi[k] = proj[hi_pt[k], k] + pad[k] if hi_pt[k] >= 0 else hi[k]
+            hi[k] = proj[hi_pt[k], k] + pad[1, k] if hi_pt[k] >= 0 else hi[k]
         if not lo_face[k]:
-            lo[k] = proj[lo_pt[k], k] - pad[k] if lo_pt[k] >= 0 else lo[k]
+            lo[k] = proj[lo_pt[k], k] - pad[0, k] if lo_pt[k] >= 0 else lo[k]
     if one_face:
         lo, hi = _one_face_depth(lo, hi, lo_face, hi_face, model)
     return np.concatenate([hi - lo, model.axes.T @ (0.5 * (hi + lo))])
@@ -250,7 +290,7 @@ def _canonical(axes, size, observed):
         new[2] = -new[2]
     if new[0, np.argmax(np.abs(new[0]))] < 0:
         new[0] = -new[0]
-    new[1] = np.cross(new[2], new[0])
+    new[1] = _faces.cross3(new[2], new[0])
     return new, size[order], tuple(bool(observed[k]) for k in order), order
 
 
@@ -260,7 +300,8 @@ def fit_cuboid(
     sigma: float | None = None,
     tolerances: Tolerances = DEFAULT_TOLERANCES,
     viewpoint=None,
-    half_spacing: bool = True,
+    edge_pad: float = 0.5,
+    silhouette: bool = True,
 ) -> FitResult:
     """Fit a cuboid to sparse range points on 1, 2 or 3 (or more) of its faces.
 
@@ -342,7 +383,7 @@ def fit_cuboid(
         on_face = frame.labels == 0
         rect = _faces.min_area_rectangle(x[on_face] @ basis)
         in_plane = rect @ basis.T
-        axes = np.vstack([normal, in_plane[0], np.cross(normal, in_plane[0])])
+        axes = np.vstack([normal, in_plane[0], _faces.cross3(normal, in_plane[0])])
         model = _Model(axes, np.array([0]), frame.face_sign.copy(), frame.face_offset.copy(), None)
         model.rot_basis = axes[1:].T.copy()
         notes.append(
@@ -363,7 +404,7 @@ def fit_cuboid(
             break
         moved = model.step(x, label, weights)
         label, residual = model.assign(x)
-        if moved < 1e-10:
+        if moved < 1e-8:
             break
     scale = _robust_scale(residual, floor)
     inliers = np.abs(residual) <= cutoff * scale
@@ -371,7 +412,7 @@ def fit_cuboid(
         iterations += 1
         moved = model.step(x[inliers], label[inliers], np.ones(np.count_nonzero(inliers)))
         label, residual = model.assign(x)
-        if moved < 1e-12:
+        if moved < 1e-9:
             break
     scale = _robust_scale(residual[inliers], floor)
     inliers = np.abs(residual) <= cutoff * max(scale, _robust_scale(residual, floor))
@@ -384,8 +425,18 @@ def fit_cuboid(
         )
 
     lo, hi, lo_face, hi_face, lo_pt, hi_pt, pad = _bounds(
-        x, label, inliers, model, cutoff * scale, half_spacing
+        x, label, inliers, model, cutoff * scale, edge_pad
     )
+    used_window = False
+    if silhouette and not one_face and (np.any(lo_pt >= 0) or np.any(hi_pt >= 0)):
+        used_window = _silhouette_bounds(
+            pts, x, origin, model, lo, hi, lo_pt, hi_pt, pad, view, cutoff * scale
+        )
+    if used_window:
+        notes.append(
+            "edges no seen face bounds were placed on the pan-tilt raster's silhouette window "
+            "(the points' angular extent from the viewpoint widened by half a raster step)"
+        )
     if one_face:
         lo, hi = _one_face_depth(lo, hi, lo_face, hi_face, model)
     size = np.maximum(hi - lo, 1e-6)
@@ -429,6 +480,7 @@ def fit_cuboid(
         "faces_axis0": float(faces_per_axis[0]),
         "faces_axis1": float(faces_per_axis[1]),
         "faces_axis2": float(faces_per_axis[2]),
+        "silhouette": float(used_window),
     }
     if not any(observed_t):
         notes.append("no two opposite faces seen: every size is bounded by the points' extent")
