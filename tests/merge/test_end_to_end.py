@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from synthetic_pipes import raster_points
@@ -58,3 +60,21 @@ def test_shot_spacing_is_the_largest_gap_along_the_axis():
     inliers = np.array([True, True, True, True, False])
     assert shot_spacing(pts, inliers, np.zeros(3), np.array([1.0, 0, 0])) == pytest.approx(0.4)
     assert shot_spacing(pts[:1], inliers[:1], np.zeros(3), np.array([1.0, 0, 0])) == 0.0
+
+
+SAMPLES = Path(__file__).resolve().parents[2] / "samples"
+
+
+@pytest.mark.skipif(not (SAMPLES / "spool.json").exists(), reason="samples not present")
+def test_the_simulated_sample_spool_merges_to_its_true_sizes():
+    """samples/spool.json comes from the full simulator (dropouts, mixed edge returns)."""
+    from asbuilt.fit import fit
+    from asbuilt.scan import load_scan
+
+    model = merge_model(fit(load_scan(SAMPLES / "spool.json")))
+    comps = {c.id: c for c in model.components}
+    truth = {"P1": "6", "P2": "6", "P3": "6", "P6": "6", "P4": "4", "P5": "4"}
+    assert {k: comps[k].nominal for k in truth} == truth
+    assert {c.type for c in model.components} == {"pipe", "tee", "elbow", "reducer"}
+    assert connection_mismatches(model.components, tolerance=1e-4) == (9, [])
+    assert [s.id for s in model.spools] == ["SP-101"]
