@@ -350,8 +350,6 @@ def _extra_faces(points, axes, faces, threshold, gap):
             offset = float(np.mean(proj_all[members, k]))
             mask = np.zeros(points.shape[0], bool)
             mask[free[np.abs(proj - offset) < threshold]] = True
-            if _spread(points[mask]) < _MIN_SPREAD * threshold:
-                continue
             if _acceptable(proj_all, explained, faces, k, offset, mask, threshold, gap):
                 best = (int(np.count_nonzero(mask)), k, offset, mask)
         if best is None:
@@ -420,6 +418,16 @@ def _score(points, frame: Frame, threshold) -> tuple[int, float]:
     return int(np.count_nonzero(kept)), -float(np.sum(dist[kept] ** 2))
 
 
+def _all_facing(points, frame: Frame, viewpoint) -> bool:
+    """Whether every face's outward normal points toward the viewpoint."""
+    normals = frame.face_sign[:, None] * frame.axes[frame.face_axis]
+    for f in range(frame.n_faces):
+        members = points[frame.labels == f]
+        if members.shape[0] and normals[f] @ (viewpoint - members.mean(axis=0)) <= 0:
+            return False
+    return True
+
+
 def segment(
     points: np.ndarray,
     normals: np.ndarray,
@@ -427,6 +435,7 @@ def segment(
     gap: float,
     face_angle_deg: float,
     viewpoint: np.ndarray | None = None,
+    visible_only: bool = False,
 ) -> Frame | None:
     """Find the cuboid frame and seen faces that explain the most points.
 
@@ -442,7 +451,10 @@ def segment(
     face_angle_deg : float, degrees
         Normals closer than this are the same direction (distinct first-face hypotheses).
     viewpoint : ndarray, shape (3,), metres, or None
-        Where the sensor was; only orients a single seen face (default: the origin).
+        Where the sensor was (default: the origin); orients a single seen face.
+    visible_only : bool
+        The viewpoint is known to be right: frames with a face turned away from it (impossible
+        for points seen from there) rank below every other frame.
 
     Returns
     -------
@@ -467,6 +479,8 @@ def segment(
             faces = _extra_faces(points, axes, faces, threshold, gap)
         frame = _frame_from(points, axes, faces, threshold, viewpoint)
         score = _score(points, frame, threshold)
+        if visible_only and viewpoint is not None:
+            score = (_all_facing(points, frame, viewpoint),) + score
         if best_score is None or score > best_score:
             best, best_score = frame, score
     return best

@@ -184,16 +184,12 @@ def _bounds(x, label, inliers, model, noise, edge_pad):
     return lo, hi, lo_face, hi_face, lo_pt, hi_pt, pads
 
 
-def _silhouette_bounds(pts, x, origin, model, lo, hi, lo_pt, hi_pt, pad, view, tol) -> bool:
+def _silhouette_bounds(x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, found, tol):
     """Replace extent bounds (in place: lo, hi, pad) by the raster silhouette solution.
 
-    Used only when the points are a pan-tilt raster seen from ``view`` (default: the origin) and
-    the solution keeps every inlier inside the box; returns whether it was used.
+    ``found`` is :func:`asbuilt.fit._silhouette.raster_window`'s answer for ``viewpoint``. The
+    solution is used only if it keeps every inlier inside the box; returns whether it was used.
     """
-    viewpoint = np.zeros(3) if view is None else view
-    found = _silhouette.raster_window(pts, viewpoint)
-    if found is None:
-        return False
     pan0, window = found
     free = [(k, 0) for k in range(3) if lo_pt[k] >= 0] + [(k, 1) for k in range(3) if hi_pt[k] >= 0]
     new_lo, new_hi = _silhouette.solve_bounds(
@@ -361,13 +357,18 @@ def fit_cuboid(
     nn = _faces.knn(x, min(4, n - 1))
     reach = float(np.median(np.linalg.norm(x[nn[:, -1]] - x, axis=1)))
     gap = threshold + 1.5 * reach
+    # The viewpoint (given, or the scan frame's origin) is trusted when the points' directions
+    # from it fall on a pan-tilt raster's rows and columns.
+    viewpoint = np.zeros(3) if view is None else view
+    window = _silhouette.raster_window(pts, viewpoint)
     frame = _faces.segment(
         x,
         normals,
         threshold,
         gap,
         tolerances.face_angle_deg,
-        None if view is None else view - origin,
+        viewpoint - origin,
+        visible_only=window is not None or view is not None,
     )
     if frame is None:
         raise FitError(
@@ -428,9 +429,9 @@ def fit_cuboid(
         x, label, inliers, model, cutoff * scale, edge_pad
     )
     used_window = False
-    if silhouette and not one_face and (np.any(lo_pt >= 0) or np.any(hi_pt >= 0)):
+    if silhouette and window is not None and not one_face:
         used_window = _silhouette_bounds(
-            pts, x, origin, model, lo, hi, lo_pt, hi_pt, pad, view, cutoff * scale
+            x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, window, cutoff * scale
         )
     if used_window:
         notes.append(
