@@ -76,8 +76,9 @@ class CadModel:
 
     def group_node_names(self) -> dict[str, str]:
         """Each group's node name in the tree: the group's name, made distinct from the root's
-        and the ungrouped components' ids by a ``" (group)"`` suffix when they clash."""
-        taken = {self.name} | {part.id for part in self.parts if part.group is None}
+        and every component id by a ``" (group)"`` suffix when they clash (a CadQuery assembly
+        needs unique names along each path, and readers of the files are spared ambiguity)."""
+        taken = {self.name} | {part.id for part in self.parts}
         names = {}
         for group in self.groups():
             if group is None:
@@ -207,9 +208,10 @@ def prepare(
         )
         if progress is not None:
             progress(done, total)
-    return CadModel(
-        model=model, parts=tuple(parts), name=model.name or "scan", plate_thickness=float(thickness)
-    )
+    name = model.name or "scan"
+    while name in ids:
+        name = f"{name} (scan)"
+    return CadModel(model=model, parts=tuple(parts), name=name, plate_thickness=float(thickness))
 
 
 def build_assembly(

@@ -97,9 +97,7 @@ def register(subparsers) -> argparse.ArgumentParser:
             default=None,
             help="also write a report (.html, .csv or .json by suffix)",
         )
-    parser.add_argument(
-        "--quiet", "-q", action="store_true", help="print nothing but errors"
-    )
+    parser.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
     parser.set_defaults(handler=run)
     return parser
 
@@ -120,6 +118,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
+    from asbuilt.errors import ExportError
     from asbuilt.export import export_models, exporter_for
     from asbuilt.pipeline import build_model
     from asbuilt.scan import load_scan
@@ -127,9 +126,16 @@ def run(args: argparse.Namespace) -> int:
     outputs = [Path(p) for p in args.out]
     report_path = getattr(args, "report", None)
     for path in outputs:
-        exporter_for(path)  # an unknown suffix fails before any work
-    if report_path is not None and Path(report_path).suffix.lower() not in (".html", ".csv",
-                                                                             ".json"):
+        exporter_for(path)  # an unknown suffix or a missing directory fails before any work
+        if not path.parent.is_dir():
+            raise ExportError(
+                "directory does not exist; create it or choose another --out", source=str(path)
+            )
+    if report_path is not None and Path(report_path).suffix.lower() not in (
+        ".html",
+        ".csv",
+        ".json",
+    ):
         from asbuilt.errors import UnknownFormatError
 
         raise UnknownFormatError(
@@ -158,8 +164,7 @@ def run(args: argparse.Namespace) -> int:
             check=not args.no_check,
             progress=lambda done, total, oid: bar.update(task, completed=done, description=oid),
         )
-        bar.update(task, completed=0, total=len(model.components), description="",
-                   stage="solids")
+        bar.update(task, completed=0, total=len(model.components), description="", stage="solids")
 
         def progress(stage: str, done: int, total: int) -> None:
             label = "solids" if stage == "solids" else "writing"

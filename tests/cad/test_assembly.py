@@ -43,18 +43,32 @@ def test_assembly_tree_is_scan_group_object(zoo_cad):
     assert zoo_cad.assembly() is assembly  # built once
 
 
-def test_group_named_like_an_object_gets_a_distinct_node_name():
+@pytest.mark.parametrize(
+    ("model_name", "sphere_group", "root", "groups"),
+    [
+        # A spool named like an ungrouped object.
+        ("plant", None, "plant", {"S1": "S1 (group)"}),
+        # A group named like one of its own members (samples/structural-bay.json has B2 in B2).
+        ("plant", "S1", "plant", {"S1": "S1 (group)"}),
+        # The scan named like a group and an object.
+        ("S1", None, "S1 (scan)", {"S1": "S1 (group)"}),
+    ],
+)
+def test_clashing_names_get_distinct_node_names(model_name, sphere_group, root, groups):
     model = Model(
         components=(
-            Component("S1", "sphere", Sphere([0, 0, 0], 1.0)),
+            Component("S1", "sphere", Sphere([0, 0, 0], 1.0), group=sphere_group),
             Component("P1", "pipe", Straight([3, 0, 0], [4, 0, 0], 0.05), spool="S1"),
         ),
-        name="S1 (group)",
+        name=model_name,
     )
     cad = prepare(model)
-    assert cad.group_node_names() == {"S1": "S1 (group) (group)"}
-    names = [child.name for child in cad.assembly().children]
-    assert len(set(names)) == len(names)
+    assert cad.name == root
+    assert cad.group_node_names() == groups
+    assembly = cad.assembly()
+    assert assembly.name == root
+    leaves = {name.split("/")[-1] for name in assembly.objects}
+    assert {"S1", "P1"} <= leaves
 
 
 def test_build_assembly_one_call(zoo):
