@@ -314,6 +314,16 @@ class PanTiltUnit:
         """Current pan and tilt, unit angles in radians."""
         return self.to_angles(*self.position_counts())
 
+    def reset(self, timeout: float = 120.0) -> None:
+        """``R``: the unit's calibration sweep (it answers ``!T!T!P!P*`` when done).
+
+        Parameters
+        ----------
+        timeout : float
+            Seconds to wait for the sweep to end.
+        """
+        self.command("R", timeout=timeout)
+
     def set_limit_enforcement(self, enabled: bool) -> None:
         """``LE`` (enabled) or ``LD`` (disabled) limit enforcement."""
         self.command("LE" if enabled else "LD")

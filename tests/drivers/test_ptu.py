@@ -103,8 +103,9 @@ def test_asynchronous_limit_notice_becomes_a_limit_error(scripted, notice, axis)
 
 
 def test_reset_accepts_the_calibration_sweep_notices(scripted):
-    ptu, _ = _unit(scripted, [("R", b"!T!T!P!P*\r\n")])
-    assert ptu.command("R") == ""
+    ptu, port = _unit(scripted, [("R", b"!T!T!P!P*\r\n")])
+    ptu.reset(timeout=1.0)
+    assert port.written == ["R"]
 
 
 @pytest.mark.parametrize("reply", [b"hello\r\n", b"# 12\r\n"])
