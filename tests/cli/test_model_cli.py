@@ -1,0 +1,224 @@
+"""``asbuilt model``: every sample to every format, summaries, errors as one line with exit 2."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from asbuilt.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+SAMPLES = sorted((ROOT / "samples").glob("*.json"))
+
+
+def _load_export_conftest():
+    """The glTF validator fixture's helpers live in tests/export/conftest.py."""
+    spec = importlib.util.spec_from_file_location(
+        "export_conftest_for_cli", ROOT / "tests" / "export" / "conftest.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+gltf_validator = _load_export_conftest().gltf_validator
+
+
+@pytest.fixture(scope="module")
+def spool_outputs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("spool")
+    outputs = [folder / f"spool{suffix}" for suffix in (".step", ".glb", ".dxf", ".json")]
+    argv = ["model", str(ROOT / "samples" / "spool.json")]
+    for path in outputs:
+        argv += ["--out", str(path)]
+    return argv, outputs
+
+
+def test_spool_to_step_glb_dxf_json(spool_outputs, capsys, gltf_validator):
+    argv, outputs = spool_outputs
+    assert main(argv) == 0
+    out, _ = capsys.readouterr()
+    lines = out.splitlines()
+    document = json.loads(outputs[3].read_text())
+    n = len(document["components"])
+    for path, line, name in zip(outputs, lines, ("STEP", "glTF", "DXF", "JSON")):
+        assert line.startswith(f"wrote {path} ({name}, ")
+        assert line.endswith(f" {n} objects)")
+    assert lines[-1].startswith(f"{n} components, 1 spool; findings: ")
+    # Merging ran: the pipes became one spool with fittings.
+    assert {c["type"] for c in document["components"]} >= {"pipe", "elbow"}
+    assert document["spools"][0]["id"] == "SP-101"
+
+    from asbuilt.export.step import declared_length_unit, read_step
+
+    assert declared_length_unit(outputs[0]) == "mm"
+    assert [s.name for s in read_step(outputs[0])] == [c["id"] for c in document["components"]]
+    (report,) = gltf_validator(outputs[1])
+    assert report["errors"] == 0
+
+
+@pytest.mark.parametrize("sample", SAMPLES, ids=[p.stem for p in SAMPLES])
+def test_every_sample_exports(sample, tmp_path, capsys):
+    outputs = [tmp_path / f"x{s}" for s in (".step", ".glb", ".dxf", ".json")]
+    argv = ["model", str(sample), "--quiet"]
+    for path in outputs:
+        argv += ["--out", str(path)]
+    assert main(argv) == 0
+    assert capsys.readouterr().out == ""  # --quiet
+    assert all(path.stat().st_size > 0 for path in outputs)
+    document = json.loads(outputs[3].read_text())
+    from asbuilt.export.step import read_step
+
+    assert len(read_step(outputs[0])) == len(document["components"])
+
+
+def test_no_merge_no_check_plate_thickness(tmp_path, capsys):
+    out = tmp_path / "plant.json"
+    step = tmp_path / "plant.step"
+    code = main(
+        [
+            "model",
+            str(ROOT / "samples" / "plant.json"),
+            "--out",
+            str(out),
+            "--out",
+            str(step),
+            "--no-merge",
+            "--no-check",
+            "--plate-thickness",
+            "25",
+        ]
+    )
+    assert code == 0
+    document = json.loads(out.read_text())
+    assert document["spools"] == [] and document["findings"] == []
+    assert {c["type"] for c in document["components"]} <= {
+        "cylinder",
+        "cuboid",
+        "sphere",
+        "plane",
+        "hull",
+    }
+    planes = [c for c in document["components"] if c["type"] == "plane"]
+    assert planes  # the plant has a wall
+    from asbuilt.export.step import read_step
+
+    volumes = {s.name: s.volume for s in read_step(step)}
+    outline = np.array(planes[0]["outline"])
+    normal = np.array(planes[0]["normal"])
+    # Shoelace area of the outline polygon, projected on the plane.
+    twice_area = (
+        sum(np.cross(outline[i], outline[(i + 1) % len(outline)]) for i in range(len(outline)))
+        @ normal
+    )
+    expected_mm3 = abs(0.5 * twice_area) * 0.025 * 1e9
+    assert volumes[planes[0]["id"]] == pytest.approx(expected_mm3, rel=1e-3)
+
+
+@pytest.mark.parametrize(
+    ("outputs", "message"),
+    [
+        (["model.ifc"], "model.ifc: unknown output format '.ifc'"),
+        (["missing/model.step"], "missing/model.step: directory does not exist"),
+        (["model.json", "model.json"], "model.json: this output is given twice"),
+    ],
+)
+def test_bad_outputs_are_one_line_exit_2_and_write_nothing(
+    tmp_path, capsys, outputs, message, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)
+    argv = ["model", str(ROOT / "samples" / "spool.json")]
+    for name in outputs:
+        argv += ["--out", name]
+    assert main(argv) == 2
+    _, err = capsys.readouterr()
+    assert err.startswith(f"asbuilt: error: {message}")
+    assert err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_unbuildable_solid_names_the_object(tmp_path, capsys, monkeypatch):
+    import asbuilt.pipeline
+    from asbuilt.model import Component, Model
+    from asbuilt.primitives import Plane, Sphere
+
+    bad = Model(
+        components=(
+            Component("S1", "sphere", Sphere([0, 0, 0], 1.0)),
+            Component("W9", "plane", Plane([0, 0, 0], [0, 0, 1])),
+        )
+    )
+    monkeypatch.setattr(asbuilt.pipeline, "build_model", lambda scan, **options: bad)
+    target = tmp_path / "x.step"
+    target.write_text("old")
+    argv = [
+        "model",
+        str(ROOT / "samples" / "spool.json"),
+        "--out",
+        str(target),
+        "--out",
+        str(tmp_path / "x.json"),
+    ]
+    assert main(argv) == 2
+    _, err = capsys.readouterr()
+    assert err.startswith("asbuilt: error: object W9: ") and err.count("\n") == 1
+    assert target.read_text() == "old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.step"]
+
+
+@pytest.mark.parametrize("value", ["0", "-3", "abc"])
+def test_bad_plate_thickness(value, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["model", "scan.json", "--out", "x.step", "--plate-thickness", value])
+    assert info.value.code == 2
+    assert "--plate-thickness" in capsys.readouterr().err
+
+
+def test_missing_scan_is_exit_2(tmp_path, capsys):
+    assert main(["model", str(tmp_path / "nope.json"), "--out", str(tmp_path / "x.json")]) == 2
+    assert "nope.json" in capsys.readouterr().err
+
+
+def test_help_reads_well(capsys):
+    with pytest.raises(SystemExit):
+        main(["model", "--help"])
+    text = capsys.readouterr().out
+    for option in (
+        "--out FILE",
+        "--plate-thickness MM",
+        "--catalog NAME|FILE",
+        "--schedule S",
+        "--rules FILE",
+        "--design FILE",
+        "--quiet",
+        ".step",
+        ".glb",
+        ".dxf",
+    ):
+        assert option in text
+
+
+def test_version_and_top_level_help_list_model(capsys):
+    with pytest.raises(SystemExit):
+        main(["--version"])
+    assert capsys.readouterr().out.startswith("asbuilt ")
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    assert "model" in capsys.readouterr().out
+
+
+def test_registering_the_command_does_not_load_cadquery():
+    code = (
+        "import sys; from asbuilt.cli import build_parser; build_parser();"
+        "print('cadquery' in sys.modules)"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
+    )
+    assert out.stdout.strip() == "False"
