@@ -197,8 +197,8 @@ def _steps(n: int) -> np.ndarray:
 
 
 #: Fewest raster lines in either direction: an operator covers an object's width with at least
-#: four lines of shots however thin it looks, so every face or arc gets more than one line.
-MIN_LINES = 4
+#: five lines of shots however thin it looks, so every face or arc gets more than one line.
+MIN_LINES = 5
 
 
 def _grid_shape(window, shots: float) -> tuple[int, int]:
