@@ -384,3 +384,29 @@ def test_cylinder_fit_helper_is_a_real_fit_result():
     res = cylinder_fit((0, 0, 0), (1, 0, 0), 0.1)
     assert res.primitive.length == pytest.approx(1.0) and res.stderr["radius"] == 0.0005
     assert DEFAULT_TOLERANCES.angle_snap_deg == 2.0
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    angle=st.floats(15, 165),
+    twist=st.floats(0, 6.28),
+    yaw=st.floats(0, 6.28),
+    nps_od=st.sampled_from([0.0603, 0.1143, 0.2191, 0.3238]),
+)
+def test_bends_of_any_angle_in_any_plane_connect_exactly(angle, twist, yaw, nps_od):
+    """Two pipes meeting at an arbitrary angle in an arbitrarily tilted plane."""
+    a = np.radians(angle)
+    reach = 1.5 * nps_od * np.tan(a / 2) + 0.05  # the scan stops short of the bend's ends
+    d1 = np.array([1.0, 0, 0])
+    d2 = np.array([np.cos(a), np.sin(a) * np.cos(twist), np.sin(a) * np.sin(twist)])
+    rot = rotation(yaw, 0.3, 0.0)
+    p = np.array([5.0, 1.0, 2.0])
+    length = max(2.0, 4 * reach)
+    pipes = [
+        Pipe("A", tuple(p - rot @ d1 * length), tuple(p - rot @ d1 * reach), nps_od),
+        Pipe("B", tuple(p + rot @ d2 * reach), tuple(p + rot @ d2 * length), nps_od),
+    ]
+    model = merge_model(report_of(pipes))
+    assert [c.type for c in model.components] == ["pipe", "elbow", "pipe"]
+    assert model.components[1].geometry.angle_deg == pytest.approx(angle, abs=2.0 + 1e-6)
+    assert connection_mismatches(model.components, tolerance=1e-4) == (2, [])
