@@ -1,0 +1,74 @@
+"""The session journal: durable appends, torn and corrupt lines, its place beside the scan."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import pytest
+from asbuilt.drivers.journal import Journal, journal_path_for, read_journal
+
+from asbuilt.errors import ScanError
+
+
+def test_journal_sits_beside_the_scan(tmp_path):
+    assert journal_path_for(tmp_path / "site.json") == tmp_path / "site.json.journal"
+
+
+def test_records_are_on_disk_as_soon_as_appended(tmp_path):
+    path = tmp_path / "s.json.journal"
+    journal = Journal(path)
+    journal.append({"type": "session", "version": 1})
+    journal.append({"type": "shot", "range": 1.25, "error": None})
+    # read through another file object while the journal is still open: nothing is buffered
+    lines = path.read_text().splitlines()
+    assert [json.loads(line) for line in lines] == [
+        {"type": "session", "version": 1},
+        {"type": "shot", "range": 1.25, "error": None},
+    ]
+    journal.close()
+    assert read_journal(path)[1]["range"] == 1.25
+
+
+def test_appending_continues_an_existing_journal(tmp_path):
+    path = tmp_path / "j"
+    for n in range(3):
+        journal = Journal(path)
+        journal.append({"n": n})
+        journal.close()
+    assert [r["n"] for r in read_journal(path)] == [0, 1, 2]
+
+
+def test_torn_last_line_is_dropped(tmp_path):
+    path = tmp_path / "j"
+    path.write_text('{"type":"session"}\n\n{"type":"shot","ra')
+    assert read_journal(path) == [{"type": "session"}]
+
+
+def test_corrupt_line_before_the_end_is_refused(tmp_path):
+    path = tmp_path / "x.json.journal"
+    path.write_text('{"type":"session"}\nnot json\n{"type":"resume"}\n')
+    with pytest.raises(ScanError, match="line 2: corrupt line"):
+        read_journal(path)
+
+
+def test_missing_journal(tmp_path):
+    with pytest.raises(ScanError, match="cannot read the journal"):
+        read_journal(tmp_path / "none")
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write anywhere")
+def test_unwritable_directory(tmp_path):
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        with pytest.raises(ScanError, match="cannot write the journal"):
+            Journal(locked / "s.json.journal")
+    finally:
+        locked.chmod(0o700)
+
+
+def test_missing_directory(tmp_path):
+    with pytest.raises(ScanError, match="cannot write the journal"):
+        Journal(tmp_path / "nowhere" / "s.json.journal")

@@ -1,0 +1,58 @@
+"""Jenoptik LDM41/42 driver against scripted replies: formats, error codes, garbage."""
+
+from __future__ import annotations
+
+import pytest
+from asbuilt.drivers.ldm import LDM4x
+from asbuilt.drivers.rangefinder import (
+    RangeFinderCommandError,
+    RangeFinderError,
+    SignalTooWeak,
+)
+
+from asbuilt.errors import DeviceProtocolError
+
+LINE = b"\r\n"
+
+
+def _ldm(scripted, script, timeout=0.3):
+    channel, port = scripted(script, timeout=timeout, delimiters=LINE)
+    return LDM4x(channel), port
+
+
+@pytest.mark.parametrize(
+    "reply, metres, quality",
+    [
+        (b"004.996\r\n", 4.996, None),
+        (b"123.456\r\n", 123.456, None),
+        (b"004.996 000985\r\n", 4.996, 985),
+    ],
+)
+def test_ldm_decimal_formats(scripted, reply, metres, quality):
+    lrf, port = _ldm(scripted, [("DM", reply)])
+    assert lrf.measure() == pytest.approx(metres)
+    assert lrf.last_quality == quality
+    assert port.written == ["DM"]
+
+
+@pytest.mark.parametrize(
+    "reply, cls",
+    [
+        (b"E15\r\n", SignalTooWeak),
+        (b"E16\r\n", SignalTooWeak),
+        (b"E17\r\n", RangeFinderCommandError),
+        (b"E99\r\n", RangeFinderError),
+    ],
+)
+def test_ldm_error_codes(scripted, reply, cls):
+    lrf, _ = _ldm(scripted, [("DM", reply)])
+    with pytest.raises(cls) as info:
+        lrf.measure()
+    assert info.value.code == reply.strip().decode()
+
+
+@pytest.mark.parametrize("reply", [b"1388\r\n", b"??\r\n"])
+def test_ldm_other_formats_are_protocol_errors(scripted, reply):
+    lrf, _ = _ldm(scripted, [("DM", reply)])
+    with pytest.raises(DeviceProtocolError, match="format d or s"):
+        lrf.measure()

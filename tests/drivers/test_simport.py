@@ -1,0 +1,56 @@
+"""The sim-ptu:// and sim-lrf:// pyserial URL handlers: parsing, shared rigs, bad URLs."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+import serial
+from asbuilt.drivers.simport import parse_sim_url
+from asbuilt.drivers.simrig import register_rig
+from driver_helpers import wall_rig
+
+
+@pytest.mark.parametrize(
+    "url, scheme, name, options",
+    [
+        ("sim-ptu://lab?scene=a.json&seed=3", "sim-ptu", "lab", {"scene": "a.json", "seed": "3"}),
+        ("SIM-LRF://lab?protocol=ldm", "sim-lrf", "lab", {"protocol": "ldm"}),
+        ("sim-lrf://", "sim-lrf", "default", {}),
+    ],
+)
+def test_parse_sim_url(url, scheme, name, options):
+    assert parse_sim_url(url) == (scheme, name, options)
+
+
+def test_ptu_and_lrf_urls_share_one_rig(scene_file):
+    ptu = serial.serial_for_url(f"sim-ptu://shared?scene={scene_file}", timeout=0.5)
+    lrf = serial.serial_for_url("sim-lrf://shared", timeout=0.5)
+    ptu.write(b"ED PP1500 A ")
+    lrf.write(b"s0g\r\n")
+    assert lrf.read_until(b"g0g").endswith(b"g0g")  # power-up g0? first, then the distance
+    ptu.close()
+    lrf.close()
+
+
+@pytest.mark.parametrize(
+    "url, message",
+    [
+        ("sim-lrf://nowhere", "does not exist; give ?scene=PATH"),
+        ("sim-lrf://wall?protocol=pelco", "unknown simulated range finder protocol"),
+        ("sim-lrf://wall?scene=other.json", "already exists with scene=None"),
+        ("sim-ptu://x?scene=/no/such/scene.json", "scene file not found"),
+    ],
+)
+def test_bad_sim_urls_fail_to_open(wall, url, message):
+    with pytest.raises(serial.SerialException, match=re.escape(message)):
+        serial.serial_for_url(url)
+
+
+def test_registered_rig_is_reused():
+    rig = register_rig("mine", wall_rig())
+    port = serial.serial_for_url("sim-ptu://mine", timeout=0.2)
+    port.write(b"ED PP300 ")
+    port.read(100)
+    assert rig.counts()[0] == 300
+    port.close()
