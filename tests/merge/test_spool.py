@@ -1,0 +1,85 @@
+"""Spool building pieces: ports of each fitting geometry and the connection checker."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from asbuilt.catalog import FittingDims
+from asbuilt.merge.contiguity import Joint
+from asbuilt.merge.spool import PipeSpec, build_spools, connection_mismatches, ports
+from asbuilt.model import Bend, Component, Reducer, Straight, Tee
+from asbuilt.primitives import Sphere
+
+
+def comp(cid, geometry, spool="S1", kind="pipe"):
+    return Component(id=cid, type=kind, geometry=geometry, spool=spool)
+
+
+def test_ports_of_each_geometry():
+    straight = comp("A", Straight([0, 0, 0], [2, 0, 0], 0.05))
+    assert [tuple(p) for p, _ in ports(straight)] == [(0, 0, 0), (2, 0, 0)]
+    assert [tuple(d) for _, d in ports(straight)] == [(-1, 0, 0), (1, 0, 0)]
+    bend = comp("E", Bend([2, 0, 0], [2.5, 0.5, 0], [2, 0.5, 0], 0.05), kind="elbow")
+    (p0, d0), (p1, d1) = ports(bend)
+    assert np.allclose(d0, [-1, 0, 0]) and np.allclose(d1, [0, 1, 0])
+    reducer = comp("R", Reducer([0, 0, 0], [0, 0, 0.1], 0.05, 0.04), kind="reducer")
+    assert np.allclose(ports(reducer)[1][1], [0, 0, 1])
+    tee = comp("T", Tee([0, 0, 0], [-0.1, 0, 0], [0.1, 0, 0], [0, 0.1, 0], 0.05, 0.04), kind="tee")
+    assert [tuple(np.round(d, 9)) for _, d in ports(tee)] == [(-1, 0, 0), (1, 0, 0), (0, 1, 0)]
+    assert ports(comp("S", Sphere([0, 0, 0], 1.0), kind="sphere")) == []
+
+
+def test_the_checker_finds_gaps_and_kinks_and_ignores_other_spools():
+    a = comp("A", Straight([0, 0, 0], [1, 0, 0], 0.05))
+    ok = comp("B", Straight([1, 0, 0], [2, 0, 0], 0.05))
+    assert connection_mismatches([a, ok]) == (1, [])
+    gap = comp("B", Straight([1.0005, 0, 0], [2, 0, 0], 0.05))
+    found, bad = connection_mismatches([a, gap], tolerance=1e-4)
+    assert found == 1 and bad[0][:2] == ("A", "B") and bad[0][2] == pytest.approx(5e-4)
+    kink = comp("B", Straight([1, 0, 0], [2, np.tan(np.radians(1)), 0], 0.05))
+    found, bad = connection_mismatches([a, kink], tolerance=1e-4)
+    assert found == 1 and bad[0][3] == pytest.approx(np.radians(1), rel=1e-3)
+    other = comp("B", Straight([1.0005, 0, 0], [2, 0, 0], 0.05), spool="S2")
+    assert connection_mismatches([a, other], tolerance=1e-4) == (0, [])
+
+
+def spec(pid, start, end, od=0.1143, dims=None):
+    start, end = np.array(start, float), np.array(end, float)
+    axis = (end - start) / np.linalg.norm(end - start)
+    dims = dims or FittingDims(
+        bend_radius=0.152, tee_run=0.105, tee_outlet=0.105, reducer_length=0.102, source="test"
+    )
+    base = Component(id=pid, type="pipe", geometry=Straight(start, end, od / 2), sources=(pid,))
+    return PipeSpec(
+        id=pid,
+        center=(start + end) / 2,
+        axis=axis,
+        length=float(np.linalg.norm(end - start)),
+        od=od,
+        wall=0.006,
+        dims=dims,
+        run=0,
+        component=base,
+        nominal="4",
+        schedule="STD",
+    )
+
+
+def test_build_spools_places_an_elbow_and_trims():
+    pipes = [spec("A", (0, 0, 0), (1.8, 0, 0)), spec("B", (2, 0.2, 0), (2, 2, 0))]
+    comps, spools = build_spools(pipes, [Joint("elbow", ((0, 1), (1, 0)))], [None, None])
+    assert [c.id for c in comps] == ["A", "A-B", "B"]
+    assert comps[0].geometry.end == pytest.approx([1.848, 0, 0])
+    assert comps[1].geometry.bend_radius == pytest.approx(0.152)
+    assert spools[0].pipe_length == pytest.approx(1.848 * 2)
+    assert connection_mismatches(comps) == (2, [])
+
+
+def test_a_fitting_too_big_for_its_pipe_is_dropped_with_a_note():
+    big = FittingDims(bend_radius=2.0, tee_run=1, tee_outlet=1, reducer_length=1, source="x")
+    pipes = [spec("A", (0, 0, 0), (0.5, 0, 0), dims=big), spec("B", (0.6, 0.1, 0), (0.6, 3, 0))]
+    comps, spools = build_spools(pipes, [Joint("elbow", ((0, 1), (1, 0)))], [None, None])
+    assert [c.type for c in comps] == ["pipe", "pipe"]
+    assert "would not fit" in comps[0].snap["merge_notes"][0]
+    assert len(spools) == 1  # still one spool: the pipes are joined, just not by a fitting
