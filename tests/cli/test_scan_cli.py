@@ -295,3 +295,20 @@ def test_simulate_device_serves_ptys_that_asbuilt_scan_uses(site):
     radius = np.linalg.norm(pipe[:, 1:] - [4.0, 1.2], axis=1)
     assert radius.mean() == pytest.approx(PIPE_OD / 2, abs=0.003)
     assert math.isfinite(radius.std())
+
+
+def test_units_apply_to_points_and_raw_ranges(site):
+    from asbuilt.scan import load_scan
+
+    plan = ["--plan", str(site / "plan.json")]
+    assert main(_args(site, "m", out="m.json", extra_ptu=EXACT, more=plan)) == 0
+    assert (
+        main(_args(site, "mm", out="mm.json", extra_ptu=EXACT, more=[*plan, "--units", "mm"])) == 0
+    )
+    in_m, in_mm = load_scan(site / "m.json"), load_scan(site / "mm.json")
+    assert in_mm.units == "mm"
+    for a, b in zip(in_m.objects, in_mm.objects):
+        assert b.points == pytest.approx(a.points, abs=1e-9)
+        assert b.measurements == pytest.approx(a.measurements, abs=1e-9)
+    raw = json.loads((site / "mm.json").read_text())["objects"][0]["measurements"][0][2]
+    assert 3000 < raw < 5000  # millimetres in the file
