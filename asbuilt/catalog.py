@@ -24,6 +24,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
+from types import MappingProxyType
 
 from .errors import CatalogError
 from .units import UNITS
@@ -569,7 +570,7 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
                 PipeSize(
                     nominal=nominal,
                     od=od,
-                    walls=walls,
+                    walls=MappingProxyType(walls),
                     nps=nps,
                     dn=int(dn) if dn else None,
                     source=row["source"],
@@ -591,7 +592,7 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
                     nps=nps,
                     dn=int(dn) if dn else None,
                     od=od,
-                    dims=dims,
+                    dims=MappingProxyType(dims),
                     source=row["source"],
                     line=line_no,
                 )

@@ -329,3 +329,12 @@ def test_lookup_errors():
     assert cat.wall("22", "40") is None  # B36.10M lists no schedule 40 at NPS 22
     assert cat.label("4") == "NPS 4"
     assert [s.nominal for s in cat.nearest(0.110)] == ["4", "3 1/2"]
+
+
+def test_loaded_catalogs_are_read_only_and_cached():
+    cat = load_catalog("asme-b36.10m")
+    assert load_catalog("asme-b36.10m") is cat
+    with pytest.raises(TypeError):
+        cat.size("4").walls["STD"] = 1.0  # type: ignore[index]
+    with pytest.raises(TypeError):
+        cat.fitting(cat.size("4")).dims["tee_run"] = 1.0  # type: ignore[index]
