@@ -11,10 +11,14 @@ cylinder 5, cuboid 9: centre, orientation, sizes) and ``n`` the number of points
 * Sensor sigma ``s`` known: ``-2 ln L = sum_i min((r_i / s)^2, c^2)`` (+ a constant common to all
   models), ``c`` = ``tolerances.outlier_cutoff_sigma``: a point beyond ``c s`` costs every model
   the same.
-* Unknown: each model's inliers are Gaussian with its own maximum-likelihood sigma
-  ``s_k^2 = sum_inliers r^2 / m_k`` and its rejected points uniform over the points' extent
-  ``W`` (bounding-box diagonal): ``-2 ln L = m_k (1 + ln(2 pi s_k^2)) + (n - m_k) 2 ln W``.
-  Only the ratio ``s_k / W`` matters, so the score does not depend on the unit.
+* Unknown: first each model's inliers are taken as Gaussian with its own maximum-likelihood
+  sigma ``s_k^2 = sum_inliers r^2 / m_k`` and its rejected points as uniform over the points'
+  extent ``W`` (bounding-box diagonal): ``-2 ln L = m_k (1 + ln(2 pi s_k^2)) + (n - m_k) 2 ln W``
+  (only ``s_k / W`` matters, so no unit enters). The best model by that score gives the noise
+  level (its degrees-of-freedom-corrected inlier sigma), and the models are then compared as
+  with a known sigma. The second step matters with 20-40 points: a model whose inlier test
+  happened to reject a few good points (3 sigma of a small-sample scale) must not lose to one
+  that kept them merely because their outlier decisions differ.
 
 A more complex model must win by *strong* evidence, a BIC difference of at least 6 (Kass &
 Raftery 1995: 0-2 barely worth mentioning, 2-6 positive, 6-10 strong): among the candidates
@@ -151,11 +155,15 @@ def fit_auto(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES)
         reasons = "; ".join(f"{kind}: {why}" for kind, why in failures.items())
         raise FitError(f"No kind fits these points ({reasons}); choose a kind or hull.")
     extent = float(np.linalg.norm(np.ptp(pts, axis=0)))
-    scores = information_scores(results, sigma, extent, tolerances)
     if sigma is not None:
+        scores = information_scores(results, float(sigma), extent, tolerances)
         basis = f"sensor sigma {float(sigma) * 1000:.3g} mm"
     else:
-        basis = "each model's own inlier sigma"
+        own = information_scores(results, None, extent, tolerances)
+        leader = min(own, key=lambda kind: (own[kind], PARAMETERS[kind]))
+        noise = max(float(results[leader].sigma), float(tolerances.sigma_floor))
+        scores = information_scores(results, noise, extent, tolerances)
+        basis = f"sigma {noise * 1000:.3g} mm from the {leader} fit"
     best = min(scores, key=lambda kind: (scores[kind], PARAMETERS[kind]))
     close = [kind for kind in scores if scores[kind] <= scores[best] + WEAK_EVIDENCE]
     chosen = min(close, key=lambda kind: (PARAMETERS[kind], scores[kind]))

@@ -1,0 +1,176 @@
+"""Automatic kind choice: the right kind for simulated objects, the reasons, the edge cases."""
+
+from __future__ import annotations
+
+import importlib
+import math
+
+import numpy as np
+import pytest
+from conftest import raster_scan
+
+from asbuilt.errors import FitError
+from asbuilt.fit import auto
+from asbuilt.fit.auto import PARAMETERS, WEAK_EVIDENCE, fit_auto, information_scores
+from asbuilt.fit.result import FitResult
+from asbuilt.primitives import Cuboid, Cylinder, Plane, Sphere
+
+SENSOR = np.array([0.0, 0.0, 2.0])
+_C, _S = np.cos(0.6), np.sin(0.6)
+
+OBJECTS = {
+    "pipe": (
+        Cylinder([5, 1, 1], np.array([0.3, 0.2, 1]) / np.linalg.norm([0.3, 0.2, 1]), 0.11, 0.7),
+        "cylinder",
+    ),
+    "stub": (Cylinder([5, 1, 1], [1, 0, 0], 0.3, 0.3), "cylinder"),
+    "ball": (Sphere([4, 1, 1], 0.2), "sphere"),
+    "wall": (
+        Plane([5, 0, 1.5], [-1, 0, 0], [[5, -2, 3], [5, 2, 3], [5, 2, 0], [5, -2, 0]]),
+        "plane",
+    ),
+    "box": (Cuboid([4, 1, 0.4], [[_C, _S, 0], [-_S, _C, 0], [0, 0, 1]], [1.2, 0.8, 0.8]), "cuboid"),
+}
+
+
+def _has_cuboid() -> bool:
+    return importlib.util.find_spec("asbuilt.fit.cuboid") is not None
+
+
+@pytest.mark.parametrize("name", sorted(OBJECTS))
+@pytest.mark.parametrize("outliers", [0.0, 0.2])
+def test_chooses_the_simulated_kind(rng, name, outliers):
+    primitive, expected = OBJECTS[name]
+    if expected == "cuboid" and not _has_cuboid():
+        pytest.skip("asbuilt.fit.cuboid is not there yet")
+    for _ in range(3):
+        sample = raster_scan(primitive, SENSOR, 30, rng, outlier_fraction=outliers)
+        result = fit_auto(sample.points)
+        assert result.kind == expected, result.notes
+        why = result.notes[-1] if result.notes[-1].startswith("auto chose") else result.notes[-2]
+        assert why.startswith(f"auto chose {expected}: BIC")
+        for other in ("plane", "sphere", "cylinder", "cuboid"):
+            assert other in " ".join(result.notes)
+
+
+def test_with_the_sensor_sigma_the_criterion_says_so(rng):
+    primitive, _ = OBJECTS["pipe"]
+    result = fit_auto(raster_scan(primitive, SENSOR, 30, rng).points, sigma=0.002)
+    assert result.kind == "cylinder"
+    assert result.sigma_source == "sensor"
+    assert any("sensor sigma 2 mm" in note for note in result.notes)
+
+
+def test_without_a_sigma_the_noise_comes_from_the_leading_fit(rng):
+    result = fit_auto(raster_scan(OBJECTS["ball"][0], SENSOR, 30, rng).points)
+    assert any("mm from the sphere fit" in note for note in result.notes)
+
+
+def test_the_result_is_the_chosen_fit_with_the_reason_appended(rng):
+    from asbuilt.fit.sphere import fit_sphere
+
+    points = raster_scan(OBJECTS["ball"][0], SENSOR, 30, rng).points
+    chosen = fit_auto(points)
+    direct = fit_sphere(points)
+    assert chosen.primitive.radius == direct.primitive.radius
+    np.testing.assert_array_equal(chosen.residuals, direct.residuals)
+    assert chosen.notes[: len(direct.notes)] == direct.notes
+    assert len(chosen.notes) > len(direct.notes)
+
+
+def _result(residuals, inliers=None) -> FitResult:
+    residuals = np.asarray(residuals, float)
+    inliers = np.ones(residuals.size, bool) if inliers is None else np.asarray(inliers)
+    return FitResult(
+        primitive=Sphere([0, 0, 0], 1.0),
+        residuals=residuals,
+        inliers=inliers,
+        stderr={},
+        sigma=0.001,
+        sigma_source="residuals",
+        method="test",
+    )
+
+
+def test_information_scores_with_a_known_sigma_truncate_outliers():
+    residuals = np.array([0.001, -0.002, 0.0, 1.0])
+    scores = information_scores({"plane": _result(residuals)}, 0.001, extent=2.0)
+    expected = 1 + 4 + 0 + 9 + 3 * math.log(4)  # the 1 m outlier costs c^2 = 9
+    assert scores["plane"] == pytest.approx(expected)
+
+
+def test_information_scores_with_unknown_sigma_use_each_models_inliers():
+    residuals = np.array([0.001, -0.001, 0.001, -0.001, 0.5])
+    inliers = np.array([True, True, True, True, False])
+    scores = information_scores({"cylinder": _result(residuals, inliers)}, None, extent=2.0)
+    expected = 4 * (1 + math.log(2 * math.pi * 1e-6)) + 2 * math.log(2.0) + 5 * math.log(5)
+    assert scores["cylinder"] == pytest.approx(expected)
+
+
+def test_weak_evidence_keeps_the_simpler_kind(monkeypatch, rng):
+    points = raster_scan(OBJECTS["wall"][0], SENSOR, 30, rng).points
+    plane = auto._fitter("plane")(points)
+    # A "cylinder" that fits a little better than the plane, but not by strong evidence.
+    better = FitResult(
+        primitive=Cylinder([0, 0, 0], [0, 0, 1], 1000.0, 1.0),
+        residuals=plane.residuals * 0.85,
+        inliers=plane.inliers,
+        stderr={},
+        sigma=plane.sigma,
+        sigma_source="residuals",
+        method="test",
+    )
+
+    real = auto._fitter
+
+    def fake(kind):
+        if kind == "cylinder":
+            return lambda points, sigma=None, tolerances=None: better
+        if kind in ("sphere", "cuboid"):
+            raise ImportError(kind)
+        return real(kind)
+
+    monkeypatch.setattr(auto, "_fitter", fake)
+    result = fit_auto(points)
+    assert result.kind == "plane"
+    assert any("not strong evidence" in note for note in result.notes)
+    assert any("could not fit a sphere: not available" in note for note in result.notes)
+    scores = information_scores({"plane": plane, "cylinder": better}, better.sigma, 5.0)
+    assert 0 < scores["plane"] - scores["cylinder"] < WEAK_EVIDENCE
+    assert PARAMETERS["plane"] < PARAMETERS["cylinder"]
+
+
+def test_a_missing_cuboid_fit_is_skipped(monkeypatch, rng):
+    real = auto._fitter
+
+    def without_cuboid(kind):
+        if kind == "cuboid":
+            raise ImportError("No module named 'asbuilt.fit.cuboid'")
+        return real(kind)
+
+    monkeypatch.setattr(auto, "_fitter", without_cuboid)
+    result = fit_auto(raster_scan(OBJECTS["pipe"][0], SENSOR, 30, rng).points)
+    assert result.kind == "cylinder"
+    assert any("could not fit a cuboid: not available" in note for note in result.notes)
+
+
+def test_when_nothing_fits_the_error_lists_every_reason(monkeypatch):
+    def failing(kind):
+        def fit(points, sigma=None, tolerances=None):
+            raise FitError(f"no {kind} here")
+
+        return fit
+
+    monkeypatch.setattr(auto, "_fitter", failing)
+    points = np.random.default_rng(1).normal(size=(10, 3))
+    with pytest.raises(FitError, match="plane: no plane here; sphere: no sphere here"):
+        fit_auto(points)
+
+
+@pytest.mark.parametrize(
+    "points, message",
+    [(np.zeros((6, 3)), "at least 7 points"), (np.outer(np.arange(9.0), [1, 0, 0]), "collinear")],
+)
+def test_degenerate_points_raise(points, message):
+    with pytest.raises(FitError, match=message):
+        fit_auto(points)
