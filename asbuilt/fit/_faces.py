@@ -28,9 +28,9 @@ __all__ = [
 ]
 
 _RNG_SEED = 20040601
-_TRIPLES = 150
+_TRIPLES = 100
 _MAX_FIRST = 3
-_MAX_PAIRS = 400
+_MAX_PAIRS = 150
 _MIN_FACE_POINTS = 3
 #: A face's points must be spread off a line by this many consensus thresholds (RMS): a raster
 #: line lies in every plane through it and would otherwise pass for a face.
@@ -93,7 +93,7 @@ def knn(points: np.ndarray, k: int) -> np.ndarray:
     return np.take_along_axis(index, order, axis=1)
 
 
-def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Unoriented unit normals and plane RMS of each point's k-neighbourhood (PCA).
 
     Parameters
@@ -108,6 +108,8 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
         Eigenvector of the smallest eigenvalue of the neighbourhood covariance.
     rms : ndarray, shape (n,), metres
         Root of that eigenvalue, corrected for the 3 fitted parameters.
+    index : ndarray, shape (n, k), int
+        The neighbours (:func:`knn`).
     """
     index = knn(points, k)
     hood = np.concatenate([points[:, None, :], points[index]], axis=1)
@@ -116,7 +118,7 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     values, vectors = np.linalg.eigh(cov)
     dof = max(hood.shape[1] - 3, 1)
     rms = np.sqrt(np.clip(values[:, 0], 0.0, None) * hood.shape[1] / dof)
-    return vectors[:, :, 0], rms
+    return vectors[:, :, 0], rms, index
 
 
 def noise_scale(rms: np.ndarray, floor: float) -> float:
@@ -128,14 +130,10 @@ def noise_scale(rms: np.ndarray, floor: float) -> float:
 
 
 def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of (k, 3) arrays (or a (3,) vector with a (k, 3) array)."""
-    a = np.broadcast_to(a, np.broadcast_shapes(np.shape(a), np.shape(b)))
-    b = np.broadcast_to(b, a.shape)
-    out = np.empty(a.shape)
-    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    return out
+    """Row-wise cross product of (k, 3) arrays (``a`` may also be one (3,) vector)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+    return np.column_stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def cross3(a, b) -> np.ndarray:
@@ -174,12 +172,14 @@ def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
         collinear points, which lie in every plane through their line).
     """
     coords = points if basis is None else points @ basis
+    dim = coords.shape[1]
+    outer = (coords[:, :, None] * coords[:, None, :]).reshape(coords.shape[0], dim * dim)
     for _ in range(rounds + 1):
         masks = np.abs(normals @ points.T - offsets[:, None]) < threshold
         weight = masks.astype(np.float64)
         count = np.maximum(weight.sum(axis=1), 1.0)
         mean = weight @ coords / count[:, None]
-        second = np.einsum("cn,ni,nj->cij", weight, coords, coords) / count[:, None, None]
+        second = (weight @ outer).reshape(-1, dim, dim) / count[:, None, None]
         cov = second - mean[:, :, None] * mean[:, None, :]
         values, vectors = np.linalg.eigh(cov)
         if _ == rounds:
@@ -323,7 +323,8 @@ def _orient(axis_vec, offset, inside_points):
     """Sign making the face's outward normal point away from the other faces' points."""
     if inside_points.shape[0] == 0:
         return 1.0
-    return -1.0 if np.median(inside_points @ axis_vec) > offset else 1.0
+    above = np.count_nonzero(inside_points @ axis_vec > offset)
+    return -1.0 if 2 * above > inside_points.shape[0] else 1.0
 
 
 def _extra_faces(points, axes, faces, threshold, gap):
@@ -361,11 +362,11 @@ def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap) -> bool
     """A new face along axis k: not on an occupied side, inside the box, contiguous with a face."""
     body = proj[explained]
     inside = body[:, k] - offset
-    side = -1.0 if np.median(inside) > 0 else 1.0
+    side = -1.0 if 2 * np.count_nonzero(inside > 0) > inside.size else 1.0
     for axis, off, fmask in faces:
         if axis != k:
             continue
-        other_side = -1.0 if np.median(proj[fmask, k]) < np.median(body[:, k]) else 1.0
+        other_side = -1.0 if proj[fmask, k].mean() < body[:, k].mean() else 1.0
         if other_side == side or abs(off - offset) < 2 * threshold:
             return False
     for j in range(3):
@@ -483,6 +484,8 @@ def segment(
             score = (_all_facing(points, frame, viewpoint),) + score
         if best_score is None or score > best_score:
             best, best_score = frame, score
+        if score[-2] == points.shape[0] and (len(score) == 2 or score[0]):
+            break  # every point explained: no other hypothesis can do better
     return best
 
 

@@ -119,7 +119,7 @@ def _extent(lo, hi, axes, origin, viewpoint, pan0) -> np.ndarray:
     return np.array([ang[:, 0].min(), ang[:, 0].max(), ang[:, 1].min(), ang[:, 1].max()])
 
 
-def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations=8):
+def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations=10):
     """Move the free bounds so that the box's angular extent matches the raster window.
 
     Parameters
@@ -135,7 +135,8 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
     pan0 : float, radians
     window : ndarray, shape (4,), radians
     iterations : int
-        Gauss-Newton iterations (Levenberg-damped, forward-difference Jacobian).
+        Gauss-Newton iterations (Levenberg-damped, forward-difference Jacobian evaluated at the
+        first and fourth iterate).
 
     Returns
     -------
@@ -146,17 +147,21 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
     if not free:
         return lo, hi
     eps = 1e-6
-    for _ in range(iterations):
+    jac = None
+    for it in range(iterations):
         base = _extent(lo, hi, axes, origin, viewpoint, pan0)
         residual = base - window
-        jac = np.zeros((4, len(free)))
-        for c, (k, side) in enumerate(free):
-            tlo, thi = lo.copy(), hi.copy()
-            (thi if side else tlo)[k] += eps
-            jac[:, c] = (_extent(tlo, thi, axes, origin, viewpoint, pan0) - base) / eps
-        normal = jac.T @ jac
-        damping = 1e-9 * max(float(np.trace(normal)), 1e-30)
-        delta = np.linalg.solve(normal + damping * np.eye(len(free)), -jac.T @ residual)
+        if jac is None or it == 3:
+            # Chord method: the Jacobian of the first iterate (refreshed once) serves them all.
+            jac = np.zeros((4, len(free)))
+            for c, (k, side) in enumerate(free):
+                tlo, thi = lo.copy(), hi.copy()
+                (thi if side else tlo)[k] += eps
+                jac[:, c] = (_extent(tlo, thi, axes, origin, viewpoint, pan0) - base) / eps
+            normal = jac.T @ jac
+            damping = 1e-9 * max(float(np.trace(normal)), 1e-30)
+            solver = np.linalg.inv(normal + damping * np.eye(len(free))) @ jac.T
+        delta = -solver @ residual
         for c, (k, side) in enumerate(free):
             (hi if side else lo)[k] += delta[c]
         if np.abs(delta).max() < 1e-7:

@@ -47,8 +47,8 @@ METHOD = (
 
 _TUKEY_C = 4.685
 _MAD_TO_SIGMA = 1.4826
-_IRLS_ITERATIONS = 12
-_REFIT_ITERATIONS = 6
+_IRLS_ITERATIONS = 6
+_REFIT_ITERATIONS = 4
 
 
 def _rodrigues(omega: np.ndarray) -> np.ndarray:
@@ -96,8 +96,10 @@ class _Model:
         """One weighted Gauss-Newton step; returns the step's size (radians + metres)."""
         residual = np.einsum("ij,ij->i", x, self.normals()[label]) - self.offset[label]
         jac = self.jacobian(x, label)
-        root = np.sqrt(weights)
-        delta, *_ = np.linalg.lstsq(jac * root[:, None], -residual * root, rcond=None)
+        weighted = jac.T * weights
+        normal = weighted @ jac
+        normal[np.diag_indices_from(normal)] += 1e-12 * max(float(np.trace(normal)), 1e-30)
+        delta = np.linalg.solve(normal, -(weighted @ residual))
         q = self.rot_basis.shape[1]
         rotation = _rodrigues(self.rot_basis @ delta[:q])
         self.axes = self.axes @ rotation.T
@@ -149,7 +151,7 @@ def _spacing(coords: np.ndarray, noise: float) -> float:
         return 0.0
     gaps = np.diff(np.sort(coords))
     big = gaps[gaps > max(0.3 * gaps.max(), noise)]
-    return float(np.median(big)) if big.size else 0.0
+    return _median(big) if big.size else 0.0
 
 
 def _bounds(x, label, inliers, model, noise, edge_pad):
@@ -351,11 +353,11 @@ def fit_cuboid(
 
     origin = pts.mean(axis=0)
     x = pts - origin
-    normals, local_rms = _faces.local_normals(x, tolerances.normal_neighbours)
+    normals, local_rms, hood = _faces.local_normals(x, tolerances.normal_neighbours)
     noise = float(sigma) if sigma is not None else _faces.noise_scale(local_rms, floor)
     threshold = cutoff * max(noise, floor)
-    nn = _faces.knn(x, min(4, n - 1))
-    reach = float(np.median(np.linalg.norm(x[nn[:, -1]] - x, axis=1)))
+    fourth = hood[:, min(3, hood.shape[1] - 1)]
+    reach = _median(np.linalg.norm(x[fourth] - x, axis=1))
     gap = threshold + 1.5 * reach
     # The viewpoint (given, or the scan frame's origin) is trusted when the points' directions
     # from it fall on a pan-tilt raster's rows and columns.
@@ -405,7 +407,7 @@ def fit_cuboid(
             break
         moved = model.step(x, label, weights)
         label, residual = model.assign(x)
-        if moved < 1e-8:
+        if moved < 1e-5:
             break
     scale = _robust_scale(residual, floor)
     inliers = np.abs(residual) <= cutoff * scale
