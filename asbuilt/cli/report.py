@@ -1,0 +1,237 @@
+"""``asbuilt report SCAN --out qa.html [--out qa.csv] [--out qa.json]``: QA reports.
+
+Fits, merges and checks the scan as ``asbuilt model`` does (or reads an ``asbuilt-model`` JSON
+document with the findings it records, checked again only when ``--rules`` or ``--design`` is
+given), then writes every ``--out`` in the format its suffix names: a
+self-contained HTML page with pictures, take-off, fit quality and findings; a CSV with one row
+per component; or the same data as JSON. All or nothing. One summary line per file and the
+findings counts go to standard output; the exit code is 0 (findings are in the report, not in
+the exit code: use ``asbuilt check`` for a QA gate).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["register", "run"]
+
+_SUFFIXES = ".html .csv .json"
+
+
+def _density(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (0 < value < 1e5):
+        raise argparse.ArgumentTypeError(f"must be a density in kg/m3 (e.g. 7850), not {text}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError("must be 0 or more")
+    return value
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``report`` subcommand to ``subparsers``."""
+    parser = subparsers.add_parser(
+        "report",
+        help="write QA reports: HTML with pictures, CSV take-off, JSON",
+        description="Build the as-built model of a scan (fit, merge, check) or read an "
+        "asbuilt-model JSON document, and write QA reports for quantity tracking: "
+        "what was built, how much of it, and how sure the model is. The format follows each "
+        f"--out suffix ({_SUFFIXES}); either every file is written or none is.",
+        epilog="Example: asbuilt report samples/spool.json --out qa.html --out qa.csv",
+    )
+    parser.add_argument(
+        "scan", metavar="SCAN", help="an asbuilt-scan JSON file (or an asbuilt-model document)"
+    )
+    parser.add_argument(
+        "--out",
+        "-o",
+        metavar="FILE",
+        action="append",
+        required=True,
+        help=f"a report file; give --out several times for several formats ({_SUFFIXES})",
+    )
+    parser.add_argument(
+        "--catalog",
+        metavar="NAME|FILE",
+        default=None,
+        help="pipe catalog for sizes (default asme-b36.10m; see 'asbuilt catalog')",
+    )
+    parser.add_argument(
+        "--schedule",
+        metavar="S",
+        default=None,
+        help="pipe wall schedule, e.g. STD, 40, 10S (default: the catalog's default); "
+        "pipe weights need it",
+    )
+    parser.add_argument("--rules", metavar="FILE", default=None, help="compliance rules (TOML)")
+    parser.add_argument(
+        "--design", metavar="FILE", default=None, help="design file to compare the model with"
+    )
+    parser.add_argument(
+        "--no-merge", action="store_true", help="one component per fitted object, no spools"
+    )
+    parser.add_argument("--no-check", action="store_true", help="skip the compliance rules")
+    parser.add_argument(
+        "--density",
+        metavar="KG_M3",
+        type=_density,
+        default=None,
+        help="pipe material density for weights (default from the catalog's material: "
+        "7850 carbon steel, 7900 stainless)",
+    )
+    parser.add_argument(
+        "--figures",
+        choices=("svg", "png"),
+        default="svg",
+        help="HTML pictures as inline SVG (default) or embedded PNG",
+    )
+    parser.add_argument(
+        "--labels",
+        metavar="N",
+        type=_positive_int,
+        default=200,
+        help="label every object in the pictures up to N objects, else only those with "
+        "findings (default 200)",
+    )
+    parser.add_argument(
+        "--gltf",
+        metavar="FILE",
+        default=None,
+        help="a glTF/GLB file of the same model (from 'asbuilt model --out'): the HTML offers "
+        "an optional interactive 3-D view of it (needs network access when opened)",
+    )
+    parser.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
+    parser.set_defaults(handler=run)
+    return parser
+
+
+def _is_model_document(path) -> bool:
+    import json
+
+    try:
+        with open(path, encoding="utf-8") as handle:
+            head = handle.read(4096)
+    except (OSError, UnicodeDecodeError):
+        return False  # the scan loader reports it properly
+    if '"asbuilt-model"' not in head:
+        return False
+    try:
+        with open(path, encoding="utf-8") as handle:
+            return json.load(handle).get("format") == "asbuilt-model"
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def _model(args, progress):
+    if _is_model_document(args.scan):
+        from asbuilt.export.model_json import load_model
+
+        model = load_model(args.scan)
+        if args.no_check or (args.rules is None and args.design is None):
+            return model  # the findings the document records
+        from asbuilt.rules import check_model, load_rules
+
+        config = load_rules(args.rules) if args.rules else None
+        options = {"catalog": args.catalog} if args.catalog else {}
+        return model.replace(findings=tuple(check_model(model, config, args.design, **options)))
+    from asbuilt.pipeline import build_model
+    from asbuilt.scan import load_scan
+
+    scan = load_scan(args.scan)
+    progress.total = len(scan.objects)
+    return build_model(
+        scan,
+        catalog=args.catalog,
+        schedule=args.schedule,
+        rules=args.rules,
+        design=args.design,
+        merge=not args.no_merge,
+        check=not args.no_check,
+        progress=progress,
+    )
+
+
+def _size(n: int) -> str:
+    if n < 1000:
+        return f"{n} B"
+    for unit in ("kB", "MB", "GB"):
+        n /= 1000
+        if n < 1000 or unit == "GB":
+            return f"{n:.1f} {unit}"
+    return f"{n:.1f} GB"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Build the model and write the reports; return 0. Bad input raises AsbuiltError."""
+    import sys
+    from pathlib import Path
+
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    from asbuilt.errors import ExportError
+    from asbuilt.report import SUFFIXES, report_format_for, write_reports
+
+    outputs = [Path(p) for p in args.out]
+    for path in outputs:
+        report_format_for(path)  # an unknown suffix fails before any work
+        if not path.parent.is_dir():
+            raise ExportError(
+                "directory does not exist; create it or choose another --out", source=str(path)
+            )
+    if args.gltf is not None and Path(args.gltf).suffix.lower() not in (".glb", ".gltf"):
+        raise ExportError("--gltf must name a .glb or .gltf file", source=str(args.gltf))
+
+    err = Console(file=sys.stderr)
+    with Progress(
+        TextColumn("{task.fields[stage]:<8}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.description}"),
+        console=err,
+        transient=True,
+        disable=args.quiet or not err.is_terminal,
+    ) as bar:
+        task = bar.add_task("", total=None, stage="fitting")
+
+        class _Progress:
+            total = None
+
+            def __call__(self, done, total, oid):
+                bar.update(task, completed=done, total=total, description=oid)
+
+        model = _model(args, _Progress())
+        bar.update(task, completed=0, total=len(outputs), description="", stage="writing")
+        options = {"figure_format": args.figures, "label_limit": args.labels}
+        if args.density is not None:
+            options["density"] = args.density
+        if args.gltf is not None:
+            options["gltf"] = args.gltf
+        written = write_reports(model, outputs, **options)
+
+    if args.quiet:
+        return 0
+    out = Console(file=sys.stdout, highlight=False, soft_wrap=True)
+    for path in written:
+        name = SUFFIXES[path.suffix.lower()].name
+        out.print(f"wrote {path} ({name} report, {_size(path.stat().st_size)})")
+    counts = {severity: 0 for severity in ("error", "warning", "info")}
+    for finding in model.findings:
+        counts[finding.severity] += 1
+    out.print(
+        f"{len(model.components)} components; findings: "
+        f"{counts['error']} error{'s' if counts['error'] != 1 else ''}, "
+        f"{counts['warning']} warning{'s' if counts['warning'] != 1 else ''}, "
+        f"{counts['info']} info"
+    )
+    return 0

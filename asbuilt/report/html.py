@@ -1,0 +1,602 @@
+"""The HTML QA report: one self-contained file (styles and pictures inline, no network needed).
+
+Sections: a header (scan, dates, catalog, units, counts and the compliance summary), the plan and
+elevation pictures (inline SVG from :mod:`asbuilt.report.figures`), the quantity take-off (pipe
+by size and schedule in metres and feet with weights, fittings by size and angle, volumes and
+areas of members, tanks and other solids), one row per component (the CSV's content), the fit
+quality of every fitted object with a residual histogram, and the findings with their
+suggestions. Ids link both ways: a label in a picture or a finding's object jumps to the
+component's row; a row's finding codes jump to the finding.
+
+An optional interactive 3-D view (``gltf=`` a glTF/GLB file of the same model, linked by a
+relative path) is loaded only when the reader presses its button, from the model-viewer web
+component on a CDN; nothing else on the page uses the network.
+"""
+
+from __future__ import annotations
+
+import html as _html
+import os
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+
+from asbuilt.atomic import atomic_write
+
+from .data import ReportData
+from .figures import VIEWS, anchor, histogram_svg, render_view
+from .takeoff import FOOT
+
+__all__ = ["html_text", "write_html", "MODEL_VIEWER_URL"]
+
+#: Where the optional 3-D viewer's script comes from (only fetched on the reader's request).
+MODEL_VIEWER_URL = "https://ajax.googleapis.com/ajax/libs/model-viewer/3.5.0/model-viewer.min.js"
+
+_CSS = """
+:root { --err:#d62728; --warn:#ff7f0e; --info:#1f77b4; --ok:#2ca02c; --line:#ddd; }
+* { box-sizing: border-box; }
+body { font: 14px/1.4 system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; margin: 0;
+       color: #222; background: #fafafa; }
+header { background: #263238; color: #fff; padding: 16px 24px; }
+header h1 { margin: 0 0 6px; font-size: 22px; }
+header dl { display: grid; grid-template-columns: max-content 1fr; gap: 2px 12px; margin: 8px 0 0; }
+header dt { color: #b0bec5; } header dd { margin: 0; }
+main { padding: 8px 24px 32px; max-width: 1400px; }
+section { margin-top: 24px; }
+h2 { font-size: 18px; border-bottom: 2px solid #263238; padding-bottom: 4px; }
+h3 { font-size: 15px; margin: 16px 0 6px; }
+nav a { color: #cfd8dc; margin-right: 14px; }
+table { border-collapse: collapse; background: #fff; margin: 4px 0 8px; }
+th, td { border: 1px solid var(--line); padding: 3px 7px; text-align: left; vertical-align: top; }
+th { background: #eceff1; position: sticky; top: 0; }
+td.num, th.num { text-align: right; font-variant-numeric: tabular-nums; }
+tr.total td { font-weight: 600; background: #f5f5f5; }
+tr:target { outline: 2px solid var(--info); }
+li:target { outline: 2px solid var(--info); }
+.summary { display: flex; gap: 12px; flex-wrap: wrap; margin-top: 12px; }
+.badge { border-radius: 6px; padding: 6px 12px; font-weight: 600; color: #fff; }
+.badge.error { background: var(--err); } .badge.warning { background: var(--warn); }
+.badge.info { background: var(--info); } .badge.ok { background: var(--ok); }
+.badge.zero { background: #546e7a; }
+.sev { font-weight: 600; } .sev.error { color: var(--err); } .sev.warning { color: var(--warn); }
+.sev.info { color: var(--info); }
+.pictures { display: grid; grid-template-columns: repeat(auto-fit, minmax(680px, 1fr)); gap: 12px; }
+figure { margin: 0; background: #fff; border: 1px solid var(--line); padding: 6px; }
+figure svg, figure img { width: 100%; height: auto; display: block; }
+figcaption { font-size: 12px; color: #555; }
+svg.hist { display: block; background: #f7f7f7; }
+ol.findings > li { margin-bottom: 10px; background: #fff; border: 1px solid var(--line);
+                   padding: 6px 10px; list-style-position: inside; }
+.muted { color: #777; font-size: 12px; }
+.viewer { background: #fff; border: 1px solid var(--line); padding: 8px; }
+.viewer model-viewer { width: 100%; height: 480px; }
+"""
+
+_SCRIPT = """
+document.addEventListener("DOMContentLoaded", function () {
+  var button = document.getElementById("load-3d");
+  if (!button) { return; }
+  button.addEventListener("click", function () {
+    var status = document.getElementById("viewer-status");
+    var script = document.createElement("script");
+    script.type = "module";
+    script.src = button.getAttribute("data-src");
+    script.onerror = function () {
+      status.textContent = "The 3-D viewer could not be loaded (no network?). " +
+        "The rest of this report does not need it.";
+    };
+    script.onload = function () {
+      var viewer = document.createElement("model-viewer");
+      viewer.setAttribute("src", button.getAttribute("data-model"));
+      viewer.setAttribute("camera-controls", "");
+      viewer.setAttribute("alt", "as-built model");
+      document.getElementById("viewer-slot").appendChild(viewer);
+      status.textContent = "";
+    };
+    status.textContent = "Loading the viewer...";
+    document.head.appendChild(script);
+    button.disabled = true;
+  });
+});
+"""
+
+
+def _e(value) -> str:
+    """Escaped text; empty for None."""
+    return "" if value is None else _html.escape(str(value), quote=True)
+
+
+def _num(value, decimals: int = 3, scale: float = 1.0) -> str:
+    if value is None:
+        return ""
+    number = float(value) * scale
+    return f"{number:,.{decimals}f}" if np.isfinite(number) else ""
+
+
+def _mm(value, decimals: int = 1) -> str:
+    return _num(value, decimals, 1000.0)
+
+
+def _table(headers: Iterable[tuple[str, bool]], rows: Iterable[str], cls: str = "") -> str:
+    numeric = ' class="num"'
+    head = "".join(f"<th{numeric if num else ''}>{_e(h)}</th>" for h, num in headers)
+    body = "\n".join(rows)
+    attr = f' class="{cls}"' if cls else ""
+    return f"<table{attr}><thead><tr>{head}</tr></thead><tbody>\n{body}\n</tbody></table>"
+
+
+def _td(value: str, num: bool = False) -> str:
+    return f'<td class="num">{value}</td>' if num else f"<td>{value}</td>"
+
+
+def _link(oid: str) -> str:
+    return f'<a href="#{anchor(oid)}">{_e(oid)}</a>'
+
+
+def _header(data: ReportData) -> str:
+    s = data.severities
+    badges = []
+    for severity, name in (("error", "errors"), ("warning", "warnings"), ("info", "info")):
+        count = s.get(severity, 0)
+        cls = severity if count else "zero"
+        badges.append(f'<span class="badge {cls}" id="count-{severity}">{count} {name}</span>')
+    verdict = (
+        '<span class="badge ok">no errors</span>'
+        if not s.get("error")
+        else '<span class="badge error">has errors</span>'
+    )
+    unverifiable = s.get("unverifiable", 0)
+    counts = data.counts
+    order = ("components", "spools", "objects", "points")
+    parts = [f"{counts[k]} {k}" for k in order if k in counts]
+    by_type = ", ".join(
+        f"{v} {k}" for k, v in counts.items() if k not in order and not k.startswith("_")
+    )
+    catalog = _e(data.catalog) if data.catalog else "none"
+    if data.catalog_title:
+        catalog += f" &mdash; {_e(data.catalog_title)}"
+    nav = "".join(
+        f'<a href="#{target}">{label}</a>'
+        for target, label in (
+            ("pictures", "Pictures"),
+            ("takeoff", "Take-off"),
+            ("components", "Components"),
+            ("quality", "Fit quality"),
+            ("findings", "Findings"),
+        )
+    )
+    return f"""<header>
+<h1>{_e(data.title)}</h1>
+<nav>{nav}</nav>
+<dl>
+<dt>Scan</dt><dd>{_e(data.source) or "not recorded"}</dd>
+<dt>Scan date</dt><dd>{_e(data.scan_date) or "not recorded in the scan file"}</dd>
+<dt>Report made</dt><dd>{_e(data.generated)}</dd>
+<dt>Catalog</dt><dd>{catalog}</dd>
+<dt>Units</dt><dd>scan in {_e(data.units)}; this report in metres (pipe lengths also in feet),
+ diameters and residuals in millimetres</dd>
+<dt>Counts</dt><dd>{_e(", ".join(parts))}{(" (" + _e(by_type) + ")") if by_type else ""}</dd>
+</dl>
+<div class="summary" id="compliance">{verdict}{"".join(badges)}
+<span class="badge zero">{unverifiable} unverifiable</span></div>
+</header>"""
+
+
+def _pictures(data: ReportData, figure_format: str, label_limit: int) -> str:
+    figures = []
+    for view in VIEWS:
+        picture = render_view(data.model, view, fmt=figure_format, label_limit=label_limit)
+        if figure_format == "png":
+            picture = f'<img src="{picture}" alt="{_e(VIEWS[view][0])}">'
+        figures.append(
+            f'<figure id="view-{view}">{picture}<figcaption>{_e(VIEWS[view][0])}: components '
+            "filled by their worst finding (grey: none, blue: info, orange: warning, red: "
+            "error); black dots: scanned points; red crosses: points the fit rejected. "
+            "Click a label to jump to its row.</figcaption></figure>"
+        )
+    return (
+        '<section id="pictures"><h2>Pictures</h2><div class="pictures">'
+        + "".join(figures)
+        + "</div></section>"
+    )
+
+
+def _takeoff(data: ReportData) -> str:
+    t = data.takeoff
+    out = ['<section id="takeoff"><h2>Quantity take-off</h2>']
+    out.append("<h3>Pipe by nominal size and schedule</h3>")
+    if t.pipes:
+        rows = []
+        for p in t.pipes:
+            rows.append(
+                "<tr>"
+                + _td(_e(p.size))
+                + _td(_e(p.schedule or "unknown"))
+                + _td(_mm(p.od), True)
+                + _td(_mm(p.wall, 2), True)
+                + _td(str(p.count), True)
+                + _td(_num(p.length), True)
+                + _td(_num(p.length_ft, 2), True)
+                + _td(_num(p.weight_per_m, 2), True)
+                + _td(_num(p.weight, 1), True)
+                + _td(_num(p.area, 2), True)
+                + "</tr>"
+            )
+        rows.append(
+            '<tr class="total"><td colspan="4">Total</td>'
+            + _td(str(sum(p.count for p in t.pipes)), True)
+            + _td(_num(t.pipe_length), True)
+            + _td(_num(t.pipe_length / FOOT, 2), True)
+            + "<td></td>"
+            + _td(_num(t.pipe_weight, 1) if any(p.weight for p in t.pipes) else "", True)
+            + _td(_num(sum(p.area for p in t.pipes), 2), True)
+            + "</tr>"
+        )
+        out.append(
+            _table(
+                [
+                    ("Size", False),
+                    ("Schedule", False),
+                    ("OD (mm)", True),
+                    ("Wall (mm)", True),
+                    ("Pieces", True),
+                    ("Length (m)", True),
+                    ("Length (ft)", True),
+                    ("kg/m", True),
+                    ("Weight (kg)", True),
+                    ("Outside area (m²)", True),
+                ],
+                rows,
+                "pipes",
+            )
+        )
+        if t.density is not None:
+            out.append(
+                f'<p class="muted">Weights: plain-end pipe, density {t.density:.0f} kg/m³ '
+                f"({_e(t.material or 'given')}), w = &rho; &pi; (OD &minus; t) t "
+                "(ASME B36.10M). Lengths are straight pipe between fittings.</p>"
+            )
+        else:
+            out.append(
+                '<p class="muted">No weights: the pipe material\'s density is not known.</p>'
+            )
+    else:
+        out.append('<p class="muted">No pipe.</p>')
+
+    out.append("<h3>Fittings by size and angle</h3>")
+    if t.fittings:
+        rows = [
+            "<tr>"
+            + _td(_e(f.type))
+            + _td(_e(f.size))
+            + _td(_e(f.schedule or ""))
+            + _td("" if f.angle_deg is None else f"{f.angle_deg}°", True)
+            + _td(_mm(f.bend_radius, 0), True)
+            + _td(str(f.count), True)
+            + _td(", ".join(_link(c) for c in f.components))
+            + "</tr>"
+            for f in t.fittings
+        ]
+        out.append(
+            _table(
+                [
+                    ("Type", False),
+                    ("Size", False),
+                    ("Schedule", False),
+                    ("Angle", True),
+                    ("Bend radius (mm)", True),
+                    ("Count", True),
+                    ("Components", False),
+                ],
+                rows,
+                "fittings",
+            )
+        )
+    else:
+        out.append('<p class="muted">No fittings.</p>')
+
+    out.append("<h3>Members, tanks, vessels and other solids</h3>")
+    if t.solids:
+        rows = [
+            "<tr>"
+            + _td(_link(s.id))
+            + _td(_e(s.shape))
+            + _td(_e(s.category))
+            + _td(_e(s.label or ""))
+            + _td(_e(" x ".join(f"{d:.3f}" for d in s.dimensions)))
+            + _td(_num(s.volume, 3), True)
+            + _td(_num(s.area, 2), True)
+            + "</tr>"
+            for s in t.solids
+        ]
+        for category in sorted(set(t.areas) | set(t.volumes)):
+            rows.append(
+                f'<tr class="total"><td colspan="5">Total {_e(category)}</td>'
+                + _td(_num(t.volumes.get(category), 3), True)
+                + _td(_num(t.areas.get(category), 2), True)
+                + "</tr>"
+            )
+        out.append(
+            _table(
+                [
+                    ("Id", False),
+                    ("Shape", False),
+                    ("Counted as", False),
+                    ("Label", False),
+                    ("Dimensions (m)", False),
+                    ("Volume (m³)", True),
+                    ("Surface (m²)", True),
+                ],
+                rows,
+                "solids",
+            )
+        )
+        out.append(
+            '<p class="muted">Dimensions: cuboid edges; cylinder diameter x length; sphere '
+            "diameter; hull extent. Volumes: cylinders &pi; r² h; surfaces are closed (ends "
+            "included); a plane's area is its outline's.</p>"
+        )
+    else:
+        out.append('<p class="muted">No other solids.</p>')
+    out.append("</section>")
+    return "\n".join(out)
+
+
+def _finding_links(data: ReportData) -> dict[str, list[tuple[int, str, str]]]:
+    links: dict[str, list[tuple[int, str, str]]] = {}
+    for index, finding in enumerate(data.findings, 1):
+        for oid in finding.objects:
+            links.setdefault(oid, []).append((index, finding.code, finding.severity))
+    return links
+
+
+def _codes(links: list[tuple[int, str, str]]) -> str:
+    return " ".join(
+        f'<a class="sev {sev}" href="#finding-{i}">{_e(code)}</a>' for i, code, sev in links
+    )
+
+
+def _components(data: ReportData, links) -> str:
+    fitted = {q.id for q in data.quality}
+    rows = []
+    for r in data.takeoff.rows:
+        oid = _e(r.id)
+        if r.id in fitted:
+            oid = f'{oid} <a class="muted" href="#fit-{anchor(r.id)[4:]}">fit</a>'
+        rows.append(
+            f'<tr id="{anchor(r.id)}">'
+            + _td(oid)
+            + _td(_e(r.type))
+            + _td(_e(r.spool or ""))
+            + _td(_e(r.label or ""))
+            + _td(_e(r.size or ""))
+            + _td(_e(r.schedule or ""))
+            + _td(_num(r.length), True)
+            + _td(_e(r.quantity_unit))
+            + _td(_num(r.quantity, 0 if r.quantity_unit == "ea" else 3), True)
+            + _td(_num(r.weight, 1), True)
+            + _td(_codes(links.get(r.id, [])))
+            + "</tr>"
+        )
+    table = _table(
+        [
+            ("Id", False),
+            ("Type", False),
+            ("Spool", False),
+            ("Label", False),
+            ("Size", False),
+            ("Schedule", False),
+            ("Length (m)", True),
+            ("Unit", False),
+            ("Quantity", True),
+            ("Weight (kg)", True),
+            ("Findings", False),
+        ],
+        rows,
+        "components",
+    )
+    return (
+        '<section id="components"><h2>Components</h2>'
+        '<p class="muted">One row per component, as in the CSV report.</p>'
+        f"{table}</section>"
+    )
+
+
+def _stderr_text(stderr) -> str:
+    parts = []
+    for key, value in stderr.items():
+        if value is None:
+            continue
+        values = value if isinstance(value, (tuple, list)) else (value,)
+        try:
+            numbers = [float(v) for v in values]
+        except (TypeError, ValueError):
+            continue
+        if not all(np.isfinite(numbers)):
+            continue
+        if key.endswith("_deg"):
+            text = "/".join(f"{v:.2f}" for v in numbers) + "°"
+            key = key[: -len("_deg")]
+        else:
+            text = "/".join(f"{v * 1000:.1f}" for v in numbers) + " mm"
+        parts.append(f"{key} {text}")
+    return ", ".join(parts)
+
+
+def _quality(data: ReportData, links) -> str:
+    if not data.quality:
+        return (
+            '<section id="quality"><h2>Fit quality</h2>'
+            '<p class="muted">No fitted objects.</p></section>'
+        )
+    rows = []
+    for q in data.quality:
+        offset = ""
+        if q.snap_offset is not None:
+            offset = f"{q.snap_offset * 1000:+.1f}"
+            if q.snap_sigmas is not None:
+                offset += f" ({q.snap_sigmas:.1f}&sigma;)"
+        size = _e(q.size or "")
+        if q.snap_status and q.snap_status not in ("snapped", "fitting"):
+            size += f' <span class="muted">{_e(q.snap_status)}</span>'
+        rows.append(
+            f'<tr id="fit-{anchor(q.id)[4:]}">'
+            + _td(_link(q.id))
+            + _td(_e(q.kind))
+            + _td(str(q.points), True)
+            + _td(str(q.inliers), True)
+            + _td(_mm(q.rms, 2), True)
+            + _td(_mm(q.max_residual, 2), True)
+            + _td(_e(_stderr_text(q.stderr)))
+            + _td(size)
+            + _td(_mm(q.od_fit), True)
+            + _td(_mm(q.od_catalog), True)
+            + _td(offset, True)
+            + _td(histogram_svg(q.residuals, q.inlier_mask))
+            + _td(_codes(links.get(q.id, [])))
+            + "</tr>"
+        )
+    table = _table(
+        [
+            ("Id", False),
+            ("Fitted as", False),
+            ("Points", True),
+            ("Inliers", True),
+            ("RMS (mm)", True),
+            ("Max (mm)", True),
+            ("Standard errors", False),
+            ("Snapped size", False),
+            ("Fitted OD (mm)", True),
+            ("Catalog OD (mm)", True),
+            ("Fit - catalog (mm)", True),
+            ("Residuals", False),
+            ("Findings", False),
+        ],
+        rows,
+        "quality",
+    )
+    return (
+        '<section id="quality"><h2>Fit quality</h2>'
+        '<p class="muted">RMS and max over the inliers; standard errors from the fit\'s '
+        "covariance; the histogram spans &plusmn; the largest residual (grey: inliers, red: "
+        "rejected points, blue line: zero).</p>"
+        f"{table}</section>"
+    )
+
+
+def _findings(data: ReportData) -> str:
+    if not data.findings:
+        return (
+            '<section id="findings"><h2>Findings</h2>'
+            '<p id="no-findings">No findings: every rule passed.</p></section>'
+        )
+    items = []
+    for index, f in enumerate(data.findings, 1):
+        values = []
+        for name, value in (
+            ("measured", f.measured),
+            ("allowed", f.allowed),
+            ("&plusmn;", f.stderr),
+        ):
+            if value is not None and np.isfinite(value):
+                values.append(f"{name} {value:.4g} {_e(f.unit)}")
+        suggestions = "".join(
+            f"<li>{_e(s.description)}{' (unambiguous: --fix applies it)' if s.unambiguous else ''}</li>"
+            for s in f.suggestions
+        )
+        items.append(
+            f'<li id="finding-{index}"><span class="sev {f.severity}">{_e(f.severity)}</span> '
+            f"<code>{_e(f.code)}</code> {_e(f.slug)}"
+            f"{' (unverifiable)' if f.unverifiable else ''} &mdash; "
+            f"{', '.join(_link(o) for o in f.objects)}<br>{_e(f.message)}"
+            + (f'<br><span class="muted">{"; ".join(values)}</span>' if values else "")
+            + (f"<ul>{suggestions}</ul>" if suggestions else "")
+            + "</li>"
+        )
+    return (
+        '<section id="findings"><h2>Findings</h2><ol class="findings">'
+        + "\n".join(items)
+        + "</ol></section>"
+    )
+
+
+def _viewer(gltf: str | None) -> str:
+    if not gltf:
+        return ""
+    return (
+        '<section id="viewer3d"><h2>Interactive 3-D view</h2><div class="viewer">'
+        f'<p>The model <a href="{_e(gltf)}">{_e(gltf)}</a> can be viewed here in 3-D; this '
+        "needs network access (the viewer is loaded from the web) and is optional.</p>"
+        f'<button id="load-3d" type="button" data-src="{_e(MODEL_VIEWER_URL)}" '
+        f'data-model="{_e(gltf)}">Load the 3-D viewer</button> '
+        '<span id="viewer-status" class="muted"></span><div id="viewer-slot"></div>'
+        "</div></section>"
+    )
+
+
+def html_text(
+    data: ReportData,
+    *,
+    figure_format: str = "svg",
+    label_limit: int = 200,
+    gltf: str | None = None,
+) -> str:
+    """The HTML report as text.
+
+    Parameters
+    ----------
+    data : ReportData
+    figure_format : {"svg", "png"}
+        Inline SVG (vector outlines and text, rasterised points) or embedded PNG.
+    label_limit : int
+        See :func:`asbuilt.report.figures.render_view`.
+    gltf : str, optional
+        URL (usually a path relative to the report) of a glTF/GLB file of the same model for
+        the optional 3-D view.
+    """
+    links = _finding_links(data)
+    body = "\n".join(
+        [
+            _header(data),
+            "<main>",
+            _pictures(data, figure_format, label_limit),
+            _takeoff(data),
+            _components(data, links),
+            _quality(data, links),
+            _findings(data),
+            _viewer(gltf),
+            '<p class="muted">Made by asbuilt. Lengths in metres unless marked; '
+            "1 ft = 0.3048 m.</p>",
+            "</main>",
+        ]
+    )
+    script = f"<script>{_SCRIPT}</script>" if gltf else ""
+    return (
+        "<!DOCTYPE html>\n"
+        '<html lang="en">\n<head>\n<meta charset="utf-8">\n'
+        '<meta name="viewport" content="width=device-width, initial-scale=1">\n'
+        f"<title>{_e(data.title)} &mdash; as-built QA report</title>\n"
+        f"<style>{_CSS}</style>\n{script}</head>\n<body>\n{body}\n</body>\n</html>\n"
+    )
+
+
+def write_html(
+    data: ReportData,
+    path,
+    *,
+    figure_format: str = "svg",
+    label_limit: int = 200,
+    gltf=None,
+) -> None:
+    """Write the HTML report to ``path`` atomically; see :func:`html_text` for the options.
+
+    ``gltf`` may be a path: it is linked relative to the report's directory.
+    """
+    if gltf is not None and not str(gltf).startswith(("http://", "https://", "data:")):
+        target = Path(gltf)
+        base = Path(path).resolve().parent
+        gltf = Path(os.path.relpath(target.resolve(), base)).as_posix()
+    text = html_text(data, figure_format=figure_format, label_limit=label_limit, gltf=gltf)
+    with atomic_write(path, "w", encoding="utf-8") as handle:
+        handle.write(text)
