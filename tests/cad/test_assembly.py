@@ -124,3 +124,21 @@ def test_plate_thickness_reaches_plates(zoo):
     plate = {p.id: p for p in thick.parts}["PL"]
     assert plate.solid.Volume() == pytest.approx(4.0 * 0.05)
     assert thick.mesh(plate).volume == pytest.approx(4.0 * 0.05)
+
+
+def test_the_sample_spool_fuses_into_one_valid_solid():
+    from pathlib import Path
+
+    from asbuilt.pipeline import build_model
+    from asbuilt.scan import load_scan
+
+    root = Path(__file__).resolve().parents[2]
+    model = build_model(load_scan(root / "samples" / "spool.json"), check=False)
+    cad = prepare(model)
+    (spool,) = model.spools
+    solid = cad.fused_spool(spool.id)
+    assert solid.isValid()
+    members = [p for p in cad.parts if p.group == spool.id]
+    assert len(members) == len(spool.components)
+    # Fittings meet pipes at end faces only, so the fused volume is the sum of the parts'.
+    assert solid.Volume() == pytest.approx(sum(p.solid.Volume() for p in members), rel=1e-4)
