@@ -10,7 +10,8 @@ URL query options
 Rig (either URL; the first one opened for a rig must give ``scene``):
     ``scene`` (scene .json or mesh path), ``calibration`` (true calibration file),
     ``range_sigma`` (m), ``angle_sigma`` (rad), ``dropout`` (0-1), ``divergence`` (rad),
-    ``min_cos``, ``max_range`` (m), ``seed``, ``speed`` (positions/s, 0 = instant).
+    ``min_cos``, ``max_range`` (m), ``seed``, ``speed`` (positions/s, 0 = instant),
+    ``station`` (scene station id; default the first).
 Port:
     ``protocol`` (sim-lrf only: ``dimetix`` (default) or ``ldm``), ``device_id`` (Dimetix id),
     ``silent=1`` (the device never answers: timeouts), ``unplug_after=N`` (after N writes every

@@ -314,6 +314,7 @@ RIG_OPTIONS = (
     "max_range",
     "seed",
     "speed",
+    "station",
 )
 
 
@@ -356,8 +357,15 @@ def get_rig(name: str, options: dict[str, str]) -> SimulatedRig:
         return rig
 
 
-def station_defaults(world) -> tuple[Calibration, dict]:
-    """Base position and noise defaults from a scene's first station (empty for other worlds).
+def station_defaults(world, station: str | None = None) -> tuple[Calibration, dict]:
+    """Base position and noise defaults from a scene's station (empty for other worlds).
+
+    Parameters
+    ----------
+    world : object
+        A scene (with ``stations``) or any other world.
+    station : str, optional
+        Station id (default: the scene's first station).
 
     Returns
     -------
@@ -368,8 +376,16 @@ def station_defaults(world) -> tuple[Calibration, dict]:
     """
     stations = getattr(world, "stations", None)
     if not stations:
+        if station is not None:
+            raise DeviceError(f"station {station!r}: this world has no stations (not a scene)")
         return Calibration(), {}
     st = stations[0]
+    if station is not None:
+        matches = [s for s in stations if s.id == station]
+        if not matches:
+            known = ", ".join(s.id for s in stations)
+            raise DeviceError(f"the scene has no station {station!r}; use one of {known}")
+        st = matches[0]
     noise = {
         "range_sigma": float(st.range_sigma),
         "angle_sigma": float(st.angular_sigma),
@@ -384,7 +400,7 @@ def _rig_from_options(opts: dict[str, str]) -> SimulatedRig:
     from .calibration import load_calibration
 
     world = load_world(opts["scene"])
-    calibration, noise_kwargs = station_defaults(world)
+    calibration, noise_kwargs = station_defaults(world, opts.get("station"))
     try:
         for key in ("range_sigma", "angle_sigma", "dropout", "divergence", "min_cos", "max_range"):
             if key in opts:

@@ -34,6 +34,7 @@ def register(subparsers) -> argparse.ArgumentParser:
         help="scene description (.json) or exported mesh (.stl, .glb, .obj, .ply)",
     )
     parser.add_argument("--lrf-protocol", choices=("dimetix", "ldm"), default="dimetix")
+    parser.add_argument("--station", help="scene station the rig stands at (default: the first)")
     parser.add_argument("--device-id", type=int, default=0, help="Dimetix device id (0)")
     parser.add_argument(
         "--calibration",
@@ -69,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.errors import DeviceError
 
     world = load_world(args.scene)
-    calibration, noise = station_defaults(world)
+    calibration, noise = station_defaults(world, args.station)
     if args.calibration:
         calibration = load_calibration(args.calibration)
     if args.range_sigma is not None:

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import json
 import re
 
 import pytest
 import serial
 from asbuilt.drivers.simport import parse_sim_url
 from asbuilt.drivers.simrig import register_rig
-from driver_helpers import wall_rig
+from driver_helpers import SCENE, wall_rig
 
 
 @pytest.mark.parametrize(
@@ -54,3 +55,16 @@ def test_registered_rig_is_reused():
     port.read(100)
     assert rig.counts()[0] == 300
     port.close()
+
+
+def test_station_option_places_the_rig(tmp_path):
+    scene = dict(SCENE)
+    scene["stations"] = [*SCENE["stations"], {"id": "S2", "position": [0.0, 1.0, 1.5]}]
+    path = tmp_path / "two.json"
+    path.write_text(json.dumps(scene))
+    serial.serial_for_url(f"sim-ptu://two?scene={path}&station=S2").close()
+    from asbuilt.drivers.simrig import get_rig
+
+    assert get_rig("two", {}).calibration.base_position == (0.0, 1.0, 1.5)
+    with pytest.raises(serial.SerialException, match="no station 'S9'; use one of S1, S2"):
+        serial.serial_for_url(f"sim-ptu://three?scene={path}&station=S9")
