@@ -197,3 +197,30 @@ def test_angles_round_trip(pan, tilt):
     p, t = angles_from_direction(direction_from_angles(pan, tilt))
     assert float(t) == pytest.approx(tilt, abs=1e-12)
     assert np.cos(float(p) - pan) == pytest.approx(1.0, abs=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.floats(-180, 180),
+    st.floats(-80, 80),
+    st.floats(-180, 180),
+    st.tuples(st.floats(0.05, 3), st.floats(0.05, 3), st.floats(0.05, 3)),
+)
+def test_box_hits_lie_on_the_cuboid_surface(yaw, pitch, roll, size):
+    from asbuilt.primitives import Cuboid
+
+    axes = rotation_zyx(yaw, pitch, roll)
+    centre = np.array([6.0, -1.0, 0.5])
+    box = BoxShape(center=centre, axes=axes, size=np.array(size))
+    truth = Cuboid(center=centre, axes=axes, size=np.array(size))
+    rng = np.random.default_rng(0)
+    # aim at points inside the box: every ray hits it
+    targets = centre + (rng.uniform(-0.5, 0.5, size=(80, 3)) * np.array(size)) @ axes
+    hits = raycast([box], np.zeros(3), targets)
+    assert hits.hit.all()
+    pts = hits.points(np.zeros(3), targets)
+    assert np.abs(truth.distance(pts)).max() < 1e-9
+    # the normal at the hit is the outward normal of a face, facing the ray
+    normals = hits.normal[hits.hit]
+    assert np.allclose(np.abs(normals @ axes.T).max(axis=1), 1.0)
+    assert np.all(np.einsum("ij,ij->i", normals, targets[hits.hit]) < 0)
