@@ -7,6 +7,7 @@ one from a :class:`SizeTable`, a catalog object of :mod:`asbuilt.catalog`, or a 
 
 from __future__ import annotations
 
+import os
 import re
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -118,7 +119,7 @@ def size_table(catalog) -> SizeTable | None:
     """A :class:`SizeTable` from a SizeTable, a catalog object or a catalog name (None if none)."""
     if catalog is None or isinstance(catalog, SizeTable):
         return catalog
-    if isinstance(catalog, str):
+    if isinstance(catalog, (str, os.PathLike)):
         from asbuilt.catalog import load_catalog
 
         catalog = load_catalog(catalog)
