@@ -75,8 +75,8 @@ def check_model(
     ----------
     model : Model
         Lengths in metres; pipes ideally merged and snapped (``component.snap``).
-    config : RulesConfig, optional
-        From :func:`load_rules`; None uses the shipped defaults.
+    config : RulesConfig or path, optional
+        From :func:`load_rules` (a path is loaded with it); None uses the shipped defaults.
     design : asbuilt.design.Design or path, optional
         The design to compare with (``design-deviation``, ``missing-component``,
         ``extra-component`` run only with one).
@@ -88,7 +88,8 @@ def check_model(
     tuple of Finding
         Sorted by severity, then position.
     """
-    config = config or load_rules()
+    if config is None or isinstance(config, (str, Path)):
+        config = load_rules(config)
     if design is not None and isinstance(design, (str, Path)):
         from asbuilt.design import load_design
 

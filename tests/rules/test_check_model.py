@@ -78,3 +78,11 @@ def test_size_table_reads_every_hint_form(size):
     nominal, dn, od = size
     for hint in (nominal, f'{nominal}"', f"NPS {nominal}", f"{nominal} in", f"DN{dn}"):
         assert B36.od(hint) == od
+
+
+def test_config_may_be_a_path(tmp_path):
+    path = tmp_path / "rules.toml"
+    path.write_text('select = ["out-of-plumb"]\n', encoding="utf-8")
+    built = model(column("C1", [1, 0, 0], 0.6, axes_deg=0.01),
+                  pipe("P1", [0, 5, 1], [2, 5, 1], 0.1143, n=10))
+    assert {f.slug for f in check_model(built, str(path))} == {"out-of-plumb"}
