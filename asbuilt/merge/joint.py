@@ -95,7 +95,10 @@ def joint_estimate(
     Returns
     -------
     od, stderr : float
-        The weighted mean and its standard error ``1 / sqrt(sum of weights)``, metres.
+        The weighted mean and its standard error ``1 / sqrt(sum of weights)``, metres, scaled
+        up by the Birge ratio ``sqrt(chi2 / (n - 1))`` when the estimates scatter more than their
+        errors say (``chi2 = sum w_i (od_i - mean)^2``), so that inconsistent fits do not
+        produce an over-confident joint estimate.
     """
     ods = np.asarray(ods, dtype=float)
     se = np.asarray(stderrs, dtype=float)
@@ -105,4 +108,8 @@ def joint_estimate(
     se = np.maximum(se, floor)
     weights = 1.0 / se**2
     mean = float(np.sum(weights * ods) / np.sum(weights))
-    return mean, float(1.0 / np.sqrt(np.sum(weights)))
+    stderr = float(1.0 / np.sqrt(np.sum(weights)))
+    if len(ods) > 1:
+        chi2 = float(np.sum(weights * (ods - mean) ** 2))
+        stderr *= max(1.0, float(np.sqrt(chi2 / (len(ods) - 1))))
+    return mean, stderr

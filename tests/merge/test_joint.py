@@ -16,14 +16,22 @@ def test_joint_estimate_is_the_inverse_variance_mean():
     od, se = joint_estimate([0.100, 0.102, 0.104], [0.003, 0.003, 0.003])
     assert od == pytest.approx(0.102)
     assert se == pytest.approx(0.003 / np.sqrt(3))
-    od, se = joint_estimate([0.100, 0.110], [0.001, 0.002])
-    assert od == pytest.approx((0.100 / 1e-6 + 0.110 / 4e-6) / (1 / 1e-6 + 1 / 4e-6))
+    od, se = joint_estimate([0.100, 0.101], [0.001, 0.002])  # consistent: chi2 < 1
+    assert od == pytest.approx((0.100 / 1e-6 + 0.101 / 4e-6) / (1 / 1e-6 + 1 / 4e-6))
     assert se == pytest.approx(1 / np.sqrt(1 / 1e-6 + 1 / 4e-6))
 
 
 def test_joint_estimate_handles_unknown_errors():
-    od, se = joint_estimate([0.1, 0.2], [float("nan"), float("nan")], floor=1e-3)
-    assert od == pytest.approx(0.15) and se == pytest.approx(1e-3 / np.sqrt(2))
+    od, se = joint_estimate([0.1, 0.1004], [float("nan"), float("nan")], floor=1e-3)
+    assert od == pytest.approx(0.1002) and se == pytest.approx(1e-3 / np.sqrt(2))
+
+
+def test_scattered_estimates_widen_the_joint_error_by_the_birge_ratio():
+    ods, ses = [0.100, 0.110, 0.105], [0.001, 0.001, 0.001]
+    od, se = joint_estimate(ods, ses)
+    chi2 = sum((o - 0.105) ** 2 for o in ods) / 0.001**2
+    assert od == pytest.approx(0.105)
+    assert se == pytest.approx(0.001 / np.sqrt(3) * np.sqrt(chi2 / 2))
 
 
 @pytest.mark.parametrize(
@@ -66,7 +74,9 @@ def test_three_pipes_decide_together_what_none_decides_alone():
         assert comp.snap["run"] == ["P1", "P2", "P3"]
         assert comp.snap["reason"].startswith("joint estimate of the run P1, P2, P3: ")
         assert comp.snap["od_joint"] == pytest.approx(np.mean(fits))
-        assert comp.snap["od_joint_stderr"] == pytest.approx(se / np.sqrt(3))
+        mean = np.mean(fits)
+        birge = np.sqrt(sum((f - mean) ** 2 for f in fits) / se**2 / 2)
+        assert comp.snap["od_joint_stderr"] == pytest.approx(se / np.sqrt(3) * max(1, birge))
         assert min(abs(comp.snap["od_fit"] - f) for f in fits) < 1e-12
 
 
