@@ -208,6 +208,22 @@ def _points(model: Model, axes) -> tuple[np.ndarray, np.ndarray]:
     return stack(keep), stack(drop)
 
 
+_ID_REF = re.compile(r'(id="|href="#|url\(#)([^"\)]+)')
+
+
+def _prefix_ids(svg: str, prefix: str) -> str:
+    """Prefix every id the SVG defines (and the references to them) with ``prefix-``, so
+    that several inline SVGs in one page never share an id; links to ids the SVG does not
+    define (the labels' ``#obj-...``) are left alone."""
+    defined = set(re.findall(r'id="([^"]+)"', svg))
+
+    def rename(match: re.Match) -> str:
+        head, name = match.group(1), match.group(2)
+        return f"{head}{prefix}-{name}" if name in defined else match.group(0)
+
+    return _ID_REF.sub(rename, svg)
+
+
 def render_view(
     model: Model,
     view: str,
@@ -340,7 +356,7 @@ def render_view(
         if fmt == "svg":
             fig.savefig(buffer, format="svg", metadata={"Date": None})
             text = buffer.getvalue().decode("utf-8")
-            return text[text.index("<svg") :]
+            return _prefix_ids(text[text.index("<svg") :], view)
         fig.savefig(buffer, format="png", metadata={"Software": None})
         return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")
 

@@ -1,0 +1,138 @@
+"""The HTML report: valid structure, every section, links that resolve, escaping."""
+
+import datetime as dt
+import re
+
+import pytest
+from conftest import check_html, known_model, many_findings
+
+from asbuilt.report import report_data
+from asbuilt.report.html import MODEL_VIEWER_URL, html_text, write_html
+
+STAMP = dt.datetime(2026, 11, 21, 7, 0, tzinfo=dt.timezone.utc)
+
+
+@pytest.fixture(scope="module")
+def plant_html(plant_model):
+    return html_text(report_data(plant_model, generated=STAMP))
+
+
+def test_plant_report_is_well_formed_and_links_resolve(plant_html):
+    checker = check_html(plant_html)
+    assert checker.tags["svg"] >= 2 + 10  # two views and one histogram per fitted object
+    for section in ("pictures", "takeoff", "components", "quality", "findings"):
+        assert f'id="{section}"' in plant_html
+
+
+def test_header_names_scan_catalog_units_counts_and_summary(plant_model, plant_html):
+    assert "plant corner: structure, pipe spool" in plant_html
+    assert "samples/plant.json" in plant_html
+    assert "2026-11-21T07:00:00Z" in plant_html
+    assert "asme-b36.10m" in plant_html and "ASME B36.10M-2004" in plant_html
+    assert f"{len(plant_model.components)} components" in plant_html
+    warnings = sum(f.severity == "warning" for f in plant_model.findings)
+    assert f'id="count-warning">{warnings} warning' in plant_html
+
+
+def test_self_contained_no_external_resources(plant_html):
+    # nothing is fetched: no src/href to another document, no external CSS or scripts
+    assert not re.search(r'(src|href)="(https?:)?//', plant_html)
+    assert "<link" not in plant_html
+    assert "<script" not in plant_html  # the script only comes with the optional 3-D view
+
+
+def test_pictures_are_inline_svg_with_points_and_labels(plant_model, plant_html):
+    for view in ("plan", "elevation"):
+        block = plant_html.split(f'id="view-{view}"', 1)[1].split("</figure>", 1)[0]
+        assert block.lstrip(">").startswith("<svg")
+        assert "<image" in block  # the rasterised scanned points
+        for comp in plant_model.components:
+            assert f'href="#obj-{comp.id}"' in block  # every label links to its row
+
+
+def test_takeoff_tables(plant_html):
+    assert '<table class="pipes">' in plant_html
+    assert "NPS 8" in plant_html and "ASME B36.10M" in plant_html
+    fittings = plant_html.split('<table class="fittings">', 1)[1].split("</table>", 1)[0]
+    assert "elbow" in fittings and "90°" in fittings
+    solids = plant_html.split('<table class="solids">', 1)[1].split("</table>", 1)[0]
+    for oid in ("C1", "TK1", "CH1", "W1", "H1"):
+        assert f'href="#obj-{oid}"' in solids
+    assert "Total tank/vessel" in solids
+
+
+def test_quality_rows_have_histograms_and_snap_offsets(plant_model, plant_html):
+    quality = plant_html.split('<table class="quality">', 1)[1].split("</table>", 1)[0]
+    fitted = [c for c in plant_model.components if c.fit is not None]
+    assert quality.count('<svg class="hist"') == len(fitted)
+    for comp in fitted:
+        assert f'id="fit-{comp.id}"' in quality
+    p1 = quality.split('id="fit-P1"', 1)[1].split("</tr>", 1)[0]
+    snap = plant_model.component("P1").snap
+    assert f"{(snap['od_fit'] - snap['od_catalog']) * 1000:+.1f}" in p1
+    assert "σ" in p1 or "&sigma;" in p1
+
+
+def test_known_model_numbers_in_the_page():
+    text = html_text(report_data(known_model(), generated=STAMP))
+    check_html(text)
+    pipes = text.split('<table class="pipes">', 1)[1].split("</table>", 1)[0]
+    for value in ("114.3", "6.02", "2.000", "6.56", "16.08", "32.2"):
+        assert f">{value}</td>" in pipes, value
+    solids = text.split('<table class="solids">', 1)[1].split("</table>", 1)[0]
+    assert ">0.480</td>" in solids and ">5.12</td>" in solids
+    assert "No fitted objects." in text
+
+
+def test_no_findings():
+    text = html_text(report_data(known_model(), generated=STAMP))
+    assert 'id="no-findings"' in text
+    assert 'id="count-error">0 errors' in text
+    assert "no errors" in text
+
+
+def test_many_findings_are_listed_linked_and_escaped():
+    model = known_model()
+    model = model.replace(findings=many_findings(model, per_object=3))
+    text = html_text(report_data(model, generated=STAMP))
+    checker = check_html(text)  # every finding link and object link resolves
+    items = re.findall(r'<li id="finding-(\d+)">', text)
+    assert len(items) == 3 * len(model.components)
+    assert "&lt;breaks&gt; rule 0 &amp; needs a look" in text and "<breaks>" not in text
+    first = text.split('<li id="finding-1">', 1)[1]
+    assert first.startswith('<span class="sev error">')  # worst first
+    assert 'id="count-error">5 errors' in text
+    assert "(unverifiable)" in text
+    # each component row links to its findings
+    row = text.split('<tr id="obj-P1">', 1)[1].split("</tr>", 1)[0]
+    assert row.count('href="#finding-') == 3
+    assert "finding-15" in checker.ids
+
+
+def test_png_figures(plant_model):
+    text = html_text(report_data(plant_model, generated=STAMP), figure_format="png")
+    check_html(text)
+    assert text.count('<img src="data:image/png;base64,') == 2
+
+
+def test_optional_3d_view_loads_only_on_request(plant_model, tmp_path):
+    glb = tmp_path / "models" / "plant.glb"
+    target = tmp_path / "qa.html"
+    write_html(report_data(plant_model, generated=STAMP), target, gltf=glb)
+    text = target.read_text(encoding="utf-8")
+    check_html(text)
+    assert 'data-model="models/plant.glb"' in text  # relative to the report
+    assert f'data-src="{MODEL_VIEWER_URL}"' in text
+    assert "<script src=" not in text  # nothing loads until the button is pressed
+
+
+def test_ids_with_unusual_characters_are_safe():
+    model = known_model()
+    comps = list(model.components)
+    from asbuilt.model import Component
+
+    odd = comps[3]
+    comps[3] = Component('C "1"/<a>', odd.type, odd.geometry, label="odd <id>")
+    text = html_text(report_data(model.replace(components=tuple(comps)), generated=STAMP))
+    check_html(text)
+    assert 'id="obj-C__1___a_"' in text

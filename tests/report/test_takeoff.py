@@ -1,0 +1,205 @@
+"""Take-off numbers against values computed by hand (and one catalog table value)."""
+
+import math
+
+import numpy as np
+import pytest
+from conftest import LR4, OD4, WALL4, known_model
+
+from asbuilt.model import Component, Model, Reducer, Straight, Tee
+from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+from asbuilt.report.takeoff import DENSITIES, pipe_weight_per_metre, take_off
+
+
+def test_nps4_std_weight_matches_the_b36_10m_table():
+    # ASME B36.10M lists NPS 4 STD (114.3 x 6.02 mm) plain end at 16.07 kg/m.
+    assert pipe_weight_per_metre(0.1143, 0.00602) == pytest.approx(16.07, abs=0.01)
+    # The standard's own constant: 0.0246615 (D - t) t kg/m with D, t in mm.
+    assert pipe_weight_per_metre(0.1143, 0.00602) == pytest.approx(
+        0.0246615 * (114.3 - 6.02) * 6.02, rel=1e-5
+    )
+
+
+@pytest.mark.parametrize(
+    ("od_mm", "wall_mm", "table_kg_m"),
+    [  # ASME B36.10M plain-end masses (STD and XS rows)
+        (60.3, 3.91, 5.44),
+        (88.9, 5.49, 11.29),
+        (168.3, 7.11, 28.26),
+        (219.1, 8.18, 42.55),
+        (114.3, 8.56, 22.32),
+    ],
+)
+def test_weights_match_table_rows(od_mm, wall_mm, table_kg_m):
+    assert pipe_weight_per_metre(od_mm / 1000, wall_mm / 1000) == pytest.approx(
+        table_kg_m, abs=0.011
+    )
+
+
+def test_weight_is_vectorised():
+    values = pipe_weight_per_metre(np.array([0.1143, 0.1683]), np.array([0.00602, 0.00711]))
+    assert values.shape == (2,)
+
+
+@pytest.fixture(scope="module")
+def known():
+    return take_off(known_model())
+
+
+def test_pipe_line_of_the_known_spool(known):
+    (line,) = known.pipes
+    assert (line.nominal, line.schedule, line.size, line.count) == ("4", "STD", "NPS 4", 2)
+    assert line.length == pytest.approx(2.0)
+    assert line.length_ft == pytest.approx(2.0 / 0.3048)  # 6.562 ft
+    assert line.od == pytest.approx(OD4)
+    assert line.wall == pytest.approx(WALL4)
+    assert line.weight_per_m == pytest.approx(7850 * math.pi * (OD4 - WALL4) * WALL4)
+    assert line.weight == pytest.approx(2 * 16.0755, abs=0.01)
+    assert line.area == pytest.approx(math.pi * OD4 * 2.0)
+    assert known.pipe_length == pytest.approx(2.0)
+    assert known.pipe_weight == pytest.approx(line.weight)
+    assert known.material == "carbon steel"
+    assert known.density == DENSITIES["carbon steel"] == 7850
+
+
+def test_elbow_counted_by_size_and_angle(known):
+    (elbow,) = known.fittings
+    assert (elbow.type, elbow.size, elbow.schedule, elbow.angle_deg, elbow.count) == (
+        "elbow",
+        "NPS 4",
+        "STD",
+        90,
+        1,
+    )
+    assert elbow.bend_radius == pytest.approx(LR4)
+
+
+def test_column_and_tank_volumes_and_areas(known):
+    solids = {s.id: s for s in known.solids}
+    column = solids["C1"]
+    assert column.volume == pytest.approx(0.4 * 0.4 * 3.0)  # 0.48 m3
+    assert column.area == pytest.approx(2 * (0.16 + 1.2 + 1.2))  # 5.12 m2
+    assert column.category == "member"
+    tank = solids["TK1"]
+    assert tank.volume == pytest.approx(math.pi * 1.0**2 * 3.0)
+    assert tank.area == pytest.approx(2 * math.pi * 1.0 * 3.0 + 2 * math.pi * 1.0**2)
+    assert tank.category == "tank/vessel"
+    assert known.volumes == pytest.approx({"member": 0.48, "tank/vessel": 3 * math.pi})
+
+
+def test_rows_one_per_component_with_units(known):
+    rows = {r.id: r for r in known.rows}
+    assert list(rows) == ["P1", "P1-P2", "P2", "C1", "TK1"]
+    assert (rows["P1"].quantity_unit, rows["P1"].quantity) == ("m", pytest.approx(1.0))
+    assert rows["P1"].weight == pytest.approx(16.0755, abs=0.001)
+    assert (rows["P1-P2"].quantity_unit, rows["P1-P2"].quantity) == ("ea", 1.0)
+    assert rows["P1-P2"].length is None
+    assert (rows["C1"].quantity_unit, rows["C1"].quantity) == ("m3", pytest.approx(0.48))
+    assert rows["C1"].length == pytest.approx(3.0)
+    assert rows["TK1"].length == pytest.approx(3.0)
+    assert known.counts == {"pipe": 2, "elbow": 1, "cuboid": 1, "cylinder": 1}
+
+
+def test_no_weight_without_density_or_wall():
+    plain = known_model()
+    copper = plain.replace(catalog="astm-b88")  # copper: no density listed
+    assert take_off(copper).pipes[0].weight is None
+    assert take_off(copper, density=8940).pipes[0].weight == pytest.approx(
+        8940 * math.pi * (OD4 - WALL4) * WALL4 * 2
+    )
+    solid = Model(components=(Component("P9", "pipe", Straight([0, 0, 0], [3, 0, 0], 0.05)),))
+    (line,) = take_off(solid).pipes
+    assert line.wall is None and line.weight is None
+    assert line.size == "OD 100.0 mm"  # not snapped: labelled by its fitted OD
+
+
+def test_findings_on_rows_worst_first():
+    from conftest import many_findings
+
+    model = known_model()
+    model = model.replace(findings=many_findings(model))
+    rows = {r.id: r for r in take_off(model).rows}
+    assert rows["P1"].findings == ("AB900", "AB901", "AB902")  # error, warning, info
+    assert rows["P1"].severity == "error"
+    assert rows["P1-P2"].severity == "error"  # (1 + 2) % 3 == 0 -> AB902 is its error
+    assert rows["P1-P2"].findings[0] == "AB902"
+
+
+def test_reducer_and_reducing_tee_sizes():
+    comps = (
+        Component(
+            "R1",
+            "reducer",
+            Reducer([0, 0, 0], [0.14, 0, 0], 0.08415, 0.05715),
+            nominal="6",
+            schedule="STD",
+            snap={"sizes": ["6", "4"]},
+        ),
+        Component(
+            "R2",
+            "reducer",
+            Reducer([0, 1, 0], [0.14, 1, 0], 0.08415, 0.05715),
+            nominal="6",
+            schedule="STD",
+        ),  # sizes from the catalog by OD
+        Component(
+            "T1",
+            "tee",
+            Tee([0, 2, 0], [-0.14, 2, 0], [0.14, 2, 0], [0, 2.14, 0], 0.08415, 0.05715),
+            nominal="6",
+        ),
+        Component(
+            "T2",
+            "tee",
+            Tee([0, 3, 0], [-0.14, 3, 0], [0.14, 3, 0], [0, 3.14, 0], 0.08415, 0.08415),
+            nominal="6",
+        ),
+    )
+    t = take_off(Model(components=comps, catalog="asme-b36.10m"))
+    sizes = sorted((f.type, f.size, f.count) for f in t.fittings)
+    assert sizes == [
+        ("reducer", "NPS 6 x 4", 2),
+        ("tee", "NPS 6", 1),
+        ("tee", "NPS 6 x 4", 1),
+    ]
+
+
+def test_sphere_plane_and_hull_quantities():
+    cube = np.array([[x, y, z] for x in (0, 2) for y in (0, 2) for z in (0, 2)], float)
+    from scipy.spatial import ConvexHull
+
+    hull = ConvexHull(cube)
+    faces = hull.simplices.copy()
+    centre = cube.mean(axis=0)
+    for f in faces:  # wind outward
+        a, b, c = cube[f]
+        if np.dot(np.cross(b - a, c - a), a - centre) < 0:
+            f[[1, 2]] = f[[2, 1]]
+    square = np.array([[0, 0, 0], [3, 0, 0], [3, 0, 2], [0, 0, 2]], float)
+    comps = (
+        Component("S1", "sphere", Sphere([0, 0, 5], 0.5)),
+        Component("W1", "plane", Plane([1.5, 0, 1], [0, -1, 0], square)),
+        Component("H1", "hull", Hull(cube, faces)),
+    )
+    t = take_off(Model(components=comps))
+    solids = {s.id: s for s in t.solids}
+    assert solids["S1"].volume == pytest.approx(4 / 3 * math.pi * 0.125)
+    assert solids["S1"].area == pytest.approx(4 * math.pi * 0.25)
+    assert solids["W1"].volume is None and solids["W1"].area == pytest.approx(6.0)
+    assert solids["H1"].volume == pytest.approx(8.0)
+    assert solids["H1"].area == pytest.approx(24.0)
+    rows = {r.id: r for r in t.rows}
+    assert (rows["W1"].quantity_unit, rows["W1"].quantity) == ("m2", pytest.approx(6.0))
+    assert (rows["H1"].quantity_unit, rows["H1"].quantity) == ("m3", pytest.approx(8.0))
+
+
+def test_cylinder_quantity_for_unmerged_pipes():
+    comp = Component("P1", "cylinder", Cylinder([0, 0, 0], [1, 0, 0], 0.1, 2.0))
+    (solid,) = take_off(Model(components=(comp,))).solids
+    assert solid.volume == pytest.approx(math.pi * 0.01 * 2.0)
+    assert solid.dimensions == pytest.approx((0.2, 2.0))
+
+
+def test_empty_model():
+    t = take_off(Model(components=()))
+    assert (t.pipes, t.fittings, t.solids, t.rows, t.pipe_length) == ((), (), (), (), 0.0)
