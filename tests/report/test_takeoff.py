@@ -7,7 +7,7 @@ import pytest
 from conftest import LR4, OD4, WALL4, known_model
 
 from asbuilt.model import Component, Model, Reducer, Straight, Tee
-from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+from asbuilt.primitives import Cylinder, Hull, Plane, Sphere
 from asbuilt.report.takeoff import DENSITIES, pipe_weight_per_metre, take_off
 
 
