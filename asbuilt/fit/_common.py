@@ -365,8 +365,9 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     n = len(points)
     k = int(min(max(k, 3), n))
     if n <= 600:
-        diff = points[:, None, :] - points[None, :, :]
-        dist = np.einsum("ijk,ijk->ij", diff, diff)
+        squares = np.einsum("ij,ij->i", points, points)
+        dist = squares[:, None] + squares[None, :] - 2.0 * (points @ points.T)
+        np.fill_diagonal(dist, -1.0)  # each point is its own nearest neighbour
         index = np.argpartition(dist, k - 1, axis=1)[:, :k]
     else:
         from scipy.spatial import cKDTree
@@ -518,10 +519,11 @@ def robust_geometric_fit(
     kind: str,
     sigma: float | None = None,
     tolerances: Tolerances = DEFAULT_TOLERANCES,
-    start_iterations: int = 4,
-    always_refine: int = 3,
-    max_starts: int = 4,
+    start_iterations: int = 3,
+    always_refine: int = 2,
+    max_starts: int = 3,
     max_iterations: int = 50,
+    start_costs: Sequence[float] | None = None,
 ) -> RobustFit:
     """Robust start selection, Tukey IRLS, then least squares on the inliers.
 
@@ -550,6 +552,9 @@ def robust_geometric_fit(
     always_refine : int
     max_starts : int
     max_iterations : int
+    start_costs : sequence of float, optional
+        Each start's least-trimmed-squares cost over ``keep_count(n)`` points, when the caller
+        has it already (saves evaluating every start).
 
     Returns
     -------
@@ -570,8 +575,10 @@ def robust_geometric_fit(
 
     ranked = []
     for order, start in enumerate(starts):
-        residuals = model.residuals(start, points)
-        cost = trimmed_cost(residuals, keep)
+        if start_costs is None:
+            cost = trimmed_cost(model.residuals(start, points), keep)
+        else:
+            cost = float(start_costs[order])
         if np.isfinite(cost):
             ranked.append((0.0 if order == 0 else cost, order, start))
     if not ranked:
@@ -597,7 +604,7 @@ def robust_geometric_fit(
     state, residuals, jacobian = refined[int(np.argmin(scores))]
     # Iterate the robust (Tukey) estimate to convergence.
     state, residuals, jacobian = _iterate(
-        model, state, points, tukey, max_iterations, 1e-8, (residuals, jacobian)
+        model, state, points, tukey, max_iterations, 1e-6, (residuals, jacobian)
     )
     # Inliers, then plain least squares on them until the inlier set is stable.
     mask = None
@@ -628,7 +635,7 @@ def robust_geometric_fit(
             points,
             lambda _r, w=weights: w,
             max_iterations,
-            1e-10,
+            1e-9,
             (residuals, jacobian),
         )
     return RobustFit(state, residuals, mask, jacobian[mask], scale)

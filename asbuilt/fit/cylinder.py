@@ -4,11 +4,13 @@ Method
 ------
 1. Axis starts: the direction most perpendicular to the local surface normals (smallest
    eigenvector of ``sum n n^T`` over k-nearest-neighbour PCA normals, Hoppe et al. 1992, with a
-   Tukey reweighting against normals spoiled by outliers), its other eigenvectors, the points'
-   principal directions, and cross products of the most different normals (short stubs, whose
-   principal direction is across the axis).
-2. For each start, an algebraic circle (Kasa 1976) in the plane perpendicular to the axis gives
-   the centre and radius.
+   Tukey reweighting against normals spoiled by outliers) and its other eigenvectors, the
+   points' principal directions, the cross products of the normals of the three best two-point samples
+   (Schnabel, Wahl & Klein 2007; short stubs, whose principal direction is across the axis),
+   and a robust line through the points (long thin pipes with background shots).
+2. For each start, a robust circle in the plane perpendicular to the axis gives the centre and
+   radius: the Kasa (1976) algebraic circle or the best circumcircle of random triples, polished
+   by least-trimmed-squares concentration steps.
 3. Geometric least squares over five parameters (two axis tilts, two across-axis centre
    offsets, the radius) minimising the orthogonal distances ``|P_perp (p - c)| - r``
    (Lukacs, Marshall & Martin 1998, "Faithful least-squares fitting of spheres, cylinders,
@@ -103,7 +105,7 @@ def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
     """Axis as the direction most perpendicular to the normals, Tukey-reweighted; and the eigvecs."""
     weights = 1.0 / (1.0 + flatness / max(float(np.median(flatness)), 1e-12))
     vectors = None
-    for _ in range(4):
+    for _ in range(2):
         scatter = (normals * weights[:, None]).T @ normals
         _, vectors = np.linalg.eigh(scatter)
         cosines = normals @ vectors[:, 0]
@@ -114,15 +116,19 @@ def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
     return vectors.T
 
 
-def _axis_starts(points: np.ndarray, normals, flatness) -> list[np.ndarray]:
-    candidates = list(_normal_axis(normals, flatness))
-    _, _, directions = principal_axes(points)
-    candidates.extend(directions)
+def _unique(candidates, limit: float = 0.995) -> list[np.ndarray]:
+    """Drop directions within ``arccos(limit)`` (about 6 degrees) of an earlier one."""
     unique: list[np.ndarray] = []
     for axis in candidates:
-        if all(abs(float(axis @ other)) < 0.995 for other in unique):
+        if all(abs(float(axis @ other)) < limit for other in unique):
             unique.append(axis)
     return unique
+
+
+def _axis_starts(points: np.ndarray, normals, flatness) -> list[np.ndarray]:
+    """The normals' eigenvectors (most perpendicular first) and the points' principal axes."""
+    _, _, directions = principal_axes(points)
+    return _unique(list(_normal_axis(normals, flatness)) + list(directions))
 
 
 def _kasa_batch(xy: np.ndarray, weights: np.ndarray):
@@ -140,13 +146,13 @@ def _kasa_batch(xy: np.ndarray, weights: np.ndarray):
     """
     design = np.concatenate([xy, np.ones(xy.shape[:2] + (1,))], axis=2)
     rhs = -(xy * xy).sum(axis=2)
-    weighted = design * weights[:, :, None]
-    normal = np.einsum("ani,anj->aij", weighted, design)
-    right = np.einsum("ani,an->ai", weighted, rhs)
+    weighted = (design * weights[:, :, None]).transpose(0, 2, 1)
+    normal = weighted @ design
+    right = weighted @ rhs[:, :, None]
     try:
-        solution = np.linalg.solve(normal, right[:, :, None])[:, :, 0]
+        solution = np.linalg.solve(normal, right)[:, :, 0]
     except np.linalg.LinAlgError:
-        solution = (np.linalg.pinv(normal) @ right[:, :, None])[:, :, 0]
+        solution = (np.linalg.pinv(normal) @ right)[:, :, 0]
     center = -0.5 * solution[:, :2]
     squared = (center * center).sum(axis=1) - solution[:, 2]
     with np.errstate(invalid="ignore"):
@@ -154,7 +160,7 @@ def _kasa_batch(xy: np.ndarray, weights: np.ndarray):
     return center, radius
 
 
-def _circle_starts(points: np.ndarray, axes: list, keep: int, rng, samples: int = 48):
+def _circle_starts(points: np.ndarray, axes: list, keep: int, rng, samples: int = 24):
     """Centre and radius for each candidate axis, robust to background shots.
 
     For every axis (all at once, vectorised), the points are projected on the plane across it;
@@ -172,7 +178,10 @@ def _circle_starts(points: np.ndarray, axes: list, keep: int, rng, samples: int 
 
     Returns
     -------
-    list of (axis, center (3,), radius) states
+    states : list of (axis, center (3,), radius)
+    costs : list of float
+        Each state's least-trimmed-squares cost (the projected circle distances are the
+        cylinder's orthogonal residuals).
     """
     n = len(points)
     keep = min(keep, n)
@@ -184,11 +193,10 @@ def _circle_starts(points: np.ndarray, axes: list, keep: int, rng, samples: int 
     rows = np.arange(count)
 
     def trimmed(center, radius):
-        distance = np.abs(
-            np.hypot(xy[:, :, 0] - center[:, None, 0], xy[:, :, 1] - center[:, None, 1])
-            - radius[:, None]
-        )
-        squared = np.where(np.isfinite(distance), distance * distance, np.inf)
+        offset = xy - center[:, None, :]
+        distance = np.abs(np.sqrt((offset * offset).sum(axis=2)) - radius[:, None])
+        distance[~np.isfinite(distance)] = np.inf
+        squared = distance * distance
         return np.partition(squared, keep - 1, axis=1)[:, :keep].sum(axis=1), distance
 
     center, radius = _kasa_batch(xy, np.ones((count, n)))
@@ -213,18 +221,19 @@ def _circle_starts(points: np.ndarray, axes: list, keep: int, rng, samples: int 
             + sb * (pa[..., 0] - pc[..., 0])
             + sc * (pb[..., 0] - pa[..., 0])
         ) / det
-        tr = np.hypot(pa[..., 0] - ux, pa[..., 1] - uy)
-        dist = np.hypot(xy[:, None, :, 0] - ux[..., None], xy[:, None, :, 1] - uy[..., None])
-        sq = (dist - tr[..., None]) ** 2
-    sq = np.where(np.isfinite(sq), sq, np.inf)
+        tr = np.sqrt((pa[..., 0] - ux) ** 2 + (pa[..., 1] - uy) ** 2)
+        dx = xy[:, None, :, 0] - ux[..., None]
+        dy = xy[:, None, :, 1] - uy[..., None]
+        sq = np.sqrt(dx * dx + dy * dy) - tr[..., None]
+        sq *= sq
+    sq[~np.isfinite(sq)] = np.inf
     tcost = np.partition(sq, keep - 1, axis=2)[:, :, :keep].sum(axis=2)  # (a, t)
     best = np.argmin(tcost, axis=1)
     better = tcost[rows, best] < np.where(np.isfinite(cost), cost, np.inf)
     center = np.where(better[:, None], np.stack([ux[rows, best], uy[rows, best]], 1), center)
     radius = np.where(better, tr[rows, best], radius)
     for _ in range(2):
-        _, distance = trimmed(center, radius)
-        distance = np.where(np.isfinite(distance), distance, np.inf)
+        cost, distance = trimmed(center, radius)
         closest = np.argpartition(distance, keep - 1, axis=1)[:, :keep]
         weights = np.zeros((count, n))
         weights[rows[:, None], closest] = 1.0
@@ -232,16 +241,18 @@ def _circle_starts(points: np.ndarray, axes: list, keep: int, rng, samples: int 
         ok = np.isfinite(new_radius)
         center = np.where(ok[:, None], new_center, center)
         radius = np.where(ok, new_radius, radius)
+    cost, _ = trimmed(center, radius)
+    axis_array = np.asarray(axes)
     centroid = points.mean(axis=0)
-    states = []
-    for k, axis in enumerate(axes):
-        if np.isfinite(radius[k]) and radius[k] > 0 and np.all(np.isfinite(center[k])):
-            middle = center[k, 0] * u[k] + center[k, 1] * v[k] + (centroid @ axis) * axis
-            states.append((axis, middle, float(radius[k])))
-    return states
+    middles = center[:, :1] * u + center[:, 1:] * v + (axis_array @ centroid)[:, None] * axis_array
+    valid = (np.isfinite(radius) & (radius > 0) & np.isfinite(middles).all(axis=1)).tolist()
+    radii, costs = radius.tolist(), cost.tolist()
+    return [(axes[k], middles[k], radii[k]) for k in range(count) if valid[k]], [
+        costs[k] for k in range(count) if valid[k]
+    ]
 
 
-def _line_axis(points: np.ndarray, keep: int, rng, samples: int = 48, steps: int = 2):
+def _line_axis(points: np.ndarray, keep: int, rng, samples: int = 32, steps: int = 1):
     """Robust principal direction: the best line through two points by trimmed cost, then
     concentration steps (principal direction of the ``keep`` points closest to the line).
 
@@ -274,7 +285,7 @@ def _line_axis(points: np.ndarray, keep: int, rng, samples: int = 48, steps: int
     return axis
 
 
-def _pair_starts(points, normals, keep: int, count: int, samples: int = 96):
+def _pair_starts(points, normals, keep: int, count: int, samples: int = 48):
     """Minimal-sample starts (Schnabel, Wahl & Klein 2007): two points and their normals.
 
     The axis is the cross product of the normals, the centre the closest approach of the two
@@ -367,9 +378,15 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
     line = _line_axis(local, keep, rng)
     if line is not None:
         axes.append(line)
-    starts = _circle_starts(local, axes, keep, rng)
+    starts, costs = _circle_starts(local, axes, keep, rng)
     robust = robust_geometric_fit(
-        local, starts, _MODEL, kind="cylinder", sigma=sigma, tolerances=tolerances
+        local,
+        starts,
+        _MODEL,
+        kind="cylinder",
+        sigma=sigma,
+        tolerances=tolerances,
+        start_costs=costs,
     )
     axis, center, radius = robust.state
     kept = local[robust.inliers]
