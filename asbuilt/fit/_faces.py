@@ -29,7 +29,11 @@ __all__ = [
 
 _RNG_SEED = 20040601
 _TRIPLES = 100
+#: First-face hypotheses tried; after ``_MAX_FIRST`` only while the best frame explains less
+#: than ``_ENOUGH`` of the points (two raster lines on different faces also span a plane).
 _MAX_FIRST = 3
+_MAX_FIRST_HARD = 6
+_ENOUGH = 0.75
 _MAX_PAIRS = 150
 _MIN_FACE_POINTS = 3
 #: A face's points must be spread off a line by this many consensus thresholds (RMS): a raster
@@ -121,12 +125,35 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, n
     return vectors[:, :, 0], rms, index
 
 
-def noise_scale(rms: np.ndarray, floor: float) -> float:
-    """Noise level (metres) from local plane RMS values (n,): their lower quartile, floored.
+def noise_scale(points: np.ndarray, normals: np.ndarray, rms: np.ndarray, floor: float) -> float:
+    """Noise level (metres) of points on planar faces, without knowing the sensor's sigma.
 
-    The lower quartile keeps neighbourhoods that straddle an edge (large RMS) out of the estimate.
+    The lower quartile of the local plane RMS values is a first guess, but on a sparse raster
+    most neighbourhoods straddle an edge; so the guess (capped at 1 cm) only sets a generous
+    consensus band for the best plane among the local-normal planes, and the noise is the
+    median absolute residual (times 1.4826) of that plane's total least squares refit.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    normals : ndarray, shape (n, 3)
+        Local normals (:func:`local_normals`).
+    rms : ndarray, shape (n,), metres
+        Local plane RMS values.
+    floor : float, metres
     """
-    return float(max(np.percentile(rms, 25.0), floor))
+    guess = min(max(float(np.percentile(rms, 25.0)), floor), 0.01)
+    band = 3.0 * guess
+    offsets = np.einsum("ij,ij->i", normals, points)
+    dist = np.abs(normals @ points.T - offsets[:, None])
+    best = int(np.argmax((dist < band).sum(axis=1)))
+    normal, offset, mask, _ = _batch_refine(
+        points, normals[best : best + 1], offsets[best : best + 1], band
+    )
+    if np.count_nonzero(mask[0]) < 4:
+        return guess
+    resid = np.abs(points[mask[0]] @ normal[0] - offset[0])
+    return float(max(1.4826 * np.median(resid), floor))
 
 
 def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -233,8 +260,8 @@ def _distinct(normals, offsets, order, cos_face, threshold, limit):
     return chosen
 
 
-def _first_planes(points, normals, threshold, cos_face, rng):
-    """Up to ``_MAX_FIRST`` distinct refined planes with the largest consensus."""
+def _first_planes(points, normals, threshold, cos_face, rng, limit=_MAX_FIRST_HARD):
+    """Up to ``limit`` distinct refined planes with the largest consensus, best first."""
     n = points.shape[0]
     seeds = np.arange(n) if n <= 200 else rng.choice(n, 200, replace=False)
     tri = rng.integers(0, n, size=(_TRIPLES, 3))
@@ -248,7 +275,7 @@ def _first_planes(points, normals, threshold, cos_face, rng):
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = (np.abs(cand_n @ points.T - offsets[:, None]) < threshold).sum(axis=1)
     order = np.argsort(-counts, kind="stable")
-    top = _distinct(cand_n, offsets, order, cos_face, threshold, 4 * _MAX_FIRST)
+    top = _distinct(cand_n, offsets, order, cos_face, threshold, 4 * limit)
     top = [i for i in top if counts[i] >= _MIN_FACE_POINTS]
     if not top:
         return []
@@ -256,7 +283,7 @@ def _first_planes(points, normals, threshold, cos_face, rng):
     sizes = masks.sum(axis=1)
     usable = (sizes >= _MIN_FACE_POINTS) & (spread >= _MIN_SPREAD * threshold)
     order = [i for i in np.argsort(-sizes, kind="stable") if usable[i]]
-    keep = _distinct(ref_n, ref_o, order, cos_face, threshold, _MAX_FIRST)
+    keep = _distinct(ref_n, ref_o, order, cos_face, threshold, limit)
     return [(ref_n[i], float(ref_o[i]), masks[i]) for i in keep]
 
 
@@ -465,7 +492,9 @@ def segment(
     rng = np.random.default_rng(_RNG_SEED)
     cos_face = float(np.cos(np.radians(face_angle_deg)))
     best, best_score = None, None
-    for first in _first_planes(points, normals, threshold, cos_face, rng):
+    for tried, first in enumerate(_first_planes(points, normals, threshold, cos_face, rng)):
+        if tried >= _MAX_FIRST and best_score[-2] >= _ENOUGH * points.shape[0]:
+            break
         d1, o1, mask1 = first
         second = _second_plane(points, normals, first, threshold, gap, rng)
         if second is None:

@@ -23,7 +23,7 @@ __all__ = ["raster_window", "solve_bounds"]
 #: box can lie inside an edge).
 _EDGE_SAMPLES = 9
 #: A line of shots is this much narrower than the raster step (relative) or it is not a raster.
-_LINE_WIDTH = 0.05
+_LINE_WIDTH = 0.02
 #: Gaps between raster lines must be whole multiples of the step within this fraction.
 _STEP_MULTIPLE = 0.15
 

@@ -354,7 +354,10 @@ def fit_cuboid(
     origin = pts.mean(axis=0)
     x = pts - origin
     normals, local_rms, hood = _faces.local_normals(x, tolerances.normal_neighbours)
-    noise = float(sigma) if sigma is not None else _faces.noise_scale(local_rms, floor)
+    if sigma is not None:
+        noise = float(sigma)
+    else:
+        noise = _faces.noise_scale(x, normals, local_rms, floor)
     threshold = cutoff * max(noise, floor)
     fourth = hood[:, min(3, hood.shape[1] - 1)]
     reach = _median(np.linalg.norm(x[fourth] - x, axis=1))
@@ -396,29 +399,34 @@ def fit_cuboid(
     else:
         model = _Model(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
 
-    # Robust joint fit (IRLS with Tukey's biweight), then inliers and a plain refit.
+    # Robust joint fit (IRLS with Tukey's biweight; the scale starts at the noise level and is
+    # re-estimated on the weights' support), then inliers and a plain refit on them.
     iterations = 0
     label, residual = model.assign(x)
+    scale = max(noise, floor)
     for _ in range(_IRLS_ITERATIONS):
         iterations += 1
-        scale = _robust_scale(residual, floor)
-        weights = _tukey(residual / (_TUKEY_C * scale))
-        if np.count_nonzero(weights) < 3:
+        support = np.abs(residual) < _TUKEY_C * scale
+        if np.count_nonzero(support) < 3:
             break
+        scale = _robust_scale(residual[support], floor)
+        weights = _tukey(residual / (_TUKEY_C * scale))
         moved = model.step(x, label, weights)
         label, residual = model.assign(x)
         if moved < 1e-5:
             break
-    scale = _robust_scale(residual, floor)
     inliers = np.abs(residual) <= cutoff * scale
     for _ in range(_REFIT_ITERATIONS):
+        if np.count_nonzero(inliers) < 3:
+            break
         iterations += 1
         moved = model.step(x[inliers], label[inliers], np.ones(np.count_nonzero(inliers)))
         label, residual = model.assign(x)
         if moved < 1e-9:
             break
-    scale = _robust_scale(residual[inliers], floor)
-    inliers = np.abs(residual) <= cutoff * max(scale, _robust_scale(residual, floor))
+    if np.any(inliers):
+        scale = _robust_scale(residual[inliers], floor)
+    inliers = np.abs(residual) <= cutoff * scale
     n_out = n - int(np.count_nonzero(inliers))
     if n_out > tolerances.max_outlier_fraction * n:
         raise FitError(

@@ -1,0 +1,395 @@
+"""Tests for asbuilt.fit.cuboid: known boxes recovered from simulated pan-tilt raster scans.
+
+The sampler below is independent of the fit: a sensor 3-10 m away shoots a raster over the box's
+angular window (cell-centred, the project's raster convention: the outer shots half a step
+inside the silhouette), each beam leaves with angular noise, meets the box exactly (slab method)
+and the point is reported along the *nominal* direction at the noisy range. Outliers are shots
+pushed along their ray behind the object (edge grazes that hit the wall behind).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from asbuilt.errors import FitError
+from asbuilt.fit.cuboid import fit_cuboid
+from asbuilt.primitives import Cuboid
+from asbuilt.tolerances import MIN_POINTS
+
+SIGMA = 0.002
+ANGLE_SIGMA = math.radians(0.01)
+
+
+# --------------------------------------------------------------------------- sampler
+
+
+def _rot_z(deg: float) -> np.ndarray:
+    c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+    return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _rotation(yaw: float, pitch: float, roll: float) -> np.ndarray:
+    """Rows: a right-handed orthonormal frame from yaw/pitch/roll in degrees."""
+    y, p, r = (math.radians(v) for v in (yaw, pitch, roll))
+    rz = np.array([[math.cos(y), -math.sin(y), 0], [math.sin(y), math.cos(y), 0], [0, 0, 1]])
+    ry = np.array([[math.cos(p), 0, math.sin(p)], [0, 1, 0], [-math.sin(p), 0, math.cos(p)]])
+    rx = np.array([[1, 0, 0], [0, math.cos(r), -math.sin(r)], [0, math.sin(r), math.cos(r)]])
+    return (rz @ ry @ rx).T
+
+
+def _directions(pan, tilt):
+    return np.stack([np.cos(tilt) * np.cos(pan), np.cos(tilt) * np.sin(pan), np.sin(tilt)], axis=-1)
+
+
+def _ray_box(box: Cuboid, origin, dirs):
+    """Distance along each ray (k, 3) to its first hit on the box, NaN on a miss (slab method)."""
+    o = box.axes @ (origin - box.center)
+    d = dirs @ box.axes.T
+    half = 0.5 * box.size
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = (-half - o) / d
+        t2 = (half - o) / d
+    near = np.nanmax(np.minimum(t1, t2), axis=1)
+    far = np.nanmin(np.maximum(t1, t2), axis=1)
+    return np.where((near <= far) & (near > 0), near, np.nan)
+
+
+def _window(box: Cuboid, sensor):
+    """Pan (about pan0) and tilt extremes of the box seen from the sensor, densely sampled."""
+    t = np.linspace(-0.5, 0.5, 41)
+    samples = []
+    for k in range(3):
+        a, b = [j for j in range(3) if j != k]
+        for sa in (-0.5, 0.5):
+            for sb in (-0.5, 0.5):
+                local = np.zeros((t.size, 3))
+                local[:, k], local[:, a], local[:, b] = t, sa, sb
+                samples.append(box.center + (local * box.size) @ box.axes)
+    rel = np.concatenate(samples) - sensor
+    mid = box.center - sensor
+    pan0 = math.atan2(mid[1], mid[0])
+    pan = np.angle(np.exp(1j * (np.arctan2(rel[:, 1], rel[:, 0]) - pan0)))
+    tilt = np.arctan2(rel[:, 2], np.hypot(rel[:, 0], rel[:, 1]))
+    return pan0, pan.min(), pan.max(), tilt.min(), tilt.max()
+
+
+def scan_box(
+    box: Cuboid,
+    sensor,
+    n_pan: int,
+    n_tilt: int,
+    rng,
+    *,
+    range_sigma: float = SIGMA,
+    angle_sigma: float = ANGLE_SIGMA,
+    outlier_fraction: float = 0.0,
+):
+    """Raster scan of a box: points (n, 3) metres and the outlier mask (n,)."""
+    sensor = np.asarray(sensor, float)
+    pan0, p_lo, p_hi, t_lo, t_hi = _window(box, sensor)
+    pans = pan0 + p_lo + (np.arange(n_pan) + 0.5) / n_pan * (p_hi - p_lo)
+    tilts = t_lo + (np.arange(n_tilt) + 0.5) / n_tilt * (t_hi - t_lo)
+    pan, tilt = (a.ravel() for a in np.meshgrid(pans, tilts))
+    nominal = _directions(pan, tilt)
+    actual = _directions(
+        pan + rng.normal(0.0, angle_sigma, pan.size), tilt + rng.normal(0.0, angle_sigma, pan.size)
+    )
+    rng_true = _ray_box(box, sensor, actual)
+    hit = np.isfinite(rng_true)
+    measured = rng_true[hit] + rng.normal(0.0, range_sigma, hit.sum())
+    outliers = np.zeros(measured.size, bool)
+    k = int(round(outlier_fraction * measured.size))
+    if k:
+        chosen = rng.choice(measured.size, k, replace=False)
+        outliers[chosen] = True
+        measured[chosen] += rng.uniform(0.05, 2.0, k)
+    return sensor + measured[:, None] * nominal[hit], outliers
+
+
+def column(width, depth, height, yaw_to_view, distance, rng=None, base=-1.0):
+    """A vertical column seen from the origin at ``distance``; yaw relative to the view line."""
+    rng = rng or np.random.default_rng(0)
+    bearing = rng.uniform(-180, 180)
+    los = np.array([math.cos(math.radians(bearing)), math.sin(math.radians(bearing)), 0.0])
+    centre = distance * los + np.array([0.0, 0.0, base + 0.5 * height])
+    axes = _rot_z(bearing + yaw_to_view)
+    return Cuboid(center=centre, axes=axes, size=[width, depth, height])
+
+
+def match(fitted: Cuboid, truth: Cuboid):
+    """Relative size errors (3,) per true axis and the largest axis angle error (degrees)."""
+    dots = np.abs(fitted.axes @ truth.axes.T)
+    order = dots.argmax(axis=0)
+    assert sorted(order.tolist()) == [0, 1, 2], "fitted axes do not match the true ones"
+    angle = np.degrees(np.arccos(np.clip(dots[order, np.arange(3)], -1.0, 1.0))).max()
+    return fitted.size[order] / truth.size - 1.0, float(angle), order
+
+
+# --------------------------------------------------------------------------- recovery
+
+
+@pytest.mark.parametrize(
+    "width, depth, yaw, distance, seed",
+    [
+        (0.2, 0.25, 30.0, 4.0, 1),
+        (0.4, 0.35, 45.0, 6.0, 2),
+        (0.6, 0.5, 60.0, 9.0, 3),
+        (0.3, 0.6, -40.0, 3.0, 4),
+    ],
+)
+def test_vertical_column_two_faces(width, depth, yaw, distance, seed):
+    rng = np.random.default_rng(seed)
+    truth = column(width, depth, 3.0, yaw, distance, rng)
+    points, _ = scan_box(truth, np.zeros(3), 6, 7, rng)
+    result = fit_cuboid(points, sigma=SIGMA)
+    err, angle, _ = match(result.primitive, truth)
+    assert result.diagnostics["faces"] == 2
+    assert np.all(np.abs(err) < 0.02), err
+    assert angle < 0.5
+    assert result.observed == (False, False, False)
+    assert abs(result.primitive.axes[2, 2]) > 0.999  # the vertical axis is listed last
+    assert result.sigma_source == "sensor" and result.sigma == SIGMA
+
+
+@pytest.mark.parametrize("seed", [11, 12, 13])
+def test_pier_three_faces_seen_from_above(seed):
+    rng = np.random.default_rng(seed)
+    distance = rng.uniform(3.0, 8.0)
+    top = -distance * math.tan(math.radians(rng.uniform(20, 35)))
+    truth = column(0.4, 0.45, 1.2, rng.uniform(25, 65), distance, rng, base=top - 1.2)
+    points, _ = scan_box(truth, np.zeros(3), 6, 7, rng)
+    result = fit_cuboid(points, sigma=SIGMA)
+    err, angle, _ = match(result.primitive, truth)
+    assert result.diagnostics["faces"] == 3
+    assert np.all(np.abs(err) < 0.02), err
+    assert angle < 0.5
+
+
+def test_horizontal_beam_seen_from_below():
+    rng = np.random.default_rng(21)
+    axes = _rotation(35.0, 0.0, 0.0)
+    truth = Cuboid(center=[5.0, 1.0, 3.5], axes=axes, size=[2.0, 0.3, 0.5])
+    points, _ = scan_box(truth, np.array([0.0, 0.0, 1.5]), 8, 6, rng)
+    result = fit_cuboid(points, sigma=SIGMA, viewpoint=[0.0, 0.0, 1.5])
+    err, angle, _ = match(result.primitive, truth)
+    assert result.diagnostics["faces"] >= 2
+    assert np.all(np.abs(err) < 0.02), err
+    assert angle < 0.5
+
+
+def test_tilted_box_three_faces():
+    rng = np.random.default_rng(31)
+    axes = _rotation(20.0, 25.0, 10.0)
+    truth = Cuboid(center=[4.0, -2.0, -1.0], axes=axes, size=[0.5, 0.4, 0.6])
+    points, _ = scan_box(truth, np.zeros(3), 7, 7, rng)
+    result = fit_cuboid(points, sigma=SIGMA)
+    err, angle, _ = match(result.primitive, truth)
+    assert np.all(np.abs(err) < 0.02), err
+    assert angle < 0.5
+
+
+def test_noise_free_scan_is_recovered_exactly():
+    truth = column(0.4, 0.3, 2.5, 40.0, 5.0, np.random.default_rng(5))
+    points, _ = scan_box(
+        truth, np.zeros(3), 6, 6, np.random.default_rng(5), range_sigma=0.0, angle_sigma=0.0
+    )
+    result = fit_cuboid(points)
+    err, angle, _ = match(result.primitive, truth)
+    assert np.all(np.abs(err) < 1e-3), err
+    assert angle < 1e-6
+    assert np.allclose(result.primitive.center, truth.center, atol=1e-3)
+    assert result.rms < 1e-6
+
+
+def test_paper_extent_without_the_silhouette_is_biased_low():
+    """Without the raster window the far edges are bounded by the last points (the paper)."""
+    truth = column(0.4, 0.3, 2.5, 40.0, 5.0, np.random.default_rng(6))
+    points, _ = scan_box(
+        truth, np.zeros(3), 6, 6, np.random.default_rng(6), range_sigma=0.0, angle_sigma=0.0
+    )
+    plain = fit_cuboid(points, silhouette=False, edge_pad=0.0)
+    err, _, _ = match(plain.primitive, truth)
+    assert np.all(err < 1e-9)  # never beyond the true edges
+    assert err.min() < -0.05  # and noticeably short of them
+    assert plain.diagnostics["silhouette"] == 0.0
+
+
+# --------------------------------------------------------------------------- outliers
+
+
+@pytest.mark.parametrize("seed", [41, 42, 43])
+def test_twenty_percent_outliers_are_rejected(seed):
+    rng = np.random.default_rng(seed)
+    truth = column(0.4, 0.35, 3.0, 45.0, rng.uniform(3, 10), rng)
+    points, bad = scan_box(truth, np.zeros(3), 6, 7, rng, outlier_fraction=0.2)
+    result = fit_cuboid(points, sigma=SIGMA)
+    err, angle, _ = match(result.primitive, truth)
+    assert np.all(np.abs(err) < 0.02), err
+    assert angle < 0.6
+    assert not np.any(result.inliers[bad]), "an outlier was kept"
+    assert np.mean(result.inliers[~bad]) > 0.9
+    assert result.diagnostics["outliers"] == np.count_nonzero(~result.inliers)
+
+
+def test_residuals_are_plane_distances_for_inliers_and_box_distances_for_outliers():
+    rng = np.random.default_rng(44)
+    truth = column(0.4, 0.35, 3.0, 45.0, 6.0, rng)
+    points, bad = scan_box(truth, np.zeros(3), 6, 7, rng, outlier_fraction=0.2)
+    result = fit_cuboid(points, sigma=SIGMA)
+    assert result.residuals.shape == (points.shape[0],)
+    assert np.max(np.abs(result.residuals[result.inliers])) < 0.01
+    out = ~result.inliers
+    assert np.allclose(result.residuals[out], result.primitive.distance(points[out]))
+    assert result.rms < 0.004 and result.max_residual < 0.01
+
+
+def test_too_many_outliers_raise():
+    rng = np.random.default_rng(45)
+    truth = column(0.4, 0.35, 3.0, 45.0, 6.0, rng)
+    points, _ = scan_box(truth, np.zeros(3), 6, 7, rng)
+    junk = rng.uniform(-3, 3, size=(len(points), 3)) + truth.center
+    with pytest.raises(FitError, match="outliers"):
+        fit_cuboid(np.vstack([points[:15], junk]), sigma=SIGMA)
+
+
+# --------------------------------------------------------------------------- faces, observed
+
+
+def test_one_face_seen():
+    truth = Cuboid(center=[6.0, 0.0, 0.0], axes=np.eye(3), size=[0.4, 0.5, 0.8])
+    rng = np.random.default_rng(51)
+    points, _ = scan_box(truth, np.zeros(3), 6, 7, rng)
+    result = fit_cuboid(points, sigma=SIGMA)
+    box = result.primitive
+    assert result.diagnostics["faces"] == 1
+    assert result.observed == (False, False, False)
+    assert any("one face" in note for note in result.notes)
+    # The face normal is the x axis; the face (x = 5.8) is the box's near side.
+    normal_row = int(np.argmax(np.abs(box.axes[:, 0])))
+    assert abs(box.axes[normal_row, 0]) > 0.9999
+    near = box.center[0] - 0.5 * box.size[normal_row]
+    assert near == pytest.approx(5.8, abs=0.002)
+    widths = [box.size[k] for k in range(3) if k != normal_row]
+    assert box.size[normal_row] == pytest.approx(min(widths))
+    assert sorted(widths) == pytest.approx([0.5, 0.8], rel=0.1)
+
+
+def test_opposite_faces_from_two_stations_are_observed():
+    truth = column(0.4, 0.3, 2.0, 45.0, 5.0, np.random.default_rng(61))
+    rng = np.random.default_rng(61)
+    front, _ = scan_box(truth, np.zeros(3), 6, 6, rng)
+    behind = 2 * truth.center - np.zeros(3)
+    behind[2] = 0.0
+    back, _ = scan_box(truth, behind, 6, 6, rng)
+    result = fit_cuboid(np.vstack([front, back]), sigma=SIGMA)
+    err, angle, order = match(result.primitive, truth)
+    assert result.diagnostics["faces"] == 4
+    observed = np.array(result.observed)[order]
+    assert observed.tolist() == [True, True, False]
+    assert np.all(np.abs(err[:2]) * truth.size[:2] < 0.003)  # between faces: millimetres
+    assert angle < 0.3
+
+
+def test_viewpoint_off_the_raster_disables_the_silhouette():
+    rng = np.random.default_rng(71)
+    truth = column(0.4, 0.35, 3.0, 45.0, 6.0, rng)
+    points, _ = scan_box(truth, np.zeros(3), 6, 7, rng)
+    assert fit_cuboid(points, sigma=SIGMA).diagnostics["silhouette"] == 1.0
+    moved = fit_cuboid(points, sigma=SIGMA, viewpoint=[2.0, -3.0, 1.0])
+    assert moved.diagnostics["silhouette"] == 0.0
+
+
+# --------------------------------------------------------------------------- uncertainty
+
+
+def test_standard_errors_scale_with_the_sensor_sigma():
+    rng = np.random.default_rng(81)
+    truth = column(0.4, 0.35, 3.0, 45.0, 6.0, rng)
+    points, _ = scan_box(truth, np.zeros(3), 6, 7, rng)
+    one = fit_cuboid(points, sigma=0.002)
+    two = fit_cuboid(points, sigma=0.004)
+    assert set(one.stderr) == {"size", "axes_deg", "center"}
+    assert len(one.stderr["size"]) == 3
+    assert two.stderr["axes_deg"] == pytest.approx(2 * one.stderr["axes_deg"], rel=1e-6)
+    assert two.stderr["center"] == pytest.approx(2 * one.stderr["center"], rel=1e-6)
+    assert np.allclose(two.stderr["size"], 2 * np.array(one.stderr["size"]), rtol=1e-6)
+    free = fit_cuboid(points)
+    assert free.sigma_source == "residuals"
+    assert 0.0005 < free.sigma < 0.005
+    assert free.covariance.shape == (5, 5)
+
+
+def test_orientation_standard_error_matches_the_scatter():
+    """The reported axes_deg is within a factor 2 of the RMS error over repeated scans."""
+    truth = column(0.4, 0.4, 2.0, 45.0, 5.0, np.random.default_rng(91))
+    errors, reported = [], []
+    for seed in range(30):
+        rng = np.random.default_rng(1000 + seed)
+        points, _ = scan_box(truth, np.zeros(3), 6, 7, rng)
+        result = fit_cuboid(points, sigma=SIGMA)
+        _, angle, _ = match(result.primitive, truth)
+        errors.append(angle)
+        reported.append(result.stderr["axes_deg"])
+    rms = math.sqrt(np.mean(np.square(errors)))
+    assert 0.5 < rms / np.median(reported) < 2.5
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+@pytest.mark.parametrize(
+    "points, message",
+    [
+        (np.zeros((MIN_POINTS["cuboid"] - 1, 3)) + np.arange(6)[:, None], "too few"),
+        (np.outer(np.linspace(0, 1, 20), [1.0, 2.0, 3.0]), "one line"),
+        (np.ones((20, 3)), "coincide"),
+        (np.full((20, 3), np.nan), "finite"),
+        (np.zeros((20, 2)), "shape"),
+    ],
+)
+def test_degenerate_input_raises_fit_error(points, message):
+    with pytest.raises(FitError, match=message):
+        fit_cuboid(points)
+
+
+# --------------------------------------------------------------------------- invariance
+
+
+@settings(max_examples=15, deadline=None)
+@given(turn=st.floats(-180, 180), shift=st.tuples(*[st.floats(-50, 50)] * 3))
+def test_fit_is_invariant_under_turns_about_the_vertical_and_shifts(turn, shift):
+    """The raster's pan and tilt stay a raster: the silhouette window is used both times."""
+    rng = np.random.default_rng(101)
+    truth = column(0.4, 0.3, 2.0, 40.0, 5.0, rng)
+    points, _ = scan_box(truth, np.zeros(3), 6, 6, rng)
+    _check_invariance(points, _rot_z(turn), np.asarray(shift), silhouette=True)
+
+
+@settings(max_examples=15, deadline=None)
+@given(
+    yaw=st.floats(-180, 180),
+    pitch=st.floats(-80, 80),
+    roll=st.floats(-180, 180),
+    shift=st.tuples(*[st.floats(-50, 50)] * 3),
+)
+def test_fit_is_invariant_under_rigid_motion(yaw, pitch, roll, shift):
+    rng = np.random.default_rng(102)
+    truth = column(0.4, 0.3, 2.0, 40.0, 5.0, rng)
+    points, _ = scan_box(truth, np.zeros(3), 6, 6, rng)
+    _check_invariance(points, _rotation(yaw, pitch, roll), np.asarray(shift), silhouette=False)
+
+
+def _check_invariance(points, rot, move, silhouette):
+    base = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3), silhouette=silhouette)
+    moved = fit_cuboid(points @ rot.T + move, sigma=SIGMA, viewpoint=move, silhouette=silhouette)
+    assert moved.diagnostics["silhouette"] == base.diagnostics["silhouette"] == float(silhouette)
+    assert np.allclose(np.sort(moved.primitive.size), np.sort(base.primitive.size), atol=1e-6)
+    assert np.allclose(moved.primitive.center, rot @ base.primitive.center + move, atol=1e-6)
+    turned = base.primitive.axes @ rot.T
+    assert np.allclose(np.abs(moved.primitive.axes @ turned.T).max(axis=1), 1.0, atol=1e-6)
+    assert np.array_equal(moved.inliers, base.inliers)
