@@ -202,6 +202,13 @@ def check_hint(ctx: Context, table: SizeTable | None) -> None:
         )
 
 
+def is_merged(model) -> bool:
+    """Whether merging ran on a model: it has spools or fittings."""
+    return bool(model.spools) or any(
+        c.type in ("elbow", "tee", "reducer", "coupling") for c in model.components
+    )
+
+
 def _size_of(comp: Component, table: SizeTable | None) -> tuple[str | None, float | None]:
     od = 2 * comp.geometry.outer_radius if hasattr(comp.geometry, "outer_radius") else None
     if od is None and hasattr(comp.geometry, "radius"):
@@ -214,6 +221,8 @@ def _size_of(comp: Component, table: SizeTable | None) -> tuple[str | None, floa
 
 def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
     slug = "contiguous-diameter-mismatch"
+    if not is_merged(ctx.model):
+        return  # merging inserts the reducers that explain a size change: judge merged models
     comps = component_map(ctx.model)
     pipes = [c.id for c in ctx.pipes]
     graph = adjacency(

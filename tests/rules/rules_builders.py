@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.fit.result import FitResult
-from asbuilt.model import Component, Model, Straight
+from asbuilt.model import Component, Model, Spool, Straight
 from asbuilt.primitives import Cuboid, Cylinder
 from asbuilt.rules import SizeTable
 
@@ -97,5 +97,8 @@ def column(cid, base, lean_deg=0.0, height=3.0, section=(0.3, 0.3), *, azimuth=0
                      fit=result, label=label)
 
 
-def model(*components, scan=None, catalog=None) -> Model:
-    return Model(components=tuple(components), scan=scan, catalog=catalog)
+def model(*components, scan=None, catalog=None, merged=True) -> Model:
+    """A model of these components; ``merged`` puts the pipes in one spool, as merging would."""
+    pipes = tuple(c.id for c in components if c.type == "pipe")
+    spools = (Spool("S1", pipes),) if merged and pipes else ()
+    return Model(components=tuple(components), scan=scan, catalog=catalog, spools=spools)

@@ -166,3 +166,21 @@ def test_reducer_between_pipes_explains_the_change():
     # the pipes' ends are 0.102 m apart (within joint_distance) but joined through a reducer
     found = only(run(a, red, b), "contiguous-diameter-mismatch")
     assert not found
+
+
+def test_unmerged_model_is_not_judged_for_contiguous_sizes():
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4")
+    b = pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.0889, nominal="3")
+    built = model(a, b, merged=False)
+    assert not [f for f in check_model(built, catalog=B36)
+                if f.slug == "contiguous-diameter-mismatch"]
+
+
+def test_different_sizes_whose_fits_agree_are_unverifiable():
+    # snapped to different sizes, but the fitted ODs differ by 2.6 mm +- 4 mm
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", od_fit=0.1146, status="snapped",
+             od_stderr=0.0004)
+    b = pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.0889, nominal="3", od_fit=0.1120,
+             status="snapped", od_stderr=0.004)
+    (f,) = only(run(a, b), "contiguous-diameter-mismatch")
+    assert f.unverifiable and f.severity == "warning"
