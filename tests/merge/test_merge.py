@@ -410,3 +410,20 @@ def test_bends_of_any_angle_in_any_plane_connect_exactly(angle, twist, yaw, nps_
     assert [c.type for c in model.components] == ["pipe", "elbow", "pipe"]
     assert model.components[1].geometry.angle_deg == pytest.approx(angle, abs=2.0 + 1e-6)
     assert connection_mismatches(model.components, tolerance=1e-4) == (2, [])
+
+
+def test_a_long_chain_is_one_spool_with_every_joint_exact():
+    """400 pipes zigzagging in one spool: the sparse alignment path, exact joints throughout."""
+    rng = np.random.default_rng(3)
+    corner = np.zeros(3)
+    pipes = []
+    for k in range(400):
+        d = np.array([1.0, 0, 0]) if k % 2 == 0 else np.array([0, 1.0, 0])
+        start = corner + (0.19 if k else 0.0) * d + rng.normal(0, 0.002, 3)
+        end = corner + 1.81 * d + rng.normal(0, 0.002, 3)
+        pipes.append(Pipe(f"P{k}", tuple(start), tuple(end), NPS4))
+        corner = corner + 2 * d
+    model = merge_model(report_of(pipes))
+    assert len(model.spools) == 1
+    assert sum(c.type == "elbow" for c in model.components) == 399
+    assert connection_mismatches(model.components, tolerance=1e-4) == (798, [])
