@@ -95,7 +95,7 @@ def register(subparsers) -> argparse.ArgumentParser:
             "--report",
             metavar="FILE",
             default=None,
-            help="also write a report (.html, .csv or .json by suffix)",
+            help="also write a QA report (.html, .csv or .json by suffix), after the --out files",
         )
     parser.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
     parser.set_defaults(handler=run)
@@ -131,16 +131,20 @@ def run(args: argparse.Namespace) -> int:
             raise ExportError(
                 "directory does not exist; create it or choose another --out", source=str(path)
             )
-    if report_path is not None and Path(report_path).suffix.lower() not in (
-        ".html",
-        ".csv",
-        ".json",
-    ):
-        from asbuilt.errors import UnknownFormatError
+    if report_path is not None:
+        from asbuilt.report import report_format_for
 
-        raise UnknownFormatError(
-            "unknown report format; use .html, .csv or .json", source=str(report_path)
-        )
+        report_format_for(report_path)  # an unknown report suffix fails before any work too
+        if Path(report_path).resolve() in {path.resolve() for path in outputs}:
+            raise ExportError(
+                "the report and an --out file are the same; name them apart",
+                source=str(report_path),
+            )
+        if not Path(report_path).parent.is_dir():
+            raise ExportError(
+                "directory does not exist; create it or choose another --report",
+                source=str(report_path),
+            )
 
     scan = load_scan(args.scan)
     err = Console(file=sys.stderr)
@@ -181,7 +185,14 @@ def run(args: argparse.Namespace) -> int:
         if report_path is not None:
             from asbuilt.report import write_report
 
-            write_report(model, report_path)
+            # The HTML report can embed a 3-D view from a glTF written in this run.
+            views = [r.path for r in results if r.path.suffix.lower() in (".glb", ".gltf")]
+            options = (
+                {"gltf": views[0]}
+                if views and Path(report_path).suffix.lower() in (".html", ".htm")
+                else {}
+            )
+            write_report(model, report_path, **options)
 
     if args.quiet:
         return 0

@@ -222,3 +222,29 @@ def test_registering_the_command_does_not_load_cadquery():
         [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
     )
     assert out.stdout.strip() == "False"
+
+
+def test_report_is_written_after_the_outputs(tmp_path, capsys):
+    glb, html = tmp_path / "spool.glb", tmp_path / "spool.html"
+    argv = ["model", str(ROOT / "samples" / "spool.json"), "--out", str(glb), "--report", str(html)]
+    assert main(argv) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith(f"wrote {glb} (glTF, ")
+    assert out[1] == f"wrote {html} (report)"
+    assert html.read_text(encoding="utf-8").lstrip().lower().startswith("<!doctype html")
+
+
+@pytest.mark.parametrize(
+    ("report", "message"),
+    [
+        ("r.pdf", "r.pdf: unknown report format '.pdf'"),
+        ("x.json", "x.json: the report and an --out file are the same"),
+        ("nope/r.html", "nope/r.html: directory does not exist"),
+    ],
+)
+def test_bad_report_fails_before_any_work(tmp_path, capsys, monkeypatch, report, message):
+    monkeypatch.chdir(tmp_path)
+    argv = ["model", str(ROOT / "samples" / "spool.json"), "--out", "x.json", "--report", report]
+    assert main(argv) == 2
+    assert capsys.readouterr().err.startswith(f"asbuilt: error: {message}")
+    assert list(tmp_path.iterdir()) == []
