@@ -1,0 +1,103 @@
+"""The HTML report as a person sees it: headless Chromium loads it with no console errors, no
+network requests, and shows the pictures, the take-off table and the findings.
+
+Skipped with a clear message where Chromium is not installed; under CI (``CI=true``) a missing
+Chromium fails instead (see the ``browser`` fixture in conftest.py).
+"""
+
+import datetime as dt
+
+import pytest
+from conftest import known_model, many_findings
+
+from asbuilt.report import write_report
+
+STAMP = dt.datetime(2026, 11, 21, 7, 0, tzinfo=dt.timezone.utc)
+
+
+def test_the_console_check_catches_errors(browser, tmp_path):
+    # the same checks on a page known to be broken must report its problems
+    page_file = tmp_path / "broken.html"
+    page_file.write_text(
+        '<!DOCTYPE html><html><head><title>x</title></head><body><img src="missing.png">'
+        '<script>console.error("planted"); notAFunction();</script></body></html>',
+        encoding="utf-8",
+    )
+    problems = browser.open(page_file.as_uri()).problems()
+    text = "\n".join(problems)
+    assert "planted" in text
+    assert "notAFunction" in text
+    assert "ERR_FILE_NOT_FOUND" in text
+
+
+@pytest.fixture(scope="module")
+def plant_page(browser, plant_model, tmp_path_factory):
+    path = tmp_path_factory.mktemp("browser") / "plant.html"
+    write_report(plant_model, path, generated=STAMP, gltf=path.with_suffix(".glb"))
+    page = browser.open(path.as_uri(), width=1280, height=2000)
+    page.screenshot(path.with_suffix(".png"))  # to look at when a test fails
+    return page
+
+
+def test_loads_without_console_errors_or_network(plant_page):
+    assert plant_page.problems() == []
+    external = [u for u in plant_page.requests() if not u.startswith(("file:", "data:"))]
+    assert external == []
+    assert plant_page.evaluate("document.readyState") == "complete"
+
+
+def test_pictures_are_rendered(plant_page):
+    sizes = plant_page.evaluate(
+        "Array.from(document.querySelectorAll('#pictures figure > svg'))"
+        ".map(s => [s.getBoundingClientRect().width, s.getBoundingClientRect().height])"
+    )
+    assert len(sizes) == 2
+    for width, height in sizes:
+        assert width > 500 and height > 250
+    # the points layer (an embedded raster image) decoded
+    images = plant_page.evaluate(
+        "Array.from(document.querySelectorAll('#pictures svg image')).map(i => i.getBBox().width)"
+    )
+    assert images and all(w > 50 for w in images)
+    labels = plant_page.evaluate(
+        "Array.from(document.querySelectorAll('#view-plan svg a text, #view-plan svg a')).length"
+    )
+    assert labels >= 15
+
+
+def test_takeoff_table_is_visible(plant_page):
+    cells = plant_page.evaluate(
+        "Array.from(document.querySelectorAll('table.pipes tbody tr:first-child td'))"
+        ".map(td => td.innerText)"
+    )
+    assert cells[0] == "NPS 8" and cells[1] == "STD"
+    visible = plant_page.evaluate(
+        "(() => { const r = document.querySelector('table.pipes').getBoundingClientRect();"
+        " return r.width > 300 && r.height > 40; })()"
+    )
+    assert visible
+
+
+def test_findings_are_shown_and_linked(plant_page, plant_model):
+    items = plant_page.evaluate(
+        "Array.from(document.querySelectorAll('ol.findings > li')).map(li => li.innerText)"
+    )
+    assert len(items) == len(plant_model.findings)
+    for finding in plant_model.findings:
+        assert any(finding.message in item for item in items)
+    # following a finding's object link scrolls to that component's row
+    target = plant_page.evaluate(
+        "(() => { const a = document.querySelector('ol.findings a[href^=\"#obj-\"]');"
+        " a.click(); return location.hash; })()"
+    )
+    assert plant_page.evaluate(f"!!document.querySelector('{target}')")
+
+
+def test_many_findings_page_is_clean(browser, tmp_path):
+    model = known_model()
+    model = model.replace(findings=many_findings(model))
+    path = tmp_path / "many.html"
+    write_report(model, path, generated=STAMP)
+    page = browser.open(path.as_uri())
+    assert page.problems() == []
+    assert page.evaluate("document.querySelectorAll('ol.findings > li').length") == 15

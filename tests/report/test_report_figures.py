@@ -1,0 +1,163 @@
+"""Pictures: silhouettes against closed forms, the convex hull against Qhull, the SVG/PNG output
+and the residual histograms."""
+
+import base64
+import math
+import re
+
+import numpy as np
+import pytest
+from conftest import known_model
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from scipy.spatial import ConvexHull
+
+from asbuilt.model import Bend, Component, Model, Straight
+from asbuilt.primitives import Cuboid, Sphere
+from asbuilt.report.figures import (
+    _RING,
+    anchor,
+    histogram_svg,
+    hull_2d,
+    projected_outlines,
+    render_view,
+)
+
+PLAN, ELEVATION = (0, 1), (0, 2)
+
+
+def area(polygon: np.ndarray) -> float:
+    x, y = polygon[:, 0], polygon[:, 1]
+    return 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def polygon_of_circle(r: float, n: int = _RING) -> float:
+    return 0.5 * n * r * r * math.sin(2 * math.pi / n)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    arrays(
+        np.float64,
+        st.tuples(st.integers(3, 40), st.just(2)),
+        elements=st.floats(-100, 100, allow_nan=False),
+    )
+)
+def test_hull_2d_matches_qhull(points):
+    ours = hull_2d(points)
+    try:
+        reference = ConvexHull(points)
+    except Exception:  # degenerate (collinear) input: ours is a segment or a point
+        assert len(ours) <= 2 or area(ours) < 1e-6 * max(1.0, np.ptp(points) ** 2)
+        return
+    if reference.volume < 1e-9:
+        return
+    assert area(ours) == pytest.approx(reference.volume, rel=1e-7, abs=1e-9)
+    # counter-clockwise
+    x, y = ours[:, 0], ours[:, 1]
+    assert np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)) > 0
+
+
+def test_horizontal_pipe_is_a_rectangle_in_plan_and_elevation():
+    comp = Component("P1", "pipe", Straight([0, 0, 1], [2, 0, 1], 0.05))
+    (plan,) = projected_outlines(comp, PLAN)
+    assert area(plan) == pytest.approx(2 * 0.1, rel=1e-9)
+    assert plan[:, 0].min() == pytest.approx(0) and plan[:, 0].max() == pytest.approx(2)
+    (elev,) = projected_outlines(comp, ELEVATION)
+    assert area(elev) == pytest.approx(2 * 0.1, rel=1e-9)
+
+
+def test_vertical_pipe_is_a_circle_in_plan():
+    comp = Component("P1", "pipe", Straight([1, 1, 0], [1, 1, 3], 0.1))
+    (plan,) = projected_outlines(comp, PLAN)
+    assert area(plan) == pytest.approx(polygon_of_circle(0.1), rel=1e-7)  # hull rounds to 1 nm
+
+
+def test_column_and_sphere_silhouettes():
+    axes = np.array(
+        [[math.cos(0.3), math.sin(0.3), 0], [-math.sin(0.3), math.cos(0.3), 0], [0, 0, 1]]
+    )
+    column = Component("C1", "cuboid", Cuboid([0, 0, 1.5], axes, [0.4, 0.3, 3.0]))
+    assert area(projected_outlines(column, PLAN)[0]) == pytest.approx(0.12)
+    ball = Component("S1", "sphere", Sphere([0, 0, 0], 0.5))
+    assert area(projected_outlines(ball, ELEVATION)[0]) == pytest.approx(
+        polygon_of_circle(0.5, 32), rel=1e-9
+    )
+
+
+def test_bend_pieces_follow_the_arc():
+    r, lr = 0.05, 0.3
+    bend = Component("E1", "elbow", Bend([0, 0, 0], [lr, lr, 0], [0, lr, 0], r))
+    pieces = projected_outlines(bend, PLAN)
+    assert len(pieces) == 8
+    total = sum(area(p) for p in pieces)
+    # the quarter annulus between lr - r and lr + r, within the polygonal approximation
+    assert total == pytest.approx(math.pi / 4 * ((lr + r) ** 2 - (lr - r) ** 2), rel=0.03)
+    corner = np.array([0.0, lr])  # the centre of curvature is outside every piece
+    for piece in pieces:
+        assert np.min(np.linalg.norm(piece - corner, axis=1)) >= lr - r - 1e-9
+
+
+def test_svg_views_are_inline_and_ids_do_not_collide():
+    model = known_model()
+    plan = render_view(model, "plan")
+    elevation = render_view(model, "elevation")
+    for svg, prefix in ((plan, "plan-"), (elevation, "elevation-")):
+        assert svg.startswith("<svg") and svg.rstrip().endswith("</svg>")
+        ids = re.findall(r'id="([^"]+)"', svg)
+        assert ids and all(i.startswith(prefix) for i in ids)
+        for ref in re.findall(r'href="#([^"]+)"', svg):
+            assert ref in ids or ref.startswith("obj-")
+        for comp in model.components:
+            assert f'href="#{anchor(comp.id)}"' in svg
+            assert f">{comp.id}<" in svg  # labels are text, not glyph paths
+    assert not set(re.findall(r'id="([^"]+)"', plan)) & set(re.findall(r'id="([^"]+)"', elevation))
+
+
+def test_png_view_is_a_png():
+    uri = render_view(known_model(), "plan", fmt="png")
+    assert uri.startswith("data:image/png;base64,")
+    assert base64.b64decode(uri.split(",", 1)[1])[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_label_limit_keeps_flagged_objects():
+    from conftest import many_findings
+
+    model = known_model()
+    flagged = many_findings(model)[:1]  # an error on P1 only
+    svg = render_view(model.replace(findings=flagged), "plan", label_limit=2)
+    assert 'href="#obj-P1"' in svg and 'href="#obj-C1"' not in svg
+
+
+def test_unknown_view_or_format():
+    with pytest.raises(ValueError, match="unknown view"):
+        render_view(known_model(), "side")
+    with pytest.raises(ValueError, match="unknown figure format"):
+        render_view(known_model(), "plan", fmt="gif")
+
+
+def test_empty_model_draws():
+    assert render_view(Model(components=()), "plan").startswith("<svg")
+
+
+def bars(svg: str, colour: str) -> list[float]:
+    return [float(h) for h in re.findall(rf'height="([\d.]+)" fill="{colour}"', svg)]
+
+
+def test_histogram_counts_and_colours():
+    residuals = np.array([-0.002, -0.001, 0.0, 0.0005, 0.001, 0.0015, 0.02])
+    inliers = np.array([True] * 6 + [False])
+    svg = histogram_svg(residuals, inliers, bins=4, height=42)
+    grey, red = bars(svg, "#777"), bars(svg, "#d62728")
+    # bins of width 10 mm over [-20, 20] mm: the 6 inliers share bin 2 ([-10, 0) holds 2,
+    # [0, 10) holds 4); the outlier is alone in the last bin
+    assert grey == pytest.approx([40 * 2 / 4, 40.0])
+    assert red == pytest.approx([40 * 1 / 4])
+    assert "<title>residuals -20.0 .. +20.0 mm, 7 points</title>" in svg
+
+
+def test_histogram_of_nothing_or_zeros():
+    assert "0 points" in histogram_svg(np.array([]))
+    svg = histogram_svg(np.zeros(5))
+    assert len(bars(svg, "#777")) == 1 and not bars(svg, "#d62728")
