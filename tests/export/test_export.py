@@ -122,6 +122,20 @@ def test_unusable_directory(zoo, tmp_path, parent):
         export_model(zoo, target)
 
 
+@pytest.mark.skipif(
+    hasattr(os, "geteuid") and os.geteuid() == 0, reason="root writes into read-only directories"
+)
+def test_read_only_directory(zoo, tmp_path):
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    folder.chmod(0o500)
+    try:
+        with pytest.raises(ExportError, match=r"cannot write here .*choose a writable directory"):
+            export_model(zoo, folder / "zoo.json")
+    finally:
+        folder.chmod(0o700)
+
+
 def test_the_same_output_twice_is_refused(zoo, tmp_path):
     with pytest.raises(ExportError, match="given twice"):
         export_models(zoo, [tmp_path / "a.json", tmp_path / "." / "a.json"])
