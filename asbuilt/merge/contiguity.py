@@ -41,6 +41,12 @@ from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
 __all__ = ["End", "Joint", "find_joints", "line_closest_points", "pipe_ends", "skew_tolerance"]
 
+#: Largest slack (metres) a pipe end may get: shots sparser than this cannot place a joint.
+SLACK_CAP = 2.0
+
+#: Spacing (metres) of the points sampled along each pipe to find tees in the middle of pipes.
+SAMPLE_STEP = 0.5
+
 #: A pipe end: (pipe index, 0 for the start end / 1 for the end end).
 End = tuple[int, int]
 
@@ -242,7 +248,8 @@ def find_joints(
     tolerances : Tolerances
     slack : array_like, shape (n,), metres, optional
         How far each pipe's fitted ends may fall short of its real ends beyond
-        ``joint_distance`` (e.g. its coarsest shot spacing along the axis); default 0.
+        ``joint_distance`` (e.g. its coarsest shot spacing along the axis); default 0; at most
+        :data:`SLACK_CAP`.
 
     Returns
     -------
@@ -258,6 +265,7 @@ def find_joints(
     pts, out = pipe_ends(centers, axes, lengths)
     tol = tolerances
     slack = np.zeros(n) if slack is None else np.asarray(slack, float).reshape(-1)
+    slack = np.clip(slack, 0.0, SLACK_CAP)
 
     used: set[End] = set()
     joints: list[Joint] = []
@@ -282,15 +290,19 @@ def find_joints(
 
     # 2. inferred end-to-end joints, best first
     flat = pts.reshape(-1, 3)
-    radius = (
-        2 * tol.joint_distance
-        + 1.5 * float(ods.max()) * 2.5
-        + float(ods.max())
-        + 2 * float(slack.max())
-    )
+    base = 2 * tol.joint_distance + 1.5 * float(ods.max()) * 2.5 + float(ods.max())
+    radius = base + 2 * float(slack.max())
     tree = cKDTree(flat)
+    # each end searches within the base reach plus twice its own slack: a pair is found by
+    # whichever of its two ends has the larger slack
+    radii = base + 2 * np.repeat(slack, 2)
+    pairs = set()
+    for a, near in enumerate(tree.query_ball_point(flat, radii)):
+        for b in near:
+            if b != a:
+                pairs.add((min(a, b), max(a, b)))
     candidates: list[_Candidate] = []
-    for a, b in tree.query_pairs(radius, output_type="ndarray"):
+    for a, b in sorted(pairs):
         i, ki = divmod(int(a), 2)
         j, kj = divmod(int(b), 2)
         if i == j or (min(i, j), max(i, j)) in linked_pairs:
@@ -349,13 +361,14 @@ def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, s
         else np.zeros((0, 3))
     )
     inline_tree = cKDTree(inline_points) if len(inline_idx) else None
-    center_tree = cKDTree(centers)
-    reach = (
-        float(lengths.max()) / 2
-        + 2 * tol.joint_distance
-        + 2 * float(ods.max())
-        + float(slack.max())
-    )
+    # pipes sampled every SAMPLE_STEP metres along their axes: a k-d tree of the samples finds
+    # the pipes passing near a free end whatever their length
+    counts = np.maximum(np.ceil(lengths / SAMPLE_STEP).astype(int) + 1, 2)
+    owner = np.repeat(np.arange(len(centers)), counts)
+    fractions = np.concatenate([np.linspace(-0.5, 0.5, c) for c in counts])
+    samples = centers[owner] + (fractions * lengths[owner])[:, None] * axes[owner]
+    sample_tree = cKDTree(samples)
+    reach = 0.5 * SAMPLE_STEP + 2 * tol.joint_distance + 2 * float(ods.max()) + float(slack.max())
     taken_inline: set[int] = set()
     for b in free:
         if b in used:
@@ -364,7 +377,7 @@ def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, s
         best = None
         if inline_tree is not None:
             near = inline_tree.query_ball_point(
-                pts[pipe, k], 2 * float(ods.max()) + 2 * tol.joint_distance
+                pts[pipe, k], 2 * float(ods.max()) + 2 * tol.joint_distance + float(slack[pipe])
             )
             for m in near:
                 idx = inline_idx[m]
@@ -373,7 +386,7 @@ def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, s
                 cost = _tee_at_inline(joints[idx], b, pts, out, axes, ods, tol, slack)
                 if cost is not None and (best is None or cost < best[0]):
                     best = (cost, "inline", idx)
-        for other in center_tree.query_ball_point(pts[pipe, k], reach):
+        for other in {int(owner[q]) for q in sample_tree.query_ball_point(pts[pipe, k], reach)}:
             if other == pipe:
                 continue
             s, t, q_run, _ = line_closest_points(
