@@ -20,6 +20,8 @@ import numpy as np
 
 __all__ = [
     "Frame",
+    "extra_faces",
+    "frame_from",
     "knn",
     "local_normals",
     "noise_scale",
@@ -354,7 +356,7 @@ def _orient(axis_vec, offset, inside_points):
     return -1.0 if 2 * above > inside_points.shape[0] else 1.0
 
 
-def _extra_faces(points, axes, faces, threshold, gap):
+def extra_faces(points, axes, faces, threshold, gap):
     """Add faces along the frame's axes (third face, opposite faces) while they pass the checks.
 
     ``faces`` is a list of (axis, unsigned offset, mask); returns the grown list.
@@ -413,7 +415,7 @@ def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap) -> bool
     return False
 
 
-def _frame_from(points, axes, faces, threshold, viewpoint) -> Frame:
+def frame_from(points, axes, faces, threshold, viewpoint) -> Frame:
     """Signs, offsets and labels for faces given as (axis, unsigned offset, mask)."""
     m = len(faces)
     face_axis = np.array([f[0] for f in faces], dtype=np.int64)
@@ -464,7 +466,8 @@ def segment(
     face_angle_deg: float,
     viewpoint: np.ndarray | None = None,
     visible_only: bool = False,
-) -> Frame | None:
+    alternatives: bool = False,
+) -> Frame | None | list[Frame]:
     """Find the cuboid frame and seen faces that explain the most points.
 
     Parameters
@@ -484,14 +487,18 @@ def segment(
         The viewpoint is known to be right: frames with a face turned away from it (impossible
         for points seen from there) rank below every other frame.
 
+    alternatives : bool
+        Return every frame tried, best first, instead of the best one.
+
     Returns
     -------
-    Frame or None
-        None when no plane has three points.
+    Frame or None (list of Frame with ``alternatives``)
+        None (an empty list) when no plane has three points.
     """
     rng = np.random.default_rng(_RNG_SEED)
     cos_face = float(np.cos(np.radians(face_angle_deg)))
     best, best_score = None, None
+    tried_frames: list = []
     for tried, first in enumerate(_first_planes(points, normals, threshold, cos_face, rng)):
         if tried >= _MAX_FIRST and best_score[-2] >= _ENOUGH * points.shape[0]:
             break
@@ -506,15 +513,19 @@ def segment(
             d2 /= np.linalg.norm(d2)
             axes = np.vstack([d1, d2, cross3(d1, d2)])
             faces = [(0, o1, mask1), (1, float(d2 @ points[mask2].mean(axis=0)), mask2)]
-            faces = _extra_faces(points, axes, faces, threshold, gap)
-        frame = _frame_from(points, axes, faces, threshold, viewpoint)
+            faces = extra_faces(points, axes, faces, threshold, gap)
+        frame = frame_from(points, axes, faces, threshold, viewpoint)
         score = _score(points, frame, threshold)
         if visible_only and viewpoint is not None:
             score = (_all_facing(points, frame, viewpoint),) + score
+        tried_frames.append((score, len(tried_frames), frame))
         if best_score is None or score > best_score:
             best, best_score = frame, score
         if score[-2] == points.shape[0] and (len(score) == 2 or score[0]):
             break  # every point explained: no other hypothesis can do better
+    if alternatives:
+        tried_frames.sort(key=lambda item: (item[0], -item[1]), reverse=True)
+        return [frame for _, _, frame in tried_frames]
     return best
 
 

@@ -124,6 +124,87 @@ def _robust_scale(residual: np.ndarray, floor: float) -> float:
     return max(_MAD_TO_SIGMA * _median(np.abs(residual)), floor)
 
 
+def _robust_fit(model, x, noise, floor, cutoff):
+    """IRLS with Tukey's biweight, then a plain least-squares refit on the inliers.
+
+    The scale starts at the noise level and is re-estimated (median absolute residual) on the
+    biweight's support each iteration; inliers are within ``cutoff`` robust sigmas. Updates
+    ``model`` in place; returns label (n,), residual (n,) metres, inliers (n,) bool, scale
+    (metres) and the number of Gauss-Newton steps.
+    """
+    iterations = 0
+    label, residual = model.assign(x)
+    scale = max(noise, floor)
+    for _ in range(_IRLS_ITERATIONS):
+        iterations += 1
+        support = np.abs(residual) < _TUKEY_C * scale
+        if np.count_nonzero(support) < 3:
+            break
+        scale = _robust_scale(residual[support], floor)
+        weights = _tukey(residual / (_TUKEY_C * scale))
+        moved = model.step(x, label, weights)
+        label, residual = model.assign(x)
+        if moved < 1e-5:
+            break
+    inliers = np.abs(residual) <= cutoff * scale
+    for _ in range(_REFIT_ITERATIONS):
+        if np.count_nonzero(inliers) < 3:
+            break
+        iterations += 1
+        moved = model.step(x[inliers], label[inliers], np.ones(np.count_nonzero(inliers)))
+        label, residual = model.assign(x)
+        if moved < 1e-9:
+            break
+    if np.any(inliers):
+        scale = _robust_scale(residual[inliers], floor)
+    inliers = np.abs(residual) <= cutoff * scale
+    return label, residual, inliers, scale, iterations
+
+
+def _grow(model, x, label, inliers, threshold, gap, viewpoint):
+    """A model with the faces the refined frame reveals among the rejected points, or None.
+
+    Segmentation works with a frame from the first planes' consensus sets; once the joint fit
+    has refined it, a face whose points were off by a fraction of a degree may line up.
+    """
+    faces = []
+    for f in range(model.offset.shape[0]):
+        mask = inliers & (label == f)
+        faces.append((int(model.face_axis[f]), float(model.face_sign[f] * model.offset[f]), mask))
+    grown = _faces.extra_faces(x, model.axes, faces, threshold, gap)
+    if len(grown) == len(faces):
+        return None
+    frame = _faces.frame_from(x, model.axes, grown, threshold, viewpoint)
+    return _Model(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
+
+
+def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint):
+    """Robust joint fit starting from one segmentation frame (plus faces it then reveals).
+
+    Returns model, label (n,), residual (n,) metres, inliers (n,) bool, scale (metres),
+    Gauss-Newton steps and whether only one face is seen.
+    """
+    one_face = frame.n_faces == 1
+    if one_face:
+        normal = frame.axes[int(frame.face_axis[0])]
+        basis = _faces._perpendicular_basis(normal)
+        rect = _faces.min_area_rectangle(x[frame.labels == 0] @ basis)
+        in_plane = rect @ basis.T
+        axes = np.vstack([normal, in_plane[0], _faces.cross3(normal, in_plane[0])])
+        model = _Model(axes, np.array([0]), frame.face_sign.copy(), frame.face_offset.copy(), None)
+        model.rot_basis = axes[1:].T.copy()
+    else:
+        model = _Model(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
+    label, residual, inliers, scale, iterations = _robust_fit(model, x, noise, floor, cutoff)
+    if not one_face:
+        grown = _grow(model, x, label, inliers, cutoff * scale, gap, viewpoint)
+        if grown is not None:
+            model = grown
+            label, residual, inliers, scale, more = _robust_fit(model, x, noise, floor, cutoff)
+            iterations += more
+    return model, label, residual, inliers, scale, iterations, one_face
+
+
 def _validate(points) -> np.ndarray:
     try:
         pts = np.array(as_points(points))
@@ -366,7 +447,7 @@ def fit_cuboid(
     # from it fall on a pan-tilt raster's rows and columns.
     viewpoint = np.zeros(3) if view is None else view
     window = _silhouette.raster_window(pts, viewpoint)
-    frame = _faces.segment(
+    frames = _faces.segment(
         x,
         normals,
         threshold,
@@ -374,59 +455,29 @@ def fit_cuboid(
         tolerances.face_angle_deg,
         viewpoint - origin,
         visible_only=window is not None or view is not None,
+        alternatives=True,
     )
-    if frame is None:
+    if not frames:
         raise FitError(
             "cuboid: no planar face found (no three points on one plane); check the points or "
             "fit the object as a hull."
         )
-    one_face = frame.n_faces == 1
+    # The best-scoring frame almost always fits; when it leaves too many points out, the other
+    # hypotheses are fitted too and the one keeping the most points wins.
+    best = None
+    for frame in frames:
+        trial = _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint - origin)
+        if best is None or np.count_nonzero(trial[3]) > np.count_nonzero(best[3]):
+            best = trial
+        if n - np.count_nonzero(best[3]) <= tolerances.max_outlier_fraction * n:
+            break
+    model, label, residual, inliers, scale, iterations, one_face = best
     notes: list[str] = []
     if one_face:
-        k0 = int(frame.face_axis[0])
-        normal = frame.axes[k0]
-        basis = _faces._perpendicular_basis(normal)
-        on_face = frame.labels == 0
-        rect = _faces.min_area_rectangle(x[on_face] @ basis)
-        in_plane = rect @ basis.T
-        axes = np.vstack([normal, in_plane[0], _faces.cross3(normal, in_plane[0])])
-        model = _Model(axes, np.array([0]), frame.face_sign.copy(), frame.face_offset.copy(), None)
-        model.rot_basis = axes[1:].T.copy()
         notes.append(
             "one face seen: the in-plane axes come from the minimum-area rectangle of the points "
             "and the unseen depth is set to the smaller visible width (not measured)"
         )
-    else:
-        model = _Model(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
-
-    # Robust joint fit (IRLS with Tukey's biweight; the scale starts at the noise level and is
-    # re-estimated on the weights' support), then inliers and a plain refit on them.
-    iterations = 0
-    label, residual = model.assign(x)
-    scale = max(noise, floor)
-    for _ in range(_IRLS_ITERATIONS):
-        iterations += 1
-        support = np.abs(residual) < _TUKEY_C * scale
-        if np.count_nonzero(support) < 3:
-            break
-        scale = _robust_scale(residual[support], floor)
-        weights = _tukey(residual / (_TUKEY_C * scale))
-        moved = model.step(x, label, weights)
-        label, residual = model.assign(x)
-        if moved < 1e-5:
-            break
-    inliers = np.abs(residual) <= cutoff * scale
-    for _ in range(_REFIT_ITERATIONS):
-        if np.count_nonzero(inliers) < 3:
-            break
-        iterations += 1
-        moved = model.step(x[inliers], label[inliers], np.ones(np.count_nonzero(inliers)))
-        label, residual = model.assign(x)
-        if moved < 1e-9:
-            break
-    if np.any(inliers):
-        scale = _robust_scale(residual[inliers], floor)
-    inliers = np.abs(residual) <= cutoff * scale
     n_out = n - int(np.count_nonzero(inliers))
     if n_out > tolerances.max_outlier_fraction * n:
         raise FitError(
