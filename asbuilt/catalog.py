@@ -274,6 +274,9 @@ class Catalog:
 # nominal sizes
 
 
+#: Unicode fraction glyphs operators may type (``1½"``).
+_VULGAR = {"\u00bd": "1/2", "\u00bc": "1/4", "\u00be": "3/4", "\u215b": "1/8", "\u215c": "3/8"}
+
 _FRACTION = re.compile(r"^(?:(\d+)[\s-]+)?(\d+)/(\d+)$")
 
 
@@ -297,6 +300,7 @@ def parse_nominal(text: str | None) -> NominalHint | None:
     """Parse an operator's nominal size hint.
 
     Understood forms: ``4"``, ``4 in``, ``4in``, ``4 inch``, ``NPS 4``, ``1 1/2"``, ``1-1/2"``,
+    ``1½"``,
     ``3/4``, ``DN100``, ``DN 100``, and a bare number such as ``4`` or ``100`` (read as the
     catalog's own designation first: NPS for ASME catalogs, DN for EN 10220). Returns None for
     anything else.
@@ -305,6 +309,9 @@ def parse_nominal(text: str | None) -> NominalHint | None:
         return None
     raw = str(text).strip()
     lowered = raw.lower().replace("\u201d", '"').replace("''", '"')
+    for glyph, text in _VULGAR.items():
+        lowered = lowered.replace(glyph, f" {text}")
+    lowered = " ".join(lowered.split())
     match = re.match(r"^dn\s*(\d+(?:\.\d+)?)$", lowered)
     if match:
         return NominalHint("dn", float(match.group(1)), raw)

@@ -427,3 +427,11 @@ def test_a_long_chain_is_one_spool_with_every_joint_exact():
     assert len(model.spools) == 1
     assert sum(c.type == "elbow" for c in model.components) == 399
     assert connection_mismatches(model.components, tolerance=1e-4) == (798, [])
+
+
+def test_a_report_without_pipes_passes_through():
+    obj, res = box_fit()
+    model = merge_model(report_of([], extra=[(obj, res)]))
+    assert [c.id for c in model.components] == ["C1"] and model.spools == ()
+    assert model.catalog == "asme-b36.10m"
+    assert merge_model(report_of([])).components == ()
