@@ -7,7 +7,10 @@ estimated by quasi-Monte Carlo inside the intersection of the two boxes: scrambl
 (cylinder, cone frustum, torus sector, box, sphere, convex hull, thick plate). With ``N`` samples
 and a hit share ``p`` the volume's standard error is bounded by the Monte Carlo one,
 ``V_box * sqrt(p (1 - p) / N)`` (Sobol points converge faster; the bound is conservative).
-Components joined end to end (ends within ``touch_distance``) or linked in the scan are never
+An overlap is an error only when it survives shrinking both solids by ``k_sigma`` standard
+errors of the gap between their surfaces (the fits' centre and radius or size standard errors in
+quadrature, split between the two); a shallower overlap (a pipe resting on a support, fitted a
+millimetre into it) is an unverifiable warning. Components joined end to end (ends within ``touch_distance``) or linked in the scan are never
 a clash; nor, with ``end_connections`` (the default), is a member whose axis *ends* inside the
 other solid: a beam framing into a column or a nozzle into a tank is a connection. A clash is
 one member passing through another.
@@ -22,14 +25,15 @@ from asbuilt.findings import Suggestion
 from asbuilt.model import Bend, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
-from ._context import Context, axis_of, ends_of
+from ._context import Context, axis_of, ends_of, stderr_value
 from ._graph import end_pairs, linked_pairs
 
 __all__ = ["CHECKS", "inside", "bounds", "candidate_pairs", "overlap_volume"]
 
 
-def _in_segment(points, start, end, radius_start, radius_end=None) -> np.ndarray:
-    """Inside a cylinder or cone frustum from ``start`` to ``end``; points (n, 3) m."""
+def _in_segment(points, start, end, radius_start, radius_end=None, erode=0.0) -> np.ndarray:
+    """Inside a cylinder or cone frustum from ``start`` to ``end`` shrunk by ``erode`` metres;
+    points (n, 3) m."""
     d = np.asarray(end) - np.asarray(start)
     length = np.linalg.norm(d)
     u = d / length
@@ -38,10 +42,10 @@ def _in_segment(points, start, end, radius_start, radius_end=None) -> np.ndarray
     radial = np.linalg.norm(rel - np.outer(t, u), axis=1)
     r_end = radius_start if radius_end is None else radius_end
     r = radius_start + (r_end - radius_start) * np.clip(t / length, 0.0, 1.0)
-    return (t >= 0) & (t <= length) & (radial <= r)
+    return (t >= erode) & (t <= length - erode) & (radial <= r - erode)
 
 
-def _in_bend(points, bend: Bend) -> np.ndarray:
+def _in_bend(points, bend: Bend, erode=0.0) -> np.ndarray:
     c = bend.center
     a = bend.start - c
     b = bend.end - c
@@ -56,54 +60,55 @@ def _in_bend(points, bend: Bend) -> np.ndarray:
     h = rel @ n
     x, y = rel @ e1, rel @ e2
     rho = np.hypot(x, y)
-    in_tube = (rho - big_r) ** 2 + h**2 <= bend.outer_radius**2
+    in_tube = (rho - big_r) ** 2 + h**2 <= max(bend.outer_radius - erode, 0.0) ** 2
     phi = np.arctan2(y, x) % (2 * np.pi)
     return in_tube & (phi <= np.radians(bend.angle_deg) + 1e-12)
 
 
-def _in_plate(points, plane: Plane, thickness: float) -> np.ndarray:
+def _in_plate(points, plane: Plane, thickness: float, erode=0.0) -> np.ndarray:
     outline = plane.outline
     if len(outline) < 3:
         return np.zeros(len(points), bool)
     d = (points - plane.point) @ plane.normal
-    ok = np.abs(d) <= thickness / 2
+    ok = np.abs(d) <= thickness / 2 - erode
     proj = points - np.outer(d, plane.normal)
     for i in range(len(outline)):
         p, q = outline[i], outline[(i + 1) % len(outline)]
-        ok &= (np.cross(q - p, proj - p) @ plane.normal) >= -1e-12
+        edge = np.cross(q - p, proj - p) @ plane.normal / max(np.linalg.norm(q - p), 1e-15)
+        ok &= edge >= erode - 1e-12
     return ok
 
 
-def inside(geometry, points, plate_thickness: float = 0.01) -> np.ndarray:
+def inside(geometry, points, plate_thickness: float = 0.01, erode: float = 0.0) -> np.ndarray:
     """Whether each point (n, 3) metres lies inside the solid of ``geometry``; bool (n,).
 
     Pipes and fittings are solid (their bore counts as inside: a pipe through another's bore is
-    still a clash).
+    still a clash). ``erode`` (metres) shrinks the solid by that much on every side first.
     """
     points = np.asarray(points, dtype=np.float64)
-    g = geometry
+    g, e = geometry, float(erode)
     if isinstance(g, Straight):
-        return _in_segment(points, g.start, g.end, g.outer_radius)
+        return _in_segment(points, g.start, g.end, g.outer_radius, erode=e)
     if isinstance(g, Reducer):
-        return _in_segment(points, g.start, g.end, g.outer_radius_start, g.outer_radius_end)
+        return _in_segment(points, g.start, g.end, g.outer_radius_start, g.outer_radius_end, e)
     if isinstance(g, Tee):
-        return _in_segment(points, g.run_start, g.run_end, g.outer_radius) | _in_segment(
-            points, g.center, g.branch_end, g.branch_outer_radius
+        return _in_segment(points, g.run_start, g.run_end, g.outer_radius, erode=e) | (
+            _in_segment(points, g.center, g.branch_end, g.branch_outer_radius, erode=e)
         )
     if isinstance(g, Bend):
-        return _in_bend(points, g)
+        return _in_bend(points, g, e)
     if isinstance(g, Cylinder):
-        s, e = g.ends
-        return _in_segment(points, s, e, g.radius)
+        s, end = g.ends
+        return _in_segment(points, s, end, g.radius, erode=e)
     if isinstance(g, Cuboid):
         local = (points - g.center) @ g.axes.T
-        return np.all(np.abs(local) <= 0.5 * g.size, axis=1)
+        return np.all(np.abs(local) <= 0.5 * g.size - e, axis=1)
     if isinstance(g, Sphere):
-        return np.linalg.norm(points - g.center, axis=1) <= g.radius
+        return np.linalg.norm(points - g.center, axis=1) <= g.radius - e
     if isinstance(g, Hull):
-        return g.distance(points) <= 0
+        return g.distance(points) <= -e
     if isinstance(g, Plane):
-        return _in_plate(points, g, plate_thickness)
+        return _in_plate(points, g, plate_thickness, e)
     raise TypeError(f"unknown geometry {type(g).__name__}")
 
 
@@ -169,9 +174,19 @@ def candidate_pairs(boxes: np.ndarray) -> list[tuple[int, int]]:
 
 
 def overlap_volume(
-    ga, gb, box_a, box_b, samples: int = 4096, seed: int = 0, plate_thickness: float = 0.01
+    ga,
+    gb,
+    box_a,
+    box_b,
+    samples: int = 4096,
+    seed: int = 0,
+    plate_thickness: float = 0.01,
+    erode: float = 0.0,
 ):
     """Overlap volume of two solids by quasi-Monte Carlo.
+
+    With ``erode`` > 0 both solids are first shrunk by that many metres on every side (the
+    overlap that is left is beyond that much uncertainty in where their surfaces are).
 
     Returns ``(volume m^3, standard error m^3, centroid (3,) m or None)``.
     """
@@ -183,13 +198,27 @@ def overlap_volume(
     exponent = max(int(np.ceil(np.log2(max(samples, 2)))), 1)
     unit = qmc.Sobol(d=3, scramble=True, seed=seed).random_base2(exponent)
     points = lo + unit * (hi - lo)
-    hit = inside(ga, points, plate_thickness) & inside(gb, points, plate_thickness)
+    hit = inside(ga, points, plate_thickness, erode) & inside(gb, points, plate_thickness, erode)
     n = len(points)
     share = float(hit.mean())
     volume = box_volume * share
     stderr = box_volume * float(np.sqrt(max(share * (1 - share), 1.0 / n) / n))
     centroid = points[hit].mean(axis=0) if hit.any() else None
     return volume, stderr, centroid
+
+
+def surface_stderr(component) -> float:
+    """Standard error (metres) of where a component's surface is: its fit's centre and radius
+    (or half size) standard errors in quadrature; 0 without a fit (fittings placed by merging)."""
+    fit = component.fit
+    if fit is None:
+        return 0.0
+    centre = stderr_value(fit.stderr, "center") or 0.0
+    radius = stderr_value(fit.stderr, "radius")
+    if radius is None:
+        size = stderr_value(fit.stderr, "size")
+        radius = 0.5 * size if size is not None else 0.0
+    return float(np.hypot(centre, radius))
 
 
 def member_ends(geometry) -> np.ndarray:
@@ -284,22 +313,40 @@ def check_clash(ctx: Context) -> None:
         )
         if volume <= min_volume:
             continue
+        # the overlap that survives shrinking both solids by k standard errors of the gap between
+        # their surfaces is certain; an overlap within that band may be fit noise (a pipe resting
+        # on a support)
+        margin = 0.5 * ctx.k * float(np.hypot(surface_stderr(a), surface_stderr(b)))
+        certain = volume - ctx.k * se > min_volume
+        if certain and margin > 0:
+            kept, kept_se, _ = overlap_volume(
+                a.geometry,
+                b.geometry,
+                boxes[i],
+                boxes[j],
+                samples,
+                seed=i * 7919 + j,
+                plate_thickness=thickness,
+                erode=margin,
+            )
+            certain = kept - ctx.k * kept_se > min_volume
         first, second = sorted((a.id, b.id))
         ctx.emit(
             slug,
             [first, second],
-            f"{first} and {second} intersect: {volume * 1e6:.0f} cm3 (+- {se * 1e6:.0f}) of overlap",
+            f"{first} and {second} intersect: {volume * 1e6:.0f} cm3 (+- {se * 1e6:.0f}) of overlap"
+            + ("" if certain else f", within the fits' uncertainty (+- {margin * 1000:.1f} mm)"),
             location=centroid,
             measured=volume,
             allowed=min_volume,
             stderr=se,
             unit="m3",
-            outcome="violation" if volume - ctx.k * se > min_volume else "unverifiable",
+            outcome="violation" if certain else "unverifiable",
             rescan=f"scan {first} and {second} where they meet",
             suggestions=(
                 Suggestion(
-                    f"check on site whether {first} and {second} really "
-                    "intersect, then reroute one of them"
+                    f"check on site whether {first} and {second} really intersect, then reroute "
+                    "one of them"
                 ),
             ),
         )

@@ -125,3 +125,36 @@ def test_thousand_objects_grid_has_no_clash():
                                        geometry=Cuboid(c, np.eye(3), [0.3, 0.3, 0.3])))
     config = loads_rules('select = ["clash"]')
     assert check_model(model(*comps), config) == ()
+
+
+def test_pipe_resting_on_a_beam_within_fit_noise_is_not_an_error():
+    from rules_builders import cuboid_fit
+
+    # a beam along x, 0.3 m deep (its top at z = 1.0) and 0.5 m wide
+    fit = cuboid_fit([0, 0, 0.85], [1, 0, 0], (0.3, 0.5, 3.0), center_se=0.002, size_se=0.002)
+    beam = Component(id="B1", type="cuboid", geometry=fit.primitive, fit=fit)
+    r = 0.1143 / 2
+    # fitted 1.5 mm into the beam's top (z = 1.0) while the fits are good to ~2 mm
+    resting = pipe("P1", [0, -1.5, 1.0 + r - 0.0015], [0, 1.5, 1.0 + r - 0.0015], 0.1143,
+                   center_se=0.002, radius_se=0.001)
+    (f,) = [f for f in check_model(model(beam, resting)) if f.slug == "clash"]
+    assert f.severity == "warning" and f.unverifiable
+    assert "within the fits' uncertainty" in f.message
+    # 30 mm into it is a clash whatever the noise
+    sunk = pipe("P1", [0, -1.5, 1.0 + r - 0.03], [0, 1.5, 1.0 + r - 0.03], 0.1143,
+                center_se=0.002, radius_se=0.001)
+    (f,) = [f for f in check_model(model(beam, sunk)) if f.slug == "clash"]
+    assert f.severity == "error"
+
+
+@pytest.mark.parametrize(
+    "geometry, point, erode, expected",
+    [
+        (Straight([0, 0, 0], [1, 0, 0], 0.1), [0.5, 0.095, 0], 0.0, True),
+        (Straight([0, 0, 0], [1, 0, 0], 0.1), [0.5, 0.095, 0], 0.01, False),
+        (Cuboid([0, 0, 0], np.eye(3), [1, 1, 1]), [0.495, 0, 0], 0.01, False),
+        (Sphere([0, 0, 0], 1.0), [0.985, 0, 0], 0.01, True),
+    ],
+)
+def test_inside_eroded(geometry, point, erode, expected):
+    assert bool(inside(geometry, np.array([point]), erode=erode)[0]) == expected
