@@ -91,6 +91,14 @@ def register(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
+def _number(value):
+    """A finite float, or None (JSON has no NaN)."""
+    if value is None:
+        return None
+    value = float(value)
+    return value if value == value and abs(value) != float("inf") else None
+
+
 def finding_dict(finding) -> dict:
     """A finding as JSON-ready data, in the shape of the model document's ``findings``."""
     location = None if finding.location is None else [float(x) for x in finding.location]
@@ -101,9 +109,9 @@ def finding_dict(finding) -> dict:
         "objects": list(finding.objects),
         "location": location,
         "message": finding.message,
-        "measured": finding.measured,
-        "allowed": finding.allowed,
-        "stderr": finding.stderr,
+        "measured": _number(finding.measured),
+        "allowed": _number(finding.allowed),
+        "stderr": _number(finding.stderr),
         "unit": finding.unit,
         "suggestions": [
             {"description": s.description, "change": dict(s.change), "unambiguous": s.unambiguous}
@@ -199,7 +207,8 @@ def run(args: argparse.Namespace) -> int:
     out = Console(file=sys.stdout, highlight=False, soft_wrap=True)
     err = Console(file=sys.stderr, highlight=False, soft_wrap=True)
     if args.format == "json":
-        sys.stdout.write(json.dumps([finding_dict(f) for f in findings], indent=2) + "\n")
+        text = json.dumps([finding_dict(f) for f in findings], indent=2, allow_nan=False)
+        sys.stdout.write(text + "\n")
         for change in changes:
             err.print(f"fixed: {escape(change)}")
         if args.fix:
