@@ -101,3 +101,14 @@ def test_incompatible_kinds_do_not_match():
     built = Model(components=(straight("P1", [-0.5, 0, 0], [0.5, 0, 0]),))
     match = match_design(built, design)
     assert not match.pairs and len(match.missing) == 1 and len(match.extra) == 1
+
+
+def test_documented_example_loads():
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "design-format.md").read_text(
+        encoding="utf-8")
+    block = re.search(r"```json\n(.*?)```", text, re.S).group(1)
+    design = loads_design(block, source="docs/design-format.md")
+    assert [d.kind for d in design.components] == ["pipe", "pipe", "column", "box"]

@@ -109,3 +109,15 @@ def test_missing_file(tmp_path):
 def test_rules_tables_may_be_named_by_code():
     config = loads_rules("[AB202]\nsteel_ratio = 250")
     assert config.option("out-of-plumb", "steel_ratio") == 250.0
+
+
+def test_documented_rules_file_example_loads():
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "rules.md").read_text(encoding="utf-8")
+    block = re.search(r"```toml\n(.*?)```", text, re.S).group(1)
+    config = loads_rules(block, source="docs/rules.md")
+    assert config.option("out-of-plumb", "steel_ratio") == 1000.0
+    assert not config.is_active("too-few-points")
+    assert config.severity("clash") == "warning"
+    assert config.tolerances.angle_snap_deg == 1.5
