@@ -448,6 +448,21 @@ def _score(points, frame: Frame, threshold) -> tuple[int, float]:
     return int(np.count_nonzero(kept)), -float(np.sum(dist[kept] ** 2))
 
 
+def _already_a_face(tried_frames, normal, offset, cos_face, threshold) -> bool:
+    """Whether a plane is (nearly) a face of a frame built from an earlier hypothesis."""
+    for _, _, frame in tried_frames:
+        if frame.n_faces < 2:
+            continue
+        normals = frame.face_sign[:, None] * frame.axes[frame.face_axis]
+        dots = normals @ normal
+        same = (np.abs(dots) > cos_face) & (
+            np.abs(np.sign(dots) * offset - frame.face_offset) < 2 * threshold
+        )
+        if same.any():
+            return True
+    return False
+
+
 def _all_facing(points, frame: Frame, viewpoint) -> bool:
     """Whether every face's outward normal points toward the viewpoint."""
     normals = frame.face_sign[:, None] * frame.axes[frame.face_axis]
@@ -503,6 +518,8 @@ def segment(
         if tried >= _MAX_FIRST and best_score[-2] >= _ENOUGH * points.shape[0]:
             break
         d1, o1, mask1 = first
+        if _already_a_face(tried_frames, d1, o1, cos_face, threshold):
+            continue  # it would grow into a frame already built
         second = _second_plane(points, normals, first, threshold, gap, rng)
         if second is None:
             axes = np.vstack([d1, _perpendicular_basis(d1).T])

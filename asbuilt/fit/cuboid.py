@@ -83,23 +83,25 @@ class _Model:
         label = np.argmin(np.abs(res), axis=1)
         return label, res[np.arange(x.shape[0]), label]
 
-    def jacobian(self, x: np.ndarray, label: np.ndarray) -> np.ndarray:
-        """d residual / d (rotation in ``rot_basis``, offsets): shape (n, q + m)."""
-        normal = self.normals()[label]
-        q = self.rot_basis.shape[1]
-        jac = np.zeros((x.shape[0], q + self.offset.shape[0]))
-        jac[:, :q] = _faces.cross_rows(normal, x) @ self.rot_basis
-        jac[np.arange(x.shape[0]), q + label] = -1.0
-        return jac
+    def jacobian(self, x: np.ndarray, label: np.ndarray, normal=None) -> np.ndarray:
+        """d residual / d (rotation in ``rot_basis``, offsets): shape (n, q + m).
+
+        ``normal`` (n, 3), each point's face normal, may be passed when already computed.
+        """
+        if normal is None:
+            normal = self.normals()[label]
+        offsets = -(label[:, None] == np.arange(self.offset.shape[0])).astype(np.float64)
+        return np.hstack([_faces.cross_rows(normal, x) @ self.rot_basis, offsets])
 
     def step(self, x, label, weights) -> float:
         """One weighted Gauss-Newton step; returns the step's size (radians + metres)."""
-        residual = np.einsum("ij,ij->i", x, self.normals()[label]) - self.offset[label]
-        jac = self.jacobian(x, label)
+        normal = self.normals()[label]
+        residual = np.einsum("ij,ij->i", x, normal) - self.offset[label]
+        jac = self.jacobian(x, label, normal)
         weighted = jac.T * weights
-        normal = weighted @ jac
-        normal[np.diag_indices_from(normal)] += 1e-12 * max(float(np.trace(normal)), 1e-30)
-        delta = np.linalg.solve(normal, -(weighted @ residual))
+        matrix = weighted @ jac
+        matrix.flat[:: matrix.shape[0] + 1] += 1e-12 * max(float(np.trace(matrix)), 1e-30)
+        delta = np.linalg.solve(matrix, -(weighted @ residual))
         q = self.rot_basis.shape[1]
         rotation = _rodrigues(self.rot_basis @ delta[:q])
         self.axes = self.axes @ rotation.T
