@@ -22,7 +22,7 @@ from asbuilt.primitives import Cuboid
 
 from ._catalog import nps_value
 from ._context import Context, axis_of, centre_of, deg, mm, stderr_value, verdict, verdict_min
-from ._graph import adjacency
+from ._graph import adjacency, contiguous_pipes
 
 __all__ = ["CHECKS", "measured_axis", "axis_stderr_deg", "rotation_between", "material_of"]
 
@@ -116,11 +116,34 @@ def _plan_azimuth(component: Component) -> float | None:
     return None
 
 
+def _fixes(cid, touching, dev, snap, description, rotation, centre) -> tuple:
+    """The rotation fix: unambiguous for a free component; for one joined to others (a pipe
+    in a spool) rotating it would open its joints, so the advice is to merge again with a larger
+    snap angle instead."""
+    change = {
+        "object": cid,
+        "field": "rotation",
+        "value": np.asarray(rotation).tolist(),
+        "about": [float(x) for x in centre],
+    }
+    if not touching.get(cid):
+        return (Suggestion(description, change, unambiguous=True),)
+    return (
+        Suggestion(
+            f"if it is meant to be regular, merge again with [general] angle_snap_deg = "
+            f"{np.ceil(dev + 0.5):.0f} (now {snap:g}) so merging regularises it and "
+            "rebuilds its joints"
+        ),
+        Suggestion(description, change, unambiguous=False),
+    )
+
+
 def check_misaligned(ctx: Context) -> None:
     slug = "misaligned-axis"
     snap = float(ctx.general("angle_snap_deg"))
     intended = float(ctx.general("intended_angle_deg"))
     comps = {c.id: c for c in ctx.model.components}
+    touching = adjacency(ctx.model, float(ctx.opt("clash", "touch_distance")))
     for comp in ctx.model.components:
         found = axis_of(comp.geometry)
         if found is None:
@@ -149,17 +172,14 @@ def check_misaligned(ctx: Context) -> None:
             unit="deg",
             outcome=verdict(dev, snap, se, ctx.k),
             rescan=f"scan {comp.id} over a longer stretch to measure its axis better",
-            suggestions=(
-                Suggestion(
-                    f"make {comp.id}'s axis {direction} (rotate it {deg(dev)} about its centre)",
-                    {
-                        "object": comp.id,
-                        "field": "rotation",
-                        "value": rot.tolist(),
-                        "about": [float(x) for x in centre],
-                    },
-                    unambiguous=True,
-                ),
+            suggestions=_fixes(
+                comp.id,
+                touching,
+                dev,
+                snap,
+                f"make {comp.id}'s axis {direction} (rotate it {deg(dev)} about its centre)",
+                rot,
+                centre,
             ),
         )
     if not ctx.opt(slug, "compare_in_plan"):
@@ -167,51 +187,46 @@ def check_misaligned(ctx: Context) -> None:
     graph = adjacency(
         ctx.model, float(ctx.opt("clash", "touch_distance")), float(ctx.general("joint_distance"))
     )
-    done = set()
-    for a in sorted(graph):
-        for b in sorted(graph[a]):
-            pair = tuple(sorted((a, b)))
-            if pair in done or a not in comps or b not in comps:
-                continue
-            done.add(pair)
-            za, zb = _plan_azimuth(comps[pair[0]]), _plan_azimuth(comps[pair[1]])
-            if za is None or zb is None:
-                continue
-            diff = (zb - za) % 90.0
-            dev = min(diff, 90.0 - diff)
-            if not snap < dev < intended:
-                continue
-            sa, sb = axis_stderr_deg(comps[pair[0]]), axis_stderr_deg(comps[pair[1]])
-            se = float(np.hypot(sa or 0.0, sb or 0.0)) if (sa or sb) else None
-            turn = -diff if diff < 45 else 90.0 - diff
-            second = comps[pair[1]]
-            centre = centre_of(second.geometry)
-            ctx.emit(
-                slug,
-                list(pair),
-                f"axis is {deg(dev)} off parallel/perpendicular to {pair[0]} in plan "
-                f"(regularised within {deg(snap)}, intended beyond {deg(intended)})",
-                location=centre,
-                measured=dev,
-                allowed=snap,
-                stderr=se,
-                unit="deg",
-                outcome=verdict(dev, snap, se, ctx.k),
-                rescan=f"scan {pair[0]} and {pair[1]} over longer stretches",
-                suggestions=(
-                    Suggestion(
-                        f"turn {pair[1]} {deg(abs(turn))} about the vertical to line up with "
-                        f"{pair[0]}",
-                        {
-                            "object": pair[1],
-                            "field": "rotation",
-                            "value": _rot_z(turn).tolist(),
-                            "about": [float(x) for x in centre],
-                        },
-                        unambiguous=True,
-                    ),
-                ),
-            )
+    pairs = {tuple(sorted((a, b))) for a in graph for b in graph[a]}
+    pipes = [c.id for c in ctx.model.components if c.type in ("pipe", "cylinder")]
+    pairs |= {(a, b) for a, b, _ in contiguous_pipes(ctx.model, graph, pipes)}
+    for pair in sorted(pairs):
+        if pair[0] not in comps or pair[1] not in comps:
+            continue
+        za, zb = _plan_azimuth(comps[pair[0]]), _plan_azimuth(comps[pair[1]])
+        if za is None or zb is None:
+            continue
+        diff = (zb - za) % 90.0
+        dev = min(diff, 90.0 - diff)
+        if not snap < dev < intended:
+            continue
+        sa, sb = axis_stderr_deg(comps[pair[0]]), axis_stderr_deg(comps[pair[1]])
+        se = float(np.hypot(sa or 0.0, sb or 0.0)) if (sa or sb) else None
+        turn = -diff if diff < 45 else 90.0 - diff
+        second = comps[pair[1]]
+        centre = centre_of(second.geometry)
+        ctx.emit(
+            slug,
+            list(pair),
+            f"axis is {deg(dev)} off parallel/perpendicular to {pair[0]} in plan "
+            f"(regularised within {deg(snap)}, intended beyond {deg(intended)})",
+            location=centre,
+            measured=dev,
+            allowed=snap,
+            stderr=se,
+            unit="deg",
+            outcome=verdict(dev, snap, se, ctx.k),
+            rescan=f"scan {pair[0]} and {pair[1]} over longer stretches",
+            suggestions=_fixes(
+                pair[1],
+                touching,
+                dev,
+                snap,
+                f"turn {pair[1]} {deg(abs(turn))} about the vertical to line up with {pair[0]}",
+                _rot_z(turn),
+                centre,
+            ),
+        )
 
 
 def check_plumb(ctx: Context) -> None:
