@@ -78,7 +78,13 @@ def check_nonstandard(ctx: Context, table: SizeTable | None) -> None:
             continue
         where = centre_of(comp.geometry)
         catalog = table.standard if table is not None else (ctx.model.catalog or "catalog")
-        if table is None:
+        count = max(int(ctx.opt(slug, "suggest")), 1)
+        if table is not None:
+            nearest = table.nearest(od, count)
+        else:  # no catalog at hand: the nearest sizes merging recorded
+            cands = sorted(_candidates(comp, None, od, 0.0), key=lambda c: abs(c[1] - od))
+            nearest = [(n, s, od - s) for n, s in cands[:count]]
+        if not nearest:
             ctx.emit(
                 slug,
                 [comp.id],
@@ -89,7 +95,6 @@ def check_nonstandard(ctx: Context, table: SizeTable | None) -> None:
                 stderr=se,
             )
             continue
-        nearest = table.nearest(od, max(int(ctx.opt(slug, "suggest")), 1))
         name, size_od, off = nearest[0]
         tol = float(ctx.general("diameter_tolerance"))
         outcome = verdict(abs(off), tol, se, ctx.k)

@@ -184,3 +184,11 @@ def test_different_sizes_whose_fits_agree_are_unverifiable():
              status="snapped", od_stderr=0.004)
     (f,) = only(run(a, b), "contiguous-diameter-mismatch")
     assert f.unverifiable and f.severity == "warning"
+
+
+def test_nonstandard_without_catalog_uses_the_merge_record():
+    comp = pipe("P3", [0, 0, 1], [2, 0, 1], 0.1182, status="no-size",
+                candidates=[{"nominal": "4", "od": 0.1143}])
+    (f,) = [f for f in check_model(model(comp)) if f.slug == "nonstandard-diameter"]
+    assert "nearest NPS 4 = 114.3 mm, 3.9 mm off" in f.message
+    assert f.severity == "error"
