@@ -315,14 +315,14 @@ def _second_plane(points, normals, first, threshold, gap, rng):
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = (np.abs(cand_n @ sub.T - offsets[:, None]) < threshold).sum(axis=1)
     order = np.argsort(-counts, kind="stable")
-    top = _distinct(cand_n, offsets, order, 0.999, threshold, 12)
+    top = _distinct(cand_n, offsets, order, 0.999, threshold, 8)
     top = [c for c in top if counts[c] >= _MIN_FACE_POINTS]
     if not top:
         return None
-    ref_n, ref_o, masks, _ = _batch_refine(sub, cand_n[top], offsets[top], threshold, basis)
+    ref_n, ref_o, masks, _ = _batch_refine(sub, cand_n[top], offsets[top], threshold, basis, rounds=1)
     sizes = masks.sum(axis=1)
     order = [c for c in np.argsort(-sizes, kind="stable") if sizes[c] >= _MIN_FACE_POINTS]
-    for c in _distinct(ref_n, ref_o, order, 0.999, threshold, 8):
+    for c in _distinct(ref_n, ref_o, order, 0.999, threshold, 5):
         mask = np.zeros(points.shape[0], bool)
         mask[rest[masks[c]]] = True
         face = (ref_n[c], float(ref_o[c]), mask)
@@ -356,11 +356,13 @@ def _orient(axis_vec, offset, inside_points):
     return -1.0 if 2 * above > inside_points.shape[0] else 1.0
 
 
-def extra_faces(points, axes, faces, threshold, gap):
+def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
     """Add faces along the frame's axes (third face, opposite faces) while they pass the checks.
 
-    ``faces`` is a list of (axis, unsigned offset, mask); returns the grown list.
+    ``faces`` is a list of (axis, unsigned offset, mask); returns the grown list. With a trusted
+    ``viewpoint`` (3,) a face turned away from it is never added.
     """
+    view_proj = None if viewpoint is None else axes @ viewpoint
     while True:
         explained = np.zeros(points.shape[0], bool)
         for _, _, mask in faces:
@@ -380,18 +382,23 @@ def extra_faces(points, axes, faces, threshold, gap):
             offset = float(np.mean(proj_all[members, k]))
             mask = np.zeros(points.shape[0], bool)
             mask[free[np.abs(proj - offset) < threshold]] = True
-            if _acceptable(proj_all, explained, faces, k, offset, mask, threshold, gap):
+            if _acceptable(
+                proj_all, explained, faces, k, offset, mask, threshold, gap, view_proj
+            ):
                 best = (int(np.count_nonzero(mask)), k, offset, mask)
         if best is None:
             return faces
         faces = faces + [(best[1], best[2], best[3])]
 
 
-def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap) -> bool:
-    """A new face along axis k: not on an occupied side, inside the box, contiguous with a face."""
+def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap, view_proj=None) -> bool:
+    """A new face along axis k: not on an occupied side, inside the box, contiguous with a face,
+    and (with ``view_proj``, the viewpoint's coordinates (3,)) facing the viewpoint."""
     body = proj[explained]
     inside = body[:, k] - offset
     side = -1.0 if 2 * np.count_nonzero(inside > 0) > inside.size else 1.0
+    if view_proj is not None and side * (view_proj[k] - offset) <= 0:
+        return False
     for axis, off, fmask in faces:
         if axis != k:
             continue
@@ -530,7 +537,9 @@ def segment(
             d2 /= np.linalg.norm(d2)
             axes = np.vstack([d1, d2, cross3(d1, d2)])
             faces = [(0, o1, mask1), (1, float(d2 @ points[mask2].mean(axis=0)), mask2)]
-            faces = extra_faces(points, axes, faces, threshold, gap)
+            faces = extra_faces(
+                points, axes, faces, threshold, gap, viewpoint if visible_only else None
+            )
         frame = frame_from(points, axes, faces, threshold, viewpoint)
         score = _score(points, frame, threshold)
         if visible_only and viewpoint is not None:

@@ -163,8 +163,11 @@ def _robust_fit(model, x, noise, floor, cutoff):
     return label, residual, inliers, scale, iterations
 
 
-def _grow(model, x, label, inliers, threshold, gap, viewpoint):
+def _grow(model, x, label, inliers, threshold, gap, viewpoint, trusted):
     """A model with the faces the refined frame reveals among the rejected points, or None.
+
+    ``viewpoint`` (3,) orients a lone face; when ``trusted`` a face turned away from it is not
+    added.
 
     Segmentation works with a frame from the first planes' consensus sets; once the joint fit
     has refined it, a face whose points were off by a fraction of a degree may line up.
@@ -173,14 +176,16 @@ def _grow(model, x, label, inliers, threshold, gap, viewpoint):
     for f in range(model.offset.shape[0]):
         mask = inliers & (label == f)
         faces.append((int(model.face_axis[f]), float(model.face_sign[f] * model.offset[f]), mask))
-    grown = _faces.extra_faces(x, model.axes, faces, threshold, gap)
+    grown = _faces.extra_faces(
+        x, model.axes, faces, threshold, gap, viewpoint if trusted else None
+    )
     if len(grown) == len(faces):
         return None
     frame = _faces.frame_from(x, model.axes, grown, threshold, viewpoint)
     return _Model(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
 
 
-def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint):
+def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted):
     """Robust joint fit starting from one segmentation frame (plus faces it then reveals).
 
     Returns model, label (n,), residual (n,) metres, inliers (n,) bool, scale (metres),
@@ -199,7 +204,7 @@ def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint):
         model = _Model(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
     label, residual, inliers, scale, iterations = _robust_fit(model, x, noise, floor, cutoff)
     if not one_face:
-        grown = _grow(model, x, label, inliers, cutoff * scale, gap, viewpoint)
+        grown = _grow(model, x, label, inliers, cutoff * scale, gap, viewpoint, trusted)
         if grown is not None:
             model = grown
             label, residual, inliers, scale, more = _robust_fit(model, x, noise, floor, cutoff)
@@ -449,6 +454,7 @@ def fit_cuboid(
     # from it fall on a pan-tilt raster's rows and columns.
     viewpoint = np.zeros(3) if view is None else view
     window = _silhouette.raster_window(pts, viewpoint)
+    trusted = window is not None or view is not None
     frames = _faces.segment(
         x,
         normals,
@@ -456,7 +462,7 @@ def fit_cuboid(
         gap,
         tolerances.face_angle_deg,
         viewpoint - origin,
-        visible_only=window is not None or view is not None,
+        visible_only=trusted,
         alternatives=True,
     )
     if not frames:
@@ -468,7 +474,7 @@ def fit_cuboid(
     # hypotheses are fitted too and the one keeping the most points wins.
     best = None
     for frame in frames:
-        trial = _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint - origin)
+        trial = _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint - origin, trusted)
         if best is None or np.count_nonzero(trial[3]) > np.count_nonzero(best[3]):
             best = trial
         if n - np.count_nonzero(best[3]) <= tolerances.max_outlier_fraction * n:
