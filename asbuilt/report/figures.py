@@ -138,7 +138,8 @@ def component_pieces(component: Component) -> list[np.ndarray]:
 
 
 def hull_2d(points: np.ndarray) -> np.ndarray:
-    """Convex hull of 2-D points (Andrew's monotone chain), counter-clockwise.
+    """Convex hull of 2-D points, counter-clockwise (Qhull, with Andrew's monotone chain for
+    degenerate input).
 
     Parameters
     ----------
@@ -150,7 +151,23 @@ def hull_2d(points: np.ndarray) -> np.ndarray:
         The hull's vertices; fewer than 3 rows when the points are collinear (a segment) or
         all equal (one point).
     """
-    pts = np.unique(np.round(np.asarray(points, dtype=np.float64), 9), axis=0)
+    from scipy.spatial import ConvexHull, QhullError
+
+    pts = np.asarray(points, dtype=np.float64)
+    if len(pts) >= 3:
+        try:
+            hull = ConvexHull(pts)
+        except (QhullError, ValueError):
+            pass
+        else:
+            if hull.volume > 1e-12 * max(1.0, float(np.ptp(pts)) ** 2):
+                return pts[hull.vertices]  # Qhull lists 2-D hull vertices counter-clockwise
+    return _monotone_chain(pts)
+
+
+def _monotone_chain(points: np.ndarray) -> np.ndarray:
+    """Andrew's monotone chain: the hull of (n, 2) points, collinear points dropped."""
+    pts = np.unique(np.round(points, 9), axis=0)
     if len(pts) < 3:
         return pts
 
@@ -351,7 +368,10 @@ def render_view(
         ax.set_title(title + shown)
         ax.grid(True, linewidth=0.3, alpha=0.5)
         if any(polygons.values()) or len(keep):
-            ax.legend(loc="best", fontsize=7, markerscale=2, framealpha=0.8)
+            # a fixed place outside the axes: "best" costs seconds on large models
+            fig.legend(
+                loc="outside lower center", ncols=6, fontsize=7, markerscale=2, frameon=False
+            )
         buffer = io.BytesIO()
         if fmt == "svg":
             fig.savefig(buffer, format="svg", metadata={"Date": None})

@@ -17,6 +17,7 @@ from asbuilt.model import Bend, Component, Model, Straight
 from asbuilt.primitives import Cuboid, Sphere
 from asbuilt.report.figures import (
     _RING,
+    _monotone_chain,
     anchor,
     histogram_svg,
     hull_2d,
@@ -45,7 +46,11 @@ def polygon_of_circle(r: float, n: int = _RING) -> float:
     )
 )
 def test_hull_2d_matches_qhull(points):
-    ours = hull_2d(points)
+    for ours in (hull_2d(points), _monotone_chain(points)):
+        check_hull(ours, points)
+
+
+def check_hull(ours, points):
     try:
         reference = ConvexHull(points)
     except Exception:  # degenerate (collinear) input: ours is a segment or a point
