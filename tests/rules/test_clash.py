@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from rules_builders import model, pipe
 
 from asbuilt.model import Bend, Component, Straight, Tee
@@ -158,3 +160,18 @@ def test_pipe_resting_on_a_beam_within_fit_noise_is_not_an_error():
 )
 def test_inside_eroded(geometry, point, erode, expected):
     assert bool(inside(geometry, np.array([point]), erode=erode)[0]) == expected
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    offset=st.tuples(*[st.floats(-0.9, 0.9)] * 3),
+    size=st.tuples(*[st.floats(0.2, 1.5)] * 3),
+)
+def test_box_overlap_matches_the_exact_product(offset, size):
+    a = Cuboid([0, 0, 0], np.eye(3), [1.0, 1.0, 1.0])
+    b = Cuboid(offset, np.eye(3), size)
+    lo = np.maximum(-0.5, np.array(offset) - 0.5 * np.array(size))
+    hi = np.minimum(0.5, np.array(offset) + 0.5 * np.array(size))
+    truth = float(np.prod(np.clip(hi - lo, 0, None)))
+    v, se, _ = volume(a, b, samples=4096)
+    assert abs(v - truth) <= 4 * se + 1e-9
