@@ -6,25 +6,35 @@ cuboid steps 1-4) and replaces its ``z = Ax + By + C`` plane fits, which fail on
 by orthogonal-distance fits of all faces at once with exactly perpendicular normals:
 
 1. Segmentation (:mod:`asbuilt.fit._faces`): local k-neighbour normals and point triples propose
-   planes scored by consensus (RANSAC); a second face is searched perpendicular to the first,
-   further faces along the third axis or opposite seen faces; the frame explaining most points
-   wins.
+   planes scored by consensus (RANSAC, Fischler and Bolles 1981); a second face is searched
+   exactly perpendicular to the first (point pairs), further faces along the third axis or
+   opposite seen faces; a face must be contiguous with its neighbour (a convex corner) and, when
+   the viewpoint is trusted, face it. The frame explaining most points wins; if its fit rejects
+   more than ``max_outlier_fraction`` of the points, the other frames are fitted too.
 2. Joint fit: one rotation (3 small-angle parameters, applied with Rodrigues' formula so the axes
    stay exactly orthonormal) and one offset per seen face minimise the squared orthogonal
    distances of every point to its nearest face plane (Gauss-Newton with an analytic Jacobian).
    Points are reassigned to faces by residual each iteration (points next to an edge), Tukey's
-   biweight (IRLS, scale from the median absolute residual) downweights outliers, points beyond
+   biweight (IRLS; the scale starts at the noise level and is re-estimated by the median
+   absolute residual on the weights' support) downweights outliers, points beyond
    ``outlier_cutoff_sigma`` robust sigmas are rejected and a plain least-squares refit on the
-   inliers gives the final estimate and its covariance (Gauss-Newton normal matrix).
+   inliers gives the final estimate and its covariance (Gauss-Newton normal matrix). Faces the
+   refined frame reveals among the rejected points are then added and the fit repeated.
 3. Sizes: between two opposite seen faces (``observed`` True); otherwise from a seen face (the
    fitted corner edge) to the farthest inlier along that axis, or between the extreme inliers
-   when no face bounds the axis (``observed`` False: the paper's point-projection step). Extent
-   bounds stop short of the true edge by up to one raster spacing; half the median spacing of
-   the raster lines along that axis is added to each extent bound (see ``half_spacing``).
+   when no face bounds the axis (``observed`` False: the paper's point-projection step). Those
+   extent bounds stop short of the true edge by up to one raster step. When the points are a
+   pan-tilt raster seen from the viewpoint (given, or the scan frame's origin; checked: every
+   point's direction must fall on the raster's evenly spaced pan columns and tilt rows), the
+   unseen edges are placed where the box's silhouette meets the raster window, the points'
+   angular extent widened by half a step (:mod:`asbuilt.fit._silhouette`; the project's raster
+   shoots at cell centres). Otherwise half the median spacing of the raster lines along that
+   axis is added to each extent bound (``edge_pad``; 0 gives the paper's plain extent).
 4. One seen face: the face normal is fitted, the in-plane axes come from the minimum-area
-   bounding rectangle of the projected points (rotating calipers) and the unseen depth is set
-   to the smaller in-plane width (a column seen face-on is about square); ``observed`` is False
-   for all three sizes and a note says so.
+   bounding rectangle of the projected points (rotating calipers, Freeman and Shapira 1975) and
+   the unseen depth is set to the smaller in-plane width (a column seen face-on is about
+   square), behind the face as seen from the viewpoint; ``observed`` is False for all three
+   sizes and a note says so.
 """
 
 from __future__ import annotations
@@ -41,8 +51,9 @@ __all__ = ["fit_cuboid"]
 
 METHOD = (
     "normal/RANSAC face segmentation + orthogonality-constrained joint plane fit (Gauss-Newton, "
-    "Tukey IRLS, least-squares refit on inliers); sizes between faces or edge-to-extent "
-    "(generalised two-face method of Kwon et al. 2004)"
+    "Tukey IRLS, least-squares refit on inliers); sizes between faces, else from the fitted edges "
+    "to the raster silhouette or the points' extent (generalised two-face method of Kwon et al. "
+    "2004)"
 )
 
 _TUKEY_C = 4.685
@@ -176,9 +187,7 @@ def _grow(model, x, label, inliers, threshold, gap, viewpoint, trusted):
     for f in range(model.offset.shape[0]):
         mask = inliers & (label == f)
         faces.append((int(model.face_axis[f]), float(model.face_sign[f] * model.offset[f]), mask))
-    grown = _faces.extra_faces(
-        x, model.axes, faces, threshold, gap, viewpoint if trusted else None
-    )
+    grown = _faces.extra_faces(x, model.axes, faces, threshold, gap, viewpoint if trusted else None)
     if len(grown) == len(faces):
         return None
     frame = _faces.frame_from(x, model.axes, grown, threshold, viewpoint)
@@ -406,13 +415,15 @@ def fit_cuboid(
         Uses ``normal_neighbours``, ``face_angle_deg``, ``outlier_cutoff_sigma``,
         ``max_outlier_fraction`` and ``sigma_floor``.
     viewpoint : array_like, shape (3,), metres, or None
-        The sensor position. Only used to decide which side of a single seen face the box is on
-        (the side away from the viewpoint); None takes the origin (scan frames centred on the
-        sensor).
-    half_spacing : bool
-        Add half the median raster-line spacing to every extent-bounded size bound (the points
-        of a raster stop short of an unseen edge by half a spacing on average). False gives the
-        paper's plain farthest-point extent.
+        The sensor position (``scan.sensor.position``). It orients a single seen face (the box
+        lies behind it), rules out faces turned away from it, and lets the raster silhouette
+        bound the unseen edges. None tries the scan frame's origin, trusted only if the points
+        are a pan-tilt raster seen from there.
+    edge_pad : float
+        Fraction of the median raster-line spacing added beyond the last point to an extent
+        bound when the silhouette cannot be used (0.5: shots at cell centres; 0: the paper).
+    silhouette : bool
+        Use the raster silhouette for unseen edges when the raster check passes.
 
     Returns
     -------
@@ -425,7 +436,8 @@ def fit_cuboid(
         metres); ``covariance`` of [rotation vector (radians, world frame, about the inliers'
         centroid; 2 components with one seen face), face offsets (metres, in face order)];
         ``diagnostics`` ``faces``, ``outliers``, ``iterations``, ``scale`` (robust residual sigma,
-        metres), ``faces_axis0..2`` (seen faces normal to each output axis).
+        metres), ``faces_axis0..2`` (seen faces normal to each output axis), ``silhouette`` (1.0
+        when the raster window placed the unseen edges).
 
     Raises
     ------
@@ -435,7 +447,10 @@ def fit_cuboid(
     """
     pts = _validate(points)
     n = pts.shape[0]
-    view = None if viewpoint is None else np.array(as_vector(viewpoint, "viewpoint"))
+    try:
+        view = None if viewpoint is None else np.array(as_vector(viewpoint, "viewpoint"))
+    except ValueError as exc:
+        raise FitError(f"cuboid: {exc}") from None
     floor = tolerances.sigma_floor
     cutoff = tolerances.outlier_cutoff_sigma
 

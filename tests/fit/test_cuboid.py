@@ -357,6 +357,13 @@ def test_degenerate_input_raises_fit_error(points, message):
         fit_cuboid(points)
 
 
+def test_a_bad_viewpoint_raises_fit_error():
+    rng = np.random.default_rng(7)
+    points, _ = scan_box(column(0.4, 0.3, 2.0, 40.0, 5.0, rng), np.zeros(3), 6, 6, rng)
+    with pytest.raises(FitError, match="viewpoint"):
+        fit_cuboid(points, viewpoint=[0.0, 1.0])
+
+
 # --------------------------------------------------------------------------- invariance
 
 
