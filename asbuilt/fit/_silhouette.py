@@ -114,9 +114,15 @@ _FRACTIONS = _edge_fractions()
 
 def _extent(lo, hi, axes, origin, viewpoint, pan0) -> np.ndarray:
     """Angular extent [pan_min, pan_max, tilt_min, tilt_max] (4,) of the box lo..hi (local)."""
-    local = lo + _FRACTIONS * (hi - lo)
-    ang = _angles(origin + local @ axes, viewpoint, pan0)
-    return np.array([ang[:, 0].min(), ang[:, 0].max(), ang[:, 1].min(), ang[:, 1].max()])
+    return _extents(lo[None, :], hi[None, :], axes, origin, viewpoint, pan0)[0]
+
+
+def _extents(lo, hi, axes, origin, viewpoint, pan0) -> np.ndarray:
+    """Angular extents (b, 4) of b boxes given by bounds lo, hi (b, 3) in one batch."""
+    local = lo[:, None, :] + _FRACTIONS[None, :, :] * (hi - lo)[:, None, :]
+    world = origin + local.reshape(-1, 3) @ axes
+    ang = _angles(world, viewpoint, pan0).reshape(lo.shape[0], -1, 2)
+    return np.concatenate([ang.min(axis=1), ang.max(axis=1)], axis=1)[:, [0, 2, 1, 3]]
 
 
 def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations=10):
@@ -148,20 +154,26 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
         return lo, hi
     eps = 1e-6
     jac = None
+    count = len(free)
     for it in range(iterations):
-        base = _extent(lo, hi, axes, origin, viewpoint, pan0)
-        residual = base - window
         if jac is None or it == 3:
-            # Chord method: the Jacobian of the first iterate (refreshed once) serves them all.
-            jac = np.zeros((4, len(free)))
+            # Chord method: the Jacobian of the first iterate (refreshed once) serves them all;
+            # the box and its perturbed copies are measured in one batch.
+            los, his = (
+                np.repeat(lo[None], count + 1, axis=0),
+                np.repeat(hi[None], count + 1, axis=0),
+            )
             for c, (k, side) in enumerate(free):
-                tlo, thi = lo.copy(), hi.copy()
-                (thi if side else tlo)[k] += eps
-                jac[:, c] = (_extent(tlo, thi, axes, origin, viewpoint, pan0) - base) / eps
+                (his if side else los)[c + 1, k] += eps
+            measured = _extents(los, his, axes, origin, viewpoint, pan0)
+            base = measured[0]
+            jac = ((measured[1:] - base) / eps).T
             normal = jac.T @ jac
             damping = 1e-9 * max(float(np.trace(normal)), 1e-30)
-            solver = np.linalg.inv(normal + damping * np.eye(len(free))) @ jac.T
-        delta = -solver @ residual
+            solver = np.linalg.inv(normal + damping * np.eye(count)) @ jac.T
+        else:
+            base = _extent(lo, hi, axes, origin, viewpoint, pan0)
+        delta = -solver @ (base - window)
         for c, (k, side) in enumerate(free):
             (hi if side else lo)[k] += delta[c]
         if np.abs(delta).max() < 1e-7:
