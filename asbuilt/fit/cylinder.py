@@ -100,6 +100,13 @@ def _update(state, delta, points, weights):
 
 _MODEL = GeometricModel(_residuals, _jacobian, _update, 5)
 
+#: Scans with fewer points than this get the axis pattern search (:func:`_polish_axis`) on their
+#: best start. With 20-30 points and 20% background shots, a start two degrees off converged to
+#: a wrong radius in about 1 in 30 random scenes (measured: 17 of 300, 10 of 300 with the
+#: search); at 40 points none did, and the search costs about 1 ms, which the 40-point speed
+#: target cannot afford.
+POLISH_BELOW = 35
+
 
 def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
     """Axis as the direction most perpendicular to the normals, Tukey-reweighted; and the eigvecs."""
@@ -175,6 +182,8 @@ def _circle_starts(points: np.ndarray, axes: list, keep: int, rng, samples: int 
     axes : list of ndarray, shape (3,)
     keep : int
     rng : numpy.random.Generator
+    samples : int
+        Random triples per axis.
 
     Returns
     -------
@@ -250,6 +259,30 @@ def _circle_starts(points: np.ndarray, axes: list, keep: int, rng, samples: int 
     return [(axes[k], middles[k], radii[k]) for k in range(count) if valid[k]], [
         costs[k] for k in range(count) if valid[k]
     ]
+
+
+def _polish_axis(points, state, cost, keep, rng, steps=(2.0, 0.7, 0.25)):
+    """Pattern search on the axis (Hooke & Jeeves 1961) around a start, on the trimmed cost of
+    the robust circle across each trial axis; returns the best (state, cost).
+
+    The robust circle's trimmed cost is sharp in the axis (a pipe seen over 1.8 m is smeared by
+    3 cm when the axis is 1 degree off), so a start a couple of degrees off, which a local
+    least-squares descent may pull onto a background shot, is first brought within a quarter
+    degree.
+    """
+    ring = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
+    cos_ring, sin_ring = np.cos(ring)[:, None], np.sin(ring)[:, None]
+    for step in steps:
+        axis = state[0]
+        u, v = orthonormal_basis(axis)
+        tilt = np.tan(np.radians(step))
+        trial = axis + tilt * (cos_ring * u + sin_ring * v)
+        trial /= np.linalg.norm(trial, axis=1)[:, None]
+        states, costs = _circle_starts(points, list(trial), keep, rng)
+        if costs and min(costs) < cost:
+            best = int(np.argmin(costs))
+            state, cost = states[best], costs[best]
+    return state, cost
 
 
 def _line_axis(points: np.ndarray, keep: int, rng, samples: int = 32, steps: int = 1):
@@ -379,6 +412,11 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
     if line is not None:
         axes.append(line)
     starts, costs = _circle_starts(local, axes, keep, rng)
+    if starts and len(local) < POLISH_BELOW:
+        best = int(np.argmin(costs))
+        polished, cost = _polish_axis(local, starts[best], costs[best], keep, rng)
+        starts.insert(1, polished)
+        costs.insert(1, cost)
     robust = robust_geometric_fit(
         local,
         starts,
