@@ -26,6 +26,10 @@ _EDGE_SAMPLES = 9
 _LINE_WIDTH = 0.02
 #: Gaps between raster lines must be whole multiples of the step within this fraction.
 _STEP_MULTIPLE = 0.15
+#: Silhouette fit weights: window sides matched to 0.1 mrad, bounds kept within 0.1 m of their
+#: start (a raster step at most) unless the window needs them moved.
+_ANGLE_TOL = 1e-4
+_PRIOR_M = 0.1
 
 
 def _angles(points: np.ndarray, viewpoint: np.ndarray, pan0: float) -> np.ndarray:
@@ -141,8 +145,8 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
     pan0 : float, radians
     window : ndarray, shape (4,), radians
     iterations : int
-        Gauss-Newton iterations (Levenberg-damped, forward-difference Jacobian evaluated at the
-        first and fourth iterate).
+        Gauss-Newton iterations (forward-difference Jacobian evaluated at the first and fourth
+        iterate) of the window misfit plus a weak pull of each bound to its start value.
 
     Returns
     -------
@@ -155,6 +159,11 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
     eps = 1e-6
     jac = None
     count = len(free)
+    start = np.array([(hi if side else lo)[k] for k, side in free])
+    # Weights: window sides to _ANGLE_TOL, bounds held to their start within _PRIOR_M, so that
+    # bounds the window does not determine (several meeting at one silhouette corner) take the
+    # smallest change.
+    prior = np.eye(count) / _PRIOR_M**2
     for it in range(iterations):
         if jac is None or it == 3:
             # Chord method: the Jacobian of the first iterate (refreshed once) serves them all;
@@ -167,13 +176,13 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
                 (his if side else los)[c + 1, k] += eps
             measured = _extents(los, his, axes, origin, viewpoint, pan0)
             base = measured[0]
-            jac = ((measured[1:] - base) / eps).T
-            normal = jac.T @ jac
-            damping = 1e-9 * max(float(np.trace(normal)), 1e-30)
-            solver = np.linalg.inv(normal + damping * np.eye(count)) @ jac.T
+            jac = ((measured[1:] - base) / eps).T / _ANGLE_TOL
+            inverse = np.linalg.inv(jac.T @ jac + prior)
         else:
             base = _extent(lo, hi, axes, origin, viewpoint, pan0)
-        delta = -solver @ (base - window)
+        now = np.array([(hi if side else lo)[k] for k, side in free])
+        gradient = jac.T @ ((base - window) / _ANGLE_TOL) + prior @ (now - start)
+        delta = -inverse @ gradient
         for c, (k, side) in enumerate(free):
             (hi if side else lo)[k] += delta[c]
         if np.abs(delta).max() < 1e-7:
