@@ -412,16 +412,29 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
             ) from None
         except (TypeError, ValueError, AttributeError) as exc:
             raise ModelDocumentError(str(exc), source=source, where=f"findings[{index}]") from None
-    spools = tuple(
-        Spool(str(s["id"]), tuple(s.get("components") or ()), float(s.get("pipe_length") or 0.0))
-        for s in document.get("spools", [])
-    )
+    spools = []
+    for index, entry in enumerate(document.get("spools", [])):
+        try:
+            spools.append(
+                Spool(
+                    str(entry["id"]),
+                    tuple(entry.get("components") or ()),
+                    float(entry.get("pipe_length") or 0.0),
+                )
+            )
+        except KeyError as exc:
+            raise ModelDocumentError(
+                f"missing field {exc.args[0]!r}", source=source, where=f"spools[{index}]"
+            ) from None
+        except (TypeError, ValueError, AttributeError) as exc:
+            raise ModelDocumentError(str(exc), source=source, where=f"spools[{index}]") from None
+
     return Model(
         components=tuple(components),
         units=document.get("display_units") or "m",
         name=document.get("name"),
         catalog=document.get("catalog"),
-        spools=spools,
+        spools=tuple(spools),
         findings=tuple(findings),
     )
 

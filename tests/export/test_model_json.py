@@ -167,6 +167,32 @@ def test_bad_components_are_located(component, message):
     assert message in str(info.value)
 
 
+@pytest.mark.parametrize(
+    ("key", "entry", "where", "message"),
+    [
+        ("spools", {"components": ["P1"]}, "spools[0]", "missing field 'id'"),
+        (
+            "findings",
+            {"code": "AB1", "slug": "x", "severity": "fatal", "message": "m"},
+            "findings[0]",
+            "severity must be one of",
+        ),
+        (
+            "findings",
+            {"code": "AB1", "severity": "error", "message": "m"},
+            "findings[0]",
+            "missing field 'slug'",
+        ),
+    ],
+)
+def test_bad_spools_and_findings_are_located(key, entry, where, message):
+    document = {"format": FORMAT, "version": 1, key: [entry]}
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value).startswith(f"m.json: {where}: ")
+    assert message in str(info.value)
+
+
 def test_missing_file(tmp_path):
     with pytest.raises(ModelDocumentError, match="cannot read the file"):
         load_model_document(tmp_path / "nope.json")
