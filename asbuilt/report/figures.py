@@ -335,7 +335,7 @@ def render_view(
             ax.scatter(
                 drop[:, 0],
                 drop[:, 1],
-                s=10,
+                s=10 if len(model.components) <= 100 else 3,  # crowded views: small crosses
                 c="#d62728",
                 marker="x",
                 linewidths=0.7,

@@ -211,8 +211,10 @@ def _pipe_fds(read_end: int, write_end: int) -> None:
 
     high_read = fcntl.fcntl(read_end, fcntl.F_DUPFD, 10)
     high_write = fcntl.fcntl(write_end, fcntl.F_DUPFD, 10)
-    os.dup2(high_read, 3)
+    os.dup2(high_read, 3)  # os.dup2 makes the copies inheritable
     os.dup2(high_write, 4)
+    os.close(high_read)
+    os.close(high_write)
 
 
 class Browser:
@@ -242,7 +244,7 @@ class Browser:
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
-            pass_fds=(3, 4),
+            close_fds=False,  # only fds 3 and 4 are inheritable (PEP 446)
             preexec_fn=lambda: _pipe_fds(to_chrome_r, from_chrome_w),
         )
         os.close(to_chrome_r)
@@ -377,12 +379,13 @@ class Page:
             if e.get("sessionId") == self.session and e.get("method") == "Network.requestWillBeSent"
         ]
 
-    def screenshot(self, path) -> None:
+    def screenshot(self, path, full: bool = True) -> None:
+        """Save a PNG of the page (``full``: the whole page, else the viewport)."""
         import base64
 
         data = self.browser.call(
             "Page.captureScreenshot",
-            {"format": "png", "captureBeyondViewport": True},
+            {"format": "png", "captureBeyondViewport": full},
             session=self.session,
         )["data"]
         Path(path).write_bytes(base64.b64decode(data))
