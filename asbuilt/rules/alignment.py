@@ -229,10 +229,24 @@ def check_misaligned(ctx: Context) -> None:
         )
 
 
+def _one_per_fit(components):
+    """Components grouped by the fit they come from (merging may cut one scanned pipe into pieces
+    at a tee): ``(first component, ids of the group)``; components without a fit stand alone."""
+    groups: dict[int, list] = {}
+    order = []
+    for comp in components:
+        key = id(comp.fit) if comp.fit is not None else id(comp)
+        if key not in groups:
+            groups[key] = []
+            order.append(key)
+        groups[key].append(comp)
+    return [(groups[k][0], [c.id for c in groups[k]]) for k in order]
+
+
 def check_plumb(ctx: Context) -> None:
     slug = "out-of-plumb"
     intended = float(ctx.general("intended_angle_deg"))
-    for comp in ctx.model.components:
+    for comp, ids in _one_per_fit(ctx.model.components):
         if comp.type not in ("cuboid", "cylinder", "pipe"):
             continue
         found = measured_axis(comp)
@@ -270,7 +284,7 @@ def check_plumb(ctx: Context) -> None:
         shown = f"1:{height / lean:.0f}" if lean > 0 else "plumb"
         ctx.emit(
             slug,
-            [comp.id],
+            ids,
             f"leans {mm(lean)} over {height:.2f} m ({shown}), allowed {mm(allowed)} "
             f"(1:{ratio:.0f}, {standard})"
             + (
@@ -305,7 +319,7 @@ def check_slope(ctx: Context) -> None:
     slug = "slope"
     intended = float(ctx.general("intended_angle_deg"))
     keywords = [k.lower() for k in ctx.opt(slug, "keywords")]
-    for comp in ctx.pipes:
+    for comp, ids in _one_per_fit(ctx.pipes):
         if keywords:
             text = " ".join(filter(None, (comp.label, comp.group))).lower()
             if not any(k in text for k in keywords):
@@ -326,7 +340,7 @@ def check_slope(ctx: Context) -> None:
         outcome = verdict_min(slope, required, se, ctx.k)
         ctx.emit(
             slug,
-            [comp.id],
+            ids,
             f"slope {slope * 100:.2f}% is below the required drainage slope {required * 100:.2f}%",
             location=centre,
             measured=slope,

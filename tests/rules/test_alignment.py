@@ -228,3 +228,15 @@ def test_plan_misalignment_through_an_elbow_is_found_but_not_auto_fixed():
     assert f.objects == ("P1", "P2") and f.measured == pytest.approx(4.0)
     assert not any(s.unambiguous for s in f.suggestions)
     assert "angle_snap_deg = 5" in f.suggestions[0].description
+
+
+def test_pieces_of_one_fitted_pipe_give_one_plumb_finding():
+    from dataclasses import replace
+
+    from asbuilt.model import Straight
+
+    whole = pipe("P1", [0, 0, 0], [0.1, 0, 2.0], 0.1143, axis_deg=0.05)  # 50 mm in 1 m
+    lower = replace(whole, id="P1a", geometry=Straight([0, 0, 0], [0.05, 0, 1.0], 0.05715))
+    upper = replace(whole, id="P1b", geometry=Straight([0.05, 0, 1.0], [0.1, 0, 2.0], 0.05715))
+    (f,) = only(run(lower, upper), "out-of-plumb")
+    assert f.objects == ("P1a", "P1b")
