@@ -138,7 +138,7 @@ def _is_model_document(path) -> bool:
         return False
 
 
-def _load(args, config, design):
+def _load(args, config, design, progress=None):
     from asbuilt.rules import check_model
 
     if _is_model_document(args.scan):
@@ -160,6 +160,7 @@ def _load(args, config, design):
         design=design,
         merge=not args.no_merge,
         check=True,
+        progress=progress,
     )
 
 
@@ -175,6 +176,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rich.console import Console
     from rich.markup import escape
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
     from asbuilt.rules import apply_fixes, check_model, load_rules
 
@@ -193,7 +195,23 @@ def run(args: argparse.Namespace) -> int:
 
         exporter_for(args.fix)  # an unknown suffix fails before any work
 
-    model = _load(args, config, design)
+    err = Console(file=sys.stderr, highlight=False, soft_wrap=True)
+    with Progress(
+        TextColumn("fitting"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.description}"),
+        console=err,
+        transient=True,
+        disable=not err.is_terminal,
+    ) as bar:
+        task = bar.add_task("", total=None)
+        model = _load(
+            args,
+            config,
+            design,
+            lambda done, total, oid: bar.update(task, completed=done, total=total, description=oid),
+        )
     findings = model.findings
     changes: list[str] = []
     if args.fix:
@@ -205,7 +223,6 @@ def run(args: argparse.Namespace) -> int:
         export_model(fixed.replace(findings=findings), Path(args.fix))
 
     out = Console(file=sys.stdout, highlight=False, soft_wrap=True)
-    err = Console(file=sys.stderr, highlight=False, soft_wrap=True)
     if args.format == "json":
         text = json.dumps([finding_dict(f) for f in findings], indent=2, allow_nan=False)
         sys.stdout.write(text + "\n")
