@@ -569,6 +569,41 @@ def _best_inlier_set(residuals, mask, extent, floor):
     return chosen | mask
 
 
+def _mixture_score(residuals, mask, extent, floor) -> float:
+    """``m (1 + ln(2 pi s^2)) + (n - m) 2 ln W``: Gaussian inliers with their own sigma, uniform
+    outliers over the extent ``W`` (see :func:`_best_inlier_set`)."""
+    kept = residuals[mask]
+    variance = max(float(np.mean(kept * kept)), floor * floor)
+    m, n = kept.size, residuals.size
+    return m * (1.0 + np.log(2.0 * np.pi * variance)) + (n - m) * 2.0 * np.log(max(extent, floor))
+
+
+def _likeliest_refit(model, state, points, mask, extent, floor, iterations):
+    """Least squares on the 3-sigma inliers, on the likeliest nested set, and on every point;
+    the refit with the best :func:`_mixture_score` wins.
+
+    A robust start on 20-30 points can settle on a subset that a five-parameter surface fits
+    too well (a few tenths of a millimetre), so that good shots look like outliers; refitted
+    with them, the whole set explains the data better. Returns (state, residuals, jacobian,
+    mask).
+    """
+    residuals = model.residuals(state, points)
+    masks = [mask, _best_inlier_set(residuals, mask, extent, floor), np.ones_like(mask)]
+    best = None
+    for index, candidate in enumerate(masks):
+        if index and any(np.array_equal(candidate, other) for other in masks[:index]):
+            continue
+        weights = candidate.astype(np.float64)
+        fitted = _iterate(model, state, points, lambda _r, w=weights: w, iterations, 1e-9)
+        score = _mixture_score(fitted[1], candidate, extent, floor)
+        if np.isfinite(score) and (best is None or score < best[0]):
+            best = (score, fitted, candidate)
+    if best is None:
+        return (state, residuals, model.jacobian(state, points)[1], mask)
+    _, (state, residuals, jacobian), chosen = best
+    return state, residuals, jacobian, chosen
+
+
 def robust_geometric_fit(
     points: np.ndarray,
     starts: Sequence[Any],
@@ -668,7 +703,7 @@ def robust_geometric_fit(
     state, residuals, jacobian = refined[int(np.argmin(scores))]
     # Iterate the robust (Tukey) estimate to convergence.
     state, residuals, jacobian = _iterate(
-        model, state, points, tukey, max_iterations, 1e-6, (residuals, jacobian)
+        model, state, points, tukey, max_iterations, 1e-3, (residuals, jacobian)
     )
     # Inliers, then plain least squares on them until the inlier set is stable; without a
     # sensor sigma, a larger inlier set that the data support better is taken once.
@@ -683,7 +718,9 @@ def robust_geometric_fit(
         new_mask = np.abs(residuals) <= tolerances.outlier_cutoff_sigma * scale
         if not rescued and not new_mask.all():
             rescued = True
-            new_mask = _best_inlier_set(residuals, new_mask, extent, floor)
+            state, residuals, jacobian, new_mask = _likeliest_refit(
+                model, state, points, new_mask, extent, floor, max_iterations
+            )
         elif mask is not None and np.array_equal(new_mask, mask):
             break
         mask = new_mask

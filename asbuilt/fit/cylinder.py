@@ -5,18 +5,20 @@ Method
 1. Axis starts: the direction most perpendicular to the local surface normals (smallest
    eigenvector of ``sum n n^T`` over k-nearest-neighbour PCA normals, Hoppe et al. 1992, with a
    Tukey reweighting against normals spoiled by outliers) and its other eigenvectors, the
-   points' principal directions, the cross products of the normals of the three best two-point samples
-   (Schnabel, Wahl & Klein 2007; short stubs, whose principal direction is across the axis),
+   points' principal directions, the cross products of the normals of the three best two-point
+   samples (Schnabel, Wahl & Klein 2007; short stubs, whose principal direction is across the axis),
    and a robust line through the points (long thin pipes with background shots).
 2. For each start, a robust circle in the plane perpendicular to the axis gives the centre and
    radius: the Kasa (1976) algebraic circle or the best circumcircle of random triples, polished
-   by least-trimmed-squares concentration steps.
+   by least-trimmed-squares concentration steps. Below ``POLISH_BELOW`` points the best start's
+   axis is also refined by a pattern search on that circle's trimmed cost.
 3. Geometric least squares over five parameters (two axis tilts, two across-axis centre
    offsets, the radius) minimising the orthogonal distances ``|P_perp (p - c)| - r``
    (Lukacs, Marshall & Martin 1998, "Faithful least-squares fitting of spheres, cylinders,
    cones and tori"; Eberly, "Fitting 3D data with a cylinder"), by Gauss-Newton with an
-   analytic Jacobian, wrapped in the robust scheme of :func:`asbuilt.fit._common.robust_geometric_fit`
-   (Tukey IRLS from every start, least-trimmed-squares choice, least squares on the inliers).
+   analytic Jacobian, wrapped in the robust scheme of
+   :func:`asbuilt.fit._common.robust_geometric_fit` (concentration steps from the best starts,
+   MSAC choice, Tukey IRLS, then least squares on the inliers).
 
 The geometric estimate is the final one: algebraic circle fits alone are biased on partial arcs.
 """
@@ -109,7 +111,7 @@ POLISH_BELOW = 35
 
 
 def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
-    """Axis as the direction most perpendicular to the normals, Tukey-reweighted; and the eigvecs."""
+    """Eigenvectors of the Tukey-reweighted ``sum n n^T``, most perpendicular to the normals first."""
     weights = 1.0 / (1.0 + flatness / max(float(np.median(flatness)), 1e-12))
     vectors = None
     for _ in range(2):
@@ -391,8 +393,8 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
         with one ``sigma`` for all points; range-finder noise lies along the beam, so the
         grazing shots at a pipe's edges (which fix the radius) are more precise than that
         average and at 3-5 m the radius error is overstated by up to about 1.5x (measured),
-        the axis error within about 10%. Diagnostics: ``arc_deg`` (angular
-        coverage of the inliers about the axis), ``length_over_diameter``, ``cost_starts``.
+        the axis error within about 10%. Diagnostics: ``arc_deg`` (angular coverage of the
+        inliers about the axis), ``length_over_diameter``, ``starts`` (starts tried).
 
     Raises
     ------
@@ -485,13 +487,14 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
 
 
 def _median_spacing(points: np.ndarray) -> float:
+    """Median nearest-neighbour distance of points (n, 3), metres."""
     if len(points) < 2:
         return 0.0
     if len(points) <= 600:
-        diff = points[:, None, :] - points[None, :, :]
-        dist = np.einsum("ijk,ijk->ij", diff, diff)
+        squares = np.einsum("ij,ij->i", points, points)
+        dist = squares[:, None] + squares[None, :] - 2.0 * (points @ points.T)
         np.fill_diagonal(dist, np.inf)
-        return float(np.sqrt(np.median(dist.min(axis=1))))
+        return float(np.sqrt(max(float(np.median(dist.min(axis=1))), 0.0)))
     from scipy.spatial import cKDTree
 
     distance, _ = cKDTree(points).query(points, k=2)
