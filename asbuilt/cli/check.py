@@ -33,7 +33,15 @@ def register(subparsers) -> argparse.ArgumentParser:
         "--rules project-rules.toml --fix spool-fixed.step",
     )
     parser.add_argument(
-        "scan", metavar="SCAN", help="an asbuilt-scan JSON file (or an asbuilt-model document)"
+        "scan",
+        metavar="SCAN",
+        nargs="?",
+        help="an asbuilt-scan JSON file (or an asbuilt-model document)",
+    )
+    parser.add_argument(
+        "--list-rules",
+        action="store_true",
+        help="print every rule (code, slug, severity from --rules, source) and exit",
     )
     parser.add_argument(
         "--design",
@@ -164,6 +172,27 @@ def _load(args, config, design, progress=None):
     )
 
 
+def _list_rules(config) -> None:
+    """The registry as a table on stdout, with the severities the rules file gives."""
+    import sys
+
+    from rich.console import Console
+    from rich.table import Table
+
+    from asbuilt.rules import RULES
+
+    table = Table("code", "slug", "severity", "runs", "source or reason", show_lines=False)
+    for r in RULES:
+        table.add_row(
+            r.code,
+            r.slug,
+            config.severity(r.slug),
+            "yes" if config.is_active(r.slug) else "no",
+            r.source,
+        )
+    Console(file=sys.stdout, soft_wrap=False, width=160).print(table)
+
+
 def _plural(n: int, word: str) -> str:
     return f"{n} {word}{'' if n == 1 else 's'}"
 
@@ -181,6 +210,13 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.rules import apply_fixes, check_model, load_rules
 
     config = load_rules(args.rules)
+    if args.list_rules:
+        _list_rules(config)
+        return 0
+    if not args.scan:
+        from asbuilt.errors import ScanReadError
+
+        raise ScanReadError("check: give a SCAN file (or --list-rules)")
     select = [s for group in args.select or () for s in group]
     ignore = [s for group in args.ignore or () for s in group]
     if select or ignore:

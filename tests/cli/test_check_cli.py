@@ -179,3 +179,22 @@ def test_subprocess_exit_code(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "asbuilt", "check", str(path)],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 1 and "error clash" in proc.stdout
+
+
+def test_list_rules_shows_the_rules_files_view(tmp_path, capsys):
+    rules = tmp_path / "rules.toml"
+    rules.write_text('ignore = ["slope"]\n[clash]\nseverity = "warning"\n', encoding="utf-8")
+    code, out, _ = run(["--list-rules", "--rules", rules], capsys)
+    assert code == 0
+    clash = next(line for line in out.splitlines() if "AB501" in line)
+    slope = next(line for line in out.splitlines() if "AB203" in line)
+    assert "warning" in clash and " yes " in clash
+    assert " no " in slope
+    from asbuilt.rules import RULES
+
+    assert all(r.code in out for r in RULES)
+
+
+def test_no_scan_is_bad_input(capsys):
+    code, out, err = run([], capsys)
+    assert code == 2 and out == "" and "SCAN" in err
