@@ -225,14 +225,6 @@ def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
     return normals, offsets, masks, spread
 
 
-def _spread(points: np.ndarray) -> float:
-    """RMS distance (metres) of points (k, 3) from their best-fit line: 0 for collinear points."""
-    if points.shape[0] < 3:
-        return 0.0
-    values = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
-    return float(values[1] / np.sqrt(points.shape[0]))
-
-
 def _perpendicular_basis(direction: np.ndarray) -> np.ndarray:
     """Two unit columns, shape (3, 2), perpendicular to ``direction`` and to each other."""
     helper = np.eye(3)[int(np.argmin(np.abs(direction)))]
@@ -319,7 +311,9 @@ def _second_plane(points, normals, first, threshold, gap, rng):
     top = [c for c in top if counts[c] >= _MIN_FACE_POINTS]
     if not top:
         return None
-    ref_n, ref_o, masks, _ = _batch_refine(sub, cand_n[top], offsets[top], threshold, basis, rounds=1)
+    ref_n, ref_o, masks, _ = _batch_refine(
+        sub, cand_n[top], offsets[top], threshold, basis, rounds=1
+    )
     sizes = masks.sum(axis=1)
     order = [c for c in np.argsort(-sizes, kind="stable") if sizes[c] >= _MIN_FACE_POINTS]
     for c in _distinct(ref_n, ref_o, order, 0.999, threshold, 5):
@@ -382,9 +376,7 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
             offset = float(np.mean(proj_all[members, k]))
             mask = np.zeros(points.shape[0], bool)
             mask[free[np.abs(proj - offset) < threshold]] = True
-            if _acceptable(
-                proj_all, explained, faces, k, offset, mask, threshold, gap, view_proj
-            ):
+            if _acceptable(proj_all, explained, faces, k, offset, mask, threshold, gap, view_proj):
                 best = (int(np.count_nonzero(mask)), k, offset, mask)
         if best is None:
             return faces
