@@ -101,3 +101,31 @@ def test_many_findings_page_is_clean(browser, tmp_path):
     page = browser.open(path.as_uri())
     assert page.problems() == []
     assert page.evaluate("document.querySelectorAll('ol.findings > li').length") == 15
+
+
+def test_3d_view_button_fails_gracefully_or_loads(browser, plant_model, tmp_path):
+    import time
+
+    path = tmp_path / "plant.html"
+    write_report(plant_model, path, generated=STAMP, gltf=tmp_path / "plant.glb")
+    plant_page = browser.open(path.as_uri())  # a page of its own: the click changes it
+    assert plant_page.problems() == []
+    plant_page.evaluate("document.getElementById('load-3d').click()")
+    deadline = time.monotonic() + 20
+    state = None
+    while time.monotonic() < deadline:
+        state = plant_page.evaluate(
+            "[document.getElementById('viewer-status').textContent,"
+            " !!document.querySelector('#viewer-slot model-viewer')]"
+        )
+        if state[1] or "could not be loaded" in state[0]:
+            break
+        time.sleep(0.2)
+    status, viewer = state
+    # offline the script fails and the page says so; online the viewer element appears
+    assert viewer or "could not be loaded" in status, state
+    assert plant_page.evaluate("document.getElementById('load-3d').disabled")
+    exceptions = [p for p in plant_page.problems() if p.startswith("exception")]
+    assert exceptions == []
+    # the rest of the page is untouched
+    assert plant_page.evaluate("document.querySelectorAll('#pictures figure > svg').length") == 2
