@@ -5,7 +5,7 @@ Top level (``"format": "asbuilt-report"``, ``"version": 1``, ``"units": "m"``): 
 ``counts``, ``findings_summary`` (by severity), ``takeoff`` (``pipes``, ``fittings``,
 ``solids``, ``totals``), ``components`` (the CSV rows, same names without unit suffixes: lengths
 m, areas m2, volumes m3, weights kg), ``quality`` (per fitted object; residuals in metres) and
-``findings`` (as in the ``asbuilt-model`` document). Non-finite numbers are written as null.
+``findings`` (as in the ``asbuilt-model`` document). Non-finite numbers are written as null. The JSON Schema is :func:`report_schema`.
 """
 
 from __future__ import annotations
@@ -19,10 +19,19 @@ from asbuilt.export.model_json import _finding, _json
 from .data import ReportData
 from .takeoff import FOOT
 
-__all__ = ["FORMAT", "VERSION", "report_document", "dumps_report", "write_json"]
+__all__ = ["FORMAT", "VERSION", "report_schema", "report_document", "dumps_report", "write_json"]
 
 FORMAT = "asbuilt-report"
 VERSION = 1
+
+
+def report_schema() -> dict:
+    """The JSON Schema (draft 2020-12) of the report, shipped as
+    ``asbuilt/schemas/report.schema.json``."""
+    from importlib import resources
+
+    text = (resources.files("asbuilt") / "schemas" / "report.schema.json").read_text("utf-8")
+    return json.loads(text)
 
 
 def _plain(item) -> dict:

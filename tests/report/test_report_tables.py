@@ -129,3 +129,26 @@ def test_empty_model_reports():
     assert csv_text(data).splitlines() == [",".join(COLUMNS)]
     document = report_document(data)
     assert document["components"] == [] and document["title"] == "as-built model"
+
+
+def test_json_reports_follow_the_schema(known_data, plant_model):
+    import jsonschema
+
+    from asbuilt.model import Model
+    from asbuilt.report.json_report import report_schema
+
+    schema = report_schema()
+    jsonschema.Draft202012Validator.check_schema(schema)
+    validator = jsonschema.Draft202012Validator(schema)
+    for data in (
+        known_data,
+        report_data(plant_model, generated=STAMP),
+        report_data(Model(components=()), generated=STAMP),
+    ):
+        document = json.loads(dumps_report(data))
+        errors = [f"{list(e.path)}: {e.message}" for e in validator.iter_errors(document)]
+        assert errors == []
+    broken = json.loads(dumps_report(known_data))
+    broken["components"][0]["quantity_unit"] = "kg"
+    del broken["takeoff"]["totals"]["pipe_length"]
+    assert len(list(validator.iter_errors(broken))) == 2
