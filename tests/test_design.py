@@ -43,17 +43,32 @@ def test_round_trip_in_millimetres(tmp_path):
     [
         ({"units": "yards"}, "units", "unknown units"),
         ({"format": "other"}, "format", "asbuilt-design"),
-        ({"pipes": [{"id": "D1", "start": [0, 0], "end": [1, 0, 0]}]}, "pipes[0] (D1).start",
-         "3 numbers"),
-        ({"pipes": [{"id": "D1", "start": [0, 0, 0], "end": [0, 0, 0]}]}, "pipes[0] (D1)",
-         "must differ"),
+        (
+            {"pipes": [{"id": "D1", "start": [0, 0], "end": [1, 0, 0]}]},
+            "pipes[0] (D1).start",
+            "3 numbers",
+        ),
+        (
+            {"pipes": [{"id": "D1", "start": [0, 0, 0], "end": [0, 0, 0]}]},
+            "pipes[0] (D1)",
+            "must differ",
+        ),
         ({"pipes": [{"start": [0, 0, 0], "end": [1, 0, 0]}]}, "pipes[0]", "id"),
-        ({"pipes": [{"id": "D1", "start": [0, 0, 0], "end": [1, 0, 0], "od": 3}]},
-         "pipes[0] (D1)", "unknown field 'od'"),
-        ({"columns": [{"id": "C1", "base": [0, 0, 0], "top": [0, 0, 3], "size": [0, 1]}]},
-         "columns[0] (C1).size", "positive"),
-        ({"boxes": [{"id": "D1", "center": [0, 0, 0], "size": [1, 1, 1]}]}, "boxes[0]",
-         "duplicate id"),
+        (
+            {"pipes": [{"id": "D1", "start": [0, 0, 0], "end": [1, 0, 0], "od": 3}]},
+            "pipes[0] (D1)",
+            "unknown field 'od'",
+        ),
+        (
+            {"columns": [{"id": "C1", "base": [0, 0, 0], "top": [0, 0, 3], "size": [0, 1]}]},
+            "columns[0] (C1).size",
+            "positive",
+        ),
+        (
+            {"boxes": [{"id": "D1", "center": [0, 0, 0], "size": [1, 1, 1]}]},
+            "boxes[0]",
+            "duplicate id",
+        ),
         ({"tanks": []}, "tanks", "unknown key"),
     ],
 )
@@ -82,13 +97,16 @@ def straight(cid, start, end, r=0.057):
 
 def test_matching_pairs_nearest_and_reports_missing_and_extra():
     design = loads_design(json.dumps(DOC))
-    built = Model(components=(
-        straight("P2", [2.0, 0.01, 1.0], [2.0, 2.0, 1.0]),
-        straight("P1", [0.0, 0.0, 1.02], [2.0, 0.0, 1.02]),
-        straight("PX", [9.0, 9.0, 1.0], [10.0, 9.0, 1.0]),
-        Component(id="T1", type="cuboid",
-                  geometry=Cuboid([4.0, 0.0, 0.5], np.eye(3), [1.0, 0.8, 1.0])),
-    ))
+    built = Model(
+        components=(
+            straight("P2", [2.0, 0.01, 1.0], [2.0, 2.0, 1.0]),
+            straight("P1", [0.0, 0.0, 1.02], [2.0, 0.0, 1.02]),
+            straight("PX", [9.0, 9.0, 1.0], [10.0, 9.0, 1.0]),
+            Component(
+                id="T1", type="cuboid", geometry=Cuboid([4.0, 0.0, 0.5], np.eye(3), [1.0, 0.8, 1.0])
+            ),
+        )
+    )
     match = match_design(built, design, radius=0.5)
     assert {(d.id, c.id) for d, c in match.pairs} == {("D1", "P1"), ("D2", "P2"), ("T1", "T1")}
     assert [d.id for d in match.missing] == ["C1"]
@@ -96,8 +114,9 @@ def test_matching_pairs_nearest_and_reports_missing_and_extra():
 
 
 def test_incompatible_kinds_do_not_match():
-    design = loads_design(json.dumps({"boxes": [{"id": "B", "center": [0, 0, 0],
-                                                 "size": [1, 1, 1]}]}))
+    design = loads_design(
+        json.dumps({"boxes": [{"id": "B", "center": [0, 0, 0], "size": [1, 1, 1]}]})
+    )
     built = Model(components=(straight("P1", [-0.5, 0, 0], [0.5, 0, 0]),))
     match = match_design(built, design)
     assert not match.pairs and len(match.missing) == 1 and len(match.extra) == 1
@@ -108,7 +127,8 @@ def test_documented_example_loads():
     from pathlib import Path
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "design-format.md").read_text(
-        encoding="utf-8")
+        encoding="utf-8"
+    )
     block = re.search(r"```json\n(.*?)```", text, re.S).group(1)
     design = loads_design(block, source="docs/design-format.md")
     assert [d.kind for d in design.components] == ["pipe", "pipe", "column", "box"]

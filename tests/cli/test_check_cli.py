@@ -15,24 +15,49 @@ from asbuilt.sim.scene import scene_from_dict
 from asbuilt.sim.simulate import simulate_scan
 
 STATION = {"id": "S1", "position": [0, 0, 1.5], "range_sigma": 0.002}
-PIPE = {"id": "P1", "kind": "cylinder", "points": 30, "nominal": '4"',
-        "geometry": {"type": "cylinder", "start": [-1.5, 4, 1.0], "end": [1.5, 4, 1.0],
-                     "od": 0.1143}}
-CROSSING = {"id": "P2", "kind": "cylinder", "points": 30,
-            "geometry": {"type": "cylinder", "start": [0.0, 2.5, 1.02], "end": [0.0, 5.5, 1.02],
-                         "od": 0.1143}}
+PIPE = {
+    "id": "P1",
+    "kind": "cylinder",
+    "points": 30,
+    "nominal": '4"',
+    "geometry": {"type": "cylinder", "start": [-1.5, 4, 1.0], "end": [1.5, 4, 1.0], "od": 0.1143},
+}
+CROSSING = {
+    "id": "P2",
+    "kind": "cylinder",
+    "points": 30,
+    "geometry": {
+        "type": "cylinder",
+        "start": [0.0, 2.5, 1.02],
+        "end": [0.0, 5.5, 1.02],
+        "od": 0.1143,
+    },
+}
 t = np.radians(5.0)
-TILTED = {"id": "P9", "kind": "cylinder", "points": 30,
-          "geometry": {"type": "cylinder", "start": [-1.5, 6, 1.0],
-                       "end": [-1.5 + 3 * np.cos(t), 6, 1.0 + 3 * np.sin(t)], "od": 0.1143}}
+TILTED = {
+    "id": "P9",
+    "kind": "cylinder",
+    "points": 30,
+    "geometry": {
+        "type": "cylinder",
+        "start": [-1.5, 6, 1.0],
+        "end": [-1.5 + 3 * np.cos(t), 6, 1.0 + 3 * np.sin(t)],
+        "od": 0.1143,
+    },
+}
 
 
 def scan_file(tmp_path, *objects, name="scan.json", seed=3):
-    scene = {"format": "asbuilt-scene", "version": 1, "units": "m", "seed": seed,
-             "stations": [STATION], "objects": list(objects)}
+    scene = {
+        "format": "asbuilt-scene",
+        "version": 1,
+        "units": "m",
+        "seed": seed,
+        "stations": [STATION],
+        "objects": list(objects),
+    }
     path = tmp_path / name
-    path.write_text(json.dumps(simulate_scan(scene_from_dict(scene), seed=seed)),
-                    encoding="utf-8")
+    path.write_text(json.dumps(simulate_scan(scene_from_dict(scene), seed=seed)), encoding="utf-8")
     return path
 
 
@@ -55,8 +80,9 @@ def test_clash_exits_1_and_reads_like_a_linter(tmp_path, capsys):
     code, out, _ = run([path], capsys)
     assert code == 1
     lines = out.splitlines()
-    assert any(line.startswith(f"{path}: P1,P2: error clash: P1 and P2 intersect: ")
-               for line in lines)
+    assert any(
+        line.startswith(f"{path}: P1,P2: error clash: P1 and P2 intersect: ") for line in lines
+    )
     # one finding per line, errors first, then the summary
     severities = [line.split(": ")[2].split()[0] for line in lines[:-1]]
     assert severities == sorted(severities, key=["error", "warning", "info"].index)
@@ -70,8 +96,20 @@ def test_json_is_the_model_document_shape(tmp_path, capsys):
     findings = json.loads(out)
     assert isinstance(findings, list) and findings
     clash = next(f for f in findings if f["slug"] == "clash")
-    assert set(clash) == {"code", "slug", "severity", "objects", "location", "message",
-                          "measured", "allowed", "stderr", "unit", "suggestions", "unverifiable"}
+    assert set(clash) == {
+        "code",
+        "slug",
+        "severity",
+        "objects",
+        "location",
+        "message",
+        "measured",
+        "allowed",
+        "stderr",
+        "unit",
+        "suggestions",
+        "unverifiable",
+    }
     assert clash["code"] == "AB501" and clash["unit"] == "m3" and len(clash["location"]) == 3
     assert all(set(f) == set(clash) for f in findings)
 
@@ -82,16 +120,27 @@ def test_json_keys_equal_the_model_documents():
     from asbuilt.findings import Finding, Suggestion
     from asbuilt.model import Component, Model, Straight
 
-    finding = Finding("AB501", "clash", "error", ("A", "B"), "m", location=[1.0, 2.0, 3.0],
-                      measured=1.0, allowed=0.5, stderr=0.1, unit="m3",
-                      suggestions=(Suggestion("x", {"object": "A"}, True),))
+    finding = Finding(
+        "AB501",
+        "clash",
+        "error",
+        ("A", "B"),
+        "m",
+        location=[1.0, 2.0, 3.0],
+        measured=1.0,
+        allowed=0.5,
+        stderr=0.1,
+        unit="m3",
+        suggestions=(Suggestion("x", {"object": "A"}, True),),
+    )
     comp = Component(id="A", type="pipe", geometry=Straight([0, 0, 0], [1, 0, 0], 0.05))
     document = model_document(Model(components=(comp,), findings=(finding,)))
     assert finding_dict(finding) == document["findings"][0]
 
 
-@pytest.mark.parametrize("option", [["--ignore", "clash"], ["--select", "AB4,AB2"],
-                                    ["--ignore", "AB5"]])
+@pytest.mark.parametrize(
+    "option", [["--ignore", "clash"], ["--select", "AB4,AB2"], ["--ignore", "AB5"]]
+)
 def test_select_and_ignore(tmp_path, capsys, option):
     path = scan_file(tmp_path, PIPE, CROSSING)
     code, out, _ = run([path, *option], capsys)
@@ -146,13 +195,30 @@ def test_missing_scan_exits_2(tmp_path, capsys):
 def test_design_missing_and_extra(tmp_path, capsys):
     path = scan_file(tmp_path, PIPE)
     design = tmp_path / "design.json"
-    design.write_text(json.dumps({
-        "format": "asbuilt-design", "version": 1, "units": "mm",
-        "pipes": [{"id": "D1", "nominal": "4", "start": [-1500, 4000, 1000],
-                   "end": [1500, 4000, 1000]},
-                  {"id": "D2", "nominal": "4", "start": [-1500, 9000, 1000],
-                   "end": [1500, 9000, 1000]}],
-    }), encoding="utf-8")
+    design.write_text(
+        json.dumps(
+            {
+                "format": "asbuilt-design",
+                "version": 1,
+                "units": "mm",
+                "pipes": [
+                    {
+                        "id": "D1",
+                        "nominal": "4",
+                        "start": [-1500, 4000, 1000],
+                        "end": [1500, 4000, 1000],
+                    },
+                    {
+                        "id": "D2",
+                        "nominal": "4",
+                        "start": [-1500, 9000, 1000],
+                        "end": [1500, 9000, 1000],
+                    },
+                ],
+            }
+        ),
+        encoding="utf-8",
+    )
     code, out, _ = run([path, "--design", design], capsys)
     assert code == 1
     assert "D2: error missing-component: designed pipe D2" in out
@@ -176,8 +242,12 @@ def test_fix_writes_model_and_recheck_is_clean(tmp_path, capsys):
 
 def test_subprocess_exit_code(tmp_path):
     path = scan_file(tmp_path, PIPE, CROSSING)
-    proc = subprocess.run([sys.executable, "-m", "asbuilt", "check", str(path)],
-                          capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-m", "asbuilt", "check", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 1 and "error clash" in proc.stdout
 
 

@@ -136,8 +136,14 @@ def test_misaligned_off_horizontal():
 def test_misaligned_in_plan_between_joined_pipes():
     a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", axis_deg=0.1)
     t = np.radians(86.0)
-    b = pipe("P2", [2.05, 0, 1], [2.05 + 2 * np.cos(t), 2 * np.sin(t), 1], 0.1143, nominal="4",
-             axis_deg=0.1)
+    b = pipe(
+        "P2",
+        [2.05, 0, 1],
+        [2.05 + 2 * np.cos(t), 2 * np.sin(t), 1],
+        0.1143,
+        nominal="4",
+        axis_deg=0.1,
+    )
     (f,) = only(run(a, b), "misaligned-axis")
     assert f.objects == ("P1", "P2")
     assert f.measured == pytest.approx(4.0)
@@ -163,8 +169,15 @@ def test_snap_tolerance_comes_from_the_rules_file():
 
 def sloped(cid, slope, nominal="4", axis_deg=0.02, label=None):
     length = 4.0
-    return pipe(cid, [0, 0, 1], [length, 0, 1 + slope * length], 0.1143, nominal=nominal,
-                axis_deg=axis_deg, label=label)
+    return pipe(
+        cid,
+        [0, 0, 1],
+        [length, 0, 1 + slope * length],
+        0.1143,
+        nominal=nominal,
+        axis_deg=axis_deg,
+        label=label,
+    )
 
 
 def test_slope_is_silent_without_a_spec():
@@ -192,8 +205,10 @@ def test_required_slope(slope, axis_deg, expected):
         assert f.measured == pytest.approx(slope, rel=1e-6)
 
 
-@pytest.mark.parametrize("nominal, slope, flagged", [("2", 0.015, True), ("4", 0.015, False),
-                                                    ("8", 0.006, False), ("8", 0.003, True)])
+@pytest.mark.parametrize(
+    "nominal, slope, flagged",
+    [("2", 0.015, True), ("4", 0.015, False), ("8", 0.006, False), ("8", 0.003, True)],
+)
 def test_ipc_704_by_size(nominal, slope, flagged):
     config = loads_rules("[slope]\nuse_ipc_704 = true")
     found = only(run(sloped("P1", slope, nominal=nominal), config=config), "slope")
@@ -202,8 +217,9 @@ def test_ipc_704_by_size(nominal, slope, flagged):
 
 def test_slope_keywords_limit_the_rule_to_drains():
     config = loads_rules('[slope]\nrequired = 0.01\nkeywords = ["drain"]')
-    found = only(run(sloped("P1", 0.0), sloped("P2", 0.0, label="drain line"), config=config),
-                 "slope")
+    found = only(
+        run(sloped("P1", 0.0), sloped("P2", 0.0, label="drain line"), config=config), "slope"
+    )
     assert [f.objects for f in found] == [("P2",)]
 
 
@@ -221,8 +237,9 @@ def test_plan_misalignment_through_an_elbow_is_found_but_not_auto_fixed():
     # a bend of radius r from P1's end turning through t onto P2's direction
     bend_centre = np.array([2.0, r, 1.0])
     bend_end = bend_centre + r * np.array([np.sin(t), -np.cos(t), 0.0])
-    elbow = Component(id="E1", type="elbow",
-                      geometry=Bend([2, 0, 1], bend_end, bend_centre, 0.1143 / 2))
+    elbow = Component(
+        id="E1", type="elbow", geometry=Bend([2, 0, 1], bend_end, bend_centre, 0.1143 / 2)
+    )
     b = pipe("P2", bend_end, bend_end + 2 * d, 0.1143, nominal="4", axis_deg=0.1)
     (f,) = only(run(a, elbow, b), "misaligned-axis")
     assert f.objects == ("P1", "P2") and f.measured == pytest.approx(4.0)

@@ -43,7 +43,10 @@ def test_catalog_by_name_uses_the_shipped_catalog():
 
 
 @given(
-    m=st.floats(0, 10), a=st.floats(0, 10), s=st.floats(0, 5), extra=st.floats(0, 5),
+    m=st.floats(0, 10),
+    a=st.floats(0, 10),
+    s=st.floats(0, 5),
+    extra=st.floats(0, 5),
 )
 def test_verdict_is_monotone_in_the_measurement(m, a, s, extra):
     order = {"pass": 0, "unverifiable": 1, "violation": 2}
@@ -83,6 +86,7 @@ def test_size_table_reads_every_hint_form(size):
 def test_config_may_be_a_path(tmp_path):
     path = tmp_path / "rules.toml"
     path.write_text('select = ["out-of-plumb"]\n', encoding="utf-8")
-    built = model(column("C1", [1, 0, 0], 0.6, axes_deg=0.01),
-                  pipe("P1", [0, 5, 1], [2, 5, 1], 0.1143, n=10))
+    built = model(
+        column("C1", [1, 0, 0], 0.6, axes_deg=0.01), pipe("P1", [0, 5, 1], [2, 5, 1], 0.1143, n=10)
+    )
     assert {f.slug for f in check_model(built, str(path))} == {"out-of-plumb"}

@@ -58,12 +58,24 @@ def test_disjoint_boxes_have_no_volume():
         (Bend([1, 0, 0], [0, 1, 0], [0, 0, 0], 0.1), [-np.sqrt(0.5), np.sqrt(0.5), 0], False),
         (Tee([0, 0, 0], [-1, 0, 0], [1, 0, 0], [0, 1, 0], 0.1, 0.05), [0, 0.5, 0.04], True),
         (Tee([0, 0, 0], [-1, 0, 0], [1, 0, 0], [0, 1, 0], 0.1, 0.05), [0, 0.5, 0.07], False),
-        (Hull(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]),
-              [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]), [0.1, 0.1, 0.1], True),
-        (Plane([0, 0, 0], [0, 0, 1], [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]),
-         [0.5, 0.5, 0.004], True),
-        (Plane([0, 0, 0], [0, 0, 1], [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]),
-         [0.5, 0.5, 0.006], False),
+        (
+            Hull(
+                np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]),
+                [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+            ),
+            [0.1, 0.1, 0.1],
+            True,
+        ),
+        (
+            Plane([0, 0, 0], [0, 0, 1], [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]),
+            [0.5, 0.5, 0.004],
+            True,
+        ),
+        (
+            Plane([0, 0, 0], [0, 0, 1], [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]),
+            [0.5, 0.5, 0.006],
+            False,
+        ),
     ],
 )
 def test_inside(geometry, point, expected):
@@ -88,8 +100,9 @@ def test_pipes_clear_of_each_other_do_not_clash():
 def test_touching_at_a_fitting_is_not_a_clash():
     r = 0.1143 / 2
     a = pipe("P1", [0, 0, 1], [1.848, 0, 1], 0.1143)
-    elbow = Component(id="E1", type="elbow", geometry=Bend([1.848, 0, 1], [2, 0.152, 1],
-                                                            [1.848, 0.152, 1], r))
+    elbow = Component(
+        id="E1", type="elbow", geometry=Bend([1.848, 0, 1], [2, 0.152, 1], [1.848, 0.152, 1], r)
+    )
     b = pipe("P2", [2, 0.152, 1], [2, 2, 1], 0.1143)
     assert not [f for f in check_model(model(a, elbow, b)) if f.slug == "clash"]
 
@@ -123,8 +136,13 @@ def test_thousand_objects_grid_has_no_clash():
         for j in range(10):
             for k in range(10):
                 c = [i * 0.5, j * 0.5, k * 0.5]
-                comps.append(Component(id=f"B{i}-{j}-{k}", type="cuboid",
-                                       geometry=Cuboid(c, np.eye(3), [0.3, 0.3, 0.3])))
+                comps.append(
+                    Component(
+                        id=f"B{i}-{j}-{k}",
+                        type="cuboid",
+                        geometry=Cuboid(c, np.eye(3), [0.3, 0.3, 0.3]),
+                    )
+                )
     config = loads_rules('select = ["clash"]')
     assert check_model(model(*comps), config) == ()
 
@@ -137,14 +155,26 @@ def test_pipe_resting_on_a_beam_within_fit_noise_is_not_an_error():
     beam = Component(id="B1", type="cuboid", geometry=fit.primitive, fit=fit)
     r = 0.1143 / 2
     # fitted 1.5 mm into the beam's top (z = 1.0) while the fits are good to ~2 mm
-    resting = pipe("P1", [0, -1.5, 1.0 + r - 0.0015], [0, 1.5, 1.0 + r - 0.0015], 0.1143,
-                   center_se=0.002, radius_se=0.001)
+    resting = pipe(
+        "P1",
+        [0, -1.5, 1.0 + r - 0.0015],
+        [0, 1.5, 1.0 + r - 0.0015],
+        0.1143,
+        center_se=0.002,
+        radius_se=0.001,
+    )
     (f,) = [f for f in check_model(model(beam, resting)) if f.slug == "clash"]
     assert f.severity == "warning" and f.unverifiable
     assert "within the fits' uncertainty" in f.message
     # 30 mm into it is a clash whatever the noise
-    sunk = pipe("P1", [0, -1.5, 1.0 + r - 0.03], [0, 1.5, 1.0 + r - 0.03], 0.1143,
-                center_se=0.002, radius_se=0.001)
+    sunk = pipe(
+        "P1",
+        [0, -1.5, 1.0 + r - 0.03],
+        [0, 1.5, 1.0 + r - 0.03],
+        0.1143,
+        center_se=0.002,
+        radius_se=0.001,
+    )
     (f,) = [f for f in check_model(model(beam, sunk)) if f.slug == "clash"]
     assert f.severity == "error"
 

@@ -67,8 +67,9 @@ def test_select_and_ignore(text, active, inactive):
 
 
 def test_with_selection_replaces_select_and_extends_ignore():
-    config = loads_rules('ignore = ["clash"]').with_selection(select=["AB5", "AB2"],
-                                                               ignore=["slope"])
+    config = loads_rules('ignore = ["clash"]').with_selection(
+        select=["AB5", "AB2"], ignore=["slope"]
+    )
     assert {r.slug for r in config.active_rules()} == {"misaligned-axis", "out-of-plumb"}
 
 
@@ -76,13 +77,13 @@ def test_with_selection_replaces_select_and_extends_ignore():
     "text, where, hint",
     [
         ("[no-such-rule]\nx = 1", "[no-such-rule]", "unknown rule"),
-        ("[out-of-plumb]\nsteel_ratio = \"500\"", "[out-of-plumb].steel_ratio", "must be a number"),
+        ('[out-of-plumb]\nsteel_ratio = "500"', "[out-of-plumb].steel_ratio", "must be a number"),
         ("[out-of-plumb]\nsteel_ratio = true", "[out-of-plumb].steel_ratio", "must be a number"),
         ("[clash]\nsamples = 1.5", "[clash].samples", "must be an integer"),
-        ("[out-of-plumb]\nseverity = \"fatal\"", "[out-of-plumb].severity", "error, warning, info"),
+        ('[out-of-plumb]\nseverity = "fatal"', "[out-of-plumb].severity", "error, warning, info"),
         ("[out-of-plumb]\nsteel_rato = 400", "[out-of-plumb].steel_rato", "unknown option"),
         ("[general]\nk_sigma = -1", "[general].k_sigma", "non-negative"),
-        ("[general]\ndefault_material = \"wood\"", "[general].default_material", "steel"),
+        ('[general]\ndefault_material = "wood"', "[general].default_material", "steel"),
         ("[general]\nsteel_keywords = [1, 2]", "[general].steel_keywords[0]", "string"),
         ('select = ["AB999"]', "select", "unknown rule"),
         ('ignore = "clash"', "ignore", "must be a list"),

@@ -30,10 +30,10 @@ def findings(built, the_design, slug=None):
 )
 def test_spool_length_pfi_es3(nominal, built_length, expected):
     od = {"4": 0.1143, "12": 0.3238}[nominal]
-    built = model(pipe("P1", [0, 0, 1], [built_length, 0, 1], od, nominal=nominal,
-                       length_se=0.001))
-    d = design(pipes=[{"id": "D1", "nominal": nominal, "start": [0, 0, 1000],
-                       "end": [2000, 0, 1000]}])
+    built = model(pipe("P1", [0, 0, 1], [built_length, 0, 1], od, nominal=nominal, length_se=0.001))
+    d = design(
+        pipes=[{"id": "D1", "nominal": nominal, "start": [0, 0, 1000], "end": [2000, 0, 1000]}]
+    )
     found = [f for f in findings(built, d, "design-deviation") if "length" in f.message]
     if expected is None:
         assert not found
@@ -44,22 +44,27 @@ def test_spool_length_pfi_es3(nominal, built_length, expected):
 
 
 def test_perfect_spool_matches_design_without_findings():
-    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.001),
-                  pipe("P2", [2, 0, 1], [2, 2, 1], 0.1143, nominal="4", length_se=0.001))
-    d = design(pipes=[
-        {"id": "D1", "nominal": "4", "start": [0, 0, 1000], "end": [2000, 0, 1000]},
-        {"id": "D2", "nominal": "4", "start": [2000, 0, 1000], "end": [2000, 2000, 1000]},
-    ])
-    assert not [f for f in findings(built, d) if f.slug in ("design-deviation",
-                                                            "missing-component",
-                                                            "extra-component")]
+    built = model(
+        pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.001),
+        pipe("P2", [2, 0, 1], [2, 2, 1], 0.1143, nominal="4", length_se=0.001),
+    )
+    d = design(
+        pipes=[
+            {"id": "D1", "nominal": "4", "start": [0, 0, 1000], "end": [2000, 0, 1000]},
+            {"id": "D2", "nominal": "4", "start": [2000, 0, 1000], "end": [2000, 2000, 1000]},
+        ]
+    )
+    assert not [
+        f
+        for f in findings(built, d)
+        if f.slug in ("design-deviation", "missing-component", "extra-component")
+    ]
 
 
 def test_offset_size_and_direction_deviations():
     end = [2 * np.cos(np.radians(3)), 2 * np.sin(np.radians(3)), 1.05]
     built = model(pipe("P1", [0, 0, 1.05], end, 0.0889, nominal="3", axis_deg=0.05))
-    d = design(pipes=[{"id": "D1", "nominal": "4", "start": [0, 0, 1000],
-                       "end": [2000, 0, 1000]}])
+    d = design(pipes=[{"id": "D1", "nominal": "4", "start": [0, 0, 1000], "end": [2000, 0, 1000]}])
     messages = " | ".join(f.message for f in findings(built, d, "design-deviation"))
     assert "size deviates from design D1: NPS 3 built, NPS 4 designed" in messages
     assert "position deviates" in messages
@@ -67,12 +72,16 @@ def test_offset_size_and_direction_deviations():
 
 
 def test_missing_and_extra_components():
-    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4"),
-                  pipe("PX", [5, 5, 1], [6, 5, 1], 0.1143, nominal="4"))
-    d = design(pipes=[
-        {"id": "D1", "nominal": "4", "start": [0, 0, 1000], "end": [2000, 0, 1000]},
-        {"id": "D9", "nominal": "4", "start": [0, 3000, 1000], "end": [2000, 3000, 1000]},
-    ])
+    built = model(
+        pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4"),
+        pipe("PX", [5, 5, 1], [6, 5, 1], 0.1143, nominal="4"),
+    )
+    d = design(
+        pipes=[
+            {"id": "D1", "nominal": "4", "start": [0, 0, 1000], "end": [2000, 0, 1000]},
+            {"id": "D9", "nominal": "4", "start": [0, 3000, 1000], "end": [2000, 3000, 1000]},
+        ]
+    )
     out = findings(built, d)
     (missing,) = [f for f in out if f.slug == "missing-component"]
     (extra,) = [f for f in out if f.slug == "extra-component"]
@@ -82,8 +91,7 @@ def test_missing_and_extra_components():
 
 def test_column_position_and_section():
     built = model(column("C1", [0.05, 0, 0], 0.0, 3.0, section=(0.32, 0.3), size_se=0.001))
-    d = design(columns=[{"id": "DC1", "base": [0, 0, 0], "top": [0, 0, 3000],
-                         "size": [300, 300]}])
+    d = design(columns=[{"id": "DC1", "base": [0, 0, 0], "top": [0, 0, 3000], "size": [300, 300]}])
     messages = [f.message for f in findings(built, d, "design-deviation")]
     assert any(m.startswith("position deviates from design DC1: axis 50.0 mm") for m in messages)
     assert any("section" in m and "+20.0 mm" in m for m in messages)
@@ -98,14 +106,14 @@ def test_design_may_be_a_path(tmp_path):
     path = tmp_path / "d.json"
     path.write_text(json.dumps({"pipes": []}), encoding="utf-8")
     built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4"))
-    assert [f.slug for f in check_model(built, design=str(path))
-            if f.code.startswith("AB6")] == ["extra-component"]
+    assert [f.slug for f in check_model(built, design=str(path)) if f.code.startswith("AB6")] == [
+        "extra-component"
+    ]
 
 
 def test_free_pipe_is_only_checked_for_being_too_long():
     # the scan stopped 150 mm short of each end: a lower bound, not a deviation
-    d = design(pipes=[{"id": "D1", "nominal": "4", "start": [0, 0, 1000],
-                       "end": [3000, 0, 1000]}])
+    d = design(pipes=[{"id": "D1", "nominal": "4", "start": [0, 0, 1000], "end": [3000, 0, 1000]}])
     short = model(pipe("P1", [0.15, 0, 1], [2.85, 0, 1], 0.1143, nominal="4", length_se=0.001))
     assert not [f for f in findings(short, d, "design-deviation") if "length" in f.message]
     long = model(pipe("P1", [-0.01, 0, 1], [3.01, 0, 1], 0.1143, nominal="4", length_se=0.001))
@@ -116,13 +124,17 @@ def test_free_pipe_is_only_checked_for_being_too_long():
 def test_joined_pipe_that_is_short_is_flagged():
     from asbuilt.model import Bend, Component
 
-    d = design(pipes=[{"id": "D1", "nominal": "4", "start": [0, 0, 1000],
-                       "end": [2000, 0, 1000]}])
-    elbow_a = Component(id="E1", type="elbow", geometry=Bend([0, 0, 1], [-0.1, 0, 1.1],
-                                                             [-0.1, 0, 1], 0.057))
+    d = design(pipes=[{"id": "D1", "nominal": "4", "start": [0, 0, 1000], "end": [2000, 0, 1000]}])
+    elbow_a = Component(
+        id="E1", type="elbow", geometry=Bend([0, 0, 1], [-0.1, 0, 1.1], [-0.1, 0, 1], 0.057)
+    )
     p = pipe("P1", [0, 0, 1], [1.99, 0, 1], 0.1143, nominal="4", length_se=0.001)
-    elbow_b = Component(id="E2", type="elbow", geometry=Bend([1.99, 0, 1], [2.09, 0, 1.1],
-                                                             [2.09, 0, 1], 0.057))
-    (f,) = [f for f in findings(model(elbow_a, p, elbow_b), d, "design-deviation")
-            if "length" in f.message]
+    elbow_b = Component(
+        id="E2", type="elbow", geometry=Bend([1.99, 0, 1], [2.09, 0, 1.1], [2.09, 0, 1], 0.057)
+    )
+    (f,) = [
+        f
+        for f in findings(model(elbow_a, p, elbow_b), d, "design-deviation")
+        if "length" in f.message
+    ]
     assert "10.0 mm short" in f.message and f.severity == "error"

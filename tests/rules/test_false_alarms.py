@@ -31,15 +31,17 @@ def test_compliant_scene_has_no_error(name, seed):
 
 
 def test_plumb_column_from_a_sparse_scan_is_unverifiable_not_an_error():
-    model = build_model(loads_scan(json.dumps(simulate_scan(
-        SCENES["plumb columns (2 x 36 pts)"], seed=21))))
+    model = build_model(
+        loads_scan(json.dumps(simulate_scan(SCENES["plumb columns (2 x 36 pts)"], seed=21)))
+    )
     plumb = [f for f in model.findings if f.slug == "out-of-plumb"]
     assert plumb and all(f.severity == "warning" and f.unverifiable for f in plumb)
     assert all("second face" in f.suggestions[0].description for f in plumb)
 
 
-@pytest.mark.parametrize("name", ["column leaning 1:100 (40 mm over 4 m)",
-                                  "NPS 4 pipes crossing 50 mm apart"])
+@pytest.mark.parametrize(
+    "name", ["column leaning 1:100 (40 mm over 4 m)", "NPS 4 pipes crossing 50 mm apart"]
+)
 def test_faulty_scene_is_an_error(name):
     scene, slug = FAULTY[name]
     model = build_model(loads_scan(json.dumps(simulate_scan(scene, seed=31))))

@@ -39,8 +39,16 @@ def test_misaligned_column_is_made_vertical(angle):
 
 def test_misaligned_horizontal_pipe_is_levelled():
     t = np.radians(5)
-    built = model(pipe("P1", [0, 0, 1], [2 * np.cos(t), 0, 1 + 2 * np.sin(t)], 0.1143,
-                       nominal="4", axis_deg=0.1))
+    built = model(
+        pipe(
+            "P1",
+            [0, 0, 1],
+            [2 * np.cos(t), 0, 1 + 2 * np.sin(t)],
+            0.1143,
+            nominal="4",
+            axis_deg=0.1,
+        )
+    )
     before, fixed, _, after = fix_and_recheck(built)
     assert "misaligned-axis" in slugs(before) and "misaligned-axis" not in slugs(after)
     geom = fixed.component("P1").geometry
@@ -52,8 +60,14 @@ def test_plan_misalignment_is_fixed():
     t = np.radians(85.0)
     built = model(
         pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", axis_deg=0.1),
-        pipe("P2", [2.05, 0, 1], [2.05 + 2 * np.cos(t), 2 * np.sin(t), 1], 0.1143, nominal="4",
-             axis_deg=0.1),
+        pipe(
+            "P2",
+            [2.05, 0, 1],
+            [2.05 + 2 * np.cos(t), 2 * np.sin(t), 1],
+            0.1143,
+            nominal="4",
+            axis_deg=0.1,
+        ),
     )
     before, fixed, _, after = fix_and_recheck(built)
     assert "misaligned-axis" in slugs(before) and "misaligned-axis" not in slugs(after)
@@ -62,10 +76,26 @@ def test_plan_misalignment_is_fixed():
 
 def test_contiguous_size_is_shared():
     built = model(
-        pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", od_fit=0.1146, status="snapped",
-             od_stderr=0.0004),
-        pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.0889, nominal="3", od_fit=0.0905, status="snapped",
-             od_stderr=0.004),
+        pipe(
+            "P1",
+            [0, 0, 1],
+            [2, 0, 1],
+            0.1143,
+            nominal="4",
+            od_fit=0.1146,
+            status="snapped",
+            od_stderr=0.0004,
+        ),
+        pipe(
+            "P2",
+            [2.05, 0, 1],
+            [4, 0, 1],
+            0.0889,
+            nominal="3",
+            od_fit=0.0905,
+            status="snapped",
+            od_stderr=0.004,
+        ),
     )
     before, fixed, changes, after = fix_and_recheck(built)
     assert "contiguous-diameter-mismatch" in slugs(before)

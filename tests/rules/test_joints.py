@@ -54,8 +54,11 @@ def test_corner_without_room_for_an_elbow_is_flagged():
 
 def test_pipes_joined_through_a_fitting_are_not_checked():
     a = pipe("P1", [0, 0, 1], [2 - 0.152, 0, 1], 0.1143, nominal="4")
-    elbow = Component(id="P1-P2", type="elbow", geometry=Bend(
-        [2 - 0.152, 0, 1], [2, 0.152, 1], [2 - 0.152, 0.152, 1], 0.1143 / 2))
+    elbow = Component(
+        id="P1-P2",
+        type="elbow",
+        geometry=Bend([2 - 0.152, 0, 1], [2, 0.152, 1], [2 - 0.152, 0.152, 1], 0.1143 / 2),
+    )
     b = pipe("P2", [2, 0.152, 1], [2, 2, 1], 0.1143, nominal="4")
     assert not gaps(a, elbow, b)
 
@@ -63,8 +66,9 @@ def test_pipes_joined_through_a_fitting_are_not_checked():
 def test_joint_geometry_of_a_corner():
     from asbuilt.model import Straight
 
-    geo = joint_geometry(Straight([0, 0, 0], [1, 0, 0], 0.05), Straight([1.2, 0.3, 0], [1.2, 2, 0],
-                                                                          0.05))
+    geo = joint_geometry(
+        Straight([0, 0, 0], [1, 0, 0], 0.05), Straight([1.2, 0.3, 0], [1.2, 2, 0], 0.05)
+    )
     assert geo["angle_deg"] == pytest.approx(90.0)
     np.testing.assert_allclose(geo["corner"], [1.2, 0, 0], atol=1e-12)
     assert geo["da"] == pytest.approx(0.2) and geo["db"] == pytest.approx(0.3)

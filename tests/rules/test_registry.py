@@ -8,9 +8,20 @@ from asbuilt.rules import RULES, match_rules, rule
 ROOT = Path(__file__).resolve().parents[2]
 
 REQUIRED = (
-    "nonstandard-diameter", "ambiguous-size", "hint-mismatch", "contiguous-diameter-mismatch",
-    "misaligned-axis", "out-of-plumb", "slope", "joint-gap", "too-few-points", "weak-geometry",
-    "poor-fit", "outliers", "clash", "design-deviation",
+    "nonstandard-diameter",
+    "ambiguous-size",
+    "hint-mismatch",
+    "contiguous-diameter-mismatch",
+    "misaligned-axis",
+    "out-of-plumb",
+    "slope",
+    "joint-gap",
+    "too-few-points",
+    "weak-geometry",
+    "poor-fit",
+    "outliers",
+    "clash",
+    "design-deviation",
 )
 
 

@@ -23,11 +23,13 @@ def run(*components, scan=None, select=None):
 
 
 def test_nonstandard_diameter_message_names_nearest_size():
-    (f,) = only(run(pipe("P3", [0, 0, 1], [2, 0, 1], 0.1182, status="no-size")),
-                "nonstandard-diameter")
+    (f,) = only(
+        run(pipe("P3", [0, 0, 1], [2, 0, 1], 0.1182, status="no-size")), "nonstandard-diameter"
+    )
     assert f.severity == "error" and f.code == "AB101" and f.objects == ("P3",)
-    assert f.message == ("OD 118.2 mm is no ASME B36.10M size (nearest NPS 4 = 114.3 mm, "
-                         "3.9 mm off)")
+    assert f.message == (
+        "OD 118.2 mm is no ASME B36.10M size (nearest NPS 4 = 114.3 mm, 3.9 mm off)"
+    )
     assert f.measured == pytest.approx(0.0039)
     assert f.allowed == pytest.approx(0.002)
     np.testing.assert_allclose(f.location, [1, 0, 1])
@@ -38,8 +40,10 @@ def test_nonstandard_diameter_message_names_nearest_size():
 
 
 def test_snapped_pipe_is_not_nonstandard():
-    assert not only(run(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4",
-                             status="snapped")), "nonstandard-diameter")
+    assert not only(
+        run(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", status="snapped")),
+        "nonstandard-diameter",
+    )
 
 
 @pytest.mark.parametrize(
@@ -71,8 +75,9 @@ def test_nonstandard_at_the_tolerance_edge_without_merge_status(od, od_se, expec
 
 def test_ambiguous_size_lists_candidates_and_suggests_scanning():
     cands = [{"nominal": "3/4", "od": 0.0267}, {"nominal": "1", "od": 0.0286}]
-    comp = pipe("P2", [0, 0, 1], [1, 0, 1], 0.0276, status="ambiguous", od_stderr=0.0012,
-                candidates=cands)
+    comp = pipe(
+        "P2", [0, 0, 1], [1, 0, 1], 0.0276, status="ambiguous", od_stderr=0.0012, candidates=cands
+    )
     (f,) = only(run(comp), "ambiguous-size")
     assert f.severity == "warning"
     assert "2 sizes" in f.message and "NPS 3/4 = 26.7 mm" in f.message
@@ -104,7 +109,7 @@ def scan_with_hint(object_id, hint):
 def test_hint_mismatch_is_found_and_fix_is_unambiguous():
     comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143)
     (f,) = only(run(comp, scan=scan_with_hint("P1", '3"')), "hint-mismatch")
-    assert "3\"" in f.message and "88.9 mm" in f.message
+    assert '3"' in f.message and "88.9 mm" in f.message
     assert f.measured == pytest.approx(0.1143 - 0.0889)
     fix = f.suggestions[0]
     assert fix.unambiguous and fix.change["value"] == "4" and fix.change["reject_hint"]
@@ -133,10 +138,26 @@ def test_merge_hint_record_is_used():
 
 
 def test_contiguous_mismatch_suggests_shared_size():
-    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", od_fit=0.1146, status="snapped",
-             od_stderr=0.0004)
-    b = pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.0889, nominal="3", od_fit=0.0905,
-             status="snapped", od_stderr=0.004)
+    a = pipe(
+        "P1",
+        [0, 0, 1],
+        [2, 0, 1],
+        0.1143,
+        nominal="4",
+        od_fit=0.1146,
+        status="snapped",
+        od_stderr=0.0004,
+    )
+    b = pipe(
+        "P2",
+        [2.05, 0, 1],
+        [4, 0, 1],
+        0.0889,
+        nominal="3",
+        od_fit=0.0905,
+        status="snapped",
+        od_stderr=0.004,
+    )
     (f,) = only(run(a, b), "contiguous-diameter-mismatch")
     assert f.severity == "error" and f.objects == ("P1", "P2")
     assert "NPS 4" in f.message and "NPS 3" in f.message
@@ -160,8 +181,9 @@ def test_reducer_between_pipes_explains_the_change():
     from asbuilt.model import Component, Reducer
 
     a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4")
-    red = Component(id="R1", type="reducer",
-                    geometry=Reducer([2, 0, 1], [2.102, 0, 1], 0.1143 / 2, 0.0889 / 2))
+    red = Component(
+        id="R1", type="reducer", geometry=Reducer([2, 0, 1], [2.102, 0, 1], 0.1143 / 2, 0.0889 / 2)
+    )
     b = pipe("P2", [2.102, 0, 1], [4, 0, 1], 0.0889, nominal="3")
     # the pipes' ends are 0.102 m apart (within joint_distance) but joined through a reducer
     found = only(run(a, red, b), "contiguous-diameter-mismatch")
@@ -172,23 +194,46 @@ def test_unmerged_model_is_not_judged_for_contiguous_sizes():
     a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4")
     b = pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.0889, nominal="3")
     built = model(a, b, merged=False)
-    assert not [f for f in check_model(built, catalog=B36)
-                if f.slug == "contiguous-diameter-mismatch"]
+    assert not [
+        f for f in check_model(built, catalog=B36) if f.slug == "contiguous-diameter-mismatch"
+    ]
 
 
 def test_different_sizes_whose_fits_agree_are_unverifiable():
     # snapped to different sizes, but the fitted ODs differ by 2.6 mm +- 4 mm
-    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", od_fit=0.1146, status="snapped",
-             od_stderr=0.0004)
-    b = pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.0889, nominal="3", od_fit=0.1120,
-             status="snapped", od_stderr=0.004)
+    a = pipe(
+        "P1",
+        [0, 0, 1],
+        [2, 0, 1],
+        0.1143,
+        nominal="4",
+        od_fit=0.1146,
+        status="snapped",
+        od_stderr=0.0004,
+    )
+    b = pipe(
+        "P2",
+        [2.05, 0, 1],
+        [4, 0, 1],
+        0.0889,
+        nominal="3",
+        od_fit=0.1120,
+        status="snapped",
+        od_stderr=0.004,
+    )
     (f,) = only(run(a, b), "contiguous-diameter-mismatch")
     assert f.unverifiable and f.severity == "warning"
 
 
 def test_nonstandard_without_catalog_uses_the_merge_record():
-    comp = pipe("P3", [0, 0, 1], [2, 0, 1], 0.1182, status="no-size",
-                candidates=[{"nominal": "4", "od": 0.1143}])
+    comp = pipe(
+        "P3",
+        [0, 0, 1],
+        [2, 0, 1],
+        0.1182,
+        status="no-size",
+        candidates=[{"nominal": "4", "od": 0.1143}],
+    )
     (f,) = [f for f in check_model(model(comp)) if f.slug == "nonstandard-diameter"]
     assert "nearest NPS 4 = 114.3 mm, 3.9 mm off" in f.message
     assert f.severity == "error"
