@@ -141,7 +141,8 @@ def _robust_fit(model, x, noise, floor, cutoff):
     """IRLS with Tukey's biweight, then a plain least-squares refit on the inliers.
 
     The scale starts at the noise level and is re-estimated (median absolute residual) on the
-    biweight's support each iteration; inliers are within ``cutoff`` robust sigmas. Updates
+    biweight's support each iteration; inliers are within ``cutoff`` times the larger of that
+    scale and the noise level (the sensor's sigma when given). Updates
     ``model`` in place; returns label (n,), residual (n,) metres, inliers (n,) bool, scale
     (metres) and the number of Gauss-Newton steps.
     """
@@ -159,7 +160,7 @@ def _robust_fit(model, x, noise, floor, cutoff):
         label, residual = model.assign(x)
         if moved < 1e-5:
             break
-    inliers = np.abs(residual) <= cutoff * scale
+    inliers = np.abs(residual) <= cutoff * max(scale, noise)
     for _ in range(_REFIT_ITERATIONS):
         if np.count_nonzero(inliers) < 3:
             break
@@ -170,7 +171,10 @@ def _robust_fit(model, x, noise, floor, cutoff):
             break
     if np.any(inliers):
         scale = _robust_scale(residual[inliers], floor)
-    inliers = np.abs(residual) <= cutoff * scale
+    # The final cut is never tighter than the noise level: orthogonal residuals of oblique shots
+    # are smaller than the range noise, and a few points' median underestimates it, so a cut at
+    # the residuals' own scale alone would drop good shots seen head-on.
+    inliers = np.abs(residual) <= cutoff * max(scale, noise)
     return label, residual, inliers, scale, iterations
 
 
