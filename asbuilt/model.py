@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import ClassVar, Union
+from typing import ClassVar
 
 import numpy as np
 
@@ -170,7 +170,7 @@ class Tee:
         )
 
 
-Geometry = Union[Straight, Bend, Reducer, Tee, Cylinder, Cuboid, Sphere, Plane, Hull]
+Geometry = Straight | Bend | Reducer | Tee | Cylinder | Cuboid | Sphere | Plane | Hull
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ to its surface (positive outside). Nothing here fits or draws: see :mod:`asbuilt
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar, Union
+from typing import ClassVar
 
 import numpy as np
 
@@ -238,4 +238,4 @@ class Hull:
         return (pts @ normals.T - offsets).max(axis=1)
 
 
-Primitive = Union[Cylinder, Cuboid, Sphere, Plane, Hull]
+Primitive = Cylinder | Cuboid | Sphere | Plane | Hull

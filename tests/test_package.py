@@ -62,13 +62,13 @@ def test_installed_wheel_works_on_its_own(wheel, tmp_path):
     )
     probe = (
         "import asbuilt, asbuilt.drivers, asbuilt.catalogs, importlib.resources as r\n"
-        "assert asbuilt.__file__.startswith(%r), asbuilt.__file__\n"
+        f"assert asbuilt.__file__.startswith({str(target)!r}), asbuilt.__file__\n"
         "from asbuilt.cli import build_parser\n"
         "build_parser()\n"
         "names = [p.name for p in r.files('asbuilt.catalogs').iterdir()]\n"
         "assert any(n.endswith('.csv') for n in names), names\n"
         "print('ok')\n"
-    ) % str(target)
+    )
     env = dict(os.environ, PYTHONPATH=str(target))
     result = subprocess.run(
         [sys.executable, "-c", probe], cwd=tmp_path, env=env, capture_output=True, text=True
