@@ -41,6 +41,7 @@ __all__ = [
     "noise_level",
     "covariance_from_jacobian",
     "stderr_of",
+    "mixture_score",
     "local_normals",
     "circle_fit_2d",
     "arc_coverage_deg",
@@ -548,9 +549,8 @@ def _iterate(model, state, points, weigh, iterations, tolerance, current=None):
 def _best_inlier_set(residuals, mask, extent, floor):
     """The likeliest inlier set among those nested by |residual|, at least as large as ``mask``.
 
-    Each candidate keeps the ``m`` points of smallest |r|: Gaussian inliers with their own
-    maximum-likelihood sigma, uniform outliers over the points' extent ``W`` (the mixture of
-    Torr's GRIC): ``score = m (1 + ln(2 pi s_m^2)) + (n - m) 2 ln W``, lowest wins. A 3-sigma test
+    Each candidate keeps the ``m`` points of smallest |r|, scored by :func:`mixture_score`
+    (lowest wins). A 3-sigma test
     on a small-sample scale can reject a whole group of good but noisier shots (square-on shots
     among grazing ones); taken together they raise sigma enough to be explained, which a
     one-at-a-time test never sees. Background shots, centimetres to metres off, never pay.
@@ -569,9 +569,25 @@ def _best_inlier_set(residuals, mask, extent, floor):
     return chosen | mask
 
 
-def _mixture_score(residuals, mask, extent, floor) -> float:
-    """``m (1 + ln(2 pi s^2)) + (n - m) 2 ln W``: Gaussian inliers with their own sigma, uniform
-    outliers over the extent ``W`` (see :func:`_best_inlier_set`)."""
+def mixture_score(residuals, mask, extent, floor) -> float:
+    """Minus twice the log-likelihood of a fit's residuals as Gaussian inliers and uniform outliers.
+
+    ``m (1 + ln(2 pi s^2)) + (n - m) 2 ln W`` with ``s`` the inliers' maximum-likelihood sigma
+    and ``W`` the extent outliers may spread over (the mixture of Torr's GRIC, 1998).
+
+    Parameters
+    ----------
+    residuals : ndarray, shape (n,), metres
+    mask : ndarray, shape (n,), bool
+        Inliers.
+    extent : float, metres
+    floor : float, metres
+        Smallest sigma.
+
+    Returns
+    -------
+    float
+    """
     kept = residuals[mask]
     variance = max(float(np.mean(kept * kept)), floor * floor)
     m, n = kept.size, residuals.size
@@ -580,7 +596,7 @@ def _mixture_score(residuals, mask, extent, floor) -> float:
 
 def _likeliest_refit(model, state, points, mask, extent, floor, iterations):
     """Least squares on the 3-sigma inliers, on the likeliest nested set, and on every point;
-    the refit with the best :func:`_mixture_score` wins.
+    the refit with the best :func:`mixture_score` wins.
 
     A robust start on 20-30 points can settle on a subset that a five-parameter surface fits
     too well (a few tenths of a millimetre), so that good shots look like outliers; refitted
@@ -595,7 +611,7 @@ def _likeliest_refit(model, state, points, mask, extent, floor, iterations):
             continue
         weights = candidate.astype(np.float64)
         fitted = _iterate(model, state, points, lambda _r, w=weights: w, iterations, 1e-9)
-        score = _mixture_score(fitted[1], candidate, extent, floor)
+        score = mixture_score(fitted[1], candidate, extent, floor)
         if np.isfinite(score) and (best is None or score < best[0]):
             best = (score, fitted, candidate)
     if best is None:
