@@ -32,10 +32,20 @@ __all__ = [
     "load_model_document",
     "model_from_document",
     "load_model",
+    "SCHEMA_PATH",
+    "model_schema",
 ]
 
 FORMAT = "asbuilt-model"
 VERSION = 1
+
+#: The JSON Schema of the document (package data).
+SCHEMA_PATH = Path(__file__).resolve().parents[1] / "schemas" / "model.schema.json"
+
+
+def model_schema() -> dict:
+    """The document's JSON Schema (draft 2020-12), as shipped in ``asbuilt/schemas``."""
+    return json.loads(SCHEMA_PATH.read_text(encoding="utf-8"))
 
 
 class ModelDocumentError(ExportError):

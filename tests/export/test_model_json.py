@@ -196,3 +196,40 @@ def test_bad_spools_and_findings_are_located(key, entry, where, message):
 def test_missing_file(tmp_path):
     with pytest.raises(ModelDocumentError, match="cannot read the file"):
         load_model_document(tmp_path / "nope.json")
+
+
+def test_documents_follow_the_shipped_schema(zoo):
+    import jsonschema
+
+    from asbuilt.export.model_json import model_schema
+    from asbuilt.pipeline import build_model
+    from asbuilt.scan import load_scan
+
+    schema = model_schema()
+    jsonschema.Draft202012Validator.check_schema(schema)
+    validator = jsonschema.Draft202012Validator(schema)
+    validator.validate(model_document(zoo))
+    for sample in ("spool", "plant", "structural-bay"):
+        model = build_model(load_scan(ROOT / "samples" / f"{sample}.json"))
+        validator.validate(json.loads(dumps_model(model)))
+
+
+@pytest.mark.parametrize(
+    ("change", "path"),
+    [
+        (lambda d: d["components"][0].pop("end"), ["components", 0]),
+        (lambda d: d["findings"][0].update(severity="fatal"), ["findings", 0, "severity"]),
+        (lambda d: d["components"][1].update(ends=[[0, 0, 0]]), ["components", 1, "ends"]),
+        (lambda d: d.update(version=2), ["version"]),
+    ],
+)
+def test_schema_rejects_broken_documents(zoo, change, path):
+    import jsonschema
+
+    from asbuilt.export.model_json import model_schema
+
+    document = model_document(zoo)
+    change(document)
+    errors = list(jsonschema.Draft202012Validator(model_schema()).iter_errors(document))
+    assert errors
+    assert any(list(error.absolute_path)[: len(path)] == path for error in errors)
