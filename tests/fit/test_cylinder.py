@@ -82,6 +82,27 @@ def test_twenty_percent_edge_outliers_are_rejected_and_reported(rng, od, ld, n, 
     assert np.abs(fit.residuals[~fit.inliers]).min() > np.abs(fit.residuals[fit.inliers]).max()
 
 
+@pytest.mark.parametrize(
+    "od, ld, n, distance, axis",
+    [
+        (0.6096, 3, 20, 3, [-0.993, 0.118, 0.3]),  # seen 35 degrees off its axis, sparse
+        (0.2191, 10, 40, 3, [-0.979, 0.206, 0.3]),
+        (0.2191, 3, 40, 3, [0.984, 0.181, 0.3]),
+    ],
+)
+def test_obliquely_seen_pipes_with_background_shots_keep_their_radius(
+    rng, od, ld, n, distance, axis
+):
+    # Seen along the pipe, background shots pushed along the beam stay close to the surface
+    # for decimetres, and local normals are poor starts: the axis pattern search must recover.
+    pipe = _pipe(od, ld, distance, axis)
+    for _ in range(8):
+        sample = raster_scan(pipe, SENSOR, n, rng, outlier_fraction=0.2)
+        fit = fit_cylinder(sample.points)
+        assert abs(fit.primitive.radius - pipe.radius) < 0.005
+        assert angle_deg(fit.primitive.axis, pipe.axis) < 2.0
+
+
 def test_noise_free_points_fit_exactly():
     pipe = Cylinder([2, 1, 3], np.array([1.0, 2, 2]) / 3, 0.25, 1.2)
     u, v = orthonormal_basis(pipe.axis)
