@@ -162,7 +162,11 @@ def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise cross product of (k, 3) arrays (``a`` may also be one (3,) vector)."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
-    return np.column_stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+    out = np.empty((b.shape[0], 3))
+    out[:, 0] = a1 * b2 - a2 * b1
+    out[:, 1] = a2 * b0 - a0 * b2
+    out[:, 2] = a0 * b1 - a1 * b0
+    return out
 
 
 def cross3(a, b) -> np.ndarray:
@@ -245,10 +249,9 @@ def _distinct(normals, offsets, order, cos_face, threshold, limit):
     )
     alive = np.ones(order.size, bool)
     while len(chosen) < limit:
-        free = np.flatnonzero(alive)
-        if free.size == 0:
+        pos = int(alive.argmax())
+        if not alive[pos]:
             break
-        pos = int(free[0])
         chosen.append(int(order[pos]))
         alive &= ~same[pos]
     return chosen

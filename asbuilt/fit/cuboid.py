@@ -39,6 +39,8 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from asbuilt.errors import FitError
@@ -62,14 +64,18 @@ _IRLS_ITERATIONS = 6
 _REFIT_ITERATIONS = 4
 
 
+_EYE3 = np.eye(3)
+_EYE3.setflags(write=False)
+
+
 def _rodrigues(omega: np.ndarray) -> np.ndarray:
     """Rotation matrix (3, 3) of the rotation vector ``omega`` (3,), radians."""
-    angle = float(np.linalg.norm(omega))
+    angle = math.sqrt(float(omega @ omega))
     if angle < 1e-15:
-        return np.eye(3)
+        return _EYE3
     k = omega / angle
     kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * kx + (1.0 - np.cos(angle)) * (kx @ kx)
+    return _EYE3 + math.sin(angle) * kx + (1.0 - math.cos(angle)) * (kx @ kx)
 
 
 class _Model:
