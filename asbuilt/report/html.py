@@ -205,6 +205,41 @@ def _pictures(data: ReportData, figure_format: str, label_limit: int) -> str:
 def _takeoff(data: ReportData) -> str:
     t = data.takeoff
     out = ['<section id="takeoff"><h2>Quantity take-off</h2>']
+    if t.spools:
+        out.append("<h3>Spools</h3>")
+        kinds = ("elbow", "tee", "reducer", "coupling")
+        rows = [
+            f'<tr id="spool-{anchor(sp.id)[4:]}">'
+            + _td(_e(sp.id))
+            + _td(_e(", ".join(sp.sizes)))
+            + _td(str(sp.pipes), True)
+            + _td(_num(sp.pipe_length), True)
+            + _td(_num(sp.pipe_length / FOOT, 2), True)
+            + _td(_num(sp.pipe_weight, 1), True)
+            + "".join(_td(str(sp.fittings.get(kind, 0)), True) for kind in kinds)
+            + _td(" ".join(_e(code) for code in sp.findings))
+            + "</tr>"
+            for sp in t.spools
+        ]
+        out.append(
+            _table(
+                [
+                    ("Spool", False),
+                    ("Sizes", False),
+                    ("Pipes", True),
+                    ("Pipe (m)", True),
+                    ("Pipe (ft)", True),
+                    ("Weight (kg)", True),
+                    ("Elbows", True),
+                    ("Tees", True),
+                    ("Reducers", True),
+                    ("Couplings", True),
+                    ("Findings", False),
+                ],
+                rows,
+                "spools",
+            )
+        )
     out.append("<h3>Pipe by nominal size and schedule</h3>")
     if t.pipes:
         rows = []

@@ -2,8 +2,8 @@
 
 Top level (``"format": "asbuilt-report"``, ``"version": 1``, ``"units": "m"``): ``title``,
 ``source``, ``scan_date``, ``generated``, ``catalog``, ``catalog_title``, ``display_units``,
-``counts``, ``findings_summary`` (by severity), ``takeoff`` (``pipes``, ``fittings``,
-``solids``, ``totals``), ``components`` (the CSV rows, same names without unit suffixes: lengths
+``counts``, ``findings_summary`` (by severity), ``takeoff`` (``spools``, ``pipes``,
+``fittings``, ``solids``, ``totals``), ``components`` (the CSV rows, same names without unit suffixes: lengths
 m, areas m2, volumes m3, weights kg), ``quality`` (per fitted object; residuals in metres) and
 ``findings`` (as in the ``asbuilt-model`` document). Non-finite numbers are written as null. The JSON Schema is :func:`report_schema`.
 """
@@ -62,6 +62,7 @@ def report_document(data: ReportData) -> dict:
         "counts": dict(data.counts),
         "findings_summary": dict(data.severities),
         "takeoff": {
+            "spools": [_plain(sp) for sp in t.spools],
             "pipes": [_plain(p) for p in t.pipes],
             "fittings": [_plain(f) for f in t.fittings],
             "solids": [_plain(s) for s in t.solids],

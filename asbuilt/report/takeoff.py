@@ -40,6 +40,7 @@ __all__ = [
     "FittingCount",
     "SolidQuantity",
     "ComponentRow",
+    "SpoolQuantity",
     "TakeOff",
     "pipe_weight_per_metre",
     "take_off",
@@ -168,10 +169,27 @@ class ComponentRow:
 
 
 @dataclass(frozen=True)
+class SpoolQuantity:
+    """One spool (the unit piping progress is tracked in): straight ``pipe_length`` metres and
+    ``pipe_weight`` kg (None when no pipe of it has a weight), the number of ``pipes`` and of
+    each fitting type (``fittings``: type -> count), its ``sizes`` (display labels) and
+    ``findings`` (codes on its components, worst first)."""
+
+    id: str
+    pipe_length: float
+    pipe_weight: float | None
+    pipes: int
+    fittings: Mapping[str, int]
+    sizes: tuple[str, ...]
+    findings: tuple[str, ...]
+    components: tuple[str, ...]
+
+
+@dataclass(frozen=True)
 class TakeOff:
     """The whole take-off. Totals: ``pipe_length`` metres, ``pipe_weight`` kg (of the lines
-    with a weight), ``solid_volume`` m3 by category, ``density`` kg/m3 used (None: no weight)
-    and ``material``."""
+    with a weight), ``volumes`` m3 and ``areas`` m2 by solid category, ``density`` kg/m3 used
+    (None: no weight) and ``material``; ``spools`` per spool in the model's order."""
 
     pipes: tuple[PipeLine, ...]
     fittings: tuple[FittingCount, ...]
@@ -184,6 +202,7 @@ class TakeOff:
     density: float | None = None
     material: str | None = None
     counts: Mapping[str, int] = field(default_factory=dict)
+    spools: tuple[SpoolQuantity, ...] = ()
 
 
 # ----------------------------------------------------------------------------------------------
@@ -340,6 +359,40 @@ def _findings_by_object(model: Model) -> dict[str, list]:
     return by_object
 
 
+def _spools(model: Model, rows: list[ComponentRow]) -> tuple[SpoolQuantity, ...]:
+    by_id = {row.id: row for row in rows}
+    members: dict[str, list[ComponentRow]] = {}
+    for spool in model.spools:
+        members[spool.id] = [by_id[c] for c in spool.components if c in by_id]
+    for row in rows:  # components naming a spool the model does not list
+        if row.spool and row.spool not in members:
+            members[row.spool] = []
+        if row.spool and row not in members[row.spool]:
+            members[row.spool].append(row)
+    result = []
+    for spool_id, parts in members.items():
+        pipes = [r for r in parts if r.type == "pipe"]
+        weights = [r.weight for r in pipes if r.weight is not None]
+        fittings: dict[str, int] = {}
+        for r in parts:
+            if r.type in FITTING_TYPES:
+                fittings[r.type] = fittings.get(r.type, 0) + 1
+        codes = sorted({(severity_rank(r.severity), code) for r in parts for code in r.findings})
+        result.append(
+            SpoolQuantity(
+                id=spool_id,
+                pipe_length=float(sum(r.length or 0.0 for r in pipes)),
+                pipe_weight=float(sum(weights)) if weights else None,
+                pipes=len(pipes),
+                fittings=fittings,
+                sizes=tuple(dict.fromkeys(r.size for r in pipes if r.size)),
+                findings=tuple(dict.fromkeys(code for _, code in codes)),
+                components=tuple(r.id for r in parts),
+            )
+        )
+    return tuple(result)
+
+
 def take_off(model: Model, *, density: float | None = None) -> TakeOff:
     """Count what was built.
 
@@ -470,6 +523,7 @@ def take_off(model: Model, *, density: float | None = None) -> TakeOff:
         if solid.volume is not None:
             volumes[solid.category] = volumes.get(solid.category, 0.0) + solid.volume
     return TakeOff(
+        spools=_spools(model, rows),
         pipes=pipes,
         fittings=fitting_rows,
         solids=tuple(solids),

@@ -136,3 +136,11 @@ def test_ids_with_unusual_characters_are_safe():
     text = html_text(report_data(model.replace(components=tuple(comps)), generated=STAMP))
     check_html(text)
     assert 'id="obj-C__1___a_"' in text
+
+
+def test_spool_table(plant_model, plant_html):
+    spools = plant_html.split('<table class="spools">', 1)[1].split("</table>", 1)[0]
+    for spool in plant_model.spools:
+        assert f'id="spool-{spool.id}"' in spools
+    row = spools.split("</tr>", 2)[1]  # the first body row (after the header row)
+    assert "NPS 8" in row

@@ -203,3 +203,26 @@ def test_cylinder_quantity_for_unmerged_pipes():
 def test_empty_model():
     t = take_off(Model(components=()))
     assert (t.pipes, t.fittings, t.solids, t.rows, t.pipe_length) == ((), (), (), (), 0.0)
+
+
+def test_spool_totals(known):
+    (spool,) = known.spools
+    assert (spool.id, spool.pipes, spool.fittings, spool.sizes) == (
+        "SP-1",
+        2,
+        {"elbow": 1},
+        ("NPS 4",),
+    )
+    assert spool.pipe_length == pytest.approx(2.0)
+    assert spool.pipe_weight == pytest.approx(2 * 16.0755, abs=0.01)
+    assert spool.components == ("P1", "P1-P2", "P2")
+
+
+def test_spool_findings_and_unlisted_spools():
+    from conftest import many_findings
+
+    model = known_model()
+    model = model.replace(findings=many_findings(model), spools=())  # spools not listed
+    (spool,) = take_off(model).spools
+    assert spool.id == "SP-1" and spool.pipes == 2
+    assert set(spool.findings) == {"AB900", "AB901", "AB902"}
