@@ -152,3 +152,11 @@ def test_json_reports_follow_the_schema(known_data, plant_model):
     broken["components"][0]["quantity_unit"] = "kg"
     del broken["takeoff"]["totals"]["pipe_length"]
     assert len(list(validator.iter_errors(broken))) == 2
+
+
+def test_shipped_schema_is_up_to_date():
+    from asbuilt.report.json_report import report_schema
+    from asbuilt.report.schema import build_report_schema, main
+
+    assert report_schema() == build_report_schema()
+    assert main(["--check"]) == 0
