@@ -13,6 +13,8 @@ on first use: :func:`asbuilt.fit.plane.fit_plane`, :func:`asbuilt.fit.sphere.fit
 
 from __future__ import annotations
 
+import functools
+import inspect
 import sys
 import types
 from collections.abc import Callable
@@ -65,6 +67,7 @@ def fit_points(
     *,
     sigma: float | None = None,
     tolerances: Tolerances = DEFAULT_TOLERANCES,
+    viewpoint=None,
 ) -> FitResult:
     """Fit one primitive of ``kind`` to points.
 
@@ -79,6 +82,9 @@ def fit_points(
         Range noise of the sensor; when None the fit estimates it from its residuals.
     tolerances : Tolerances
         Numerical tolerances passed to the fit.
+    viewpoint : array_like, shape (3,), metres, optional
+        The sensor's position, passed to the fits that use it (the cuboid fit places unseen
+        edges from the raster's angular window as seen from there).
 
     Returns
     -------
@@ -97,7 +103,15 @@ def fit_points(
         array = as_points(points)
     except ValueError as exc:
         raise FitError(str(exc), where="points") from None
-    return function(np.array(array), sigma=sigma, tolerances=tolerances)
+    options = {}
+    if viewpoint is not None and _accepts_viewpoint(function):
+        options["viewpoint"] = np.asarray(viewpoint, dtype=np.float64)
+    return function(np.array(array), sigma=sigma, tolerances=tolerances, **options)
+
+
+@functools.cache
+def _accepts_viewpoint(function) -> bool:
+    return "viewpoint" in inspect.signature(function).parameters
 
 
 def fit_object(
@@ -105,6 +119,7 @@ def fit_object(
     *,
     sigma: float | None = None,
     tolerances: Tolerances = DEFAULT_TOLERANCES,
+    viewpoint=None,
 ) -> ObjectFit:
     """Fit the primitive a scan object asks for.
 
@@ -116,6 +131,8 @@ def fit_object(
         Sensor range noise (usually ``scan.sensor.range_sigma``).
     tolerances : Tolerances
         Numerical tolerances.
+    viewpoint : array_like, shape (3,), metres, optional
+        The sensor's position (usually ``scan.sensor.position``).
 
     Returns
     -------
@@ -128,7 +145,9 @@ def fit_object(
         Located at the object, e.g. ``objects[2] (P3): <why the fit failed>``.
     """
     try:
-        result = fit_points(obj.kind, obj.points, sigma=sigma, tolerances=tolerances)
+        result = fit_points(
+            obj.kind, obj.points, sigma=sigma, tolerances=tolerances, viewpoint=viewpoint
+        )
     except FitError as exc:
         raise FitError(
             exc.message, source=exc.source, where=located(None, obj.where, exc.where)
@@ -148,7 +167,7 @@ def fit(
     ----------
     scan : Scan
         A loaded scan (points in metres); ``scan.sensor.range_sigma`` (metres), when given, is
-        the noise level every fit uses.
+        the noise level every fit uses, and ``scan.sensor.position`` the viewpoint.
     tolerances : Tolerances
         Numerical tolerances.
     progress : callable, optional
@@ -169,7 +188,11 @@ def fit(
     total = len(scan.objects)
     for done, obj in enumerate(scan.objects, start=1):
         try:
-            fits.append(fit_object(obj, sigma=sigma, tolerances=tolerances))
+            fits.append(
+                fit_object(
+                    obj, sigma=sigma, tolerances=tolerances, viewpoint=scan.sensor.position
+                )
+            )
         except FitError as exc:
             raise FitError(exc.message, source=scan.source, where=exc.where) from exc
         if progress is not None:

@@ -155,6 +155,21 @@ def test_fit_uses_the_sensor_sigma_in_metres(stand_ins):
     assert report.get("S1").result.sigma_source == "sensor"
 
 
+def sighted_sphere(points, *, sigma=None, tolerances=DEFAULT_TOLERANCES, viewpoint=None):
+    CALLS.append({"viewpoint": viewpoint})
+    return centroid_sphere(points, sigma=sigma, tolerances=tolerances)
+
+
+def test_fit_passes_the_sensor_position_to_fits_that_take_a_viewpoint(stand_ins, monkeypatch):
+    stand_ins.sighted_sphere = sighted_sphere
+    monkeypatch.setitem(FITTERS, "cuboid", ("stand_in_fits", "sighted_sphere"))
+    scan = scan_of("cuboid", "sphere")
+    scan = Scan(units="m", objects=scan.objects, sensor=Sensor(position=np.array([1.0, 2, 3])))
+    fit(scan)
+    np.testing.assert_allclose(CALLS[0]["viewpoint"], [1, 2, 3])
+    assert "viewpoint" not in CALLS[2]  # the plain stand-in is called without one
+
+
 def test_fit_without_sensor_sigma_passes_none(stand_ins):
     fit(scan_of("sphere"))
     assert CALLS[0]["sigma"] is None
