@@ -136,9 +136,11 @@ def _file_mode() -> int:
     return 0o666 & ~mask
 
 
-def _writer_options(exporter: Exporter, step_schema: str, mesh_units: str | None) -> dict:
+def _writer_options(
+    exporter: Exporter, target: Path, step_schema: str, mesh_units: str | None
+) -> dict:
     if exporter.module == "step":
-        return {"schema": step_schema}
+        return {"schema": step_schema, "file_name": target.name}
     if exporter.module == "gltf":
         return {"binary": exporter.suffix == ".glb"}
     if exporter.module == "mesh" and mesh_units is not None:
@@ -206,7 +208,7 @@ def export_models(
 
             cad = prepare(model, plate_thickness=plate_thickness, progress=solids_progress)
         for done, (exporter, temp, target) in enumerate(zip(exporters, temps, targets), 1):
-            options = _writer_options(exporter, step_schema, mesh_units)
+            options = _writer_options(exporter, target, step_schema, mesh_units)
             try:
                 exporter.write(cad if exporter.needs_cad else model, temp, **options)
             except AsbuiltError as exc:

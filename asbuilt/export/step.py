@@ -1,8 +1,9 @@
 """STEP export (AP214 by default, or AP242) with the assembly tree, names, colours, millimetres.
 
-The solids are in metres; the writer is told so (``xstep.cascade.unit = M``) and declares
-millimetres in the file (``write.step.unit = MM``), so OpenCASCADE scales every length by 1000
-on the way out. :func:`read_step` reads a file back through the XCAF document (names, tree,
+The solids are in metres; the writer (OpenCASCADE's XCAF STEP writer, fed by CadQuery's
+``toCAF``) is told so (``xstep.cascade.unit = M``) and declares millimetres in the file
+(``write.step.unit = MM``), so OpenCASCADE scales every length by 1000 on the way out. The
+header names the final file and asbuilt as the originating system. :func:`read_step` reads a file back through the XCAF document (names, tree,
 colours, volumes) for checks.
 """
 
@@ -12,13 +13,15 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
 from OCP.BRepGProp import BRepGProp
 from OCP.GProp import GProp_GProps
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.Interface import Interface_Static
 from OCP.Quantity import Quantity_Color, Quantity_ColorRGBA
-from OCP.STEPCAFControl import STEPCAFControl_Reader
-from OCP.TCollection import TCollection_ExtendedString
+from OCP.STEPCAFControl import STEPCAFControl_Reader, STEPCAFControl_Writer
+from OCP.STEPControl import STEPControl_StepModelType
+from OCP.TCollection import TCollection_ExtendedString, TCollection_HAsciiString
 from OCP.TDataStd import TDataStd_Name
 from OCP.TDF import TDF_Label, TDF_LabelSequence
 from OCP.TDocStd import TDocStd_Document
@@ -30,7 +33,9 @@ from OCP.XCAFDoc import (
     XCAFDoc_ColorTool,
     XCAFDoc_DocumentTool,
 )
+from OCP.XSControl import XSControl_WorkSession
 
+from asbuilt import __version__
 from asbuilt.errors import ExportError
 
 __all__ = ["SCHEMAS", "write_step", "read_step", "StepSolid", "declared_length_unit"]
@@ -45,7 +50,7 @@ def _set(name: str, value: str) -> str:
     return previous
 
 
-def write_step(cad, path, *, schema: str = "AP214") -> None:
+def write_step(cad, path, *, schema: str = "AP214", file_name: str | None = None) -> None:
     """Write the CAD model's assembly as STEP to ``path`` (lengths in millimetres).
 
     Parameters
@@ -55,21 +60,43 @@ def write_step(cad, path, *, schema: str = "AP214") -> None:
     path : str or Path
         Written directly; callers stage it for atomicity (:mod:`asbuilt.export`).
     schema : {"AP214", "AP242"}
+    file_name : str, optional
+        The name the header's FILE_NAME records (default ``path``'s name); the exporter passes
+        the final name, not the temporary file's.
     """
-    from cadquery.occ_impl.exporters.assembly import exportAssembly
+    from cadquery.occ_impl.assembly import toCAF
 
     key = schema.upper()
     if key not in SCHEMAS:
         raise ExportError(
             f"unknown STEP schema {schema!r}; use one of {', '.join(SCHEMAS)}", source=str(path)
         )
-    previous_schema = _set("write.step.schema", SCHEMAS[key])
-    previous_unit = Interface_Static.CVal_s("xstep.cascade.unit")
+    # The writer's constructor initialises the STEP statics, so create it before setting them.
+    writer = STEPCAFControl_Writer(XSControl_WorkSession(), False)
+    writer.SetColorMode(True)
+    writer.SetLayerMode(True)
+    writer.SetNameMode(True)
+    previous = {
+        name: _set(name, value)
+        for name, value in (
+            ("write.step.schema", SCHEMAS[key]),
+            ("xstep.cascade.unit", "M"),  # the shapes are in metres...
+            ("write.step.unit", "MM"),  # ...and the file declares millimetres
+        )
+    }
     try:
-        ok = exportAssembly(cad.assembly(), str(path), unit="M", outputUnit="MM")
+        _, doc = toCAF(cad.assembly(), True)  # True: colours as STEP colours
+        writer.Transfer(doc, STEPControl_StepModelType.STEPControl_AsIs)
+        model = writer.ChangeWriter().Model()
+        header = APIHeaderSection_MakeHeader(model)
+        header.SetName(TCollection_HAsciiString(file_name or Path(path).name))
+        header.SetOriginatingSystem(TCollection_HAsciiString(f"asbuilt {__version__}"))
+        header.SetDescriptionValue(1, TCollection_HAsciiString(f"as-built model: {cad.name}"))
+        header.Apply(model)
+        ok = writer.Write(str(path)) == IFSelect_RetDone
     finally:
-        _set("write.step.schema", previous_schema)
-        _set("xstep.cascade.unit", previous_unit)
+        for name, value in previous.items():
+            _set(name, value)
     if not ok:
         raise ExportError("the STEP writer failed; check the disk and try again", source=str(path))
 

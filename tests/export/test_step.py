@@ -54,6 +54,15 @@ def test_golden_the_file_declares_millimetres_and_ap214(step_file):
         assert f"PRODUCT('{name}','{name}'" in text
 
 
+def test_header_names_the_final_file_not_the_temporary_one(zoo, tmp_path):
+    path = tmp_path / "plant model.step"
+    export_model(zoo, path)
+    header = path.read_text(encoding="latin-1").split("ENDSEC;")[0]
+    assert "FILE_NAME('plant model.step'" in header
+    assert ".part" not in header
+    assert "'asbuilt " in header and "as-built model: zoo" in header
+
+
 def test_ap242_schema(zoo_cad, tmp_path):
     path = tmp_path / "zoo.stp"
     write_step(zoo_cad, path, schema="AP242")
