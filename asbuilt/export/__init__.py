@@ -196,6 +196,14 @@ def export_models(
                 "this output is given twice; name each output once", source=str(target)
             )
         seen.add(key)
+    if not model.components:
+        for exporter, target in zip(exporters, targets):
+            if exporter.needs_cad:
+                raise ExportError(
+                    f"the model has no objects, so there is no {exporter.name} geometry to "
+                    "write; check that the scan has objects",
+                    source=str(target),
+                )
     mode = _file_mode()
     with AtomicBatch() as batch:
         temps = [batch.stage(target) for target in targets]

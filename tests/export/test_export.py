@@ -136,6 +136,16 @@ def test_read_only_directory(zoo, tmp_path):
         folder.chmod(0o700)
 
 
+def test_an_empty_model_has_no_cad_to_write(tmp_path):
+    from asbuilt.model import Model
+
+    empty = Model(components=(), name="empty")
+    with pytest.raises(ExportError, match=r"e\.step: the model has no objects"):
+        export_models(empty, [tmp_path / "e.json", tmp_path / "e.step"])
+    assert list(tmp_path.iterdir()) == []
+    assert export_model(empty, tmp_path / "e.json").objects == 0
+
+
 def test_the_same_output_twice_is_refused(zoo, tmp_path):
     with pytest.raises(ExportError, match="given twice"):
         export_models(zoo, [tmp_path / "a.json", tmp_path / "." / "a.json"])
