@@ -12,7 +12,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import cadquery as cq
-import numpy as np
 
 from asbuilt.errors import SolidBuildError
 from asbuilt.model import Component, Model
@@ -242,11 +241,3 @@ def fused_spool_solid(
         When the spool has no components or they do not fuse into one solid.
     """
     return prepare(model, plate_thickness=plate_thickness).fused_spool(spool_id)
-
-
-def part_centroid(part: CadPart) -> np.ndarray:
-    """The centre of a part's bounding box, shape (3,) metres."""
-    box = part.solid.BoundingBox()
-    return np.array(
-        [(box.xmin + box.xmax) / 2, (box.ymin + box.ymax) / 2, (box.zmin + box.zmax) / 2]
-    )
