@@ -168,12 +168,81 @@ def plate_solid(geometry: Plane, thickness: float) -> cq.Shape:
     return cq.Solid.extrudeLinear(face, _v(thickness * normal))
 
 
+def _convex_facets(vertices: np.ndarray, faces: np.ndarray) -> list[np.ndarray] | None:
+    """The hull's planar facets as convex polygons (each (k, 3) metres, unordered winding), or
+    None when the polyhedron is not convex (then its triangles are used as they are).
+
+    Coplanar triangles of a convex polyhedron form one convex polygon: its boundary is the 2D
+    convex hull of their vertices in the facet's plane.
+    """
+    tri = vertices[faces]
+    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    lengths = np.linalg.norm(normals, axis=1)
+    keep = lengths > 1e-14
+    tri, normals = tri[keep], normals[keep] / lengths[keep, None]
+    centre = vertices.mean(axis=0)
+    # Orient every normal away from the centre (the winding may be inconsistent).
+    flip = np.einsum("ij,ij->i", normals, tri[:, 0] - centre) < 0
+    normals[flip] *= -1
+    offsets = np.einsum("ij,ij->i", normals, tri[:, 0])
+    scale = float(np.ptp(vertices, axis=0).max())
+    tolerance = 1e-9 * max(scale, 1.0)
+    if np.any(vertices @ normals.T - offsets > tolerance * 10):
+        return None  # some vertex lies outside a face plane: not convex
+    facets: list[np.ndarray] = []
+    used = np.zeros(len(tri), bool)
+    for k in range(len(tri)):
+        if used[k]:
+            continue
+        same = (
+            (~used)
+            & (normals @ normals[k] > 1 - 1e-9)
+            & (np.abs(offsets - offsets[k]) <= tolerance * 10)
+        )
+        used |= same
+        points = np.unique(np.round(tri[same].reshape(-1, 3), 12), axis=0)
+        u = tri[k, 1] - tri[k, 0]
+        u /= np.linalg.norm(u)
+        v = np.cross(normals[k], u)
+        flat = np.stack([(points - points[0]) @ u, (points - points[0]) @ v], axis=1)
+        order = _hull_2d(flat)
+        facets.append(points[order])
+    return facets
+
+
+def _hull_2d(points: np.ndarray) -> list[int]:
+    """Indices of the 2D convex hull (Andrew's monotone chain), counter-clockwise."""
+    order = np.lexsort((points[:, 1], points[:, 0]))
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower: list[int] = []
+    for i in order:
+        while len(lower) >= 2 and cross(points[lower[-2]], points[lower[-1]], points[i]) <= 0:
+            lower.pop()
+        lower.append(int(i))
+    upper: list[int] = []
+    for i in order[::-1]:
+        while len(upper) >= 2 and cross(points[upper[-2]], points[upper[-1]], points[i]) <= 0:
+            upper.pop()
+        upper.append(int(i))
+    return lower[:-1] + upper[:-1]
+
+
 def _hull(geometry: Hull) -> cq.Shape:
-    faces = []
-    for tri in geometry.vertices[geometry.faces]:
-        if np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0])) <= 1e-14:
-            continue  # a degenerate triangle adds nothing to a closed polyhedron
-        faces.append(cq.Face.makeFromWires(cq.Wire.makePolygon([_v(p) for p in tri], close=True)))
+    """Sew the hull's facets (coplanar triangles merged when the hull is convex) into a solid."""
+    polygons = _convex_facets(geometry.vertices, geometry.faces)
+    if polygons is None:
+        polygons = [
+            tri
+            for tri in geometry.vertices[geometry.faces]
+            if np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0])) > 1e-14
+        ]
+    faces = [
+        cq.Face.makeFromWires(cq.Wire.makePolygon([_v(p) for p in polygon], close=True))
+        for polygon in polygons
+    ]
     shell = cq.Shell.makeShell(faces)
     if shell.wrapped.ShapeType().name != "TopAbs_SHELL":
         shells = shell.Shells()

@@ -159,3 +159,27 @@ def test_degenerate_hull_is_a_solid_build_error():
 def test_sphere_solid_is_whole():
     solid = solid_for(Component("S", "sphere", Sphere([0, 0, 0], 2.0)))
     assert solid.Volume() == pytest.approx(4 / 3 * math.pi * 8, rel=1e-9)
+
+
+def test_coplanar_hull_triangles_become_one_face_each():
+    import trimesh
+
+    box = trimesh.creation.box(extents=[1.0, 2.0, 3.0])
+    solid = solid_for(Component("HB", "hull", Hull(box.vertices, box.faces)))
+    assert len(solid.Faces()) == 6
+    assert solid.Volume() == pytest.approx(6.0)
+
+
+def test_non_convex_closed_mesh_keeps_its_triangles():
+    # An L-shaped prism, 0.5 high: a closed but non-convex polyhedron.
+    ell = np.array([(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)], float)
+    n = len(ell)
+    vertices = np.vstack([np.c_[ell, np.zeros(n)], np.c_[ell, np.full(n, 0.5)]])
+    fan = [(0, i, i + 1) for i in range(1, n - 1)]  # the L is star-shaped from vertex 0
+    faces = [(a, c, b) for a, b, c in fan] + [(a + n, b + n, c + n) for a, b, c in fan]
+    for i in range(n):
+        j = (i + 1) % n
+        faces += [(i, j, j + n), (i, j + n, i + n)]
+    solid = solid_for(Component("HL", "hull", Hull(vertices, faces)))
+    assert solid.isValid()
+    assert solid.Volume() == pytest.approx(3.0 * 0.5)
