@@ -248,3 +248,23 @@ def test_bad_report_fails_before_any_work(tmp_path, capsys, monkeypatch, report,
     assert main(argv) == 2
     assert capsys.readouterr().err.startswith(f"asbuilt: error: {message}")
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("option", "value", "words"),
+    [
+        ("--schedule", "XYZ", "schedule 'XYZ' is not in catalog"),
+        ("--catalog", "nope", "unknown catalog 'nope'"),
+        ("--rules", "missing.toml", "missing.toml"),
+        ("--design", "missing.json", "missing.json"),
+    ],
+)
+def test_bad_catalog_schedule_rules_design_are_exit_2(
+    tmp_path, capsys, monkeypatch, option, value, words
+):
+    monkeypatch.chdir(tmp_path)
+    argv = ["model", str(ROOT / "samples" / "spool.json"), "--out", "x.json", option, value]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("asbuilt: error: ") and words in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
