@@ -168,11 +168,17 @@ def run(args: argparse.Namespace) -> int:
             check=not args.no_check,
             progress=lambda done, total, oid: bar.update(task, completed=done, description=oid),
         )
-        bar.update(task, completed=0, total=len(model.components), description="", stage="solids")
+        bar.update(
+            task,
+            completed=0,
+            total=len(model.components),
+            description="loading the CAD kernel",
+            stage="solids",
+        )
 
         def progress(stage: str, done: int, total: int) -> None:
             label = "solids" if stage == "solids" else "writing"
-            bar.update(task, completed=done, total=total, stage=label)
+            bar.update(task, completed=done, total=total, stage=label, description="")
 
         thickness = None if args.plate_thickness is None else args.plate_thickness / 1000.0
         results = export_models(
