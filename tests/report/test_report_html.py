@@ -144,3 +144,19 @@ def test_spool_table(plant_model, plant_html):
         assert f'id="spool-{spool.id}"' in spools
     row = spools.split("</tr>", 2)[1]  # the first body row (after the header row)
     assert "NPS 8" in row
+
+
+def test_html5lib_parses_without_errors(plant_model):
+    """The WHATWG parsing algorithm (html5lib) reports no parse error either (where html5lib
+    is installed; the tag-stack check above always runs)."""
+    html5lib = pytest.importorskip(
+        "html5lib", reason="html5lib not installed (pip install html5lib) for the WHATWG check"
+    )
+    model = plant_model.replace(findings=many_findings(plant_model, per_object=1))
+    for text in (
+        html_text(report_data(model, generated=STAMP)),
+        html_text(report_data(known_model(), generated=STAMP), gltf="model.glb"),
+    ):
+        parser = html5lib.HTMLParser(strict=False, namespaceHTMLElements=False)
+        parser.parse(text)
+        assert parser.errors == []
