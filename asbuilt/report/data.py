@@ -12,6 +12,7 @@ from __future__ import annotations
 import datetime as _dt
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -95,7 +96,10 @@ class ReportData:
     source : str or None
         The scan file.
     scan_date : str or None
-        The date the scan file records (``date``, ``created`` or ``scanned`` key), if any.
+        The date the scan file records (a top-level ``date``, ``created``, ``scanned`` or
+        ``time`` key, or ``acquisition.started``), if any.
+    scan_file_modified : str or None
+        When the scan file was last modified (ISO 8601 UTC), if it can be read.
     generated : str
         When the report was made, ISO 8601 UTC.
     catalog, catalog_title, units : str or None
@@ -123,6 +127,7 @@ class ReportData:
     takeoff: TakeOff
     quality: tuple[FitQuality, ...]
     findings: tuple[Finding, ...] = field(default_factory=tuple)
+    scan_file_modified: str | None = None
 
 
 def _float(value) -> float | None:
@@ -188,13 +193,31 @@ def fit_quality(model: Model, takeoff: TakeOff | None = None) -> tuple[FitQualit
 
 
 def _scan_date(model: Model) -> str | None:
-    if model.scan is None:
+    if model.scan is None or not isinstance(model.scan.extra, Mapping):
         return None
+    extra = model.scan.extra
     for key in ("date", "created", "scanned", "time"):
-        value = model.scan.extra.get(key) if isinstance(model.scan.extra, Mapping) else None
-        if value:
-            return str(value)
+        if extra.get(key):
+            return str(extra[key])
+    acquisition = extra.get("acquisition")
+    if isinstance(acquisition, Mapping) and acquisition.get("started"):
+        return str(acquisition["started"])
     return None
+
+
+def _iso(stamp: _dt.datetime) -> str:
+    utc = stamp.astimezone(_dt.timezone.utc).replace(microsecond=0)
+    return utc.isoformat().replace("+00:00", "Z")
+
+
+def _file_modified(source) -> str | None:
+    if not source:
+        return None
+    try:
+        seconds = Path(source).stat().st_mtime
+    except OSError:
+        return None
+    return _iso(_dt.datetime.fromtimestamp(seconds, _dt.timezone.utc))
 
 
 def _catalog_title(name: str | None) -> str | None:
@@ -245,13 +268,13 @@ def report_data(
         counts["points"] = int(sum(len(obj.points) for obj in model.scan.objects))
     source = model.scan.source if model.scan is not None else None
     title = model.name or (str(source) if source else "as-built model")
-    stamp = (generated or _dt.datetime.now(_dt.timezone.utc)).astimezone(_dt.timezone.utc)
+    stamp = generated or _dt.datetime.now(_dt.timezone.utc)
     return ReportData(
         model=model,
         title=title,
         source=None if source is None else str(source),
         scan_date=_scan_date(model),
-        generated=stamp.replace(microsecond=0).isoformat().replace("+00:00", "Z"),
+        generated=_iso(stamp),
         catalog=model.catalog,
         catalog_title=_catalog_title(model.catalog),
         units=model.units,
@@ -260,4 +283,5 @@ def report_data(
         takeoff=takeoff,
         quality=quality,
         findings=findings,
+        scan_file_modified=_file_modified(source),
     )

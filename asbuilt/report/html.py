@@ -134,6 +134,15 @@ def _link(oid: str) -> str:
     return f'<a href="#{anchor(oid)}">{_e(oid)}</a>'
 
 
+def _scan_date(data: ReportData) -> str:
+    if data.scan_date:
+        return _e(data.scan_date)
+    text = "not recorded in the scan file"
+    if data.scan_file_modified:
+        text += f" (file modified {_e(data.scan_file_modified)})"
+    return text
+
+
 def _header(data: ReportData) -> str:
     s = data.severities
     badges = []
@@ -171,7 +180,7 @@ def _header(data: ReportData) -> str:
 <nav>{nav}</nav>
 <dl>
 <dt>Scan</dt><dd>{_e(data.source) or "not recorded"}</dd>
-<dt>Scan date</dt><dd>{_e(data.scan_date) or "not recorded in the scan file"}</dd>
+<dt>Scan date</dt><dd>{_scan_date(data)}</dd>
 <dt>Report made</dt><dd>{_e(data.generated)}</dd>
 <dt>Catalog</dt><dd>{catalog}</dd>
 <dt>Units</dt><dd>scan in {_e(data.units)}; this report in metres (pipe lengths also in feet),

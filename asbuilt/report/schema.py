@@ -183,6 +183,7 @@ def build_report_schema() -> dict:
             "title": {"type": "string"},
             "source": _STRING_OR_NULL,
             "scan_date": _STRING_OR_NULL,
+            "scan_file_modified": _STRING_OR_NULL,
             "generated": {
                 "type": "string",
                 "pattern": r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ$",

@@ -77,3 +77,33 @@ def test_a_thousand_components(tmp_path):
     assert "(labels: 143 flagged)" in html
     data = report_data(model, generated=STAMP)
     assert abs(data.takeoff.pipe_length - 400.0) < 1e-9
+
+
+def test_scan_date_from_acquisition_or_file_time(tmp_path):
+    import os
+
+    import numpy as np
+
+    source = tmp_path / "scan.json"
+    source.write_text("{}", encoding="utf-8")
+    os.utime(source, (1_700_000_000, 1_700_000_000))
+    obj = ScanObject("C1", "cuboid", np.zeros((3, 3)))
+    scan = Scan(
+        units="m",
+        objects=(obj,),
+        source=str(source),
+        extra={"acquisition": {"started": "2026-11-19T10:00:00+00:00"}},
+    )
+    data = report_data(known_model().replace(scan=scan), generated=STAMP)
+    assert data.scan_date == "2026-11-19T10:00:00+00:00"
+    assert data.scan_file_modified == "2023-11-14T22:13:20Z"
+    bare = report_data(
+        known_model().replace(scan=Scan(units="m", objects=(obj,), source=str(source))),
+        generated=STAMP,
+    )
+    assert bare.scan_date is None
+    from asbuilt.report.html import html_text
+
+    assert "not recorded in the scan file (file modified 2023-11-14T22:13:20Z)" in html_text(
+        bare, label_limit=0
+    )
