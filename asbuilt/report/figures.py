@@ -1,13 +1,15 @@
 """Pictures for the report: plan (XY) and elevation (XZ) views, and residual histograms.
 
-The views are drawn with matplotlib (Agg backend, imported inside the functions): every
+The views are drawn with matplotlib (imported inside the functions; a bare ``Figure`` rendered
+by the Agg/SVG canvases, never pyplot, so no GUI backend and no global state): every
 component is the 2-D convex hull of its projected pieces (a cylinder's two end circles, a
 bend's short arc segments, a tee's run and branch, a box's corners...), which is the exact
 silhouette of each convex piece under orthographic projection. The scanned points are overlaid
 (inliers as dots, points the fit rejected as crosses) and components with findings are filled in
-their worst severity's colour. Every layer is one matplotlib collection, so a 1,000-object model
-draws in about the time of a 10-object one; the point layers are rasterised inside the SVG to
-keep the file small. Labels link to the object's row in the report (``#obj-<id>``).
+their worst severity's colour. Every layer is one matplotlib collection (never one call per
+object), so a 1,000-object view takes about 2 s, mostly the silhouettes and labels (see
+``benchmarks/RESULTS.md``); the point layers are rasterised inside the SVG to keep the file
+small. Labels link to the object's row in the report (``#obj-<id>``).
 
 The residual histograms are tiny hand-written SVGs (no matplotlib: one per object).
 """
@@ -272,8 +274,6 @@ def render_view(
     str
     """
     import matplotlib
-
-    matplotlib.use("Agg", force=False)
     from matplotlib.collections import PolyCollection
     from matplotlib.figure import Figure
 
