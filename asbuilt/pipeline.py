@@ -9,41 +9,21 @@ Every stage is a pure function of the previous one's output; this module only ch
 from __future__ import annotations
 
 from collections.abc import Callable
-from importlib import import_module
-from pathlib import Path
 
 from asbuilt.model import Model, model_from_fits
 from asbuilt.scan.model import Scan
-from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
+from asbuilt.tolerances import Tolerances
 
-__all__ = ["build_model", "stage_available"]
-
-
-def _optional(module: str, name: str):
-    """``module.name``, or None when the module is not part of this build."""
-    try:
-        return getattr(import_module(module), name)
-    except ModuleNotFoundError as exc:
-        if exc.name is not None and module.startswith(exc.name):
-            return None
-        raise
-
-
-def stage_available(stage: str) -> bool:
-    """Whether the optional stage ``"merge"`` or ``"rules"`` is part of this build."""
-    if stage == "merge":
-        return _optional("asbuilt.merge", "merge_model") is not None
-    if stage == "rules":
-        return _optional("asbuilt.rules", "check_model") is not None
-    raise ValueError(f"unknown stage {stage!r}; use 'merge' or 'rules'")
+__all__ = ["build_model"]
 
 
 def build_model(
     scan: Scan,
     *,
     catalog=None,
-    tolerances: Tolerances = DEFAULT_TOLERANCES,
+    tolerances: Tolerances | None = None,
     schedule: str | None = None,
+    elbow_radius: str = "long",
     rules=None,
     design=None,
     merge: bool = True,
@@ -58,9 +38,14 @@ def build_model(
         Points in metres.
     catalog : str, Path or Catalog, optional
         Pipe catalog for snapping sizes (name or file); default the merger's (ASME B36.10M).
-    tolerances : Tolerances
+    tolerances : Tolerances, optional
+        Numerical tolerances for fitting and merging. Default: the rules file's (its
+        ``[tolerances]`` table over :data:`~asbuilt.tolerances.DEFAULT_TOLERANCES`), so that
+        ``asbuilt model --rules F`` and ``asbuilt check --rules F`` merge alike.
     schedule : str, optional
         Pipe wall schedule (e.g. ``"STD"``, ``"40"``): pipes become hollow solids.
+    elbow_radius : {"long", "short"}
+        ASME B16.9 elbow radius for the fittings merging places.
     rules : str, Path or RulesConfig, optional
         Compliance rules; default the shipped rules.
     design : str, Path or Design, optional
@@ -83,18 +68,24 @@ def build_model(
         Located one-line errors for bad input.
     """
     from asbuilt.fit import fit
+    from asbuilt.merge import merge_model
+    from asbuilt.rules import RulesConfig, check_model, load_rules
 
+    config = rules if isinstance(rules, RulesConfig) else load_rules(rules)
+    if tolerances is None:
+        tolerances = config.tolerances
     report = fit(scan, tolerances, progress=progress)
-    merge_model = _optional("asbuilt.merge", "merge_model") if merge else None
-    if merge_model is not None:
-        model = merge_model(report, catalog=catalog, tolerances=tolerances, schedule=schedule)
+    if merge:
+        model = merge_model(
+            report,
+            catalog=catalog,
+            tolerances=tolerances,
+            schedule=schedule,
+            elbow_radius=elbow_radius,
+        )
     else:
         model = model_from_fits(report)
-    check_model = _optional("asbuilt.rules", "check_model") if check else None
-    if check_model is not None:
-        config = rules
-        if isinstance(rules, (str, Path)):
-            config = import_module("asbuilt.rules").load_rules(rules)
-        options = {"catalog": catalog} if catalog is not None else {}
-        model = model.replace(findings=tuple(check_model(model, config, design, **options)))
+    if check:
+        findings = check_model(model, config, design, catalog=catalog)
+        model = model.replace(findings=tuple(findings))
     return model

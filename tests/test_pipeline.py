@@ -8,7 +8,7 @@ import pytest
 
 from asbuilt.fit import fit
 from asbuilt.model import model_from_fits
-from asbuilt.pipeline import _optional, build_model, stage_available
+from asbuilt.pipeline import build_model
 from asbuilt.scan import load_scan
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,7 +23,6 @@ def test_the_real_merge_and_rules_are_used(spool_scan):
     from asbuilt.merge import merge_model
     from asbuilt.rules import check_model
 
-    assert stage_available("merge") and stage_available("rules")
     model = build_model(spool_scan)
     merged = merge_model(fit(spool_scan))
     assert [c.id for c in model.components] == [c.id for c in merged.components]
@@ -62,17 +61,28 @@ def test_progress_is_passed_to_the_fit(spool_scan):
     assert seen == [obj.id for obj in spool_scan.objects]
 
 
-def test_optional_returns_none_only_for_a_missing_stage(monkeypatch):
-    assert _optional("asbuilt.no_such_stage", "anything") is None
+def test_the_rules_file_tolerances_drive_the_merge(spool_scan, tmp_path):
+    rules = tmp_path / "rules.toml"
+    rules.write_text("[general]\nangle_snap_deg = 0.001\n")
+    default = build_model(spool_scan, check=False)
+    strict = build_model(spool_scan, rules=rules, check=False)
 
-    def fail(name):  # the stage exists but one of *its* imports is missing: a real error
-        raise ModuleNotFoundError("No module named 'scipy.missing'", name="scipy.missing")
+    def vertical_or_horizontal(model):
+        return {
+            c.id
+            for c in model.components
+            for k in c.corrections
+            if k.what.startswith("axis regularised")
+            and ("vertical" in k.what or "horizontal" in k.what)
+        }
 
-    monkeypatch.setattr("asbuilt.pipeline.import_module", fail)
-    with pytest.raises(ModuleNotFoundError):
-        _optional("asbuilt.merge", "merge_model")
+    assert vertical_or_horizontal(default), "the default 2 degrees regularise the sample's axes"
+    assert not vertical_or_horizontal(strict)
 
 
-def test_unknown_stage_name():
-    with pytest.raises(ValueError, match="unknown stage"):
-        stage_available("report")
+def test_short_elbows_on_request(spool_scan):
+    long = build_model(spool_scan, check=False)
+    short = build_model(spool_scan, check=False, elbow_radius="short")
+    radius = {c.id: c.geometry.bend_radius for c in long.components if c.type == "elbow"}
+    shorter = {c.id: c.geometry.bend_radius for c in short.components if c.type == "elbow"}
+    assert radius and all(shorter[k] < radius[k] for k in radius)

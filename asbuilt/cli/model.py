@@ -25,12 +25,6 @@ def _thickness_mm(text: str) -> float:
     return value
 
 
-def _report_available() -> bool:
-    from importlib.util import find_spec
-
-    return find_spec("asbuilt.report") is not None
-
-
 def register(subparsers) -> argparse.ArgumentParser:
     """Add the ``model`` subcommand to ``subparsers``."""
     parser = subparsers.add_parser(
@@ -73,6 +67,12 @@ def register(subparsers) -> argparse.ArgumentParser:
         "catalog's default schedule)",
     )
     parser.add_argument(
+        "--elbow-radius",
+        choices=("long", "short"),
+        default="long",
+        help="ASME B16.9 elbow radius for the fittings joining pipes (default long)",
+    )
+    parser.add_argument(
         "--rules", metavar="FILE", default=None, help="compliance rules file (TOML)"
     )
     parser.add_argument(
@@ -90,13 +90,12 @@ def register(subparsers) -> argparse.ArgumentParser:
         default="AP214",
         help="STEP application protocol (default AP214)",
     )
-    if _report_available():
-        parser.add_argument(
-            "--report",
-            metavar="FILE",
-            default=None,
-            help="also write a QA report (.html, .csv or .json by suffix), after the --out files",
-        )
+    parser.add_argument(
+        "--report",
+        metavar="FILE",
+        default=None,
+        help="also write a QA report (.html, .csv or .json by suffix), after the --out files",
+    )
     parser.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
     parser.set_defaults(handler=run)
     return parser
@@ -124,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.scan import load_scan
 
     outputs = [Path(p) for p in args.out]
-    report_path = getattr(args, "report", None)
+    report_path = args.report
     for path in outputs:
         exporter_for(path)  # an unknown suffix or a missing directory fails before any work
         if not path.parent.is_dir():
@@ -162,6 +161,7 @@ def run(args: argparse.Namespace) -> int:
             scan,
             catalog=args.catalog,
             schedule=args.schedule,
+            elbow_radius=args.elbow_radius,
             rules=args.rules,
             design=args.design,
             merge=not args.no_merge,
