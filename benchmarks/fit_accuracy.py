@@ -9,7 +9,8 @@ exactly n points.
 Cells
 -----
 * cylinders: outside diameters 60.3, 114.3, 219.1, 323.8, 609.6 mm x length/diameter 1, 3, 10
-  x 20, 30, 40 points; axis at 45-90 degrees to the line of sight, open ends (pipes);
+  x 20, 30, 40 points; axis at 45-90 degrees to the line of sight; returns on the end caps
+  are dropped (a pipe runs on into its fittings);
 * spheres: diameters 0.2, 0.5, 1, 3 m x 20, 30, 40 points;
 * planes (walls and plates): 0.5 and 3 m wide, incidence 0-60 degrees x 20, 30, 40 points;
 * cuboids: sections about 0.2, 0.4, 0.6 m across (each side 0.8-1.2 x that), 2 seen faces (a
@@ -195,12 +196,17 @@ class Trial:
     bound: dict
 
 
-def _take(scene, n, rng):
-    """Exactly n clean returns on object 0, the outlier version, and the clean shots."""
+def _take(scene, n, rng, keep=None):
+    """Exactly n clean returns on object 0, the outlier version, and the clean shots.
+
+    ``keep(shots) -> bool mask`` drops returns the operator would not take (pipe end caps).
+    """
     wanted = n
     for _ in range(8):
         pan, tilt, _ = plan_raster(scene, 0, STATION, wanted)
         shots = shoot(scene, 0, STATION, pan, tilt, rng)
+        if keep is not None:
+            shots = shots.subset(keep(shots))
         if len(shots) >= n:
             break
         wanted = int(math.ceil(wanted * 1.2 * n / max(len(shots), 1)))
@@ -238,15 +244,17 @@ def cylinder_trial(rng, od_mm, ld, n) -> Trial:
     length = ld * 2 * radius
     los, centre = _line_of_sight(rng, rng.uniform(3.0, 10.0))
     axis = _random_axis(rng, los)
+    # Closed ends keep the beam out of the bore; returns on the end caps are dropped (a pipe
+    # runs on into its fittings, so the operator's shots all land on its body).
     shape = CylinderShape(
         start=centre - 0.5 * length * axis,
         end=centre + 0.5 * length * axis,
         radius=radius,
-        capped=False,
+        capped=True,
     )
     behind = centre + (radius + rng.uniform(1.5, 3.0)) * los
     scene = _scene(shape, None, "cylinder", behind, -los)
-    shots, dirty, sig = _take(scene, n, rng)
+    shots, dirty, sig = _take(scene, n, rng, keep=lambda s: np.abs(s.normals @ axis) < 0.5)
     bound = crb.cylinder_bounds(shots.surface_points, centre, axis, radius, sig)
     return Trial(shots.points, dirty, {"radius": radius, "axis": axis}, bound)
 
