@@ -508,7 +508,7 @@ class RobustFit:
     scale: float
 
 
-def _iterate(model, state, points, weigh, iterations, tolerance, current=None):
+def gauss_newton(model, state, points, weigh, iterations, tolerance, current=None):
     """Gauss-Newton with step halving; ``weigh(residuals) -> weights`` is re-evaluated each step.
 
     Returns (state, residuals, jacobian); stops when a step lowers the weighted cost by less
@@ -610,7 +610,7 @@ def _likeliest_refit(model, state, points, mask, extent, floor, iterations):
         if index and any(np.array_equal(candidate, other) for other in masks[:index]):
             continue
         weights = candidate.astype(np.float64)
-        fitted = _iterate(model, state, points, lambda _r, w=weights: w, iterations, 1e-9)
+        fitted = gauss_newton(model, state, points, lambda _r, w=weights: w, iterations, 1e-9)
         score = mixture_score(fitted[1], candidate, extent, floor)
         if np.isfinite(score) and (best is None or score < best[0]):
             best = (score, fitted, candidate)
@@ -704,7 +704,9 @@ def robust_geometric_fit(
     for cost, _, start in ranked:
         if len(refined) >= max_starts or (len(refined) >= always_refine and cost >= bound):
             break
-        state, residuals, jacobian = _iterate(model, start, points, trimmed, start_iterations, 0.0)
+        state, residuals, jacobian = gauss_newton(
+            model, start, points, trimmed, start_iterations, 0.0
+        )
         if not np.all(np.isfinite(residuals)):
             continue
         bound = min(bound, trimmed_cost(residuals, keep))
@@ -718,7 +720,7 @@ def robust_geometric_fit(
     scores = [float(np.minimum(item[1] * item[1], cap).sum()) for item in refined]
     state, residuals, jacobian = refined[int(np.argmin(scores))]
     # Iterate the robust (Tukey) estimate to convergence.
-    state, residuals, jacobian = _iterate(
+    state, residuals, jacobian = gauss_newton(
         model, state, points, tukey, max_iterations, 1e-3, (residuals, jacobian)
     )
     # Inliers, then plain least squares on them until the inlier set is stable; without a
@@ -747,7 +749,7 @@ def robust_geometric_fit(
                 f"{tolerances.max_outlier_fraction:.0%}); check that the points are one {kind}."
             )
         weights = mask.astype(np.float64)
-        state, residuals, jacobian = _iterate(
+        state, residuals, jacobian = gauss_newton(
             model,
             state,
             points,

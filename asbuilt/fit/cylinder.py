@@ -30,8 +30,10 @@ import numpy as np
 from asbuilt.errors import FitError
 from asbuilt.fit._common import (
     GeometricModel,
+    RobustFit,
     arc_coverage_deg,
     covariance_from_jacobian,
+    gauss_newton,
     keep_count,
     local_normals,
     mixture_score,
@@ -459,6 +461,9 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
                 second = None
             if second is not None and _likelier(second, robust, local, tolerances):
                 robust = second
+    near = robust
+    robust = _drop_far_side(near, local, tolerances)
+    far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
     axis, center, radius = robust.state
     kept = local[robust.inliers]
     along = (kept - center) @ axis
@@ -496,7 +501,9 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
     if outliers:
         notes.append(
             f"{outliers} outlier point(s) rejected (beyond {tolerances.outlier_cutoff_sigma:g}"
-            f" x {robust.scale * 1000:.3g} mm)."
+            f" x {robust.scale * 1000:.3g} mm"
+            + (f", or {far_side} on the far side of the pipe" if far_side else "")
+            + ")."
         )
     diagnostics = {
         "arc_deg": arc_coverage_deg(angles),
@@ -515,6 +522,47 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
         diagnostics=diagnostics,
         notes=tuple(notes),
     )
+
+
+#: Mean resultant length of the inliers' directions about the axis above which they are taken as
+#: seen from one side (one station): 0.64 for a 180 degree arc, 0.74 for 150, 0 all round.
+ONE_SIDED = 0.5
+#: Angle from the seen side's mean direction beyond which a point faces away from it.
+FAR_SIDE_DEG = 95.0
+
+
+def _drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances) -> RobustFit:
+    """Reject inliers on the far side of a pipe seen from one side, and refit without them.
+
+    A station sees at most the half of a pipe that faces it. A shot that passed the pipe and hit
+    the wall behind can land within millimetres of the *far* side of the (infinite) cylinder,
+    where its distance alone cannot tell it from a surface point; there it would decide the
+    radius. When the inliers' directions about the axis are concentrated (mean resultant length
+    above ``ONE_SIDED``, circular statistics: Mardia & Jupp 2000), inliers more than
+    ``FAR_SIDE_DEG`` from their mean direction are rejected and the fit is redone by least
+    squares on the rest.
+    """
+    axis, center, _ = robust.state
+    u, v = orthonormal_basis(axis)
+    rel = points - center
+    angles = np.arctan2(rel @ v, rel @ u)
+    kept = robust.inliers
+    mean = np.array([np.cos(angles[kept]).mean(), np.sin(angles[kept]).mean()])
+    resultant = float(np.hypot(*mean))
+    if resultant <= ONE_SIDED:
+        return robust
+    offset = np.angle(np.exp(1j * (angles - np.arctan2(mean[1], mean[0]))))
+    far = kept & (np.abs(offset) > np.radians(FAR_SIDE_DEG))
+    if not far.any():
+        return robust
+    mask = kept & ~far
+    if np.count_nonzero(mask) <= _MODEL.n_params:
+        return robust
+    weights = mask.astype(np.float64)
+    state, residuals, jacobian = gauss_newton(
+        _MODEL, robust.state, points, lambda _r, w=weights: w, 50, 1e-9
+    )
+    return RobustFit(state, residuals, mask, jacobian[mask], robust.scale)
 
 
 def _likelier(first, second, points, tolerances: Tolerances) -> bool:

@@ -78,8 +78,10 @@ def test_twenty_percent_edge_outliers_are_rejected_and_reported(rng, od, ld, n, 
     assert abs(fit.primitive.radius - pipe.radius) <= 4.5 * fit.stderr["radius"] + 1e-4
     assert angle_deg(fit.primitive.axis, pipe.axis) < 2.0
     assert any("outlier" in note for note in fit.notes)
-    # Rejection is a threshold on the residual: every rejected point is farther than any kept one.
-    assert np.abs(fit.residuals[~fit.inliers]).min() > np.abs(fit.residuals[fit.inliers]).max()
+    # Rejection is a threshold on the residual, except for points on the pipe's far side (which
+    # a station cannot see): those must be background shots.
+    close = ~fit.inliers & (np.abs(fit.residuals) <= np.abs(fit.residuals[fit.inliers]).max())
+    assert np.all(sample.outliers[close])
 
 
 @pytest.mark.parametrize(
