@@ -15,7 +15,14 @@ from pathlib import Path
 
 from .errors import ExportError
 
-__all__ = ["atomic_write", "AtomicBatch"]
+__all__ = ["atomic_write", "AtomicBatch", "default_file_mode"]
+
+
+def default_file_mode() -> int:
+    """The mode a plain ``open(path, "w")`` would give a new file (0o666 less the umask)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
 
 
 def _temp_beside(path: Path) -> tuple[int, str]:
@@ -24,10 +31,13 @@ def _temp_beside(path: Path) -> tuple[int, str]:
         raise ExportError("directory does not exist; create it or choose another --out",
                           source=str(path))
     try:
-        return tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=directory)
+        fd, temp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=directory)
     except OSError as exc:
         raise ExportError(f"cannot write here ({exc.strerror}); choose a writable directory",
                           source=str(path)) from None
+    # mkstemp makes owner-only files; the published file should look like any other output.
+    os.chmod(temp, default_file_mode())
+    return fd, temp
 
 
 @contextlib.contextmanager

@@ -41,3 +41,12 @@ def test_missing_directory_is_one_clear_error(tmp_path):
         with atomic_write(tmp_path / "nope" / "out.step") as f:
             f.write(b"x")
     assert str(info.value).endswith("directory does not exist; create it or choose another --out")
+
+
+def test_published_files_have_the_usual_permissions(tmp_path):
+    from asbuilt.atomic import default_file_mode
+
+    target = tmp_path / "out.json"
+    with atomic_write(target, "w") as f:
+        f.write("{}")
+    assert target.stat().st_mode & 0o777 == default_file_mode()

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from importlib import import_module
 from pathlib import Path
 
-from asbuilt.atomic import AtomicBatch
+from asbuilt.atomic import AtomicBatch, default_file_mode
 from asbuilt.errors import AsbuiltError, ExportError, UnknownFormatError
 
 __all__ = [
@@ -130,12 +130,6 @@ class ExportResult:
     objects: int
 
 
-def _file_mode() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return 0o666 & ~mask
-
-
 def _writer_options(
     exporter: Exporter, target: Path, step_schema: str, mesh_units: str | None
 ) -> dict:
@@ -204,7 +198,7 @@ def export_models(
                     "write; check that the scan has objects",
                     source=str(target),
                 )
-    mode = _file_mode()
+    mode = default_file_mode()
     with AtomicBatch() as batch:
         temps = [batch.stage(target) for target in targets]
         if cad is None and any(exporter.needs_cad for exporter in exporters):
