@@ -9,11 +9,11 @@ Everything here is a pure numpy function on float64 arrays in metres. The fits i
    first start and the best few are refined by concentration steps (Rousseeuw & Van Driessen
    2006: Gauss-Newton on the ``h`` points closest to the current surface) and compared by their
    MSAC cost (Torr & Zisserman 2000);
-2. the winner is iterated to convergence by Gauss-Newton with Tukey's biweight (Beaton & Tukey
-   1974) on the residuals, scaled by the median absolute residual (MAD x 1.4826, Hampel 1974);
-3. points with ``|r| <= outlier_cutoff_sigma * scale`` are the inliers, and the final estimate is
-   plain geometric least squares on the inliers only (so clean data gets the efficient
-   estimate), repeated until the inlier set is stable.
+2. points within ``outlier_cutoff_sigma`` noise scales of the winner are the inliers (the sensor
+   sigma, else :func:`residual_scale`), and the final estimate is plain geometric least squares
+   on the inliers only (so clean data gets the efficient estimate), repeated until the inlier
+   set is stable; without a sensor sigma, the likeliest of a few nested inlier sets is taken
+   once (:func:`mixture_score`), so that a small-sample scale does not reject good shots.
 """
 
 from __future__ import annotations
@@ -634,7 +634,7 @@ def robust_geometric_fit(
     max_iterations: int = 50,
     start_costs: Sequence[float] | None = None,
 ) -> RobustFit:
-    """Robust start selection, Tukey IRLS, then least squares on the inliers.
+    """Robust start selection, then least squares on the inliers (see the module docstring).
 
     The first start and the ``always_refine - 1`` others with the smallest least-trimmed-squares
     cost are refined (``start_iterations`` concentration steps each); further starts, in
@@ -678,9 +678,6 @@ def robust_geometric_fit(
     keep = keep_count(n, tolerances)
     floor = float(tolerances.sigma_floor)
 
-    def tukey(residuals):
-        return tukey_weights(residuals, robust_scale(residuals, floor))
-
     def trimmed(residuals):
         # A concentration step (Rousseeuw & Van Driessen 2006): least squares on the ``keep``
         # points closest to the current surface.
@@ -719,10 +716,6 @@ def robust_geometric_fit(
     cap = (tolerances.outlier_cutoff_sigma * reference) ** 2
     scores = [float(np.minimum(item[1] * item[1], cap).sum()) for item in refined]
     state, residuals, jacobian = refined[int(np.argmin(scores))]
-    # Iterate the robust (Tukey) estimate to convergence.
-    state, residuals, jacobian = gauss_newton(
-        model, state, points, tukey, max_iterations, 1e-3, (residuals, jacobian)
-    )
     # Inliers, then plain least squares on them until the inlier set is stable; without a
     # sensor sigma, a larger inlier set that the data support better is taken once.
     extent = float(np.linalg.norm(np.ptp(points, axis=0)))

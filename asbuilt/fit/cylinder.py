@@ -18,7 +18,7 @@ Method
    cones and tori"; Eberly, "Fitting 3D data with a cylinder"), by Gauss-Newton with an
    analytic Jacobian, wrapped in the robust scheme of
    :func:`asbuilt.fit._common.robust_geometric_fit` (concentration steps from the best starts,
-   MSAC choice, Tukey IRLS, then least squares on the inliers).
+   MSAC choice, then least squares on the inliers).
 
 The geometric estimate is the final one: algebraic circle fits alone are biased on partial arcs.
 """
@@ -116,7 +116,7 @@ POLISHED_STARTS = 3
 
 
 def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
-    """Eigenvectors of the Tukey-reweighted ``sum n n^T``, most perpendicular to the normals first."""
+    """Eigenvectors of the Tukey-reweighted ``sum n n^T``, most perpendicular to normals first."""
     weights = 1.0 / (1.0 + flatness / max(float(np.median(flatness)), 1e-12))
     vectors = None
     for _ in range(2):

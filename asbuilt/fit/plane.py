@@ -8,8 +8,8 @@ and planes of closest fit"; orthogonal regression). Unlike ``z = A x + B y + C``
 three coordinates alike, so vertical walls are fitted as well as floors.
 
 Robustness: starts from the all-points plane and from the best of random point triples by
-trimmed cost (Fischler & Bolles 1981), Tukey IRLS, then the exact SVD plane of the inliers (see
-:func:`asbuilt.fit._common.robust_geometric_fit`).
+trimmed cost (Fischler & Bolles 1981), concentration steps, then the exact SVD plane of the
+inliers (see :func:`asbuilt.fit._common.robust_geometric_fit`).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
 __all__ = ["fit_plane", "plane_outline", "METHOD"]
 
-METHOD = "total least squares by SVD (Pearson 1901) with robust Tukey IRLS start"
+METHOD = "total least squares by SVD (Pearson 1901) on robustly chosen inliers"
 
 
 # State: (unit normal (3,), point on the plane (3,)).
@@ -146,7 +146,8 @@ def fit_plane(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES
     """Fit a bounded plane by total least squares (orthogonal distances), robust to outliers.
 
     Algorithm: the SVD plane of the centred inliers (Pearson 1901, orthogonal regression), after
-    a robust start (random triples by trimmed cost, Tukey IRLS); see the module docstring.
+    a robust start (random triples by trimmed cost, concentration steps); see the module
+    docstring.
 
     Parameters
     ----------

@@ -6,7 +6,7 @@ Starts: the algebraic sphere of all points (Kasa 1976 / Pratt 1987 linearisation
 ``|p|^2 = 2 c.p + (r^2 - |c|^2)``, solved by linear least squares) and the best of random
 four-point spheres by trimmed cost (Fischler & Bolles 1981). The final estimate minimises the
 orthogonal distances ``|p - c| - r`` by Gauss-Newton on the four parameters (Lukacs, Marshall &
-Martin 1998), robustly (Tukey IRLS, then least squares on the inliers; see
+Martin 1998), robustly (concentration steps, then least squares on the inliers; see
 :func:`asbuilt.fit._common.robust_geometric_fit`). The algebraic fit alone is biased on small
 caps; only the geometric one is reported.
 """
@@ -110,8 +110,8 @@ def _quad_start(points: np.ndarray, keep: int, samples: int = 64):
 def fit_sphere(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES) -> FitResult:
     """Fit a sphere by robust geometric least squares (orthogonal distances).
 
-    Algorithm: algebraic (Kasa/Pratt) and four-point starts, Tukey IRLS, then Gauss-Newton on
-    the inliers (Lukacs, Marshall & Martin 1998); see the module docstring.
+    Algorithm: algebraic (Kasa/Pratt) and four-point starts, concentration steps, then
+    Gauss-Newton on the inliers (Lukacs, Marshall & Martin 1998); see the module docstring.
 
     Parameters
     ----------
