@@ -57,7 +57,9 @@ def fit_hull(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES)
     ----------
     points : array_like, shape (n, 3), metres
     sigma : float, optional, metres
-        The sensor's range sigma; reported as the result's ``sigma`` when given.
+        The sensor's range sigma; reported as the result's ``sigma`` when given (otherwise
+        ``tolerances.sigma_floor`` with ``sigma_source`` ``"residuals"``: a hull estimates no
+        noise level).
     tolerances : Tolerances
 
     Returns
