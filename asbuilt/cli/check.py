@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["register", "run", "finding_dict"]
+__all__ = ["register", "run"]
 
 
 def _selectors(text: str) -> list[str]:
@@ -97,36 +97,6 @@ def register(subparsers) -> argparse.ArgumentParser:
     )
     parser.set_defaults(handler=run)
     return parser
-
-
-def _number(value):
-    """A finite float, or None (JSON has no NaN)."""
-    if value is None:
-        return None
-    value = float(value)
-    return value if value == value and abs(value) != float("inf") else None
-
-
-def finding_dict(finding) -> dict:
-    """A finding as JSON-ready data, in the shape of the model document's ``findings``."""
-    location = None if finding.location is None else [float(x) for x in finding.location]
-    return {
-        "code": finding.code,
-        "slug": finding.slug,
-        "severity": finding.severity,
-        "objects": list(finding.objects),
-        "location": location,
-        "message": finding.message,
-        "measured": _number(finding.measured),
-        "allowed": _number(finding.allowed),
-        "stderr": _number(finding.stderr),
-        "unit": finding.unit,
-        "suggestions": [
-            {"description": s.description, "change": dict(s.change), "unambiguous": s.unambiguous}
-            for s in finding.suggestions
-        ],
-        "unverifiable": finding.unverifiable,
-    }
 
 
 def _is_model_document(path) -> bool:
@@ -260,7 +230,9 @@ def run(args: argparse.Namespace) -> int:
 
     out = Console(file=sys.stdout, highlight=False, soft_wrap=True)
     if args.format == "json":
-        text = json.dumps([finding_dict(f) for f in findings], indent=2, allow_nan=False)
+        from asbuilt.export.model_json import finding_to_dict
+
+        text = json.dumps([finding_to_dict(f) for f in findings], indent=2, allow_nan=False)
         sys.stdout.write(text + "\n")
         for change in changes:
             err.print(f"fixed: {escape(change)}")

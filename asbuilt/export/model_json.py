@@ -34,6 +34,8 @@ __all__ = [
     "load_model",
     "SCHEMA_PATH",
     "model_schema",
+    "finding_to_dict",
+    "json_ready",
 ]
 
 FORMAT = "asbuilt-model"
@@ -52,14 +54,14 @@ class ModelDocumentError(ExportError):
     """An ``asbuilt-model`` document is malformed (not JSON, wrong format, bad field)."""
 
 
-def _json(value):
+def json_ready(value):
     """Plain JSON data from numpy arrays, tuples, mappings and non-finite floats (-> None)."""
     if isinstance(value, Mapping):
-        return {str(k): _json(v) for k, v in value.items()}
+        return {str(k): json_ready(v) for k, v in value.items()}
     if isinstance(value, np.ndarray):
-        return _json(value.tolist())
+        return json_ready(value.tolist())
     if isinstance(value, (list, tuple)):
-        return [_json(v) for v in value]
+        return [json_ready(v) for v in value]
     if isinstance(value, (bool, np.bool_)):
         return bool(value)
     if isinstance(value, (int, np.integer)):
@@ -191,24 +193,31 @@ def _component(component: Component) -> dict:
     return entry
 
 
-def _finding(finding: Finding) -> dict:
-    return {
-        "code": finding.code,
-        "slug": finding.slug,
-        "severity": finding.severity,
-        "objects": list(finding.objects),
-        "location": finding.location,
-        "message": finding.message,
-        "measured": finding.measured,
-        "allowed": finding.allowed,
-        "stderr": finding.stderr,
-        "unit": finding.unit,
-        "suggestions": [
-            {"description": s.description, "change": dict(s.change), "unambiguous": s.unambiguous}
-            for s in finding.suggestions
-        ],
-        "unverifiable": finding.unverifiable,
-    }
+def finding_to_dict(finding: Finding) -> dict:
+    """A finding as JSON-ready data (the shape of the model document's ``findings``)."""
+    return json_ready(
+        {
+            "code": finding.code,
+            "slug": finding.slug,
+            "severity": finding.severity,
+            "objects": list(finding.objects),
+            "location": finding.location,
+            "message": finding.message,
+            "measured": finding.measured,
+            "allowed": finding.allowed,
+            "stderr": finding.stderr,
+            "unit": finding.unit,
+            "suggestions": [
+                {
+                    "description": s.description,
+                    "change": dict(s.change),
+                    "unambiguous": s.unambiguous,
+                }
+                for s in finding.suggestions
+            ],
+            "unverifiable": finding.unverifiable,
+        }
+    )
 
 
 def model_document(model: Model) -> dict:
@@ -233,9 +242,9 @@ def model_document(model: Model) -> dict:
             {"id": s.id, "components": list(s.components), "pipe_length": s.pipe_length}
             for s in model.spools
         ],
-        "findings": [_finding(f) for f in model.findings],
+        "findings": [finding_to_dict(f) for f in model.findings],
     }
-    return _json(document)
+    return json_ready(document)
 
 
 def dumps_model(model: Model) -> str:

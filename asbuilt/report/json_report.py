@@ -16,7 +16,7 @@ import dataclasses
 import json
 
 from asbuilt.atomic import atomic_write
-from asbuilt.export.model_json import _finding, _json
+from asbuilt.export.model_json import finding_to_dict, json_ready
 
 from .data import ReportData
 from .takeoff import FOOT
@@ -81,9 +81,9 @@ def report_document(data: ReportData) -> dict:
         },
         "components": [_plain(row) for row in t.rows],
         "quality": [_quality(q) for q in data.quality],
-        "findings": [_finding(f) for f in data.findings],
+        "findings": [finding_to_dict(f) for f in data.findings],
     }
-    return _json(document)
+    return json_ready(document)
 
 
 def dumps_report(data: ReportData) -> str:

@@ -115,8 +115,7 @@ def test_json_is_the_model_document_shape(tmp_path, capsys):
 
 
 def test_json_keys_equal_the_model_documents():
-    from asbuilt.cli.check import finding_dict
-    from asbuilt.export.model_json import model_document
+    from asbuilt.export.model_json import finding_to_dict, model_document
     from asbuilt.findings import Finding, Suggestion
     from asbuilt.model import Component, Model, Straight
 
@@ -135,7 +134,7 @@ def test_json_keys_equal_the_model_documents():
     )
     comp = Component(id="A", type="pipe", geometry=Straight([0, 0, 0], [1, 0, 0], 0.05))
     document = model_document(Model(components=(comp,), findings=(finding,)))
-    assert finding_dict(finding) == document["findings"][0]
+    assert finding_to_dict(finding) == document["findings"][0]
 
 
 @pytest.mark.parametrize(

@@ -1,4 +1,4 @@
-"""Shared helpers for the report tests: models, an HTML structure checker, headless Chromium.
+"""Shared helpers for the report tests (fixtures are in conftest.py): models, an HTML structure checker, headless Chromium.
 
 The browser is driven over the DevTools protocol through ``--remote-debugging-pipe`` (JSON
 messages separated by NUL bytes on file descriptors 3 and 4), so no extra Python package is
@@ -17,7 +17,6 @@ from html.parser import HTMLParser
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from asbuilt.findings import Finding, Suggestion
 from asbuilt.model import Bend, Component, Model, Spool, Straight
@@ -89,15 +88,6 @@ def many_findings(model: Model, per_object: int = 3) -> tuple[Finding, ...]:
                 )
             )
     return tuple(found)
-
-
-@pytest.fixture(scope="session")
-def plant_model():
-    """The plant sample fitted, merged and checked (cuboids, pipes, elbows, tank, plane, hull)."""
-    from asbuilt.pipeline import build_model
-    from asbuilt.scan import load_scan
-
-    return build_model(load_scan(ROOT / "samples" / "plant.json"))
 
 
 # ----------------------------------------------------------------------------------------------
@@ -389,23 +379,3 @@ class Page:
             session=self.session,
         )["data"]
         Path(path).write_bytes(base64.b64decode(data))
-
-
-@pytest.fixture(scope="module")
-def browser():
-    """Headless Chromium; skipped with the reason where it is missing, but under CI
-    (``CI=true``) a missing browser fails the test."""
-    executable = _chromium()
-    if executable is None:
-        message = (
-            "chromium not found: install it (apt-get install chromium chromium-driver) "
-            "to render the HTML report in a real browser"
-        )
-        if _ci():
-            pytest.fail(message)
-        pytest.skip(message)
-    instance = Browser(executable)
-    try:
-        yield instance
-    finally:
-        instance.close()

@@ -8,7 +8,7 @@ Chromium fails instead (see the ``browser`` fixture in conftest.py).
 import datetime as dt
 
 import pytest
-from conftest import known_model, many_findings
+from report_helpers import known_model, many_findings
 
 from asbuilt.report import write_report
 

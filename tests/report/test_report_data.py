@@ -2,7 +2,7 @@
 
 import datetime as dt
 
-from conftest import known_model, many_findings
+from report_helpers import known_model, many_findings
 
 from asbuilt.model import Component, Model
 from asbuilt.report import report_data, write_reports

@@ -7,10 +7,10 @@ import re
 
 import numpy as np
 import pytest
-from conftest import known_model
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+from report_helpers import known_model
 from scipy.spatial import ConvexHull
 
 from asbuilt.model import Bend, Component, Model, Straight
@@ -56,8 +56,8 @@ def check_hull(ours, points):
     except Exception:  # degenerate (collinear) input: ours is a segment or a point
         assert len(ours) <= 2 or area(ours) < 1e-6 * max(1.0, np.ptp(points) ** 2)
         return
-    if reference.volume < 1e-9:
-        return
+    if reference.volume < 1e-9 * max(1.0, np.ptp(points) ** 2):
+        return  # nearly collinear: areas at rounding level, where hull codes legitimately differ
     assert area(ours) == pytest.approx(reference.volume, rel=1e-7, abs=1e-9)
     # counter-clockwise
     x, y = ours[:, 0], ours[:, 1]
@@ -127,7 +127,7 @@ def test_png_view_is_a_png():
 
 
 def test_label_limit_keeps_flagged_objects():
-    from conftest import many_findings
+    from report_helpers import many_findings
 
     model = known_model()
     flagged = many_findings(model)[:1]  # an error on P1 only

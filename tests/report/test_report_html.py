@@ -4,7 +4,7 @@ import datetime as dt
 import re
 
 import pytest
-from conftest import check_html, known_model, many_findings
+from report_helpers import check_html, known_model, many_findings
 
 from asbuilt.report import report_data
 from asbuilt.report.html import MODEL_VIEWER_URL, html_text, write_html

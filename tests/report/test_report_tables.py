@@ -7,7 +7,7 @@ import json
 import math
 
 import pytest
-from conftest import known_model, many_findings
+from report_helpers import known_model, many_findings
 
 from asbuilt.report import report_data
 from asbuilt.report.json_report import FORMAT, dumps_report, report_document

@@ -4,7 +4,7 @@ import json
 import os
 
 import pytest
-from conftest import known_model
+from report_helpers import known_model
 
 from asbuilt.errors import AsbuiltError, ExportError, UnknownFormatError
 from asbuilt.report import SUFFIXES, report_format_for, write_report, write_reports

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import LR4, OD4, WALL4, known_model
+from report_helpers import LR4, OD4, WALL4, known_model
 
 from asbuilt.model import Component, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cylinder, Hull, Plane, Sphere
@@ -114,7 +114,7 @@ def test_no_weight_without_density_or_wall():
 
 
 def test_findings_on_rows_worst_first():
-    from conftest import many_findings
+    from report_helpers import many_findings
 
     model = known_model()
     model = model.replace(findings=many_findings(model))
@@ -219,7 +219,7 @@ def test_spool_totals(known):
 
 
 def test_spool_findings_and_unlisted_spools():
-    from conftest import many_findings
+    from report_helpers import many_findings
 
     model = known_model()
     model = model.replace(findings=many_findings(model), spools=())  # spools not listed
