@@ -43,7 +43,6 @@ __all__ = [
     "stderr_of",
     "mixture_score",
     "local_normals",
-    "circle_fit_2d",
     "arc_coverage_deg",
     "GeometricModel",
     "RobustFit",
@@ -414,42 +413,6 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     values, vectors = np.linalg.eigh(scatter)
     flatness = values[:, 0] / np.maximum(values[:, 1], 1e-300)
     return vectors[:, :, 0], flatness
-
-
-def circle_fit_2d(xy: np.ndarray, weights: np.ndarray | None = None):
-    """Algebraic circle fit (Kasa 1976): least squares on ``x^2 + y^2 + D x + E y + F = 0``.
-
-    Only an initial value: it is biased on partial arcs, so the fits refine it geometrically.
-
-    Parameters
-    ----------
-    xy : ndarray, shape (n, 2), metres
-    weights : ndarray, shape (n,), optional
-
-    Returns
-    -------
-    center : ndarray, shape (2,), metres
-    radius : float, metres
-        Both NaN when the system is singular.
-    """
-    offset = xy.mean(axis=0)
-    local = xy - offset
-    design = np.column_stack([local, np.ones(len(local))])
-    rhs = -(local * local).sum(axis=1)
-    if weights is not None:
-        root = np.sqrt(weights)
-        design = design * root[:, None]
-        rhs = rhs * root
-    try:
-        solution, _, rank, _ = np.linalg.lstsq(design, rhs, rcond=None)
-    except np.linalg.LinAlgError:
-        return np.full(2, np.nan), float("nan")
-    if rank < 3:
-        return np.full(2, np.nan), float("nan")
-    center = -0.5 * solution[:2]
-    squared = center @ center - solution[2]
-    radius = float(np.sqrt(squared)) if squared > 0 else float("nan")
-    return center + offset, radius
 
 
 def arc_coverage_deg(angles: np.ndarray) -> float:

@@ -166,7 +166,11 @@ def _kasa_batch(xy: np.ndarray, weights: np.ndarray):
     try:
         solution = np.linalg.solve(normal, right)[:, :, 0]
     except np.linalg.LinAlgError:
+        # Some projections are degenerate (points on a line across the axis): no circle there.
+        singular = np.linalg.svd(normal, compute_uv=False)
+        degenerate = singular[:, -1] <= 1e-12 * singular[:, 0]
         solution = (np.linalg.pinv(normal) @ right)[:, :, 0]
+        solution[degenerate] = np.nan
     center = -0.5 * solution[:, :2]
     squared = (center * center).sum(axis=1) - solution[:, 2]
     with np.errstate(invalid="ignore"):

@@ -152,21 +152,6 @@ def test_local_normals_on_many_points_use_the_tree():
     np.testing.assert_allclose(np.abs(normals[:, 2]), 1.0, atol=1e-9)
 
 
-@pytest.mark.parametrize("start, stop", [(0.0, 2 * np.pi), (0.3, 0.3 + np.pi / 2)])
-def test_circle_fit_2d_recovers_an_exact_circle(start, stop):
-    angles = np.linspace(start, stop, 12, endpoint=False)
-    xy = np.column_stack([3 + 2 * np.cos(angles), -1 + 2 * np.sin(angles)])
-    center, radius = common.circle_fit_2d(xy)
-    np.testing.assert_allclose(center, [3, -1], atol=1e-9)
-    assert radius == pytest.approx(2.0)
-
-
-def test_circle_fit_2d_of_collinear_points_is_undefined_not_an_exception():
-    xy = np.column_stack([np.arange(5.0), np.zeros(5)])
-    center, radius = common.circle_fit_2d(xy)
-    assert not np.isfinite(radius) or radius > 1e6
-
-
 @pytest.mark.parametrize(
     "angles_deg, expected",
     [([0, 45, 90], 90.0), ([350, 10], 20.0), (np.arange(0, 360, 30), 330.0), ([5], 0.0)],

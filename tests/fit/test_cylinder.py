@@ -8,7 +8,7 @@ from conftest import angle_deg, raster_scan
 
 from asbuilt.errors import FitError
 from asbuilt.fit._common import orthonormal_basis
-from asbuilt.fit.cylinder import fit_cylinder
+from asbuilt.fit.cylinder import _kasa_batch, fit_cylinder
 from asbuilt.primitives import Cylinder
 
 SENSOR = np.zeros(3)
@@ -103,6 +103,19 @@ def test_obliquely_seen_pipes_with_background_shots_keep_their_radius(
         fit = fit_cylinder(sample.points)
         assert abs(fit.primitive.radius - pipe.radius) < 0.005
         assert angle_deg(fit.primitive.axis, pipe.axis) < 2.0
+
+
+@pytest.mark.parametrize("start, stop", [(0.0, 2 * np.pi), (0.3, 0.3 + np.pi / 2)])
+def test_kasa_circles_are_exact_on_exact_arcs_and_undefined_on_lines(start, stop):
+    angles = np.linspace(start, stop, 12, endpoint=False)
+    arc = np.column_stack([3 + 2 * np.cos(angles), -1 + 2 * np.sin(angles)])
+    line = np.column_stack([np.arange(12.0), np.zeros(12)])
+    weights = np.ones((2, 12))
+    weights[0, ::3] = 0.0  # weights select the points (concentration steps)
+    center, radius = _kasa_batch(np.stack([arc, line]), weights)
+    np.testing.assert_allclose(center[0], [3, -1], atol=1e-9)
+    assert radius[0] == pytest.approx(2.0)
+    assert not np.isfinite(radius[1]) or radius[1] > 1e6
 
 
 def test_noise_free_points_fit_exactly():
