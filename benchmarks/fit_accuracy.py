@@ -43,7 +43,7 @@ import math
 import sys
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +53,14 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))
 
 import crb  # noqa: E402
+from fit_report import (  # noqa: E402
+    Cell,
+    cuboid_table,
+    cylinder_table,
+    fmt,
+    plane_table,
+    summary,
+)
 
 from asbuilt.sim.raycast import (  # noqa: E402
     BoxShape,
@@ -339,47 +347,6 @@ def cuboid_errors(fitted, truth) -> dict:
     return {"size_rel": size_rel, "orientation": angle}
 
 
-# --------------------------------------------------------------------------- statistics
-
-
-@dataclass
-class Cell:
-    """Accumulated errors of one cell for one estimator and one data version."""
-
-    errors: dict = field(default_factory=dict)
-    bounds: dict = field(default_factory=dict)
-    times: list = field(default_factory=list)
-    failures: int = 0
-    trials: int = 0
-
-    def add(self, name, value):
-        self.errors.setdefault(name, []).append(value)
-
-    def bound(self, name, value):
-        self.bounds.setdefault(name, []).append(value)
-
-    def values(self, name) -> np.ndarray:
-        return np.asarray(self.errors.get(name, []), float)
-
-    def rms_bound(self, name) -> float:
-        b = np.asarray(self.bounds.get(name, []), float)
-        return float(np.sqrt(np.mean(b**2))) if b.size else float("nan")
-
-
-def _rmse(x) -> float:
-    return float(np.sqrt(np.mean(np.square(x)))) if len(x) else float("nan")
-
-
-def _pct(x, q) -> float:
-    return float(np.percentile(np.abs(x), q)) if len(x) else float("nan")
-
-
-def _fmt(x, digits=2) -> str:
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return "-"
-    return f"{x:.{digits}f}"
-
-
 def run_fit(function, kind, points, is_ours):
     start = time.perf_counter()
     try:
@@ -439,286 +406,6 @@ def run_cells(kind, cells, make, trials, sk_trials, ours, sk, seed, progress):
 def hash_key(kind, key) -> int:
     text = f"{kind}:{key}"
     return sum((i + 1) * ord(c) for i, c in enumerate(text)) % (2**31)
-
-
-# --------------------------------------------------------------------------- tables
-
-
-def _ratio(a, b) -> float:
-    return a / b if b and math.isfinite(a) and math.isfinite(b) else float("nan")
-
-
-def cylinder_table(results, kind, version, sk_name="skspatial"):
-    head = (
-        "| OD mm | L/D | n | trials | fails | radius med mm | p90 | bias | RMSE | CRB | RMSE/CRB "
-        "| axis med deg | p90 | RMSE | CRB | RMSE/CRB | max | skspatial radius med mm | axis med "
-        "deg | fails/trials |"
-    )
-    if kind == "sphere":
-        head = (
-            "| D m | n | trials | fails | radius med mm | p90 | bias | RMSE | CRB | RMSE/CRB "
-            "| skspatial radius med mm | fails/trials |"
-        )
-    lines = [head, "|" + "---|" * (head.count("|") - 1)]
-    for key, per in results.items():
-        ours = per.get(("ours", version))
-        sk = per.get((sk_name, version))
-        r = ours.values("radius") * 1e3
-        r_b = ours.rms_bound("radius") * 1e3
-        row = [f"{k:g}" for k in key] + [str(ours.trials), str(ours.failures)]
-        row += [
-            _fmt(_pct(r, 50)),
-            _fmt(_pct(r, 90)),
-            _fmt(float(np.mean(r)) if len(r) else float("nan")),
-            _fmt(_rmse(r)),
-            _fmt(r_b),
-            _fmt(_ratio(_rmse(r), r_b)),
-        ]
-        if kind == "cylinder":
-            a = ours.values("axis")
-            a_b = math.degrees(ours.rms_bound("axis"))
-            row += [
-                _fmt(_pct(a, 50), 3),
-                _fmt(_pct(a, 90), 3),
-                _fmt(_rmse(a), 3),
-                _fmt(a_b, 3),
-                _fmt(_ratio(_rmse(a), a_b)),
-                _fmt(float(a.max()) if len(a) else float("nan")),
-            ]
-        if sk is not None:
-            row.append(_fmt(_pct(sk.values("radius") * 1e3, 50)))
-            if kind == "cylinder":
-                row.append(_fmt(_pct(sk.values("axis"), 50), 3))
-            row.append(f"{sk.failures}/{sk.trials}")
-        else:
-            row += ["-"] * (3 if kind == "cylinder" else 2)
-        lines.append("| " + " | ".join(row) + " |")
-    return "\n".join(lines)
-
-
-def plane_table(results, version):
-    head = (
-        "| width m | n | trials | fails | normal med deg | p90 | RMSE | CRB | RMSE/CRB | "
-        "skspatial normal med deg | fails/trials |"
-    )
-    lines = [head, "|" + "---|" * (head.count("|") - 1)]
-    for key, per in results.items():
-        ours = per.get(("ours", version))
-        sk = per.get(("skspatial", version))
-        a = ours.values("normal")
-        b = math.degrees(ours.rms_bound("normal"))
-        row = [f"{k:g}" for k in key] + [
-            str(ours.trials),
-            str(ours.failures),
-            _fmt(_pct(a, 50), 3),
-            _fmt(_pct(a, 90), 3),
-            _fmt(_rmse(a), 3),
-            _fmt(b, 3),
-            _fmt(_ratio(_rmse(a), b)),
-        ]
-        if sk is not None:
-            row += [_fmt(_pct(sk.values("normal"), 50), 3), f"{sk.failures}/{sk.trials}"]
-        else:
-            row += ["-", "-"]
-        lines.append("| " + " | ".join(row) + " |")
-    return "\n".join(lines)
-
-
-def cuboid_table(results, version):
-    head = (
-        "| section m | faces | n | trials | fails | across-size med % | p90 % | length med % "
-        "| orientation med deg | p90 | RMSE | CRB | RMSE/CRB |"
-    )
-    lines = [head, "|" + "---|" * (head.count("|") - 1)]
-    for key, per in results.items():
-        ours = per.get(("ours", version))
-        across = np.concatenate([ours.values("size_a"), ours.values("size_b")]) * 100
-        length = ours.values("size_len") * 100
-        o = ours.values("orientation")
-        b = math.degrees(ours.rms_bound("orientation"))
-        row = [f"{k:g}" for k in key] + [
-            str(ours.trials),
-            str(ours.failures),
-            _fmt(_pct(across, 50)),
-            _fmt(_pct(across, 90)),
-            _fmt(_pct(length, 50)),
-            _fmt(_pct(o, 50), 3),
-            _fmt(_pct(o, 90), 3),
-            _fmt(_rmse(o), 3),
-            _fmt(b, 3),
-            _fmt(_ratio(_rmse(o), b)),
-        ]
-        lines.append("| " + " | ".join(row) + " |")
-    return "\n".join(lines)
-
-
-# --------------------------------------------------------------------------- summary
-
-
-def _times(results, estimator, n=40):
-    out = []
-    for key, per in results.items():
-        if key[-1] != n:
-            continue
-        for version in ("clean", "outliers"):
-            cell = per.get((estimator, version))
-            if cell:
-                out.extend(cell.times)
-    return np.asarray(out)
-
-
-def _significant(ratios, counts) -> str:
-    """How many cells sit above the bound beyond sampling noise.
-
-    For an efficient unbiased estimator ``n RMSE^2 / CRB^2`` is about chi-square with n degrees
-    of freedom, so a cell's ratio above ``sqrt(chi2_0.99(n) / n)`` (1.24 for 50 trials) is
-    significantly above the bound at the 1% level.
-    """
-    from scipy.stats import chi2
-
-    limits = [math.sqrt(chi2.ppf(0.99, n) / n) for n in counts]
-    above = sum(r > lim for r, lim in zip(ratios, limits))
-    return f"{above} significantly above the bound (99% chi-square limit {min(limits):.2f})"
-
-
-def summary(all_results):
-    rows = []
-
-    def verdict(ok):
-        return "met" if ok else "**missed**"
-
-    ratios_r, ratios_a, biases, max_axis, over5 = [], [], [], 0.0, 0
-    trial_counts, axis_counts = [], []
-    out_ratio = []
-    for kind in ("cylinder", "sphere"):
-        for per in all_results.get(kind, {}).values():
-            clean = per[("ours", "clean")]
-            dirty = per[("ours", "outliers")]
-            r = clean.values("radius")
-            rb = clean.rms_bound("radius")
-            if len(r):
-                ratios_r.append(_rmse(r) / rb)
-                trial_counts.append(len(r))
-                biases.append(abs(float(np.mean(r))) / rb)
-                out_ratio.append(_rmse(dirty.values("radius")) / _rmse(r))
-            if kind == "cylinder":
-                a = clean.values("axis")
-                ab = math.degrees(clean.rms_bound("axis"))
-                if len(a):
-                    ratios_a.append(_rmse(a) / ab)
-                    axis_counts.append(len(a))
-                    out_ratio.append(_rmse(dirty.values("axis")) / _rmse(a))
-                for cell in (clean, dirty):
-                    ax = cell.values("axis")
-                    if len(ax):
-                        max_axis = max(max_axis, float(ax.max()))
-                        over5 += int((ax > 5.0).sum())
-    if ratios_r:
-        worst = max(ratios_r)
-        rows.append(
-            (
-                "cylinder + sphere radius RMSE / CRB <= 1.15 in every cell",
-                f"worst {worst:.2f}, median {np.median(ratios_r):.2f}, "
-                f"{sum(x > 1.15 for x in ratios_r)}/{len(ratios_r)} cells over; "
-                + _significant(ratios_r, trial_counts),
-                verdict(worst <= 1.15),
-            )
-        )
-    if ratios_a:
-        worst = max(ratios_a)
-        rows.append(
-            (
-                "cylinder axis RMSE / CRB <= 1.15 in every cell",
-                f"worst {worst:.2f}, median {np.median(ratios_a):.2f}, "
-                f"{sum(x > 1.15 for x in ratios_a)}/{len(ratios_a)} cells over; "
-                + _significant(ratios_a, axis_counts),
-                verdict(worst <= 1.15),
-            )
-        )
-    if biases:
-        worst = max(biases)
-        rows.append(
-            (
-                "radius abs(bias) < 0.25 x CRB",
-                f"worst {worst:.2f}, {sum(x >= 0.25 for x in biases)}/{len(biases)} cells over",
-                verdict(worst < 0.25),
-            )
-        )
-    if ratios_a:
-        rows.append(
-            (
-                "no cylinder trial with an axis error over 5 degrees",
-                f"max {max_axis:.2f} deg, {over5} trials over 5 deg (clean + outliers)",
-                verdict(over5 == 0),
-            )
-        )
-    cub = all_results.get("cuboid", {})
-    if cub:
-        med, orient, cub_out = [], [], []
-        for key, per in cub.items():
-            clean = per[("ours", "clean")]
-            dirty = per[("ours", "outliers")]
-            across = np.concatenate([clean.values("size_a"), clean.values("size_b")])
-            allsizes = np.concatenate([across, clean.values("size_len")])
-            if key[-1] >= 30 and len(allsizes):
-                med.append(float(np.median(allsizes)) * 100)
-            o = clean.values("orientation")
-            if len(o):
-                orient.append(float(np.median(o)))
-                d_o = dirty.values("orientation")
-                if len(d_o):
-                    cub_out.append(float(np.median(d_o)) / max(float(np.median(o)), 1e-9))
-            d_all = np.concatenate(
-                [dirty.values("size_a"), dirty.values("size_b"), dirty.values("size_len")]
-            )
-            if len(d_all) and len(allsizes):
-                cub_out.append(float(np.median(d_all)) / max(float(np.median(allsizes)), 1e-9))
-        if med:
-            rows.append(
-                (
-                    "cuboid sizes: median error <= 1% with 30+ points (every cell)",
-                    f"worst cell {max(med):.2f}%, median cell {np.median(med):.2f}%",
-                    verdict(max(med) <= 1.0),
-                )
-            )
-        if orient:
-            rows.append(
-                (
-                    "cuboid orientation within 0.5 deg (cell medians)",
-                    f"worst cell median {max(orient):.3f} deg",
-                    verdict(max(orient) <= 0.5),
-                )
-            )
-        out_ratio.extend(cub_out)
-    if out_ratio:
-        finite = [x for x in out_ratio if math.isfinite(x)]
-        worst = max(finite) if finite else float("nan")
-        rows.append(
-            (
-                "with 20% edge outliers: within 1.3 x the clean figures",
-                f"worst ratio {worst:.2f} (cylinder/sphere RMSE, cuboid medians), "
-                f"{sum(x > 1.3 for x in finite)}/{len(finite)} over",
-                verdict(worst <= 1.3),
-            )
-        )
-    for kind, target in (("cylinder", 2.0), ("cuboid", 5.0)):
-        res = all_results.get(kind)
-        if not res:
-            continue
-        t = _times(res, "ours")
-        if t.size:
-            ms = float(np.median(t)) * 1e3
-            text = f"median {ms:.2f} ms over {t.size} fits"
-            sk_t = _times(res, "skspatial")
-            if sk_t.size:
-                sk_ms = float(np.median(sk_t)) * 1e3
-                text += f"; skspatial {sk_ms:.2f} ms, {sk_ms / ms:.1f}x ours"
-            rows.append(
-                (f"{kind} fit time at 40 points <= {target:g} ms", text, verdict(ms <= target))
-            )
-    lines = ["| target | measured | verdict |", "|---|---|---|"]
-    lines += [f"| {a} | {b} | {c} |" for a, b, c in rows]
-    return "\n".join(lines)
 
 
 # --------------------------------------------------------------------------- main
@@ -837,9 +524,9 @@ def main(argv=None) -> int:
         ]
         s = np.concatenate(s) * 1e3 if s else np.array([])
         out.append(
-            f"| {kind} | {_fmt(np.median(t))} | {_fmt(np.percentile(t, 90))} | "
-            f"{_fmt(np.median(s)) if s.size else '-'} | "
-            f"{_fmt(np.percentile(s, 90)) if s.size else '-'} |"
+            f"| {kind} | {fmt(np.median(t))} | {fmt(np.percentile(t, 90))} | "
+            f"{fmt(np.median(s)) if s.size else '-'} | "
+            f"{fmt(np.percentile(s, 90)) if s.size else '-'} |"
         )
     text = "\n".join(out) + "\n"
     if args.out:
