@@ -699,10 +699,11 @@ def robust_geometric_fit(
             break
         mask = new_mask
         kept = int(np.count_nonzero(mask))
-        if n - kept > tolerances.max_outlier_fraction * n or kept <= model.n_params:
+        if n - kept > tolerances.max_outlier_fraction * n or kept < model.n_params:
             raise FitError(
                 f"{n - kept} of {n} points are outliers to the best {kind} (more than "
-                f"{tolerances.max_outlier_fraction:.0%}); check that the points are one {kind}."
+                f"{tolerances.max_outlier_fraction:.0%}, or fewer than {model.n_params} left); "
+                f"check that the points are one {kind}."
             )
         weights = mask.astype(np.float64)
         state, residuals, jacobian = gauss_newton(

@@ -84,6 +84,12 @@ def test_plane_outline_of_collinear_points_raises():
         plane_outline(points, np.zeros(3), np.array([0.0, 0.0, 1.0]))
 
 
+def test_three_points_define_a_plane_exactly():
+    fit = fit_plane([[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0]])
+    np.testing.assert_allclose(fit.primitive.normal, -np.ones(3) / np.sqrt(3))
+    assert fit.n_inliers == 3 and fit.rms < 1e-12
+
+
 def test_a_plane_through_the_origin_uses_the_sign_rule():
     x, y = np.meshgrid(np.linspace(-1, 1, 4), np.linspace(-1, 1, 4))
     points = np.column_stack([x.ravel(), y.ravel(), np.zeros(16)])

@@ -45,6 +45,14 @@ def test_noise_free_cap_is_exact_where_the_algebraic_fit_is_not():
     assert abs(fit_sphere(noisy).primitive.radius - 0.5) < 0.01
 
 
+def test_four_points_define_a_sphere_exactly():
+    points = np.array([[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0], [-1.0, 0, 0]]) * 2 + 5
+    fit = fit_sphere(points)
+    assert fit.primitive.radius == pytest.approx(2.0)
+    np.testing.assert_allclose(fit.primitive.center, [5, 5, 5], atol=1e-9)
+    assert fit.n_inliers == 4
+
+
 def test_twenty_percent_edge_outliers_are_rejected(rng):
     sphere = Sphere([5, 1, 1], 0.4)
     sample = raster_scan(sphere, SENSOR, 30, rng, outlier_fraction=0.2)
