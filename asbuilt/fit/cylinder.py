@@ -386,14 +386,16 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
 
     Works on partial arcs down to about 90 degrees and on stubs shorter than their diameter;
     up to ``tolerances.max_outlier_fraction`` of edge outliers are rejected and reported. See
-    the module docstring for the algorithm (normal-based starts, Kasa initial circle, robust
-    geometric Gauss-Newton after Lukacs, Marshall & Martin 1998, least squares on the inliers).
+    the module docstring for the algorithm (normal, two-point and line starts, robust circles,
+    axis pattern search, robust geometric Gauss-Newton after Lukacs, Marshall & Martin 1998,
+    least squares on the inliers weighted by a fitted incidence noise model).
 
     Parameters
     ----------
     points : array_like, shape (n, 3), metres
     sigma : float, optional, metres
-        The sensor's range sigma; scales the standard errors when given.
+        The sensor's range sigma (of a square-on shot); sets the inlier threshold and scales
+        the standard errors when given.
     tolerances : Tolerances
 
     Returns
@@ -401,20 +403,23 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
     FitResult
         ``primitive`` is a :class:`~asbuilt.primitives.Cylinder` whose ``center`` is the
         mid-point of the inliers' extent along the axis and ``length`` that extent. The axis
-        sign follows :func:`asbuilt.fit._common.orient` (+z, else +x, else +y). Residuals are
-        positive outside. ``covariance`` (5 x 5) is over (tilt of the axis towards ``u``,
-        tilt towards ``v`` (radians, about ``center``), centre offset along ``u``, along ``v``
-        (metres), radius (metres)) with ``u, v = orthonormal_basis(axis)``. ``stderr``:
+        sign follows :func:`asbuilt.fit._common.orient` (largest component positive).
+        Residuals are orthogonal distances, positive outside. ``covariance`` (5 x 5) is over
+        (tilt of the axis towards ``u``, tilt towards ``v`` (radians, about ``center``), centre
+        offset along ``u``, along ``v`` (metres), radius (metres)) with
+        ``u, v = orthonormal_basis(axis)``: ``sigma^2 (J^T W J)^-1``, ``W`` the inliers'
+        weights (1 / variance relative to a square-on shot, see :func:`_incidence_weighted`;
+        all 1 when the noise looks even) and ``sigma`` the square-on noise level (the sensor's,
+        else the weighted residuals' RMS with the degrees of freedom corrected). ``stderr``:
         ``radius``; ``axis_deg`` (RMS axis angle error, the root of the two tilt variances);
         ``center`` (across-axis position, root of the two offset variances); ``length``
         (end-point uncertainty: each end lies somewhere between the last shot and the next
         one, so ``s / sqrt(6)`` with ``s`` the median nearest-neighbour spacing of the
-        points, plus the axis-tilt effect, in quadrature). The errors are ``(J^T J)^-1 sigma^2``
-        with one ``sigma`` for all points; range-finder noise lies along the beam, so the
-        grazing shots at a pipe's edges (which fix the radius) are more precise than that
-        average and at 3-5 m the radius error is overstated by up to about 1.5x (measured),
-        the axis error within about 10%. Diagnostics: ``arc_deg`` (angular coverage of the
-        inliers about the axis), ``length_over_diameter``, ``starts`` (starts tried).
+        points, plus the noise and the axis-tilt effect, in quadrature). Measured against the
+        scatter of repeated simulated scans (range 2 mm, angle 0.01 degree): the radius error
+        is overstated by up to 1.4x at 3 m and understated by up to 1.25x at 10 m; the axis
+        error is within 10%. Diagnostics: ``arc_deg`` (angular coverage of the inliers about
+        the axis), ``length_over_diameter``, ``starts`` (starts tried).
 
     Raises
     ------
@@ -468,6 +473,7 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
     near = robust
     robust = _drop_far_side(near, local, tolerances)
     far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
+    robust, relative = _incidence_weighted(robust, local)
     axis, center, radius = robust.state
     kept = local[robust.inliers]
     along = (kept - center) @ axis
@@ -476,14 +482,18 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
     if length <= 0:
         raise FitError("The points must spread along the cylinder's axis to give it a length.")
     mid = center + 0.5 * (low + high) * axis
-    noise, source = noise_level(robust.residuals[robust.inliers], 5, sigma, tolerances)
+    # Noise level of a square-on shot; the inliers' weights are 1 / relative variance.
+    weights = 1.0 / relative[robust.inliers]
+    noise, source = noise_level(
+        robust.residuals[robust.inliers] * np.sqrt(weights), 5, sigma, tolerances
+    )
     # Re-express the Jacobian about the mid-point (the reported centre): shift the along-axis
     # coordinate used by the tilt columns.
     jac = robust.jacobian.copy()
     shift = 0.5 * (low + high)
     jac[:, 0] -= shift * jac[:, 2]
     jac[:, 1] -= shift * jac[:, 3]
-    covariance = covariance_from_jacobian(jac, noise)
+    covariance = covariance_from_jacobian(jac * np.sqrt(weights)[:, None], noise)
     tilt_var = covariance[0, 0] + covariance[1, 1]
     spacing = _median_spacing(kept)
     length_se = stderr_of(spacing**2 / 6.0 + 2.0 * noise**2 + (radius**2) * tilt_var)
@@ -567,6 +577,64 @@ def _drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances
         _MODEL, robust.state, points, lambda _r, w=weights: w, 50, 1e-9
     )
     return RobustFit(state, residuals, mask, jacobian[mask], robust.scale)
+
+
+#: Smallest relative noise variance of a shot (grazing, against square-on) the weights allow.
+MIN_RELATIVE_VARIANCE = 0.05
+#: Standard errors by which the fitted noise model's slope must exceed zero before weighting:
+#: weights fitted to noise alone make the fit no better and its standard errors too small.
+EVIDENCE = 1.0
+
+
+def _incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFit, np.ndarray]:
+    """Refit the inliers by weighted least squares with a fitted noise model for range shots.
+
+    A range finder's noise lies along its beam (range noise ``s_r``) and across it (angular
+    noise ``s_a`` times the range ``R``), so a shot meeting the surface at incidence ``t`` is
+    off the surface by ``s_r^2 cos^2 t + (R s_a)^2 sin^2 t = A + B cos^2 t`` in variance. For a
+    pipe seen from one side by a distant station, ``cos t`` is proportional to ``cos(phi -
+    phi0)``, ``phi`` a point's direction about the axis and ``phi0`` the seen side's mean
+    direction. ``A`` and ``B`` are estimated by least squares on the squared residuals, then
+    the fit is redone with weights ``1 / (A + B cos^2)``: feasible generalised least squares
+    (Carroll & Ruppert 1988, "Transformation and Weighting in Regression"). At 3 m the grazing
+    shots are several times more precise than square-on ones and weighting brings the radius
+    error of a 0.6 m pipe from about 1.2 to about 1.05 times the Cramer-Rao bound (measured);
+    when ``B`` is not ``EVIDENCE`` standard errors above zero (even noise, as at 10 m) or the
+    pipe is seen all round, the weights are 1.
+
+    Returns the refitted RobustFit (same inliers) and each point's variance relative to a
+    square-on shot, shape (n,), in ``[MIN_RELATIVE_VARIANCE, 1]``.
+    """
+    n = len(points)
+    uniform = np.ones(n)
+    axis, center, _ = robust.state
+    u, v = orthonormal_basis(axis)
+    rel = points - center
+    angles = np.arctan2(rel @ v, rel @ u)
+    kept = robust.inliers
+    mean = np.array([np.cos(angles[kept]).mean(), np.sin(angles[kept]).mean()])
+    if float(np.hypot(*mean)) <= ONE_SIDED or np.count_nonzero(kept) < 8:
+        return robust, uniform
+    square_on = np.cos(angles - np.arctan2(mean[1], mean[0])) ** 2
+    design = np.column_stack([np.ones(np.count_nonzero(kept)), square_on[kept]])
+    squares = robust.residuals[kept] ** 2
+    (level, slope), *_ = np.linalg.lstsq(design, squares, rcond=None)
+    # Weight only on evidence: the slope must stand EVIDENCE standard errors above zero.
+    spread = squares - design @ np.array([level, slope])
+    dof = max(len(squares) - 2, 1)
+    try:
+        slope_var = float(spread @ spread) / dof * np.linalg.inv(design.T @ design)[1, 1]
+    except np.linalg.LinAlgError:
+        return robust, uniform
+    top = level + slope
+    if not (np.isfinite(top) and top > 0 and slope > EVIDENCE * np.sqrt(max(slope_var, 0.0))):
+        return robust, uniform
+    relative = np.clip((level + slope * square_on) / top, MIN_RELATIVE_VARIANCE, 1.0)
+    weights = np.where(kept, 1.0 / relative, 0.0)
+    state, residuals, jacobian = gauss_newton(
+        _MODEL, robust.state, points, lambda _r, w=weights: w, 6, 1e-7
+    )
+    return RobustFit(state, residuals, kept, jacobian[kept], robust.scale), relative
 
 
 def _likelier(first, second, points, tolerances: Tolerances) -> bool:

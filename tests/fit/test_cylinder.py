@@ -191,9 +191,8 @@ def test_standard_errors_match_the_scatter_of_repeated_scans(rng):
         axis_errors.append(angle_deg(fit.primitive.axis, pipe.axis))
         axis_predicted.append(fit.stderr["axis_deg"])
     rmse = np.sqrt(np.mean(np.square(errors)))
-    # (J^T J)^-1 sigma^2 with the average residual sigma is conservative for the radius: the
-    # grazing shots at the pipe's edges, which fix the radius, are more precise than average
-    # (range noise lies along the beam). Measured about 0.65-0.85 at 3-5 m.
+    # The radius error is a little conservative at short range, where the fitted noise model
+    # cannot capture all of the grazing shots' extra precision (measured 0.7-1.1 at 3-5 m).
     assert 0.55 < rmse / np.sqrt(np.mean(np.square(predicted))) < 1.3
     # Geometric least squares is (nearly) unbiased: the mean error is within noise of zero.
     assert abs(np.mean(errors)) < 3 * rmse / np.sqrt(len(errors))
