@@ -7,8 +7,8 @@ import pytest
 from conftest import angle_deg, raster_scan
 
 from asbuilt.errors import FitError
-from asbuilt.fit._common import orthonormal_basis
-from asbuilt.fit.cylinder import _kasa_batch, fit_cylinder
+from asbuilt.fit._common import RobustFit, orthonormal_basis
+from asbuilt.fit.cylinder import _MODEL, _incidence_weighted, _kasa_batch, fit_cylinder
 from asbuilt.primitives import Cylinder
 
 SENSOR = np.zeros(3)
@@ -231,3 +231,37 @@ def test_the_input_is_not_modified(rng):
     before = points.copy()
     fit_cylinder(points)
     np.testing.assert_array_equal(points, before)
+
+
+def test_noise_that_grows_square_on_is_modelled_and_weighted():
+    # Orthogonal noise sigma = 2 mm x |cos| of the angle from the seen side's middle (range
+    # noise at incidence), tiny at the grazing edges.
+    rng = np.random.default_rng(8)
+    phi, s = np.meshgrid(np.linspace(-1.45, 1.45, 15), np.linspace(-0.4, 0.4, 8))
+    phi, s = phi.ravel(), s.ravel()
+    noise = rng.normal(0, 1, phi.size) * (0.002 * np.abs(np.cos(phi)) + 0.0001)
+    radial = 0.3 + noise
+    points = np.column_stack([radial * np.cos(phi), radial * np.sin(phi), s]) + [4, 0, 1]
+    fit = fit_cylinder(points)
+    robust_state = (np.array([0, 0, 1.0]), np.array([4, 0, 1.0]), 0.3)
+    residuals, jacobian = _MODEL.jacobian(robust_state, points)
+    inliers = np.ones(phi.size, bool)
+    _, relative = _incidence_weighted(
+        RobustFit(robust_state, residuals, inliers, jacobian, 0.002), points
+    )
+    assert np.corrcoef(relative, np.cos(phi) ** 2)[0, 1] > 0.95
+    assert relative.max() == pytest.approx(1.0, abs=0.3)
+    # The reported sigma is the square-on level, not the average.
+    assert fit.sigma == pytest.approx(0.002, rel=0.3)
+    assert abs(fit.primitive.radius - 0.3) < 3 * fit.stderr["radius"]
+
+
+def test_a_pipe_seen_all_round_is_not_weighted():
+    phi, s = np.meshgrid(np.linspace(0, 2 * np.pi, 24, endpoint=False), np.linspace(0, 1, 4))
+    points = np.column_stack([0.2 * np.cos(phi.ravel()), 0.2 * np.sin(phi.ravel()), s.ravel()])
+    state = (np.array([0, 0, 1.0]), np.array([0, 0, 0.5]), 0.2)
+    residuals, jacobian = _MODEL.jacobian(state, points)
+    fit = RobustFit(state, residuals, np.ones(len(points), bool), jacobian, 0.001)
+    same, relative = _incidence_weighted(fit, points)
+    assert same is fit
+    np.testing.assert_array_equal(relative, 1.0)
