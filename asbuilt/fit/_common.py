@@ -42,6 +42,9 @@ __all__ = [
     "covariance_from_jacobian",
     "stderr_of",
     "mixture_score",
+    "incidence_variance",
+    "MIN_RELATIVE_VARIANCE",
+    "EVIDENCE",
     "local_normals",
     "arc_coverage_deg",
     "GeometricModel",
@@ -530,6 +533,55 @@ def _best_inlier_set(residuals, mask, extent, floor):
     chosen = np.zeros(n, dtype=bool)
     chosen[order[: best + 1]] = True
     return chosen | mask
+
+
+#: Smallest relative noise variance of a shot (grazing, against square-on) the weights allow.
+MIN_RELATIVE_VARIANCE = 0.05
+#: Standard errors by which a fitted noise model's slope must exceed zero before weighting:
+#: weights fitted to noise alone make a fit no better and its standard errors too small.
+EVIDENCE = 1.0
+
+
+def incidence_variance(residuals: np.ndarray, square_on: np.ndarray, mask) -> np.ndarray | None:
+    """Each shot's noise variance relative to a square-on shot, from the residuals.
+
+    A range finder's noise lies along its beam (range noise ``s_r``) and across it (angular
+    noise ``s_a`` times the range ``R``), so a shot meeting the surface at incidence ``t`` is
+    off it by ``s_r^2 cos^2 t + (R s_a)^2 sin^2 t = A + B cos^2 t`` in variance. ``A`` and ``B``
+    are the least-squares line of the inliers' squared residuals on ``cos^2 t``; weighting by
+    its inverse is feasible generalised least squares (Carroll & Ruppert 1988,
+    "Transformation and Weighting in Regression").
+
+    Parameters
+    ----------
+    residuals : ndarray, shape (n,), metres
+    square_on : ndarray, shape (n,)
+        ``cos^2`` of each shot's incidence (up to a common factor).
+    mask : ndarray, shape (n,), bool
+        Inliers.
+
+    Returns
+    -------
+    ndarray, shape (n,), or None
+        ``(A + B c) / (A + B)`` clipped to ``[MIN_RELATIVE_VARIANCE, 1]``; None when ``B`` is
+        not ``EVIDENCE`` standard errors above zero (even noise) or the model is degenerate.
+    """
+    count = int(np.count_nonzero(mask))
+    if count < 8:
+        return None
+    design = np.column_stack([np.ones(count), square_on[mask]])
+    squares = residuals[mask] ** 2
+    try:
+        normal_inverse = np.linalg.inv(design.T @ design)
+    except np.linalg.LinAlgError:
+        return None
+    level, slope = normal_inverse @ (design.T @ squares)
+    spread = squares - design @ np.array([level, slope])
+    slope_var = float(spread @ spread) / max(count - 2, 1) * normal_inverse[1, 1]
+    top = level + slope
+    if not (np.isfinite(top) and top > 0 and slope > EVIDENCE * np.sqrt(max(slope_var, 0.0))):
+        return None
+    return np.clip((level + slope * square_on) / top, MIN_RELATIVE_VARIANCE, 1.0)
 
 
 def mixture_score(residuals, mask, extent, floor) -> float:

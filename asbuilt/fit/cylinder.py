@@ -34,6 +34,7 @@ from asbuilt.fit._common import (
     arc_coverage_deg,
     covariance_from_jacobian,
     gauss_newton,
+    incidence_variance,
     keep_count,
     local_normals,
     mixture_score,
@@ -579,31 +580,19 @@ def _drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances
     return RobustFit(state, residuals, mask, jacobian[mask], robust.scale)
 
 
-#: Smallest relative noise variance of a shot (grazing, against square-on) the weights allow.
-MIN_RELATIVE_VARIANCE = 0.05
-#: Standard errors by which the fitted noise model's slope must exceed zero before weighting:
-#: weights fitted to noise alone make the fit no better and its standard errors too small.
-EVIDENCE = 1.0
-
-
 def _incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFit, np.ndarray]:
-    """Refit the inliers by weighted least squares with a fitted noise model for range shots.
+    """Refit the inliers by weighted least squares with a fitted incidence noise model.
 
-    A range finder's noise lies along its beam (range noise ``s_r``) and across it (angular
-    noise ``s_a`` times the range ``R``), so a shot meeting the surface at incidence ``t`` is
-    off the surface by ``s_r^2 cos^2 t + (R s_a)^2 sin^2 t = A + B cos^2 t`` in variance. For a
-    pipe seen from one side by a distant station, ``cos t`` is proportional to ``cos(phi -
-    phi0)``, ``phi`` a point's direction about the axis and ``phi0`` the seen side's mean
-    direction. ``A`` and ``B`` are estimated by least squares on the squared residuals, then
-    the fit is redone with weights ``1 / (A + B cos^2)``: feasible generalised least squares
-    (Carroll & Ruppert 1988, "Transformation and Weighting in Regression"). At 3 m the grazing
-    shots are several times more precise than square-on ones and weighting brings the radius
-    error of a 0.6 m pipe from about 1.2 to about 1.05 times the Cramer-Rao bound (measured);
-    when ``B`` is not ``EVIDENCE`` standard errors above zero (even noise, as at 10 m) or the
-    pipe is seen all round, the weights are 1.
+    For a pipe seen from one side by a distant station, the cosine of a shot's incidence is
+    proportional to ``cos(phi - phi0)``, ``phi`` its direction about the axis and ``phi0`` the
+    seen side's mean direction; :func:`asbuilt.fit._common.incidence_variance` fits the noise
+    model ``A + B cos^2`` and the fit is redone with weights ``1 / (A + B cos^2)``. At 3 m the
+    grazing shots are several times more precise than square-on ones and weighting brings the
+    radius error of a 0.6 m pipe from about 1.2 to about 1.05 times the Cramer-Rao bound
+    (measured). With even noise (as at 10 m) or a pipe seen all round the weights are 1.
 
     Returns the refitted RobustFit (same inliers) and each point's variance relative to a
-    square-on shot, shape (n,), in ``[MIN_RELATIVE_VARIANCE, 1]``.
+    square-on shot, shape (n,).
     """
     n = len(points)
     uniform = np.ones(n)
@@ -616,20 +605,9 @@ def _incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFi
     if float(np.hypot(*mean)) <= ONE_SIDED or np.count_nonzero(kept) < 8:
         return robust, uniform
     square_on = np.cos(angles - np.arctan2(mean[1], mean[0])) ** 2
-    design = np.column_stack([np.ones(np.count_nonzero(kept)), square_on[kept]])
-    squares = robust.residuals[kept] ** 2
-    (level, slope), *_ = np.linalg.lstsq(design, squares, rcond=None)
-    # Weight only on evidence: the slope must stand EVIDENCE standard errors above zero.
-    spread = squares - design @ np.array([level, slope])
-    dof = max(len(squares) - 2, 1)
-    try:
-        slope_var = float(spread @ spread) / dof * np.linalg.inv(design.T @ design)[1, 1]
-    except np.linalg.LinAlgError:
+    relative = incidence_variance(robust.residuals, square_on, kept)
+    if relative is None:
         return robust, uniform
-    top = level + slope
-    if not (np.isfinite(top) and top > 0 and slope > EVIDENCE * np.sqrt(max(slope_var, 0.0))):
-        return robust, uniform
-    relative = np.clip((level + slope * square_on) / top, MIN_RELATIVE_VARIANCE, 1.0)
     weights = np.where(kept, 1.0 / relative, 0.0)
     state, residuals, jacobian = gauss_newton(
         _MODEL, robust.state, points, lambda _r, w=weights: w, 6, 1e-7

@@ -7,8 +7,9 @@ Starts: the algebraic sphere of all points (Kasa 1976 / Pratt 1987 linearisation
 four-point spheres by trimmed cost (Fischler & Bolles 1981). The final estimate minimises the
 orthogonal distances ``|p - c| - r`` by Gauss-Newton on the four parameters (Lukacs, Marshall &
 Martin 1998), robustly (concentration steps, then least squares on the inliers; see
-:func:`asbuilt.fit._common.robust_geometric_fit`). The algebraic fit alone is biased on small
-caps; only the geometric one is reported.
+:func:`asbuilt.fit._common.robust_geometric_fit`), and finally weighted by a fitted incidence
+noise model (:func:`_incidence_weighted`). The algebraic fit alone is biased on small caps;
+only the geometric one is reported.
 """
 
 from __future__ import annotations
@@ -17,7 +18,10 @@ import numpy as np
 
 from asbuilt.fit._common import (
     GeometricModel,
+    RobustFit,
     covariance_from_jacobian,
+    gauss_newton,
+    incidence_variance,
     keep_count,
     noise_level,
     require_spread,
@@ -107,6 +111,40 @@ def _quad_start(points: np.ndarray, keep: int, samples: int = 64):
     return center[best], float(radius[best])
 
 
+#: Mean resultant length of the inliers' directions from the centre above which the sphere is
+#: taken as seen from one side (a hemisphere of raster shots gives about 0.6, all round 0).
+ONE_SIDED = 0.3
+
+
+def _incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFit, np.ndarray]:
+    """Refit the inliers by weighted least squares with a fitted incidence noise model.
+
+    Seen from a distant station, the cosine of a shot's incidence is the cosine between its
+    direction from the centre and the seen side's mean direction;
+    :func:`asbuilt.fit._common.incidence_variance` fits the noise model ``A + B cos^2`` and the
+    fit is redone with weights ``1 / (A + B cos^2)``. Weights are 1 with even noise or when the
+    sphere is seen all round. Returns the refitted RobustFit (same inliers) and each point's
+    variance relative to a square-on shot, shape (n,).
+    """
+    uniform = np.ones(len(points))
+    center, _ = robust.state
+    kept = robust.inliers
+    directions = points - center
+    directions /= np.maximum(np.linalg.norm(directions, axis=1), 1e-300)[:, None]
+    mean = directions[kept].mean(axis=0)
+    length = float(np.linalg.norm(mean))
+    if length <= ONE_SIDED:
+        return robust, uniform
+    relative = incidence_variance(robust.residuals, (directions @ (mean / length)) ** 2, kept)
+    if relative is None:
+        return robust, uniform
+    weights = np.where(kept, 1.0 / relative, 0.0)
+    state, residuals, jacobian = gauss_newton(
+        _MODEL, robust.state, points, lambda _r, w=weights: w, 6, 1e-7
+    )
+    return RobustFit(state, residuals, kept, jacobian[kept], robust.scale), relative
+
+
 def fit_sphere(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES) -> FitResult:
     """Fit a sphere by robust geometric least squares (orthogonal distances).
 
@@ -126,6 +164,9 @@ def fit_sphere(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCE
         ``primitive`` is a :class:`~asbuilt.primitives.Sphere`; residuals are positive
         outside. ``covariance`` (4 x 4) is over (centre x, y, z, radius), metres. ``stderr``:
         ``radius``; ``center`` (root of the summed centre variances, the RMS position error).
+        The covariance is ``sigma^2 (J^T W J)^-1`` with ``W`` the inliers' incidence weights
+        (see :func:`_incidence_weighted`; all 1 with even noise) and ``sigma`` the square-on
+        noise level (the sensor's, else from the weighted residuals).
         Diagnostics: ``cap_deg`` (apex angle of the cone from the centre that holds the
         inliers: twice the largest angle between an inlier's direction and their mean
         direction; 360 when they surround the centre).
@@ -156,9 +197,14 @@ def fit_sphere(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCE
         always_refine=2,
         max_starts=2,
     )
+    robust, relative = _incidence_weighted(robust, local)
     center, radius = robust.state
-    noise, source = noise_level(robust.residuals[robust.inliers], 4, sigma, tolerances)
-    covariance = covariance_from_jacobian(robust.jacobian, noise)
+    # Noise level of a square-on shot; the inliers' weights are 1 / relative variance.
+    weights = 1.0 / relative[robust.inliers]
+    noise, source = noise_level(
+        robust.residuals[robust.inliers] * np.sqrt(weights), 4, sigma, tolerances
+    )
+    covariance = covariance_from_jacobian(robust.jacobian * np.sqrt(weights)[:, None], noise)
     sphere = Sphere(center + offset, radius)
     directions = local[robust.inliers] - center
     directions /= np.maximum(np.linalg.norm(directions, axis=1), 1e-300)[:, None]
