@@ -116,6 +116,38 @@ def _quad_start(points: np.ndarray, keep: int, samples: int = 64):
 ONE_SIDED = 0.3
 
 
+#: Angle from the seen side's mean direction beyond which a point faces away from it.
+FAR_SIDE_DEG = 95.0
+
+
+def _drop_far_side(robust: RobustFit, points: np.ndarray) -> RobustFit:
+    """Reject inliers on the far side of a sphere seen from one side, and refit without them.
+
+    A station sees at most the hemisphere facing it; a shot that passed the sphere and hit the
+    wall behind can land within millimetres of the far side, where its distance alone cannot
+    tell it from a surface point. When the inliers' directions from the centre are concentrated
+    (mean resultant length above ``ONE_SIDED``), inliers more than ``FAR_SIDE_DEG`` from their
+    mean direction are rejected and the fit is redone by least squares on the rest.
+    """
+    center, _ = robust.state
+    kept = robust.inliers
+    directions = points - center
+    directions /= np.maximum(np.linalg.norm(directions, axis=1), 1e-300)[:, None]
+    mean = directions[kept].mean(axis=0)
+    length = float(np.linalg.norm(mean))
+    if length <= ONE_SIDED:
+        return robust
+    far = kept & (directions @ (mean / length) < np.cos(np.radians(FAR_SIDE_DEG)))
+    mask = kept & ~far
+    if not far.any() or np.count_nonzero(mask) <= _MODEL.n_params:
+        return robust
+    weights = mask.astype(np.float64)
+    state, residuals, jacobian = gauss_newton(
+        _MODEL, robust.state, points, lambda _r, w=weights: w, 50, 1e-9
+    )
+    return RobustFit(state, residuals, mask, jacobian[mask], robust.scale)
+
+
 def _incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFit, np.ndarray]:
     """Refit the inliers by weighted least squares with a fitted incidence noise model.
 
@@ -197,6 +229,9 @@ def fit_sphere(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCE
         always_refine=2,
         max_starts=2,
     )
+    near = robust
+    robust = _drop_far_side(near, local)
+    far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
     robust, relative = _incidence_weighted(robust, local)
     center, radius = robust.state
     # Noise level of a square-on shot; the inliers' weights are 1 / relative variance.
@@ -224,7 +259,9 @@ def fit_sphere(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCE
     if outliers:
         notes.append(
             f"{outliers} outlier point(s) rejected (beyond {tolerances.outlier_cutoff_sigma:g}"
-            f" x {robust.scale * 1000:.3g} mm)."
+            f" x {robust.scale * 1000:.3g} mm"
+            + (f", or {far_side} on the far side" if far_side else "")
+            + ")."
         )
     return FitResult(
         primitive=sphere,

@@ -101,3 +101,12 @@ def test_radius_error_matches_repeated_scans_and_is_unbiased(rng):
 def test_degenerate_points_raise(points, message):
     with pytest.raises(FitError, match=message):
         fit_sphere(points)
+
+
+def test_a_shot_on_the_far_side_is_rejected(rng):
+    sphere = Sphere([5, 1, 1], 0.3)
+    sample = raster_scan(sphere, SENSOR, 30, rng)
+    behind = sphere.center + 0.3 * sphere.center / np.linalg.norm(sphere.center)  # back pole
+    fit = fit_sphere(np.vstack([sample.points, behind + 0.001]))
+    assert not fit.inliers[-1] and fit.inliers[:-1].sum() >= 28
+    assert any("far side" in note for note in fit.notes)
