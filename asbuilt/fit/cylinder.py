@@ -19,6 +19,10 @@ Method
    analytic Jacobian, wrapped in the robust scheme of
    :func:`asbuilt.fit._common.robust_geometric_fit` (concentration steps from the best starts,
    MSAC choice, then least squares on the inliers).
+4. Shots on the far side of a pipe seen from one side are rejected (a station cannot see them:
+   they are background shots that landed on the infinite cylinder), and the inliers are refitted
+   with weights from a fitted incidence noise model (range noise along the beam makes grazing
+   shots more precise than square-on ones).
 
 The geometric estimate is the final one: algebraic circle fits alone are biased on partial arcs.
 """
