@@ -99,27 +99,11 @@ def register(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
-def _is_model_document(path) -> bool:
-    import json
-
-    try:
-        with open(path, encoding="utf-8") as handle:
-            head = handle.read(4096)
-    except (OSError, UnicodeDecodeError):
-        return False  # the scan loader reports it properly
-    if '"asbuilt-model"' not in head:
-        return False
-    try:
-        with open(path, encoding="utf-8") as handle:
-            return json.load(handle).get("format") == "asbuilt-model"
-    except (OSError, ValueError, AttributeError):
-        return False
-
-
 def _load(args, config, design, progress=None):
+    from asbuilt.export.model_json import is_model_document
     from asbuilt.rules import check_model
 
-    if _is_model_document(args.scan):
+    if is_model_document(args.scan):
         from asbuilt.export.model_json import load_model
 
         model = load_model(args.scan)

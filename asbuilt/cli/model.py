@@ -10,19 +10,11 @@ from __future__ import annotations
 
 import argparse
 
+from asbuilt.cli._args import positive_number
+
 __all__ = ["register", "run"]
 
 _SUFFIXES = ".step .stp .glb .gltf .dxf .stl .obj .json"
-
-
-def _thickness_mm(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (value > 0 and value < 1e5):
-        raise argparse.ArgumentTypeError(f"must be a positive thickness in mm, not {text}")
-    return value
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -49,7 +41,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     parser.add_argument(
         "--plate-thickness",
         metavar="MM",
-        type=_thickness_mm,
+        type=positive_number("thickness in mm"),
         default=None,
         help="thickness of the plates made from fitted planes, in millimetres (default 10)",
     )

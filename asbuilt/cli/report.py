@@ -13,19 +13,11 @@ from __future__ import annotations
 
 import argparse
 
+from asbuilt.cli._args import positive_number
+
 __all__ = ["register", "run"]
 
 _SUFFIXES = ".html .csv .json"
-
-
-def _density(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (0 < value < 1e5):
-        raise argparse.ArgumentTypeError(f"must be a density in kg/m3 (e.g. 7850), not {text}")
-    return value
 
 
 def _positive_int(text: str) -> int:
@@ -84,7 +76,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     parser.add_argument(
         "--density",
         metavar="KG_M3",
-        type=_density,
+        type=positive_number("density in kg/m3 (e.g. 7850)"),
         default=None,
         help="pipe material density for weights (default from the catalog's material: "
         "7850 carbon steel, 7900 stainless)",
@@ -115,25 +107,10 @@ def register(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
-def _is_model_document(path) -> bool:
-    import json
-
-    try:
-        with open(path, encoding="utf-8") as handle:
-            head = handle.read(4096)
-    except (OSError, UnicodeDecodeError):
-        return False  # the scan loader reports it properly
-    if '"asbuilt-model"' not in head:
-        return False
-    try:
-        with open(path, encoding="utf-8") as handle:
-            return json.load(handle).get("format") == "asbuilt-model"
-    except (OSError, ValueError, AttributeError):
-        return False
-
-
 def _model(args, progress):
-    if _is_model_document(args.scan):
+    from asbuilt.export.model_json import is_model_document
+
+    if is_model_document(args.scan):
         from asbuilt.export.model_json import load_model
 
         model = load_model(args.scan)

@@ -36,6 +36,7 @@ __all__ = [
     "model_schema",
     "finding_to_dict",
     "json_ready",
+    "is_model_document",
 ]
 
 FORMAT = "asbuilt-model"
@@ -257,6 +258,25 @@ def write_model_json(model: Model, path) -> None:
     text = dumps_model(model)
     with atomic_write(path, "w") as handle:
         handle.write(text)
+
+
+def is_model_document(path) -> bool:
+    """Whether ``path`` holds an ``asbuilt-model`` document (rather than a scan).
+
+    False for anything unreadable or not JSON: the scan loader then reports the problem.
+    """
+    try:
+        with open(path, encoding="utf-8") as handle:
+            head = handle.read(4096)
+    except (OSError, UnicodeDecodeError):
+        return False
+    if '"asbuilt-model"' not in head:
+        return False
+    try:
+        with open(path, encoding="utf-8") as handle:
+            return json.load(handle).get("format") == FORMAT
+    except (OSError, ValueError, AttributeError):
+        return False
 
 
 def load_model_document(path) -> dict:
