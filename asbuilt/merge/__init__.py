@@ -35,7 +35,7 @@ from asbuilt.model import Component, Correction, Model, model_from_fits
 from asbuilt.primitives import Cylinder
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
-from .contiguity import Joint, find_joints, joint_pairs
+from .contiguity import Joint, connected_groups, find_joints, joint_pairs
 from .joint import find_runs, joint_estimate
 from .regularize import align_lines, regularize_directions
 from .snap import SnapResult, snap_diameter
@@ -355,7 +355,7 @@ def merge_model(
     new_axes = directions.axes
     meets, coaxial = _constraints(joints)
     new_centers = centers.copy()
-    groups = _components(len(ids), joints)
+    groups = connected_groups(len(ids), joints)
     group_of_pipe = np.zeros(len(ids), int)
     local = np.zeros(len(ids), int)
     for g, group in enumerate(groups):
@@ -534,24 +534,3 @@ def _constraints(joints: tuple[Joint, ...]):
             else:
                 meets.append((branch, joint.through))
     return meets, coaxial
-
-
-def _components(n: int, joints) -> list[list[int]]:
-    parent = list(range(n))
-
-    def find(a):
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    for joint in joints:
-        pipes = joint.pipes
-        for p in pipes[1:]:
-            ra, rb = find(pipes[0]), find(p)
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
-    groups: dict[int, list[int]] = {}
-    for i in range(n):
-        groups.setdefault(find(i), []).append(i)
-    return list(groups.values())

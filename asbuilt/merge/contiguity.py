@@ -419,3 +419,25 @@ def joint_pairs(joints: Sequence[Joint]) -> list[tuple[int, int]]:
             for b in range(a + 1, len(pipes)):
                 pairs.append((pipes[a], pipes[b]))
     return pairs
+
+
+def connected_groups(n: int, joints) -> list[list[int]]:
+    """Pipes ``0 .. n-1`` grouped by the joints that connect them (the spools).
+
+    Each group is in ascending order and the groups are ordered by their first pipe; a pipe no
+    joint touches is a group of its own. Connected components by scipy's csgraph.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    rows, cols = [], []
+    for joint in joints:
+        first, *others = joint.pipes
+        rows += [first] * len(others)
+        cols += list(others)
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    _, labels = connected_components(graph, directed=False)
+    groups: dict[int, list[int]] = {}
+    for index, label in enumerate(labels):
+        groups.setdefault(int(label), []).append(index)
+    return sorted(groups.values(), key=lambda group: group[0])

@@ -36,7 +36,7 @@ from scipy.spatial import cKDTree
 from asbuilt.catalog import FittingDims
 from asbuilt.model import Bend, Component, Correction, Reducer, Spool, Straight, Tee
 
-from .contiguity import Joint, line_closest_points
+from .contiguity import Joint, connected_groups, line_closest_points
 
 __all__ = [
     "PipeSpec",
@@ -370,24 +370,8 @@ def build_spools(
         first = min(joint.pipes)
         fittings_after.setdefault(first, []).append((kind, name, geometry, size_of, snap))
 
-    # spools: union-find over pipes joined by any joint (including contacts and failed ones)
-    parent = list(range(len(pipes)))
-
-    def find(a):
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    for joint in joints:
-        members = joint.pipes
-        for m in members[1:]:
-            ra, rb = find(members[0]), find(m)
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
-    roots: dict[int, list[int]] = {}
-    for i in range(len(pipes)):
-        roots.setdefault(find(i), []).append(i)
+    # spools: pipes joined by any joint (including contacts and failed ones)
+    roots = {group[0]: group for group in connected_groups(len(pipes), joints)}
     spool_of: dict[int, str] = {}
     used_names: set[str] = {p.id for p in pipes}
     groups_count: dict[str, int] = {}

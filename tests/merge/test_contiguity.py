@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from asbuilt.merge.contiguity import find_joints, joint_pairs, line_closest_points, pipe_ends
+from asbuilt.merge.contiguity import (
+    connected_groups,
+    find_joints,
+    joint_pairs,
+    line_closest_points,
+    pipe_ends,
+)
 
 OD = 0.1143
 
@@ -139,3 +145,20 @@ def test_a_four_way_cross_is_a_tee_and_one_unjoined_pipe():
     )
     assert [j.kind for j in joints] == ["tee"]
     assert len(joints[0].pipes) == 3
+
+
+class _Link:
+    def __init__(self, *pipes):
+        self.pipes = pipes
+
+
+@pytest.mark.parametrize(
+    ("n", "links", "groups"),
+    [
+        (3, [], [[0], [1], [2]]),
+        (4, [(2, 0), (1, 3)], [[0, 2], [1, 3]]),
+        (5, [(4, 3), (3, 1, 2)], [[0], [1, 2, 3, 4]]),  # a tee joins three pipes
+    ],
+)
+def test_connected_groups_are_the_spools(n, links, groups):
+    assert connected_groups(n, [_Link(*pipes) for pipes in links]) == groups
