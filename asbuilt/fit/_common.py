@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy.linalg.lapack import dposv as _dposv
 
 from asbuilt.errors import FitError
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
@@ -170,13 +171,16 @@ def orthonormal_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     -------
     u, v : ndarray, shape (3,)
     """
-    ax, ay, az = (float(value) for value in axis)
-    magnitudes = (abs(ax), abs(ay), abs(az))
-    least = magnitudes.index(min(magnitudes))
-    # u = axis x e_least, written out (np.cross is slow on single 3-vectors).
-    if least == 0:
+    if isinstance(axis, np.ndarray):
+        ax, ay, az = axis.tolist()
+    else:
+        ax, ay, az = (float(value) for value in axis)
+    mx, my, mz = abs(ax), abs(ay), abs(az)
+    # u = axis x e_least (the first least-aligned coordinate axis on ties), written out
+    # (np.cross is slow on single 3-vectors).
+    if mx <= my and mx <= mz:
         ux, uy, uz = 0.0, az, -ay
-    elif least == 1:
+    elif my <= mz:
         ux, uy, uz = -az, 0.0, ax
     else:
         ux, uy, uz = ay, -ax, 0.0
@@ -474,27 +478,41 @@ class RobustFit:
     scale: float
 
 
+def _newton_step(normal: np.ndarray, gradient: np.ndarray) -> np.ndarray:
+    """The Gauss-Newton step ``-normal^-1 gradient``: a Cholesky solve (LAPACK ``dposv``, without
+    the overhead of :func:`numpy.linalg.solve` on a 5 x 5 system), LU when the normal matrix is
+    not numerically positive definite, least squares when it is singular."""
+    _, solution, info = _dposv(normal, gradient)
+    if info == 0:
+        return -solution
+    try:
+        return -np.linalg.solve(normal, gradient)
+    except np.linalg.LinAlgError:
+        return -np.linalg.lstsq(normal, gradient, rcond=None)[0]
+
+
 def gauss_newton(model, state, points, weigh, iterations, tolerance, current=None):
     """Gauss-Newton with step halving; ``weigh(residuals) -> weights`` is re-evaluated each step.
 
     Returns (state, residuals, jacobian); stops when a step lowers the weighted cost by less
-    than ``tolerance`` times the cost.
+    than ``tolerance`` times the cost. A step whose predicted decrease (of the linearised
+    cost, ``g^T N^-1 g``) is already below that is not taken: it would move the state by a
+    negligible fraction of its standard error (``tolerance`` is at most 1e-7 in the fits).
     """
     residuals, jacobian = model.jacobian(state, points) if current is None else current
     for _ in range(iterations):
         weights = weigh(residuals)
         if np.count_nonzero(weights) < model.n_params:
             break
-        cost = float(weights @ (residuals * residuals))
+        weighted_residuals = weights * residuals
+        cost = float(weighted_residuals @ residuals)
         if cost <= 0.0:
             break
-        weighted = jacobian * weights[:, None]
-        normal = weighted.T @ jacobian
-        gradient = weighted.T @ residuals
-        try:
-            delta = -np.linalg.solve(normal, gradient)
-        except np.linalg.LinAlgError:
-            delta = -np.linalg.lstsq(normal, gradient, rcond=None)[0]
+        normal = (jacobian.T * weights) @ jacobian
+        gradient = jacobian.T @ weighted_residuals
+        delta = _newton_step(normal, gradient)
+        if tolerance > 0.0 and -float(gradient @ delta) <= tolerance * cost:
+            break
         accepted = False
         for _ in range(8):
             trial = model.update(state, delta, points, weights)

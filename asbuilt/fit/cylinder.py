@@ -67,45 +67,60 @@ METHOD = (
 
 # State: (axis (3,), centre on the axis (3,), radius).
 
+_FRAME_CACHE: dict[bytes, tuple] = {}
+
+
+def _frame(axis: np.ndarray):
+    """``(u, v, frame)`` for an axis: its :func:`orthonormal_basis` and the (3, 3) matrix whose
+    columns are ``axis, u, v``. Gauss-Newton asks for the same axis several times (the
+    Jacobian at a state, then the update from it), so the last few frames are remembered."""
+    key = axis.tobytes()
+    found = _FRAME_CACHE.get(key)
+    if found is None:
+        u, v = orthonormal_basis(axis)
+        found = (u, v, np.column_stack([axis, u, v]))
+        if len(_FRAME_CACHE) >= 8:
+            _FRAME_CACHE.clear()
+        _FRAME_CACHE[key] = found
+    return found
+
 
 def _residuals(state, points):
     axis, center, radius = state
-    rel = points - center
-    along = rel @ axis
-    radial = rel - along[:, None] * axis
-    return np.sqrt(np.einsum("ij,ij->i", radial, radial)) - radius
+    across = (points - center) @ _frame(axis)[2][:, 1:]
+    return np.sqrt(np.einsum("ij,ij->i", across, across)) - radius
 
 
 def _jacobian(state, points):
     axis, center, radius = state
-    u, v = orthonormal_basis(axis)
-    rel = points - center
-    along = rel @ axis
-    radial = rel - along[:, None] * axis
-    rho = np.maximum(np.sqrt(np.einsum("ij,ij->i", radial, radial)), 1e-300)
-    eu = (radial @ u) / rho
-    ev = (radial @ v) / rho
+    local = (points - center) @ _frame(axis)[2]  # along, across u, across v
+    across = local[:, 1:]
+    rho = np.maximum(np.sqrt(np.einsum("ij,ij->i", across, across)), 1e-300)
     jac = np.empty((len(points), 5))
-    jac[:, 0] = -along * eu
-    jac[:, 1] = -along * ev
-    jac[:, 2] = -eu
-    jac[:, 3] = -ev
+    unit = jac[:, 2:4]
+    np.divide(across, -rho[:, None], out=unit)  # -(eu, ev)
+    np.multiply(unit, local[:, :1], out=jac[:, 0:2])  # -along (eu, ev)
     jac[:, 4] = -1.0
     return rho - radius, jac
 
 
 def _update(state, delta, points, weights):
     axis, center, radius = state
-    u, v = orthonormal_basis(axis)
-    new_axis = axis + delta[0] * u + delta[1] * v
-    new_axis = new_axis / np.linalg.norm(new_axis)
-    new_center = center + delta[2] * u + delta[3] * v
+    u, v, _ = _frame(axis)
+    d0, d1, d2, d3, d4 = delta.tolist()
+    ax, ay, az = (axis + d0 * u + d1 * v).tolist()
+    norm = (ax * ax + ay * ay + az * az) ** 0.5
+    ax, ay, az = ax / norm, ay / norm, az / norm
+    cx, cy, cz = (center + d2 * u + d3 * v).tolist()
     # Slide the centre along the axis to the weighted centroid's foot (residuals unchanged),
     # which keeps the axis tilts and the centre offsets uncorrelated.
-    total = weights.sum()
+    total = float(weights.sum())
     centroid = (weights @ points) / total if total > 0 else points.mean(axis=0)
-    new_center = new_center + ((centroid - new_center) @ new_axis) * new_axis
-    return new_axis, new_center, abs(radius + delta[4])
+    gx, gy, gz = centroid.tolist()
+    slide = (gx - cx) * ax + (gy - cy) * ay + (gz - cz) * az
+    new_axis = np.array((ax, ay, az))
+    new_center = np.array((cx + slide * ax, cy + slide * ay, cz + slide * az))
+    return new_axis, new_center, abs(radius + d4)
 
 
 _MODEL = GeometricModel(_residuals, _jacobian, _update, 5)
