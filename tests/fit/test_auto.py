@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import raster_scan
+from fit_scans import raster_scan
 
 from asbuilt.errors import FitError
 from asbuilt.fit import auto

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import angle_deg, raster_scan
+from fit_scans import angle_deg, raster_scan
 
 from asbuilt.errors import FitError
 from asbuilt.fit._common import orthonormal_basis

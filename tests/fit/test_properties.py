@@ -11,7 +11,7 @@ import importlib.util
 
 import numpy as np
 import pytest
-from conftest import raster_scan
+from fit_scans import raster_scan
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 

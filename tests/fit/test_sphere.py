@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import raster_scan
+from fit_scans import raster_scan
 
 from asbuilt.errors import FitError
 from asbuilt.fit.sphere import algebraic_sphere, fit_sphere
