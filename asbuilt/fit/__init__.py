@@ -167,7 +167,8 @@ def fit(
     ----------
     scan : Scan
         A loaded scan (points in metres); ``scan.sensor.range_sigma`` (metres), when given, is
-        the noise level every fit uses, and ``scan.sensor.position`` the viewpoint.
+        the noise level every fit uses, and each object's station (else ``scan.sensor.position``)
+        the viewpoint.
     tolerances : Tolerances
         Numerical tolerances.
     progress : callable, optional
@@ -190,7 +191,7 @@ def fit(
         try:
             fits.append(
                 fit_object(
-                    obj, sigma=sigma, tolerances=tolerances, viewpoint=scan.sensor.position
+                    obj, sigma=sigma, tolerances=tolerances, viewpoint=obj.viewpoint(scan.sensor)
                 )
             )
         except FitError as exc:

@@ -58,7 +58,7 @@ COLLINEAR_RTOL = 1e-6
 #: Top-level keys the format defines; any other key is kept in ``Scan.extra`` and ignored.
 TOP_LEVEL_KEYS = ("format", "version", "units", "name", "sensor", "objects", "links")
 #: Object keys the format defines; any other key is kept in ``ScanObject.extra``.
-OBJECT_KEYS = ("id", "kind", "points", "group", "label", "nominal", "measurements")
+OBJECT_KEYS = ("id", "kind", "points", "group", "label", "nominal", "measurements", "station")
 
 _UNITS_TEXT = ", ".join(UNITS)
 _KINDS_TEXT = ", ".join(KINDS)
@@ -303,6 +303,17 @@ def _optional_string(mapping: Mapping, key: str, where: str, ctx: _Context) -> s
     raise ctx.error(where, f"must be text (a JSON string), not {_describe(value)}")
 
 
+def _position(raw, factor: float, where: str, ctx: _Context) -> np.ndarray | None:
+    """An optional station position [x, y, z] in file units, as (3,) metres."""
+    if raw is None:
+        return None
+    if not isinstance(raw, list) or len(raw) != 3 or not all(_is_finite_number(c) for c in raw):
+        raise ctx.error(where, "must be 3 finite numbers [x, y, z] in the file's units")
+    position = np.array(raw, dtype=np.float64) * factor
+    position.setflags(write=False)
+    return position
+
+
 def _sensor(raw, factor: float, ctx: _Context) -> Sensor:
     if raw is None:
         return Sensor()
@@ -312,18 +323,7 @@ def _sensor(raw, factor: float, ctx: _Context) -> Sensor:
             f'must be an object like {{"position": [x, y, z], "range_sigma": 0.002}}, '
             f"not {_describe(raw)}",
         )
-    position = raw.get("position")
-    if position is not None:
-        if (
-            not isinstance(position, list)
-            or len(position) != 3
-            or not all(_is_finite_number(c) for c in position)
-        ):
-            raise ctx.error(
-                "sensor.position", "must be 3 finite numbers [x, y, z] in the file's units"
-            )
-        position = np.array(position, dtype=np.float64) * factor
-        position.setflags(write=False)
+    position = _position(raw.get("position"), factor, "sensor.position", ctx)
     sigma = raw.get("range_sigma")
     if sigma is not None:
         if not _is_finite_number(sigma) or sigma <= 0:
@@ -404,6 +404,7 @@ def _object(index: int, raw, factor: float, ctx: _Context) -> ScanObject:
         label=_optional_string(raw, "label", f"{where}.label", ctx),
         nominal=_optional_string(raw, "nominal", f"{where}.nominal", ctx),
         measurements=measurements,
+        station=_position(raw.get("station"), factor, f"{where}.station", ctx),
         extra=MappingProxyType({k: v for k, v in raw.items() if k not in OBJECT_KEYS}),
     )
 

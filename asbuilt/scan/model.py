@@ -32,6 +32,8 @@ class ScanObject:
     measurements : ndarray, shape (n, 3), or None
         Raw pan (rad), tilt (rad) and range (m) of each point when the scan came from a device,
         so points can be recomputed after a new calibration.
+    station : ndarray, shape (3,), metres, or None
+        Where this object was scanned from, when not from the scan's ``sensor.position``.
     extra : Mapping
         Unknown keys of the object, kept as they were.
     """
@@ -44,7 +46,12 @@ class ScanObject:
     label: str | None = None
     nominal: str | None = None
     measurements: np.ndarray | None = None
+    station: np.ndarray | None = None
     extra: Mapping = field(default_factory=dict)
+
+    def viewpoint(self, sensor: Sensor) -> np.ndarray | None:
+        """Where the object was seen from, shape (3,) metres: its own station, else the sensor's."""
+        return self.station if self.station is not None else sensor.position
 
     @property
     def where(self) -> str:

@@ -88,6 +88,14 @@ def _object_schema() -> dict:
                     "[pan_deg, tilt_deg, range]", {"type": "number", "exclusiveMinimum": 0}
                 ),
             },
+            "station": {
+                "oneOf": [
+                    _triple("Where this object was scanned from, [x, y, z] in the file's units."),
+                    {"type": "null"},
+                ],
+                "description": "Optional: the station this object was scanned from, when not "
+                "sensor.position; its measurements are relative to it.",
+            },
             "group": _optional_text("Spool or assembly name."),
             "label": _optional_text("Free text."),
             "nominal": _optional_text('Operator size hint, e.g. 4" or DN100.'),

@@ -170,6 +170,14 @@ def test_fit_passes_the_sensor_position_to_fits_that_take_a_viewpoint(stand_ins,
     assert "viewpoint" not in CALLS[2]  # the plain stand-in is called without one
 
 
+def test_an_objects_own_station_is_its_viewpoint(stand_ins, monkeypatch):
+    stand_ins.sighted_sphere = sighted_sphere
+    monkeypatch.setitem(FITTERS, "cuboid", ("stand_in_fits", "sighted_sphere"))
+    obj = ScanObject(id="C1", kind="cuboid", points=octahedron(), station=np.array([9.0, 8, 7]))
+    fit(Scan(units="m", objects=(obj,), sensor=Sensor(position=np.array([1.0, 2, 3]))))
+    np.testing.assert_allclose(CALLS[0]["viewpoint"], [9, 8, 7])
+
+
 def test_fit_without_sensor_sigma_passes_none(stand_ins):
     fit(scan_of("sphere"))
     assert CALLS[0]["sigma"] is None

@@ -306,3 +306,28 @@ def test_bad_sensor_values(sensor, message):
     with pytest.raises(ScanError) as err:
         loads_scan(json.dumps(doc))
     assert str(err.value) == message
+
+
+def test_object_station_is_read_in_metres_and_is_the_viewpoint():
+    doc = make_doc("mm", kinds=("cylinder", "plane"))
+    doc["sensor"] = {"position": [0.0, 0.0, 1500.0]}
+    doc["objects"][1]["station"] = [4000.0, 0.0, 1600.0]
+    scan = loads_scan(json.dumps(doc))
+    first, second = scan.objects
+    assert first.station is None
+    np.testing.assert_allclose(second.station, [4.0, 0.0, 1.6])
+    assert not second.station.flags.writeable
+    np.testing.assert_allclose(first.viewpoint(scan.sensor), [0.0, 0.0, 1.5])
+    np.testing.assert_allclose(second.viewpoint(scan.sensor), [4.0, 0.0, 1.6])
+    assert "station" not in second.extra
+
+
+@pytest.mark.parametrize("station", [[1, 2], [1, 2, "x"], [1, 2, float("inf")], "here"])
+def test_bad_object_station(station):
+    doc = make_doc(kinds=("plane",))
+    doc["objects"][0]["station"] = station
+    with pytest.raises(ScanError) as err:
+        loads_scan(json.dumps(doc))
+    assert str(err.value) == (
+        "objects[0] (K1).station: must be 3 finite numbers [x, y, z] in the file's units"
+    )
