@@ -20,6 +20,12 @@ Shot model (one shot, nominal angles ``pan, tilt`` as the device reports them):
 
 The recorded point is ``station + range * direction(pan, tilt)`` with the *nominal* angles, so
 pointing noise displaces points across the beam by about ``range * e``.
+
+The raster is cell-centred over a window: by default the object's exact angular silhouette
+window (the outer shots half a raster step inside it), or, with ``operator_window=True`` in
+:func:`scan_object`, the window an operator marks by eye - the silhouette window enlarged on
+each side by an independent random margin uniform between 0 and one raster step - so the
+object's edge falls anywhere between the last hit and the first miss.
 """
 
 from __future__ import annotations
@@ -34,6 +40,8 @@ __all__ = [
     "Shots",
     "angular_window",
     "raster_angles",
+    "operator_margins",
+    "operator_window",
     "plan_raster",
     "shoot",
     "scan_object",
@@ -211,7 +219,69 @@ def _grid_shape(window, shots: float) -> tuple[int, int]:
     return n_pan, n_tilt
 
 
-def plan_raster(scene, target: int, station, n_points: int, *, max_rounds: int = 16):
+def operator_margins(rng) -> np.ndarray:
+    """Random margins by which an operator's marked window overshoots the object's silhouette.
+
+    A real operator marks the window by eye (or by aiming at the object's extreme directions),
+    never exactly on its silhouette: each of the four sides lands an independent distance
+    beyond the silhouette's bounding window, uniform between 0 and one raster step.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws exactly four uniforms, so a stream stays reproducible.
+
+    Returns
+    -------
+    ndarray, shape (4,)
+        Margins in raster steps, each in [0, 1): ``[pan_low, pan_high, tilt_low, tilt_high]``.
+    """
+    return rng.uniform(0.0, 1.0, size=4)
+
+
+def operator_window(window, n_pan: int, n_tilt: int, margins) -> tuple[float, float, float, float]:
+    """The silhouette window enlarged on each side by a margin in steps of the final raster.
+
+    The raster step depends on the enlarged window it is cut from: with ``c = n - 1 +
+    2 EDGE_INSET`` cells the step is ``extent' / c`` and ``extent' = extent + (m_lo + m_hi)
+    step``, so ``extent' = extent / (1 - (m_lo + m_hi) / c)`` makes every margin exactly
+    ``m`` steps of the raster :func:`raster_angles` then shoots over the enlarged window. With
+    cell-centred shots the object's edge then falls anywhere from 0 to 1 step beyond the last
+    line of hits (uniformly, for margins uniform over one step), as on a real device.
+
+    Parameters
+    ----------
+    window : tuple of float
+        ``(pan0, tilt0, pan_extent, tilt_extent)`` radians: the silhouette window
+        (:func:`angular_window`).
+    n_pan, n_tilt : int
+        Columns and rows of the raster that will be shot over the enlarged window (>= 2).
+    margins : array_like, shape (4,)
+        ``[pan_low, pan_high, tilt_low, tilt_high]`` in raster steps, each in [0, 1]
+        (:func:`operator_margins`).
+
+    Returns
+    -------
+    tuple of float
+        The enlarged ``(pan0, tilt0, pan_extent, tilt_extent)``, radians.
+    """
+    pan0, tilt0, pan_ext, tilt_ext = window
+    m = np.asarray(margins, dtype=np.float64)
+    if m.shape != (4,) or np.any(m < 0.0) or np.any(m > 1.0):
+        raise ValueError("operator margins must be four values in [0, 1] raster steps")
+    out = []
+    for centre, extent, n, lo, hi in (
+        (pan0, pan_ext, n_pan, m[0], m[1]),
+        (tilt0, tilt_ext, n_tilt, m[2], m[3]),
+    ):
+        cells = n - 1 + 2 * EDGE_INSET
+        enlarged = extent / (1.0 - (lo + hi) / cells)
+        step = enlarged / cells
+        out.append((centre + 0.5 * (hi - lo) * step, enlarged))
+    return (float(out[0][0]), float(out[1][0]), float(out[0][1]), float(out[1][1]))
+
+
+def plan_raster(scene, target: int, station, n_points: int, *, max_rounds: int = 16, margins=None):
     """Choose a raster over the object's window with at least ``n_points`` noise-free hits.
 
     The grid's aspect follows the window's; its size is rescaled by the observed hit fraction
@@ -225,6 +295,11 @@ def plan_raster(scene, target: int, station, n_points: int, *, max_rounds: int =
         Object index.
     station : Station
     n_points : int
+    margins : array_like, shape (4,), optional
+        The operator's window: the silhouette window enlarged by these margins, in raster steps
+        (:func:`operator_margins`, :func:`operator_window`); each candidate grid is cut from the
+        window enlarged for its own step, and the shots off the object are simply not counted.
+        Default: the exact silhouette window.
 
     Returns
     -------
@@ -247,7 +322,8 @@ def plan_raster(scene, target: int, station, n_points: int, *, max_rounds: int =
         if dims in tried:
             dims = (dims[0] + 1, dims[1] + (dims[1] >= dims[0]))
         tried.add(dims)
-        pan, tilt = raster_angles(window, *dims)
+        marked = window if margins is None else operator_window(window, *dims, margins)
+        pan, tilt = raster_angles(marked, *dims)
         hits = scene.raycast(station.position, direction_from_angles(pan, tilt))
         n_hit = int(
             np.count_nonzero((hits.object_index == target) & (hits.range <= station.max_range))
@@ -347,7 +423,14 @@ def shoot(scene, target: int, station, pan, tilt, rng) -> Shots:
 
 
 def scan_object(
-    scene, target: int, *, n_points: int | None = None, station=None, rng=None, exact: bool = False
+    scene,
+    target: int,
+    *,
+    n_points: int | None = None,
+    station=None,
+    rng=None,
+    exact: bool = False,
+    operator_window: bool = False,
 ) -> Shots:
     """Aim at one object and shoot a raster of about ``n_points`` shots landing on it.
 
@@ -365,6 +448,13 @@ def scan_object(
     exact : bool
         Return exactly ``n_points`` shots (evenly thinned from a raster with at least that
         many returns), as the accuracy benchmark needs; otherwise return what the raster gave.
+    operator_window : bool
+        Shoot over an operator's window instead of the exact silhouette window: the window
+        enlarged on each side by an independent margin uniform between 0 and one raster step
+        (:func:`operator_margins`, four uniforms drawn from ``rng`` before any shot), so the
+        object's edges fall anywhere between the last hit and the first miss. Shots off the
+        object are dropped; the raster is sized so about ``n_points`` still land on it. Default
+        False: the exact window (the committed samples and ``asbuilt simulate``).
 
     Returns
     -------
@@ -379,9 +469,10 @@ def scan_object(
     station = scene.station(obj.station) if station is None else station
     n_points = obj.points if n_points is None else int(n_points)
     rng = np.random.default_rng(0) if rng is None else rng
+    margins = operator_margins(rng) if operator_window else None
     wanted = n_points
     for _ in range(6):
-        pan, tilt, _hits = plan_raster(scene, target, station, wanted)
+        pan, tilt, _hits = plan_raster(scene, target, station, wanted, margins=margins)
         shots = shoot(scene, target, station, pan, tilt, rng)
         if not exact:
             return shots

@@ -7,7 +7,16 @@ import pytest
 
 from asbuilt.sim.raycast import direction_from_angles
 from asbuilt.sim.scene import scene_from_dict
-from asbuilt.sim.sensor import angular_window, plan_raster, raster_angles, scan_object, shoot
+from asbuilt.sim.sensor import (
+    EDGE_INSET,
+    angular_window,
+    operator_margins,
+    operator_window,
+    plan_raster,
+    raster_angles,
+    scan_object,
+    shoot,
+)
 
 
 def plate_scene(yaw_deg=0.0, **station):
@@ -254,3 +263,106 @@ def test_hidden_object_raises(scene_doc):
     scene = scene_from_dict(scene_doc)
     with pytest.raises(ValueError, match="too few shots land on it"):
         scan_object(scene, 1)
+
+
+# --------------------------------------------------------------------------- operator window
+
+
+def test_operator_margins_are_four_uniforms_in_one_step():
+    margins = np.array([operator_margins(np.random.default_rng(s)) for s in range(400)])
+    assert margins.shape == (400, 4)
+    assert margins.min() >= 0.0 and margins.max() < 1.0
+    # uniform on [0, 1): mean 1/2, variance 1/12, the four sides independent
+    assert abs(margins.mean() - 0.5) < 4 * math.sqrt(1 / 12 / margins.size)
+    assert abs(margins.var() - 1 / 12) < 0.01
+    assert np.abs(np.corrcoef(margins.T) - np.eye(4)).max() < 0.2
+    np.testing.assert_array_equal(
+        operator_margins(np.random.default_rng(9)), operator_margins(np.random.default_rng(9))
+    )
+
+
+@pytest.mark.parametrize(
+    "margins", [(0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 1.0), (0.3, 0.9, 0.6, 0.1), (1, 1, 1, 1)]
+)
+@pytest.mark.parametrize("dims", [(5, 5), (9, 6)])
+def test_operator_window_margins_are_steps_of_the_final_raster(margins, dims):
+    window = (0.4, -0.1, 0.2, 0.1)
+    marked = operator_window(window, *dims, margins)
+    pan, tilt = raster_angles(marked, *dims)
+    pan_step = marked[2] / (dims[0] - 1 + 2 * EDGE_INSET)
+    tilt_step = marked[3] / (dims[1] - 1 + 2 * EDGE_INSET)
+    # the raster's own spacing is the step the margins are measured in
+    assert np.diff(np.unique(np.round(pan, 12))) == pytest.approx(pan_step)
+    assert np.diff(np.unique(np.round(tilt, 12))) == pytest.approx(tilt_step)
+    sides = np.array(
+        [
+            (window[0] - 0.5 * window[2]) - (marked[0] - 0.5 * marked[2]),
+            (marked[0] + 0.5 * marked[2]) - (window[0] + 0.5 * window[2]),
+            (window[1] - 0.5 * window[3]) - (marked[1] - 0.5 * marked[3]),
+            (marked[1] + 0.5 * marked[3]) - (window[1] + 0.5 * window[3]),
+        ]
+    )
+    steps = np.array([pan_step, pan_step, tilt_step, tilt_step])
+    np.testing.assert_allclose(sides / steps, margins, atol=1e-12)
+    # the outer shots sit (margin - inset) steps beyond the silhouette window
+    assert pan.max() - (window[0] + 0.5 * window[2]) == pytest.approx(
+        (margins[1] - EDGE_INSET) * pan_step
+    )
+
+
+@pytest.mark.parametrize("margins", [(-0.1, 0, 0, 0), (0, 0, 1.2, 0), (0, 0, 0)])
+def test_operator_window_rejects_bad_margins(margins):
+    with pytest.raises(ValueError, match="margins"):
+        operator_window((0.0, 0.0, 0.1, 0.1), 5, 5, margins)
+
+
+def test_operator_window_scan_is_deterministic_and_on_the_object(scene_doc):
+    scene = scene_from_dict(scene_doc)
+    for target in (0, 1, 2):
+        a = scan_object(scene, target, rng=np.random.default_rng(4), operator_window=True)
+        b = scan_object(scene, target, rng=np.random.default_rng(4), operator_window=True)
+        np.testing.assert_array_equal(a.points, b.points)
+        exact = scan_object(scene, target, rng=np.random.default_rng(4))
+        assert not np.array_equal(a.pan, exact.pan)
+        # every recorded shot met the aimed-at object: its surface point is on the object
+        truth = scene.objects[target].truth
+        assert np.abs(truth.distance(a.surface_points)).max() < 1e-6
+
+
+@pytest.mark.parametrize("n", [20, 30, 40])
+def test_operator_window_still_lands_about_n(scene_doc, n):
+    scene = scene_from_dict(scene_doc)
+    for target in (0, 1, 2):
+        margins = operator_margins(np.random.default_rng(n + target))
+        pan, tilt, hits = plan_raster(scene, target, scene.stations[0], n, margins=margins)
+        assert n <= hits <= 1.35 * n + 2
+        shots = scan_object(
+            scene,
+            target,
+            n_points=n,
+            rng=np.random.default_rng(3),
+            exact=True,
+            operator_window=True,
+        )
+        assert len(shots) == n
+
+
+def test_operator_window_edge_falls_between_last_hit_and_first_miss():
+    """Head-on plate, no pointing noise: the gap from the last hit column to the plate's edge
+    spans 0 to 1 raster step over operators, where the exact window always leaves half a step."""
+    scene = plate_scene(angular_sigma_deg=0.0, range_sigma=0.0, mixed_return=0.0, dropout=0.0)
+    station = scene.stations[0]
+    edge = math.atan2(2.0, 4.95)  # the front face's right edge (y = -2 m, x = 4.95 m)
+    gaps = []
+    for seed in range(60):
+        margins = operator_margins(np.random.default_rng(seed))
+        pan, tilt, _ = plan_raster(scene, 0, station, 30, margins=margins)
+        step = np.diff(np.unique(np.round(pan, 12))).min()
+        hit = scene.raycast(station.position, direction_from_angles(pan, tilt)).object_index == 0
+        gaps.append((edge - (-pan[hit].min())) / step)
+    gaps = np.array(gaps)
+    assert gaps.min() > -0.05 and gaps.max() < 1.05
+    assert gaps.min() < 0.25 and gaps.max() > 0.75
+    pan, tilt, _ = plan_raster(scene, 0, station, 30)
+    step = np.diff(np.unique(np.round(pan, 12))).min()
+    assert (edge - (-pan.min())) / step == pytest.approx(EDGE_INSET, abs=1e-9)
