@@ -131,6 +131,11 @@ _MODEL = GeometricModel(_residuals, _jacobian, _update, 5)
 #: degrees off otherwise converge to a wrong radius in a few percent of scenes; the search
 #: costs 1-3 ms, which the 40-point speed target on clean scans cannot afford every time.
 POLISH_BELOW = 35
+#: Trimmed-cost ratio above which the normal-based start (the first) is taken as off and only
+#: the best start, and those that beat its refinement, are refined.
+OFF_START = 100.0
+#: ... and its axis more than 45 degrees from the best start's.
+OFF_START_COS = float(np.cos(np.radians(45.0)))
 #: How many of the best starts get the pattern search.
 POLISHED_STARTS = 3
 
@@ -461,6 +466,18 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
     starts, costs = _circle_starts(local, axes, keep, rng)
 
     def robust_from(starts, costs):
+        trusted = 2
+        best = int(np.argmin(costs))
+        if (
+            costs[0] > OFF_START * costs[best]
+            and abs(float(starts[0][0] @ starts[best][0])) < OFF_START_COS
+        ):
+            # The normal-based start is another, far worse hypothesis (its axis far from the
+            # best start's, its circle leaving far larger residuals): trust the best start
+            # instead of refining both.
+            starts = [starts[best]] + starts[:best] + starts[best + 1 :]
+            costs = [costs[best]] + costs[:best] + costs[best + 1 :]
+            trusted = 1
         return robust_geometric_fit(
             local,
             starts,
@@ -469,6 +486,7 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
             sigma=sigma,
             tolerances=tolerances,
             start_costs=costs,
+            always_refine=trusted,
         )
 
     def polished(starts, costs):
