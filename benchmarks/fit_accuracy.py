@@ -25,6 +25,17 @@ true; axis (normal) = angle between fitted and true axis, sign-free; cuboid orie
 rotation angle between the fitted and true frames after matching axes; cuboid sizes relative,
 per side.
 
+Raster window: by default the raster is cell-centred over the object's exact angular silhouette
+window, so the outer shots fall exactly half a raster step inside the silhouette - the
+convention the cuboid fit assumes when it places unseen edges half a step beyond the outermost
+points, and therefore optimistic. ``--operator-window`` also fits every trial again with the
+raster over an operator's window (:func:`asbuilt.sim.sensor.operator_margins`: each side of the
+silhouette window moved out by an independent margin uniform between 0 and one raster step;
+shots off the object dropped), where the edge falls anywhere between the last hit and the first
+miss. The operator-window twin of a trial starts from the same generator state, so it has the
+same object and pose (its noise differs); the exact-window trials are the same with or without
+the flag.
+
 The same trials are fitted again with 20% edge outliers: the fifth of the shots nearest the
 silhouette (angular distance to the nearest raster shot that missed the object) become mixed
 returns by the sensor model's rule (half land on the background surface 1.5-3 m behind, half
@@ -32,13 +43,15 @@ uniformly between object and background). scikit-spatial's ``best_fit`` (Cylinde
 Plane; it has no cuboid) runs on the first ``--sk-trials`` trials of each cell, errors and time
 per fit side by side.
 
-Run: ``python benchmarks/fit_accuracy.py [--trials 50] [--sk-trials 20] [--quick] [--out F]``.
+Run: ``python benchmarks/fit_accuracy.py [--trials 50] [--sk-trials 20] [--operator-window]
+[--quick] [--out F]``.
 Times are single-process wall-clock per fit call (``time.perf_counter``).
 """
 
 from __future__ import annotations
 
 import argparse
+import copy
 import math
 import sys
 import time
@@ -60,6 +73,7 @@ from fit_report import (  # noqa: E402
     fmt,
     plane_table,
     summary,
+    window_table,
 )
 
 from asbuilt.sim.raycast import (  # noqa: E402
@@ -70,7 +84,7 @@ from asbuilt.sim.raycast import (  # noqa: E402
     direction_from_angles,
 )
 from asbuilt.sim.scene import Scene, SceneObject, Station  # noqa: E402
-from asbuilt.sim.sensor import plan_raster, shoot  # noqa: E402
+from asbuilt.sim.sensor import operator_margins, plan_raster, shoot  # noqa: E402
 
 SIGMA_R = 0.002
 SIGMA_A = math.radians(0.01)
@@ -81,6 +95,8 @@ SPHERE_D = (0.2, 0.5, 1.0, 3.0)
 PLANE_W = (0.5, 3.0)
 SECTIONS = (0.2, 0.4, 0.6)
 OUTLIER_FRACTION = 0.2
+#: Suffix of the data versions shot over an operator's window (``"clean" + OPERATOR``).
+OPERATOR = "@operator"
 STATION = Station(
     id="S",
     position=np.zeros(3),
@@ -204,14 +220,17 @@ class Trial:
     bound: dict
 
 
-def _take(scene, n, rng, keep=None):
+def _take(scene, n, rng, keep=None, operator=False):
     """Exactly n clean returns on object 0, the outlier version, and the clean shots.
 
     ``keep(shots) -> bool mask`` drops returns the operator would not take (pipe end caps).
+    ``operator``: shoot over an operator's window (the silhouette window enlarged by random
+    margins of 0-1 raster step per side) instead of the exact silhouette window.
     """
+    margins = operator_margins(rng) if operator else None
     wanted = n
     for _ in range(8):
-        pan, tilt, _ = plan_raster(scene, 0, STATION, wanted)
+        pan, tilt, _ = plan_raster(scene, 0, STATION, wanted, margins=margins)
         shots = shoot(scene, 0, STATION, pan, tilt, rng)
         if keep is not None:
             shots = shots.subset(keep(shots))
@@ -247,7 +266,7 @@ def _take(scene, n, rng, keep=None):
     return shots, dirty, sig
 
 
-def cylinder_trial(rng, od_mm, ld, n) -> Trial:
+def cylinder_trial(rng, od_mm, ld, n, operator=False) -> Trial:
     radius = od_mm / 2000.0
     length = ld * 2 * radius
     los, centre = _line_of_sight(rng, rng.uniform(3.0, 10.0))
@@ -262,23 +281,25 @@ def cylinder_trial(rng, od_mm, ld, n) -> Trial:
     )
     behind = centre + (radius + rng.uniform(1.5, 3.0)) * los
     scene = _scene(shape, None, "cylinder", behind, -los)
-    shots, dirty, sig = _take(scene, n, rng, keep=lambda s: np.abs(s.normals @ axis) < 0.5)
+    shots, dirty, sig = _take(
+        scene, n, rng, keep=lambda s: np.abs(s.normals @ axis) < 0.5, operator=operator
+    )
     bound = crb.cylinder_bounds(shots.surface_points, centre, axis, radius, sig)
     return Trial(shots.points, dirty, {"radius": radius, "axis": axis}, bound)
 
 
-def sphere_trial(rng, diameter, n) -> Trial:
+def sphere_trial(rng, diameter, n, operator=False) -> Trial:
     radius = diameter / 2
     los, centre = _line_of_sight(rng, rng.uniform(3.0, 10.0))
     shape = SphereShape(center=centre, radius=radius)
     behind = centre + (radius + rng.uniform(1.5, 3.0)) * los
     scene = _scene(shape, None, "sphere", behind, -los)
-    shots, dirty, sig = _take(scene, n, rng)
+    shots, dirty, sig = _take(scene, n, rng, operator=operator)
     bound = crb.sphere_bounds(shots.surface_points, centre, sig)
     return Trial(shots.points, dirty, {"radius": radius}, bound)
 
 
-def plane_trial(rng, width, n) -> Trial:
+def plane_trial(rng, width, n, operator=False) -> Trial:
     los, centre = _line_of_sight(rng, rng.uniform(3.0, 10.0))
     incidence = math.radians(rng.uniform(0.0, 60.0))
     u, v = crb.perpendicular_basis(los)
@@ -297,13 +318,13 @@ def plane_trial(rng, width, n) -> Trial:
     )
     behind = centre + rng.uniform(1.5, 3.0) * los
     scene = _scene(shape, None, "plane", behind, -los)
-    shots, dirty, sig = _take(scene, n, rng)
+    shots, dirty, sig = _take(scene, n, rng, operator=operator)
     front = shots.normals @ normal > 0.999
     bound = crb.plane_bounds(shots.surface_points[front], normal, sig[front])
     return Trial(shots.points, dirty, {"normal": normal}, bound)
 
 
-def cuboid_trial(rng, section, faces, n) -> Trial:
+def cuboid_trial(rng, section, faces, n, operator=False) -> Trial:
     size_a, size_b = section * rng.uniform(0.8, 1.2, size=2)
     distance = rng.uniform(3.0, 10.0)
     pan = rng.uniform(-math.pi, math.pi)
@@ -325,7 +346,7 @@ def cuboid_trial(rng, section, faces, n) -> Trial:
     los = _unit(centre)
     behind = centre + rng.uniform(1.5, 3.0) * los_h + 0.5 * max(size_a, size_b) * los_h
     scene = _scene(shape, None, "cuboid", behind, -los_h)
-    shots, dirty, sig = _take(scene, n, rng)
+    shots, dirty, sig = _take(scene, n, rng, operator=operator)
     bound = crb.cuboid_bounds(shots.surface_points, shots.normals, centre, sig)
     return Trial(shots.points, dirty, {"axes": axes, "size": size, "los": los}, bound)
 
@@ -374,33 +395,59 @@ def record(cell: Cell, kind, params, truth):
         cell.add("orientation", err["orientation"])
 
 
-def run_cells(kind, cells, make, trials, sk_trials, ours, sk, seed, progress):
-    """Run every cell; return {cell key: {(estimator, version): Cell}}."""
+def _twin(rng):
+    """A generator in ``rng``'s current state (``rng`` itself is left untouched)."""
+    twin = np.random.Generator(type(rng.bit_generator)())
+    twin.bit_generator.state = copy.deepcopy(rng.bit_generator.state)
+    return twin
+
+
+def run_cells(kind, cells, make, trials, sk_trials, ours, sk, seed, progress, operator=False):
+    """Run every cell; return {cell key: {(estimator, version): Cell}}.
+
+    Versions: ``"clean"`` and ``"outliers"`` (exact silhouette window) and, with ``operator``,
+    the same trials shot over an operator's window, ``"clean@operator"`` and
+    ``"outliers@operator"`` (ours only).
+    """
     results = {}
     for key in cells:
         rng = np.random.default_rng([seed, hash_key(kind, key)])
         per = {}
         for t in range(trials):
+            twin = _twin(rng) if operator else None
+            versions = []
             trial = make(rng, *key)
-            for version, pts in (("clean", trial.clean), ("outliers", trial.dirty)):
-                estimators = [("ours", ours, True)]
-                if sk is not None and t < sk_trials:
-                    estimators.append(("skspatial", sk, False))
-                for name, function, is_ours in estimators:
-                    cell = per.setdefault((name, version), Cell())
-                    cell.trials += 1
-                    params, elapsed, failure = run_fit(function, kind, pts, is_ours)
-                    cell.times.append(elapsed)
-                    if failure:
-                        cell.failures += 1
-                        continue
-                    record(cell, kind, params, trial.truth)
-                    for bname, value in trial.bound.items():
-                        if bname != "faces":
-                            cell.bound(bname, value)
+            versions.append((trial, ("clean", trial.clean), ("outliers", trial.dirty)))
+            if operator:
+                op = make(twin, *key, operator=True)
+                versions.append(
+                    (op, ("clean" + OPERATOR, op.clean), ("outliers" + OPERATOR, op.dirty))
+                )
+            for trial, *data in versions:
+                _fit_trial(per, kind, trial, data, t, ours, sk, sk_trials)
         results[key] = per
         progress(kind, key)
     return results
+
+
+def _fit_trial(per, kind, trial, data, t, ours, sk, sk_trials):
+    """Fit one trial's point sets (``data``: (version, points) pairs) into ``per``."""
+    for version, pts in data:
+        estimators = [("ours", ours, True)]
+        if sk is not None and t < sk_trials and OPERATOR not in version:
+            estimators.append(("skspatial", sk, False))
+        for name, function, is_ours in estimators:
+            cell = per.setdefault((name, version), Cell())
+            cell.trials += 1
+            params, elapsed, failure = run_fit(function, kind, pts, is_ours)
+            cell.times.append(elapsed)
+            if failure:
+                cell.failures += 1
+                continue
+            record(cell, kind, params, trial.truth)
+            for bname, value in trial.bound.items():
+                if bname != "faces":
+                    cell.bound(bname, value)
 
 
 def hash_key(kind, key) -> int:
@@ -427,6 +474,12 @@ def main(argv=None) -> int:
         choices=("cylinder", "sphere", "plane", "cuboid"),
         action="append",
         help="run only these kinds",
+    )
+    parser.add_argument(
+        "--operator-window",
+        action="store_true",
+        help="also fit every trial shot over an operator's window (silhouette window enlarged by "
+        "0-1 raster step per side, at random) and report both windows",
     )
     parser.add_argument("--out", default=None, help="write the markdown here instead of stdout")
     args = parser.parse_args(argv)
@@ -458,7 +511,16 @@ def main(argv=None) -> int:
             continue
         cells, make = plan[kind]
         results[kind] = run_cells(
-            kind, cells, make, trials, sk_trials, ours[kind], sk.get(kind), args.seed, progress
+            kind,
+            cells,
+            make,
+            trials,
+            sk_trials,
+            ours[kind],
+            sk.get(kind),
+            args.seed,
+            progress,
+            operator=args.operator_window,
         )
     elapsed = time.perf_counter() - started
 
@@ -472,7 +534,10 @@ def main(argv=None) -> int:
         f"skspatial on the first {sk_trials} of each cell{'' if sk else ' - not installed'}).",
         "",
         "Simulated pan-tilt range finder: range sigma 2 mm, pointing sigma 0.01 deg (pan and "
-        "tilt), objects 3-10 m away, raster over the visible side thinned to exactly n points. "
+        "tilt), objects 3-10 m away, cell-centred raster over the visible side thinned to exactly "
+        "n points; 'exact window': the raster over the object's exact angular silhouette window, "
+        "'operator window': over that window enlarged by a random 0-1 raster step per side "
+        "(same objects). "
         "Errors in mm and degrees; medians and p90 of absolute errors, bias = mean signed error; "
         "CRB = Cramer-Rao bound (RMS over the cell's trials).",
         "",
@@ -480,16 +545,34 @@ def main(argv=None) -> int:
     if missing:
         out += [f"Not run (fit not in this tree yet): {', '.join(missing)}.", ""]
     out += ["#### Targets", "", summary(results), ""]
+    if args.operator_window:
+        out += [
+            "#### Exact silhouette window vs operator window (ours; per-cell figures, median and "
+            "worst cell)",
+            "",
+            window_table(results),
+            "",
+        ]
     titles = {
         "cylinder": "Cylinders",
         "sphere": "Spheres",
         "plane": "Planes (walls, plates)",
         "cuboid": "Cuboids (columns, beams, piers)",
     }
+    versions = [("clean", "clean"), ("outliers", "with 20% edge outliers")]
+    if args.operator_window:
+        versions = [(v, f"exact window, {label}") for v, label in versions]
     for kind in ("cylinder", "sphere", "plane", "cuboid"):
         if kind not in results:
             continue
-        for version, label in (("clean", "clean"), ("outliers", "with 20% edge outliers")):
+        shown = versions
+        if args.operator_window and kind == "cuboid":
+            # the window matters to the cuboid's unseen edges: its tables for both windows
+            shown = versions + [
+                ("clean" + OPERATOR, "operator window, clean"),
+                ("outliers" + OPERATOR, "operator window, with 20% edge outliers"),
+            ]
+        for version, label in shown:
             out += [f"#### {titles[kind]}, {label}", ""]
             if kind in ("cylinder", "sphere"):
                 out.append(cylinder_table(results[kind], kind, version))
@@ -499,7 +582,7 @@ def main(argv=None) -> int:
                 out.append(cuboid_table(results[kind], version))
             out.append("")
     out += [
-        "#### Time per fit (all cells, clean and outliers)",
+        "#### Time per fit (all cells, clean and outliers, exact window)",
         "",
         "| kind | ours median ms | ours p90 ms | skspatial median ms | skspatial p90 ms |",
         "|---|---|---|---|---|",
@@ -510,8 +593,8 @@ def main(argv=None) -> int:
                 [
                     np.asarray(c.times)
                     for per in res.values()
-                    for (e, _), c in per.items()
-                    if e == "ours"
+                    for (e, v), c in per.items()
+                    if e == "ours" and OPERATOR not in v
                 ]
             )
             * 1e3

@@ -2,7 +2,9 @@
 
 A :class:`Cell` accumulates one cell's errors, bounds and times for one estimator and one data
 version; the table functions turn ``{cell key: {(estimator, version): Cell}}`` into markdown and
-:func:`summary` checks the targets of the fitting benchmark.
+:func:`summary` checks the targets of the fitting benchmark. Versions are ``"clean"`` and
+``"outliers"``, shot over the object's exact silhouette window, and the same with the suffix
+:data:`OPERATOR` when shot over an operator's window; :func:`window_table` compares the two.
 """
 
 from __future__ import annotations
@@ -11,6 +13,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
+#: Suffix of the data versions shot over an operator's window.
+OPERATOR = "@operator"
 
 
 @dataclass
@@ -162,6 +167,75 @@ def cuboid_table(results, version):
     return "\n".join(lines)
 
 
+# --------------------------------------------------------------------------- windows
+
+
+def _cell_measures(kind, cell):
+    """(measure label, value) pairs of one cell for the window comparison."""
+    if kind in ("cylinder", "sphere"):
+        r = cell.values("radius")
+        out = [("radius RMSE / CRB", _ratio(_rmse(r), cell.rms_bound("radius")))]
+        if kind == "cylinder":
+            a = cell.values("axis")
+            out.append(("axis RMSE / CRB", _ratio(_rmse(a), math.degrees(cell.rms_bound("axis")))))
+        return out
+    if kind == "plane":
+        a = cell.values("normal")
+        return [("normal RMSE / CRB", _ratio(_rmse(a), math.degrees(cell.rms_bound("normal"))))]
+    across = np.concatenate([cell.values("size_a"), cell.values("size_b")]) * 100
+    return [
+        ("across-size median error %", _pct(across, 50)),
+        ("across-size p90 error %", _pct(across, 90)),
+        ("length median error %", _pct(cell.values("size_len") * 100, 50)),
+        ("orientation median deg", _pct(cell.values("orientation"), 50)),
+    ]
+
+
+def window_table(all_results, estimator="ours"):
+    """Per kind, data version and measure: median and worst cell, exact vs operator window.
+
+    Parameters
+    ----------
+    all_results : dict
+        ``{kind: {cell key: {(estimator, version): Cell}}}`` with both the plain versions and
+        their :data:`OPERATOR` twins.
+
+    Returns
+    -------
+    str
+        A markdown table; kinds without operator-window cells are left out.
+    """
+    head = (
+        "| kind | data | measure | exact window: median cell | worst cell "
+        "| operator window: median cell | worst cell |"
+    )
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for kind in ("cylinder", "sphere", "plane", "cuboid"):
+        res = all_results.get(kind)
+        if not res:
+            continue
+        for version in ("clean", "outliers"):
+            values = {}
+            for per in res.values():
+                for window, v in (("exact", version), ("operator", version + OPERATOR)):
+                    cell = per.get((estimator, v))
+                    if cell is None:
+                        continue
+                    for label, value in _cell_measures(kind, cell):
+                        values.setdefault(label, {}).setdefault(window, []).append(value)
+            for label, by_window in values.items():
+                if "operator" not in by_window:
+                    continue
+                row = [kind, version, label]
+                for window in ("exact", "operator"):
+                    x = np.asarray(by_window.get(window, []), float)
+                    x = x[np.isfinite(x)]
+                    row += [fmt(float(np.median(x)) if x.size else float("nan"))]
+                    row += [fmt(float(x.max()) if x.size else float("nan"))]
+                lines.append("| " + " | ".join(row) + " |")
+    return "\n".join(lines)
+
+
 # --------------------------------------------------------------------------- summary
 
 
@@ -263,11 +337,14 @@ def summary(all_results):
             )
         )
     cub = all_results.get("cuboid", {})
-    if cub:
+    windows = [("", "")]
+    if any(("ours", "clean" + OPERATOR) in per for per in cub.values()):
+        windows = [("", ", exact silhouette window"), (OPERATOR, ", operator window")]
+    for suffix, label in windows:
         med, orient, cub_out = [], [], []
         for key, per in cub.items():
-            clean = per[("ours", "clean")]
-            dirty = per[("ours", "outliers")]
+            clean = per[("ours", "clean" + suffix)]
+            dirty = per[("ours", "outliers" + suffix)]
             across = np.concatenate([clean.values("size_a"), clean.values("size_b")])
             allsizes = np.concatenate([across, clean.values("size_len")])
             if key[-1] >= 30 and len(allsizes):
@@ -286,7 +363,7 @@ def summary(all_results):
         if med:
             rows.append(
                 (
-                    "cuboid sizes: median error <= 1% with 30+ points (every cell)",
+                    f"cuboid sizes: median error <= 1% with 30+ points (every cell){label}",
                     f"worst cell {max(med):.2f}%, median cell {np.median(med):.2f}%",
                     verdict(max(med) <= 1.0),
                 )
@@ -294,12 +371,13 @@ def summary(all_results):
         if orient:
             rows.append(
                 (
-                    "cuboid orientation within 0.5 deg (cell medians)",
+                    f"cuboid orientation within 0.5 deg (cell medians){label}",
                     f"worst cell median {max(orient):.3f} deg",
                     verdict(max(orient) <= 0.5),
                 )
             )
-        out_ratio.extend(cub_out)
+        if not suffix:
+            out_ratio.extend(cub_out)
     if out_ratio:
         finite = [x for x in out_ratio if math.isfinite(x)]
         worst = max(finite) if finite else float("nan")

@@ -50,3 +50,82 @@ def test_trials_are_exact_and_on_the_surface():
     changed = np.any(trial.clean != trial.dirty, axis=1)
     assert changed.sum() == 6  # 20% edge outliers
     assert trial.bound["radius"] > 0 and trial.bound["axis"] > 0
+
+
+# --------------------------------------------------------------------------- operator window
+
+
+def test_quick_run_reports_both_windows(tmp_path):
+    out = tmp_path / "fit.md"
+    argv = ["--quick", "--only", "cuboid", "--operator-window", "--out", str(out)]
+    assert fit_accuracy.main(argv) == 0
+    text = out.read_text()
+    assert "#### Exact silhouette window vs operator window" in text
+    assert "#### Cuboids (columns, beams, piers), exact window, clean" in text
+    assert "#### Cuboids (columns, beams, piers), operator window, with 20% edge" in text
+    assert "(every cell), exact silhouette window |" in text
+    assert "(every cell), operator window |" in text
+    assert "| cuboid | clean | across-size median error % |" in text
+
+
+def _sphere_cells(operator):
+    ours = fit_accuracy._ours()["sphere"]
+    return fit_accuracy.run_cells(
+        "sphere",
+        [(0.5, 20)],
+        fit_accuracy.sphere_trial,
+        3,
+        0,
+        ours,
+        None,
+        7,
+        lambda *a: None,
+        operator=operator,
+    )[(0.5, 20)]
+
+
+def test_exact_window_trials_do_not_depend_on_the_flag():
+    plain, both = _sphere_cells(False), _sphere_cells(True)
+    assert set(plain) == {("ours", "clean"), ("ours", "outliers")}
+    assert set(both) == set(plain) | {("ours", "clean@operator"), ("ours", "outliers@operator")}
+    for version in ("clean", "outliers"):
+        np.testing.assert_array_equal(
+            plain[("ours", version)].values("radius"), both[("ours", version)].values("radius")
+        )
+    assert both[("ours", "clean@operator")].trials == 3
+
+
+def test_operator_twin_has_the_same_object_and_a_wider_raster():
+    rng = np.random.default_rng(11)
+    twin = fit_accuracy._twin(rng)
+    exact = fit_accuracy.cuboid_trial(rng, 0.4, 2, 30)
+    operator = fit_accuracy.cuboid_trial(twin, 0.4, 2, 30, operator=True)
+    np.testing.assert_array_equal(exact.truth["axes"], operator.truth["axes"])
+    np.testing.assert_array_equal(exact.truth["size"], operator.truth["size"])
+    assert operator.clean.shape == exact.clean.shape == (30, 3)
+    assert not np.array_equal(exact.clean, operator.clean)
+
+
+def test_window_table_medians_and_worst_cells():
+    from fit_report import Cell, window_table
+
+    def cell(values, bound):
+        c = Cell()
+        for v in values:
+            c.add("radius", v)
+            c.bound("radius", bound)
+        return c
+
+    # RMSE / CRB per cell: exact 1, 2, 3; operator 2, 4, 6
+    results = {
+        "sphere": {
+            (d, 20): {
+                ("ours", "clean"): cell([0.001 * k, -0.001 * k], 0.001),
+                ("ours", "clean@operator"): cell([0.002 * k, -0.002 * k], 0.001),
+            }
+            for k, d in ((1, 0.2), (2, 0.5), (3, 1.0))
+        }
+    }
+    lines = window_table(results).splitlines()
+    assert lines[2] == "| sphere | clean | radius RMSE / CRB | 2.00 | 3.00 | 4.00 | 6.00 |"
+    assert len(lines) == 3  # no outlier version, no row for it
