@@ -32,6 +32,7 @@ __all__ = [
     "validate_points",
     "principal_axes",
     "require_spread",
+    "check_spread",
     "orthonormal_basis",
     "orient",
     "robust_scale",
@@ -141,6 +142,20 @@ def require_spread(points: np.ndarray, kind: str, dimensions: int) -> np.ndarray
         The RMS spread along the three principal directions, descending.
     """
     _, spread, _ = principal_axes(points)
+    check_spread(spread, kind, dimensions)
+    return spread
+
+
+def check_spread(spread: np.ndarray, kind: str, dimensions: int) -> None:
+    """:func:`require_spread` on a spread the caller has from :func:`principal_axes` already.
+
+    Parameters
+    ----------
+    spread : ndarray, shape (3,), metres
+        RMS spread along the principal directions, descending.
+    kind : str
+    dimensions : int
+    """
     size = spread[0]
     relative = 1e-9
     if size <= 1e-12:
@@ -153,7 +168,6 @@ def require_spread(points: np.ndarray, kind: str, dimensions: int) -> np.ndarray
         raise FitError(
             f"The points must not be coplanar; a {kind} needs points on a curved surface."
         )
-    return spread
 
 
 def orthonormal_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

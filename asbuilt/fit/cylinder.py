@@ -36,6 +36,7 @@ from asbuilt.fit._common import (
     GeometricModel,
     RobustFit,
     arc_coverage_deg,
+    check_spread,
     covariance_from_jacobian,
     gauss_newton,
     incidence_variance,
@@ -46,7 +47,6 @@ from asbuilt.fit._common import (
     orient,
     orthonormal_basis,
     principal_axes,
-    require_spread,
     robust_geometric_fit,
     robust_scale,
     stderr_of,
@@ -140,9 +140,19 @@ OFF_START_COS = float(np.cos(np.radians(45.0)))
 POLISHED_STARTS = 3
 
 
+def _median(values: np.ndarray) -> float:
+    """The median of a 1-D array (as :func:`numpy.median`, without its overhead)."""
+    size = values.size
+    half = size // 2
+    if size % 2:
+        return float(np.partition(values, half)[half])
+    part = np.partition(values, (half - 1, half))
+    return float(0.5 * (part[half - 1] + part[half]))
+
+
 def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
     """Eigenvectors of the Tukey-reweighted ``sum n n^T``, most perpendicular to normals first."""
-    weights = 1.0 / (1.0 + flatness / max(float(np.median(flatness)), 1e-12))
+    weights = 1.0 / (1.0 + flatness / max(_median(flatness), 1e-12))
     vectors = None
     for _ in range(2):
         scatter = (normals * weights[:, None]).T @ normals
@@ -164,30 +174,44 @@ def _unique(candidates, limit: float = 0.995) -> list[np.ndarray]:
     return unique
 
 
-def _axis_starts(points: np.ndarray, normals, flatness) -> list[np.ndarray]:
-    """The normals' eigenvectors (most perpendicular first) and the points' principal axes."""
-    _, _, directions = principal_axes(points)
+def _axis_starts(points: np.ndarray, normals, flatness, directions=None) -> list[np.ndarray]:
+    """The normals' eigenvectors (most perpendicular first) and the points' principal axes
+    (``directions``, rows, when the caller has them already)."""
+    if directions is None:
+        _, _, directions = principal_axes(points)
     return _unique(list(_normal_axis(normals, flatness)) + list(directions))
 
 
-def _kasa_batch(xy: np.ndarray, weights: np.ndarray):
+def _kasa_design(xy: np.ndarray) -> np.ndarray:
+    """The Kasa least-squares system's rows ``(x, y, 1, -(x^2 + y^2))``, shape (a, n, 4)."""
+    design = np.empty(xy.shape[:2] + (4,))
+    design[:, :, :2] = xy
+    design[:, :, 2] = 1.0
+    np.einsum("ank,ank->an", xy, xy, out=design[:, :, 3])
+    design[:, :, 3] *= -1.0
+    return design
+
+
+def _kasa_batch(xy: np.ndarray, weights: np.ndarray, design: np.ndarray | None = None):
     """Weighted Kasa circles (Kasa 1976) for a batch of projections.
 
     Parameters
     ----------
     xy : ndarray, shape (a, n, 2), metres
     weights : ndarray, shape (a, n)
+    design : ndarray, shape (a, n, 4), optional
+        ``_kasa_design(xy)`` when the caller has it already.
 
     Returns
     -------
     center : ndarray, shape (a, 2), metres
     radius : ndarray, shape (a,), metres (NaN where undefined)
     """
-    design = np.concatenate([xy, np.ones(xy.shape[:2] + (1,))], axis=2)
-    rhs = -(xy * xy).sum(axis=2)
-    weighted = (design * weights[:, :, None]).transpose(0, 2, 1)
-    normal = weighted @ design
-    right = weighted @ rhs[:, :, None]
+    if design is None:
+        design = _kasa_design(xy)
+    # One product gives the normal matrix (first three columns) and the right-hand side.
+    system = (design.transpose(0, 2, 1) * weights[:, None, :]) @ design
+    normal, right = system[:, :3, :3], system[:, :3, 3:]
     try:
         solution = np.linalg.solve(normal, right)[:, :, 0]
     except np.linalg.LinAlgError:
@@ -197,9 +221,9 @@ def _kasa_batch(xy: np.ndarray, weights: np.ndarray):
         solution = (np.linalg.pinv(normal) @ right)[:, :, 0]
         solution[degenerate] = np.nan
     center = -0.5 * solution[:, :2]
-    squared = (center * center).sum(axis=1) - solution[:, 2]
+    squared = np.einsum("ak,ak->a", center, center) - solution[:, 2]
     with np.errstate(invalid="ignore"):
-        radius = np.where(squared > 0, np.sqrt(np.abs(squared)), np.nan)
+        radius = np.sqrt(np.where(squared > 0, squared, np.nan))
     return center, radius
 
 
@@ -235,46 +259,45 @@ def _circle_starts(
     """
     n = len(points)
     keep = min(keep, n)
-    bases = [orthonormal_basis(axis) for axis in axes]
-    u = np.array([basis[0] for basis in bases])
-    v = np.array([basis[1] for basis in bases])
-    xy = np.stack([points @ u.T, points @ v.T], axis=2).transpose(1, 0, 2)  # (a, n, 2)
     count = len(axes)
+    frame = np.empty((2, count, 3))
+    for k, axis in enumerate(axes):
+        frame[0, k], frame[1, k] = orthonormal_basis(axis)
+    u, v = frame[0], frame[1]
+    xy = (points @ frame.reshape(2 * count, 3).T).reshape(n, 2, count).transpose(2, 0, 1)
+    xy = np.ascontiguousarray(xy)  # (a, n, 2)
+    x, y = xy[:, :, 0], xy[:, :, 1]
+    design = _kasa_design(xy)
     rows = np.arange(count)
 
-    def trimmed(center, radius):
-        offset = xy - center[:, None, :]
-        distance = np.abs(np.sqrt((offset * offset).sum(axis=2)) - radius[:, None])
+    def distances(center, radius):
+        distance = np.hypot(x - center[:, :1], y - center[:, 1:])
+        distance -= radius[:, None]
+        np.abs(distance, out=distance)
         distance[~np.isfinite(distance)] = np.inf
-        squared = distance * distance
-        return np.partition(squared, keep - 1, axis=1)[:, :keep].sum(axis=1), distance
+        return distance
 
-    center, radius = _kasa_batch(xy, np.ones((count, n)))
-    cost, _ = trimmed(center, radius)
+    def trimmed(distance):
+        squared = distance * distance
+        return np.partition(squared, keep - 1, axis=1)[:, :keep].sum(axis=1)
+
+    center, radius = _kasa_batch(xy, np.ones((count, n)), design)
+    cost = trimmed(distances(center, radius))
     # Circumcircles of random triples, shared across axes.
     index = rng.integers(0, n, (samples, 3))
     pa, pb, pc = xy[:, index[:, 0]], xy[:, index[:, 1]], xy[:, index[:, 2]]  # (a, t, 2)
-    det = 2.0 * (
-        pa[..., 0] * (pb[..., 1] - pc[..., 1])
-        + pb[..., 0] * (pc[..., 1] - pa[..., 1])
-        + pc[..., 0] * (pa[..., 1] - pb[..., 1])
-    )
-    sa, sb, sc = (pa * pa).sum(-1), (pb * pb).sum(-1), (pc * pc).sum(-1)
+    ax_, ay_ = pa[..., 0], pa[..., 1]
+    bx, by = pb[..., 0], pb[..., 1]
+    cx, cy = pc[..., 0], pc[..., 1]
+    bcy, cay, aby = by - cy, cy - ay_, ay_ - by
+    det = 2.0 * (ax_ * bcy + bx * cay + cx * aby)
+    sa, sb, sc = ax_ * ax_ + ay_ * ay_, bx * bx + by * by, cx * cx + cy * cy
     with np.errstate(divide="ignore", invalid="ignore"):
-        ux = (
-            sa * (pb[..., 1] - pc[..., 1])
-            + sb * (pc[..., 1] - pa[..., 1])
-            + sc * (pa[..., 1] - pb[..., 1])
-        ) / det
-        uy = (
-            sa * (pc[..., 0] - pb[..., 0])
-            + sb * (pa[..., 0] - pc[..., 0])
-            + sc * (pb[..., 0] - pa[..., 0])
-        ) / det
-        tr = np.sqrt((pa[..., 0] - ux) ** 2 + (pa[..., 1] - uy) ** 2)
-        dx = xy[:, None, :, 0] - ux[..., None]
-        dy = xy[:, None, :, 1] - uy[..., None]
-        sq = np.sqrt(dx * dx + dy * dy) - tr[..., None]
+        ux = (sa * bcy + sb * cay + sc * aby) / det
+        uy = (sa * (cx - bx) + sb * (ax_ - cx) + sc * (bx - ax_)) / det
+        tr = np.hypot(ax_ - ux, ay_ - uy)
+        sq = np.hypot(x[:, None, :] - ux[..., None], y[:, None, :] - uy[..., None])
+        sq -= tr[..., None]
         sq *= sq
     sq[~np.isfinite(sq)] = np.inf
     tcost = np.partition(sq, keep - 1, axis=2)[:, :, :keep].sum(axis=2)  # (a, t)
@@ -282,16 +305,16 @@ def _circle_starts(
     better = tcost[rows, best] < np.where(np.isfinite(cost), cost, np.inf)
     center = np.where(better[:, None], np.stack([ux[rows, best], uy[rows, best]], 1), center)
     radius = np.where(better, tr[rows, best], radius)
+    weights = np.empty((count, n))
     for _ in range(2):
-        cost, distance = trimmed(center, radius)
-        closest = np.argpartition(distance, keep - 1, axis=1)[:, :keep]
-        weights = np.zeros((count, n))
+        closest = np.argpartition(distances(center, radius), keep - 1, axis=1)[:, :keep]
+        weights.fill(0.0)
         weights[rows[:, None], closest] = 1.0
-        new_center, new_radius = _kasa_batch(xy, weights)
+        new_center, new_radius = _kasa_batch(xy, weights, design)
         ok = np.isfinite(new_radius)
         center = np.where(ok[:, None], new_center, center)
         radius = np.where(ok, new_radius, radius)
-    cost, _ = trimmed(center, radius)
+    cost = trimmed(distances(center, radius))
     axis_array = np.asarray(axes)
     centroid = points.mean(axis=0)
     middles = center[:, :1] * u + center[:, 1:] * v + (axis_array @ centroid)[:, None] * axis_array
@@ -365,6 +388,9 @@ def _line_axis(points: np.ndarray, keep: int, rng, samples: int = 32, steps: int
     return axis
 
 
+_NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
+
+
 def _pair_starts(points, normals, keep: int, count: int, samples: int = 48):
     """Minimal-sample starts (Schnabel, Wahl & Klein 2007): two points and their normals.
 
@@ -386,8 +412,9 @@ def _pair_starts(points, normals, keep: int, count: int, samples: int = 48):
         return []
     first, second, d1, d2, b = first[good], second[good], d1[good], d2[good], b[good]
     p1, p2 = points[first], points[second]
-    axis = np.cross(d1, d2)
-    axis /= np.linalg.norm(axis, axis=1)[:, None]
+    # Cross products, written out (np.cross is slow on short stacks).
+    axis = d1[:, _NEXT] * d2[:, _AFTER] - d1[:, _AFTER] * d2[:, _NEXT]
+    axis /= np.sqrt(np.einsum("ij,ij->i", axis, axis))[:, None]
     w = p1 - p2
     d = np.einsum("ij,ij->i", d1, w)
     e = np.einsum("ij,ij->i", d2, w)
@@ -452,14 +479,17 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
         Too few points, identical, collinear or coplanar points, or too many outliers.
     """
     pts = validate_points(points, "cylinder")
-    require_spread(pts, "cylinder", 3)
     offset = pts.mean(axis=0)
     local = pts - offset
+    _, spread, directions = principal_axes(local)
+    check_spread(spread, "cylinder", 3)
     normals, flatness = local_normals(local, tolerances.normal_neighbours)
     keep = keep_count(len(local), tolerances)
     starts = []
     rng = np.random.default_rng(len(local))
-    axes = _axis_starts(local, normals, flatness) + _pair_starts(local, normals, keep, 3)
+    axes = _axis_starts(local, normals, flatness, directions) + _pair_starts(
+        local, normals, keep, 3
+    )
     line = _line_axis(local, keep, rng)
     if line is not None:
         axes.append(line)
