@@ -601,15 +601,18 @@ def incidence_variance(residuals: np.ndarray, square_on: np.ndarray, mask) -> np
     count = int(np.count_nonzero(mask))
     if count < 8:
         return None
-    design = np.column_stack([np.ones(count), square_on[mask]])
+    # The 2 x 2 normal equations of the line, solved in closed form.
+    c = square_on[mask]
     squares = residuals[mask] ** 2
-    try:
-        normal_inverse = np.linalg.inv(design.T @ design)
-    except np.linalg.LinAlgError:
+    sum_c, sum_cc = float(c.sum()), float(c @ c)
+    det = count * sum_cc - sum_c * sum_c
+    if not det > 0.0:
         return None
-    level, slope = normal_inverse @ (design.T @ squares)
-    spread = squares - design @ np.array([level, slope])
-    slope_var = float(spread @ spread) / max(count - 2, 1) * normal_inverse[1, 1]
+    sum_s, sum_cs = float(squares.sum()), float(c @ squares)
+    level = (sum_cc * sum_s - sum_c * sum_cs) / det
+    slope = (count * sum_cs - sum_c * sum_s) / det
+    spread = squares - (level + slope * c)
+    slope_var = float(spread @ spread) / max(count - 2, 1) * (count / det)
     top = level + slope
     if not (np.isfinite(top) and top > 0 and slope > EVIDENCE * np.sqrt(max(slope_var, 0.0))):
         return None

@@ -78,7 +78,7 @@ def _frame(axis: np.ndarray):
     found = _FRAME_CACHE.get(key)
     if found is None:
         u, v = orthonormal_basis(axis)
-        found = (u, v, np.column_stack([axis, u, v]))
+        found = (u, v, np.array((axis, u, v)).T)
         if len(_FRAME_CACHE) >= 8:
             _FRAME_CACHE.clear()
         _FRAME_CACHE[key] = found
