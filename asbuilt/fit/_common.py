@@ -768,7 +768,6 @@ def robust_geometric_fit(
     state, residuals, jacobian = refined[int(np.argmin(scores))]
     # Inliers, then plain least squares on them until the inlier set is stable; without a
     # sensor sigma, a larger inlier set that the data support better is taken once.
-    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
     mask = None
     rescued = sigma is not None
     for _ in range(8):
@@ -779,6 +778,7 @@ def robust_geometric_fit(
         new_mask = np.abs(residuals) <= tolerances.outlier_cutoff_sigma * scale
         if not rescued and not new_mask.all():
             rescued = True
+            extent = float(np.linalg.norm(np.ptp(points, axis=0)))
             state, residuals, jacobian, new_mask = _likeliest_refit(
                 model, state, points, new_mask, extent, floor, max_iterations
             )
