@@ -73,6 +73,7 @@ from fit_report import (  # noqa: E402
     fmt,
     plane_table,
     summary,
+    window_cells_table,
     window_table,
 )
 
@@ -551,6 +552,11 @@ def main(argv=None) -> int:
             "worst cell)",
             "",
             window_table(results),
+            "",
+            "Clean cylinder, sphere and plane cells above the 99% chi-square limit of RMSE / CRB "
+            "in either window (cell: OD mm / L/D / n, D m / n or width m / n):",
+            "",
+            window_cells_table(results),
             "",
         ]
     titles = {

@@ -236,6 +236,58 @@ def window_table(all_results, estimator="ours"):
     return "\n".join(lines)
 
 
+def _limit(count: int) -> float:
+    """99% chi-square limit of RMSE / CRB for ``count`` trials (see :func:`_significant`)."""
+    from scipy.stats import chi2
+
+    return math.sqrt(chi2.ppf(0.99, count) / count) if count else float("nan")
+
+
+def window_cells_table(all_results, estimator="ours"):
+    """The clean-data cells of the bound-referenced kinds that either window puts significantly
+    above the bound, with both windows' RMSE / CRB side by side.
+
+    Parameters
+    ----------
+    all_results : dict
+        ``{kind: {cell key: {(estimator, version): Cell}}}`` with :data:`OPERATOR` twins.
+
+    Returns
+    -------
+    str
+        A markdown table (cylinder, sphere and plane cells; clean data: with outliers most cells
+        are above the bound in both windows).
+    """
+    head = (
+        "| kind | cell | measure | exact window RMSE/CRB | operator window RMSE/CRB "
+        "| operator max error |"
+    )
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for kind in ("cylinder", "sphere", "plane"):
+        for key, per in all_results.get(kind, {}).items():
+            for version in ("clean",):
+                exact = per.get((estimator, version))
+                operator = per.get((estimator, version + OPERATOR))
+                if exact is None or operator is None:
+                    continue
+                for (label, a), (_, b) in zip(
+                    _cell_measures(kind, exact), _cell_measures(kind, operator)
+                ):
+                    name = label.split()[0]  # radius, axis or normal: the error's name
+                    limit = _limit(len(operator.values(name)))
+                    if not (a > limit or b > limit):
+                        continue
+                    worst = operator.values(name)
+                    worst = float(np.abs(worst).max()) if len(worst) else float("nan")
+                    unit = " mm" if name == "radius" else " deg"
+                    worst_text = fmt(worst * 1e3 if name == "radius" else worst) + unit
+                    cell = " / ".join(f"{k:g}" for k in key)
+                    lines.append(
+                        f"| {kind} | {cell} | {name} | {fmt(a)} | {fmt(b)} | {worst_text} |"
+                    )
+    return "\n".join(lines)
+
+
 # --------------------------------------------------------------------------- summary
 
 

@@ -129,3 +129,24 @@ def test_window_table_medians_and_worst_cells():
     lines = window_table(results).splitlines()
     assert lines[2] == "| sphere | clean | radius RMSE / CRB | 2.00 | 3.00 | 4.00 | 6.00 |"
     assert len(lines) == 3  # no outlier version, no row for it
+
+
+def test_window_cells_table_lists_cells_above_the_chi_square_limit():
+    from fit_report import Cell, window_cells_table
+
+    def cell(scale):
+        c = Cell()
+        for v in scale * np.array([1.0, -1.0] * 25):
+            c.add("radius", v)
+            c.bound("radius", 0.001)
+        return c
+
+    # RMSE / CRB 1.0 (exact) vs 2.0 (operator): listed; 1.0 vs 1.1 (within the limit): not
+    results = {
+        "sphere": {
+            (0.2, 20): {("ours", "clean"): cell(0.001), ("ours", "clean@operator"): cell(0.002)},
+            (0.5, 20): {("ours", "clean"): cell(0.001), ("ours", "clean@operator"): cell(0.0011)},
+        }
+    }
+    lines = window_cells_table(results).splitlines()
+    assert lines[2:] == ["| sphere | 0.2 / 20 | radius | 1.00 | 2.00 | 2.00 mm |"]
