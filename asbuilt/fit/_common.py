@@ -429,8 +429,8 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
 
         _, index = cKDTree(points).query(points, k=k)
     hood = points[index]
-    hood = hood - hood.mean(axis=1, keepdims=True)
-    scatter = np.einsum("nki,nkj->nij", hood, hood)
+    hood -= hood.mean(axis=1, keepdims=True)
+    scatter = hood.transpose(0, 2, 1) @ hood
     values, vectors = np.linalg.eigh(scatter)
     flatness = values[:, 0] / np.maximum(values[:, 1], 1e-300)
     return vectors[:, :, 0], flatness

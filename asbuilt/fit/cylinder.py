@@ -131,11 +131,14 @@ _MODEL = GeometricModel(_residuals, _jacobian, _update, 5)
 #: degrees off otherwise converge to a wrong radius in a few percent of scenes; the search
 #: costs 1-3 ms, which the 40-point speed target on clean scans cannot afford every time.
 POLISH_BELOW = 35
-#: Trimmed-cost ratio above which the normal-based start (the first) is taken as off and only
-#: the best start, and those that beat its refinement, are refined.
+#: Trimmed-cost ratio above which the normal-based start (the first) is taken as off ...
 OFF_START = 100.0
-#: ... and its axis more than 45 degrees from the best start's.
+#: ... when its axis is also more than 45 degrees from the best start's.
 OFF_START_COS = float(np.cos(np.radians(45.0)))
+#: Two starts are one hypothesis when their axes are within 2 degrees and their centres (across
+#: the axis) and radii within 2% of the radius.
+SAME_START_COS = float(np.cos(np.radians(5.0)))
+SAME_START_RELATIVE = 0.1
 #: How many of the best starts get the pattern search.
 POLISHED_STARTS = 3
 
@@ -148,6 +151,43 @@ def _median(values: np.ndarray) -> float:
         return float(np.partition(values, half)[half])
     part = np.partition(values, (half - 1, half))
     return float(0.5 * (part[half - 1] + part[half]))
+
+
+def _same_start(one, other) -> bool:
+    """Whether two starts (axis, centre, radius) are one hypothesis (``SAME_START_*``)."""
+    axis, center, radius = one
+    if abs(float(axis @ other[0])) < SAME_START_COS:
+        return False
+    scale = SAME_START_RELATIVE * max(radius, other[2])
+    offset = other[1] - center
+    across = offset - float(offset @ axis) * axis
+    return abs(radius - other[2]) <= scale and float(np.sqrt(across @ across)) <= scale
+
+
+def _trust_order(starts: list, costs: list) -> tuple[list, list, int]:
+    """The starts in the order :func:`robust_geometric_fit` trusts them and how many it must
+    refine (its ``always_refine``).
+
+    The normal-based start comes first and is refined together with the best other start
+    (lowest trimmed cost), except where that pair is redundant: when the best other start is
+    the same hypothesis (:func:`_same_start`), refining it again would land in the same place;
+    when the normal-based start is a far worse, different one (axis more than 45 degrees off,
+    trimmed cost ``OFF_START`` times higher), the best start goes first alone. Either way
+    further starts are still refined while their cost is below the best refined fit's.
+    """
+    if len(starts) < 2:
+        return starts, costs, 2
+    second = 1 + int(np.argmin(costs[1:]))
+    if _same_start(starts[0], starts[second]):
+        return starts, costs, 1
+    best = second if costs[second] < costs[0] else 0
+    if (
+        costs[0] > OFF_START * costs[best]
+        and abs(float(starts[0][0] @ starts[best][0])) < OFF_START_COS
+    ):
+        order = [best] + [k for k in range(len(starts)) if k != best]
+        return [starts[k] for k in order], [costs[k] for k in order], 1
+    return starts, costs, 2
 
 
 def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
@@ -372,9 +412,7 @@ def _line_axis(points: np.ndarray, keep: int, rng, samples: int = 32, steps: int
         return None
     direction = direction[good] / norm[good, None]
     base = points[first[good]]
-    rel = points[None, :, :] - base[:, None, :]
-    along = np.einsum("snk,sk->sn", rel, direction)
-    distance = np.einsum("snk,snk->sn", rel, rel) - along * along
+    _, distance = _line_distances(points, base, direction)
     cost = np.partition(distance, keep - 1, axis=1)[:, :keep].sum(axis=1)
     best = int(np.argmin(cost))
     axis, point = direction[best], base[best]
@@ -382,10 +420,39 @@ def _line_axis(points: np.ndarray, keep: int, rng, samples: int = 32, steps: int
         rel = points - point
         along = rel @ axis
         distance = np.einsum("ij,ij->i", rel, rel) - along * along
-        closest = np.argpartition(distance, keep - 1)[:keep]
-        point, _, directions = principal_axes(points[closest])
-        axis = directions[0]
+        closest = points[np.argpartition(distance, keep - 1)[:keep]]
+        point = closest.mean(axis=0)
+        centred = closest - point
+        # Principal direction: the scatter matrix's leading eigenvector.
+        axis = np.linalg.eigh(centred.T @ centred)[1][:, 2]
     return axis
+
+
+def _line_distances(points: np.ndarray, base: np.ndarray, direction: np.ndarray):
+    """Coordinates of points along lines and squared distances from them.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres (centred)
+    base : ndarray, shape (s, 3), metres
+        A point on each line.
+    direction : ndarray, shape (s, 3)
+        Unit directions.
+
+    Returns
+    -------
+    along : ndarray, shape (s, n), metres
+    squared : ndarray, shape (s, n), metres^2
+        Written out as ``|p|^2 + |b|^2 - 2 p.b - along^2`` (two matrix products instead of an
+        (s, n, 3) array of differences; the points are centred, so nothing cancels badly).
+    """
+    products = np.concatenate([direction, base]) @ points.T
+    count = len(base)
+    along = products[:count] - np.einsum("ij,ij->i", base, direction)[:, None]
+    squared = np.einsum("ij,ij->i", points, points)[None, :] - 2.0 * products[count:]
+    squared += np.einsum("ij,ij->i", base, base)[:, None]
+    squared -= along * along
+    return along, squared
 
 
 _NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
@@ -422,9 +489,8 @@ def _pair_starts(points, normals, keep: int, count: int, samples: int = 48):
     s = (b * e - d) / denom
     t = (e - b * d) / denom
     center = 0.5 * (p1 + s[:, None] * d1 + p2 + t[:, None] * d2)
-    rel = points[None, :, :] - center[:, None, :]
-    along = np.einsum("snk,sk->sn", rel, axis)
-    rho = np.sqrt(np.maximum(np.einsum("snk,snk->sn", rel, rel) - along * along, 0.0))
+    _, squared = _line_distances(points, center, axis)
+    rho = np.sqrt(np.maximum(squared, 0.0))
     radius = 0.5 * (rho[np.arange(len(first)), first] + rho[np.arange(len(first)), second])
     residuals = rho - radius[:, None]
     keep = min(keep, n)
@@ -496,18 +562,7 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
     starts, costs = _circle_starts(local, axes, keep, rng)
 
     def robust_from(starts, costs):
-        trusted = 2
-        best = int(np.argmin(costs))
-        if (
-            costs[0] > OFF_START * costs[best]
-            and abs(float(starts[0][0] @ starts[best][0])) < OFF_START_COS
-        ):
-            # The normal-based start is another, far worse hypothesis (its axis far from the
-            # best start's, its circle leaving far larger residuals): trust the best start
-            # instead of refining both.
-            starts = [starts[best]] + starts[:best] + starts[best + 1 :]
-            costs = [costs[best]] + costs[:best] + costs[best + 1 :]
-            trusted = 1
+        starts, costs, trusted = _trust_order(starts, costs)
         return robust_geometric_fit(
             local,
             starts,
