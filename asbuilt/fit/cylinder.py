@@ -731,8 +731,10 @@ def _incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFi
     if relative is None:
         return robust, uniform
     weights = np.where(kept, 1.0 / relative, 0.0)
+    # With every point an inlier, the fit's Jacobian is the full one at its state.
+    current = (robust.residuals, robust.jacobian) if kept.all() else None
     state, residuals, jacobian = gauss_newton(
-        _MODEL, robust.state, points, lambda _r, w=weights: w, 6, 1e-7
+        _MODEL, robust.state, points, lambda _r, w=weights: w, 6, 1e-7, current
     )
     return RobustFit(state, residuals, kept, jacobian[kept], robust.scale), relative
 
