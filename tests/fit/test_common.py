@@ -192,3 +192,48 @@ def test_robust_geometric_fit_needs_a_finite_start():
         common.robust_geometric_fit(
             np.eye(4, 3), [(np.full(3, np.nan), 1.0)], sphere_module._MODEL, kind="sphere"
         )
+
+
+@pytest.mark.parametrize(
+    "points, dimensions, message",
+    [
+        (np.ones((6, 3)), 1, "identical"),
+        (np.outer(np.arange(6.0), [1, 2, 3]), 2, "collinear"),
+        (np.column_stack([np.arange(6.0), np.arange(6.0) ** 2, np.zeros(6)]), 3, "coplanar"),
+    ],
+)
+def test_check_spread_judges_a_spread_as_require_spread_judges_points(points, dimensions, message):
+    _, spread, _ = common.principal_axes(points)
+    with pytest.raises(FitError, match=message):
+        common.check_spread(spread, "cylinder", dimensions)
+    # One dimension fewer is fine for both.
+    if dimensions > 1:
+        common.check_spread(spread, "cylinder", dimensions - 1)
+        common.require_spread(points, "cylinder", dimensions - 1)
+
+
+@pytest.mark.parametrize("slope", [0.0, 3e-6])
+def test_incidence_variance_is_the_least_squares_line_of_squared_residuals(slope):
+    rng = np.random.default_rng(4)
+    square_on = rng.uniform(0.0, 1.0, 200)
+    residuals = rng.normal(0.0, 1.0, 200) * np.sqrt(1e-7 + slope * square_on)
+    mask = np.ones(200, bool)
+    relative = common.incidence_variance(residuals, square_on, mask)
+    if slope == 0.0:
+        assert relative is None  # no evidence of a slope: even noise
+        return
+    level_slope = np.polyfit(square_on, residuals**2, 1)  # (slope, level), independent solver
+    expected = (level_slope[1] + level_slope[0] * square_on) / level_slope.sum()
+    np.testing.assert_allclose(
+        relative, np.clip(expected, common.MIN_RELATIVE_VARIANCE, 1.0), rtol=1e-9
+    )
+
+
+def test_gauss_newton_steps_solve_singular_normal_equations_by_least_squares():
+    # Positive definite: the Cholesky solve; singular: the minimum-norm least-squares step.
+    normal = np.array([[4.0, 2.0], [2.0, 3.0]])
+    np.testing.assert_allclose(
+        common._newton_step(normal, np.array([1.0, 2.0])), -np.linalg.solve(normal, [1.0, 2.0])
+    )
+    singular = np.array([[1.0, 0.0], [0.0, 0.0]])
+    np.testing.assert_allclose(common._newton_step(singular, np.array([2.0, 0.0])), [-2.0, 0.0])

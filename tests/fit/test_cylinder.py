@@ -8,7 +8,13 @@ from fit_scans import angle_deg, raster_scan
 
 from asbuilt.errors import FitError
 from asbuilt.fit._common import RobustFit, orthonormal_basis
-from asbuilt.fit.cylinder import _MODEL, _incidence_weighted, _kasa_batch, fit_cylinder
+from asbuilt.fit.cylinder import (
+    _MODEL,
+    _incidence_weighted,
+    _kasa_batch,
+    _trust_order,
+    fit_cylinder,
+)
 from asbuilt.primitives import Cylinder
 
 SENSOR = np.zeros(3)
@@ -265,3 +271,34 @@ def test_a_pipe_seen_all_round_is_not_weighted():
     same, relative = _incidence_weighted(fit, points)
     assert same is fit
     np.testing.assert_array_equal(relative, 1.0)
+
+
+def _start(axis, center, radius):
+    axis = np.asarray(axis, float)
+    return (axis / np.linalg.norm(axis), np.asarray(center, float), radius)
+
+
+@pytest.mark.parametrize(
+    "second, costs, order, trusted",
+    [
+        # The best other start is the normal-based one again (1 degree, 2% off): refine it once.
+        (
+            _start([0, np.sin(np.radians(1)), 1], [0.001, 0, 0], 0.102),
+            [3e-5, 2e-5, 9e-3],
+            [0, 1, 2],
+            1,
+        ),
+        # A different hypothesis 90 degrees off and far better: it goes first, alone.
+        (_start([1, 0, 0], [0, 0, 0.3], 0.1), [1e-2, 2e-5, 9e-3], [1, 0, 2], 1),
+        # Different but not far better, or far better but not far off: refine both.
+        (_start([1, 0, 0], [0, 0, 0.3], 0.1), [1e-4, 2e-5, 9e-3], [0, 1, 2], 2),
+        (_start([0, np.sin(np.radians(20)), 1], [0, 0, 0], 0.1), [1e-2, 2e-5, 9e-3], [0, 1, 2], 2),
+    ],
+)
+def test_trust_order_skips_only_redundant_refinements(second, costs, order, trusted):
+    starts = [_start([0, 0, 1], [0, 0, 0], 0.1), second, _start([0, 1, 0], [0, 0, 0], 0.5)]
+    got_starts, got_costs, got_trusted = _trust_order(starts, costs)
+    assert got_trusted == trusted
+    assert [next(k for k, s in enumerate(starts) if s is got) for got in got_starts] == order
+    assert got_costs == [costs[k] for k in order]
+    assert _trust_order(starts[:1], costs[:1])[2] == 2
