@@ -18,7 +18,9 @@ Method
    cones and tori"; Eberly, "Fitting 3D data with a cylinder"), by Gauss-Newton with an
    analytic Jacobian, wrapped in the robust scheme of
    :func:`asbuilt.fit._common.robust_geometric_fit` (concentration steps from the best starts,
-   MSAC choice, then least squares on the inliers).
+   MSAC choice, then least squares on the inliers). The normal-based start and the best other
+   one are both refined unless that is redundant (:func:`_trust_order`: the same hypothesis
+   twice, or a normal-based start far worse and far off).
 4. Shots on the far side of a pipe seen from one side are rejected (a station cannot see them:
    they are background shots that landed on the infinite cylinder), and the inliers are refitted
    with weights from a fitted incidence noise model (range noise along the beam makes grazing
