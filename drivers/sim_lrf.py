@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import re
 import time
+from abc import ABC, abstractmethod
 
 from .simrig import SimulatedRig
 
@@ -29,7 +30,7 @@ __all__ = ["DimetixSimulator", "LDMSimulator"]
 _DIMETIX = re.compile(rb"^s(\d)([a-z]+)([+-]\d+)?$")
 
 
-class _LineDevice:
+class _LineDevice(ABC):
     """Common line assembly: bytes in, one command per CR/LF-terminated line."""
 
     def __init__(self, rig: SimulatedRig):
@@ -53,8 +54,9 @@ class _LineDevice:
                     self._line.clear()
         return out
 
+    @abstractmethod
     def _execute(self, line: bytes) -> list[bytes]:
-        raise NotImplementedError
+        """The replies, without their line ends, to one command line."""
 
 
 class DimetixSimulator(_LineDevice):

@@ -20,6 +20,7 @@ All lengths are metres. Directions are normalised on entry.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
@@ -127,9 +128,10 @@ class RayHits:
         return o + rng[:, None] * d
 
 
-class Shape:
+class Shape(ABC):
     """A surface that rays can hit. Subclasses implement :meth:`intersect`."""
 
+    @abstractmethod
     def intersect(self, origins: np.ndarray, directions: np.ndarray):
         """Nearest positive hit of each ray.
 
@@ -143,15 +145,14 @@ class Shape:
         t : ndarray, shape (n,), metres (``inf`` for a miss)
         normal : ndarray, shape (n, 3), outward unit normal at the hit (zeros for a miss)
         """
-        raise NotImplementedError
 
+    @abstractmethod
     def bounds(self) -> np.ndarray:
         """Axis-aligned bounds, shape (2, 3) metres (min row, max row); may be infinite."""
-        raise NotImplementedError
 
+    @abstractmethod
     def sample_surface(self) -> np.ndarray:
         """Points, shape (k, 3) metres, outlining the shape (for angular windows)."""
-        raise NotImplementedError
 
 
 def _nearest(*candidates: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
