@@ -139,8 +139,8 @@ OFF_START = 100.0
 OFF_START_COS = float(np.cos(np.radians(45.0)))
 #: Two starts are one hypothesis when their axes are within 2 degrees and their centres (across
 #: the axis) and radii within 2% of the radius.
-SAME_START_COS = float(np.cos(np.radians(5.0)))
-SAME_START_RELATIVE = 0.1
+SAME_START_COS = float(np.cos(np.radians(2.0)))
+SAME_START_RELATIVE = 0.02
 #: How many of the best starts get the pattern search.
 POLISHED_STARTS = 3
 
