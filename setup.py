@@ -5,10 +5,16 @@ asbuilt.catalogs (see ``package-dir`` in pyproject.toml); setuptools' automatic 
 finds folders named after their package, so list them here.
 """
 
-from setuptools import find_packages, setup
+from setuptools import find_namespace_packages, setup
 
-packages = find_packages(".", include=["asbuilt", "asbuilt.*"])
-packages += ["asbuilt.drivers"] + [f"asbuilt.drivers.{p}" for p in find_packages("drivers")]
+# Namespace discovery so that the data folders asbuilt/data and asbuilt/schemas are packages too.
+packages = find_namespace_packages(
+    ".", include=["asbuilt", "asbuilt.*"], exclude=["*.__pycache__", "*.__pycache__.*"]
+)
+packages += ["asbuilt.drivers"] + [
+    f"asbuilt.drivers.{p}"
+    for p in find_namespace_packages("drivers", exclude=["__pycache__", "*.__pycache__"])
+]
 packages += ["asbuilt.catalogs"]
 
 setup(packages=packages)
