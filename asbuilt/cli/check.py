@@ -159,8 +159,8 @@ def run(args: argparse.Namespace) -> int:
 
     from rich.console import Console
     from rich.markup import escape
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
+    from asbuilt.cli._progress import stage_progress
     from asbuilt.rules import apply_fixes, check_model, load_rules
 
     config = load_rules(args.rules)
@@ -186,16 +186,8 @@ def run(args: argparse.Namespace) -> int:
         exporter_for(args.fix)  # an unknown suffix fails before any work
 
     err = Console(file=sys.stderr, highlight=False, soft_wrap=True)
-    with Progress(
-        TextColumn("fitting"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("{task.description}"),
-        console=err,
-        transient=True,
-        disable=not err.is_terminal,
-    ) as bar:
-        task = bar.add_task("", total=None)
+    with stage_progress(err) as bar:
+        task = bar.add_task("", total=None, stage="fitting")
         model = _load(
             args,
             config,

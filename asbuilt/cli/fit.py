@@ -52,26 +52,18 @@ def run(args: argparse.Namespace) -> int:
     import sys
 
     from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
     from rich.table import Table
 
     from asbuilt.atomic import atomic_write
+    from asbuilt.cli._progress import stage_progress
     from asbuilt.fit import fit
     from asbuilt.fit.output import TABLE_COLUMNS, fit_report_to_dict, fit_table_rows
     from asbuilt.scan import load_scan
 
     scan = load_scan(args.scan)
     err = Console(file=sys.stderr)
-    with Progress(
-        TextColumn("fitting"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("{task.description}"),
-        console=err,
-        transient=True,
-        disable=not err.is_terminal,
-    ) as bar:
-        task = bar.add_task("", total=len(scan.objects))
+    with stage_progress(err) as bar:
+        task = bar.add_task("", total=len(scan.objects), stage="fitting")
         report = fit(
             scan,
             progress=lambda done, total, oid: bar.update(task, completed=done, description=oid),

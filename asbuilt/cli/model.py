@@ -107,8 +107,8 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
+    from asbuilt.cli._progress import stage_progress
     from asbuilt.errors import ExportError
     from asbuilt.export import export_models, exporter_for
     from asbuilt.pipeline import build_model
@@ -139,15 +139,7 @@ def run(args: argparse.Namespace) -> int:
 
     scan = load_scan(args.scan)
     err = Console(file=sys.stderr)
-    with Progress(
-        TextColumn("{task.fields[stage]:<8}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("{task.description}"),
-        console=err,
-        transient=True,
-        disable=args.quiet or not err.is_terminal,
-    ) as bar:
+    with stage_progress(err, quiet=args.quiet) as bar:
         task = bar.add_task("", total=len(scan.objects), stage="fitting")
         model = build_model(
             scan,

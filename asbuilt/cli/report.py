@@ -154,8 +154,8 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
+    from asbuilt.cli._progress import stage_progress
     from asbuilt.errors import ExportError
     from asbuilt.report import SUFFIXES, report_format_for, write_reports
 
@@ -170,15 +170,7 @@ def run(args: argparse.Namespace) -> int:
         raise ExportError("--gltf must name a .glb or .gltf file", source=str(args.gltf))
 
     err = Console(file=sys.stderr)
-    with Progress(
-        TextColumn("{task.fields[stage]:<8}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("{task.description}"),
-        console=err,
-        transient=True,
-        disable=args.quiet or not err.is_terminal,
-    ) as bar:
+    with stage_progress(err, quiet=args.quiet) as bar:
         task = bar.add_task("", total=None, stage="fitting")
 
         class _Progress:
