@@ -21,7 +21,11 @@ Method
    MSAC choice, then least squares on the inliers). The normal-based start and the best other
    one are both refined unless that is redundant (:func:`_trust_order`: the same hypothesis
    twice, or a normal-based start far worse and far off).
-4. Shots on the far side of a pipe seen from one side are rejected (a station cannot see them:
+4. When the viewpoint is known and the fit is in doubt (a sparse scan, rejected shots, or a beam
+   that would have passed through the fitted pipe), the best starts are settled again and the
+   shots' beams decide (:mod:`asbuilt.fit._visibility`): a fit that explains some shots only by
+   placing them on its own far side, behind it along their beams, pays for them as outliers.
+5. Shots on the far side of a pipe seen from one side are rejected (a station cannot see them:
    they are background shots that landed on the infinite cylinder), and the inliers are refitted
    with weights from a fitted incidence noise model (range noise along the beam makes grazing
    shots more precise than square-on ones).
@@ -34,6 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.errors import FitError
+from asbuilt.fit._circles import circle_starts
 from asbuilt.fit._common import (
     GeometricModel,
     RobustFit,
@@ -55,6 +60,7 @@ from asbuilt.fit._common import (
     tukey_weights,
     validate_points,
 )
+from asbuilt.fit._visibility import cylinder_beam_excess, reconsidered
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cylinder
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
@@ -143,6 +149,9 @@ SAME_START_COS = float(np.cos(np.radians(2.0)))
 SAME_START_RELATIVE = 0.02
 #: How many of the best starts get the pattern search.
 POLISHED_STARTS = 3
+#: How many of the best starts are settled again and judged by their beams when the viewpoint
+#: is known (:func:`asbuilt.fit._visibility.reconsidered`).
+RECONSIDERED_STARTS = 4
 
 
 def _median(values: np.ndarray) -> float:
@@ -224,160 +233,6 @@ def _axis_starts(points: np.ndarray, normals, flatness, directions=None) -> list
     return _unique(list(_normal_axis(normals, flatness)) + list(directions))
 
 
-def _kasa_design(xy: np.ndarray) -> np.ndarray:
-    """The Kasa least-squares system's rows ``(x, y, 1, -(x^2 + y^2))``, shape (a, n, 4)."""
-    design = np.empty(xy.shape[:2] + (4,))
-    design[:, :, :2] = xy
-    design[:, :, 2] = 1.0
-    np.einsum("ank,ank->an", xy, xy, out=design[:, :, 3])
-    design[:, :, 3] *= -1.0
-    return design
-
-
-def _kasa_batch(xy: np.ndarray, weights: np.ndarray, design: np.ndarray | None = None):
-    """Weighted Kasa circles (Kasa 1976) for a batch of projections.
-
-    Parameters
-    ----------
-    xy : ndarray, shape (a, n, 2), metres
-    weights : ndarray, shape (a, n)
-    design : ndarray, shape (a, n, 4), optional
-        ``_kasa_design(xy)`` when the caller has it already.
-
-    Returns
-    -------
-    center : ndarray, shape (a, 2), metres
-    radius : ndarray, shape (a,), metres (NaN where undefined)
-    """
-    if design is None:
-        design = _kasa_design(xy)
-    # One product gives the normal matrix (first three columns) and the right-hand side.
-    system = (design.transpose(0, 2, 1) * weights[:, None, :]) @ design
-    normal, right = system[:, :3, :3], system[:, :3, 3:]
-    try:
-        solution = np.linalg.solve(normal, right)[:, :, 0]
-    except np.linalg.LinAlgError:
-        # Some projections are degenerate (points on a line across the axis): no circle there.
-        singular = np.linalg.svd(normal, compute_uv=False)
-        degenerate = singular[:, -1] <= 1e-12 * singular[:, 0]
-        solution = (np.linalg.pinv(normal) @ right)[:, :, 0]
-        solution[degenerate] = np.nan
-    center = -0.5 * solution[:, :2]
-    squared = np.einsum("ak,ak->a", center, center) - solution[:, 2]
-    with np.errstate(invalid="ignore"):
-        radius = np.sqrt(np.where(squared > 0, squared, np.nan))
-    return center, radius
-
-
-def _norm2(dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
-    """``sqrt(dx^2 + dy^2)`` in place in ``dx`` (which must be a fresh array); several times
-    faster than :func:`numpy.hypot`, whose overflow care the centred points do not need."""
-    dx *= dx
-    dy *= dy
-    dx += dy
-    return np.sqrt(dx, out=dx)
-
-
-def _circle_starts(
-    points: np.ndarray, axes: list, keep: int, rng, samples: int = 24, keep_invalid: bool = False
-):
-    """Centre and radius for each candidate axis, robust to background shots.
-
-    For every axis (all at once, vectorised), the points are projected on the plane across it;
-    the Kasa circle of all of them and the best circumcircle of random point triples (by
-    trimmed cost, a RANSAC-style start: Fischler & Bolles 1981) compete by trimmed cost, and the
-    winner is polished by two least-trimmed-squares concentration steps (Rousseeuw & Van
-    Driessen 2006: the Kasa circle of the ``keep`` points closest to the current circle).
-
-    Parameters
-    ----------
-    points : ndarray, shape (n, 3), metres (centred)
-    axes : list of ndarray, shape (3,)
-    keep : int
-    rng : numpy.random.Generator
-    samples : int
-        Random triples per axis.
-    keep_invalid : bool
-        Return a state for every axis (cost infinite where no circle was found) instead of
-        dropping those.
-
-    Returns
-    -------
-    states : list of (axis, center (3,), radius)
-    costs : list of float
-        Each state's least-trimmed-squares cost (the projected circle distances are the
-        cylinder's orthogonal residuals).
-    """
-    n = len(points)
-    keep = min(keep, n)
-    count = len(axes)
-    frame = np.empty((2, count, 3))
-    for k, axis in enumerate(axes):
-        frame[0, k], frame[1, k] = orthonormal_basis(axis)
-    u, v = frame[0], frame[1]
-    xy = (points @ frame.reshape(2 * count, 3).T).reshape(n, 2, count).transpose(2, 0, 1)
-    xy = np.ascontiguousarray(xy)  # (a, n, 2)
-    x, y = xy[:, :, 0], xy[:, :, 1]
-    design = _kasa_design(xy)
-    rows = np.arange(count)
-
-    def distances(center, radius):
-        distance = _norm2(x - center[:, :1], y - center[:, 1:])
-        distance -= radius[:, None]
-        np.abs(distance, out=distance)
-        distance[~np.isfinite(distance)] = np.inf
-        return distance
-
-    def trimmed(distance):
-        squared = distance * distance
-        return np.partition(squared, keep - 1, axis=1)[:, :keep].sum(axis=1)
-
-    center, radius = _kasa_batch(xy, np.ones((count, n)), design)
-    cost = trimmed(distances(center, radius))
-    # Circumcircles of random triples, shared across axes.
-    index = rng.integers(0, n, (samples, 3))
-    pa, pb, pc = xy[:, index[:, 0]], xy[:, index[:, 1]], xy[:, index[:, 2]]  # (a, t, 2)
-    ax_, ay_ = pa[..., 0], pa[..., 1]
-    bx, by = pb[..., 0], pb[..., 1]
-    cx, cy = pc[..., 0], pc[..., 1]
-    bcy, cay, aby = by - cy, cy - ay_, ay_ - by
-    det = 2.0 * (ax_ * bcy + bx * cay + cx * aby)
-    sa, sb, sc = ax_ * ax_ + ay_ * ay_, bx * bx + by * by, cx * cx + cy * cy
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ux = (sa * bcy + sb * cay + sc * aby) / det
-        uy = (sa * (cx - bx) + sb * (ax_ - cx) + sc * (bx - ax_)) / det
-        tr = _norm2(ax_ - ux, ay_ - uy)
-        sq = _norm2(x[:, None, :] - ux[..., None], y[:, None, :] - uy[..., None])
-        sq -= tr[..., None]
-        sq *= sq
-    sq[~np.isfinite(sq)] = np.inf
-    tcost = np.partition(sq, keep - 1, axis=2)[:, :, :keep].sum(axis=2)  # (a, t)
-    best = np.argmin(tcost, axis=1)
-    better = tcost[rows, best] < np.where(np.isfinite(cost), cost, np.inf)
-    center = np.where(better[:, None], np.stack([ux[rows, best], uy[rows, best]], 1), center)
-    radius = np.where(better, tr[rows, best], radius)
-    weights = np.empty((count, n))
-    for _ in range(2):
-        closest = np.argpartition(distances(center, radius), keep - 1, axis=1)[:, :keep]
-        weights.fill(0.0)
-        weights[rows[:, None], closest] = 1.0
-        new_center, new_radius = _kasa_batch(xy, weights, design)
-        ok = np.isfinite(new_radius)
-        center = np.where(ok[:, None], new_center, center)
-        radius = np.where(ok, new_radius, radius)
-    cost = trimmed(distances(center, radius))
-    axis_array = np.asarray(axes)
-    centroid = points.mean(axis=0)
-    middles = center[:, :1] * u + center[:, 1:] * v + (axis_array @ centroid)[:, None] * axis_array
-    valid = np.isfinite(radius) & (radius > 0) & np.isfinite(middles).all(axis=1)
-    if keep_invalid:
-        costs = np.where(valid, cost, np.inf).tolist()
-        return [(axes[k], middles[k], float(radius[k])) for k in range(count)], costs
-    keep_rows = np.flatnonzero(valid).tolist()
-    radii, costs = radius.tolist(), cost.tolist()
-    return [(axes[k], middles[k], radii[k]) for k in keep_rows], [costs[k] for k in keep_rows]
-
-
 def _polish_axes(points, states, costs, keep, rng, steps=(8.0, 4.0, 2.0, 1.0, 0.5, 0.25)):
     """Pattern search on the axis (Hooke & Jeeves 1961) around each start, on the trimmed cost
     of the robust circle across each trial axis (all starts' rings in one batch per step).
@@ -397,7 +252,7 @@ def _polish_axes(points, states, costs, keep, rng, steps=(8.0, 4.0, 2.0, 1.0, 0.
             u, v = orthonormal_basis(state[0])
             trial = state[0] + tilt * (cos_ring * u + sin_ring * v)
             trials.extend(trial / np.linalg.norm(trial, axis=1)[:, None])
-        found, found_costs = _circle_starts(points, trials, keep, rng, keep_invalid=True)
+        found, found_costs = circle_starts(points, trials, keep, rng, keep_invalid=True)
         for k in range(len(states)):
             block = found_costs[8 * k : 8 * k + 8]
             best = int(np.argmin(block))
@@ -510,7 +365,9 @@ def _pair_starts(points, normals, keep: int, count: int, samples: int = 48):
     return [axis[i] for i in order if radius[i] > 0]
 
 
-def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES) -> FitResult:
+def fit_cylinder(
+    points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES, viewpoint=None
+) -> FitResult:
     """Fit a bounded circular cylinder to points on its visible side.
 
     Works on partial arcs down to about 90 degrees and on stubs shorter than their diameter;
@@ -526,6 +383,10 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
         The sensor's range sigma (of a square-on shot); sets the inlier threshold and scales
         the standard errors when given.
     tolerances : Tolerances
+    viewpoint : array_like, shape (3,), metres, optional
+        Where the shots were taken from. When given, the fit settled from each of the best starts
+        is also considered and the beams decide between them (a shot's beam must reach it
+        without passing through the pipe, :mod:`asbuilt.fit._visibility`).
 
     Returns
     -------
@@ -570,7 +431,7 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
     line = _line_axis(local, keep, rng)
     if line is not None:
         axes.append(line)
-    starts, costs = _circle_starts(local, axes, keep, rng)
+    starts, costs = circle_starts(local, axes, keep, rng)
 
     def robust_from(starts, costs):
         starts, costs, trusted = _trust_order(starts, costs)
@@ -593,7 +454,8 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
         return starts[:1] + better + starts[1:], costs[:1] + better_costs + costs[1:]
 
     if starts and len(local) < POLISH_BELOW:
-        robust = robust_from(*polished(starts, costs))
+        starts, costs = polished(starts, costs)
+        robust = robust_from(starts, costs)
     else:
         robust = robust_from(starts, costs)
         if starts and not robust.inliers.all():
@@ -604,6 +466,28 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
                 second = None
             if second is not None and _likelier(second, robust, local, tolerances):
                 robust = second
+    view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64) - offset
+    if (
+        view is not None
+        and starts
+        and _doubtful(robust, local, view, len(local), sigma, tolerances)
+    ):
+        # A seed that is the robust fit's own hypothesis (or an earlier seed's) would settle
+        # where that one did.
+        seeds = []
+        for k in np.argsort(costs)[:RECONSIDERED_STARTS]:
+            if not any(_same_start(starts[k], other) for other in [robust.state, *seeds]):
+                seeds.append(starts[k])
+        robust = reconsidered(
+            robust,
+            local,
+            seeds,
+            _MODEL,
+            lambda state, x: cylinder_beam_excess(*state, x, view),
+            kind="cylinder",
+            sigma=sigma,
+            tolerances=tolerances,
+        )
     near = robust
     robust = _drop_far_side(near, local, tolerances)
     far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
@@ -677,6 +561,19 @@ def fit_cylinder(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERAN
 ONE_SIDED = 0.5
 #: Angle from the seen side's mean direction beyond which a point faces away from it.
 FAR_SIDE_DEG = 95.0
+
+
+def _doubtful(robust: RobustFit, points, view, count: int, sigma, tolerances: Tolerances) -> bool:
+    """Whether a robust fit deserves a second look at the other starts (:func:`reconsidered`).
+
+    Sparse scans (below ``POLISH_BELOW`` points) always do: there a subset of the shots can
+    pull the choice of start into the wrong basin. Larger ones do when the fit rejected shots
+    or some inlier's beam ran through the fitted pipe by more than the inlier threshold.
+    """
+    if count < POLISH_BELOW or not robust.inliers.all():
+        return True
+    threshold = tolerances.outlier_cutoff_sigma * (sigma if sigma is not None else robust.scale)
+    return bool(np.any(cylinder_beam_excess(*robust.state, points, view) > threshold))
 
 
 def _drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances) -> RobustFit:

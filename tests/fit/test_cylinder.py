@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 from fit_scans import angle_deg, raster_scan
 
 from asbuilt.errors import FitError
+from asbuilt.fit._circles import kasa_batch
 from asbuilt.fit._common import RobustFit, orthonormal_basis
+from asbuilt.fit._visibility import cylinder_beam_excess
 from asbuilt.fit.cylinder import (
     _MODEL,
     _incidence_weighted,
-    _kasa_batch,
     _trust_order,
     fit_cylinder,
 )
@@ -118,7 +122,7 @@ def test_kasa_circles_are_exact_on_exact_arcs_and_undefined_on_lines(start, stop
     line = np.column_stack([np.arange(12.0), np.zeros(12)])
     weights = np.ones((2, 12))
     weights[0, ::3] = 0.0  # weights select the points (concentration steps)
-    center, radius = _kasa_batch(np.stack([arc, line]), weights)
+    center, radius = kasa_batch(np.stack([arc, line]), weights)
     np.testing.assert_allclose(center[0], [3, -1], atol=1e-9)
     assert radius[0] == pytest.approx(2.0)
     assert not np.isfinite(radius[1]) or radius[1] > 1e6
@@ -302,3 +306,37 @@ def test_trust_order_skips_only_redundant_refinements(second, costs, order, trus
     assert [next(k for k, s in enumerate(starts) if s is got) for got in got_starts] == order
     assert got_costs == [costs[k] for k in order]
     assert _trust_order(starts[:1], costs[:1])[2] == 2
+
+
+_SPARSE = json.loads((Path(__file__).parent / "sparse_long_pipes.json").read_text())
+
+
+@pytest.mark.parametrize("scan", _SPARSE["scans"], ids=lambda s: s["source"][-28:])
+def test_the_viewpoint_rules_out_thin_pipes_seen_through_themselves(scan):
+    # Twenty shots of a long thin pipe (simulated, clean) that a thinner, tilted cylinder fits
+    # more closely: some of its "inliers" lie on its far side, behind it along their beams.
+    # Knowing where the shots came from, the fit must find the pipe whose beams are clear.
+    points = np.array(scan["points"])
+    viewpoint = np.array(_SPARSE["viewpoint"])
+    sigma = _SPARSE["range_sigma"]
+    seen = fit_cylinder(points, sigma=sigma, viewpoint=viewpoint)
+    got = seen.primitive
+    excess = cylinder_beam_excess(got.axis, got.center, got.radius, points, viewpoint)
+    assert excess[seen.inliers].max() <= 3 * sigma
+    assert abs(got.radius - scan["radius"]) <= 4.5 * seen.stderr["radius"] + 1e-3
+    assert angle_deg(got.axis, scan["axis"]) < 2.0
+    blind = fit_cylinder(points, sigma=sigma).primitive
+    assert abs(blind.radius - scan["radius"]) > abs(got.radius - scan["radius"])
+    assert (
+        cylinder_beam_excess(blind.axis, blind.center, blind.radius, points, viewpoint).max()
+        > 3 * sigma
+    )
+
+
+def test_a_viewpoint_does_not_change_a_clear_fit(rng):
+    pipe = _pipe(0.2191, 3, 5, [1, 0.5, 0.3])
+    sample = raster_scan(pipe, SENSOR, 40, rng)
+    blind = fit_cylinder(sample.points, sigma=0.002)
+    seen = fit_cylinder(sample.points, sigma=0.002, viewpoint=SENSOR)
+    assert seen.primitive.radius == pytest.approx(blind.primitive.radius, abs=1e-9)
+    np.testing.assert_allclose(seen.primitive.axis, blind.primitive.axis, atol=1e-9)

@@ -1,0 +1,168 @@
+"""Robust circle starts for the cylinder fit: the circle across each candidate axis.
+
+Private helper of :mod:`asbuilt.fit.cylinder`. For a candidate axis the points are projected on
+the plane perpendicular to it; a pipe's shots then lie on a circle (background shots off it).
+Everything here is batched over many candidate axes at once; lengths in metres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from asbuilt.fit._common import orthonormal_basis
+
+__all__ = ["circle_starts", "kasa_batch"]
+
+
+def _kasa_design(xy: np.ndarray) -> np.ndarray:
+    """The Kasa least-squares system's rows ``(x, y, 1, -(x^2 + y^2))``, shape (a, n, 4)."""
+    design = np.empty(xy.shape[:2] + (4,))
+    design[:, :, :2] = xy
+    design[:, :, 2] = 1.0
+    np.einsum("ank,ank->an", xy, xy, out=design[:, :, 3])
+    design[:, :, 3] *= -1.0
+    return design
+
+
+def kasa_batch(xy: np.ndarray, weights: np.ndarray, design: np.ndarray | None = None):
+    """Weighted Kasa circles (Kasa 1976) for a batch of projections.
+
+    Parameters
+    ----------
+    xy : ndarray, shape (a, n, 2), metres
+    weights : ndarray, shape (a, n)
+    design : ndarray, shape (a, n, 4), optional
+        ``_kasa_design(xy)`` when the caller has it already.
+
+    Returns
+    -------
+    center : ndarray, shape (a, 2), metres
+    radius : ndarray, shape (a,), metres (NaN where undefined)
+    """
+    if design is None:
+        design = _kasa_design(xy)
+    # One product gives the normal matrix (first three columns) and the right-hand side.
+    system = (design.transpose(0, 2, 1) * weights[:, None, :]) @ design
+    normal, right = system[:, :3, :3], system[:, :3, 3:]
+    try:
+        solution = np.linalg.solve(normal, right)[:, :, 0]
+    except np.linalg.LinAlgError:
+        # Some projections are degenerate (points on a line across the axis): no circle there.
+        singular = np.linalg.svd(normal, compute_uv=False)
+        degenerate = singular[:, -1] <= 1e-12 * singular[:, 0]
+        solution = (np.linalg.pinv(normal) @ right)[:, :, 0]
+        solution[degenerate] = np.nan
+    center = -0.5 * solution[:, :2]
+    squared = np.einsum("ak,ak->a", center, center) - solution[:, 2]
+    with np.errstate(invalid="ignore"):
+        radius = np.sqrt(np.where(squared > 0, squared, np.nan))
+    return center, radius
+
+
+def _norm2(dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
+    """``sqrt(dx^2 + dy^2)`` in place in ``dx`` (which must be a fresh array); several times
+    faster than :func:`numpy.hypot`, whose overflow care the centred points do not need."""
+    dx *= dx
+    dy *= dy
+    dx += dy
+    return np.sqrt(dx, out=dx)
+
+
+def circle_starts(
+    points: np.ndarray, axes: list, keep: int, rng, samples: int = 24, keep_invalid: bool = False
+):
+    """Centre and radius for each candidate axis, robust to background shots.
+
+    For every axis (all at once, vectorised), the points are projected on the plane across it;
+    the Kasa circle of all of them and the best circumcircle of random point triples (by
+    trimmed cost, a RANSAC-style start: Fischler & Bolles 1981) compete by trimmed cost, and the
+    winner is polished by two least-trimmed-squares concentration steps (Rousseeuw & Van
+    Driessen 2006: the Kasa circle of the ``keep`` points closest to the current circle).
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres (centred)
+    axes : list of ndarray, shape (3,)
+    keep : int
+    rng : numpy.random.Generator
+    samples : int
+        Random triples per axis.
+    keep_invalid : bool
+        Return a state for every axis (cost infinite where no circle was found) instead of
+        dropping those.
+
+    Returns
+    -------
+    states : list of (axis, center (3,), radius)
+    costs : list of float
+        Each state's least-trimmed-squares cost (the projected circle distances are the
+        cylinder's orthogonal residuals).
+    """
+    n = len(points)
+    keep = min(keep, n)
+    count = len(axes)
+    frame = np.empty((2, count, 3))
+    for k, axis in enumerate(axes):
+        frame[0, k], frame[1, k] = orthonormal_basis(axis)
+    u, v = frame[0], frame[1]
+    xy = (points @ frame.reshape(2 * count, 3).T).reshape(n, 2, count).transpose(2, 0, 1)
+    xy = np.ascontiguousarray(xy)  # (a, n, 2)
+    x, y = xy[:, :, 0], xy[:, :, 1]
+    design = _kasa_design(xy)
+    rows = np.arange(count)
+
+    def distances(center, radius):
+        distance = _norm2(x - center[:, :1], y - center[:, 1:])
+        distance -= radius[:, None]
+        np.abs(distance, out=distance)
+        distance[~np.isfinite(distance)] = np.inf
+        return distance
+
+    def trimmed(distance):
+        squared = distance * distance
+        return np.partition(squared, keep - 1, axis=1)[:, :keep].sum(axis=1)
+
+    center, radius = kasa_batch(xy, np.ones((count, n)), design)
+    cost = trimmed(distances(center, radius))
+    # Circumcircles of random triples, shared across axes.
+    index = rng.integers(0, n, (samples, 3))
+    pa, pb, pc = xy[:, index[:, 0]], xy[:, index[:, 1]], xy[:, index[:, 2]]  # (a, t, 2)
+    ax_, ay_ = pa[..., 0], pa[..., 1]
+    bx, by = pb[..., 0], pb[..., 1]
+    cx, cy = pc[..., 0], pc[..., 1]
+    bcy, cay, aby = by - cy, cy - ay_, ay_ - by
+    det = 2.0 * (ax_ * bcy + bx * cay + cx * aby)
+    sa, sb, sc = ax_ * ax_ + ay_ * ay_, bx * bx + by * by, cx * cx + cy * cy
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ux = (sa * bcy + sb * cay + sc * aby) / det
+        uy = (sa * (cx - bx) + sb * (ax_ - cx) + sc * (bx - ax_)) / det
+        tr = _norm2(ax_ - ux, ay_ - uy)
+        sq = _norm2(x[:, None, :] - ux[..., None], y[:, None, :] - uy[..., None])
+        sq -= tr[..., None]
+        sq *= sq
+    sq[~np.isfinite(sq)] = np.inf
+    tcost = np.partition(sq, keep - 1, axis=2)[:, :, :keep].sum(axis=2)  # (a, t)
+    best = np.argmin(tcost, axis=1)
+    better = tcost[rows, best] < np.where(np.isfinite(cost), cost, np.inf)
+    center = np.where(better[:, None], np.stack([ux[rows, best], uy[rows, best]], 1), center)
+    radius = np.where(better, tr[rows, best], radius)
+    weights = np.empty((count, n))
+    for _ in range(2):
+        closest = np.argpartition(distances(center, radius), keep - 1, axis=1)[:, :keep]
+        weights.fill(0.0)
+        weights[rows[:, None], closest] = 1.0
+        new_center, new_radius = kasa_batch(xy, weights, design)
+        ok = np.isfinite(new_radius)
+        center = np.where(ok[:, None], new_center, center)
+        radius = np.where(ok, new_radius, radius)
+    cost = trimmed(distances(center, radius))
+    axis_array = np.asarray(axes)
+    centroid = points.mean(axis=0)
+    middles = center[:, :1] * u + center[:, 1:] * v + (axis_array @ centroid)[:, None] * axis_array
+    valid = np.isfinite(radius) & (radius > 0) & np.isfinite(middles).all(axis=1)
+    if keep_invalid:
+        costs = np.where(valid, cost, np.inf).tolist()
+        return [(axes[k], middles[k], float(radius[k])) for k in range(count)], costs
+    keep_rows = np.flatnonzero(valid).tolist()
+    radii, costs = radius.tolist(), cost.tolist()
+    return [(axes[k], middles[k], radii[k]) for k in keep_rows], [costs[k] for k in keep_rows]

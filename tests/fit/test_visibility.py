@@ -1,0 +1,95 @@
+"""Free-space evidence: beam excess through a cylinder, and the MSAC score that uses it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from asbuilt.fit._visibility import cylinder_beam_excess, visible_score
+
+AXIS = np.array([0.0, 0.0, 1.0])
+CENTER = np.zeros(3)
+
+
+def _marched_excess(axis, center, radius, point, viewpoint, steps=200_001):
+    """Independent truth: march along the beam and measure the length inside the cylinder
+    from the entry point up to the shot's point, capped at the chord (as documented)."""
+    t = np.linspace(0.0, 1.0, steps)
+    beam = viewpoint + t[:, None] * (point - viewpoint)
+    rel = beam - center
+    across = rel - np.outer(rel @ axis, axis)
+    inside = np.linalg.norm(across, axis=1) < radius
+    if not inside.any():
+        return 0.0
+    length = np.linalg.norm(point - viewpoint)
+    first = t[np.argmax(inside)] * length
+    # Far end of the chord along the (infinite) beam line.
+    line = viewpoint + np.linspace(0.0, 4.0, 4 * steps)[:, None] * (point - viewpoint)
+    rel = line - center
+    across = rel - np.outer(rel @ axis, axis)
+    inside_line = np.linalg.norm(across, axis=1) < radius
+    last = np.linspace(0.0, 4.0, 4 * steps)[np.flatnonzero(inside_line)[-1]] * length
+    chord = last - first
+    middle = 0.5 * (first + last)
+    return float(np.clip(2.0 * (length - middle), 0.0, chord))
+
+
+@pytest.mark.parametrize(
+    "point, viewpoint, expected",
+    [
+        ([1.0, 0.0, 0.0], [10.0, 0.0, 0.0], 0.0),  # near side, square on
+        ([-1.0, 0.0, 0.0], [10.0, 0.0, 0.0], 2.0),  # far side: the whole chord
+        ([-5.0, 0.0, 0.0], [10.0, 0.0, 0.0], 2.0),  # behind the pipe
+        ([0.0, 0.0, 0.0], [10.0, 0.0, 0.0], 0.0),  # the chord's middle
+        ([-0.5, 0.0, 0.0], [10.0, 0.0, 0.0], 1.0),  # half-way to the far side
+        ([5.0, 3.0, 0.0], [10.0, 0.0, 0.0], 0.0),  # the beam misses the pipe
+        ([0.0, 1.0, 0.0], [10.0, 1.0, 0.0], 0.0),  # grazing: a zero-length chord
+    ],
+)
+def test_beam_excess_on_a_unit_pipe(point, viewpoint, expected):
+    got = cylinder_beam_excess(AXIS, CENTER, 1.0, np.array([point]), np.array(viewpoint))
+    assert got[0] == pytest.approx(expected, abs=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.floats(-1.5, 1.5),
+    st.floats(-1.5, 1.5),
+    st.floats(-2.0, 2.0),
+    st.floats(-1.0, 1.0),
+    st.floats(2.0, 8.0),
+)
+def test_beam_excess_matches_marching_along_an_oblique_beam(x, y, z, lift, distance):
+    viewpoint = np.array([distance, 0.3 * distance, lift * distance])
+    point = np.array([x, y, z])
+    got = cylinder_beam_excess(AXIS, CENTER, 1.0, point[None], viewpoint)[0]
+    assert got == pytest.approx(_marched_excess(AXIS, CENTER, 1.0, point, viewpoint), abs=2e-3)
+
+
+def test_beam_excess_does_not_depend_on_the_frame(rng):
+    points = rng.normal(size=(30, 3))
+    viewpoint = np.array([6.0, 2.0, 1.0])
+    axis = np.array([0.3, -0.2, 1.0]) / np.linalg.norm([0.3, -0.2, 1.0])
+    before = cylinder_beam_excess(axis, CENTER, 0.8, points, viewpoint)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    shift = rng.normal(size=3)
+    after = cylinder_beam_excess(
+        q @ axis, q @ CENTER + shift, 0.8, points @ q.T + shift, q @ viewpoint + shift
+    )
+    np.testing.assert_allclose(after, before, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "residuals, excess, expected",
+    [
+        ([0.0, 0.002, -0.002], [0.0, 0.0, 0.0], 2.0),
+        ([0.0, 0.0], [0.004, 0.0], 4.0),  # a beam through the pipe costs like a residual
+        ([1.0, 0.0], [0.0, 0.0], 9.0),  # an outlier pays the cap, no more
+        ([0.0], [1.0], 9.0),
+    ],
+)
+def test_visible_score_is_truncated_at_the_cutoff(residuals, excess, expected):
+    score = visible_score(np.array(residuals), np.array(excess), 0.002, 3.0)
+    assert score == pytest.approx(expected)
