@@ -4,14 +4,16 @@ A target is what the operator says and points at: an id, a kind and a window of 
 (two corner directions). A plan file lists targets for repeatable runs::
 
     {"format": "asbuilt-scan-plan", "version": 1,
-     "settings": {"retries": 2, "edge_pairs": 4, "edge_depth": 2},
+     "settings": {"retries": 2, "edge_pairs": 4, "edge_tolerance": 0.002},
      "targets": [
        {"id": "P1", "kind": "cylinder", "window_deg": [-10, -3, 12, 4],
         "points": 24, "group": "line-1", "nominal": "4\\""}]}
 
 ``window_deg`` is ``[pan1, tilt1, pan2, tilt2]``: two opposite corners in the pan-tilt unit's
 own degrees (as its position readout shows them); ``points`` is optional (default: the paper's
-minimum for the kind). Settings are optional and override the command-line defaults.
+minimum for the kind). Settings are optional and override the command-line defaults; they are
+the fields of :class:`SessionSettings` (``edge_tolerance`` in metres, the others counts or
+true/false).
 """
 
 from __future__ import annotations
@@ -186,9 +188,17 @@ class SessionSettings:
     retries : int
         Extra attempts for a shot that fails with a device error, before it is skipped.
     edge_pairs : int
-        Hit/miss neighbour pairs refined per object by bisection.
+        Hit/miss neighbour pairs refined per object by bisection, dealt in turn to the
+        silhouette's four sides (left, right, bottom, top) so that every side gets some.
     edge_depth : int
-        Bisection steps per pair (each halves the angular uncertainty of the boundary).
+        Most bisection steps per pair (each halves the angular bracket of the boundary).
+    edge_tolerance : float
+        Metres: a pair is bisected until its bracket, as an angle times the range of its
+        inside shot (the width across the beam at the object), is at most this (or
+        ``edge_depth`` steps are taken). 2 mm is about the range noise and the pointing noise
+        at 10 m, below which bisection gains nothing.
+    edge_shots : int
+        Most bisection shots per object, all pairs together.
     fill_rounds : int
         Denser rasters over the object's angular extent when the first raster put too few
         points on it.
@@ -200,17 +210,25 @@ class SessionSettings:
 
     retries: int = 2
     edge_pairs: int = 4
-    edge_depth: int = 2
+    edge_depth: int = 8
+    edge_tolerance: float = 0.002
+    edge_shots: int = 32
     fill_rounds: int = 2
     lost_after: int = 3
     keep_background: bool = False
 
     def __post_init__(self) -> None:
-        for name in ("retries", "edge_pairs", "edge_depth", "fill_rounds"):
+        for name in ("retries", "edge_pairs", "edge_depth", "edge_shots", "fill_rounds"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be >= 0")
+        if not (math.isfinite(self.edge_tolerance) and self.edge_tolerance > 0):
+            raise ValueError("edge_tolerance must be a length > 0 (metres)")
         if self.lost_after < 1:
             raise ValueError("lost_after must be >= 1")
+
+    def edge_budget(self) -> int:
+        """Most bisection shots one object can take (pairs x depth, capped by ``edge_shots``)."""
+        return min(self.edge_shots, self.edge_pairs * self.edge_depth)
 
 
 #: The default settings (module-level so functions can default to it).
@@ -229,6 +247,8 @@ _SETTING_TYPES = {
     "retries": int,
     "edge_pairs": int,
     "edge_depth": int,
+    "edge_tolerance": float,
+    "edge_shots": int,
     "fill_rounds": int,
     "lost_after": int,
     "keep_background": bool,
@@ -278,16 +298,22 @@ def load_plan(path) -> Plan:
                 source=source,
                 where=f"settings.{key}",
             )
-        if (
-            not isinstance(value, kind)
-            or (kind is int and isinstance(value, bool))
-            or (kind is int and value < 0)
-        ):
-            raise ScanError(
-                f"must be {'true or false' if kind is bool else 'an integer >= 0'}",
-                source=source,
-                where=f"settings.{key}",
+        if kind is float:
+            ok = (
+                isinstance(value, (int, float))
+                and not isinstance(value, bool)
+                and math.isfinite(value)
+                and value > 0
             )
+            expected = "a length in metres > 0"
+        elif kind is int:
+            ok = isinstance(value, int) and not isinstance(value, bool) and value >= 0
+            expected = "an integer >= 0"
+        else:
+            ok = isinstance(value, bool)
+            expected = "true or false"
+        if not ok:
+            raise ScanError(f"must be {expected}", source=source, where=f"settings.{key}")
     return Plan(targets, dict(settings))
 
 

@@ -12,10 +12,18 @@ Per object (:func:`scan_target`, deterministic given the measured ranges):
 3. **Fill.** If fewer than the wanted points landed on the object, a denser raster over the
    object's angular extent (its foreground cells, widened by half a cell) adds them
    (``fill_rounds`` times at most).
-4. **Edges.** Neighbouring raster cells of which one is on the object and the other not bracket
-   the object's silhouette; ``edge_pairs`` of them, spread over the boundary, are bisected
-   ``edge_depth`` times (shoot the midpoint, keep the half that still brackets the edge), which
-   pins the boundary to a quarter cell with two shots per pair.
+4. **Edges.** Neighbouring cells of which one is on the object and the other not bracket the
+   object's silhouette; each pair belongs to the side its outside cell is on (left, right,
+   bottom, top: lower or higher pan or tilt), taken from the finest raster that has pairs
+   there. ``edge_pairs`` pairs are dealt to the sides in turn (every side gets some), each
+   side's share at evenly spaced quantiles of its pairs (its middle pair for one). A pair is
+   bisected (shoot the midpoint, keep the half that still brackets the edge) until the
+   bracket, as an angle times the range of its inside shot, is at most ``edge_tolerance``
+   metres, ``edge_depth`` steps at most, ``edge_shots`` shots per object at most. The last hit
+   of a pair then lies within ``edge_tolerance`` (across the beam) of the silhouette edge,
+   which bounds the object's unseen edges (a face's far edge, a column's top) far better than
+   the raster (up to one raster step short). On a face seen at incidence ``theta`` the
+   bracket along the face is ``edge_tolerance / cos(theta)``.
 
 Every shot is appended to a JSON-lines journal beside the output (``<out>.journal``) and
 flushed to disk (fsync) before the next one, so nothing measured is lost; after each object the
@@ -350,55 +358,101 @@ def scan_target(
 
     threshold = foreground_threshold(s.range for s in shots)
     fg = on_object(threshold)
-    pairs = []
+    sides: dict[str, list] = {side: [] for side in _SIDES}
     for start, r0, c0, win0 in reversed(grids):  # finest grid first
         cells = fg[start : start + r0 * c0][_cell_index(r0, c0)]
+        index = _cell_index(r0, c0) + start
         dp, dt = win0.width / c0, win0.height / r0
-        for inside, outside in _boundary_pairs(cells):
-            pairs.append(
-                tuple(
-                    np.array([win0.pan_min + (c + 0.5) * dp, win0.tilt_min + (r + 0.5) * dt])
-                    for r, c in (inside, outside)
+        found = _boundary_pairs(cells)
+        for side in _SIDES:
+            if sides[side] or not found[side]:
+                continue  # a side keeps the pairs of the finest grid that has any there
+            sides[side] = [
+                (
+                    np.array([win0.pan_min + (c + 0.5) * dp, win0.tilt_min + (r + 0.5) * dt]),
+                    np.array([win0.pan_min + (c2 + 0.5) * dp, win0.tilt_min + (r2 + 0.5) * dt]),
+                    float(shots[index[r, c]].range),
                 )
-            )
-    if pairs and settings.edge_pairs and settings.edge_depth:
-        pick = np.unique(
-            np.linspace(0, len(pairs) - 1, min(settings.edge_pairs, len(pairs))).round()
-        )
-        for k in pick.astype(int):
-            inside, outside = pairs[k]
-            for _ in range(settings.edge_depth):
-                mid = 0.5 * (inside + outside)
-                shot = shoot(float(mid[0]), float(mid[1]), "edge")
-                shots.append(shot)
-                hit = shot.range is not None and (
-                    settings.keep_background or shot.range < threshold
-                )
-                if hit:
-                    inside = mid
-                else:
-                    outside = mid
+                for (r, c), (r2, c2) in found[side]
+            ]
+    budget = settings.edge_budget()
+    for inside, outside, reach in _deal_pairs(sides, settings.edge_pairs):
+        for _ in range(settings.edge_depth):
+            if budget <= 0 or _bracket(inside, outside) * reach <= settings.edge_tolerance:
+                break
+            mid = 0.5 * (inside + outside)
+            shot = shoot(float(mid[0]), float(mid[1]), "edge")
+            shots.append(shot)
+            budget -= 1
+            hit = shot.range is not None and (settings.keep_background or shot.range < threshold)
+            if hit:
+                inside, reach = mid, float(shot.range)
+            else:
+                outside = mid
     return ObjectScan(target, tuple(shots), on_object(threshold))
 
 
-def _boundary_pairs(cells: np.ndarray) -> list[tuple[tuple[int, int], tuple[int, int]]]:
-    """(inside cell, outside cell) for every pair of neighbours that straddles the boundary.
+#: The silhouette's sides, in the order pairs are dealt to them: pan low and high (left, right),
+#: tilt low and high (bottom, top).
+_SIDES = ("left", "right", "bottom", "top")
 
-    Horizontal neighbours first (row by row), then vertical ones (column by column).
+
+def _bracket(inside: np.ndarray, outside: np.ndarray) -> float:
+    """Angle (radians) between two unit-angle directions ``[pan, tilt]`` (small-angle form)."""
+    d_pan = (outside[0] - inside[0]) * math.cos(0.5 * (inside[1] + outside[1]))
+    return math.hypot(d_pan, outside[1] - inside[1])
+
+
+def _deal_pairs(sides: dict[str, list], count: int) -> list:
+    """Up to ``count`` pairs, dealt in turn to the sides that have any.
+
+    A side's share is taken at evenly spaced quantiles of its pairs in boundary order (its
+    middle one for a share of one), away from the silhouette's corners, where an edge of the
+    window's side meets the next. A side with fewer pairs than its share gives them all and the
+    rest goes to the others. Returns ``(inside, outside, range)`` triples, side by side.
+    """
+    available = [side for side in _SIDES if sides[side]]
+    share = dict.fromkeys(available, 0)
+    left = min(count, sum(len(sides[s]) for s in available))
+    while left > 0:
+        for side in available:
+            if left > 0 and share[side] < len(sides[side]):
+                share[side] += 1
+                left -= 1
+    out = []
+    for side in available:
+        pairs = sides[side]
+        k = share[side]
+        picks = np.unique(np.floor((np.arange(k) + 0.5) * len(pairs) / k).astype(int)) if k else []
+        out.extend(pairs[i] for i in picks)
+    return out
+
+
+def _boundary_pairs(cells: np.ndarray) -> dict[str, list]:
+    """(inside cell, outside cell) neighbour pairs that straddle the boundary, by side.
+
+    ``cells`` (rows, cols) bool, row 0 at the lowest tilt and column 0 at the lowest pan. A pair
+    belongs to the side its outside cell is on: ``"left"`` (lower pan), ``"right"``,
+    ``"bottom"`` (lower tilt) or ``"top"``; horizontal pairs are listed row by row, vertical
+    ones column by column (boundary order along each side).
     """
     rows, cols = cells.shape
-    pairs = []
+    found: dict[str, list] = {side: [] for side in _SIDES}
     for r in range(rows):
         for c in range(cols - 1):
             a, b = cells[r, c], cells[r, c + 1]
             if a != b:
-                pairs.append(((r, c), (r, c + 1)) if a else ((r, c + 1), (r, c)))
+                found["right" if a else "left"].append(
+                    ((r, c), (r, c + 1)) if a else ((r, c + 1), (r, c))
+                )
     for c in range(cols):
         for r in range(rows - 1):
             a, b = cells[r, c], cells[r + 1, c]
             if a != b:
-                pairs.append(((r, c), (r + 1, c)) if a else ((r + 1, c), (r, c)))
-    return pairs
+                found["top" if a else "bottom"].append(
+                    ((r, c), (r + 1, c)) if a else ((r + 1, c), (r, c))
+                )
+    return found
 
 
 # -- session --------------------------------------------------------------------------------------
@@ -591,9 +645,7 @@ class ScanSession:
         else:
             self.journal.append({"type": "object", "target": target.to_dict()})
         seq = len(recorded)
-        planned = (
-            target.wanted(self.tolerances) + self.settings.edge_pairs * self.settings.edge_depth
-        )
+        planned = target.wanted(self.tolerances) + self.settings.edge_budget()
         taken = 0
 
         def live(pan: float, tilt: float, phase: str) -> Shot:

@@ -126,6 +126,42 @@ GOOD = {"id": "P1", "kind": "cylinder", "window_deg": [0, 0, 10, 5]}
             },
             "settings.retries",
         ),
+        (
+            {
+                "format": "asbuilt-scan-plan",
+                "version": 1,
+                "targets": [GOOD],
+                "settings": {"edge_tolerance": 0},
+            },
+            "settings.edge_tolerance",
+        ),
+        (
+            {
+                "format": "asbuilt-scan-plan",
+                "version": 1,
+                "targets": [GOOD],
+                "settings": {"edge_tolerance": "2mm"},
+            },
+            "settings.edge_tolerance",
+        ),
+        (
+            {
+                "format": "asbuilt-scan-plan",
+                "version": 1,
+                "targets": [GOOD],
+                "settings": {"edge_tolerance": True},
+            },
+            "settings.edge_tolerance",
+        ),
+        (
+            {
+                "format": "asbuilt-scan-plan",
+                "version": 1,
+                "targets": [GOOD],
+                "settings": {"edge_shots": 2.5},
+            },
+            "settings.edge_shots",
+        ),
     ],
 )
 def test_bad_plans_name_the_place(tmp_path, doc, where):
@@ -143,3 +179,18 @@ def test_unreadable_plan(tmp_path):
     (tmp_path / "bad.json").write_text("{")
     with pytest.raises(ScanError, match="not valid JSON"):
         load_plan(tmp_path / "bad.json")
+
+
+@pytest.mark.parametrize(
+    "settings",
+    [{"edge_tolerance": 0.003}, {"edge_tolerance": 1}, {"edge_shots": 12, "edge_depth": 5}],
+)
+def test_edge_settings_in_a_plan_make_session_settings(tmp_path, settings):
+    from asbuilt.drivers.plan import SessionSettings
+
+    path = tmp_path / "plan.json"
+    doc = {"format": "asbuilt-scan-plan", "version": 1, "targets": [GOOD], "settings": settings}
+    path.write_text(json.dumps(doc))
+    made = SessionSettings(**load_plan(path).settings)
+    for key, value in settings.items():
+        assert getattr(made, key) == value

@@ -263,3 +263,113 @@ def test_duplicate_object_ids_are_refused(scene_file, tmp_path):
         session.scan(PIPE)
         with pytest.raises(ScanError, match="already in the scan"):
             session.scan(PIPE)
+
+
+# -- edge seeking ---------------------------------------------------------------------------------
+def box_world(half_pan=0.05, half_tilt=0.12, near=4.0, far=7.0):
+    """A fake shooter: an angular rectangle (a column seen side-on) at ``near``, a wall behind."""
+    log = []
+
+    def shoot(pan, tilt, phase):
+        inside = abs(pan - 0.01) < half_pan and abs(tilt + 0.02) < half_tilt
+        shot = Shot(pan, tilt, pan, tilt, near if inside else far, None, 1, phase)
+        log.append(shot)
+        return shot
+
+    return shoot, log
+
+
+@pytest.mark.parametrize("tolerance", [0.002, 0.005, 0.02])
+def test_every_side_is_bisected_down_to_the_tolerance(tolerance):
+    shoot, _ = box_world()
+    # an operator's window: wider than the object by uneven margins
+    target = Target("C", "cuboid", Window(-0.07, 0.09, -0.17, 0.13))
+    settings = SessionSettings(edge_pairs=4, edge_tolerance=tolerance, edge_depth=20)
+    result = scan_target(target, shoot, settings)
+    edges = [(s, k) for s, k in zip(result.shots, result.on_object) if s.phase == "edge"]
+    hits = [s for s, k in edges if k]
+    # the innermost hit beyond each side's edge: within the tolerance (across the beam at 4 m)
+    gaps = {
+        "left": min(s.pan - (0.01 - 0.05) for s in hits),
+        "right": min((0.01 + 0.05) - s.pan for s in hits),
+        "bottom": min(s.tilt - (-0.02 - 0.12) for s in hits),
+        "top": min((-0.02 + 0.12) - s.tilt for s in hits),
+    }
+    for side, gap in gaps.items():
+        assert 0.0 <= gap * 4.0 <= tolerance, side
+    # and no more shots than halving the first bracket (one raster cell) down to the tolerance
+    _, _, (rows, cols) = grid(target.window, 30)
+    cells = (target.window.width / cols, target.window.height / rows)
+    most = sum(2 * math.ceil(math.log2(c * 4.0 / tolerance)) for c in cells)
+    assert len(edges) <= most
+
+
+def test_edge_shots_are_capped_per_object():
+    shoot, _ = box_world()
+    target = Target("C", "cuboid", Window(-0.07, 0.09, -0.17, 0.13))
+    settings = SessionSettings(edge_pairs=8, edge_tolerance=1e-6, edge_depth=30, edge_shots=11)
+    result = scan_target(target, shoot, settings)
+    assert sum(s.phase == "edge" for s in result.shots) == 11
+
+
+@pytest.mark.parametrize(
+    "counts, want, expected",
+    [
+        (
+            {"left": 5, "right": 5, "bottom": 3, "top": 3},
+            4,
+            {"left": [2], "right": [2], "bottom": [1], "top": [1]},
+        ),
+        (
+            {"left": 4, "right": 4, "bottom": 0, "top": 2},
+            4,
+            {"left": [1, 3], "right": [2], "top": [1]},
+        ),
+        ({"left": 1, "right": 6, "bottom": 0, "top": 0}, 4, {"left": [0], "right": [1, 3, 5]}),
+        ({"left": 3, "right": 3, "bottom": 3, "top": 3}, 0, {}),
+        (
+            {"left": 1, "right": 1, "bottom": 1, "top": 1},
+            9,
+            {s: [0] for s in ("left", "right", "bottom", "top")},
+        ),
+    ],
+)
+def test_pairs_are_dealt_to_every_side(counts, want, expected):
+    from asbuilt.drivers.session import _deal_pairs
+
+    sides = {side: [(side, i) for i in range(k)] for side, k in counts.items()}
+    dealt = _deal_pairs(sides, want)
+    got: dict = {}
+    for side, i in dealt:
+        got.setdefault(side, []).append(i)
+    assert got == expected
+
+
+@pytest.mark.parametrize(
+    "field, value",
+    [
+        ("edge_tolerance", 0.0),
+        ("edge_tolerance", -0.001),
+        ("edge_tolerance", math.nan),
+        ("edge_shots", -1),
+        ("edge_depth", -1),
+    ],
+)
+def test_bad_edge_settings_are_refused(field, value):
+    with pytest.raises(ValueError, match=field):
+        SessionSettings(**{field: value})
+
+
+def test_resume_replays_tolerance_driven_bisection():
+    shoot, log = box_world()
+    target = Target("C", "cuboid", Window(-0.07, 0.09, -0.17, 0.13))
+    whole = scan_target(target, shoot)
+    from asbuilt.drivers.session import _Replay
+
+    # half the shots from the journal, the rest live: the same shots in the same order
+    replay = _Replay(list(whole.shots[: len(whole.shots) // 2]), box_world()[0])
+    again = scan_target(target, replay)
+    assert [(s.pan_req, s.tilt_req, s.range) for s in again.shots] == [
+        (s.pan_req, s.tilt_req, s.range) for s in whole.shots
+    ]
+    assert replay.i == len(whole.shots) // 2 and not replay.diverged
