@@ -24,6 +24,7 @@ from asbuilt.fit._common import (
     RobustFit,
     gauss_newton,
     robust_geometric_fit,
+    robust_scale,
     tukey_weights,
 )
 from asbuilt.tolerances import Tolerances
@@ -119,7 +120,8 @@ def reconsidered(
     A robust fit's choice among starts is made on trimmed subsets, before the least-squares
     refinement; on 20 shots a five-parameter surface can fit a subset so closely that the wrong
     basin wins. Here every seed is settled the same way (Tukey-weighted Gauss-Newton on all
-    points, Beaton & Tukey 1974, at the noise level, then least squares on the 3-sigma inliers
+    points, Beaton & Tukey 1974, its scale the larger of the noise level and the residuals' MAD
+    scale, re-estimated each step so that a seed centimetres off still sees its inliers, then least squares on the 3-sigma inliers
     as in :func:`asbuilt.fit._common.robust_geometric_fit`), and the settled fits, the robust
     one among them, are compared by :func:`visible_score`: their MSAC cost with each point's beam
     excess added to its residual.
@@ -150,7 +152,14 @@ def reconsidered(
     best = robust
     best_score = visible_score(robust.residuals, excess(robust.state, points), scale, cutoff)
     for seed in seeds:
-        state, _, _ = gauss_newton(model, seed, points, lambda r: tukey_weights(r, scale), 30, 1e-9)
+        state, _, _ = gauss_newton(
+            model,
+            seed,
+            points,
+            lambda r: tukey_weights(r, max(scale, robust_scale(r, scale))),
+            30,
+            1e-9,
+        )
         try:
             fit = robust_geometric_fit(
                 points,

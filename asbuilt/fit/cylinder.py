@@ -152,6 +152,9 @@ POLISHED_STARTS = 3
 #: How many of the best starts are settled again and judged by their beams when the viewpoint
 #: is known (:func:`asbuilt.fit._visibility.reconsidered`).
 RECONSIDERED_STARTS = 4
+#: Two states are in one basin when their axes are within 5 degrees and radii within 25%.
+SAME_BASIN_COS = float(np.cos(np.radians(5.0)))
+SAME_BASIN_RELATIVE = 0.25
 
 
 def _median(values: np.ndarray) -> float:
@@ -173,6 +176,14 @@ def _same_start(one, other) -> bool:
     offset = other[1] - center
     across = offset - float(offset @ axis) * axis
     return abs(radius - other[2]) <= scale and float(np.sqrt(across @ across)) <= scale
+
+
+def _same_basin(one, other) -> bool:
+    """Whether two states are near enough to settle in one place (``SAME_BASIN_*``): a coarser
+    test than :func:`_same_start`, for choosing which starts to settle again."""
+    if abs(float(one[0] @ other[0])) < SAME_BASIN_COS:
+        return False
+    return abs(one[2] - other[2]) <= SAME_BASIN_RELATIVE * max(one[2], other[2])
 
 
 def _trust_order(starts: list, costs: list) -> tuple[list, list, int]:
@@ -472,11 +483,13 @@ def fit_cylinder(
         and starts
         and _doubtful(robust, local, view, len(local), sigma, tolerances)
     ):
-        # A seed that is the robust fit's own hypothesis (or an earlier seed's) would settle
-        # where that one did.
+        # The best starts from distinct basins: one in the robust fit's basin (or an earlier
+        # seed's) would settle where that one did.
         seeds = []
-        for k in np.argsort(costs)[:RECONSIDERED_STARTS]:
-            if not any(_same_start(starts[k], other) for other in [robust.state, *seeds]):
+        for k in np.argsort(costs):
+            if len(seeds) == RECONSIDERED_STARTS:
+                break
+            if not any(_same_basin(starts[k], other) for other in [robust.state, *seeds]):
                 seeds.append(starts[k])
         robust = reconsidered(
             robust,
