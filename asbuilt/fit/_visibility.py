@@ -105,7 +105,7 @@ def visible_score(residuals: np.ndarray, excess: np.ndarray, scale: float, cutof
 
 
 def reconsidered(
-    robust: RobustFit,
+    robust: RobustFit | None,
     points: np.ndarray,
     seeds: Sequence[Any],
     model: GeometricModel,
@@ -128,8 +128,8 @@ def reconsidered(
 
     Parameters
     ----------
-    robust : RobustFit
-        The fit so far.
+    robust : RobustFit or None
+        The fit so far; None when the robust choice failed (then ``sigma`` is required).
     points : ndarray, shape (n, 3), metres
     seeds : sequence
         Model states to settle.
@@ -146,11 +146,19 @@ def reconsidered(
     -------
     RobustFit
         ``robust`` itself unless another settled fit scores lower.
+
+    Raises
+    ------
+    FitError
+        ``robust`` is None and no seed settles with enough inliers.
     """
+    if robust is None and sigma is None:
+        raise ValueError("Without a robust fit the sensor's sigma must set the noise level.")
     scale = max(float(sigma) if sigma is not None else robust.scale, tolerances.sigma_floor)
     cutoff = tolerances.outlier_cutoff_sigma
-    best = robust
-    best_score = visible_score(robust.residuals, excess(robust.state, points), scale, cutoff)
+    best, best_score = robust, np.inf
+    if robust is not None:
+        best_score = visible_score(robust.residuals, excess(robust.state, points), scale, cutoff)
     for seed in seeds:
         state, _, _ = gauss_newton(
             model,
@@ -177,4 +185,6 @@ def reconsidered(
         score = visible_score(fit.residuals, excess(fit.state, points), scale, cutoff)
         if score < best_score:
             best, best_score = fit, score
+    if best is None:
+        raise FitError(f"No {kind} explains most of these points; check that they are one {kind}.")
     return best

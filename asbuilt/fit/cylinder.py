@@ -152,9 +152,11 @@ POLISHED_STARTS = 3
 #: How many of the best starts are settled again and judged by their beams when the viewpoint
 #: is known (:func:`asbuilt.fit._visibility.reconsidered`).
 RECONSIDERED_STARTS = 4
-#: Two states are in one basin when their axes are within 5 degrees and radii within 25%.
+#: Two states are in one basin when their axes are within 5 degrees and radii within 10%.
 SAME_BASIN_COS = float(np.cos(np.radians(5.0)))
-SAME_BASIN_RELATIVE = 0.25
+SAME_BASIN_RELATIVE = 0.10
+#: A cylinder this many times wider than the points' extent is, over them, nearly a plane.
+PLANE_LIKE = 3.0
 
 
 def _median(values: np.ndarray) -> float:
@@ -178,9 +180,32 @@ def _same_start(one, other) -> bool:
     return abs(radius - other[2]) <= scale and float(np.sqrt(across @ across)) <= scale
 
 
-def _same_basin(one, other) -> bool:
+def _robust_fit(local, starts, costs, robust_from, polished, tolerances) -> RobustFit:
+    """The robust fit from the starts (already polished below ``POLISH_BELOW`` points); above,
+    the polished starts are tried too when the first fit rejected shots, and the likelier fit
+    kept."""
+    robust = robust_from(starts, costs)
+    if len(local) < POLISH_BELOW:
+        return robust
+    if starts and not robust.inliers.all():
+        # Background shots present: also try the polished starts and keep the likelier fit.
+        try:
+            second = robust_from(*polished(starts, costs))
+        except FitError:
+            second = None
+        if second is not None and _likelier(second, robust, local, tolerances):
+            robust = second
+    return robust
+
+
+def _same_basin(one, other, extent: float) -> bool:
     """Whether two states are near enough to settle in one place (``SAME_BASIN_*``): a coarser
-    test than :func:`_same_start`, for choosing which starts to settle again."""
+    test than :func:`_same_start`, for choosing which starts to settle again. Two cylinders
+    both wider than ``PLANE_LIKE`` times the points' ``extent`` (metres) are one basin whatever
+    their axes: over the points both are nearly the same plane, along which the axis is
+    unobservable."""
+    if min(one[2], other[2]) > PLANE_LIKE * extent:
+        return True
     if abs(float(one[0] @ other[0])) < SAME_BASIN_COS:
         return False
     return abs(one[2] - other[2]) <= SAME_BASIN_RELATIVE * max(one[2], other[2])
@@ -464,37 +489,40 @@ def fit_cylinder(
         )
         return starts[:1] + better + starts[1:], costs[:1] + better_costs + costs[1:]
 
+    view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64) - offset
     if starts and len(local) < POLISH_BELOW:
         starts, costs = polished(starts, costs)
-        robust = robust_from(starts, costs)
-    else:
-        robust = robust_from(starts, costs)
-        if starts and not robust.inliers.all():
-            # Background shots present: also try the polished starts and keep the likelier fit.
-            try:
-                second = robust_from(*polished(starts, costs))
-            except FitError:
-                second = None
-            if second is not None and _likelier(second, robust, local, tolerances):
-                robust = second
-    view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64) - offset
+    try:
+        robust = _robust_fit(local, starts, costs, robust_from, polished, tolerances)
+    except FitError:
+        # Too many outliers to the robust choice; with the beams to judge, the other starts
+        # may still settle on the pipe.
+        if view is None or sigma is None or not starts:
+            raise
+        robust = None
     if (
         view is not None
         and starts
-        and _doubtful(robust, local, view, len(local), sigma, tolerances)
+        and (robust is None or _doubtful(robust, local, view, len(local), sigma, tolerances))
     ):
-        # The best starts from distinct basins: one in the robust fit's basin (or an earlier
-        # seed's) would settle where that one did.
+        # The robust fit itself (settled: its concentration steps fit subsets) and the best
+        # starts from other basins: one in the robust fit's basin (or an earlier seed's) would
+        # settle where that one did.
         seeds = []
+        known = [] if robust is None else [robust.state]
+        # The points' extent, robustly: four times their median distance from their median
+        # (about the full length of a pipe seen over its length; background shots ignored).
+        middle = np.median(local, axis=0)
+        extent = 4.0 * _median(np.sqrt(np.einsum("ij,ij->i", local - middle, local - middle)))
         for k in np.argsort(costs):
             if len(seeds) == RECONSIDERED_STARTS:
                 break
-            if not any(_same_basin(starts[k], other) for other in [robust.state, *seeds]):
+            if not any(_same_basin(starts[k], other, extent) for other in [*known, *seeds]):
                 seeds.append(starts[k])
         robust = reconsidered(
             robust,
             local,
-            seeds,
+            known + seeds,
             _MODEL,
             lambda state, x: cylinder_beam_excess(*state, x, view),
             kind="cylinder",
