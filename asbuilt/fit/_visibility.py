@@ -31,6 +31,10 @@ from asbuilt.tolerances import Tolerances
 
 __all__ = ["cylinder_beam_excess", "reconsidered", "visible_score"]
 
+#: Tukey-weighted steps that bring a seed into its basin; least squares on the inliers then
+#: converges from there.
+SETTLE_ITERATIONS = 10
+
 
 def cylinder_beam_excess(
     axis: np.ndarray, center: np.ndarray, radius: float, points: np.ndarray, viewpoint
@@ -165,8 +169,8 @@ def reconsidered(
             seed,
             points,
             lambda r: tukey_weights(r, max(scale, robust_scale(r, scale))),
-            30,
-            1e-9,
+            SETTLE_ITERATIONS,
+            1e-6,
         )
         try:
             fit = robust_geometric_fit(
