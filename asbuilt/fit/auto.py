@@ -30,6 +30,7 @@ sigma^2), while real curved or boxy objects win by tens to hundreds.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 
 import numpy as np
@@ -110,7 +111,9 @@ def information_scores(
     return scores
 
 
-def fit_auto(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES) -> FitResult:
+def fit_auto(
+    points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES, viewpoint=None
+) -> FitResult:
     """Fit every candidate kind and return the one a robust BIC prefers, saying why.
 
     Algorithm: plane, sphere, cylinder and cuboid fits of the same points, compared by the
@@ -125,6 +128,8 @@ def fit_auto(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES)
     sigma : float, optional, metres
         The sensor's range sigma; the common noise level of the criterion when given.
     tolerances : Tolerances
+    viewpoint : array_like, shape (3,), metres, optional
+        Where the shots were taken from; passed to the candidate fits that use it.
 
     Returns
     -------
@@ -148,7 +153,10 @@ def fit_auto(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES)
             failures[kind] = "not available"
             continue
         try:
-            results[kind] = fitter(pts, sigma=sigma, tolerances=tolerances)
+            options = {"sigma": sigma, "tolerances": tolerances}
+            if viewpoint is not None and "viewpoint" in inspect.signature(fitter).parameters:
+                options["viewpoint"] = viewpoint
+            results[kind] = fitter(pts, **options)
         except FitError as exc:
             failures[kind] = exc.message
     if not results:
