@@ -199,6 +199,10 @@ class SessionSettings:
         at 10 m, below which bisection gains nothing.
     edge_shots : int
         Most bisection shots per object, all pairs together.
+    curved_depth : int
+        Bisection steps per pair for cylinders and spheres instead of ``edge_tolerance``: their
+        fits use the surface points only, and shots pressed against a curved silhouette graze
+        it (mixed returns, outliers), so two steps (a quarter cell) are enough there.
     fill_rounds : int
         Denser rasters over the object's angular extent when the first raster put too few
         points on it.
@@ -213,12 +217,14 @@ class SessionSettings:
     edge_depth: int = 8
     edge_tolerance: float = 0.002
     edge_shots: int = 32
+    curved_depth: int = 2
     fill_rounds: int = 2
     lost_after: int = 3
     keep_background: bool = False
 
     def __post_init__(self) -> None:
-        for name in ("retries", "edge_pairs", "edge_depth", "edge_shots", "fill_rounds"):
+        names = ("retries", "edge_pairs", "edge_depth", "edge_shots", "curved_depth", "fill_rounds")
+        for name in names:
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be >= 0")
         if not (math.isfinite(self.edge_tolerance) and self.edge_tolerance > 0):
@@ -249,6 +255,7 @@ _SETTING_TYPES = {
     "edge_depth": int,
     "edge_tolerance": float,
     "edge_shots": int,
+    "curved_depth": int,
     "fill_rounds": int,
     "lost_after": int,
     "keep_background": bool,

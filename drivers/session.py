@@ -13,13 +13,17 @@ Per object (:func:`scan_target`, deterministic given the measured ranges):
    object's angular extent (its foreground cells, widened by half a cell) adds them
    (``fill_rounds`` times at most).
 4. **Edges.** Neighbouring cells of which one is on the object and the other not bracket the
-   object's silhouette; each pair belongs to the side its outside cell is on (left, right,
+   object's silhouette (an object cell on the raster's border pairs with the cell beyond it,
+   shot first: if that is on the object too, the object runs on beyond the window and the
+   pair is dropped); each pair belongs to the side its outside cell is on (left, right,
    bottom, top: lower or higher pan or tilt), taken from the finest raster that has pairs
    there. ``edge_pairs`` pairs are dealt to the sides in turn (every side gets some), each
    side's share at evenly spaced quantiles of its pairs (its middle pair for one). A pair is
    bisected (shoot the midpoint, keep the half that still brackets the edge) until the
    bracket, as an angle times the range of its inside shot, is at most ``edge_tolerance``
-   metres, ``edge_depth`` steps at most, ``edge_shots`` shots per object at most. The last hit
+   metres, ``edge_depth`` steps at most, ``edge_shots`` shots per object at most. Cylinders
+   and spheres take ``curved_depth`` steps (2) instead: their fits use surface points only,
+   and shots pressed against a curved silhouette graze it (mixed returns). The last hit
    of a pair then lies within ``edge_tolerance`` (across the beam) of the silhouette edge,
    which bounds the object's unseen edges (a face's far edge, a column's top) far better than
    the raster (up to one raster step short). On a face seen at incidence ``theta`` the
@@ -372,20 +376,37 @@ def scan_target(
                     np.array([win0.pan_min + (c + 0.5) * dp, win0.tilt_min + (r + 0.5) * dt]),
                     np.array([win0.pan_min + (c2 + 0.5) * dp, win0.tilt_min + (r2 + 0.5) * dt]),
                     float(shots[index[r, c]].range),
+                    not (0 <= r2 < r0 and 0 <= c2 < c0),
                 )
                 for (r, c), (r2, c2) in found[side]
             ]
     budget = settings.edge_budget()
-    for inside, outside, reach in _deal_pairs(sides, settings.edge_pairs):
-        for _ in range(settings.edge_depth):
-            if budget <= 0 or _bracket(inside, outside) * reach <= settings.edge_tolerance:
+    curved = target.kind in ("cylinder", "sphere")
+    depth = min(settings.edge_depth, settings.curved_depth) if curved else settings.edge_depth
+
+    def is_hit(shot: Shot) -> bool:
+        return shot.range is not None and (settings.keep_background or shot.range < threshold)
+
+    for inside, outside, reach, beyond in _deal_pairs(sides, settings.edge_pairs):
+        if beyond:
+            # The object reaches the raster's border here: the cell beyond it was not shot.
+            if budget <= 0:
+                break
+            shot = shoot(float(outside[0]), float(outside[1]), "edge")
+            shots.append(shot)
+            budget -= 1
+            if is_hit(shot):
+                continue  # the object runs on beyond the window: no edge to pin here
+        for _ in range(depth):
+            if budget <= 0:
+                break
+            if not curved and _bracket(inside, outside) * reach <= settings.edge_tolerance:
                 break
             mid = 0.5 * (inside + outside)
             shot = shoot(float(mid[0]), float(mid[1]), "edge")
             shots.append(shot)
             budget -= 1
-            hit = shot.range is not None and (settings.keep_background or shot.range < threshold)
-            if hit:
+            if is_hit(shot):
                 inside, reach = mid, float(shot.range)
             else:
                 outside = mid
@@ -409,7 +430,8 @@ def _deal_pairs(sides: dict[str, list], count: int) -> list:
     A side's share is taken at evenly spaced quantiles of its pairs in boundary order (its
     middle one for a share of one), away from the silhouette's corners, where an edge of the
     window's side meets the next. A side with fewer pairs than its share gives them all and the
-    rest goes to the others. Returns ``(inside, outside, range)`` triples, side by side.
+    rest goes to the others. Returns the pairs (``(inside, outside, range, beyond)``), side by
+    side.
     """
     available = [side for side in _SIDES if sides[side]]
     share = dict.fromkeys(available, 0)
@@ -434,20 +456,25 @@ def _boundary_pairs(cells: np.ndarray) -> dict[str, list]:
     ``cells`` (rows, cols) bool, row 0 at the lowest tilt and column 0 at the lowest pan. A pair
     belongs to the side its outside cell is on: ``"left"`` (lower pan), ``"right"``,
     ``"bottom"`` (lower tilt) or ``"top"``; horizontal pairs are listed row by row, vertical
-    ones column by column (boundary order along each side).
+    ones column by column (boundary order along each side). An object cell on the raster's
+    border pairs with the (unshot) cell beyond it (row or column index -1, ``rows`` or
+    ``cols``): an operator's window is often only a fraction of a cell wider than the object,
+    so its outer cells are on it and the edge lies beyond them.
     """
     rows, cols = cells.shape
+    padded = np.zeros((rows + 2, cols + 2), dtype=bool)
+    padded[1:-1, 1:-1] = cells
     found: dict[str, list] = {side: [] for side in _SIDES}
     for r in range(rows):
-        for c in range(cols - 1):
-            a, b = cells[r, c], cells[r, c + 1]
+        for c in range(-1, cols):
+            a, b = padded[r + 1, c + 1], padded[r + 1, c + 2]
             if a != b:
                 found["right" if a else "left"].append(
                     ((r, c), (r, c + 1)) if a else ((r, c + 1), (r, c))
                 )
     for c in range(cols):
-        for r in range(rows - 1):
-            a, b = cells[r, c], cells[r + 1, c]
+        for r in range(-1, rows):
+            a, b = padded[r + 1, c + 1], padded[r + 2, c + 1]
             if a != b:
                 found["top" if a else "bottom"].append(
                     ((r, c), (r + 1, c)) if a else ((r + 1, c), (r, c))
