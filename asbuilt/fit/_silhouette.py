@@ -10,6 +10,18 @@ half a step on each side. An edge no seen face bounds (the far side of a face, a
 bottom) is then placed where the box's silhouette touches that window, instead of at the last
 point, which stops short of it by up to a raster step.
 
+Over an operator's window (marked by eye, a little wider than the object) the silhouette lies
+anywhere between the last line of hits and the first line of misses, so the half-step rule is
+right only on average (within half a step either way). An acquisition session therefore adds
+edge-bisection shots (``asbuilt.drivers.session``: between a hit and a miss, bisected until the
+bracket is a few millimetres across): those points are off the raster's lines, but the rest
+still are. :func:`raster_grid` finds the raster among them (the lines carrying at least two
+points, then every point on those lines' evenly spaced grid) and each side of the window that
+off-grid shots reach beyond the raster's last line is placed at the outermost of them instead:
+a bisection hit lies inside the silhouette, within the session's tolerance of it, and beyond
+the last raster hit, so it pins that side far more tightly than half a step. Sides with no such
+shot keep the half-step rule. :func:`solve_bounds` weights each side by how well it is known.
+
 Everything here is numpy; angles in radians, lengths in metres.
 """
 
@@ -17,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["raster_window", "solve_bounds"]
+__all__ = ["raster_grid", "raster_window", "edge_shots", "solve_bounds"]
 
 #: Samples per box edge when measuring the box's angular extent (the tilt extreme of a convex
 #: box can lie inside an edge).
@@ -61,6 +73,100 @@ def _grid_step(values: np.ndarray) -> float | None:
     return step
 
 
+def _lines(values: np.ndarray, tol: float) -> np.ndarray:
+    """Line label (k,) of 1-D values: sorted values closer than ``tol`` share a line."""
+    order = np.argsort(values)
+    label = np.empty(values.shape[0], dtype=np.int64)
+    label[order] = np.concatenate([[0], np.cumsum(np.diff(values[order]) > tol)])
+    return label
+
+
+def _on_lines(values: np.ndarray, step: float, ref: float) -> np.ndarray:
+    """Whether each value (k,) lies on the grid ``ref + i * step`` (within ``_LINE_WIDTH``)."""
+    phase = (values - ref) / step
+    return np.abs(phase - np.round(phase)) <= _LINE_WIDTH
+
+
+def raster_grid(points: np.ndarray, viewpoint: np.ndarray):
+    """The raster's angular window and which points are on its grid, edge shots allowed.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+        All measured points (outliers too: their directions are still shot directions).
+    viewpoint : ndarray, shape (3,), metres
+
+    Returns
+    -------
+    tuple or None
+        ``(pan0, window, on_grid, pinned, steps)``: the reference pan (radians); ``window`` (4,)
+        radians, ``[pan_min, pan_max, tilt_min, tilt_max]`` with pan relative to ``pan0``;
+        ``on_grid`` (n,) bool, the points on the raster's columns and rows; ``pinned`` (4,)
+        bool, the window sides placed at an off-grid (edge) shot instead of half a step beyond
+        the last raster line; ``steps`` (2,) radians, the raster's pan and tilt steps. None when
+        no raster of at least two evenly spaced columns and
+        rows carries most (at least half, and 7) of the points.
+
+    Notes
+    -----
+    Without off-grid points this is :func:`raster_window`. Otherwise the lines (columns, then
+    rows) holding a single point are set aside (a bisection shot has a pan or a tilt of its
+    own; raster lines hold a point per row or column on the object), the step is measured on
+    the points left, and every point on that step's grid (both angles within ``_LINE_WIDTH``
+    steps of a line) is a raster point. A window side is pinned when off-grid points lie beyond
+    the raster's outermost line on that side: it is then their outermost angle.
+    """
+    rel = points - viewpoint
+    if np.any(np.linalg.norm(rel, axis=1) < 1e-6):
+        return None
+    n = points.shape[0]
+    mean = rel.mean(axis=0)
+    pan0 = float(np.arctan2(mean[1], mean[0]))
+    ang = _angles(points, viewpoint, pan0)
+    steps = [_grid_step(ang[:, j]) for j in range(2)]
+    if steps[0] is not None and steps[1] is not None:
+        on_grid = np.ones(n, dtype=bool)
+    else:
+        on_grid = None
+        for least in (2, 3):
+            keep = np.ones(n, dtype=bool)
+            for j in range(2):
+                spread = float(np.ptp(ang[:, j]))
+                label = _lines(ang[:, j], _LINE_WIDTH * 1e-2 * max(spread, 1e-12))
+                keep &= np.bincount(label)[label] >= least
+            if np.count_nonzero(keep) < max(7, n // 2):
+                continue
+            steps = [_grid_step(ang[keep, j]) for j in range(2)]
+            if steps[0] is None or steps[1] is None:
+                continue
+            refs = [float(np.median(ang[keep, j])) for j in range(2)]
+            grid = _on_lines(ang[:, 0], steps[0], refs[0]) & _on_lines(ang[:, 1], steps[1], refs[1])
+            if np.count_nonzero(grid) >= max(7, n // 2):
+                on_grid = grid
+                break
+        if on_grid is None:
+            return None
+    inner = ang[on_grid]
+    window = np.array(
+        [
+            inner[:, 0].min() - 0.5 * steps[0],
+            inner[:, 0].max() + 0.5 * steps[0],
+            inner[:, 1].min() - 0.5 * steps[1],
+            inner[:, 1].max() + 0.5 * steps[1],
+        ]
+    )
+    pinned = np.zeros(4, dtype=bool)
+    off = ang[~on_grid]
+    if off.shape[0]:
+        for j in range(2):
+            low, high = inner[:, j].min(), inner[:, j].max()
+            if off[:, j].min() < low:
+                window[2 * j], pinned[2 * j] = off[:, j].min(), True
+            if off[:, j].max() > high:
+                window[2 * j + 1], pinned[2 * j + 1] = off[:, j].max(), True
+    return pan0, window, on_grid, pinned, np.array(steps, dtype=float)
+
+
 def raster_window(points: np.ndarray, viewpoint: np.ndarray):
     """The raster's angular window, if the points are a pan-tilt raster shot from ``viewpoint``.
 
@@ -75,26 +181,94 @@ def raster_window(points: np.ndarray, viewpoint: np.ndarray):
     tuple or None
         ``(pan0, window)``: the reference pan (radians) and ``window`` shape (4,) radians,
         ``[pan_min, pan_max, tilt_min, tilt_max]`` with pan relative to ``pan0``; None when the
-        directions from ``viewpoint`` do not fall on at least two evenly spaced columns and rows.
+        directions from ``viewpoint`` do not fall on a raster (edge shots allowed: see
+        :func:`raster_grid`).
     """
+    found = raster_grid(points, viewpoint)
+    return None if found is None else found[:2]
+
+
+def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
+    """Which points look like edge-bisection shots of an acquisition session.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    viewpoint : ndarray, shape (3,), metres
+
+    Returns
+    -------
+    along : ndarray, shape (n,), int
+        ``0`` for a shot bisected along pan (its tilt on a raster row, its pan on no raster
+        column), ``1`` along tilt, ``-1`` for the others (raster and fill shots, or points not
+        shot from ``viewpoint``).
+    partner : ndarray, shape (n,), int
+        For a bisection shot, the nearest other shot on its row (column): the previous hit of
+        its bisection or the raster hit it started from, the two spanning the bisection's
+        direction on the surface. ``-1`` for the others.
+
+    Notes
+    -----
+    A session (``asbuilt.drivers.session``) bisects between a raster hit and a neighbouring
+    miss of the same row (or column), so every bisection shot keeps the row's tilt (the
+    column's pan) and has a pan (tilt) between two raster columns, at a binary fraction of
+    the step. Raster columns (of the raster or of a fill raster) hold shots on three rows or
+    more, or two (an object two columns wide); a bisection's pans hold one shot (one pair per
+    side, the session's default: with more, pairs sharing a bracket look like a raster column
+    and their shots get the raster's pad). So a shot is taken for a
+    pan bisection when its pan holds shots on one row only and, on its row, it is not
+    a whole number of steps from the columns that hold two or more (the step being their
+    smallest spacing on that row, or anywhere when the row has one; with none the shot is
+    taken for a raster shot); the same with pan and tilt exchanged. A shot that
+    would be both is neither. Repeated shots in one direction (a head rounding to whole
+    counts) count once. Lines are told apart at 0.02 % of the angular spread (the shots'
+    angles are the nominal ones, exact to rounding), and a shot is on a raster's lattice within
+    that too: a bisection's deepest hits come within a fraction of a percent of a step of the
+    line it started from.
+    """
+    n = points.shape[0]
+    out = -np.ones(n, dtype=np.int64)
+    partner = -np.ones(n, dtype=np.int64)
     rel = points - viewpoint
-    if np.any(np.linalg.norm(rel, axis=1) < 1e-6):
-        return None
+    if n < 3 or np.any(np.linalg.norm(rel, axis=1) < 1e-6):
+        return out, partner
     mean = rel.mean(axis=0)
-    pan0 = float(np.arctan2(mean[1], mean[0]))
-    ang = _angles(points, viewpoint, pan0)
-    steps = [_grid_step(ang[:, j]) for j in range(2)]
-    if steps[0] is None or steps[1] is None:
-        return None
-    window = np.array(
-        [
-            ang[:, 0].min() - 0.5 * steps[0],
-            ang[:, 0].max() + 0.5 * steps[0],
-            ang[:, 1].min() - 0.5 * steps[1],
-            ang[:, 1].max() + 0.5 * steps[1],
-        ]
-    )
-    return pan0, window
+    ang = _angles(points, viewpoint, float(np.arctan2(mean[1], mean[0])))
+    labels, tols = [], []
+    for j in range(2):
+        tol = _LINE_WIDTH * 1e-2 * max(float(np.ptp(ang[:, j])), 1e-12)
+        labels.append(_lines(ang[:, j], tol))
+        tols.append(tol)
+    full = []
+    for j in range(2):
+        pairs = np.unique(np.column_stack([labels[j], labels[1 - j]]), axis=0)
+        positions = np.bincount(pairs[:, 0], minlength=labels[j].max() + 1)
+        full.append(positions[labels[j]] >= 2)
+    flagged = np.zeros((2, n), dtype=bool)
+    for j in range(2):
+        everywhere = np.unique(ang[full[j], j])
+        for i in np.flatnonzero(~full[j]):
+            row = labels[1 - j] == labels[1 - j][i]
+            lines = np.unique(ang[row & full[j], j])
+            if lines.size == 0:
+                continue
+            # the step of the raster this row belongs to; with one full line on the row (a
+            # one-column fill raster), the smallest spacing of the full lines anywhere
+            gaps = np.diff(lines if lines.size >= 2 else everywhere)
+            gaps = gaps[gaps > tols[j]]
+            if gaps.size == 0:
+                continue
+            step = float(gaps.min())
+            offset = (ang[i, j] - lines[0]) % step
+            flagged[j, i] = min(offset, step - offset) > tols[j]
+    for j in range(2):
+        for i in np.flatnonzero(flagged[j] & ~flagged[1 - j]):
+            line = np.flatnonzero((labels[1 - j] == labels[1 - j][i]) & (labels[j] != labels[j][i]))
+            if line.size == 0:
+                continue
+            out[i] = j
+            partner[i] = line[int(np.argmin(np.abs(ang[line, j] - ang[i, j])))]
+    return out, partner
 
 
 def _edge_fractions() -> np.ndarray:
@@ -129,7 +303,7 @@ def _extents(lo, hi, axes, origin, viewpoint, pan0) -> np.ndarray:
     return np.concatenate([ang.min(axis=1), ang.max(axis=1)], axis=1)[:, [0, 2, 1, 3]]
 
 
-def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations=10):
+def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations=10, side_tol=None):
     """Move the free bounds so that the box's angular extent matches the raster window.
 
     Parameters
@@ -147,6 +321,10 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
     iterations : int
         Gauss-Newton iterations (forward-difference Jacobian evaluated at the first and fourth
         iterate) of the window misfit plus a weak pull of each bound to its start value.
+    side_tol : ndarray, shape (4,), radians, optional
+        How well each window side is known (the misfit of a side is divided by it); default
+        ``_ANGLE_TOL`` for all four. It matters only when the window determines the bounds more
+        than once over (three free bounds and four sides seen from above a pier).
 
     Returns
     -------
@@ -164,6 +342,7 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
     # bounds the window does not determine (several meeting at one silhouette corner) take the
     # smallest change.
     prior = np.eye(count) / _PRIOR_M**2
+    tol = np.full(4, _ANGLE_TOL) if side_tol is None else np.asarray(side_tol, dtype=float)
     for it in range(iterations):
         if jac is None or it == 3:
             # Chord method: the Jacobian of the first iterate (refreshed once) serves them all;
@@ -176,12 +355,12 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
                 (his if side else los)[c + 1, k] += eps
             measured = _extents(los, his, axes, origin, viewpoint, pan0)
             base = measured[0]
-            jac = ((measured[1:] - base) / eps).T / _ANGLE_TOL
+            jac = ((measured[1:] - base) / eps).T / tol[:, None]
             inverse = np.linalg.inv(jac.T @ jac + prior)
         else:
             base = _extent(lo, hi, axes, origin, viewpoint, pan0)
         now = np.array([(hi if side else lo)[k] for k, side in free])
-        gradient = jac.T @ ((base - window) / _ANGLE_TOL) + prior @ (now - start)
+        gradient = jac.T @ ((base - window) / tol) + prior @ (now - start)
         delta = -inverse @ gradient
         for c, (k, side) in enumerate(free):
             (hi if side else lo)[k] += delta[c]

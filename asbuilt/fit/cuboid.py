@@ -23,13 +23,23 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
 3. Sizes: between two opposite seen faces (``observed`` True); otherwise from a seen face (the
    fitted corner edge) to the farthest inlier along that axis, or between the extreme inliers
    when no face bounds the axis (``observed`` False: the paper's point-projection step). Those
-   extent bounds stop short of the true edge by up to one raster step. When the points are a
-   pan-tilt raster seen from the viewpoint (given, or the scan frame's origin; checked: every
-   point's direction must fall on the raster's evenly spaced pan columns and tilt rows), the
-   unseen edges are placed where the box's silhouette meets the raster window, the points'
-   angular extent widened by half a step (:mod:`asbuilt.fit._silhouette`; the project's raster
-   shoots at cell centres). Otherwise half the median spacing of the raster lines along that
-   axis is added to each extent bound (``edge_pad``; 0 gives the paper's plain extent).
+   extent bounds stop short of the true edge by up to the spacing of the shots that reached it:
+   a raster step for a raster's last line, the final bracket (a few millimetres) for an
+   acquisition session's edge-bisection shots. Each extent bound is padded by ``edge_pad``
+   (0.5) times that spacing, the middle of the gap in which the edge lies: the smaller of the
+   median spacing of the raster lines along the axis and the distance along the axis from the
+   extreme inlier to the nearest inlier behind it within 45 degrees of the axis (the previous
+   shot of its raster row or bisection line). When the points are a pan-tilt raster seen from the viewpoint
+   (given, or the scan frame's origin; checked: the directions must fall on a raster's evenly
+   spaced pan columns and tilt rows, extra off-grid edge shots allowed), the unseen edges are
+   instead placed where the box's silhouette meets the raster window, the raster's angular
+   extent widened by half a step (:mod:`asbuilt.fit._silhouette`; the project's raster shoots at
+   cell centres), each side that edge-bisection shots reach beyond the last raster line being
+   placed at the outermost of them. Over an operator's window (a little wider than the object)
+   the half-step rule is right only within half a step either way; the bisection shots are what
+   make those sizes accurate. The size's standard error includes the remaining gap: the edge is
+   taken as uniform between the extreme point and twice the pad beyond it (variance pad^2 / 3
+   per extent bound), besides the extreme point's own noise.
 4. One seen face: the face normal is fitted, the in-plane axes come from the minimum-area
    bounding rectangle of the projected points (rotating calipers, Freeman and Shapira 1975) and
    the unseen depth is set to the smaller in-plane width (a column seen face-on is about
@@ -261,8 +271,43 @@ def _spacing(coords: np.ndarray, noise: float) -> float:
     return _median(big) if big.size else 0.0
 
 
-def _bounds(x, label, inliers, model, noise, edge_pad):
+def _outward_spacing(proj: np.ndarray, extreme: int, k: int, sign: float) -> float | None:
+    """Spacing (metres) of the shots leading out to an extreme point along axis ``k``.
+
+    ``proj`` (m, 3): the inliers in the box frame; ``extreme`` indexes the outermost one along
+    ``sign * axis k``. The spacing is the distance along the axis to the nearest inlier behind
+    it within 45 degrees of the axis (the previous shot of the raster row or bisection that
+    reached the edge), None when there is none.
+    """
+    delta = sign * (proj[extreme, k] - proj[:, k])
+    lateral = np.linalg.norm(np.delete(proj - proj[extreme], k, axis=1), axis=1)
+    behind = (delta > 0.0) & (lateral <= delta)
+    return float(delta[behind].min()) if np.any(behind) else None
+
+
+def _bisected(x, direction, i, edges) -> bool:
+    """Whether point ``i`` ends an edge bisection heading along ``direction`` (3,) (45 degrees)."""
+    if edges is None or edges[0][i] < 0:
+        return False
+    step = x[i] - x[edges[1][i]]
+    length = float(np.linalg.norm(step))
+    return length > 0.0 and float(step @ direction) >= np.sqrt(0.5) * length
+
+
+def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
     """Per-axis (lo, hi) bounds in the centred frame, which come from faces, and the extreme points.
+
+    An extent bound is the extreme inlier plus ``edge_pad`` times the sampling step there: the
+    edge lies within one step past the last hit. Two measures of that step: the median spacing
+    of the raster lines along the axis (lines crossing the edge obliquely come closer than a
+    whole step) and the spacing of the shots that led out to the extreme point
+    (:func:`_outward_spacing`: a few millimetres for an edge-bisection shot, whose bracket
+    halves at each step); the smaller one is the finer sampling that reached the edge.
+
+    An extreme inlier that is an edge-bisection shot (``edges``: the ``(along, partner)`` answer
+    of :func:`asbuilt.fit._silhouette.edge_shots`) bisected outwards along the axis (the step
+    from its partner within 45 degrees of it) is the bound itself: the session bisects until
+    the bracket is a few millimetres across, about the range noise, so no pad is added.
 
     Returns lo (3,), hi (3,), lo_face (3,) bool, hi_face (3,) bool, lo_point (3,) int, hi_point
     (3,) int (index of the extreme inlier defining an extent bound, -1 for face bounds), pad
@@ -274,6 +319,7 @@ def _bounds(x, label, inliers, model, noise, edge_pad):
     lo_pt, hi_pt = -np.ones(3, np.int64), -np.ones(3, np.int64)
     pads = np.zeros((2, 3))
     index = np.flatnonzero(inliers)
+    inner = proj[index]
     for k in range(3):
         for f in np.flatnonzero(model.face_axis == k):
             if model.face_sign[f] > 0:
@@ -282,14 +328,23 @@ def _bounds(x, label, inliers, model, noise, edge_pad):
                 lo[k], lo_face[k] = -model.offset[f], True
         along = proj[index, k]
         lines = index[model.face_axis[label[index]] != k]
-        pad = edge_pad * _spacing(proj[lines, k], noise)
-        pads[:, k] = pad
+        median = _spacing(proj[lines, k], noise)
         if not hi_face[k]:
-            hi_pt[k] = index[int(np.argmax(along))]
-            hi[k] = along.max() + pad
+            top = int(np.argmax(along))
+            local = _outward_spacing(inner, top, k, 1.0)
+            pads[1, k] = edge_pad * (median if local is None else min(local, median))
+            if _bisected(x, model.axes[k], index[top], edges):
+                pads[1, k] = 0.0
+            hi_pt[k] = index[top]
+            hi[k] = along.max() + pads[1, k]
         if not lo_face[k]:
-            lo_pt[k] = index[int(np.argmin(along))]
-            lo[k] = along.min() - pad
+            bottom = int(np.argmin(along))
+            local = _outward_spacing(inner, bottom, k, -1.0)
+            pads[0, k] = edge_pad * (median if local is None else min(local, median))
+            if _bisected(x, -model.axes[k], index[bottom], edges):
+                pads[0, k] = 0.0
+            lo_pt[k] = index[bottom]
+            lo[k] = along.min() - pads[0, k]
     return lo, hi, lo_face, hi_face, lo_pt, hi_pt, pads
 
 
@@ -299,10 +354,16 @@ def _silhouette_bounds(x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, f
     ``found`` is :func:`asbuilt.fit._silhouette.raster_window`'s answer for ``viewpoint``. The
     solution is used only if it keeps every inlier inside the box; returns whether it was used.
     """
-    pan0, window = found
+    pan0, window, _on_grid, pinned, steps = found
     free = [(k, 0) for k in range(3) if lo_pt[k] >= 0] + [(k, 1) for k in range(3) if hi_pt[k] >= 0]
+    side_tol = None
+    if pinned.any():
+        # A side at the half-step rule is uncertain by +-half a step (uniform over the step in
+        # which an operator's window edge falls: sd step / sqrt 12); a side at a bisection shot
+        # is known to the session's tolerance, far better. Pure rasters keep equal weights.
+        side_tol = np.where(pinned, _silhouette._ANGLE_TOL, np.repeat(steps, 2) / np.sqrt(12.0))
     new_lo, new_hi = _silhouette.solve_bounds(
-        lo, hi, free, model.axes, origin, viewpoint, pan0, window
+        lo, hi, free, model.axes, origin, viewpoint, pan0, window, side_tol=side_tol
     )
     proj = x @ model.axes.T
     for k, side in free:
@@ -375,10 +436,14 @@ def _propagate(model, x, cov, bounds_info, sigma, one_face):
             _derived(trial, x, lo_pt, hi_pt, lo_face, hi_face, pad, one_face) - base
         ) / eps
     out = grads @ cov @ grads.T
-    # An extent bound also carries its defining point's own noise (not in the parameters).
+    # An extent bound also carries its defining point's own noise (not in the parameters) and
+    # the gap it was padded across: the edge lies anywhere between the extreme point and twice
+    # the pad beyond it (uniform: variance pad^2 / 3). Half a raster step for a raster's last
+    # line, a few millimetres for an edge-bisection shot.
     extent_var = np.zeros(3)
     for k in range(3):
         extent_var[k] = sigma**2 * ((not lo_face[k]) + (not hi_face[k]))
+        extent_var[k] += (pad[0, k] ** 2 * (not lo_face[k]) + pad[1, k] ** 2 * (not hi_face[k])) / 3
     size_var = np.diag(out)[:3] + extent_var
     centre_cov = out[3:, 3:] + model.axes.T @ np.diag(extent_var / 4.0) @ model.axes
     return np.sqrt(size_var), float(np.sqrt(np.trace(centre_cov)))
@@ -430,8 +495,9 @@ def fit_cuboid(
         bound the unseen edges. None tries the scan frame's origin, trusted only if the points
         are a pan-tilt raster seen from there.
     edge_pad : float
-        Fraction of the median raster-line spacing added beyond the last point to an extent
-        bound when the silhouette cannot be used (0.5: shots at cell centres; 0: the paper).
+        Fraction of the local shot spacing (see the module docstring, step 3) added beyond the
+        last point to an extent bound when the silhouette cannot be used (0.5: the middle of
+        the gap in which the edge lies; 0: the paper's plain extent).
     silhouette : bool
         Use the raster silhouette for unseen edges when the raster check passes.
 
@@ -478,8 +544,8 @@ def fit_cuboid(
     # The viewpoint (given, or the scan frame's origin) is trusted when the points' directions
     # from it fall on a pan-tilt raster's rows and columns.
     viewpoint = np.zeros(3) if view is None else view
-    window = _silhouette.raster_window(pts, viewpoint)
-    trusted = window is not None or view is not None
+    grid = _silhouette.raster_grid(pts, viewpoint)
+    trusted = grid is not None or view is not None
     frames = _faces.segment(
         x,
         normals,
@@ -520,17 +586,19 @@ def fit_cuboid(
         )
 
     lo, hi, lo_face, hi_face, lo_pt, hi_pt, pad = _bounds(
-        x, label, inliers, model, cutoff * scale, edge_pad
+        x, label, inliers, model, cutoff * scale, edge_pad, _silhouette.edge_shots(pts, viewpoint)
     )
     used_window = False
-    if silhouette and window is not None and not one_face:
+    if silhouette and grid is not None and not one_face:
         used_window = _silhouette_bounds(
-            x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, window, cutoff * scale
+            x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid, cutoff * scale
         )
     if used_window:
         notes.append(
             "edges no seen face bounds were placed on the pan-tilt raster's silhouette window "
-            "(the points' angular extent from the viewpoint widened by half a raster step)"
+            "(the raster's angular extent from the viewpoint widened by half a raster step"
+            + (", edge-bisection shots where they reach beyond it" if grid[3].any() else "")
+            + ")"
         )
     if one_face:
         lo, hi = _one_face_depth(lo, hi, lo_face, hi_face, model)
