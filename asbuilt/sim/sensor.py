@@ -26,6 +26,10 @@ window (the outer shots half a raster step inside it), or, with ``operator_windo
 :func:`scan_object`, the window an operator marks by eye - the silhouette window enlarged on
 each side by an independent random margin uniform between 0 and one raster step - so the
 object's edge falls anywhere between the last hit and the first miss.
+
+:func:`fire` is the same shot model for beams aimed one at a time by an acquisition algorithm
+(``asbuilt.drivers.session.scan_target``): it returns whatever each beam meets, the aimed-at
+object or the background behind it, as the range finder would.
 """
 
 from __future__ import annotations
@@ -37,6 +41,8 @@ import numpy as np
 from asbuilt.sim.raycast import angles_from_direction, direction_from_angles
 
 __all__ = [
+    "Returns",
+    "fire",
     "Shots",
     "angular_window",
     "raster_angles",
@@ -122,6 +128,103 @@ class Shots:
         )
         values = {name: getattr(self, name)[keep] for name in fields}
         return Shots(station=self.station, planned=self.planned, **values)
+
+
+@dataclass(frozen=True, eq=False)
+class Returns:
+    """What each beam of :func:`fire` measured, whatever it met.
+
+    Attributes
+    ----------
+    object_index : ndarray, shape (m,), int
+        The object the actual beam met first (``-1``: nothing within the station's range).
+    range : ndarray, shape (m,), metres
+        Measured range (noise and mixed returns included); NaN when there is no return.
+    true_range : ndarray, shape (m,), metres
+        Noise-free range along the actual beam (``inf`` when it met nothing).
+    surface_points : ndarray, shape (m, 3), metres
+        Where the actual beam met the scene (NaN when it met nothing).
+    normals : ndarray, shape (m, 3)
+        Outward unit surface normals there (NaN when it met nothing).
+    mixed : ndarray, shape (m,), bool
+        The range is a mixed return (the footprint straddled a silhouette edge).
+    """
+
+    object_index: np.ndarray
+    range: np.ndarray
+    true_range: np.ndarray
+    surface_points: np.ndarray
+    normals: np.ndarray
+    mixed: np.ndarray
+
+
+def fire(scene, station, pan, tilt, rng) -> Returns:
+    """Fire beams one aims at a time: each measures whatever it meets first (the shot model).
+
+    The module's shot model (pointing noise, footprint probes, mixed returns, dropout, range
+    noise) applied to every beam whatever it meets: the object aimed at, the wall behind it or
+    nothing. A footprint that straddles a silhouette edge returns, with probability
+    ``mixed_return``, the range of the next surface behind (or nothing) or a range in between.
+
+    Parameters
+    ----------
+    scene : Scene
+    station : Station
+    pan, tilt : array_like, shape (m,), radians
+        Nominal angles (the recorded point is ``station + range * direction(pan, tilt)``).
+    rng : numpy.random.Generator
+        Draws 7 numbers per beam up front (as :func:`shoot`), whatever the beams meet.
+
+    Returns
+    -------
+    Returns
+    """
+    pan = np.atleast_1d(np.asarray(pan, dtype=np.float64))
+    tilt = np.atleast_1d(np.asarray(tilt, dtype=np.float64))
+    m = len(pan)
+    e_pan, e_tilt = rng.normal(0.0, station.angular_sigma, size=(2, m))
+    noise = rng.normal(0.0, station.range_sigma, size=m)
+    u_drop, u_mixed, u_kind, u_frac = rng.random(size=(4, m))
+
+    actual_pan, actual_tilt = pan + e_pan, tilt + e_tilt
+    beam = direction_from_angles(actual_pan, actual_tilt)
+    origin = np.asarray(station.position, dtype=np.float64)
+    hits = scene.raycast(origin, beam)
+    met = (hits.object_index >= 0) & (hits.range <= station.max_range)
+    index = np.where(met, hits.object_index, -1)
+    true_range = np.where(met, hits.range, np.inf)
+    surface = np.full((m, 3), np.nan)
+    normals = np.full((m, 3), np.nan)
+    surface[met] = origin + true_range[met, None] * beam[met]
+    normals[met] = hits.normal[met]
+
+    measured = np.full(m, np.nan)
+    mixed = np.zeros(m, dtype=bool)
+    idx = np.flatnonzero(met)
+    if idx.size:
+        r = true_range[idx]
+        delta = station.footprint_radius(r) / r
+        cos_t = np.maximum(np.cos(actual_tilt[idx]), 1e-6)
+        edge = np.zeros(idx.size, dtype=bool)
+        for dp, dt in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+            probe = direction_from_angles(
+                actual_pan[idx] + dp * delta / cos_t, actual_tilt[idx] + dt * delta
+            )
+            edge |= scene.raycast(origin, probe).object_index != index[idx]
+        behind = scene.raycast(origin, beam[idx], exclude=index[idx])
+        background = np.where(behind.range <= station.max_range, behind.range, np.inf)
+        value = r.copy()
+        mix = edge & (u_mixed[idx] < station.mixed_return)
+        lost = mix & ~np.isfinite(background)
+        full = mix & np.isfinite(background) & (u_kind[idx] < 0.5)
+        between = mix & np.isfinite(background) & ~full
+        value[full] = background[full]
+        value[between] = r[between] + u_frac[idx][between] * (background[between] - r[between])
+        value = value + noise[idx]
+        ok = ~lost & (u_drop[idx] >= station.dropout) & (value > 0)
+        measured[idx[ok]] = value[ok]
+        mixed[idx] = mix
+    return Returns(index, measured, true_range, surface, normals, mixed)
 
 
 def angular_window(shape, station) -> tuple[float, float, float, float]:
