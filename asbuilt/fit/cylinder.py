@@ -500,6 +500,7 @@ def fit_cylinder(
         if view is None or sigma is None or not starts:
             raise
         robust = None
+    blind, ignored_view = robust, False
     if (
         view is not None
         and starts
@@ -529,6 +530,10 @@ def fit_cylinder(
             sigma=sigma,
             tolerances=tolerances,
         )
+        if blind is not None and _unseen(robust, local, view):
+            # Even the best fit hides a third of the shots behind itself: the shots were not
+            # taken from this viewpoint.
+            robust, ignored_view = blind, True
     near = robust
     robust = _drop_far_side(near, local, tolerances)
     far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
@@ -570,6 +575,11 @@ def fit_cylinder(
     if oriented is not axis:
         covariance = _flip_covariance(covariance, axis, oriented)
     notes = []
+    if ignored_view:
+        notes.append(
+            "The viewpoint was ignored: more than a third of the shots would have been seen "
+            "through the pipe from it (check the scan's sensor position or the station)."
+        )
     outliers = int(len(pts) - robust.inliers.sum())
     if outliers:
         notes.append(
@@ -602,6 +612,22 @@ def fit_cylinder(
 ONE_SIDED = 0.5
 #: Angle from the seen side's mean direction beyond which a point faces away from it.
 FAR_SIDE_DEG = 95.0
+
+
+#: Fraction of the best fit's inliers seen through the pipe beyond which the viewpoint is taken
+#: as wrong: from a wrong viewpoint about half of the shots of the true pipe are.
+UNSEEN_FRACTION = 1.0 / 3.0
+
+
+def _unseen(robust: RobustFit, points, view) -> bool:
+    """Whether the viewpoint cannot be where the shots came from: more than ``UNSEEN_FRACTION``
+    of the best fit's inliers lie beyond its pipe along their beams by more than a tenth of its
+    radius (a scan whose sensor position is in another frame, or shots from several stations
+    without their ``station``). Asked of the fit the beams chose, so a wrong fit hiding shots
+    behind itself is not mistaken for a wrong viewpoint."""
+    axis, center, radius = robust.state
+    excess = cylinder_beam_excess(axis, center, radius, points[robust.inliers], view)
+    return bool(np.mean(excess > 0.1 * radius) > UNSEEN_FRACTION)
 
 
 def _doubtful(robust: RobustFit, points, view, count: int, sigma, tolerances: Tolerances) -> bool:

@@ -360,3 +360,17 @@ def test_the_viewpoint_recovers_sparse_pipes_among_background_shots(scan):
     assert np.count_nonzero(~fit.inliers & ~background) <= 1
     assert abs(fit.primitive.radius - scan["radius"]) <= 4.5 * fit.stderr["radius"] + 1e-3
     assert angle_deg(fit.primitive.axis, scan["axis"]) <= 4.5 * fit.stderr["axis_deg"] + 0.5
+
+
+def test_a_viewpoint_the_shots_cannot_come_from_is_ignored_and_said(rng):
+    # Scanned from SENSOR; the scan claims a station on the far side of the pipe (another
+    # frame): half the shots would have been seen through the pipe from there.
+    pipe = _pipe(0.2191, 3, 5, [0, 0, 1])
+    sample = raster_scan(pipe, SENSOR, 20, rng)
+    behind = 2 * pipe.center - SENSOR
+    blind = fit_cylinder(sample.points, sigma=0.002)
+    wrong = fit_cylinder(sample.points, sigma=0.002, viewpoint=behind)
+    assert wrong.primitive.radius == pytest.approx(blind.primitive.radius, abs=1e-9)
+    assert any("viewpoint was ignored" in note for note in wrong.notes)
+    right = fit_cylinder(sample.points, sigma=0.002, viewpoint=SENSOR)
+    assert not any("viewpoint" in note for note in right.notes)
