@@ -38,6 +38,9 @@ _EDGE_SAMPLES = 9
 _LINE_WIDTH = 0.02
 #: Gaps between raster lines must be whole multiples of the step within this fraction.
 _STEP_MULTIPLE = 0.15
+#: Least distance across the beam (metres) between a bisection shot and the shot that gives
+#: its line's direction.
+_SPAN = 0.01
 #: Silhouette fit weights: window sides matched to 0.1 mrad, bounds kept within 0.1 m of their
 #: start (a raster step at most) unless the window needs them moved.
 _ANGLE_TOL = 1e-4
@@ -87,6 +90,21 @@ def _on_lines(values: np.ndarray, step: float, ref: float) -> np.ndarray:
     return np.abs(phase - np.round(phase)) <= _LINE_WIDTH
 
 
+def _shot_alike(ang: np.ndarray, off: np.ndarray, labels: list) -> bool:
+    """Whether the points off the raster look shot by the same head (``off``: (n,) bool).
+
+    Edge-bisection shots keep a raster row's tilt or column's pan, and fill rasters have lines
+    of their own: nearly every such point shares its pan or its tilt with another point. Points
+    from another station, seen from this viewpoint, have angles of their own.
+    """
+    if not off.any():
+        return True
+    shared = np.zeros(ang.shape[0], dtype=bool)
+    for label in labels:
+        shared |= np.bincount(label)[label] >= 2
+    return np.count_nonzero(off & ~shared) <= 0.1 * np.count_nonzero(off)
+
+
 def raster_grid(points: np.ndarray, viewpoint: np.ndarray):
     """The raster's angular window and which points are on its grid, edge shots allowed.
 
@@ -109,8 +127,9 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray):
 
     Notes
     -----
-    Without off-grid points this is :func:`raster_window`. Otherwise the lines (columns, then
-    rows) holding a single point are set aside (a bisection shot has a pan or a tilt of its
+    Without off-grid points this is :func:`raster_window`. Otherwise (provided the off-grid
+    points share their pan or tilt with others, as a session's fill and bisection shots do:
+    :func:`_shot_alike`) the lines (columns, then rows) holding a single point are set aside (a bisection shot has a pan or a tilt of its
     own; raster lines hold a point per row or column on the object), the step is measured on
     the points left, and every point on that step's grid (both angles within ``_LINE_WIDTH``
     steps of a line) is a raster point. A window side is pinned when off-grid points lie beyond
@@ -130,18 +149,20 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray):
         on_grid = None
         for least in (2, 3):
             keep = np.ones(n, dtype=bool)
+            labels = []
             for j in range(2):
                 spread = float(np.ptp(ang[:, j]))
                 label = _lines(ang[:, j], _LINE_WIDTH * 1e-2 * max(spread, 1e-12))
+                labels.append(label)
                 keep &= np.bincount(label)[label] >= least
             if np.count_nonzero(keep) < max(7, n // 2):
                 continue
             steps = [_grid_step(ang[keep, j]) for j in range(2)]
             if steps[0] is None or steps[1] is None:
                 continue
-            refs = [float(np.median(ang[keep, j])) for j in range(2)]
+            refs = [float(ang[keep, j].min()) for j in range(2)]
             grid = _on_lines(ang[:, 0], steps[0], refs[0]) & _on_lines(ang[:, 1], steps[1], refs[1])
-            if np.count_nonzero(grid) >= max(7, n // 2):
+            if np.count_nonzero(grid) >= max(7, n // 2) and _shot_alike(ang, ~grid, labels):
                 on_grid = grid
                 break
         if on_grid is None:
@@ -188,6 +209,25 @@ def raster_window(points: np.ndarray, viewpoint: np.ndarray):
     return None if found is None else found[:2]
 
 
+def _in_progression(v: float, others: np.ndarray, tol: float) -> bool:
+    """Whether ``v`` and two of ``others`` (sorted, distinct) are three evenly spaced values.
+
+    A raster's lines are evenly spaced; the hits of one bisection are not, nor are they with
+    the raster shot they started from (each step at most halves the previous one, and the
+    bracket's far end missed).
+    """
+    for a in others:
+        d = a - v
+        if abs(d) <= tol:
+            continue
+        for target in (a + d, v - d):  # v, a, a + d; or v - d, v, a
+            k = int(np.searchsorted(others, target))
+            for m in (k - 1, k):
+                if 0 <= m < others.size and abs(others[m] - target) <= tol:
+                    return True
+    return False
+
+
 def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
     """Which points look like edge-bisection shots of an acquisition session.
 
@@ -203,8 +243,8 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
         column), ``1`` along tilt, ``-1`` for the others (raster and fill shots, or points not
         shot from ``viewpoint``).
     partner : ndarray, shape (n,), int
-        For a bisection shot, the nearest other shot on its row (column): the previous hit of
-        its bisection or the raster hit it started from, the two spanning the bisection's
+        For a bisection shot, the nearest other shot on its row (column) at least ``_SPAN``
+        (1 cm) away across the beam (the nearest when none is): the two span the bisection's
         direction on the surface. ``-1`` for the others.
 
     Notes
@@ -212,14 +252,14 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
     A session (``asbuilt.drivers.session``) bisects between a raster hit and a neighbouring
     miss of the same row (or column), so every bisection shot keeps the row's tilt (the
     column's pan) and has a pan (tilt) between two raster columns, at a binary fraction of
-    the step. Raster columns (of the raster or of a fill raster) hold shots on three rows or
-    more, or two (an object two columns wide); a bisection's pans hold one shot (one pair per
-    side, the session's default: with more, pairs sharing a bracket look like a raster column
-    and their shots get the raster's pad). So a shot is taken for a
-    pan bisection when its pan holds shots on one row only and, on its row, it is not
-    a whole number of steps from the columns that hold two or more (the step being their
-    smallest spacing on that row, or anywhere when the row has one; with none the shot is
-    taken for a raster shot); the same with pan and tilt exchanged. A shot that
+    the step. Raster columns (of the raster or of a fill raster) hold shots on two rows or
+    more; a bisection's pans hold one shot (the session bisects one pair per bracket, so no two
+    bisections share angles). A shot whose pan holds one row is a raster shot when its pan and
+    two others of its row are evenly spaced (a one-column fill raster, a raster's lone corner
+    shot), and a pan-bisection shot when it is off the lattice of the raster columns crossing
+    its row (a whole number of their smallest spacing from them; with one such column on the
+    row, a one-column fill raster's, there is no lattice and the lone pan is taken for a
+    bisection's; with none, for a raster shot); the same with pan and tilt exchanged. A shot that
     would be both is neither. Repeated shots in one direction (a head rounding to whole
     counts) count once. Lines are told apart at 0.02 % of the angular spread (the shots'
     angles are the nominal ones, exact to rounding), and a shot is on a raster's lattice within
@@ -246,28 +286,40 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
         full.append(positions[labels[j]] >= 2)
     flagged = np.zeros((2, n), dtype=bool)
     for j in range(2):
-        everywhere = np.unique(ang[full[j], j])
         for i in np.flatnonzero(~full[j]):
-            row = labels[1 - j] == labels[1 - j][i]
-            lines = np.unique(ang[row & full[j], j])
+            own = labels[1 - j] == labels[1 - j][i]
+            v = ang[i, j]
+            # on an evenly spaced progression of its own line (a one-column fill raster, a
+            # raster's lone corner shot): a raster shot
+            if _in_progression(v, np.unique(ang[own & (labels[j] != labels[j][i]), j]), tols[j]):
+                continue
+            # else off the lattice of the raster columns crossing its row: a bisection shot
+            lines = np.unique(ang[own & full[j], j])
             if lines.size == 0:
                 continue
-            # the step of the raster this row belongs to; with one full line on the row (a
-            # one-column fill raster), the smallest spacing of the full lines anywhere
-            gaps = np.diff(lines if lines.size >= 2 else everywhere)
+            gaps = np.diff(lines)
             gaps = gaps[gaps > tols[j]]
             if gaps.size == 0:
+                # one raster column on the row (a one-column fill raster): no lattice to be off;
+                # a lone pan, on no progression, next to a raster column is a bisection's
+                flagged[j, i] = True
                 continue
             step = float(gaps.min())
-            offset = (ang[i, j] - lines[0]) % step
+            offset = (v - lines[0]) % step
             flagged[j, i] = min(offset, step - offset) > tols[j]
+    reach = np.linalg.norm(rel, axis=1)
     for j in range(2):
         for i in np.flatnonzero(flagged[j] & ~flagged[1 - j]):
             line = np.flatnonzero((labels[1 - j] == labels[1 - j][i]) & (labels[j] != labels[j][i]))
             if line.size == 0:
                 continue
+            # the nearest shot on the line at least _SPAN away across the beam, so that the
+            # two span the line's direction well above the range noise (millimetres)
+            apart = np.abs(ang[line, j] - ang[i, j]) * reach[i]
+            if np.any(apart >= _SPAN):
+                line, apart = line[apart >= _SPAN], apart[apart >= _SPAN]
             out[i] = j
-            partner[i] = line[int(np.argmin(np.abs(ang[line, j] - ang[i, j])))]
+            partner[i] = line[int(np.argmin(apart))]
     return out, partner
 
 

@@ -214,6 +214,13 @@ def _grow(model, x, label, inliers, threshold, gap, viewpoint, trusted):
     return _Model(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
 
 
+def _expand(frame, subset: np.ndarray, n: int):
+    """``frame`` segmented on the points ``subset`` (m,), its labels spread over all n (-1)."""
+    labels = -np.ones(n, dtype=np.int64)
+    labels[subset] = frame.labels
+    return _faces.Frame(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, labels)
+
+
 def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted):
     """Robust joint fit starting from one segmentation frame (plus faces it then reveals).
 
@@ -285,13 +292,46 @@ def _outward_spacing(proj: np.ndarray, extreme: int, k: int, sign: float) -> flo
     return float(delta[behind].min()) if np.any(behind) else None
 
 
+#: Cosine of the largest angle between a bisection's line and an axis for the bisection to
+#: bound that axis (75 degrees).
+_ALONG = math.cos(math.radians(75.0))
+
+
 def _bisected(x, direction, i, edges) -> bool:
-    """Whether point ``i`` ends an edge bisection heading along ``direction`` (3,) (45 degrees)."""
+    """Whether point ``i`` is an edge-bisection shot whose line runs along ``direction`` (3,).
+
+    The line (through the shot and its partner, the raster shot it started from) must not be
+    within 15 degrees of perpendicular to the axis (``_ALONG``): a bisection across the axis
+    (a column's top, bisected vertically, seen as the extreme of a horizontal axis near a
+    corner) says nothing about that axis's edge. The top face of a pier seen from above is
+    bisected along the line of sight, diagonal to both of its axes: it pins whichever far edge
+    it ends on.
+    """
     if edges is None or edges[0][i] < 0:
         return False
     step = x[i] - x[edges[1][i]]
     length = float(np.linalg.norm(step))
-    return length > 0.0 and float(step @ direction) >= np.sqrt(0.5) * length
+    return length > 0.0 and abs(float(step @ direction)) >= _ALONG * length
+
+
+def _pinned(x, index, along, sign, axis, edges, tol) -> bool:
+    """Whether an edge bisection along ``sign * axis`` ended at the extreme inlier (within tol).
+
+    ``index`` (m,): the inliers; ``along`` (m,): their coordinates along ``axis`` (3,). The
+    outermost inlier bisected along the axis (:func:`_bisected`) pins the edge there, to the
+    session's tolerance; when it is within ``tol`` (metres, the residual cut: noise) of the
+    extreme inlier, the edge is at the extreme. Farther in, it pinned another stretch of the
+    silhouette (which need not be straight in angle: a horizontal edge seen from below dips
+    towards its nearest point), and the extreme point keeps the raster's pad.
+    """
+    if edges is None:
+        return False
+    best = None
+    for m in np.flatnonzero(edges[0][index] >= 0):
+        if _bisected(x, axis, index[m], edges):
+            value = sign * along[m]
+            best = value if best is None else max(best, value)
+    return best is not None and float(np.max(sign * along)) - best <= tol
 
 
 def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
@@ -304,9 +344,10 @@ def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
     (:func:`_outward_spacing`: a few millimetres for an edge-bisection shot, whose bracket
     halves at each step); the smaller one is the finer sampling that reached the edge.
 
-    An extreme inlier that is an edge-bisection shot (``edges``: the ``(along, partner)`` answer
-    of :func:`asbuilt.fit._silhouette.edge_shots`) bisected outwards along the axis (the step
-    from its partner within 45 degrees of it) is the bound itself: the session bisects until
+    When the outermost edge-bisection shot along the axis (``edges``: the ``(along, partner)``
+    answer of :func:`asbuilt.fit._silhouette.edge_shots`; the line through it and its partner
+    within 75 degrees of the axis) is the extreme inlier, or within the residual cut of it
+    (:func:`_pinned`), the extreme is the bound itself: the session bisects until
     the bracket is a few millimetres across, about the range noise, so no pad is added.
 
     Returns lo (3,), hi (3,), lo_face (3,) bool, hi_face (3,) bool, lo_point (3,) int, hi_point
@@ -333,7 +374,7 @@ def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
             top = int(np.argmax(along))
             local = _outward_spacing(inner, top, k, 1.0)
             pads[1, k] = edge_pad * (median if local is None else min(local, median))
-            if _bisected(x, model.axes[k], index[top], edges):
+            if _pinned(x, index, along, 1.0, model.axes[k], edges, noise):
                 pads[1, k] = 0.0
             hi_pt[k] = index[top]
             hi[k] = along.max() + pads[1, k]
@@ -341,7 +382,7 @@ def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
             bottom = int(np.argmin(along))
             local = _outward_spacing(inner, bottom, k, -1.0)
             pads[0, k] = edge_pad * (median if local is None else min(local, median))
-            if _bisected(x, -model.axes[k], index[bottom], edges):
+            if _pinned(x, index, along, -1.0, model.axes[k], edges, noise):
                 pads[0, k] = 0.0
             lo_pt[k] = index[bottom]
             lo[k] = along.min() - pads[0, k]
@@ -493,7 +534,8 @@ def fit_cuboid(
         The sensor position (``scan.sensor.position``). It orients a single seen face (the box
         lies behind it), rules out faces turned away from it, and lets the raster silhouette
         bound the unseen edges. None tries the scan frame's origin, trusted only if the points
-        are a pan-tilt raster seen from there.
+        are a plain pan-tilt raster seen from there (edge-bisection shots are used with a given
+        viewpoint only).
     edge_pad : float
         Fraction of the local shot spacing (see the module docstring, step 3) added beyond the
         last point to an extent bound when the silhouette cannot be used (0.5: the middle of
@@ -532,22 +574,35 @@ def fit_cuboid(
 
     origin = pts.mean(axis=0)
     x = pts - origin
-    normals, local_rms, hood = _faces.local_normals(x, tolerances.normal_neighbours)
-    if sigma is not None:
-        noise = float(sigma)
-    else:
-        noise = _faces.noise_scale(x, normals, local_rms, floor)
-    threshold = cutoff * max(noise, floor)
-    fourth = hood[:, min(3, hood.shape[1] - 1)]
-    reach = _median(np.linalg.norm(x[fourth] - x, axis=1))
-    gap = threshold + 1.5 * reach
     # The viewpoint (given, or the scan frame's origin) is trusted when the points' directions
     # from it fall on a pan-tilt raster's rows and columns.
     viewpoint = np.zeros(3) if view is None else view
     grid = _silhouette.raster_grid(pts, viewpoint)
-    trusted = grid is not None or view is not None
+    # Without a given viewpoint, the scan frame's origin is trusted on a plain raster only: a
+    # raster with off-grid shots could also be two stations' points seen from one of them.
+    trusted = view is not None or (grid is not None and grid[2].all())
+    if not trusted:
+        grid = None
+    # Bisection shots are told from the raster by their angles from a trusted viewpoint only.
+    edges = _silhouette.edge_shots(pts, viewpoint) if trusted else (-np.ones(n, np.int64),) * 2
+    # Segmentation works on the raster's shots: a bisection's hits lie millimetres apart on a
+    # line next to an edge, so their neighbourhoods give no normal and would shrink the spacing
+    # scale; the joint fit and the bounds use every point.
+    seg = np.flatnonzero(edges[0] < 0)
+    if seg.size < max(MIN_POINTS["cuboid"], n // 2):
+        seg = np.arange(n)
+    xs = x[seg]
+    normals, local_rms, hood = _faces.local_normals(xs, tolerances.normal_neighbours)
+    if sigma is not None:
+        noise = float(sigma)
+    else:
+        noise = _faces.noise_scale(xs, normals, local_rms, floor)
+    threshold = cutoff * max(noise, floor)
+    fourth = hood[:, min(3, hood.shape[1] - 1)]
+    reach = _median(np.linalg.norm(xs[fourth] - xs, axis=1))
+    gap = threshold + 1.5 * reach
     frames = _faces.segment(
-        x,
+        xs,
         normals,
         threshold,
         gap,
@@ -556,6 +611,8 @@ def fit_cuboid(
         visible_only=trusted,
         alternatives=True,
     )
+    if seg.size < n:
+        frames = [_expand(frame, seg, n) for frame in frames]
     if not frames:
         raise FitError(
             "cuboid: no planar face found (no three points on one plane); check the points or "
@@ -586,7 +643,7 @@ def fit_cuboid(
         )
 
     lo, hi, lo_face, hi_face, lo_pt, hi_pt, pad = _bounds(
-        x, label, inliers, model, cutoff * scale, edge_pad, _silhouette.edge_shots(pts, viewpoint)
+        x, label, inliers, model, cutoff * scale, edge_pad, edges
     )
     used_window = False
     if silhouette and grid is not None and not one_face:

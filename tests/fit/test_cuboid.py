@@ -408,3 +408,99 @@ def _check_invariance(points, rot, move, silhouette):
     turned = base.primitive.axes @ rot.T
     assert np.allclose(np.abs(moved.primitive.axes @ turned.T).max(axis=1), 1.0, atol=1e-6)
     assert np.array_equal(moved.inliers, base.inliers)
+
+
+# --------------------------------------------------------------------------- scan sessions
+
+
+def session_scan(box: Cuboid, sensor, margins, rng, wanted=24, edge_pairs=4):
+    """Points (n, 3) and the edge-shot mask (n,) of the acquisition session's algorithm
+    (``asbuilt.drivers.session.scan_target``, default settings but ``edge_pairs``) shooting
+    over an operator's window: the box's angular window widened on each side by ``margins``
+    (4,) in steps of a ``wanted``-shot raster; beams with angular noise meet the box (the slab
+    method above) or a wall 15 m away, ranges with noise, points along the nominal angles."""
+    from asbuilt.drivers.plan import SessionSettings, Target, Window
+    from asbuilt.drivers.session import Shot, grid, scan_target
+
+    sensor = np.asarray(sensor, float)
+    pan0, p_lo, p_hi, t_lo, t_hi = _window(box, sensor)
+    rows, cols = grid(Window(p_lo, p_hi, t_lo, t_hi), wanted)[2]
+    dp, dt = (p_hi - p_lo) / cols, (t_hi - t_lo) / rows
+    window = Window(
+        pan0 + p_lo - margins[0] * dp,
+        pan0 + p_hi + margins[1] * dp,
+        t_lo - margins[2] * dt,
+        t_hi + margins[3] * dt,
+    )
+
+    def shoot(pan, tilt, phase):
+        actual = _directions(
+            np.array([pan + rng.normal(0.0, ANGLE_SIGMA)]),
+            np.array([tilt + rng.normal(0.0, ANGLE_SIGMA)]),
+        )
+        hit = _ray_box(box, sensor, actual)[0]
+        true = hit if np.isfinite(hit) else 15.0
+        return Shot(pan, tilt, pan, tilt, true + rng.normal(0.0, SIGMA), None, 1, phase)
+
+    settings = SessionSettings(edge_pairs=edge_pairs)
+    result = scan_target(Target("C", "cuboid", window, points=wanted), shoot, settings)
+    kept = [s for s, k in zip(result.shots, result.on_object) if k]
+    pan = np.array([s.pan for s in kept])
+    tilt = np.array([s.tilt for s in kept])
+    ranges = np.array([s.range for s in kept])
+    points = sensor + ranges[:, None] * _directions(pan, tilt)
+    return points, np.array([s.phase == "edge" for s in kept])
+
+
+def _session_cases():
+    cases = []
+    for seed in range(6):
+        rng = np.random.default_rng(500 + seed)
+        distance = rng.uniform(3.0, 9.0)
+        if seed % 2:
+            top = -distance * math.tan(math.radians(rng.uniform(20, 35)))
+            truth = column(0.4, 0.35, 1.2, rng.uniform(25, 65), distance, rng, base=top - 1.2)
+        else:
+            truth = column(0.3, 0.4, 3.0, rng.uniform(25, 65), distance, rng, base=-1.5)
+        cases.append((truth, rng.uniform(0.0, 1.0, 4), rng))
+    return cases
+
+
+def test_session_edge_shots_bound_the_unseen_edges():
+    """Over an operator's window the raster's last lines stop up to a step short of the edges;
+    the session's bisection shots pin them: sizes to about a percent, far better than the
+    same scan without its edge shots, and the size's standard error says how well."""
+    with_edges, without, pinned_se, raster_se = [], [], [], []
+    for truth, margins, rng in _session_cases():
+        points, edge = session_scan(truth, np.zeros(3), margins, rng)
+        assert edge.sum() >= 4  # every side bisected, about half of the shots on the object
+        fit = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+        err, angle, order = match(fit.primitive, truth)
+        with_edges.append(np.abs(err))
+        assert angle < 1.0
+        se = np.asarray(fit.stderr["size"])[order]
+        pinned_se.append(se)
+        plain = fit_cuboid(points[~edge], sigma=SIGMA, viewpoint=np.zeros(3))
+        plain_err, _, plain_order = match(plain.primitive, truth)
+        without.append(np.abs(plain_err))
+        raster_se.append(np.asarray(plain.stderr["size"])[plain_order])
+    with_edges, without = np.array(with_edges), np.array(without)
+    assert np.median(with_edges) < 0.01, with_edges
+    assert np.median(with_edges) < 0.5 * np.median(without)
+    # the remaining gap: millimetres past a bisection's last hit, up to a raster step past a
+    # raster line; the standard errors say so
+    assert np.median(pinned_se) < 0.5 * np.median(raster_se)
+    assert np.median(np.abs(without) * [t.size for t, _, _ in _session_cases()]) < 3 * np.median(
+        raster_se
+    )
+
+
+def test_session_scan_from_a_station_off_the_origin_is_the_same_box():
+    """The bisection shots are found from the viewpoint; moving everything keeps the fit."""
+    truth, margins, rng = _session_cases()[0]
+    points, _ = session_scan(truth, np.zeros(3), margins, rng)
+    base = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+    move = np.array([10.0, -4.0, 2.0])
+    moved = fit_cuboid(points + move, sigma=SIGMA, viewpoint=move)
+    assert moved.primitive.size == pytest.approx(base.primitive.size, abs=1e-6)
+    assert moved.primitive.center == pytest.approx(base.primitive.center + move, abs=1e-6)

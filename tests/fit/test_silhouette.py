@@ -65,3 +65,75 @@ def test_the_simulator_raster_convention_is_the_one_assumed():
     """The silhouette window assumes shots at cell centres (half a step inside the window)."""
     sensor = pytest.importorskip("asbuilt.sim.sensor")
     assert sensor.EDGE_INSET == 0.5
+
+
+# --------------------------------------------------------------------------- edge-bisection shots
+
+
+def _grid_and_edges(step_p=0.01, step_t=0.02, cols=4, rows=5):
+    """A raster plus bisection shots: one pan bisection right of row 2, one tilt bisection
+    above column 1, each stepping 1/2, 3/4, 7/8 of a step (hits only)."""
+    raster = [(0.3 + step_p * c, -0.1 + step_t * r) for r in range(rows) for c in range(cols)]
+    right = 0.3 + step_p * (cols - 1)
+    top = -0.1 + step_t * (rows - 1)
+    pan_bisection = [(right + f * step_p, -0.1 + 2 * step_t) for f in (0.5, 0.75, 0.875)]
+    tilt_bisection = [(0.3 + step_p, top + f * step_t) for f in (0.5, 0.625)]
+    return raster, pan_bisection, tilt_bisection
+
+
+def _points(view, angles):
+    pan, tilt = np.asarray(angles, float).T
+    d = np.column_stack([np.cos(tilt) * np.cos(pan), np.cos(tilt) * np.sin(pan), np.sin(tilt)])
+    ranges = np.random.default_rng(3).uniform(5.0, 6.0, len(pan))
+    return view + ranges[:, None] * d
+
+
+@pytest.mark.parametrize("view", [np.zeros(3), np.array([1.0, -2.0, 0.5])])
+def test_bisection_shots_are_told_from_the_raster(view):
+    raster, pan_b, tilt_b = _grid_and_edges()
+    pts = _points(view, raster + pan_b + tilt_b)
+    along, partner = _silhouette.edge_shots(pts, view)
+    k = len(raster)
+    assert np.all(along[:k] == -1) and np.all(partner[:k] == -1)
+    assert np.all(along[k : k + 3] == 0)  # bisected along pan, on raster row 2
+    assert np.all(along[k + 3 :] == 1)  # bisected along tilt, on raster column 1
+    # each one's partner lies on its own row (column) at least a centimetre across the beam
+    for i in range(k, len(pts)):
+        j = 1 - along[i]
+        assert np.asarray(raster + pan_b + tilt_b)[partner[i], j] == pytest.approx(
+            np.asarray(raster + pan_b + tilt_b)[i, j]
+        )
+
+
+@pytest.mark.parametrize(
+    "extra, flagged",
+    [
+        ([], 0),  # a plain raster
+        ([(0.31, -0.1 + 0.02 * 5)], 0),  # a lone shot on a raster's next row (a box's corner)
+        ([(0.335, 0.06 + 0.0137 * i) for i in range(3)], 0),  # a one-column fill raster
+        ([(0.295, -0.04)], 1),  # half a step left of the raster, on a row
+    ],
+)
+def test_raster_shots_off_the_main_lines_are_not_bisections(extra, flagged):
+    raster, _, _ = _grid_and_edges()
+    view = np.zeros(3)
+    along, _ = _silhouette.edge_shots(_points(view, raster + extra), view)
+    assert np.count_nonzero(along >= 0) == flagged
+
+
+def test_raster_grid_pins_the_sides_that_bisection_shots_reach_beyond():
+    raster, pan_b, tilt_b = _grid_and_edges()
+    view = np.zeros(3)
+    pts = _points(view, raster + pan_b + tilt_b)
+    pan0, window, on_grid, pinned, steps = _silhouette.raster_grid(pts, view)
+    assert on_grid.tolist() == [True] * len(raster) + [False] * 5
+    assert steps == pytest.approx([0.01, 0.02])
+    # pan high and tilt high at the outermost bisection shots; the others half a step out
+    assert pinned.tolist() == [False, True, False, True]
+    assert window[1] + pan0 == pytest.approx(0.33 + 0.875 * 0.01)
+    assert window[3] == pytest.approx(-0.1 + 0.08 + 0.625 * 0.02)
+    assert window[0] + pan0 == pytest.approx(0.3 - 0.005)
+    assert window[2] == pytest.approx(-0.1 - 0.01)
+    # and the plain raster's window is unchanged by the check
+    plain = _silhouette.raster_window(_points(view, raster), view)
+    assert plain[1][2] == pytest.approx(-0.11)
