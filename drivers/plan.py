@@ -198,7 +198,8 @@ class SessionSettings:
         ``edge_depth`` steps are taken). 2 mm is about the range noise and the pointing noise
         at 10 m, below which bisection gains nothing.
     edge_shots : int
-        Most bisection shots per object, all pairs together.
+        Most edge shots per object, all pairs together (the default leaves room for four
+        pairs of ten steps: a bracket of 2 m down to 2 mm).
     curved_depth : int
         Bisection steps per pair for cylinders and spheres instead of ``edge_tolerance``: their
         fits use the surface points only, and shots pressed against a curved silhouette graze
@@ -214,9 +215,9 @@ class SessionSettings:
 
     retries: int = 2
     edge_pairs: int = 4
-    edge_depth: int = 8
+    edge_depth: int = 10
     edge_tolerance: float = 0.002
-    edge_shots: int = 32
+    edge_shots: int = 40
     curved_depth: int = 2
     fill_rounds: int = 2
     lost_after: int = 3
@@ -233,8 +234,10 @@ class SessionSettings:
             raise ValueError("lost_after must be >= 1")
 
     def edge_budget(self) -> int:
-        """Most bisection shots one object can take (pairs x depth, capped by ``edge_shots``)."""
-        return min(self.edge_shots, self.edge_pairs * self.edge_depth)
+        """Most edge shots one object can take: ``edge_shots``, or fewer when the pairs cannot
+        use them (pairs x (depth + 1): the bisection steps and a check of the cell beyond the
+        raster's border)."""
+        return min(self.edge_shots, self.edge_pairs * (self.edge_depth + 1))
 
 
 #: The default settings (module-level so functions can default to it).

@@ -17,8 +17,9 @@ Per object (:func:`scan_target`, deterministic given the measured ranges):
    shot first: if that is on the object too, the object runs on beyond the window and the
    pair is dropped); each pair belongs to the side its outside cell is on (left, right,
    bottom, top: lower or higher pan or tilt), taken from the finest raster that has pairs
-   there. ``edge_pairs`` pairs are dealt to the sides in turn (every side gets some), each
-   side's share at evenly spaced quantiles of its pairs (its middle pair for one). A pair is
+   there; of the pairs of a side that bracket the same two lines (a straight edge), only the
+   middle one is kept. ``edge_pairs`` pairs are dealt to the sides in turn (every side gets
+   some), each side's share at evenly spaced quantiles of its pairs (its middle pair for one). A pair is
    bisected (shoot the midpoint, keep the half that still brackets the edge) until the
    bracket, as an angle times the range of its inside shot, is at most ``edge_tolerance``
    metres, ``edge_depth`` steps at most, ``edge_shots`` shots per object at most. Cylinders
@@ -380,11 +381,16 @@ def scan_target(
                 )
                 for (r, c), (r2, c2) in found[side]
             ]
+            sides[side] = _distinct_brackets(sides[side], 0 if side in ("left", "right") else 1)
     budget = settings.edge_budget()
     curved = target.kind in ("cylinder", "sphere")
     depth = min(settings.edge_depth, settings.curved_depth) if curved else settings.edge_depth
 
     def is_hit(shot: Shot) -> bool:
+        # The split is re-measured with every edge shot: a raster that fell wholly on the object
+        # saw no background yet, and the first shot beyond its border may be the first to.
+        nonlocal threshold
+        threshold = foreground_threshold(s.range for s in shots)
         return shot.range is not None and (settings.keep_background or shot.range < threshold)
 
     for inside, outside, reach, beyond in _deal_pairs(sides, settings.edge_pairs):
@@ -422,6 +428,21 @@ def _bracket(inside: np.ndarray, outside: np.ndarray) -> float:
     """Angle (radians) between two unit-angle directions ``[pan, tilt]`` (small-angle form)."""
     d_pan = (outside[0] - inside[0]) * math.cos(0.5 * (inside[1] + outside[1]))
     return math.hypot(d_pan, outside[1] - inside[1])
+
+
+def _distinct_brackets(pairs: list, axis: int) -> list:
+    """One pair per bracket: the middle one of the pairs sharing their angles along ``axis``.
+
+    Pairs of one side that bracket the same two raster lines (a straight edge crossing many
+    rows between the same two columns) would be bisected into the same angles: the second
+    would pin the same line again, and its shots, sharing angles with the first's, would look
+    like a raster line to the fit. Groups keep the order of their first pair.
+    """
+    groups: dict[tuple, list] = {}
+    for pair in pairs:
+        key = (round(float(pair[0][axis]), 12), round(float(pair[1][axis]), 12))
+        groups.setdefault(key, []).append(pair)
+    return [group[(len(group) - 1) // 2] for group in groups.values()]
 
 
 def _deal_pairs(sides: dict[str, list], count: int) -> list:
