@@ -10,6 +10,7 @@ from asbuilt.sim.scene import scene_from_dict
 from asbuilt.sim.sensor import (
     EDGE_INSET,
     angular_window,
+    fire,
     operator_margins,
     operator_window,
     plan_raster,
@@ -366,3 +367,40 @@ def test_operator_window_edge_falls_between_last_hit_and_first_miss():
     pan, tilt, _ = plan_raster(scene, 0, station, 30)
     step = np.diff(np.unique(np.round(pan, 12))).min()
     assert (edge - (-pan.min())) / step == pytest.approx(EDGE_INSET, abs=1e-9)
+
+
+# --------------------------------------------------------------------------- single beams
+
+
+@pytest.mark.parametrize("with_background", [True, False])
+def test_fire_measures_whatever_each_beam_meets(with_background):
+    scene = edge_scene(with_background)
+    # straight at the pipe, just above it (the wall or nothing), and far off to the side
+    pan = np.radians([90.0, 90.0, 60.0])
+    tilt = np.radians([0.0, 3.0, 0.0])
+    got = fire(scene, scene.stations[0], pan, tilt, np.random.default_rng(0))
+    assert got.object_index[0] == 0
+    assert got.range[0] == pytest.approx(4.9, abs=0.005)  # 5 m to the axis, radius 0.1
+    assert got.surface_points[0] == pytest.approx([0.0, 4.9, 0.0], abs=0.01)
+    if with_background:
+        assert got.object_index[1] == 1 and got.object_index[2] == 1
+        assert got.range[1] == pytest.approx(7.0 / math.cos(math.radians(3.0)), abs=0.005)
+    else:
+        assert np.all(got.object_index[1:] == -1)
+        assert np.all(np.isnan(got.range[1:])) and np.all(np.isinf(got.true_range[1:]))
+        assert np.all(np.isnan(got.surface_points[1:]))
+
+
+def test_fire_draws_a_fixed_stream_and_matches_shoot_on_the_object():
+    """Seven random numbers a beam, as shoot draws them: the same beams give the same ranges."""
+    scene = edge_scene(True)
+    station = scene.stations[0]
+    pan, tilt, _ = plan_raster(scene, 0, station, 30)
+    shots = shoot(scene, 0, station, pan, tilt, np.random.default_rng(9))
+    got = fire(scene, station, pan, tilt, np.random.default_rng(9))
+    on = got.object_index == 0
+    np.testing.assert_array_equal(np.flatnonzero(on & np.isfinite(got.range)), shots.index)
+    np.testing.assert_allclose(got.range[shots.index], shots.range)
+    one_by_one = np.random.default_rng(9)
+    singles = [fire(scene, station, [p], [t], one_by_one).range[0] for p, t in zip(pan, tilt)]
+    assert np.isfinite(singles).sum() == np.isfinite(got.range).sum()
