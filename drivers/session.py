@@ -4,8 +4,9 @@ Per object (:func:`scan_target`, deterministic given the measured ranges):
 
 1. **Raster.** A cell-centred grid over the window with at least the points the kind needs
    (:meth:`Target.wanted`), columns and rows in proportion to the window's width and height,
-   shot row by row in serpentine order (short head moves); never fewer than 3 rows and 3 columns, so a thin object
-   (a pipe seen side-on) cannot fall between two rows of a loose window.
+   shot row by row in serpentine order (short head moves); never fewer than 3 rows and 3
+   columns (5 for cuboids: two lines on each of two seen faces), so a thin object (a pipe
+   seen side-on) cannot fall between two rows of a loose window.
 2. **Foreground.** Valid returns are split at the largest gap in sorted range when it exceeds
    ``max(0.1 m, 5 %)``: the nearer cluster is the object the operator aimed at, the farther one
    the background behind it. Misses (no return, device errors) are background too.
@@ -335,7 +336,7 @@ def scan_target(
             dtype=bool,
         )
 
-    pan, tilt, (rows, cols) = grid(target.window, wanted)
+    pan, tilt, (rows, cols) = grid(target.window, wanted, _MIN_LINES.get(target.kind, 3))
     shots.extend(shoot(p, t, "raster") for p, t in zip(pan, tilt))
     grids = [(0, rows, cols, target.window)]
     for _ in range(settings.fill_rounds):
@@ -418,6 +419,12 @@ def scan_target(
                 outside = mid
     return ObjectScan(target, tuple(shots), on_object(threshold))
 
+
+#: Fewest raster rows and columns by kind (3 otherwise): a cuboid is mostly seen on two faces,
+#: each of which needs two lines of shots for its plane; five lines across the object's window
+#: give that wherever the corner falls (a column seen edge-on in a tall window would otherwise
+#: get three columns, one of them alone on a face).
+_MIN_LINES = {"cuboid": 5}
 
 #: The silhouette's sides, in the order pairs are dealt to them: pan low and high (left, right),
 #: tilt low and high (bottom, top).

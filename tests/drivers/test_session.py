@@ -290,8 +290,8 @@ def test_every_side_is_bisected_down_to_the_tolerance(tolerance):
     settings = SessionSettings(edge_pairs=4, edge_tolerance=tolerance, edge_depth=20)
     result = scan_target(target, shoot, settings)
     edges = [(s, k) for s, k in zip(result.shots, result.on_object) if s.phase == "edge"]
-    hits = [s for s, k in edges if k]
-    # the innermost hit beyond each side's edge: within the tolerance (across the beam at 4 m)
+    hits = [s for s, k in zip(result.shots, result.on_object) if k]
+    # the outermost hit towards each side's edge: within the tolerance (across the beam at 4 m)
     gaps = {
         "left": min(s.pan - (0.01 - 0.05) for s in hits),
         "right": min((0.01 + 0.05) - s.pan for s in hits),
