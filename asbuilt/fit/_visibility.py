@@ -23,6 +23,7 @@ from asbuilt.fit._common import (
     GeometricModel,
     RobustFit,
     gauss_newton,
+    newton_step,
     robust_geometric_fit,
     robust_scale,
     tukey_weights,
@@ -31,14 +32,14 @@ from asbuilt.tolerances import Tolerances
 
 __all__ = ["cylinder_beam_excess", "reconsidered", "visible_score"]
 
-#: Tukey-weighted steps that bring a seed into its basin; least squares on the inliers then
-#: converges from there.
+#: Gauss-Newton steps that bring a seed into its basin (:func:`_settle`); least squares on the
+#: inliers converges from there.
 SETTLE_ITERATIONS = 10
+#: Forward-difference step of the beam excess's Jacobian (radians and metres).
+_DIFFERENCE_STEP = 1e-6
 
 
-def cylinder_beam_excess(
-    axis: np.ndarray, center: np.ndarray, radius: float, points: np.ndarray, viewpoint
-) -> np.ndarray:
+def cylinder_beam_excess(axis, center, radius, points: np.ndarray, viewpoint) -> np.ndarray:
     """How far each shot's beam ran inside an infinite cylinder before reaching the shot.
 
     The beam from ``viewpoint`` to a point crosses the cylinder along a chord (if at all). A point
@@ -49,38 +50,44 @@ def cylinder_beam_excess(
 
     Parameters
     ----------
-    axis : ndarray, shape (3,)
-        Unit axis.
-    center : ndarray, shape (3,), metres
+    axis : ndarray, shape (3,) or (s, 3)
+        Unit axis (of each of ``s`` cylinders).
+    center : ndarray, shape (3,) or (s, 3), metres
         A point on the axis.
-    radius : float, metres
+    radius : float or ndarray, shape (s,), metres
     points : ndarray, shape (n, 3), metres
     viewpoint : array_like, shape (3,), metres
         Where the shots were taken from.
 
     Returns
     -------
-    ndarray, shape (n,), metres
+    ndarray, shape (n,) or (s, n), metres
         Non-negative; 0 where the beam misses the cylinder or the point is on the near half.
     """
     view = np.asarray(viewpoint, dtype=np.float64)
+    axes = np.atleast_2d(axis)
+    centers = np.atleast_2d(center)
+    radii = np.atleast_1d(np.asarray(radius, dtype=np.float64))
     beams = points - view
     lengths = np.sqrt(np.einsum("ij,ij->i", beams, beams))
     directions = beams / np.maximum(lengths, 1e-300)[:, None]
-    start = view - center
-    start_across = start - float(start @ axis) * axis
-    across = directions - np.outer(directions @ axis, axis)
-    a = np.einsum("ij,ij->i", across, across)
-    b = 2.0 * (across @ start_across)
-    c = float(start_across @ start_across) - radius * radius
-    discriminant = b * b - 4.0 * a * c
-    excess = np.zeros(len(points))
+    start = view - centers
+    start_across = start - np.einsum("ij,ij->i", start, axes)[:, None] * axes
+    # With across = d - (d.a) a and start_across perpendicular to a: |across|^2 = 1 - (d.a)^2
+    # and across.start_across = d.start_across.
+    along = axes @ directions.T  # (s, n)
+    a = 1.0 - along * along
+    b = 2.0 * (start_across @ directions.T)
+    c = np.einsum("ij,ij->i", start_across, start_across) - radii * radii
+    discriminant = b * b - 4.0 * a * c[:, None]
+    excess = np.zeros(a.shape)
     hit = (discriminant > 0.0) & (a > 1e-24)
     if np.any(hit):
         middle = -b[hit] / (2.0 * a[hit])
         chord = np.sqrt(discriminant[hit]) / a[hit]
-        excess[hit] = np.clip(2.0 * (lengths[hit] - middle), 0.0, chord)
-    return excess
+        reach = np.broadcast_to(lengths, a.shape)[hit]
+        excess[hit] = np.clip(2.0 * (reach - middle), 0.0, chord)
+    return excess[0] if np.ndim(axis) == 1 else excess
 
 
 def visible_score(residuals: np.ndarray, excess: np.ndarray, scale: float, cutoff: float) -> float:
@@ -108,6 +115,53 @@ def visible_score(residuals: np.ndarray, excess: np.ndarray, scale: float, cutof
     return float(np.minimum(squares, cutoff * cutoff).sum())
 
 
+def _settle(model: GeometricModel, seed, points: np.ndarray, excess, scale: float):
+    """Bring a seed into its basin of the free-space-aware cost: Gauss-Newton on each point's
+    orthogonal residual and beam excess together, Tukey-weighted (Beaton & Tukey 1974) on their
+    combined size at the larger of the noise level and its MAD scale (re-estimated each step,
+    so that a seed centimetres off still sees its inliers).
+
+    The excess is piecewise smooth; its Jacobian is taken by forward differences. Without the
+    excess in the cost a seed near the true pipe can slide into a thinner cylinder that hides
+    shots behind itself, and no later choice could bring it back.
+    """
+    n = len(points)
+    uniform = np.ones(n)
+    state = seed
+    for _ in range(SETTLE_ITERATIONS):
+        residuals, jacobian = model.jacobian(state, points)
+        moved = [state] + [
+            model.update(state, step, points, uniform)
+            for step in _DIFFERENCE_STEP * np.eye(model.n_params)
+        ]
+        beyond, *shifted = excess(moved, points)
+        beyond_jacobian = (np.array(shifted).T - beyond[:, None]) / _DIFFERENCE_STEP
+        size = np.sqrt(residuals * residuals + beyond * beyond)
+        weights = tukey_weights(size, max(scale, robust_scale(size, scale)))
+        cost = float(weights @ (size * size))
+        if not cost > 0.0:
+            break
+        normal = (jacobian.T * weights) @ jacobian + (beyond_jacobian.T * weights) @ beyond_jacobian
+        gradient = jacobian.T @ (weights * residuals) + beyond_jacobian.T @ (weights * beyond)
+        delta = newton_step(normal, gradient)
+        for _ in range(8):
+            trial = model.update(state, delta, points, weights)
+            trial_residuals = model.residuals(trial, points)
+            trial_beyond = excess([trial], points)[0]
+            trial_cost = float(
+                weights @ (trial_residuals * trial_residuals + trial_beyond * trial_beyond)
+            )
+            if np.isfinite(trial_cost) and trial_cost <= cost:
+                break
+            delta = 0.5 * delta
+        else:
+            break
+        state = trial
+        if cost - trial_cost <= 1e-6 * cost:
+            break
+    return state
+
+
 def reconsidered(
     robust: RobustFit | None,
     points: np.ndarray,
@@ -118,17 +172,17 @@ def reconsidered(
     kind: str,
     sigma: float | None,
     tolerances: Tolerances,
+    resettle: bool = True,
 ) -> RobustFit:
     """The robust fit, or a fit settled from another seed that the shots' beams favour.
 
     A robust fit's choice among starts is made on trimmed subsets, before the least-squares
     refinement; on 20 shots a five-parameter surface can fit a subset so closely that the wrong
-    basin wins. Here every seed is settled the same way (Tukey-weighted Gauss-Newton on all
-    points, Beaton & Tukey 1974, its scale the larger of the noise level and the residuals' MAD
-    scale, re-estimated each step so that a seed centimetres off still sees its inliers, then least squares on the 3-sigma inliers
-    as in :func:`asbuilt.fit._common.robust_geometric_fit`), and the settled fits, the robust
-    one among them, are compared by :func:`visible_score`: their MSAC cost with each point's beam
-    excess added to its residual.
+    basin wins. Here every seed is settled the same way (:func:`_settle` on residuals and beam
+    excess together, then least squares on the 3-sigma inliers as in
+    :func:`asbuilt.fit._common.robust_geometric_fit`), and the settled fits, the robust one among
+    them, are compared by :func:`visible_score`: their MSAC cost with each point's beam excess
+    added to its residual.
 
     Parameters
     ----------
@@ -139,12 +193,16 @@ def reconsidered(
         Model states to settle.
     model : GeometricModel
     excess : callable
-        ``excess(state, points) -> (n,)`` metres, the beam excess of each point for a state.
+        ``excess(states, points) -> (s, n)`` metres, the beam excess of each point for each of a
+        list of states (one call for the several states a differenced Jacobian needs).
     kind : str
         Named in errors (which are caught: a seed that cannot be settled is skipped).
     sigma : float or None, metres
         The sensor's range sigma; else the robust fit's scale sets the noise level.
     tolerances : Tolerances
+    resettle : bool
+        Whether a settled fit that hides inliers behind itself is settled again with the beams
+        in the cost (:func:`_settle`; several times slower).
 
     Returns
     -------
@@ -162,18 +220,13 @@ def reconsidered(
     cutoff = tolerances.outlier_cutoff_sigma
     best, best_score = robust, np.inf
     if robust is not None:
-        best_score = visible_score(robust.residuals, excess(robust.state, points), scale, cutoff)
-    for seed in seeds:
-        state, _, _ = gauss_newton(
-            model,
-            seed,
-            points,
-            lambda r: tukey_weights(r, max(scale, robust_scale(r, scale))),
-            SETTLE_ITERATIONS,
-            1e-6,
+        best_score = visible_score(
+            robust.residuals, excess([robust.state], points)[0], scale, cutoff
         )
+
+    def refined(state):
         try:
-            fit = robust_geometric_fit(
+            return robust_geometric_fit(
                 points,
                 [state],
                 model,
@@ -185,10 +238,33 @@ def reconsidered(
                 max_starts=1,
             )
         except FitError:
-            continue
-        score = visible_score(fit.residuals, excess(fit.state, points), scale, cutoff)
-        if score < best_score:
-            best, best_score = fit, score
+            return None
+
+    for seed in seeds:
+        # The plain robust settle first; only a fit that hides inliers behind itself is
+        # settled again with the beams in the cost (slower: a differenced Jacobian).
+        state, _, _ = gauss_newton(
+            model,
+            seed,
+            points,
+            lambda r: tukey_weights(r, max(scale, robust_scale(r, scale))),
+            SETTLE_ITERATIONS,
+            1e-6,
+        )
+        fit = refined(state)
+        hides = fit is None
+        if fit is not None:
+            beyond = excess([fit.state], points)[0]
+            score = visible_score(fit.residuals, beyond, scale, cutoff)
+            if score < best_score:
+                best, best_score = fit, score
+            hides = bool(np.any(beyond[fit.inliers] > cutoff * scale))
+        if resettle and hides:
+            fit = refined(_settle(model, seed, points, excess, scale))
+            if fit is not None:
+                score = visible_score(fit.residuals, excess([fit.state], points)[0], scale, cutoff)
+                if score < best_score:
+                    best, best_score = fit, score
     if best is None:
         raise FitError(f"No {kind} explains most of these points; check that they are one {kind}.")
     return best
