@@ -214,6 +214,25 @@ def _grow(model, x, label, inliers, threshold, gap, viewpoint, trusted):
     return _Model(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
 
 
+def _spread_subset(x: np.ndarray, base: np.ndarray) -> np.ndarray:
+    """Indices of the ``base`` points (n,) bool plus the others that stand apart from them.
+
+    Another point joins when it is at least half the base points' median nearest-neighbour
+    distance from every point already taken (in the order given). Returns sorted indices.
+    """
+    taken = list(np.flatnonzero(base))
+    if len(taken) < 2 or len(taken) == x.shape[0]:
+        return np.flatnonzero(base) if len(taken) >= 2 else np.arange(x.shape[0])
+    pts = x[taken]
+    d = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=2)
+    np.fill_diagonal(d, np.inf)
+    least = 0.5 * _median(d.min(axis=1))
+    for i in np.flatnonzero(~base):
+        if np.linalg.norm(x[taken] - x[i], axis=1).min() >= least:
+            taken.append(i)
+    return np.sort(np.array(taken, dtype=np.int64))
+
+
 def _expand(frame, subset: np.ndarray, n: int):
     """``frame`` segmented on the points ``subset`` (m,), its labels spread over all n (-1)."""
     labels = -np.ones(n, dtype=np.int64)
@@ -585,10 +604,12 @@ def fit_cuboid(
         grid = None
     # Bisection shots are told from the raster by their angles from a trusted viewpoint only.
     edges = _silhouette.edge_shots(pts, viewpoint) if trusted else (-np.ones(n, np.int64),) * 2
-    # Segmentation works on the raster's shots: a bisection's hits lie millimetres apart on a
-    # line next to an edge, so their neighbourhoods give no normal and would shrink the spacing
-    # scale; the joint fit and the bounds use every point.
-    seg = np.flatnonzero(edges[0] < 0)
+    # Segmentation works on the raster's shots and the bisection shots that stand apart from
+    # them: a bisection's later hits lie millimetres apart on a line next to an edge, so their
+    # neighbourhoods give no normal and would shrink the spacing scale, but its first hits
+    # sample a narrow face half a raster step farther out. The joint fit and the bounds use
+    # every point.
+    seg = _spread_subset(x, edges[0] < 0)
     if seg.size < max(MIN_POINTS["cuboid"], n // 2):
         seg = np.arange(n)
     xs = x[seg]
