@@ -172,7 +172,7 @@ def reconsidered(
     kind: str,
     sigma: float | None,
     tolerances: Tolerances,
-    resettle: bool = True,
+    thorough: bool = True,
 ) -> RobustFit:
     """The robust fit, or a fit settled from another seed that the shots' beams favour.
 
@@ -200,9 +200,10 @@ def reconsidered(
     sigma : float or None, metres
         The sensor's range sigma; else the robust fit's scale sets the noise level.
     tolerances : Tolerances
-    resettle : bool
+    thorough : bool
         Whether a settled fit that hides inliers behind itself is settled again with the beams
-        in the cost (:func:`_settle`; several times slower).
+        in the cost (:func:`_settle`), and a settled fit that rejected shots is also refitted
+        to every shot; several times slower.
 
     Returns
     -------
@@ -219,6 +220,7 @@ def reconsidered(
     scale = max(float(sigma) if sigma is not None else robust.scale, tolerances.sigma_floor)
     cutoff = tolerances.outlier_cutoff_sigma
     best, best_score = robust, np.inf
+    uniform = np.ones(len(points))
     if robust is not None:
         best_score = visible_score(
             robust.residuals, excess([robust.state], points)[0], scale, cutoff
@@ -259,7 +261,21 @@ def reconsidered(
             if score < best_score:
                 best, best_score = fit, score
             hides = bool(np.any(beyond[fit.inliers] > cutoff * scale))
-        if resettle and hides:
+            if thorough and not fit.inliers.all():
+                # A good shot just beyond the 3-sigma test can send the refit into a basin
+                # where it stays an outlier (a thinner pipe through the other shots); the fit
+                # of every shot is a candidate too.
+                whole, _, _ = gauss_newton(
+                    model, fit.state, points, lambda r: uniform, SETTLE_ITERATIONS, 1e-6
+                )
+                other = refined(whole)
+                if other is not None:
+                    score = visible_score(
+                        other.residuals, excess([other.state], points)[0], scale, cutoff
+                    )
+                    if score < best_score:
+                        best, best_score = other, score
+        if thorough and hides:
             fit = refined(_settle(model, seed, points, excess, scale))
             if fit is not None:
                 score = visible_score(fit.residuals, excess([fit.state], points)[0], scale, cutoff)
