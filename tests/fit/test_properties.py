@@ -8,6 +8,8 @@ angles and inlier sets do not change, residuals scale by ``s``.
 from __future__ import annotations
 
 import importlib.util
+import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -182,4 +184,31 @@ def test_cuboid_is_equivariant(q, t, s):
     # Each fitted edge direction is a rotated one (up to sign and order).
     alignment = np.abs(b.axes @ (a.axes @ rotation.T).T)
     np.testing.assert_allclose(np.sort(alignment.max(axis=1)), 1.0, atol=1e-6)
+    np.testing.assert_array_equal(before.inliers, after.inliers)
+
+
+_SPARSE = np.array(
+    json.loads((Path(__file__).parent / "sparse_long_pipes.json").read_text())["scans"][0]["points"]
+)
+
+
+@SETTINGS
+@given(q=quaternions, t=translations, s=scales)
+@pytest.mark.parametrize("name", ["cylinder", "sparse"])
+def test_cylinder_seen_from_a_viewpoint_is_equivariant(name, q, t, s):
+    # The viewpoint moves with the points (and the sensor sigma scales with them): the
+    # free-space reconsideration must not depend on the frame.
+    points, viewpoint = (
+        (SCANS["cylinder"], _SENSOR) if name == "cylinder" else (_SPARSE, np.zeros(3))
+    )
+    rotation = _rotation(q)
+    before = fit_cylinder(points, sigma=0.002, viewpoint=viewpoint)
+    after = fit_cylinder(
+        _move(points, rotation, t, s),
+        sigma=0.002 * s,
+        viewpoint=_move(viewpoint[None], rotation, t, s)[0],
+    )
+    a, b = before.primitive, after.primitive
+    assert b.radius == pytest.approx(s * a.radius, rel=1e-5)
+    _same_direction(b.axis, rotation @ a.axis)
     np.testing.assert_array_equal(before.inliers, after.inliers)
