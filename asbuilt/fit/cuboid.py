@@ -37,9 +37,17 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    cell centres), each side that edge-bisection shots reach beyond the last raster line being
    placed at the outermost of them. Over an operator's window (a little wider than the object)
    the half-step rule is right only within half a step either way; the bisection shots are what
-   make those sizes accurate. The size's standard error includes the remaining gap: the edge is
-   taken as uniform between the extreme point and twice the pad beyond it (variance pad^2 / 3
-   per extent bound), besides the extreme point's own noise.
+   make those sizes accurate. Edge-bisection shots (an acquisition session's, told from the
+   raster by their angles from a given viewpoint: :func:`asbuilt.fit._silhouette.edge_shots`)
+   end within the session's tolerance (2 mm) of the silhouette, so an extent bound that the
+   outermost bisection shot along its axis reaches gets no pad. Such shots often straddle the
+   edge and come back as mixed returns (the fit rejects them); their direction is still
+   good, so each is put back where its beam enters the fitted box and bounds the edge as a
+   clean hit would. Bisection shots are left out of the segmentation where they crowd within
+   millimetres of each other (no normal from such neighbourhoods). The size's standard error
+   includes the remaining gap: the edge is taken as uniform between the extreme point and
+   twice the pad beyond it (variance pad^2 / 3 per extent bound), besides the extreme point's
+   own noise.
 4. One seen face: the face normal is fitted, the in-plane axes come from the minimum-area
    bounding rectangle of the projected points (rotating calipers, Freeman and Shapira 1975) and
    the unseen depth is set to the smaller in-plane width (a column seen face-on is about
@@ -231,6 +239,45 @@ def _spread_subset(x: np.ndarray, base: np.ndarray) -> np.ndarray:
         if np.linalg.norm(x[taken] - x[i], axis=1).min() >= least:
             taken.append(i)
     return np.sort(np.array(taken, dtype=np.int64))
+
+
+def _mixed_returns(x, label, inliers, model, edges, view, tol):
+    """Bisection shots rejected as outliers, put back on the box along their beam.
+
+    A shot pressed against a silhouette edge often straddles it and returns a mixed range (the
+    background's, or one in between), so the fit rejects it; its direction is still the
+    shot's, just inside the silhouette. Where the beam from ``view`` (3,) (centred frame)
+    through such a shot enters the box is where a clean return would have been: the last of
+    its entries into the seen faces' half-spaces (the slab method: every seen face faces the
+    viewpoint). Kept only if that is not farther than the measured point by more than ``tol``
+    metres (a mixed return is never short); ``label`` and ``inliers`` are not used beyond
+    skipping inliers.
+
+    Returns the mended points (m, 3), their face labels (m,) and the indices (m,) of the shots
+    they mend. The mended points are held fixed in the error propagation.
+    """
+    points, labels, index = [], [], []
+    normals = model.normals()
+    for i in np.flatnonzero((edges[0] >= 0) & ~inliers):
+        beam = x[i] - view
+        reach = float(np.linalg.norm(beam))
+        if reach <= 0.0:
+            continue
+        unit = beam / reach
+        facing = normals @ unit
+        front = facing < -1e-6
+        if not np.any(front):
+            continue
+        t = np.where(front, (model.offset - normals @ view) / np.where(front, facing, 1.0), -np.inf)
+        f = int(np.argmax(t))
+        if not (0.0 < t[f] <= reach + tol):
+            continue
+        points.append(view + t[f] * unit)
+        labels.append(f)
+        index.append(i)
+    if not index:
+        return np.zeros((0, 3)), np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.array(points), np.array(labels, np.int64), np.array(index, np.int64)
 
 
 def _expand(frame, subset: np.ndarray, n: int):
@@ -574,7 +621,8 @@ def fit_cuboid(
         centroid; 2 components with one seen face), face offsets (metres, in face order)];
         ``diagnostics`` ``faces``, ``outliers``, ``iterations``, ``scale`` (robust residual sigma,
         metres), ``faces_axis0..2`` (seen faces normal to each output axis), ``silhouette`` (1.0
-        when the raster window placed the unseen edges).
+        when the raster window placed the unseen edges), ``mended`` (rejected bisection shots put
+        back on the box along their beam).
 
     Raises
     ------
@@ -663,13 +711,26 @@ def fit_cuboid(
             "Check the object's points or fit it as a hull."
         )
 
+    # Bisection shots rejected as mixed returns still carry their direction: put back on their
+    # face along the beam, they bound the edge as a clean hit would (extra rows of xb).
+    xb, label_b, inliers_b, edges_b, mended = x, label, inliers, edges, 0
+    if trusted and not one_face:
+        extra, extra_label, extra_of = _mixed_returns(
+            x, label, inliers, model, edges, viewpoint - origin, cutoff * max(scale, noise)
+        )
+        if extra_of.size:
+            mended = int(extra_of.size)
+            xb = np.vstack([x, extra])
+            label_b = np.concatenate([label, extra_label])
+            inliers_b = np.concatenate([inliers, np.ones(mended, bool)])
+            edges_b = tuple(np.concatenate([e, e[extra_of]]) for e in edges)
     lo, hi, lo_face, hi_face, lo_pt, hi_pt, pad = _bounds(
-        x, label, inliers, model, cutoff * scale, edge_pad, edges
+        xb, label_b, inliers_b, model, cutoff * scale, edge_pad, edges_b
     )
     used_window = False
     if silhouette and grid is not None and not one_face:
         used_window = _silhouette_bounds(
-            x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid, cutoff * scale
+            xb, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid, cutoff * scale
         )
     if used_window:
         notes.append(
@@ -693,7 +754,7 @@ def fit_cuboid(
         sig, source = max(np.sqrt(rss / max(used - n_par, 1)), floor), "residuals"
     cov = _covariance(model, x[inliers], label[inliers], sig)
     size_se, centre_se = _propagate(
-        model, x, cov, (lo_pt, hi_pt, lo_face, hi_face, pad), sig, one_face
+        model, xb, cov, (lo_pt, hi_pt, lo_face, hi_face, pad), sig, one_face
     )
     c_rot = model.rot_basis @ cov[: model.rot_basis.shape[1], : model.rot_basis.shape[1]]
     c_rot = c_rot @ model.rot_basis.T
@@ -722,6 +783,7 @@ def fit_cuboid(
         "faces_axis1": float(faces_per_axis[1]),
         "faces_axis2": float(faces_per_axis[2]),
         "silhouette": float(used_window),
+        "mended": float(mended),
     }
     if not any(observed_t):
         notes.append("no two opposite faces seen: every size is bounded by the points' extent")

@@ -506,3 +506,22 @@ def test_session_scan_from_a_station_off_the_origin_is_the_same_box():
     moved = fit_cuboid(points + move, sigma=SIGMA, viewpoint=move)
     assert moved.primitive.size == pytest.approx(base.primitive.size, abs=1e-6)
     assert moved.primitive.center == pytest.approx(base.primitive.center + move, abs=1e-6)
+
+
+@pytest.mark.parametrize("case", [0, 1, 3])
+def test_mixed_returns_at_the_edges_are_put_back_on_their_face(case):
+    """Bisection shots grazing the edge return the wall's range or one in between; the fit
+    rejects them but puts them back on their face along their beam, so they still pin it."""
+    truth, margins, rng = _session_cases()[case]
+    points, edge = session_scan(truth, np.zeros(3), margins, rng)
+    clean = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+    mixed = points.copy()
+    grazing = np.flatnonzero(edge)
+    beams = mixed[grazing] / np.linalg.norm(mixed[grazing], axis=1)[:, None]
+    mixed[grazing] += rng.uniform(0.05, 2.0, grazing.size)[:, None] * beams
+    fit = fit_cuboid(mixed, sigma=SIGMA, viewpoint=np.zeros(3))
+    assert fit.diagnostics["mended"] >= 4
+    assert not np.any(fit.inliers[grazing])
+    err, _, _ = match(fit.primitive, truth)
+    clean_err, _, _ = match(clean.primitive, truth)
+    assert np.all(np.abs(err) < np.abs(clean_err) + 0.01), (err, clean_err)
