@@ -243,9 +243,10 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
         column), ``1`` along tilt, ``-1`` for the others (raster and fill shots, or points not
         shot from ``viewpoint``).
     partner : ndarray, shape (n,), int
-        For a bisection shot, the nearest other shot on its row (column) at least ``_SPAN``
-        (1 cm) away across the beam (the nearest when none is): the two span the bisection's
-        direction on the surface. ``-1`` for the others.
+        For a bisection shot, the nearest raster shot on its row (column), normally the one its
+        bisection started from, else the nearest other shot at least ``_SPAN`` (1 cm) away
+        across the beam: the two span the bisection's direction on the surface. ``-1`` for
+        the others.
 
     Notes
     -----
@@ -313,10 +314,14 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
             line = np.flatnonzero((labels[1 - j] == labels[1 - j][i]) & (labels[j] != labels[j][i]))
             if line.size == 0:
                 continue
-            # the nearest shot on the line at least _SPAN away across the beam, so that the
-            # two span the line's direction well above the range noise (millimetres)
+            # the nearest raster shot on the line (the one the bisection started from), else
+            # the nearest shot at least _SPAN away across the beam, so that the two span the
+            # line's direction well above the range noise (millimetres)
             apart = np.abs(ang[line, j] - ang[i, j]) * reach[i]
-            if np.any(apart >= _SPAN):
+            start = ~(flagged[0, line] | flagged[1, line]) & (apart >= _SPAN)
+            if np.any(start):
+                line, apart = line[start], apart[start]
+            elif np.any(apart >= _SPAN):
                 line, apart = line[apart >= _SPAN], apart[apart >= _SPAN]
             out[i] = j
             partner[i] = line[int(np.argmin(apart))]

@@ -250,8 +250,9 @@ def _mixed_returns(x, label, inliers, model, edges, view, tol):
     through such a shot enters the box is where a clean return would have been: the last of
     its entries into the seen faces' half-spaces (the slab method: every seen face faces the
     viewpoint). Kept only if that is not farther than the measured point by more than ``tol``
-    metres (a mixed return is never short); ``label`` and ``inliers`` are not used beyond
-    skipping inliers.
+    metres (a mixed return is never short), on the face of the inlier it leans on (its
+    partner, or the partner's partner and so on back along the bisection) and no farther from
+    that than the measured point: a shot on a face the fit did not find is left out.
 
     Returns the mended points (m, 3), their face labels (m,) and the indices (m,) of the shots
     they mend. The mended points are held fixed in the error propagation.
@@ -272,7 +273,21 @@ def _mixed_returns(x, label, inliers, model, edges, view, tol):
         f = int(np.argmax(t))
         if not (0.0 < t[f] <= reach + tol):
             continue
-        points.append(view + t[f] * unit)
+        mended = view + t[f] * unit
+        # A bisection runs on one face from the raster shot it started from: the mended point
+        # must be on the face of the shot it leans on (its partner, or the partner's, back to
+        # a shot the fit kept) and no farther from it than the measured point (pushed away
+        # along the beam by the mixed range).
+        partner = int(edges[1][i])
+        for _ in range(32):  # back along the bisection to a shot the fit kept
+            if partner < 0 or inliers[partner] or edges[0][partner] < 0:
+                break
+            partner = int(edges[1][partner])
+        if partner < 0 or not inliers[partner] or int(label[partner]) != f:
+            continue
+        if np.linalg.norm(mended - x[partner]) > np.linalg.norm(x[i] - x[partner]) + tol:
+            continue
+        points.append(mended)
         labels.append(f)
         index.append(i)
     if not index:
