@@ -20,8 +20,8 @@ Per object (:func:`scan_target`, deterministic given the measured ranges):
    bottom, top: lower or higher pan or tilt), taken from the finest raster that has pairs
    there; of the pairs of a side that bracket the same two lines (a straight edge), only the
    middle one is kept. ``edge_pairs`` pairs are dealt to the sides in turn (every side gets
-   some), each side's share at evenly spaced quantiles of its pairs (its middle pair for one). A pair is
-   bisected (shoot the midpoint, keep the half that still brackets the edge) until the
+   some), each side's share at evenly spaced quantiles of its pairs (its middle pair for one);
+   the foreground split is re-measured with every edge shot. A pair is bisected (shoot the midpoint, keep the half that still brackets the edge) until the
    bracket, as an angle times the range of its inside shot, is at most ``edge_tolerance``
    metres, ``edge_depth`` steps at most, ``edge_shots`` shots per object at most. Cylinders
    and spheres take ``curved_depth`` steps (2) instead: their fits use surface points only,
