@@ -36,6 +36,16 @@ miss. The operator-window twin of a trial starts from the same generator state, 
 same object and pose (its noise differs); the exact-window trials are the same with or without
 the flag.
 
+Scan session (cuboids, ``--session``): the cuboid trials acquired once more, from the same
+generator state (same object and pose), by the product's acquisition algorithm
+(``asbuilt.drivers.session.scan_target``, default settings: a raster, fill rasters when too few
+shots land, then one edge-bisection pair per silhouette side bisected to 2 mm) over an operator's
+window (:func:`session_window`), each shot by the sensor model
+(:func:`asbuilt.sim.sensor.fire`). n counts every point on the object, raster, fill and edge
+hits alike: the session is asked for about n - 8 raster points and its edge hits make up the
+rest (the coarsest edge hits dropped when over n; the raster is never thinned). Outliers as below
+(the edge shots, nearest a miss, become them first).
+
 The same trials are fitted again with 20% edge outliers: the fifth of the shots nearest the
 silhouette (angular distance to the nearest raster shot that missed the object) become mixed
 returns by the sensor model's rule (half land on the background surface 1.5-3 m behind, half
@@ -44,7 +54,7 @@ Plane; it has no cuboid) runs on the first ``--sk-trials`` trials of each cell, 
 per fit side by side.
 
 Run: ``python benchmarks/fit_accuracy.py [--trials 50] [--sk-trials 20] [--operator-window]
-[--quick] [--out F]``.
+[--session] [--quick] [--out F]``.
 Times are single-process wall-clock per fit call (``time.perf_counter``).
 """
 
@@ -53,6 +63,7 @@ from __future__ import annotations
 import argparse
 import copy
 import inspect
+import itertools
 import math
 import sys
 import time
@@ -86,7 +97,14 @@ from asbuilt.sim.raycast import (  # noqa: E402
     direction_from_angles,
 )
 from asbuilt.sim.scene import Scene, SceneObject, Station  # noqa: E402
-from asbuilt.sim.sensor import operator_margins, plan_raster, shoot  # noqa: E402
+from asbuilt.sim.sensor import (  # noqa: E402
+    angular_window,
+    fire,
+    operator_margins,
+    operator_window,
+    plan_raster,
+    shoot,
+)
 
 SIGMA_R = 0.002
 SIGMA_A = math.radians(0.01)
@@ -99,6 +117,12 @@ SECTIONS = (0.2, 0.4, 0.6)
 OUTLIER_FRACTION = 0.2
 #: Suffix of the data versions shot over an operator's window (``"clean" + OPERATOR``).
 OPERATOR = "@operator"
+#: Suffix of the cuboid data versions acquired by the scan session's algorithm (raster, fill and
+#: edge bisection: ``asbuilt.drivers.session.scan_target``) over an operator's window.
+SESSION = "@session"
+#: Edge-bisection hits a session trial keeps within its n points (about two a side: each
+#: bisection's last hits; the intermediate ones are dropped first).
+SESSION_EDGE_HITS = 8
 STATION = Station(
     id="S",
     position=np.zeros(3),
@@ -338,7 +362,7 @@ def plane_trial(rng, width, n, operator=False) -> Trial:
     return Trial(shots.points, dirty, {"normal": normal}, bound)
 
 
-def cuboid_trial(rng, section, faces, n, operator=False) -> Trial:
+def cuboid_trial(rng, section, faces, n, operator=False, session=False) -> Trial:
     size_a, size_b = section * rng.uniform(0.8, 1.2, size=2)
     distance = rng.uniform(3.0, 10.0)
     pan = rng.uniform(-math.pi, math.pi)
@@ -360,17 +384,183 @@ def cuboid_trial(rng, section, faces, n, operator=False) -> Trial:
     los = _unit(centre)
     behind = centre + rng.uniform(1.5, 3.0) * los_h + 0.5 * max(size_a, size_b) * los_h
     scene = _scene(shape, None, "cuboid", behind, -los_h)
-    shots, dirty, sig, _ = _take(scene, n, rng, operator=operator)
+    if session:
+        shots, dirty, sig, _ = _take_session(scene, n, rng)
+    else:
+        shots, dirty, sig, _ = _take(scene, n, rng, operator=operator)
     bound = crb.cuboid_bounds(shots.surface_points, shots.normals, centre, sig)
     return Trial(shots.points, dirty, {"axes": axes, "size": size, "los": los}, bound)
 
 
+@dataclass
+class SessionShots:
+    """The object's points from a simulated session and the truth behind each (n rows)."""
+
+    points: np.ndarray  # (n, 3) metres, measured
+    directions: np.ndarray  # (n, 3) nominal unit directions
+    true_range: np.ndarray  # (n,) metres
+    background_range: np.ndarray  # (n,) metres, next surface behind (inf: none)
+    surface_points: np.ndarray  # (n, 3) metres
+    normals: np.ndarray  # (n, 3)
+    edge: np.ndarray  # (n,) bool: an edge-bisection shot
+
+
+def session_window(scene, wanted, margins):
+    """The operator's window for a session: the silhouette window enlarged by ``margins``.
+
+    ``margins`` are in steps of the session's raster (``drivers.session.grid``: ``wanted`` shots,
+    cell-centred, columns and rows in proportion to the window), found by cutting the raster
+    from the enlarged window twice (the raster's shape follows the window's aspect).
+    """
+    from asbuilt.drivers.plan import Window
+    from asbuilt.drivers.session import grid
+
+    silhouette = angular_window(scene.objects[0].shape, STATION.position)
+    marked = silhouette
+    for _ in range(2):
+        pan0, tilt0, width, height = marked
+        box = Window(pan0 - width / 2, pan0 + width / 2, tilt0 - height / 2, tilt0 + height / 2)
+        rows, cols = grid(box, wanted)[2]
+        marked = operator_window(silhouette, cols, rows, margins)
+    pan0, tilt0, width, height = marked
+    return Window(pan0 - width / 2, pan0 + width / 2, tilt0 - height / 2, tilt0 + height / 2)
+
+
+def _take_session(scene, n, rng):
+    """Exactly n points on object 0 acquired by the scan session's algorithm, outlier version.
+
+    The session (``asbuilt.drivers.session.scan_target``, default settings: 4 edge pairs, one per
+    silhouette side, bisected to 2 mm) shoots over an operator's window (:func:`session_window`,
+    margins from :func:`~asbuilt.sim.sensor.operator_margins`), each shot by the station's model
+    (:func:`asbuilt.sim.sensor.fire`: the beam measures whatever it meets, the wall behind when
+    it misses). ``n`` counts every point kept on the object: raster, fill and edge-bisection
+    hits. The session takes about 15 edge hits with the default 2 mm tolerance, most of them
+    intermediate steps; within ``n`` it is asked for ``n - SESSION_EDGE_HITS`` raster points
+    (again, adjusted, when its raster and fill land more or fewer) and the coarsest edge hits
+    (farthest from a miss: a bisection's first steps) are dropped to make ``n``, which keeps
+    the last two or so of each side's bisection. The raster is never thinned: its shots stay
+    on their lattice, as on the device. Outliers as in :func:`_take`: the fifth of the
+    points nearest a shot that missed become mixed returns (edge shots first: they graze the
+    silhouette). Returns like :func:`_take`.
+    """
+    import dataclasses
+
+    from asbuilt.drivers.plan import Target
+    from asbuilt.drivers.session import Shot, scan_target
+
+    from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS
+
+    margins = operator_margins(rng)
+    window = session_window(scene, n, margins)
+    tolerances = dataclasses.replace(
+        DEFAULT_TOLERANCES, recommended_points_cuboid=MIN_POINTS["cuboid"]
+    )
+    log = []
+
+    def device(pan, tilt, phase):
+        got = fire(scene, STATION, [pan], [tilt], rng)
+        log.append(got)
+        value = float(got.range[0])
+        if not math.isfinite(value):
+            return Shot(pan, tilt, pan, tilt, None, "E255", 1, phase)
+        return Shot(pan, tilt, pan, tilt, value, None, 1, phase)
+
+    # Ask for the raster points the kept edge hits leave room for: the session's raster and
+    # fill keep at least what they are asked for, so a few rounds settle (the round nearest
+    # the aim is kept).
+    wanted = max(MIN_POINTS["cuboid"], n - SESSION_EDGE_HITS)
+    best, fallback, tried = None, None, set()
+    for _ in range(8):
+        if wanted in tried:
+            break
+        tried.add(wanted)
+        log.clear()
+        target = Target("T", "cuboid", window, points=wanted)
+        scan = scan_target(target, device, tolerances=tolerances)
+        on = scan.on_object & np.array([r.object_index[0] == 0 for r in log])
+        edge = np.array([s.phase == "edge" for s in scan.shots])
+        body = int(np.count_nonzero(on & ~edge))
+        hits = int(np.count_nonzero(on & edge))
+        aim = n - min(SESSION_EDGE_HITS, hits)
+        if body <= n <= body + hits and (best is None or abs(body - aim) < best[0]):
+            best = (abs(body - aim), scan, on, edge, list(log))
+        if best is not None and best[0] <= 1:
+            break
+        wanted = max(MIN_POINTS["cuboid"], wanted + aim - body)
+        if best is None and body + hits >= n:
+            fallback = (scan, on, edge, list(log))
+    if best is None:
+        if fallback is None:
+            raise RuntimeError("the session could not put n points on the object")
+        # Last resort: the raster and fill hits thinned evenly to leave room for the edge hits.
+        scan, on, edge, log = fallback
+        body = np.flatnonzero(on & ~edge)
+        room = max(n - int(np.count_nonzero(on & edge)), MIN_POINTS["cuboid"])
+        thinned = np.unique(np.round(np.linspace(0, len(body) - 1, room)).astype(int))
+        on = on.copy()
+        on[np.setdiff1d(body, body[thinned])] = False
+    else:
+        _, scan, on, edge, log = best
+    angles = np.array([[s.pan, s.tilt] for s in scan.shots])
+    # Edge proximity: angular distance to the nearest shot of the session that missed.
+    missed = np.array([r.object_index[0] != 0 or not np.isfinite(r.range[0]) for r in log])
+    xy = np.column_stack([angles[:, 0] * np.cos(angles[:, 1]), angles[:, 1]])
+    near = np.zeros(len(log))
+    if missed.any():
+        diff = xy[:, None, :] - xy[missed][None, :, :]
+        near = np.sqrt((diff**2).sum(axis=2)).min(axis=1)
+    body = np.flatnonzero(on & ~edge)
+    edges = np.flatnonzero(on & edge)
+    extra = len(body) + len(edges) - n
+    if extra > len(edges):
+        raise RuntimeError("the session put more raster points on the object than n")
+    if extra > 0:
+        coarse = edges[np.argsort(-near[edges], kind="stable")[:extra]]
+        edges = np.setdiff1d(edges, coarse)
+    keep = np.sort(np.concatenate([body, edges]))
+    proximity = near[keep]
+    directions = direction_from_angles(angles[:, 0], angles[:, 1])
+    ranges = np.array([np.nan if s.range is None else s.range for s in scan.shots])
+    surface = np.array([log[i].surface_points[0] for i in keep])
+    behind = scene.raycast(STATION.position, surface - STATION.position, exclude=0)
+    shots = SessionShots(
+        points=STATION.position + ranges[keep, None] * directions[keep],
+        directions=directions[keep],
+        true_range=np.array([log[i].true_range[0] for i in keep]),
+        background_range=np.where(np.isfinite(behind.range), behind.range, np.inf),
+        surface_points=surface,
+        normals=np.array([log[i].normals[0] for i in keep]),
+        edge=edge[keep],
+    )
+    k = int(round(OUTLIER_FRACTION * n))
+    chosen = np.lexsort((rng.random(n), proximity))[:k]
+    measured = ranges[keep].copy()
+    r_true = shots.true_range[chosen]
+    bg = shots.background_range[chosen]
+    bg = np.where(np.isfinite(bg), bg, r_true + 2.0)
+    full = rng.random(k) < 0.5
+    frac = rng.random(k)
+    mixed = np.where(full, bg, r_true + frac * (bg - r_true))
+    measured[chosen] = mixed + rng.normal(0.0, SIGMA_R, size=k)
+    dirty = STATION.position + measured[:, None] * shots.directions
+    sig = crb.sigma_eff(shots.surface_points, shots.normals, STATION.position, SIGMA_R, SIGMA_A)
+    retained = np.ones(n, dtype=bool)
+    retained[chosen] = False
+    return shots, dirty, sig, retained
+
+
 def cuboid_errors(fitted, truth) -> dict:
-    """Relative size errors per true side and the frame rotation angle (degrees)."""
+    """Relative size errors per true side and the frame rotation angle (degrees).
+
+    Fitted axes are matched to the true ones by the permutation with the largest sum of
+    absolute cosines (a fit turned near 45 degrees still gets its sizes compared, on the
+    nearest assignment, rather than none).
+    """
     dots = fitted.axes @ truth["axes"].T  # fitted rows x true rows
-    match = np.argmax(np.abs(dots), axis=0)
-    if len(set(match.tolist())) < 3:
-        return {"size_rel": np.full(3, np.nan), "orientation": 90.0}
+    match = max(
+        (np.array(order) for order in itertools.permutations(range(3))),
+        key=lambda order: float(np.abs(dots[order, np.arange(3)]).sum()),
+    )
     signs = np.sign(dots[match, np.arange(3)])
     matched = signs[:, None] * fitted.axes[match]
     if np.linalg.det(matched) < 0:
@@ -416,12 +606,17 @@ def _twin(rng):
     return twin
 
 
-def run_cells(kind, cells, make, trials, sk_trials, ours, sk, seed, progress, operator=False):
+def run_cells(
+    kind, cells, make, trials, sk_trials, ours, sk, seed, progress, operator=False, session=False
+):
     """Run every cell; return {cell key: {(estimator, version): Cell}}.
 
     Versions: ``"clean"`` and ``"outliers"`` (exact silhouette window) and, with ``operator``,
     the same trials shot over an operator's window, ``"clean@operator"`` and
-    ``"outliers@operator"`` (ours only).
+    ``"outliers@operator"`` (ours only); with ``session`` (cuboids: ``make`` takes
+    ``session=True``) the same objects acquired by the scan session's algorithm over an
+    operator's window, ``"clean@session"`` and ``"outliers@session"`` (ours only). Each twin
+    starts from the trial's generator state, so the plain versions do not depend on the flags.
     """
     results = {}
     for key in cells:
@@ -429,6 +624,7 @@ def run_cells(kind, cells, make, trials, sk_trials, ours, sk, seed, progress, op
         per = {}
         for t in range(trials):
             twin = _twin(rng) if operator else None
+            session_twin = _twin(rng) if session else None
             versions = []
             trial = make(rng, *key)
             versions.append((trial, ("clean", trial.clean), ("outliers", trial.dirty)))
@@ -436,6 +632,11 @@ def run_cells(kind, cells, make, trials, sk_trials, ours, sk, seed, progress, op
                 op = make(twin, *key, operator=True)
                 versions.append(
                     (op, ("clean" + OPERATOR, op.clean), ("outliers" + OPERATOR, op.dirty))
+                )
+            if session:
+                se = make(session_twin, *key, session=True)
+                versions.append(
+                    (se, ("clean" + SESSION, se.clean), ("outliers" + SESSION, se.dirty))
                 )
             for trial, *data in versions:
                 _fit_trial(per, kind, trial, data, t, ours, sk, sk_trials)
@@ -448,7 +649,7 @@ def _fit_trial(per, kind, trial, data, t, ours, sk, sk_trials):
     """Fit one trial's point sets (``data``: (version, points) pairs) into ``per``."""
     for version, pts in data:
         estimators = [("ours", ours, True)]
-        if sk is not None and t < sk_trials and OPERATOR not in version:
+        if sk is not None and t < sk_trials and "@" not in version:
             estimators.append(("skspatial", sk, False))
         for name, function, is_ours in estimators:
             cell = per.setdefault((name, version), Cell())
@@ -499,6 +700,12 @@ def main(argv=None) -> int:
         help="also fit every trial shot over an operator's window (silhouette window enlarged by "
         "0-1 raster step per side, at random) and report both windows",
     )
+    parser.add_argument(
+        "--session",
+        action="store_true",
+        help="also acquire every cuboid trial with the scan session's algorithm (raster, fill, "
+        "edge bisection; asbuilt.drivers.session) over an operator's window and report it",
+    )
     parser.add_argument("--out", default=None, help="write the markdown here instead of stdout")
     args = parser.parse_args(argv)
 
@@ -539,6 +746,7 @@ def main(argv=None) -> int:
             args.seed,
             progress,
             operator=args.operator_window,
+            session=args.session and kind == "cuboid",
         )
     elapsed = time.perf_counter() - started
 
@@ -598,6 +806,14 @@ def main(argv=None) -> int:
                 ("clean" + OPERATOR, "operator window, clean"),
                 ("outliers" + OPERATOR, "operator window, with 20% edge outliers"),
             ]
+        if args.session and kind == "cuboid":
+            shown = shown + [
+                ("clean" + SESSION, "scan session over an operator window, clean"),
+                (
+                    "outliers" + SESSION,
+                    "scan session over an operator window, with 20% edge outliers",
+                ),
+            ]
         for version, label in shown:
             out += [f"#### {titles[kind]}, {label}", ""]
             if kind in ("cylinder", "sphere"):
@@ -620,7 +836,7 @@ def main(argv=None) -> int:
                     np.asarray(c.times)
                     for per in res.values()
                     for (e, v), c in per.items()
-                    if e == "ours" and OPERATOR not in v
+                    if e == "ours" and "@" not in v
                 ]
             )
             * 1e3

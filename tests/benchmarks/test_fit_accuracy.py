@@ -150,3 +150,60 @@ def test_window_cells_table_lists_cells_above_the_chi_square_limit():
     }
     lines = window_cells_table(results).splitlines()
     assert lines[2:] == ["| sphere | 0.2 / 20 | radius | 1.00 | 2.00 | 2.00 mm |"]
+
+
+# --------------------------------------------------------------------------- scan session
+
+
+@pytest.mark.parametrize("faces, n", [(2, 30), (3, 20), (2, 40)])
+def test_session_trial_has_exactly_n_points_with_edge_shots(faces, n):
+    rng = np.random.default_rng(5)
+    twin = fit_accuracy._twin(rng)
+    exact = fit_accuracy.cuboid_trial(rng, 0.4, faces, n)
+    session = fit_accuracy.cuboid_trial(twin, 0.4, faces, n, session=True)
+    np.testing.assert_array_equal(exact.truth["size"], session.truth["size"])
+    np.testing.assert_array_equal(exact.truth["axes"], session.truth["axes"])
+    assert session.clean.shape == session.dirty.shape == (n, 3)
+    changed = np.any(session.clean != session.dirty, axis=1)
+    assert changed.sum() == round(0.2 * n)
+    assert np.isfinite(session.bound["orientation"])
+
+
+def _cuboid_cell(session):
+    ours = fit_accuracy._ours()["cuboid"]
+    return fit_accuracy.run_cells(
+        "cuboid",
+        [(0.4, 2, 30)],
+        fit_accuracy.cuboid_trial,
+        2,
+        0,
+        ours,
+        None,
+        7,
+        lambda *a: None,
+        operator=True,
+        session=session,
+    )[(0.4, 2, 30)]
+
+
+def test_session_versions_leave_the_other_versions_alone():
+    plain, both = _cuboid_cell(False), _cuboid_cell(True)
+    assert set(both) == set(plain) | {("ours", "clean@session"), ("ours", "outliers@session")}
+    for version in ("clean", "outliers", "clean@operator", "outliers@operator"):
+        for name in ("size_a", "size_b", "size_len", "orientation"):
+            np.testing.assert_array_equal(
+                plain[("ours", version)].values(name), both[("ours", version)].values(name)
+            )
+
+
+def test_quick_run_reports_the_session(tmp_path):
+    out = tmp_path / "fit.md"
+    argv = ["--quick", "--only", "cuboid", "--operator-window", "--session", "--out", str(out)]
+    assert fit_accuracy.main(argv) == 0
+    text = out.read_text()
+    assert (
+        "#### Cuboids (columns, beams, piers), scan session over an operator window, clean" in text
+    )
+    assert "(every cell), scan session (edge bisection) over an operator window |" in text
+    # the other windows' rows are still there
+    assert "(every cell), operator window |" in text
