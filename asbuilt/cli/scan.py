@@ -90,7 +90,16 @@ def register(subparsers) -> argparse.ArgumentParser:
     parser.add_argument(
         "--edge-pairs", type=int, default=None, help="hit/miss pairs bisected per object (4)"
     )
-    parser.add_argument("--edge-depth", type=int, default=None, help="bisection steps per pair (2)")
+    parser.add_argument(
+        "--edge-depth", type=int, default=None, help="most bisection steps per pair (10)"
+    )
+    parser.add_argument(
+        "--edge-tolerance",
+        type=float,
+        default=None,
+        help="bisect an edge until its bracket is this wide across the beam, in the scan's "
+        "--units (0.002 m)",
+    )
     parser.add_argument(
         "--keep-background",
         action="store_true",
@@ -118,6 +127,16 @@ def _settings(args, plan):
 
                 raise ScanError(f"--{key.replace('_', '-')} must be >= 0")
             values[key] = value
+    if args.edge_tolerance is not None:
+        import math
+
+        from asbuilt.units import to_metres
+
+        if not (math.isfinite(args.edge_tolerance) and args.edge_tolerance > 0):
+            from asbuilt.errors import ScanError
+
+            raise ScanError("--edge-tolerance must be a length > 0")
+        values["edge_tolerance"] = to_metres(args.edge_tolerance, args.units)
     if args.keep_background:
         values["keep_background"] = True
     return SessionSettings(**values)

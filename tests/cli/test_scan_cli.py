@@ -312,3 +312,43 @@ def test_units_apply_to_points_and_raw_ranges(site):
         assert b.measurements == pytest.approx(a.measurements, abs=1e-9)
     raw = json.loads((site / "mm.json").read_text())["objects"][0]["measurements"][0][2]
     assert 3000 < raw < 5000  # millimetres in the file
+
+
+@pytest.mark.parametrize(
+    "units, value, metres", [("m", 0.003, 0.003), ("mm", 3.0, 0.003), ("in", 0.1, 0.00254)]
+)
+def test_edge_tolerance_is_given_in_the_scan_units(units, value, metres):
+    import argparse
+
+    from asbuilt.cli.scan import _settings
+
+    args = argparse.Namespace(
+        retries=None,
+        edge_pairs=None,
+        edge_depth=12,
+        edge_tolerance=value,
+        keep_background=False,
+        units=units,
+    )
+    settings = _settings(args, None)
+    assert settings.edge_tolerance == pytest.approx(metres)
+    assert settings.edge_depth == 12
+
+
+@pytest.mark.parametrize("value", [0.0, -1.0, float("nan")])
+def test_a_bad_edge_tolerance_is_one_clear_error(value):
+    import argparse
+
+    from asbuilt.cli.scan import _settings
+    from asbuilt.errors import ScanError
+
+    args = argparse.Namespace(
+        retries=None,
+        edge_pairs=None,
+        edge_depth=None,
+        edge_tolerance=value,
+        keep_background=False,
+        units="mm",
+    )
+    with pytest.raises(ScanError, match="--edge-tolerance must be a length > 0"):
+        _settings(args, None)
