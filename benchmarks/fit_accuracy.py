@@ -284,10 +284,22 @@ def _take(scene, n, rng, keep=None, operator=False):
         proximity = np.sqrt((diff**2).sum(axis=2)).min(axis=1)
     else:
         proximity = np.zeros(len(shots))
+    return _with_edge_outliers(shots, shots.range, proximity, n, rng)
+
+
+def _with_edge_outliers(shots, ranges, proximity, n, rng):
+    """The outlier version of n shots: the fifth nearest a miss become mixed returns.
+
+    ``shots`` has ``true_range``, ``background_range``, ``directions``, ``surface_points`` and
+    ``normals`` (n rows); ``ranges`` (n,) metres are the measured ones; ``proximity`` (n,) the
+    angular distance of each shot to the nearest one that missed (ties broken at random). Half
+    of the chosen shots land on the background surface, half uniformly between object and
+    background, plus range noise. Returns the shots, the outlier points (n, 3), the shots'
+    effective noise sigmas and the mask of shots kept as they were.
+    """
     k = int(round(OUTLIER_FRACTION * n))
-    order = np.lexsort((rng.random(len(shots)), proximity))
-    chosen = order[:k]
-    measured = shots.range.copy()
+    chosen = np.lexsort((rng.random(n), proximity))[:k]
+    measured = np.asarray(ranges, dtype=np.float64).copy()
     r_true = shots.true_range[chosen]
     bg = shots.background_range[chosen]
     bg = np.where(np.isfinite(bg), bg, r_true + 2.0)
@@ -297,7 +309,7 @@ def _take(scene, n, rng, keep=None, operator=False):
     measured[chosen] = mixed + rng.normal(0.0, SIGMA_R, size=k)
     dirty = STATION.position + measured[:, None] * shots.directions
     sig = crb.sigma_eff(shots.surface_points, shots.normals, STATION.position, SIGMA_R, SIGMA_A)
-    retained = np.ones(len(shots), dtype=bool)
+    retained = np.ones(n, dtype=bool)
     retained[chosen] = False
     return shots, dirty, sig, retained
 
@@ -532,21 +544,7 @@ def _take_session(scene, n, rng):
         normals=np.array([log[i].normals[0] for i in keep]),
         edge=edge[keep],
     )
-    k = int(round(OUTLIER_FRACTION * n))
-    chosen = np.lexsort((rng.random(n), proximity))[:k]
-    measured = ranges[keep].copy()
-    r_true = shots.true_range[chosen]
-    bg = shots.background_range[chosen]
-    bg = np.where(np.isfinite(bg), bg, r_true + 2.0)
-    full = rng.random(k) < 0.5
-    frac = rng.random(k)
-    mixed = np.where(full, bg, r_true + frac * (bg - r_true))
-    measured[chosen] = mixed + rng.normal(0.0, SIGMA_R, size=k)
-    dirty = STATION.position + measured[:, None] * shots.directions
-    sig = crb.sigma_eff(shots.surface_points, shots.normals, STATION.position, SIGMA_R, SIGMA_A)
-    retained = np.ones(n, dtype=bool)
-    retained[chosen] = False
-    return shots, dirty, sig, retained
+    return _with_edge_outliers(shots, ranges[keep], proximity, n, rng)
 
 
 def cuboid_errors(fitted, truth) -> dict:

@@ -148,6 +148,10 @@ class Returns:
         Outward unit surface normals there (NaN when it met nothing).
     mixed : ndarray, shape (m,), bool
         The range is a mixed return (the footprint straddled a silhouette edge).
+    edge : ndarray, shape (m,), bool
+        The footprint straddled a silhouette edge of what the beam met.
+    background_range : ndarray, shape (m,), metres
+        Range to the next surface behind what the beam met (``inf``: none, or nothing met).
     """
 
     object_index: np.ndarray
@@ -156,6 +160,8 @@ class Returns:
     surface_points: np.ndarray
     normals: np.ndarray
     mixed: np.ndarray
+    edge: np.ndarray
+    background_range: np.ndarray
 
 
 def fire(scene, station, pan, tilt, rng) -> Returns:
@@ -200,6 +206,8 @@ def fire(scene, station, pan, tilt, rng) -> Returns:
 
     measured = np.full(m, np.nan)
     mixed = np.zeros(m, dtype=bool)
+    edges = np.zeros(m, dtype=bool)
+    behind_range = np.full(m, np.inf)
     idx = np.flatnonzero(met)
     if idx.size:
         r = true_range[idx]
@@ -224,7 +232,9 @@ def fire(scene, station, pan, tilt, rng) -> Returns:
         ok = ~lost & (u_drop[idx] >= station.dropout) & (value > 0)
         measured[idx[ok]] = value[ok]
         mixed[idx] = mix
-    return Returns(index, measured, true_range, surface, normals, mixed)
+        edges[idx] = edge
+        behind_range[idx] = background
+    return Returns(index, measured, true_range, surface, normals, mixed, edges, behind_range)
 
 
 def angular_window(shape, station) -> tuple[float, float, float, float]:
@@ -467,62 +477,27 @@ def shoot(scene, target: int, station, pan, tilt, rng) -> Shots:
     Shots
         Only the shots that returned a range on the object.
     """
-    pan = np.asarray(pan, dtype=np.float64)
-    tilt = np.asarray(tilt, dtype=np.float64)
-    m = len(pan)
-    # Draw every random number up front so the stream never depends on the geometry.
-    e_pan, e_tilt = rng.normal(0.0, station.angular_sigma, size=(2, m))
-    noise = rng.normal(0.0, station.range_sigma, size=m)
-    u_drop, u_mixed, u_kind, u_frac = rng.random(size=(4, m))
-
-    actual_pan, actual_tilt = pan + e_pan, tilt + e_tilt
-    beam = direction_from_angles(actual_pan, actual_tilt)
-    origin = np.asarray(station.position, dtype=np.float64)
-    hits = scene.raycast(origin, beam)
-    on = (hits.object_index == target) & (hits.range <= station.max_range)
-    idx = np.flatnonzero(on)
-    true_range = hits.range[idx]
-
-    # Footprint probes at the beam's edge: left, right, up, down.
-    delta = station.footprint_radius(true_range) / true_range
-    cos_t = np.maximum(np.cos(actual_tilt[idx]), 1e-6)
-    edge = np.zeros(len(idx), dtype=bool)
-    for dp, dt in ((1, 0), (-1, 0), (0, 1), (0, -1)):
-        probe = direction_from_angles(
-            actual_pan[idx] + dp * delta / cos_t, actual_tilt[idx] + dt * delta
-        )
-        probe_hits = scene.raycast(origin, probe)
-        edge |= probe_hits.object_index != target
-    behind = scene.raycast(origin, beam[idx], exclude=target)
-    background = np.where(behind.range <= station.max_range, behind.range, np.inf)
-
-    measured = true_range.copy()
-    mixed = edge & (u_mixed[idx] < station.mixed_return)
-    lost = mixed & ~np.isfinite(background)
-    full = mixed & np.isfinite(background) & (u_kind[idx] < 0.5)
-    between = mixed & np.isfinite(background) & ~full
-    measured[full] = background[full]
-    measured[between] = true_range[between] + u_frac[idx][between] * (
-        background[between] - true_range[between]
-    )
-    measured = measured + noise[idx]
-    keep = ~lost & (u_drop[idx] >= station.dropout) & (measured > 0)
-    surface = origin + true_range[:, None] * beam[idx]
+    pan = np.atleast_1d(np.asarray(pan, dtype=np.float64))
+    tilt = np.atleast_1d(np.asarray(tilt, dtype=np.float64))
+    # The same beams as :func:`fire` (same random numbers); the operator keeps the returns
+    # whose beam met the aimed-at object.
+    got = fire(scene, station, pan, tilt, rng)
+    idx = np.flatnonzero(got.object_index == target)
     shots = Shots(
-        station=origin.copy(),
+        station=np.asarray(station.position, dtype=np.float64).copy(),
         pan=pan[idx],
         tilt=tilt[idx],
-        range=measured,
-        true_range=true_range,
-        surface_points=surface,
-        normals=hits.normal[idx],
-        edge=edge,
-        mixed=mixed,
-        background_range=background,
-        planned=m,
+        range=got.range[idx],
+        true_range=got.true_range[idx],
+        surface_points=got.surface_points[idx],
+        normals=got.normals[idx],
+        edge=got.edge[idx],
+        mixed=got.mixed[idx],
+        background_range=got.background_range[idx],
+        planned=len(pan),
         index=idx,
     )
-    return shots.subset(keep)
+    return shots.subset(np.isfinite(got.range[idx]))
 
 
 def scan_object(
