@@ -492,7 +492,7 @@ class RobustFit:
     scale: float
 
 
-def newton_step(normal: np.ndarray, gradient: np.ndarray) -> np.ndarray:
+def _newton_step(normal: np.ndarray, gradient: np.ndarray) -> np.ndarray:
     """The Gauss-Newton step ``-normal^-1 gradient``: a Cholesky solve (LAPACK ``dposv``, without
     the overhead of :func:`numpy.linalg.solve` on a 5 x 5 system), LU when the normal matrix is
     not numerically positive definite, least squares when it is singular."""
@@ -524,7 +524,7 @@ def gauss_newton(model, state, points, weigh, iterations, tolerance, current=Non
             break
         normal = (jacobian.T * weights) @ jacobian
         gradient = jacobian.T @ weighted_residuals
-        delta = newton_step(normal, gradient)
+        delta = _newton_step(normal, gradient)
         if tolerance > 0.0 and -float(gradient @ delta) <= tolerance * cost:
             break
         accepted = False

@@ -23,7 +23,6 @@ from asbuilt.fit._common import (
     GeometricModel,
     RobustFit,
     gauss_newton,
-    newton_step,
     robust_geometric_fit,
     robust_scale,
     tukey_weights,
@@ -115,50 +114,54 @@ def visible_score(residuals: np.ndarray, excess: np.ndarray, scale: float, cutof
     return float(np.minimum(squares, cutoff * cutoff).sum())
 
 
-def _settle(model: GeometricModel, seed, points: np.ndarray, excess, scale: float):
-    """Bring a seed into its basin of the free-space-aware cost: Gauss-Newton on each point's
-    orthogonal residual and beam excess together, Tukey-weighted (Beaton & Tukey 1974) on their
-    combined size at the larger of the noise level and its MAD scale (re-estimated each step,
-    so that a seed centimetres off still sees its inliers).
+def _with_beams(model: GeometricModel, excess) -> GeometricModel:
+    """``model`` with each point's beam excess appended to its residuals: ``(2n,)`` metres.
 
-    The excess is piecewise smooth; its Jacobian is taken by forward differences. Without the
-    excess in the cost a seed near the true pipe can slide into a thinner cylinder that hides
-    shots behind itself, and no later choice could bring it back.
+    The excess is piecewise smooth; its Jacobian is taken by forward differences (all the
+    perturbed states in one ``excess`` call).
     """
-    n = len(points)
-    uniform = np.ones(n)
-    state = seed
-    for _ in range(SETTLE_ITERATIONS):
-        residuals, jacobian = model.jacobian(state, points)
+
+    def residuals(state, points):
+        return np.concatenate([model.residuals(state, points), excess([state], points)[0]])
+
+    def jacobian(state, points):
+        orthogonal, orthogonal_jacobian = model.jacobian(state, points)
+        uniform = np.ones(len(points))
         moved = [state] + [
             model.update(state, step, points, uniform)
             for step in _DIFFERENCE_STEP * np.eye(model.n_params)
         ]
         beyond, *shifted = excess(moved, points)
         beyond_jacobian = (np.array(shifted).T - beyond[:, None]) / _DIFFERENCE_STEP
-        size = np.sqrt(residuals * residuals + beyond * beyond)
+        return np.concatenate([orthogonal, beyond]), np.vstack(
+            [orthogonal_jacobian, beyond_jacobian]
+        )
+
+    def update(state, delta, points, weights):
+        return model.update(state, delta, points, weights[: len(points)])
+
+    return GeometricModel(residuals, jacobian, update, model.n_params)
+
+
+def _settle(model: GeometricModel, seed, points: np.ndarray, excess, scale: float):
+    """Bring a seed into its basin of the free-space-aware cost: Gauss-Newton on each point's
+    orthogonal residual and beam excess together (:func:`_with_beams`), Tukey-weighted (Beaton &
+    Tukey 1974) on their combined size at the larger of the noise level and its MAD scale
+    (re-estimated each step, so that a seed centimetres off still sees its inliers).
+
+    Without the excess in the cost a seed near the true pipe can slide into a thinner cylinder
+    that hides shots behind itself, and no later choice could bring it back.
+    """
+    n = len(points)
+
+    def weigh(stacked):
+        size = np.hypot(stacked[:n], stacked[n:])
         weights = tukey_weights(size, max(scale, robust_scale(size, scale)))
-        cost = float(weights @ (size * size))
-        if not cost > 0.0:
-            break
-        normal = (jacobian.T * weights) @ jacobian + (beyond_jacobian.T * weights) @ beyond_jacobian
-        gradient = jacobian.T @ (weights * residuals) + beyond_jacobian.T @ (weights * beyond)
-        delta = newton_step(normal, gradient)
-        for _ in range(8):
-            trial = model.update(state, delta, points, weights)
-            trial_residuals = model.residuals(trial, points)
-            trial_beyond = excess([trial], points)[0]
-            trial_cost = float(
-                weights @ (trial_residuals * trial_residuals + trial_beyond * trial_beyond)
-            )
-            if np.isfinite(trial_cost) and trial_cost <= cost:
-                break
-            delta = 0.5 * delta
-        else:
-            break
-        state = trial
-        if cost - trial_cost <= 1e-6 * cost:
-            break
+        return np.concatenate([weights, weights])
+
+    state, _, _ = gauss_newton(
+        _with_beams(model, excess), seed, points, weigh, SETTLE_ITERATIONS, 1e-6
+    )
     return state
 
 
@@ -219,12 +222,19 @@ def reconsidered(
         raise ValueError("Without a robust fit the sensor's sigma must set the noise level.")
     scale = max(float(sigma) if sigma is not None else robust.scale, tolerances.sigma_floor)
     cutoff = tolerances.outlier_cutoff_sigma
-    best, best_score = robust, np.inf
+    best, best_score = None, np.inf
     uniform = np.ones(len(points))
-    if robust is not None:
-        best_score = visible_score(
-            robust.residuals, excess([robust.state], points)[0], scale, cutoff
-        )
+
+    def consider(fit) -> np.ndarray | None:
+        """Keep ``fit`` if it scores best so far; its points' beam excess (n,) metres."""
+        nonlocal best, best_score
+        if fit is None:
+            return None
+        beyond = excess([fit.state], points)[0]
+        score = visible_score(fit.residuals, beyond, scale, cutoff)
+        if score < best_score:
+            best, best_score = fit, score
+        return beyond
 
     def refined(state):
         try:
@@ -242,6 +252,7 @@ def reconsidered(
         except FitError:
             return None
 
+    consider(robust)
     for seed in seeds:
         # The plain robust settle first; only a fit that hides inliers behind itself is
         # settled again with the beams in the cost (slower: a differenced Jacobian).
@@ -254,33 +265,18 @@ def reconsidered(
             1e-6,
         )
         fit = refined(state)
-        hides = fit is None
-        if fit is not None:
-            beyond = excess([fit.state], points)[0]
-            score = visible_score(fit.residuals, beyond, scale, cutoff)
-            if score < best_score:
-                best, best_score = fit, score
-            hides = bool(np.any(beyond[fit.inliers] > cutoff * scale))
-            if thorough and not fit.inliers.all():
-                # A good shot just beyond the 3-sigma test can send the refit into a basin
-                # where it stays an outlier (a thinner pipe through the other shots); the fit
-                # of every shot is a candidate too.
-                whole, _, _ = gauss_newton(
-                    model, fit.state, points, lambda r: uniform, SETTLE_ITERATIONS, 1e-6
-                )
-                other = refined(whole)
-                if other is not None:
-                    score = visible_score(
-                        other.residuals, excess([other.state], points)[0], scale, cutoff
-                    )
-                    if score < best_score:
-                        best, best_score = other, score
+        beyond = consider(fit)
+        hides = fit is None or bool(np.any(beyond[fit.inliers] > cutoff * scale))
+        if thorough and fit is not None and not fit.inliers.all():
+            # A good shot just beyond the 3-sigma test can send the refit into a basin where
+            # it stays an outlier (a thinner pipe through the other shots); the fit of every
+            # shot is a candidate too.
+            whole, _, _ = gauss_newton(
+                model, fit.state, points, lambda r: uniform, SETTLE_ITERATIONS, 1e-6
+            )
+            consider(refined(whole))
         if thorough and hides:
-            fit = refined(_settle(model, seed, points, excess, scale))
-            if fit is not None:
-                score = visible_score(fit.residuals, excess([fit.state], points)[0], scale, cutoff)
-                if score < best_score:
-                    best, best_score = fit, score
+            consider(refined(_settle(model, seed, points, excess, scale)))
     if best is None:
         raise FitError(f"No {kind} explains most of these points; check that they are one {kind}.")
     return best

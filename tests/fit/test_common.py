@@ -233,7 +233,7 @@ def test_gauss_newton_steps_solve_singular_normal_equations_by_least_squares():
     # Positive definite: the Cholesky solve; singular: the minimum-norm least-squares step.
     normal = np.array([[4.0, 2.0], [2.0, 3.0]])
     np.testing.assert_allclose(
-        common.newton_step(normal, np.array([1.0, 2.0])), -np.linalg.solve(normal, [1.0, 2.0])
+        common._newton_step(normal, np.array([1.0, 2.0])), -np.linalg.solve(normal, [1.0, 2.0])
     )
     singular = np.array([[1.0, 0.0], [0.0, 0.0]])
-    np.testing.assert_allclose(common.newton_step(singular, np.array([2.0, 0.0])), [-2.0, 0.0])
+    np.testing.assert_allclose(common._newton_step(singular, np.array([2.0, 0.0])), [-2.0, 0.0])
