@@ -62,6 +62,12 @@ def fmt(x, digits=2) -> str:
 # --------------------------------------------------------------------------- tables
 
 
+def _bound_prefix(cell: Cell) -> str:
+    """``"retained_"`` for a cell with outliers (its bound is that of the shots the outliers
+    leave, see ``fit_accuracy.Trial``), else ``""``."""
+    return "retained_" if cell.bounds.get("retained_radius") else ""
+
+
 def _ratio(a, b) -> float:
     return a / b if b and math.isfinite(a) and math.isfinite(b) else float("nan")
 
@@ -82,8 +88,7 @@ def cylinder_table(results, kind, version, sk_name="skspatial"):
         ours = per.get(("ours", version))
         sk = per.get((sk_name, version))
         r = ours.values("radius") * 1e3
-        # With outliers, the bound is that of the shots the outliers left (see Trial).
-        bound = "retained_" if ours.bounds.get("retained_radius") else ""
+        bound = _bound_prefix(ours)
         r_b = ours.rms_bound(bound + "radius") * 1e3
         row = [f"{k:g}" for k in key] + [str(ours.trials), str(ours.failures)]
         row += [
@@ -178,8 +183,7 @@ def cuboid_table(results, version):
 def _cell_measures(kind, cell):
     """(measure label, value) pairs of one cell for the window comparison."""
     if kind in ("cylinder", "sphere"):
-        # With outliers, against the bound of the shots they leave (as the tables).
-        bound = "retained_" if cell.bounds.get("retained_radius") else ""
+        bound = _bound_prefix(cell)
         r = cell.values("radius")
         out = [("radius RMSE / CRB", _ratio(_rmse(r), cell.rms_bound(bound + "radius")))]
         if kind == "cylinder":
