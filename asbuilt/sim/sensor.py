@@ -188,6 +188,7 @@ def fire(scene, station, pan, tilt, rng) -> Returns:
     pan = np.atleast_1d(np.asarray(pan, dtype=np.float64))
     tilt = np.atleast_1d(np.asarray(tilt, dtype=np.float64))
     m = len(pan)
+    # Draw every random number up front so the stream never depends on the geometry.
     e_pan, e_tilt = rng.normal(0.0, station.angular_sigma, size=(2, m))
     noise = rng.normal(0.0, station.range_sigma, size=m)
     u_drop, u_mixed, u_kind, u_frac = rng.random(size=(4, m))
