@@ -430,9 +430,11 @@ def fit_cylinder(
         the standard errors when given.
     tolerances : Tolerances
     viewpoint : array_like, shape (3,), metres, optional
-        Where the shots were taken from. When given, the fit settled from each of the best starts
-        is also considered and the beams decide between them (a shot's beam must reach it
-        without passing through the pipe, :mod:`asbuilt.fit._visibility`).
+        Where the shots were taken from. When given and the fit is in doubt (:func:`_doubtful`),
+        the fit is settled again from the best starts of other basins and the beams decide
+        between them (a shot's beam must reach it without passing through the pipe,
+        :mod:`asbuilt.fit._visibility`); a viewpoint the shots cannot have come from is ignored
+        with a note.
 
     Returns
     -------
