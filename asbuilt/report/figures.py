@@ -168,8 +168,12 @@ def hull_2d(points: np.ndarray) -> np.ndarray:
 
 
 def _monotone_chain(points: np.ndarray) -> np.ndarray:
-    """Andrew's monotone chain: the hull of (n, 2) points, collinear points dropped."""
-    pts = np.unique(np.round(points, 9), axis=0)
+    """Andrew's monotone chain: the hull of (n, 2) points, collinear points dropped.
+
+    The vertices are input points as given (exact duplicates merged): rounding them would
+    change a thin hull's area by far more than its own rounding error.
+    """
+    pts = np.unique(np.asarray(points, dtype=np.float64), axis=0)
     if len(pts) < 3:
         return pts
 
