@@ -38,6 +38,8 @@ _MAX_FIRST_HARD = 6
 _ENOUGH = 0.75
 _MAX_PAIRS = 150
 _MIN_FACE_POINTS = 3
+# Share of a plane's consensus points on one face of a built frame for it to be that face.
+_SAME_FACE = 0.9
 #: A face's points must be spread off a line by this many consensus thresholds (RMS): a raster
 #: line lies in every plane through it and would otherwise pass for a face.
 _MIN_SPREAD = 1.5
@@ -450,18 +452,22 @@ def _score(points, frame: Frame, threshold) -> tuple[int, float]:
     return int(np.count_nonzero(kept)), -float(np.sum(dist[kept] ** 2))
 
 
-def _already_a_face(tried_frames, normal, offset, cos_face, threshold) -> bool:
-    """Whether a plane is (nearly) a face of a frame built from an earlier hypothesis."""
+def _already_a_face(tried_frames, normal, mask, cos_face) -> bool:
+    """Whether a plane is (nearly) a face of a frame built from an earlier hypothesis.
+
+    The same face means about the same direction and nearly the same points
+    (``_SAME_FACE`` of the plane's consensus ``mask`` (n,) bool on that face): a plane a
+    little off a face's direction that also takes in points the frame put on another face
+    (the other corner of three raster columns on two narrow faces) is a hypothesis of its own.
+    """
+    count = max(int(np.count_nonzero(mask)), 1)
     for _, _, frame in tried_frames:
         if frame.n_faces < 2:
             continue
         normals = frame.face_sign[:, None] * frame.axes[frame.face_axis]
-        dots = normals @ normal
-        same = (np.abs(dots) > cos_face) & (
-            np.abs(np.sign(dots) * offset - frame.face_offset) < 2 * threshold
-        )
-        if same.any():
-            return True
+        for f in np.flatnonzero(np.abs(normals @ normal) > cos_face):
+            if np.count_nonzero(mask & (frame.labels == f)) >= _SAME_FACE * count:
+                return True
     return False
 
 
@@ -484,6 +490,7 @@ def segment(
     viewpoint: np.ndarray | None = None,
     visible_only: bool = False,
     alternatives: bool = False,
+    exhaustive: bool = False,
 ) -> Frame | None | list[Frame]:
     """Find the cuboid frame and seen faces that explain the most points.
 
@@ -506,6 +513,10 @@ def segment(
 
     alternatives : bool
         Return every frame tried, best first, instead of the best one.
+    exhaustive : bool
+        Go on to the other first faces after a frame explains every point (three raster
+        columns on two narrow faces are explained by either corner; only shots left out of
+        the segmentation can tell).
 
     Returns
     -------
@@ -520,7 +531,7 @@ def segment(
         if tried >= _MAX_FIRST and best_score[-2] >= _ENOUGH * points.shape[0]:
             break
         d1, o1, mask1 = first
-        if _already_a_face(tried_frames, d1, o1, cos_face, threshold):
+        if _already_a_face(tried_frames, d1, mask1, cos_face):
             continue  # it would grow into a frame already built
         second = _second_plane(points, normals, first, threshold, gap, rng)
         if second is None:
@@ -542,8 +553,8 @@ def segment(
         tried_frames.append((score, len(tried_frames), frame))
         if best_score is None or score > best_score:
             best, best_score = frame, score
-        if score[-2] == points.shape[0] and (len(score) == 2 or score[0]):
-            break  # every point explained: no other hypothesis can do better
+        if score[-2] == points.shape[0] and (len(score) == 2 or score[0]) and not exhaustive:
+            break  # every point explained: no other hypothesis can explain more
     if alternatives:
         tried_frames.sort(key=lambda item: (item[0], -item[1]), reverse=True)
         return [frame for _, _, frame in tried_frames]

@@ -9,8 +9,12 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    planes scored by consensus (RANSAC, Fischler and Bolles 1981); a second face is searched
    exactly perpendicular to the first (point pairs), further faces along the third axis or
    opposite seen faces; a face must be contiguous with its neighbour (a convex corner) and, when
-   the viewpoint is trusted, face it. The frame explaining most points wins; if its fit rejects
-   more than ``max_outlier_fraction`` of the points, the other frames are fitted too.
+   the viewpoint is trusted, face it. The frame explaining most points is fitted first. If its
+   fit rejects points, every other frame explaining as many segmented points is fitted too
+   (three raster columns on two narrow faces fit either corner; the shots left out of the
+   segmentation, or rejected, decide) and the lowest MSAC cost over all points wins (Torr and
+   Zisserman 2000); if the winner rejects more than ``max_outlier_fraction`` of the points,
+   the frame whose fit keeps the most points wins.
 2. Joint fit: one rotation (3 small-angle parameters, applied with Rodrigues' formula so the axes
    stay exactly orthonormal) and one offset per seen face minimise the squared orthogonal
    distances of every point to its nearest face plane (Gauss-Newton with an analytic Jacobian).
@@ -63,6 +67,7 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette
+from asbuilt.fit._joint import FaceModel, best_fit, expand_frame, median, rodrigues
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cuboid, as_points, as_vector
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
@@ -75,151 +80,6 @@ METHOD = (
     "to the raster silhouette or the points' extent (generalised two-face method of Kwon et al. "
     "2004)"
 )
-
-_TUKEY_C = 4.685
-_MAD_TO_SIGMA = 1.4826
-_IRLS_ITERATIONS = 6
-_REFIT_ITERATIONS = 4
-
-
-_EYE3 = np.eye(3)
-_EYE3.setflags(write=False)
-
-
-def _rodrigues(omega: np.ndarray) -> np.ndarray:
-    """Rotation matrix (3, 3) of the rotation vector ``omega`` (3,), radians."""
-    angle = math.sqrt(float(omega @ omega))
-    if angle < 1e-15:
-        return _EYE3
-    k = omega / angle
-    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return _EYE3 + math.sin(angle) * kx + (1.0 - math.cos(angle)) * (kx @ kx)
-
-
-class _Model:
-    """Mutable working state of the joint fit: axes rows (3, 3), faces, offsets (centred frame)."""
-
-    def __init__(self, axes, face_axis, face_sign, face_offset, rot_basis):
-        self.axes = np.array(axes, dtype=np.float64)
-        self.face_axis = face_axis
-        self.face_sign = face_sign
-        self.offset = np.array(face_offset, dtype=np.float64)
-        self.rot_basis = rot_basis  # (3, q): free rotation directions, world frame
-
-    def normals(self) -> np.ndarray:
-        return self.face_sign[:, None] * self.axes[self.face_axis]
-
-    def all_residuals(self, x: np.ndarray) -> np.ndarray:
-        """Signed distance (n, m) of each point to each face plane."""
-        return x @ self.normals().T - self.offset[None, :]
-
-    def assign(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        res = self.all_residuals(x)
-        label = np.argmin(np.abs(res), axis=1)
-        return label, res[np.arange(x.shape[0]), label]
-
-    def jacobian(self, x: np.ndarray, label: np.ndarray, normal=None) -> np.ndarray:
-        """d residual / d (rotation in ``rot_basis``, offsets): shape (n, q + m).
-
-        ``normal`` (n, 3), each point's face normal, may be passed when already computed.
-        """
-        if normal is None:
-            normal = self.normals()[label]
-        offsets = -(label[:, None] == np.arange(self.offset.shape[0])).astype(np.float64)
-        return np.hstack([_faces.cross_rows(normal, x) @ self.rot_basis, offsets])
-
-    def step(self, x, label, weights) -> float:
-        """One weighted Gauss-Newton step; returns the step's size (radians + metres)."""
-        normal = self.normals()[label]
-        residual = np.einsum("ij,ij->i", x, normal) - self.offset[label]
-        jac = self.jacobian(x, label, normal)
-        weighted = jac.T * weights
-        matrix = weighted @ jac
-        matrix.flat[:: matrix.shape[0] + 1] += 1e-12 * max(float(np.trace(matrix)), 1e-30)
-        delta = np.linalg.solve(matrix, -(weighted @ residual))
-        q = self.rot_basis.shape[1]
-        rotation = _rodrigues(self.rot_basis @ delta[:q])
-        self.axes = self.axes @ rotation.T
-        self.offset = self.offset + delta[q:]
-        return float(np.abs(delta).max())
-
-
-def _tukey(u: np.ndarray) -> np.ndarray:
-    return np.where(np.abs(u) < 1.0, (1.0 - u**2) ** 2, 0.0)
-
-
-def _median(values: np.ndarray) -> float:
-    """Median of a 1-D array (np.partition; cheaper than np.median for small arrays)."""
-    k = values.shape[0]
-    if k == 0:
-        return float("nan")
-    part = np.partition(values, [(k - 1) // 2, k // 2])
-    return 0.5 * float(part[(k - 1) // 2] + part[k // 2])
-
-
-def _robust_scale(residual: np.ndarray, floor: float) -> float:
-    return max(_MAD_TO_SIGMA * _median(np.abs(residual)), floor)
-
-
-def _robust_fit(model, x, noise, floor, cutoff):
-    """IRLS with Tukey's biweight, then a plain least-squares refit on the inliers.
-
-    The scale starts at the noise level and is re-estimated (median absolute residual) on the
-    biweight's support each iteration; inliers are within ``cutoff`` times the larger of that
-    scale and the noise level (the sensor's sigma when given). Updates
-    ``model`` in place; returns label (n,), residual (n,) metres, inliers (n,) bool, scale
-    (metres) and the number of Gauss-Newton steps.
-    """
-    iterations = 0
-    label, residual = model.assign(x)
-    scale = max(noise, floor)
-    for _ in range(_IRLS_ITERATIONS):
-        iterations += 1
-        support = np.abs(residual) < _TUKEY_C * scale
-        if np.count_nonzero(support) < 3:
-            break
-        scale = _robust_scale(residual[support], floor)
-        weights = _tukey(residual / (_TUKEY_C * scale))
-        moved = model.step(x, label, weights)
-        label, residual = model.assign(x)
-        if moved < 1e-5:
-            break
-    inliers = np.abs(residual) <= cutoff * max(scale, noise)
-    for _ in range(_REFIT_ITERATIONS):
-        if np.count_nonzero(inliers) < 3:
-            break
-        iterations += 1
-        moved = model.step(x[inliers], label[inliers], np.ones(np.count_nonzero(inliers)))
-        label, residual = model.assign(x)
-        if moved < 1e-9:
-            break
-    if np.any(inliers):
-        scale = _robust_scale(residual[inliers], floor)
-    # The final cut is never tighter than the noise level: orthogonal residuals of oblique shots
-    # are smaller than the range noise, and a few points' median underestimates it, so a cut at
-    # the residuals' own scale alone would drop good shots seen head-on.
-    inliers = np.abs(residual) <= cutoff * max(scale, noise)
-    return label, residual, inliers, scale, iterations
-
-
-def _grow(model, x, label, inliers, threshold, gap, viewpoint, trusted):
-    """A model with the faces the refined frame reveals among the rejected points, or None.
-
-    ``viewpoint`` (3,) orients a lone face; when ``trusted`` a face turned away from it is not
-    added.
-
-    Segmentation works with a frame from the first planes' consensus sets; once the joint fit
-    has refined it, a face whose points were off by a fraction of a degree may line up.
-    """
-    faces = []
-    for f in range(model.offset.shape[0]):
-        mask = inliers & (label == f)
-        faces.append((int(model.face_axis[f]), float(model.face_sign[f] * model.offset[f]), mask))
-    grown = _faces.extra_faces(x, model.axes, faces, threshold, gap, viewpoint if trusted else None)
-    if len(grown) == len(faces):
-        return None
-    frame = _faces.frame_from(x, model.axes, grown, threshold, viewpoint)
-    return _Model(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
 
 
 def _spread_subset(x: np.ndarray, base: np.ndarray) -> np.ndarray:
@@ -234,7 +94,7 @@ def _spread_subset(x: np.ndarray, base: np.ndarray) -> np.ndarray:
     pts = x[taken]
     d = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=2)
     np.fill_diagonal(d, np.inf)
-    least = 0.5 * _median(d.min(axis=1))
+    least = 0.5 * median(d.min(axis=1))
     for i in np.flatnonzero(~base):
         if np.linalg.norm(x[taken] - x[i], axis=1).min() >= least:
             taken.append(i)
@@ -295,40 +155,6 @@ def _mixed_returns(x, label, inliers, model, edges, view, tol):
     return np.array(points), np.array(labels, np.int64), np.array(index, np.int64)
 
 
-def _expand(frame, subset: np.ndarray, n: int):
-    """``frame`` segmented on the points ``subset`` (m,), its labels spread over all n (-1)."""
-    labels = -np.ones(n, dtype=np.int64)
-    labels[subset] = frame.labels
-    return _faces.Frame(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, labels)
-
-
-def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted):
-    """Robust joint fit starting from one segmentation frame (plus faces it then reveals).
-
-    Returns model, label (n,), residual (n,) metres, inliers (n,) bool, scale (metres),
-    Gauss-Newton steps and whether only one face is seen.
-    """
-    one_face = frame.n_faces == 1
-    if one_face:
-        normal = frame.axes[int(frame.face_axis[0])]
-        basis = _faces._perpendicular_basis(normal)
-        rect = _faces.min_area_rectangle(x[frame.labels == 0] @ basis)
-        in_plane = rect @ basis.T
-        axes = np.vstack([normal, in_plane[0], _faces.cross3(normal, in_plane[0])])
-        model = _Model(axes, np.array([0]), frame.face_sign.copy(), frame.face_offset.copy(), None)
-        model.rot_basis = axes[1:].T.copy()
-    else:
-        model = _Model(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
-    label, residual, inliers, scale, iterations = _robust_fit(model, x, noise, floor, cutoff)
-    if not one_face:
-        grown = _grow(model, x, label, inliers, cutoff * scale, gap, viewpoint, trusted)
-        if grown is not None:
-            model = grown
-            label, residual, inliers, scale, more = _robust_fit(model, x, noise, floor, cutoff)
-            iterations += more
-    return model, label, residual, inliers, scale, iterations, one_face
-
-
 def _validate(points) -> np.ndarray:
     try:
         pts = np.array(as_points(points))
@@ -356,7 +182,7 @@ def _spacing(coords: np.ndarray, noise: float) -> float:
         return 0.0
     gaps = np.diff(np.sort(coords))
     big = gaps[gaps > max(0.3 * gaps.max(), noise)]
-    return _median(big) if big.size else 0.0
+    return median(big) if big.size else 0.0
 
 
 def _outward_spacing(proj: np.ndarray, extreme: int, k: int, sign: float) -> float | None:
@@ -548,9 +374,11 @@ def _propagate(model, x, cov, bounds_info, sigma, one_face):
     grads = np.zeros((base.shape[0], cov.shape[0]))
     eps = 1e-7
     for p in range(cov.shape[0]):
-        trial = _Model(model.axes, model.face_axis, model.face_sign, model.offset, model.rot_basis)
+        trial = FaceModel(
+            model.axes, model.face_axis, model.face_sign, model.offset, model.rot_basis
+        )
         if p < q:
-            trial.axes = model.axes @ _rodrigues(model.rot_basis[:, p] * eps).T
+            trial.axes = model.axes @ rodrigues(model.rot_basis[:, p] * eps).T
         else:
             trial.offset = model.offset.copy()
             trial.offset[p - q] += eps
@@ -683,35 +511,38 @@ def fit_cuboid(
         noise = _faces.noise_scale(xs, normals, local_rms, floor)
     threshold = cutoff * max(noise, floor)
     fourth = hood[:, min(3, hood.shape[1] - 1)]
-    reach = _median(np.linalg.norm(xs[fourth] - xs, axis=1))
+    reach = median(np.linalg.norm(xs[fourth] - xs, axis=1))
     gap = threshold + 1.5 * reach
-    frames = _faces.segment(
-        xs,
-        normals,
-        threshold,
-        gap,
-        tolerances.face_angle_deg,
-        viewpoint - origin,
-        visible_only=trusted,
-        alternatives=True,
-    )
-    if seg.size < n:
-        frames = [_expand(frame, seg, n) for frame in frames]
+
+    def segmentation(exhaustive: bool) -> list:
+        frames = _faces.segment(
+            xs,
+            normals,
+            threshold,
+            gap,
+            tolerances.face_angle_deg,
+            viewpoint - origin,
+            visible_only=trusted,
+            alternatives=True,
+            exhaustive=exhaustive,
+        )
+        return [expand_frame(frame, seg, n) for frame in frames] if seg.size < n else frames
+
+    frames = segmentation(False)
     if not frames:
         raise FitError(
             "cuboid: no planar face found (no three points on one plane); check the points or "
             "fit the object as a hull."
         )
-    # The best-scoring frame almost always fits; when it leaves too many points out, the other
-    # hypotheses are fitted too and the one keeping the most points wins.
-    best = None
-    for frame in frames:
-        trial = _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint - origin, trusted)
-        if best is None or np.count_nonzero(trial[3]) > np.count_nonzero(best[3]):
-            best = trial
-        if n - np.count_nonzero(best[3]) <= tolerances.max_outlier_fraction * n:
-            break
-    model, label, residual, inliers, scale, iterations, one_face = best
+    # The search stops at a frame explaining every segmented point; only then can an
+    # exhaustive one find more frames.
+    complete = np.count_nonzero(frames[0].labels >= 0) < seg.size
+    model, label, residual, inliers, scale, iterations, one_face = best_fit(
+        frames,
+        lambda: frames if complete else segmentation(True),
+        (x, noise, floor, cutoff, gap, viewpoint - origin, trusted),
+        tolerances.max_outlier_fraction,
+    )
     notes: list[str] = []
     if one_face:
         notes.append(

@@ -1,0 +1,264 @@
+"""The joint orthogonal-distance fit of a cuboid's seen faces, and the choice among frames.
+
+Step 2 of :mod:`asbuilt.fit.cuboid`: one rotation (3 small-angle parameters applied with
+Rodrigues' formula, so the axes stay exactly orthonormal) and one offset per seen face minimise
+the squared orthogonal distances of the points to their nearest face plane (Gauss-Newton with
+an analytic Jacobian, Tukey biweight IRLS, a least-squares refit on the inliers), and of the
+segmentation's frames the one every point supports best is kept (MSAC, Torr and Zisserman
+2000). Working state only: :func:`asbuilt.fit.cuboid.fit_cuboid` builds the result.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from asbuilt.fit import _faces
+
+_TUKEY_C = 4.685
+
+
+_MAD_TO_SIGMA = 1.4826
+
+
+_IRLS_ITERATIONS = 6
+
+
+_REFIT_ITERATIONS = 4
+
+
+_EYE3 = np.eye(3)
+
+
+_EYE3.setflags(write=False)
+
+
+def rodrigues(omega: np.ndarray) -> np.ndarray:
+    """Rotation matrix (3, 3) of the rotation vector ``omega`` (3,), radians."""
+    angle = math.sqrt(float(omega @ omega))
+    if angle < 1e-15:
+        return _EYE3
+    k = omega / angle
+    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return _EYE3 + math.sin(angle) * kx + (1.0 - math.cos(angle)) * (kx @ kx)
+
+
+class FaceModel:
+    """Mutable working state of the joint fit: axes rows (3, 3), faces, offsets (centred frame)."""
+
+    def __init__(self, axes, face_axis, face_sign, face_offset, rot_basis):
+        self.axes = np.array(axes, dtype=np.float64)
+        self.face_axis = face_axis
+        self.face_sign = face_sign
+        self.offset = np.array(face_offset, dtype=np.float64)
+        self.rot_basis = rot_basis  # (3, q): free rotation directions, world frame
+
+    def normals(self) -> np.ndarray:
+        return self.face_sign[:, None] * self.axes[self.face_axis]
+
+    def all_residuals(self, x: np.ndarray) -> np.ndarray:
+        """Signed distance (n, m) of each point to each face plane."""
+        return x @ self.normals().T - self.offset[None, :]
+
+    def assign(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        res = self.all_residuals(x)
+        label = np.argmin(np.abs(res), axis=1)
+        return label, res[np.arange(x.shape[0]), label]
+
+    def jacobian(self, x: np.ndarray, label: np.ndarray, normal=None) -> np.ndarray:
+        """d residual / d (rotation in ``rot_basis``, offsets): shape (n, q + m).
+
+        ``normal`` (n, 3), each point's face normal, may be passed when already computed.
+        """
+        if normal is None:
+            normal = self.normals()[label]
+        offsets = -(label[:, None] == np.arange(self.offset.shape[0])).astype(np.float64)
+        return np.hstack([_faces.cross_rows(normal, x) @ self.rot_basis, offsets])
+
+    def step(self, x, label, weights) -> float:
+        """One weighted Gauss-Newton step; returns the step's size (radians + metres)."""
+        normal = self.normals()[label]
+        residual = np.einsum("ij,ij->i", x, normal) - self.offset[label]
+        jac = self.jacobian(x, label, normal)
+        weighted = jac.T * weights
+        matrix = weighted @ jac
+        matrix.flat[:: matrix.shape[0] + 1] += 1e-12 * max(float(np.trace(matrix)), 1e-30)
+        delta = np.linalg.solve(matrix, -(weighted @ residual))
+        q = self.rot_basis.shape[1]
+        rotation = rodrigues(self.rot_basis @ delta[:q])
+        self.axes = self.axes @ rotation.T
+        self.offset = self.offset + delta[q:]
+        return float(np.abs(delta).max())
+
+
+def _tukey(u: np.ndarray) -> np.ndarray:
+    return np.where(np.abs(u) < 1.0, (1.0 - u**2) ** 2, 0.0)
+
+
+def median(values: np.ndarray) -> float:
+    """Median of a 1-D array (np.partition; cheaper than np.median for small arrays)."""
+    k = values.shape[0]
+    if k == 0:
+        return float("nan")
+    part = np.partition(values, [(k - 1) // 2, k // 2])
+    return 0.5 * float(part[(k - 1) // 2] + part[k // 2])
+
+
+def _robust_scale(residual: np.ndarray, floor: float) -> float:
+    return max(_MAD_TO_SIGMA * median(np.abs(residual)), floor)
+
+
+def _robust_fit(model, x, noise, floor, cutoff):
+    """IRLS with Tukey's biweight, then a plain least-squares refit on the inliers.
+
+    The scale starts at the noise level and is re-estimated (median absolute residual) on the
+    biweight's support each iteration; inliers are within ``cutoff`` times the larger of that
+    scale and the noise level (the sensor's sigma when given). Updates
+    ``model`` in place; returns label (n,), residual (n,) metres, inliers (n,) bool, scale
+    (metres) and the number of Gauss-Newton steps.
+    """
+    iterations = 0
+    label, residual = model.assign(x)
+    scale = max(noise, floor)
+    for _ in range(_IRLS_ITERATIONS):
+        iterations += 1
+        support = np.abs(residual) < _TUKEY_C * scale
+        if np.count_nonzero(support) < 3:
+            break
+        scale = _robust_scale(residual[support], floor)
+        weights = _tukey(residual / (_TUKEY_C * scale))
+        moved = model.step(x, label, weights)
+        label, residual = model.assign(x)
+        if moved < 1e-5:
+            break
+    inliers = np.abs(residual) <= cutoff * max(scale, noise)
+    for _ in range(_REFIT_ITERATIONS):
+        if np.count_nonzero(inliers) < 3:
+            break
+        iterations += 1
+        moved = model.step(x[inliers], label[inliers], np.ones(np.count_nonzero(inliers)))
+        label, residual = model.assign(x)
+        if moved < 1e-9:
+            break
+    if np.any(inliers):
+        scale = _robust_scale(residual[inliers], floor)
+    # The final cut is never tighter than the noise level: orthogonal residuals of oblique shots
+    # are smaller than the range noise, and a few points' median underestimates it, so a cut at
+    # the residuals' own scale alone would drop good shots seen head-on.
+    inliers = np.abs(residual) <= cutoff * max(scale, noise)
+    return label, residual, inliers, scale, iterations
+
+
+def _grow(model, x, label, inliers, threshold, gap, viewpoint, trusted):
+    """A model with the faces the refined frame reveals among the rejected points, or None.
+
+    ``viewpoint`` (3,) orients a lone face; when ``trusted`` a face turned away from it is not
+    added.
+
+    Segmentation works with a frame from the first planes' consensus sets; once the joint fit
+    has refined it, a face whose points were off by a fraction of a degree may line up.
+    """
+    faces = []
+    for f in range(model.offset.shape[0]):
+        mask = inliers & (label == f)
+        faces.append((int(model.face_axis[f]), float(model.face_sign[f] * model.offset[f]), mask))
+    grown = _faces.extra_faces(x, model.axes, faces, threshold, gap, viewpoint if trusted else None)
+    if len(grown) == len(faces):
+        return None
+    frame = _faces.frame_from(x, model.axes, grown, threshold, viewpoint)
+    return FaceModel(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
+
+
+def expand_frame(frame, subset: np.ndarray, n: int):
+    """``frame`` segmented on the points ``subset`` (m,), its labels spread over all n (-1)."""
+    labels = -np.ones(n, dtype=np.int64)
+    labels[subset] = frame.labels
+    return _faces.Frame(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, labels)
+
+
+def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted):
+    """Robust joint fit starting from one segmentation frame (plus faces it then reveals).
+
+    Returns model, label (n,), residual (n,) metres, inliers (n,) bool, scale (metres),
+    Gauss-Newton steps and whether only one face is seen.
+    """
+    one_face = frame.n_faces == 1
+    if one_face:
+        normal = frame.axes[int(frame.face_axis[0])]
+        basis = _faces._perpendicular_basis(normal)
+        rect = _faces.min_area_rectangle(x[frame.labels == 0] @ basis)
+        in_plane = rect @ basis.T
+        axes = np.vstack([normal, in_plane[0], _faces.cross3(normal, in_plane[0])])
+        model = FaceModel(
+            axes, np.array([0]), frame.face_sign.copy(), frame.face_offset.copy(), None
+        )
+        model.rot_basis = axes[1:].T.copy()
+    else:
+        model = FaceModel(
+            frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3)
+        )
+    label, residual, inliers, scale, iterations = _robust_fit(model, x, noise, floor, cutoff)
+    if not one_face:
+        grown = _grow(model, x, label, inliers, cutoff * scale, gap, viewpoint, trusted)
+        if grown is not None:
+            model = grown
+            label, residual, inliers, scale, more = _robust_fit(model, x, noise, floor, cutoff)
+            iterations += more
+    return model, label, residual, inliers, scale, iterations, one_face
+
+
+def _msac(residual: np.ndarray, cap: float) -> float:
+    """MSAC cost (Torr and Zisserman 2000): squared residuals (n,) metres, each capped at cap^2."""
+    return float(np.sum(np.minimum(residual**2, cap * cap)))
+
+
+def _same_frame(a, b) -> bool:
+    """Whether two segmentation frames have the same axes and faces."""
+    return (
+        np.array_equal(a.face_axis, b.face_axis)
+        and np.array_equal(a.face_sign, b.face_sign)
+        and np.allclose(a.axes, b.axes)
+        and np.allclose(a.face_offset, b.face_offset)
+    )
+
+
+def best_fit(frames, exhaustive, fit_args, max_outlier_fraction):
+    """The robust joint fit of the segmentation frame that every point supports best.
+
+    The best-scoring frame of ``frames`` is fitted first. A fit that keeps every point cannot
+    be beaten. One that rejects r points is compared with the fits of the frames of an
+    exhaustive segmentation (``exhaustive()``: the search does not stop at the first frame
+    explaining every segmented point) that explain at least as many points as the first less
+    r: three raster columns on two narrow faces fit either corner, and only the shots the
+    segmentation left out, or the fit rejected, decide. The lowest MSAC cost over all n
+    points, cut at the noise level, wins. If the winner still rejects more than
+    ``max_outlier_fraction`` of the points, the frames are fitted in turn and the one keeping
+    the most points wins. ``fit_args`` are :func:`_fit_frame`'s arguments after the frame.
+    Returns :func:`_fit_frame`'s tuple.
+    """
+    x, noise, floor, cutoff = fit_args[:4]
+    n = x.shape[0]
+    cap = cutoff * max(noise, floor)
+    best = _fit_frame(frames[0], *fit_args)
+    rejected = n - int(np.count_nonzero(best[3]))
+    if rejected:
+        first = int(np.count_nonzero(frames[0].labels >= 0))
+        best_cost = _msac(best[2], cap)
+        fitted, frames = frames[0], exhaustive()
+        for frame in frames:
+            if np.count_nonzero(frame.labels >= 0) < first:
+                continue
+            if _same_frame(frame, fitted):
+                continue
+            trial = _fit_frame(frame, *fit_args)
+            cost = _msac(trial[2], cap)
+            if cost < best_cost:
+                best, best_cost = trial, cost
+    for frame in frames:
+        if n - np.count_nonzero(best[3]) <= max_outlier_fraction * n:
+            break
+        trial = _fit_frame(frame, *fit_args)
+        if np.count_nonzero(trial[3]) > np.count_nonzero(best[3]):
+            best = trial
+    return best
