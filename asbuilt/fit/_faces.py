@@ -396,6 +396,8 @@ def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap, view_pr
     side = -1.0 if 2 * np.count_nonzero(inside > 0) > inside.size else 1.0
     if view_proj is not None and side * (view_proj[k] - offset) <= 0:
         return False
+    if sum(1 for axis, _, _ in faces if axis == k) >= 2:
+        return False  # a box has two faces across each axis
     for axis, off, fmask in faces:
         if axis != k:
             continue
@@ -417,6 +419,27 @@ def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap, view_pr
             continue
         return True
     return False
+
+
+def is_box(face_axis: np.ndarray, face_sign: np.ndarray, face_offset: np.ndarray) -> bool:
+    """Whether faces can be faces of one box: at most two across each axis, and two across
+    one axis face opposite ways with the box between them.
+
+    ``face_axis`` (m,) int, ``face_sign`` (m,) +1/-1 and ``face_offset`` (m,) metres as in
+    :class:`Frame`.
+    """
+    for k in range(3):
+        on = np.flatnonzero(face_axis == k)
+        if on.size > 2:
+            return False
+        if on.size == 2:
+            a, b = on
+            if face_sign[a] == face_sign[b]:
+                return False
+            # outward +axis at axis.x = o+, outward -axis at axis.x = -o-: o+ > -o-
+            if face_offset[a] + face_offset[b] <= 0.0:
+                return False
+    return True
 
 
 def frame_from(points, axes, faces, threshold, viewpoint) -> Frame:
@@ -528,7 +551,7 @@ def segment(
     best, best_score = None, None
     tried_frames: list = []
     for tried, first in enumerate(_first_planes(points, normals, threshold, cos_face, rng)):
-        if tried >= _MAX_FIRST and best_score[-2] >= _ENOUGH * points.shape[0]:
+        if tried >= _MAX_FIRST and best_score[1] >= _ENOUGH * points.shape[0]:
             break
         d1, o1, mask1 = first
         if _already_a_face(tried_frames, d1, mask1, cos_face):
@@ -547,13 +570,16 @@ def segment(
                 points, axes, faces, threshold, gap, viewpoint if visible_only else None
             )
         frame = frame_from(points, axes, faces, threshold, viewpoint)
-        score = _score(points, frame, threshold)
+        # A frame that cannot be a box (faces on both sides of the points across one axis, or
+        # one turned away from a trusted viewpoint) ranks below every frame that can.
+        plausible = is_box(frame.face_axis, frame.face_sign, frame.face_offset)
         if visible_only and viewpoint is not None:
-            score = (_all_facing(points, frame, viewpoint),) + score
+            plausible = plausible and _all_facing(points, frame, viewpoint)
+        score = (plausible,) + _score(points, frame, threshold)
         tried_frames.append((score, len(tried_frames), frame))
         if best_score is None or score > best_score:
             best, best_score = frame, score
-        if score[-2] == points.shape[0] and (len(score) == 2 or score[0]) and not exhaustive:
+        if score[1] == points.shape[0] and plausible and not exhaustive:
             break  # every point explained: no other hypothesis can explain more
     if alternatives:
         tried_frames.sort(key=lambda item: (item[0], -item[1]), reverse=True)

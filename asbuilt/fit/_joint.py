@@ -223,42 +223,58 @@ def _same_frame(a, b) -> bool:
     )
 
 
+def _plausible(model: FaceModel, view: np.ndarray, trusted: bool) -> bool:
+    """Whether a fitted frame can be a box seen from ``view`` (3,) metres (centred frame):
+    :func:`asbuilt.fit._faces.is_box`, and with a ``trusted`` viewpoint every face facing it
+    (a face turned away, such as a back face opposite a seen one, cannot have been hit)."""
+    if not _faces.is_box(model.face_axis, model.face_sign, model.offset):
+        return False
+    return not trusted or bool(np.all(model.normals() @ view - model.offset > 0.0))
+
+
 def best_fit(frames, exhaustive, fit_args, max_outlier_fraction):
     """The robust joint fit of the segmentation frame that every point supports best.
 
-    The best-scoring frame of ``frames`` is fitted first. A fit that keeps every point cannot
-    be beaten. One that rejects r points is compared with the fits of the frames of an
+    The best-scoring frame of ``frames`` is fitted first. A plausible fit (:func:`_plausible`)
+    that keeps every point cannot be beaten. Otherwise the fits of the frames of an
     exhaustive segmentation (``exhaustive()``: the search does not stop at the first frame
-    explaining every segmented point) that explain at least as many points as the first less
-    r: three raster columns on two narrow faces fit either corner, and only the shots the
-    segmentation left out, or the fit rejected, decide. The lowest MSAC cost over all n
-    points, cut at the noise level, wins. If the winner still rejects more than
-    ``max_outlier_fraction`` of the points, the frames are fitted in turn and the one keeping
-    the most points wins. ``fit_args`` are :func:`_fit_frame`'s arguments after the frame.
-    Returns :func:`_fit_frame`'s tuple.
+    explaining every segmented point) that explain at least as many points as the first are
+    compared: three raster columns on two narrow faces fit either corner, and only the shots
+    the segmentation left out, or the fit rejected, decide. A plausible fit beats an
+    implausible one; among those, the lowest MSAC cost over all n points, cut at the noise
+    level, wins (background shots that happen to line up with a wrong frame's extra face
+    lower its cost a little, but that face is a back face or a plane through the box). If the
+    winner still rejects more than ``max_outlier_fraction`` of the points, the frames are
+    fitted in turn and the plausible one keeping the most points wins. ``fit_args`` are
+    :func:`_fit_frame`'s arguments after the frame. Returns :func:`_fit_frame`'s tuple.
     """
-    x, noise, floor, cutoff = fit_args[:4]
+    x, noise, floor, cutoff, _, view, trusted = fit_args
     n = x.shape[0]
     cap = cutoff * max(noise, floor)
+
+    def rank(trial, by_cost):
+        quality = -_msac(trial[2], cap) if by_cost else int(np.count_nonzero(trial[3]))
+        return (_plausible(trial[0], view, trusted), quality)
+
     best = _fit_frame(frames[0], *fit_args)
-    rejected = n - int(np.count_nonzero(best[3]))
-    if rejected:
+    best_rank = rank(best, True)
+    if not (best_rank[0] and best[3].all()):
         first = int(np.count_nonzero(frames[0].labels >= 0))
-        best_cost = _msac(best[2], cap)
         fitted, frames = frames[0], exhaustive()
         for frame in frames:
-            if np.count_nonzero(frame.labels >= 0) < first:
-                continue
-            if _same_frame(frame, fitted):
+            if np.count_nonzero(frame.labels >= 0) < first or _same_frame(frame, fitted):
                 continue
             trial = _fit_frame(frame, *fit_args)
-            cost = _msac(trial[2], cap)
-            if cost < best_cost:
-                best, best_cost = trial, cost
-    for frame in frames:
-        if n - np.count_nonzero(best[3]) <= max_outlier_fraction * n:
-            break
-        trial = _fit_frame(frame, *fit_args)
-        if np.count_nonzero(trial[3]) > np.count_nonzero(best[3]):
-            best = trial
+            trial_rank = rank(trial, True)
+            if trial_rank > best_rank:
+                best, best_rank = trial, trial_rank
+    if n - np.count_nonzero(best[3]) > max_outlier_fraction * n:
+        best_rank = rank(best, False)
+        for frame in frames:
+            trial = _fit_frame(frame, *fit_args)
+            trial_rank = rank(trial, False)
+            if trial_rank > best_rank:
+                best, best_rank = trial, trial_rank
+            if best_rank[0] and n - best_rank[1] <= max_outlier_fraction * n:
+                break
     return best

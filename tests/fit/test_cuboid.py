@@ -560,3 +560,24 @@ def test_three_raster_columns_on_two_narrow_faces_take_the_corner_all_shots_supp
     assert fit.n_inliers >= len(points) - 1
     err = np.sort(fit.primitive.size) / np.sort(scan["size"]) - 1.0
     assert np.abs(err).max() < 0.03, err
+
+
+_BACKGROUND = json.loads((Path(__file__).parent / "boxes_with_background_shots.json").read_text())
+
+
+@pytest.mark.parametrize(
+    "scan", _BACKGROUND["scans"], ids=lambda s: s["source"].split("cell ")[1].split(" (20%")[0]
+)
+def test_background_shots_never_make_a_back_face(scan):
+    # Simulated raster scans (20% of the shots grazed an edge and hit the wall behind) where
+    # the background shots lined up with a wrong frame's extra face: a back face opposite a
+    # seen one, or a plane through the box. Seen from one station, no face can face away.
+    points = np.array(scan["points"])
+    view = np.array(_BACKGROUND["viewpoint"], dtype=float)
+    fit = fit_cuboid(points, sigma=_BACKGROUND["range_sigma"], viewpoint=view)
+    box = fit.primitive
+    assert _axes_error_deg(box.axes, scan["axes"]) < max(1.0, 4 * fit.stderr["axes_deg"])
+    assert not any(fit.observed)  # one station sees no two opposite faces
+    assert not fit.inliers[scan["outliers"]].any()
+    err = np.sort(box.size) / np.sort(scan["size"]) - 1.0
+    assert np.abs(err).max() < 0.05, err
