@@ -232,11 +232,27 @@ def _plausible(model: FaceModel, view: np.ndarray, trusted: bool) -> bool:
     return not trusted or bool(np.all(model.normals() @ view - model.offset > 0.0))
 
 
+def _on_a_line(trial, x: np.ndarray, width: float) -> bool:
+    """Whether some face of a fit has its inliers within ``width`` metres (RMS) of one line:
+    a single raster column or row, which leaves the face's own direction about that line to
+    the other faces (three columns on two narrow faces fit either corner)."""
+    model, label, _, inliers = trial[:4]
+    for f in range(model.offset.shape[0]):
+        members = x[inliers & (label == f)]
+        if members.shape[0] < 2:
+            continue
+        spread = np.linalg.svd(members - members.mean(axis=0), compute_uv=False)
+        if spread[1] < width * math.sqrt(members.shape[0]):
+            return True
+    return False
+
+
 def best_fit(frames, exhaustive, fit_args, max_outlier_fraction):
     """The robust joint fit of the segmentation frame that every point supports best.
 
     The best-scoring frame of ``frames`` is fitted first. A plausible fit (:func:`_plausible`)
-    that keeps every point cannot be beaten. Otherwise the fits of the frames of an
+    that keeps every point cannot be beaten unless one of its faces is a single line of shots
+    (:func:`_on_a_line`). Otherwise the fits of the frames of an
     exhaustive segmentation (``exhaustive()``: the search does not stop at the first frame
     explaining every segmented point) that explain at least as many points as the first are
     compared: three raster columns on two narrow faces fit either corner, and only the shots
@@ -258,7 +274,7 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction):
 
     best = _fit_frame(frames[0], *fit_args)
     best_rank = rank(best, True)
-    if not (best_rank[0] and best[3].all()):
+    if not (best_rank[0] and best[3].all()) or _on_a_line(best, x, cap):
         first = int(np.count_nonzero(frames[0].labels >= 0))
         fitted, frames = frames[0], exhaustive()
         for frame in frames:
