@@ -6,7 +6,10 @@ Per object (:func:`scan_target`, deterministic given the measured ranges):
    (:meth:`Target.wanted`), columns and rows in proportion to the window's width and height,
    shot row by row in serpentine order (short head moves); never fewer than 3 rows and 3
    columns (5 for cuboids: two lines on each of two seen faces), so a thin object (a pipe
-   seen side-on) cannot fall between two rows of a loose window.
+   seen side-on) cannot fall between two rows of a loose window. Along a window at least
+   twice as long as wide (a column's, a beam's) 3 lines suffice for cuboids too: the seen
+   faces lie side by side across it (:func:`min_lines`), and with a small point budget the
+   shots saved go to the edges.
 2. **Foreground.** Valid returns are split at the largest gap in sorted range when it exceeds
    ``max(0.1 m, 5 %)``: the nearer cluster is the object the operator aimed at, the farther one
    the background behind it. Misses (no return, device errors) are background too.
@@ -17,18 +20,27 @@ Per object (:func:`scan_target`, deterministic given the measured ranges):
    object's silhouette (an object cell on the raster's border pairs with the cell beyond it,
    shot first: if that is on the object too, the object runs on beyond the window and the
    pair is dropped); each pair belongs to the side its outside cell is on (left, right,
-   bottom, top: lower or higher pan or tilt), taken from the finest raster that has pairs
-   there; of the pairs of a side that bracket the same two lines (a straight edge), only the
-   middle one is kept. ``edge_pairs`` pairs are dealt to the sides in turn (every side gets
-   some), each side's share at evenly spaced quantiles of its pairs (its middle pair for one);
-   the foreground split is re-measured with every edge shot. A pair is bisected (shoot the midpoint, keep the half that still brackets the edge) until the
-   bracket, as an angle times the range of its inside shot, is at most ``edge_tolerance``
-   metres, ``edge_depth`` steps at most, ``edge_shots`` shots per object at most. Cylinders
-   and spheres take ``curved_depth`` steps (2) instead: their fits use surface points only,
-   and shots pressed against a curved silhouette graze it (mixed returns). The last hit
-   of a pair then lies within ``edge_tolerance`` (across the beam) of the silhouette edge,
-   which bounds the object's unseen edges (a face's far edge, a column's top) far better than
-   the raster (up to one raster step short). On a face seen at incidence ``theta`` the
+   bottom, top: lower or higher pan or tilt). A side takes the pairs whose inside cell is on
+   its outermost line of object cells (they bracket the object's extreme there, which bounds
+   its unseen edges; a pair on an inner line brackets a stretch of silhouette cut short, such
+   as a row through a column's top seen from below), from the finest raster that has any; on
+   the sides along an elongated object (:func:`_long_sides`) those with object cells on both
+   sides along the edge first (a row through a column's end can be cut short by it). Of
+   the pairs of a side that bracket the same two lines (a straight edge), only the middle
+   one is kept. ``edge_pairs`` pairs are dealt to the sides in turn (every side gets some),
+   each side's share at evenly spaced quantiles of its pairs (its middle pair for one); the
+   foreground split is re-measured with every edge shot. A pair is bisected (shoot the
+   midpoint, keep the half that still brackets the edge) until the bracket, as an angle times
+   the range of its inside shot, is at most ``edge_tolerance`` metres, ``edge_depth`` steps
+   at most, ``edge_shots`` shots per object at most. Cylinders and spheres take
+   ``curved_depth`` steps (2) instead: their fits use surface points only, and shots pressed
+   against a curved silhouette graze it (mixed returns). The last hit of a pair then lies
+   within ``edge_tolerance`` (across the beam) of the silhouette edge, which bounds the
+   object's unseen edges (a face's far edge, a column's top) far better than the raster (up
+   to one raster step short). When that last hit shares its bisected angle with other hits
+   (every step missed, so it is the raster shot the pair started from; or a step fell on a
+   fill raster's column), one more shot a bracket inside it gives the points a hit off the
+   raster's lines within two brackets of the edge. On a face seen at incidence ``theta`` the
    bracket along the face is ``edge_tolerance / cos(theta)``.
 
 Every shot is appended to a JSON-lines journal beside the output (``<out>.journal``) and
@@ -68,6 +80,7 @@ __all__ = [
     "ObjectScan",
     "DeviceShooter",
     "grid",
+    "min_lines",
     "foreground_threshold",
     "scan_target",
     "Journal",
@@ -246,7 +259,7 @@ class DeviceShooter:
 
 
 def grid(
-    window: Window, n: int, min_cells: int = 3
+    window: Window, n: int, min_cells: int | tuple[int, int] = 3
 ) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
     """A cell-centred raster of at least ``n`` shots over ``window``, serpentine row order.
 
@@ -255,8 +268,8 @@ def grid(
     window : Window
     n : int
         Minimum number of shots.
-    min_cells : int
-        Fewest rows and fewest columns.
+    min_cells : int or (int, int)
+        Fewest rows and fewest columns (one number for both, or ``(rows, cols)``).
 
     Returns
     -------
@@ -265,9 +278,10 @@ def grid(
     shape : (int, int)
         ``(rows, cols)``; shot ``k`` is cell ``(k // cols, k % cols)`` with odd rows reversed.
     """
+    min_rows, min_cols = (min_cells, min_cells) if isinstance(min_cells, int) else min_cells
     aspect = window.width / window.height
-    cols = max(min_cells, int(round(math.sqrt(n * aspect))))
-    rows = max(min_cells, math.ceil(n / cols))
+    cols = max(min_cols, int(round(math.sqrt(n * aspect))))
+    rows = max(min_rows, math.ceil(n / cols))
     pans = window.pan_min + (np.arange(cols) + 0.5) * window.width / cols
     tilts = window.tilt_min + (np.arange(rows) + 0.5) * window.height / rows
     pan = np.empty(rows * cols)
@@ -336,7 +350,7 @@ def scan_target(
             dtype=bool,
         )
 
-    pan, tilt, (rows, cols) = grid(target.window, wanted, _MIN_LINES.get(target.kind, 3))
+    pan, tilt, (rows, cols) = grid(target.window, wanted, min_lines(target.kind, target.window))
     shots.extend(shoot(p, t, "raster") for p, t in zip(pan, tilt))
     grids = [(0, rows, cols, target.window)]
     for _ in range(settings.fill_rounds):
@@ -365,24 +379,36 @@ def scan_target(
     threshold = foreground_threshold(s.range for s in shots)
     fg = on_object(threshold)
     sides: dict[str, list] = {side: [] for side in _SIDES}
-    for start, r0, c0, win0 in reversed(grids):  # finest grid first
-        cells = fg[start : start + r0 * c0][_cell_index(r0, c0)]
-        index = _cell_index(r0, c0) + start
-        dp, dt = win0.width / c0, win0.height / r0
-        found = _boundary_pairs(cells)
-        for side in _SIDES:
-            if sides[side] or not found[side]:
-                continue  # a side keeps the pairs of the finest grid that has any there
-            sides[side] = [
-                (
-                    np.array([win0.pan_min + (c + 0.5) * dp, win0.tilt_min + (r + 0.5) * dt]),
-                    np.array([win0.pan_min + (c2 + 0.5) * dp, win0.tilt_min + (r2 + 0.5) * dt]),
-                    float(shots[index[r, c]].range),
-                    not (0 <= r2 < r0 and 0 <= c2 < c0),
-                )
-                for (r, c), (r2, c2) in found[side]
-            ]
-            sides[side] = _distinct_brackets(sides[side], 0 if side in ("left", "right") else 1)
+    # A side keeps the pairs on its outermost line of object cells (they bracket the object's
+    # extreme on that side, which bounds its unseen edges), from the finest grid that has any.
+    # Along an elongated object (:func:`_long_sides`) those away from its ends come first
+    # (:func:`_interior`): a row through a column's end can be cut short by the end.
+    long_sides = _long_sides(target.window)
+    for interior in (True, False):
+        for start, r0, c0, win0 in reversed(grids):  # finest grid first
+            cells = fg[start : start + r0 * c0][_cell_index(r0, c0)]
+            index = _cell_index(r0, c0) + start
+            dp, dt = win0.width / c0, win0.height / r0
+            found = _boundary_pairs(cells)
+            for side in _SIDES:
+                chosen = [
+                    p
+                    for p in found[side]
+                    if _extreme(p, cells, side)
+                    and not (interior and side in long_sides and not _interior(p, cells, side))
+                ]
+                if sides[side] or not chosen:
+                    continue
+                sides[side] = [
+                    (
+                        np.array([win0.pan_min + (c + 0.5) * dp, win0.tilt_min + (r + 0.5) * dt]),
+                        np.array([win0.pan_min + (c2 + 0.5) * dp, win0.tilt_min + (r2 + 0.5) * dt]),
+                        float(shots[index[r, c]].range),
+                        not (0 <= r2 < r0 and 0 <= c2 < c0),
+                    )
+                    for (r, c), (r2, c2) in chosen
+                ]
+                sides[side] = _distinct_brackets(sides[side], 0 if side in ("left", "right") else 1)
     budget = settings.edge_budget()
     curved = target.kind in ("cylinder", "sphere")
     depth = min(settings.edge_depth, settings.curved_depth) if curved else settings.edge_depth
@@ -417,6 +443,26 @@ def scan_target(
                 inside, reach = mid, float(shot.range)
             else:
                 outside = mid
+        if (
+            not curved
+            and budget > 0
+            and _bracket(inside, outside) * reach <= settings.edge_tolerance
+            and _on_a_line_shot(
+                inside,
+                outside,
+                shots,
+                lambda s: s.range is not None and (settings.keep_background or s.range < threshold),
+            )
+        ):
+            # The last hit lies within the tolerance of the edge, but on a line of other hits
+            # (the raster shot the pair started from, when every step missed, or a step that
+            # fell on a fill raster's column): the points alone cannot tell it from a raster
+            # shot. One shot a bracket inside it lands on the object off those lines, within
+            # two brackets of the edge, and marks the edge there.
+            back = inside - (outside - inside)
+            shot = shoot(float(back[0]), float(back[1]), "edge")
+            shots.append(shot)
+            budget -= 1
     return ObjectScan(target, tuple(shots), on_object(threshold))
 
 
@@ -425,16 +471,102 @@ def scan_target(
 #: give that wherever the corner falls (a column seen edge-on in a tall window would otherwise
 #: get three columns, one of them alone on a face).
 _MIN_LINES = {"cuboid": 5}
+#: A window at least this many times longer (as an angle) than wide frames an elongated object
+#: (a column, a beam): see :func:`min_lines`.
+_ELONGATED = 2.0
+
+
+def min_lines(kind: str, window: Window) -> tuple[int, int]:
+    """Fewest raster ``(rows, cols)`` for an object of ``kind`` framed by ``window``.
+
+    ``_MIN_LINES`` across the window (3 for kinds not listed). Along a window at least
+    ``_ELONGATED`` times longer than wide (pan extent times the cosine of the middle tilt
+    against tilt extent) three lines: an elongated object's seen faces lie side by side across
+    the window (a column's or a beam's corner edges run along it), so every line along it
+    crosses each of them and their split needs no extra lines there. The shots saved go to the
+    edge bisection instead when the object's point budget is small.
+    """
+    least = _MIN_LINES.get(kind, 3)
+    along = _long_sides(window)
+    if along == ("bottom", "top"):
+        return least, 3
+    if along == ("left", "right"):
+        return 3, least
+    return least, least
+
 
 #: The silhouette's sides, in the order pairs are dealt to them: pan low and high (left, right),
 #: tilt low and high (bottom, top).
 _SIDES = ("left", "right", "bottom", "top")
 
 
+def _on_a_line_shot(inside: np.ndarray, outside: np.ndarray, shots: list, is_hit) -> bool:
+    """Whether another hit shares the bisected angle of a pair's last hit ``inside``.
+
+    The bisected angle is the one in which ``inside`` and ``outside`` (``[pan, tilt]``,
+    radians) differ: pan for a left or right pair, tilt for a bottom or top one. ``shots``:
+    the object's shots so far; ``is_hit(shot)``: whether one is on the object.
+    """
+    axis = 0 if abs(outside[0] - inside[0]) > abs(outside[1] - inside[1]) else 1
+    other = 1 - axis
+    return any(
+        abs((s.pan_req, s.tilt_req)[axis] - inside[axis]) <= 1e-12
+        and abs((s.pan_req, s.tilt_req)[other] - inside[other]) > 1e-12
+        and is_hit(s)
+        for s in shots
+    )
+
+
 def _bracket(inside: np.ndarray, outside: np.ndarray) -> float:
     """Angle (radians) between two unit-angle directions ``[pan, tilt]`` (small-angle form)."""
     d_pan = (outside[0] - inside[0]) * math.cos(0.5 * (inside[1] + outside[1]))
     return math.hypot(d_pan, outside[1] - inside[1])
+
+
+def _extreme(pair: tuple, cells: np.ndarray, side: str) -> bool:
+    """Whether a boundary pair's inside cell lies on the outermost line of object cells on its
+    side (``pair``: ``((r, c), (r2, c2))``; ``cells`` (rows, cols) bool): the lowest column
+    holding object cells for a left pair, the highest for a right one, the lowest or highest
+    row for a bottom or top one."""
+    (r, c), _ = pair
+    rows, cols = np.nonzero(cells)
+    if side == "left":
+        return c == cols.min()
+    if side == "right":
+        return c == cols.max()
+    if side == "bottom":
+        return r == rows.min()
+    return r == rows.max()
+
+
+def _long_sides(window: Window) -> tuple[str, ...]:
+    """The silhouette sides that run along an elongated object framed by ``window``: left and
+    right for a window at least ``_ELONGATED`` times taller than wide (a column), bottom and
+    top for one that many times wider than tall (a beam), none otherwise."""
+    wide = window.width * math.cos(0.5 * (window.tilt_min + window.tilt_max))
+    if window.height >= _ELONGATED * wide:
+        return ("left", "right")
+    if wide >= _ELONGATED * window.height:
+        return ("bottom", "top")
+    return ()
+
+
+def _interior(pair: tuple, cells: np.ndarray, side: str) -> bool:
+    """Whether a boundary pair's inside cell has object cells on both sides along its side.
+
+    ``pair`` is ``((r, c), (r2, c2))`` (inside cell, outside cell) of ``cells`` (rows, cols)
+    bool. For a left or right pair the cells above and below the inside cell, for a bottom or
+    top pair those left and right of it, must be on the object (and in the raster): the edge
+    then runs on past the pair both ways, and the bisection pins it rather than a row cut
+    short by the object's end (a column's bottom, seen from above).
+    """
+    (r, c), _ = pair
+    rows, cols = cells.shape
+    steps = ((-1, 0), (1, 0)) if side in ("left", "right") else ((0, -1), (0, 1))
+    return all(
+        0 <= r + dr < rows and 0 <= c + dc < cols and bool(cells[r + dr, c + dc])
+        for dr, dc in steps
+    )
 
 
 def _distinct_brackets(pairs: list, axis: int) -> list:

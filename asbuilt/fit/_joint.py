@@ -232,13 +232,16 @@ def _plausible(model: FaceModel, view: np.ndarray, trusted: bool) -> bool:
     return not trusted or bool(np.all(model.normals() @ view - model.offset > 0.0))
 
 
-def _on_a_line(trial, x: np.ndarray, width: float) -> bool:
+def _on_a_line(trial, x: np.ndarray, width: float, raster: np.ndarray | None = None) -> bool:
     """Whether some face of a fit has its inliers within ``width`` metres (RMS) of one line:
     a single raster column or row, which leaves the face's own direction about that line to
-    the other faces (three columns on two narrow faces fit either corner)."""
+    the other faces (three columns on two narrow faces fit either corner). Only the
+    ``raster`` (n,) bool points count when given: a bisection's hits next to an edge, a few
+    millimetres apart on one row, leave it one line of the raster all the same."""
     model, label, _, inliers = trial[:4]
+    counted = inliers if raster is None else inliers & raster
     for f in range(model.offset.shape[0]):
-        members = x[inliers & (label == f)]
+        members = x[counted & (label == f)]
         if members.shape[0] < 2:
             continue
         spread = np.linalg.svd(members - members.mean(axis=0), compute_uv=False)
@@ -247,7 +250,7 @@ def _on_a_line(trial, x: np.ndarray, width: float) -> bool:
     return False
 
 
-def best_fit(frames, exhaustive, fit_args, max_outlier_fraction):
+def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
     """The robust joint fit of the segmentation frame that every point supports best.
 
     The best-scoring frame of ``frames`` is fitted first. A plausible fit (:func:`_plausible`)
@@ -262,7 +265,9 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction):
     lower its cost a little, but that face is a back face or a plane through the box). If the
     winner still rejects more than ``max_outlier_fraction`` of the points, the frames are
     fitted in turn and the plausible one keeping the most points wins. ``fit_args`` are
-    :func:`_fit_frame`'s arguments after the frame. Returns :func:`_fit_frame`'s tuple.
+    :func:`_fit_frame`'s arguments after the frame; ``raster`` (n,) bool, optional, the points
+    that are not edge-bisection shots (for :func:`_on_a_line`). Returns :func:`_fit_frame`'s
+    tuple.
     """
     x, noise, floor, cutoff, _, view, trusted = fit_args
     n = x.shape[0]
@@ -274,7 +279,7 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction):
 
     best = _fit_frame(frames[0], *fit_args)
     best_rank = rank(best, True)
-    if not (best_rank[0] and best[3].all()) or _on_a_line(best, x, cap):
+    if not (best_rank[0] and best[3].all()) or _on_a_line(best, x, cap, raster):
         first = int(np.count_nonzero(frames[0].labels >= 0))
         fitted, frames = frames[0], exhaustive()
         for frame in frames:

@@ -16,11 +16,17 @@ right only on average (within half a step either way). An acquisition session th
 edge-bisection shots (``asbuilt.drivers.session``: between a hit and a miss, bisected until the
 bracket is a few millimetres across): those points are off the raster's lines, but the rest
 still are. :func:`raster_grid` finds the raster among them (the lines carrying at least two
-points, then every point on those lines' evenly spaced grid) and each side of the window that
-off-grid shots reach beyond the raster's last line is placed at the outermost of them instead:
-a bisection hit lies inside the silhouette, within the session's tolerance of it, and beyond
-the last raster hit, so it pins that side far more tightly than half a step. Sides with no such
-shot keep the half-step rule. :func:`solve_bounds` weights each side by how well it is known.
+points, then every point on those lines' evenly spaced grid; shots :func:`edge_shots` calls
+bisection shots are never raster shots, even within the line width of the line they started
+from) and each side of the window that off-grid shots reach beyond the raster's last line (in
+the angle they are off the raster's lines in: a pan bisection keeps its row's tilt) is placed
+at the outermost of them instead: a bisection hit lies inside the silhouette, within the
+session's tolerance of it, and beyond the last raster hit, so it pins that side far more
+tightly than half a step. A side whose last raster line has a bisection hit just inside it
+(within ``_NEAR`` of a step) is placed on that line: the silhouette runs along the line (its
+shots straddle the edge, or the bisection from its shot missed at every step and the session
+shot once more a bracket inside). Other sides keep the half-step rule. :func:`solve_bounds`
+weights each side by how well it is known.
 
 Everything here is numpy; angles in radians, lengths in metres.
 """
@@ -41,6 +47,10 @@ _STEP_MULTIPLE = 0.15
 #: Least distance across the beam (metres) between a bisection shot and the shot that gives
 #: its line's direction.
 _SPAN = 0.01
+#: A bisection hit this close inside the raster's outermost line (in steps) pins that side at
+#: the line: the silhouette runs along it (the line's shots straddle the edge, or the
+#: bisection from its shot missed at every step).
+_NEAR = 0.1
 #: Silhouette fit weights: window sides matched to 0.1 mrad, bounds kept within 0.1 m of their
 #: start (a raster step at most) unless the window needs them moved.
 _ANGLE_TOL = 1e-4
@@ -105,7 +115,7 @@ def _shot_alike(ang: np.ndarray, off: np.ndarray, labels: list) -> bool:
     return np.count_nonzero(off & ~shared) <= 0.1 * np.count_nonzero(off)
 
 
-def raster_grid(points: np.ndarray, viewpoint: np.ndarray):
+def raster_grid(points: np.ndarray, viewpoint: np.ndarray, off_grid: np.ndarray | None = None):
     """The raster's angular window and which points are on its grid, edge shots allowed.
 
     Parameters
@@ -113,6 +123,11 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray):
     points : ndarray, shape (n, 3), metres
         All measured points (outliers too: their directions are still shot directions).
     viewpoint : ndarray, shape (3,), metres
+    off_grid : ndarray, shape (n,), bool, optional
+        Points known not to be raster shots (edge-bisection shots found by :func:`edge_shots`):
+        a bisection's deepest hit can come within the line width of the raster line it started
+        from, and counted on that line it would move the window's side by up to half a step
+        instead of pinning it.
 
     Returns
     -------
@@ -133,7 +148,12 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray):
     own; raster lines hold a point per row or column on the object), the step is measured on
     the points left, and every point on that step's grid (both angles within ``_LINE_WIDTH``
     steps of a line) is a raster point. A window side is pinned when off-grid points lie beyond
-    the raster's outermost line on that side: it is then their outermost angle.
+    the raster's outermost line on that side (off the raster's lines in that angle, to the
+    tight tolerance of :func:`edge_shots`): it is then their outermost angle. Failing that, a
+    side with an ``off_grid`` shot off the lines within ``_NEAR`` steps inside its outermost
+    line is placed on the line (not pinned: the silhouette reaches the line, and runs along it
+    when straight; a slanted one may reach past it, so the side keeps the half-step rule's
+    weight).
     """
     rel = points - viewpoint
     if np.any(np.linalg.norm(rel, axis=1) < 1e-6):
@@ -142,13 +162,14 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray):
     mean = rel.mean(axis=0)
     pan0 = float(np.arctan2(mean[1], mean[0]))
     ang = _angles(points, viewpoint, pan0)
-    steps = [_grid_step(ang[:, j]) for j in range(2)]
-    if steps[0] is not None and steps[1] is not None:
+    known = np.ones(n, dtype=bool) if off_grid is None else ~np.asarray(off_grid, dtype=bool)
+    steps = [_grid_step(ang[known, j]) for j in range(2)] if known.sum() >= 2 else [None, None]
+    if steps[0] is not None and steps[1] is not None and known.all():
         on_grid = np.ones(n, dtype=bool)
     else:
         on_grid = None
         for least in (2, 3):
-            keep = np.ones(n, dtype=bool)
+            keep = known.copy()
             labels = []
             for j in range(2):
                 spread = float(np.ptp(ang[:, j]))
@@ -162,6 +183,7 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray):
                 continue
             refs = [float(ang[keep, j].min()) for j in range(2)]
             grid = _on_lines(ang[:, 0], steps[0], refs[0]) & _on_lines(ang[:, 1], steps[1], refs[1])
+            grid &= known
             if np.count_nonzero(grid) >= max(7, n // 2) and _shot_alike(ang, ~grid, labels):
                 on_grid = grid
                 break
@@ -177,14 +199,26 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray):
         ]
     )
     pinned = np.zeros(4, dtype=bool)
-    off = ang[~on_grid]
-    if off.shape[0]:
-        for j in range(2):
-            low, high = inner[:, j].min(), inner[:, j].max()
-            if off[:, j].min() < low:
-                window[2 * j], pinned[2 * j] = off[:, j].min(), True
-            if off[:, j].max() > high:
-                window[2 * j + 1], pinned[2 * j + 1] = off[:, j].max(), True
+    bisected = ~known
+    for j in range(2):
+        low, high = inner[:, j].min(), inner[:, j].max()
+        # Off-grid shots off the raster's lines along j (a pan bisection keeps its row's tilt:
+        # it says nothing about the tilt sides).
+        tight = _LINE_WIDTH * 1e-2 * max(float(np.ptp(ang[:, j])), 1e-12)
+        phase = (ang[:, j] - low) / steps[j]
+        across = ~on_grid & (np.abs(phase - np.round(phase)) * steps[j] > tight)
+        if not across.any():
+            continue
+        values = ang[across, j]
+        near = _NEAR * steps[j]
+        if values.min() < low:
+            window[2 * j], pinned[2 * j] = values.min(), True
+        elif np.any(bisected & across & (ang[:, j] <= low + near)):
+            window[2 * j] = low
+        if values.max() > high:
+            window[2 * j + 1], pinned[2 * j + 1] = values.max(), True
+        elif np.any(bisected & across & (ang[:, j] >= high - near)):
+            window[2 * j + 1] = high
     return pan0, window, on_grid, pinned, np.array(steps, dtype=float)
 
 

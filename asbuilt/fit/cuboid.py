@@ -39,9 +39,10 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    instead placed where the box's silhouette meets the raster window, the raster's angular
    extent widened by half a step (:mod:`asbuilt.fit._silhouette`; the project's raster shoots at
    cell centres), each side that edge-bisection shots reach beyond the last raster line being
-   placed at the outermost of them. Over an operator's window (a little wider than the object)
-   the half-step rule is right only within half a step either way; the bisection shots are what
-   make those sizes accurate. Edge-bisection shots (an acquisition session's, told from the
+   placed at the outermost of them, and a side with a bisection hit just inside its last line
+   on that line. Where the solution would cut off an inlier, the bound stays at the inlier.
+   Over an operator's window (a little wider than the object) the half-step rule is right only
+   within half a step either way; the bisection shots are what make those sizes accurate. Edge-bisection shots (an acquisition session's, told from the
    raster by their angles from a given viewpoint: :func:`asbuilt.fit._silhouette.edge_shots`)
    end within the session's tolerance (2 mm) of the silhouette, so an extent bound that the
    outermost bisection shot along its axis reaches gets no pad. Such shots often straddle the
@@ -296,11 +297,14 @@ def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
     return lo, hi, lo_face, hi_face, lo_pt, hi_pt, pads
 
 
-def _silhouette_bounds(x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, found, tol):
+def _silhouette_bounds(x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, found):
     """Replace extent bounds (in place: lo, hi, pad) by the raster silhouette solution.
 
-    ``found`` is :func:`asbuilt.fit._silhouette.raster_window`'s answer for ``viewpoint``. The
-    solution is used only if it keeps every inlier inside the box; returns whether it was used.
+    ``found`` is :func:`asbuilt.fit._silhouette.raster_grid`'s answer for ``viewpoint``. The
+    solution is used only if it cuts off less than half the box's extent along any axis; a
+    bound it would put inside an inlier stays at that inlier (a side pinned on a raster line is
+    short of the edge by up to a bisection bracket across the beam, more along a face seen at
+    grazing incidence). Returns whether it was used.
     """
     pan0, window, _on_grid, pinned, steps = found
     free = [(k, 0) for k in range(3) if lo_pt[k] >= 0] + [(k, 1) for k in range(3) if hi_pt[k] >= 0]
@@ -317,7 +321,8 @@ def _silhouette_bounds(x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, f
     for k, side in free:
         extreme = proj[hi_pt[k], k] if side else proj[lo_pt[k], k]
         beyond = new_hi[k] - extreme if side else extreme - new_lo[k]
-        if not np.isfinite(beyond) or beyond < -tol or beyond > 2.0 * (hi[k] - lo[k]):
+        span = hi[k] - lo[k]
+        if not np.isfinite(beyond) or beyond < -0.5 * span or beyond > 2.0 * span:
             return False
     for k, side in free:
         if side:
@@ -495,6 +500,10 @@ def fit_cuboid(
         grid = None
     # Bisection shots are told from the raster by their angles from a trusted viewpoint only.
     edges = _silhouette.edge_shots(pts, viewpoint) if trusted else (-np.ones(n, np.int64),) * 2
+    if grid is not None and np.any(edges[0] >= 0):
+        # Bisection shots are not raster shots, even when one falls within the line width of
+        # the raster line it started from; they pin the window's sides.
+        grid = _silhouette.raster_grid(pts, viewpoint, off_grid=edges[0] >= 0)
     # Segmentation works on the raster's shots and the bisection shots that stand apart from
     # them: a bisection's later hits lie millimetres apart on a line next to an edge, so their
     # neighbourhoods give no normal and would shrink the spacing scale, but its first hits
@@ -542,6 +551,7 @@ def fit_cuboid(
         lambda: frames if complete else segmentation(True),
         (x, noise, floor, cutoff, gap, viewpoint - origin, trusted),
         tolerances.max_outlier_fraction,
+        edges[0] < 0,
     )
     notes: list[str] = []
     if one_face:
@@ -576,7 +586,7 @@ def fit_cuboid(
     used_window = False
     if silhouette and grid is not None and not one_face:
         used_window = _silhouette_bounds(
-            xb, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid, cutoff * scale
+            xb, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid
         )
     if used_window:
         notes.append(

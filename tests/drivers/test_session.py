@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -18,6 +19,7 @@ from asbuilt.drivers.session import (
     foreground_threshold,
     grid,
     journal_path_for,
+    min_lines,
     read_journal,
     scan_target,
 )
@@ -25,6 +27,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from asbuilt.errors import DeviceError, DeviceTimeout, ScanError
+from asbuilt.tolerances import DEFAULT_TOLERANCES
 
 
 @settings(max_examples=50, deadline=None)
@@ -301,10 +304,11 @@ def test_every_side_is_bisected_down_to_the_tolerance(tolerance):
     for side, gap in gaps.items():
         assert 0.0 <= gap * 4.0 <= tolerance, side
     # and no more shots than halving the first bracket (one raster cell) down to the tolerance,
-    # plus one per side for the cell beyond the raster's border when the pair starts there
+    # plus one per side for the cell beyond the raster's border when the pair starts there and
+    # one per side a bracket back inside when the last hit is on a line of other hits
     _, _, (rows, cols) = grid(target.window, 30)
     cells = (target.window.width / cols, target.window.height / rows)
-    most = sum(2 * math.ceil(math.log2(c * 4.0 / tolerance)) for c in cells) + 4
+    most = sum(2 * math.ceil(math.log2(c * 4.0 / tolerance)) for c in cells) + 8
     assert len(edges) <= most
 
 
@@ -377,3 +381,78 @@ def test_resume_replays_tolerance_driven_bisection():
         (s.pan_req, s.tilt_req, s.range) for s in whole.shots
     ]
     assert replay.i == len(whole.shots) // 2 and not replay.diverged
+
+
+#: The paper's minimum point counts only (not its recommended 30 per cuboid): a small budget.
+FEW_POINTS = dataclasses.replace(DEFAULT_TOLERANCES, recommended_points_cuboid=7)
+
+
+@pytest.mark.parametrize(
+    "kind, window, expected",
+    [
+        ("cuboid", Window(-0.03, 0.03, -0.3, 0.3), (3, 5)),  # a column: five columns of shots
+        ("cuboid", Window(-0.3, 0.3, -0.03, 0.03), (5, 3)),  # a beam: five rows
+        ("cuboid", Window(-0.1, 0.1, -0.1, 0.1), (5, 5)),  # a box: either split
+        ("cuboid", Window(-0.1, 0.1, -0.06, 0.06), (5, 5)),  # under twice as wide as tall
+        ("cuboid", Window(-0.2, 0.2, 1.0, 1.4), (3, 5)),  # pan extent shrinks by cos(tilt)
+        ("cylinder", Window(-0.03, 0.03, -0.3, 0.3), (3, 3)),
+    ],
+)
+def test_min_lines_across_and_along_an_elongated_window(kind, window, expected):
+    assert min_lines(kind, window) == expected
+
+
+def test_a_column_window_spends_no_extra_rows_along_the_column():
+    shoot, _ = box_world(half_pan=0.02, half_tilt=0.25)
+    target = Target("C", "cuboid", Window(-0.015, 0.035, -0.3, 0.26), points=12)
+    result = scan_target(target, shoot, SessionSettings(edge_pairs=0), FEW_POINTS)
+    raster = [s for s in result.shots if s.phase == "raster"]
+    assert len(raster) == 15  # five columns across, three rows along: not 5 x 5
+    assert len({round(s.pan, 12) for s in raster}) == 5
+
+
+def notched_world(near=4.0, far=7.0):
+    """A column whose upper left corner is cut off (as a column's top, seen from below, cuts
+    the row through it short of the vertical edge): pan -0.04..0.06 for tilt -0.14..0.06, only
+    -0.01..0.06 above that up to 0.10."""
+
+    def shoot(pan, tilt, phase):
+        body = -0.04 < pan < 0.06 and -0.14 < tilt < 0.06
+        head = -0.01 < pan < 0.06 and 0.06 <= tilt < 0.10
+        return Shot(pan, tilt, pan, tilt, near if body or head else far, None, 1, phase)
+
+    return shoot
+
+
+def test_side_pairs_bracket_the_outermost_line_of_object_cells():
+    # five raster rows: four on the body (tilt -0.124 to 0.032), one on the cut-off head (0.084)
+    target = Target("C", "cuboid", Window(-0.05, 0.07, -0.15, 0.11), points=23)
+    result = scan_target(target, notched_world(), SessionSettings(edge_pairs=4), FEW_POINTS)
+    assert not any(s.phase == "fill" for s in result.shots)
+    hits = [s for s, k in zip(result.shots, result.on_object) if k]
+    # the left edge is pinned where it is the object's extreme, not at the cut-off head
+    assert min(s.pan for s in hits) == pytest.approx(-0.04, abs=0.002 / 4.0)
+    left = [s for s in result.shots if s.phase == "edge" and s.pan < -0.0141]
+    assert left and all(s.tilt == pytest.approx(-0.072) for s in left)  # a body row
+
+
+def test_a_bracket_that_never_hit_again_adds_a_hit_off_the_raster_lines():
+    window = Window(-0.05, 0.07, -0.3, 0.26)
+    target = Target("C", "cuboid", window, points=12)
+    pans, _, _ = grid(window, 12, min_lines("cuboid", window))
+    columns = np.unique(pans)
+    # the right edge a hair (0.04 mm at 4 m) beyond a raster column: every bisection step misses
+    right = columns[3] + 1e-5
+    shoot, _ = box_world(half_pan=(right - columns[1] + 0.002) / 2, half_tilt=0.25)
+    shift = 0.5 * (right + columns[1] - 0.002) - 0.01  # box_world is centred on pan 0.01
+
+    def shifted(pan, tilt, phase):
+        shot = shoot(pan - shift, tilt, phase)
+        return Shot(pan, tilt, pan, tilt, shot.range, None, 1, phase)
+
+    result = scan_target(target, shifted, SessionSettings(edge_pairs=4), FEW_POINTS)
+    hits = [s for s, k in zip(result.shots, result.on_object) if k]
+    off_lines = [s for s in hits if s.phase == "edge" and np.abs(columns - s.pan).min() > 1e-9]
+    # a hit a bracket (at most the 2 mm tolerance at 4 m) inside the column, off every column
+    back = [s for s in off_lines if columns[3] - 0.002 / 4.0 <= s.pan < columns[3]]
+    assert back

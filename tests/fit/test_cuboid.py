@@ -570,6 +570,20 @@ def test_three_raster_columns_on_two_narrow_faces_take_the_corner_all_shots_supp
     assert np.abs(size_error).max() < 0.03, size_error
 
 
+@_stored("session_window_sides.json")
+def test_session_edge_shots_pin_the_raster_window_sides(scan):
+    # Session scans (simulated, clean) of columns with 20 or 40 points. The edge bisection put
+    # hits within 2 mm of each silhouette side, but the fit did not see them as pinning it: a
+    # bisection's deepest hit within the line width of the raster column it started from was
+    # counted on that column; a bisection that missed at every step, or whose last hit fell on
+    # a fill raster's column, left its side at the raster's last line plus half a step (sizes
+    # 16-38 % too large); and with a face carrying one raster column plus bisection hits, the
+    # first frame was taken without comparing the other corner (2.6-7.8 degrees off).
+    fit, size_error = _fit_stored(scan)
+    assert fit.inliers.all()
+    assert np.abs(size_error).max() < 0.03, size_error
+
+
 @_stored("boxes_with_background_shots.json")
 def test_background_shots_never_make_a_back_face(scan):
     # Simulated raster scans (20% of the shots grazed an edge and hit the wall behind) where
