@@ -147,10 +147,14 @@ def regularize_directions(
 
     cluster_of = np.zeros(n, int)
     relations: list[list[str]] = [[] for _ in range(n)]
-    fixed: list[tuple[np.ndarray, str]] = [(_Z, "vertical")]
+    # Fixed directions as (regular direction, label, measured direction). Relations are found
+    # between measured directions, so snaps cannot chain: a pipe 2.1 degrees off square to
+    # another is not made square because the other was first made horizontal.
+    fixed: list[tuple[np.ndarray, str, np.ndarray]] = [(_Z, "vertical", _Z)]
     final_dirs = []
     for index, (group, d) in enumerate(zip(merged, merged_dirs)):
         cluster_of[group] = index
+        measured = d
         rel: list[str] = []
         if len(group) > 1:
             lead = names[max(group, key=lambda m: weights[m])]
@@ -161,20 +165,24 @@ def regularize_directions(
                     relations[member].append(f"parallel to {lead}")
         # parallel to a fixed direction (vertical, or an earlier cluster)?
         snapped = False
-        for f, label in fixed:
-            if _angle(d, f) <= tol_deg:
+        for f, label, seen in fixed:
+            if _angle(measured, seen) <= tol_deg and _angle(measured, f) <= tol_deg:
                 d = f * np.sign(float(d @ f) or 1.0)
                 rel.append(label if label == "vertical" else f"parallel to {label}")
                 snapped = True
                 break
         if not snapped:
-            near_perp = [(f, label) for f, label in fixed if abs(90.0 - _angle(d, f)) <= tol_deg]
+            near_perp = [
+                (f, label)
+                for f, label, seen in fixed
+                if abs(90.0 - _angle(measured, seen)) <= tol_deg
+            ]
             if near_perp:
                 d, kept = _make_perpendicular(d, near_perp, tol_deg)
                 for label in kept:
                     rel.append("horizontal" if label == "vertical" else f"perpendicular to {label}")
         lead_name = names[max(group, key=lambda m: weights[m])]
-        fixed.append((d, lead_name))
+        fixed.append((d, lead_name, measured))
         final_dirs.append(d)
         for member in group:
             relations[member].extend(rel)

@@ -70,6 +70,20 @@ def test_near_perpendicular_horizontal_axes_become_exactly_perpendicular():
     assert "perpendicular to P1" in result.relations[1]
 
 
+def test_relations_are_found_between_measured_axes_so_snaps_do_not_chain():
+    # P2 is 0.63 degrees off horizontal, P1 is 17 degrees off it and 2.1 degrees off square to
+    # P2. P2 becomes horizontal, which brings the pair within 2 degrees of square, but the pair
+    # was not measured square and must stay 2 degrees off (less the horizontal snap's share).
+    p1 = np.array([0.95533649, 0.0, -0.29552021])
+    p2 = np.array([0.03542363, 0.99931231, -0.01095781])
+    assert 87.8 < np.degrees(np.arccos(p1 @ p2)) < 87.9
+    result = regularize_directions([p1, p2], [1.0, 1.1], tol_deg=2.0, names=["P1", "P2"])
+    assert result.relations == ((), ("horizontal",))
+    assert result.axes[0] == pytest.approx(p1)
+    angle = np.degrees(np.arccos(abs(result.axes[0] @ result.axes[1])))
+    assert 87.9 < angle < 88.2
+
+
 def test_parallel_groups_are_forced_together_beyond_the_tolerance():
     a, b = X, tilted(X, Y, 6.0)
     loose = regularize_directions([a, b], [1, 1], tol_deg=2.0)
