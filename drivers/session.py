@@ -39,8 +39,9 @@ Per object (:func:`scan_target`, deterministic given the measured ranges):
    object's unseen edges (a face's far edge, a column's top) far better than the raster (up
    to one raster step short). When that last hit shares its bisected angle with other hits
    (every step missed, so it is the raster shot the pair started from; or a step fell on a
-   fill raster's column), one more shot a bracket inside it gives the points a hit off the
-   raster's lines within two brackets of the edge. On a face seen at incidence ``theta`` the
+   fill raster's column), a shot a bracket inside it (then two, then four brackets, until one
+   hits: that last hit may be a pointing error's) gives the points a hit off the raster's
+   lines a few brackets from the edge. On a face seen at incidence ``theta`` the
    bracket along the face is ``edge_tolerance / cos(theta)``.
 
 Every shot is appended to a JSON-lines journal beside the output (``<out>.journal``) and
@@ -457,12 +458,19 @@ def scan_target(
             # The last hit lies within the tolerance of the edge, but on a line of other hits
             # (the raster shot the pair started from, when every step missed, or a step that
             # fell on a fill raster's column): the points alone cannot tell it from a raster
-            # shot. One shot a bracket inside it lands on the object off those lines, within
-            # two brackets of the edge, and marks the edge there.
-            back = inside - (outside - inside)
-            shot = shoot(float(back[0]), float(back[1]), "edge")
-            shots.append(shot)
-            budget -= 1
+            # shot. A shot a bracket inside it lands on the object off those lines, within two
+            # brackets of the edge, and marks the edge there; should it miss (the last hit
+            # was a pointing error's, the edge lies inside that line), two and then four
+            # brackets inside.
+            for back_by in _BACK_STEPS:
+                if budget <= 0:
+                    break
+                back = inside - back_by * (outside - inside)
+                shot = shoot(float(back[0]), float(back[1]), "edge")
+                shots.append(shot)
+                budget -= 1
+                if is_hit(shot):
+                    break
     return ObjectScan(target, tuple(shots), on_object(threshold))
 
 
@@ -494,6 +502,10 @@ def min_lines(kind: str, window: Window) -> tuple[int, int]:
         return 3, least
     return least, least
 
+
+#: Brackets back inside a pair's last hit, in turn, for a hit off the raster's lines when
+#: that hit shares its bisected angle with others (see :func:`scan_target`).
+_BACK_STEPS = (1.0, 2.0, 4.0)
 
 #: The silhouette's sides, in the order pairs are dealt to them: pan low and high (left, right),
 #: tilt low and high (bottom, top).

@@ -25,7 +25,7 @@ session's tolerance of it, and beyond the last raster hit, so it pins that side 
 tightly than half a step. A side whose last raster line has a bisection hit just inside it
 (within ``_NEAR`` of a step) is placed on that line: the silhouette runs along the line (its
 shots straddle the edge, or the bisection from its shot missed at every step and the session
-shot once more a bracket inside). Other sides keep the half-step rule. :func:`solve_bounds`
+shot again a few brackets inside). Other sides keep the half-step rule. :func:`solve_bounds`
 weights each side by how well it is known.
 
 Everything here is numpy; angles in radians, lengths in metres.

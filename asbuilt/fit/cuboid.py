@@ -227,10 +227,13 @@ def _pinned(x, index, along, sign, axis, edges, tol) -> bool:
 
     ``index`` (m,): the inliers; ``along`` (m,): their coordinates along ``axis`` (3,). The
     outermost inlier bisected along the axis (:func:`_bisected`) pins the edge there, to the
-    session's tolerance; when it is within ``tol`` (metres, the residual cut: noise) of the
-    extreme inlier, the edge is at the extreme. Farther in, it pinned another stretch of the
-    silhouette (which need not be straight in angle: a horizontal edge seen from below dips
-    towards its nearest point), and the extreme point keeps the raster's pad.
+    session's tolerance; when it is within ``tol`` (metres: the residual cut, or half the pad
+    the extreme would get, whichever is larger) of the extreme inlier, the edge is at the
+    extreme: the raster's last hit just crossed the edge the bisection found (a shot on a line
+    straddling the edge, its pointing error putting it past the edge). Farther in, it pinned
+    another stretch of the silhouette (which need not be straight in angle: a horizontal edge
+    seen from below dips towards its nearest point), and the extreme point keeps the raster's
+    pad.
     """
     if edges is None:
         return False
@@ -254,8 +257,8 @@ def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
 
     When the outermost edge-bisection shot along the axis (``edges``: the ``(along, partner)``
     answer of :func:`asbuilt.fit._silhouette.edge_shots`; the line through it and its partner
-    within 75 degrees of the axis) is the extreme inlier, or within the residual cut of it
-    (:func:`_pinned`), the extreme is the bound itself: the session bisects until
+    within 75 degrees of the axis) is the extreme inlier, or within the residual cut or half
+    the pad of it (:func:`_pinned`), the extreme is the bound itself: the session bisects until
     the bracket is a few millimetres across, about the range noise, so no pad is added.
 
     Returns lo (3,), hi (3,), lo_face (3,) bool, hi_face (3,) bool, lo_point (3,) int, hi_point
@@ -282,7 +285,7 @@ def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
             top = int(np.argmax(along))
             local = _outward_spacing(inner, top, k, 1.0)
             pads[1, k] = edge_pad * (median if local is None else min(local, median))
-            if _pinned(x, index, along, 1.0, model.axes[k], edges, noise):
+            if _pinned(x, index, along, 1.0, model.axes[k], edges, max(noise, 0.5 * pads[1, k])):
                 pads[1, k] = 0.0
             hi_pt[k] = index[top]
             hi[k] = along.max() + pads[1, k]
@@ -290,7 +293,7 @@ def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
             bottom = int(np.argmin(along))
             local = _outward_spacing(inner, bottom, k, -1.0)
             pads[0, k] = edge_pad * (median if local is None else min(local, median))
-            if _pinned(x, index, along, -1.0, model.axes[k], edges, noise):
+            if _pinned(x, index, along, -1.0, model.axes[k], edges, max(noise, 0.5 * pads[0, k])):
                 pads[0, k] = 0.0
             lo_pt[k] = index[bottom]
             lo[k] = along.min() - pads[0, k]

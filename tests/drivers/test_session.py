@@ -456,3 +456,29 @@ def test_a_bracket_that_never_hit_again_adds_a_hit_off_the_raster_lines():
     # a hit a bracket (at most the 2 mm tolerance at 4 m) inside the column, off every column
     back = [s for s in off_lines if columns[3] - 0.002 / 4.0 <= s.pan < columns[3]]
     assert back
+
+
+def test_a_back_shot_that_misses_steps_further_inside():
+    # The raster column's shot on the pair's row hit although the edge there lies a tolerance
+    # (2 mm at 4 m) inside the column (a pointing error): the first shot a bracket back
+    # inside misses too, the next, two brackets inside, lands on the object.
+    window = Window(-0.05, 0.07, -0.3, 0.26)
+    target = Target("C", "cuboid", window, points=12)
+    pans, _, _ = grid(window, 12, min_lines("cuboid", window))
+    columns = np.unique(pans)
+    edge = columns[3] - 0.002 / 4.0
+
+    def shoot(pan, tilt, phase):
+        on = (columns[1] - 0.002 < pan < edge or abs(pan - columns[3]) < 1e-12) and abs(
+            tilt + 0.02
+        ) < 0.25
+        return Shot(pan, tilt, pan, tilt, 4.0 if on else 7.0, None, 1, phase)
+
+    result = scan_target(target, shoot, SessionSettings(edge_pairs=4), FEW_POINTS)
+    right = [
+        (s, k)
+        for s, k in zip(result.shots, result.on_object)
+        if s.phase == "edge" and columns[3] - 0.01 / 4.0 < s.pan < columns[3]
+    ]
+    assert len(right) >= 2 and not right[0][1]  # the first one back missed ...
+    assert right[-1][1] and right[-1][0].pan < edge  # ... a later one hit, inside the edge

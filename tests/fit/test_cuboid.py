@@ -577,8 +577,10 @@ def test_session_edge_shots_pin_the_raster_window_sides(scan):
     # bisection's deepest hit within the line width of the raster column it started from was
     # counted on that column; a bisection that missed at every step, or whose last hit fell on
     # a fill raster's column, left its side at the raster's last line plus half a step (sizes
-    # 16-38 % too large); and with a face carrying one raster column plus bisection hits, the
-    # first frame was taken without comparing the other corner (2.6-7.8 degrees off).
+    # 16-38 % too large); a raster hit just past the edge (its pointing error) kept a pad of
+    # half the raster's spacing although a bisection hit millimetres inside it pinned the edge
+    # (18-21 %); and with a face carrying one raster column plus bisection hits, the first
+    # frame was taken without comparing the other corner (2.6-7.8 degrees off).
     fit, size_error = _fit_stored(scan)
     assert fit.inliers.all()
     assert np.abs(size_error).max() < 0.03, size_error
