@@ -537,9 +537,9 @@ def segment(
     alternatives : bool
         Return every frame tried, best first, instead of the best one.
     exhaustive : bool
-        Go on to the other first faces after a frame explains every point (three raster
-        columns on two narrow faces are explained by either corner; only shots left out of
-        the segmentation can tell).
+        Try every first face (up to ``_MAX_FIRST_HARD``), also after a frame explains every
+        point or most of them (three raster columns on two narrow faces are explained by
+        either corner; only shots left out of the segmentation, or the fit, can tell).
 
     Returns
     -------
@@ -551,7 +551,7 @@ def segment(
     best, best_score = None, None
     tried_frames: list = []
     for tried, first in enumerate(_first_planes(points, normals, threshold, cos_face, rng)):
-        if tried >= _MAX_FIRST and best_score[1] >= _ENOUGH * points.shape[0]:
+        if tried >= _MAX_FIRST and best_score[1] >= _ENOUGH * points.shape[0] and not exhaustive:
             break
         d1, o1, mask1 = first
         if _already_a_face(tried_frames, d1, mask1, cos_face):

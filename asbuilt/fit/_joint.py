@@ -256,8 +256,9 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
     The best-scoring frame of ``frames`` is fitted first. A plausible fit (:func:`_plausible`)
     that keeps every point cannot be beaten unless one of its faces is a single line of shots
     (:func:`_on_a_line`). Otherwise the fits of the frames of an
-    exhaustive segmentation (``exhaustive()``: the search does not stop at the first frame
-    explaining every segmented point) that explain at least as many points as the first are
+    exhaustive segmentation (``exhaustive()``: every first-face hypothesis is tried, not only
+    until a frame explains every segmented point, or most of them) that explain at least as
+    many points as the first are
     compared: three raster columns on two narrow faces fit either corner, and only the shots
     the segmentation left out, or the fit rejected, decide. A plausible fit beats an
     implausible one; among those, the lowest MSAC cost over all n points, cut at the noise

@@ -9,12 +9,16 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    planes scored by consensus (RANSAC, Fischler and Bolles 1981); a second face is searched
    exactly perpendicular to the first (point pairs), further faces along the third axis or
    opposite seen faces; a face must be contiguous with its neighbour (a convex corner) and, when
-   the viewpoint is trusted, face it. The frame explaining most points is fitted first. If its
-   fit rejects points, every other frame explaining as many segmented points is fitted too
-   (three raster columns on two narrow faces fit either corner; the shots left out of the
-   segmentation, or rejected, decide) and the lowest MSAC cost over all points wins (Torr and
-   Zisserman 2000); if the winner rejects more than ``max_outlier_fraction`` of the points,
-   the frame whose fit keeps the most points wins.
+   the viewpoint is trusted, face it; a frame must be a box seen from the viewpoint (at most
+   two faces across an axis, facing opposite ways, none turned away). The frame explaining
+   most points is fitted first. If its fit rejects points, is implausible, or has a face whose
+   raster shots lie on one line (a single column: its direction about that line is free), the
+   segmentation is rerun trying every first-face hypothesis, every frame explaining as many
+   segmented points is fitted too (three raster columns on two narrow faces fit either
+   corner; the shots left out of the segmentation, or rejected, decide) and the plausible fit
+   with the lowest MSAC cost over all points wins (Torr and Zisserman 2000); if the winner
+   rejects more than ``max_outlier_fraction`` of the points, the frame whose fit keeps the
+   most points wins.
 2. Joint fit: one rotation (3 small-angle parameters, applied with Rodrigues' formula so the axes
    stay exactly orthonormal) and one offset per seen face minimise the squared orthogonal
    distances of every point to its nearest face plane (Gauss-Newton with an analytic Jacobian).
@@ -546,12 +550,9 @@ def fit_cuboid(
             "cuboid: no planar face found (no three points on one plane); check the points or "
             "fit the object as a hull."
         )
-    # The search stops at a frame explaining every segmented point; only then can an
-    # exhaustive one find more frames.
-    complete = np.count_nonzero(frames[0].labels >= 0) < seg.size
     model, label, residual, inliers, scale, iterations, one_face = best_fit(
         frames,
-        lambda: frames if complete else segmentation(True),
+        lambda: segmentation(True),
         (x, noise, floor, cutoff, gap, viewpoint - origin, trusted),
         tolerances.max_outlier_fraction,
         edges[0] < 0,
