@@ -605,3 +605,13 @@ def test_a_face_seen_as_one_raster_column_does_not_settle_the_frame(scan):
     # column is free, and another frame explains the shots better (2-5 degrees off before).
     fit, _ = _fit_stored(scan)
     assert fit.inliers.all()
+
+
+@_stored("session_late_first_faces.json")
+def test_a_doubtful_fit_tries_every_first_face(scan):
+    # Session scans (simulated, clean) whose right frame starts from the fourth to sixth
+    # first-face hypothesis: the first frames explained most points and stopped the search,
+    # and their fits rejected shots or were 5-27 degrees off.
+    fit, size_error = _fit_stored(scan)
+    assert fit.inliers.all()
+    assert np.abs(size_error).max() < 0.03, size_error
