@@ -38,6 +38,8 @@ _MAX_FIRST_HARD = 6
 _ENOUGH = 0.75
 _MAX_PAIRS = 150
 _MIN_FACE_POINTS = 3
+#: Points enough for a face whose direction two other seen faces fix (only its offset is free).
+_MIN_THIRD_FACE_POINTS = 2
 # Share of a plane's consensus points on one face of a built frame for it to be that face.
 _SAME_FACE = 0.9
 #: A face's points must be spread off a line by this many consensus thresholds (RMS): a raster
@@ -367,15 +369,24 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
         for _, _, mask in faces:
             explained |= mask
         free = np.flatnonzero(~explained)
-        if free.size < _MIN_FACE_POINTS:
+        if free.size < _MIN_THIRD_FACE_POINTS:
             return faces
         best = None
         proj_all = points @ axes.T
+        seen_axes = {axis for axis, _, _ in faces}
         for k in range(3):
+            # A face across the one axis no seen face is normal to has only its offset free
+            # (the other two fix its direction): two points that agree on it suffice (the top
+            # of a pier that a sparse raster crosses once).
+            least = (
+                _MIN_THIRD_FACE_POINTS
+                if k not in seen_axes and len(seen_axes) == 2
+                else _MIN_FACE_POINTS
+            )
             proj = proj_all[free, k]
             counts = (np.abs(proj[:, None] - proj[None, :]) < threshold).sum(axis=1)
             c = int(np.argmax(counts))
-            if counts[c] < _MIN_FACE_POINTS or (best is not None and counts[c] <= best[0]):
+            if counts[c] < least or (best is not None and counts[c] <= best[0]):
                 continue
             members = free[np.abs(proj - proj[c]) < threshold]
             offset = float(np.mean(proj_all[members, k]))
@@ -399,7 +410,7 @@ def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap, view_pr
     if sum(1 for axis, _, _ in faces if axis == k) >= 2:
         return False  # a box has two faces across each axis
     for axis, off, fmask in faces:
-        if axis != k:
+        if axis != k or not fmask.any():
             continue
         other_side = -1.0 if proj[fmask, k].mean() < body[:, k].mean() else 1.0
         if other_side == side or abs(off - offset) < 2 * threshold:
@@ -411,7 +422,7 @@ def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap, view_pr
         if np.any(proj[mask, j] < lo) or np.any(proj[mask, j] > hi):
             return False
     for axis, off, fmask in faces:
-        if axis == k:
+        if axis == k or not fmask.any():
             continue
         if np.min(np.abs(proj[fmask, k] - offset)) > gap:
             continue

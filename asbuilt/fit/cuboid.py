@@ -8,7 +8,8 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
 1. Segmentation (:mod:`asbuilt.fit._faces`): local k-neighbour normals and point triples propose
    planes scored by consensus (RANSAC, Fischler and Bolles 1981); a second face is searched
    exactly perpendicular to the first (point pairs), further faces along the third axis or
-   opposite seen faces; a face must be contiguous with its neighbour (a convex corner) and, when
+   opposite seen faces (a third face, whose direction the first two fix, from two points at
+   least); a face must be contiguous with its neighbour (a convex corner) and, when
    the viewpoint is trusted, face it; a frame must be a box seen from the viewpoint (at most
    two faces across an axis, facing opposite ways, none turned away). The frame explaining
    most points is fitted first. If its fit rejects points, is implausible, or has a face whose
@@ -304,17 +305,28 @@ def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
     return lo, hi, lo_face, hi_face, lo_pt, hi_pt, pads
 
 
-def _silhouette_bounds(x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, found):
+def _silhouette_bounds(x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, found, edges):
     """Replace extent bounds (in place: lo, hi, pad) by the raster silhouette solution.
 
-    ``found`` is :func:`asbuilt.fit._silhouette.raster_grid`'s answer for ``viewpoint``. The
+    ``found`` is :func:`asbuilt.fit._silhouette.raster_grid`'s answer for ``viewpoint``. A
+    bound an edge-bisection shot reached (``edges``, :func:`asbuilt.fit._silhouette.edge_shots`;
+    no pad) is known to the session's tolerance and stays: the window's side beyond it may be
+    at the half-step rule, which seen obliquely (a pier's foot from above) can put the edge a
+    raster step of angle, most of a metre, away. The
     solution is used only if it cuts off less than half the box's extent along any axis; a
     bound it would put inside an inlier stays at that inlier (a side pinned on a raster line is
     short of the edge by up to a bisection bracket across the beam, more along a face seen at
     grazing incidence). Returns whether it was used.
     """
     pan0, window, _on_grid, pinned, steps = found
-    free = [(k, 0) for k in range(3) if lo_pt[k] >= 0] + [(k, 1) for k in range(3) if hi_pt[k] >= 0]
+
+    def open_side(k, side):
+        point = hi_pt[k] if side else lo_pt[k]
+        return point >= 0 and not (pad[side, k] == 0.0 and edges[0][point] >= 0)
+
+    free = [(k, side) for side in (0, 1) for k in range(3) if open_side(k, side)]
+    if not free:
+        return False
     side_tol = None
     if pinned.any():
         # A side at the half-step rule is uncertain by +-half a step (uniform over the step in
@@ -590,7 +602,7 @@ def fit_cuboid(
     used_window = False
     if silhouette and grid is not None and not one_face:
         used_window = _silhouette_bounds(
-            xb, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid
+            xb, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid, edges_b
         )
     if used_window:
         notes.append(

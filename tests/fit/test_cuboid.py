@@ -615,3 +615,16 @@ def test_a_doubtful_fit_tries_every_first_face(scan):
     fit, size_error = _fit_stored(scan)
     assert fit.inliers.all()
     assert np.abs(size_error).max() < 0.03, size_error
+
+
+@_stored("session_pier_tops.json")
+def test_a_pier_top_crossed_once_is_a_face_and_the_foot_stays_where_bisection_put_it(scan):
+    # Session scans (simulated, clean) of 1.2 m piers seen from above at 20 points: the raster
+    # crosses the top once, leaving it two shots (its direction is fixed by the two side
+    # faces, so they are enough), and the bisection shots at the foot pin it to 2 mm, which
+    # the raster window's half-step rule must not move (it put the foot 0.9 m lower). The
+    # lengths were 5-75% long before.
+    fit, size_error = _fit_stored(scan)
+    assert fit.inliers.all()
+    assert fit.diagnostics["faces"] == 3
+    assert np.abs(size_error).max() < 0.03, size_error
