@@ -24,7 +24,7 @@ Per object (:func:`scan_target`, deterministic given the measured ranges):
    its outermost line of object cells (they bracket the object's extreme there, which bounds
    its unseen edges; a pair on an inner line brackets a stretch of silhouette cut short, such
    as a row through a column's top seen from below), from the finest raster that has any; on
-   the sides along an elongated object (:func:`_long_sides`) those with object cells on both
+   the sides along an elongated object (:func:`long_sides`) those with object cells on both
    sides along the edge first (a row through a column's end can be cut short by it). Of
    the pairs of a side that bracket the same two lines (a straight edge), only the middle
    one is kept. ``edge_pairs`` pairs are dealt to the sides in turn (every side gets some),
@@ -72,6 +72,19 @@ from asbuilt.errors import DeviceProtocolError, DeviceTimeout, ScanError
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 from asbuilt.units import unit_factor
 
+from .edges import (
+    BACK_STEPS,
+    SIDES,
+    boundary_pairs,
+    bracket,
+    deal_pairs,
+    distinct_brackets,
+    is_extreme,
+    is_interior,
+    long_sides,
+    min_lines,
+    on_a_line_shot,
+)
 from .journal import Journal, journal_path_for, read_journal
 from .kinematics import Calibration, forward
 from .plan import DEFAULT_SETTINGS, SessionSettings, Target, Window
@@ -379,24 +392,24 @@ def scan_target(
 
     threshold = foreground_threshold(s.range for s in shots)
     fg = on_object(threshold)
-    sides: dict[str, list] = {side: [] for side in _SIDES}
+    sides: dict[str, list] = {side: [] for side in SIDES}
     # A side keeps the pairs on its outermost line of object cells (they bracket the object's
     # extreme on that side, which bounds its unseen edges), from the finest grid that has any.
-    # Along an elongated object (:func:`_long_sides`) those away from its ends come first
-    # (:func:`_interior`): a row through a column's end can be cut short by the end.
-    long_sides = _long_sides(target.window)
+    # Along an elongated object (:func:`long_sides`) those away from its ends come first
+    # (:func:`is_interior`): a row through a column's end can be cut short by the end.
+    along = long_sides(target.window)
     for interior in (True, False):
         for start, r0, c0, win0 in reversed(grids):  # finest grid first
             cells = fg[start : start + r0 * c0][_cell_index(r0, c0)]
             index = _cell_index(r0, c0) + start
             dp, dt = win0.width / c0, win0.height / r0
-            found = _boundary_pairs(cells)
-            for side in _SIDES:
+            found = boundary_pairs(cells)
+            for side in SIDES:
                 chosen = [
                     p
                     for p in found[side]
-                    if _extreme(p, cells, side)
-                    and not (interior and side in long_sides and not _interior(p, cells, side))
+                    if is_extreme(p, cells, side)
+                    and not (interior and side in along and not is_interior(p, cells, side))
                 ]
                 if sides[side] or not chosen:
                     continue
@@ -409,7 +422,7 @@ def scan_target(
                     )
                     for (r, c), (r2, c2) in chosen
                 ]
-                sides[side] = _distinct_brackets(sides[side], 0 if side in ("left", "right") else 1)
+                sides[side] = distinct_brackets(sides[side], 0 if side in ("left", "right") else 1)
     budget = settings.edge_budget()
     curved = target.kind in ("cylinder", "sphere")
     depth = min(settings.edge_depth, settings.curved_depth) if curved else settings.edge_depth
@@ -421,7 +434,7 @@ def scan_target(
         threshold = foreground_threshold(s.range for s in shots)
         return shot.range is not None and (settings.keep_background or shot.range < threshold)
 
-    for inside, outside, reach, beyond in _deal_pairs(sides, settings.edge_pairs):
+    for inside, outside, reach, beyond in deal_pairs(sides, settings.edge_pairs):
         if beyond:
             # The object reaches the raster's border here: the cell beyond it was not shot.
             if budget <= 0:
@@ -434,7 +447,7 @@ def scan_target(
         for _ in range(depth):
             if budget <= 0:
                 break
-            if not curved and _bracket(inside, outside) * reach <= settings.edge_tolerance:
+            if not curved and bracket(inside, outside) * reach <= settings.edge_tolerance:
                 break
             mid = 0.5 * (inside + outside)
             shot = shoot(float(mid[0]), float(mid[1]), "edge")
@@ -447,8 +460,8 @@ def scan_target(
         if (
             not curved
             and budget > 0
-            and _bracket(inside, outside) * reach <= settings.edge_tolerance
-            and _on_a_line_shot(
+            and bracket(inside, outside) * reach <= settings.edge_tolerance
+            and on_a_line_shot(
                 inside,
                 outside,
                 shots,
@@ -462,7 +475,7 @@ def scan_target(
             # brackets of the edge, and marks the edge there; should it miss (the last hit
             # was a pointing error's, the edge lies inside that line), two and then four
             # brackets inside.
-            for back_by in _BACK_STEPS:
+            for back_by in BACK_STEPS:
                 if budget <= 0:
                     break
                 back = inside - back_by * (outside - inside)
@@ -472,186 +485,6 @@ def scan_target(
                 if is_hit(shot):
                     break
     return ObjectScan(target, tuple(shots), on_object(threshold))
-
-
-#: Fewest raster rows and columns by kind (3 otherwise): a cuboid is mostly seen on two faces,
-#: each of which needs two lines of shots for its plane; five lines across the object's window
-#: give that wherever the corner falls (a column seen edge-on in a tall window would otherwise
-#: get three columns, one of them alone on a face).
-_MIN_LINES = {"cuboid": 5}
-#: A window at least this many times longer (as an angle) than wide frames an elongated object
-#: (a column, a beam): see :func:`min_lines`.
-_ELONGATED = 2.0
-
-
-def min_lines(kind: str, window: Window) -> tuple[int, int]:
-    """Fewest raster ``(rows, cols)`` for an object of ``kind`` framed by ``window``.
-
-    ``_MIN_LINES`` across the window (3 for kinds not listed). Along a window at least
-    ``_ELONGATED`` times longer than wide (pan extent times the cosine of the middle tilt
-    against tilt extent) three lines: an elongated object's seen faces lie side by side across
-    the window (a column's or a beam's corner edges run along it), so every line along it
-    crosses each of them and their split needs no extra lines there. The shots saved go to the
-    edge bisection instead when the object's point budget is small.
-    """
-    least = _MIN_LINES.get(kind, 3)
-    along = _long_sides(window)
-    if along == ("bottom", "top"):
-        return least, 3
-    if along == ("left", "right"):
-        return 3, least
-    return least, least
-
-
-#: Brackets back inside a pair's last hit, in turn, for a hit off the raster's lines when
-#: that hit shares its bisected angle with others (see :func:`scan_target`).
-_BACK_STEPS = (1.0, 2.0, 4.0)
-
-#: The silhouette's sides, in the order pairs are dealt to them: pan low and high (left, right),
-#: tilt low and high (bottom, top).
-_SIDES = ("left", "right", "bottom", "top")
-
-
-def _on_a_line_shot(inside: np.ndarray, outside: np.ndarray, shots: list, is_hit) -> bool:
-    """Whether another hit shares the bisected angle of a pair's last hit ``inside``.
-
-    The bisected angle is the one in which ``inside`` and ``outside`` (``[pan, tilt]``,
-    radians) differ: pan for a left or right pair, tilt for a bottom or top one. ``shots``:
-    the object's shots so far; ``is_hit(shot)``: whether one is on the object.
-    """
-    axis = 0 if abs(outside[0] - inside[0]) > abs(outside[1] - inside[1]) else 1
-    other = 1 - axis
-    return any(
-        abs((s.pan_req, s.tilt_req)[axis] - inside[axis]) <= 1e-12
-        and abs((s.pan_req, s.tilt_req)[other] - inside[other]) > 1e-12
-        and is_hit(s)
-        for s in shots
-    )
-
-
-def _bracket(inside: np.ndarray, outside: np.ndarray) -> float:
-    """Angle (radians) between two unit-angle directions ``[pan, tilt]`` (small-angle form)."""
-    d_pan = (outside[0] - inside[0]) * math.cos(0.5 * (inside[1] + outside[1]))
-    return math.hypot(d_pan, outside[1] - inside[1])
-
-
-def _extreme(pair: tuple, cells: np.ndarray, side: str) -> bool:
-    """Whether a boundary pair's inside cell lies on the outermost line of object cells on its
-    side (``pair``: ``((r, c), (r2, c2))``; ``cells`` (rows, cols) bool): the lowest column
-    holding object cells for a left pair, the highest for a right one, the lowest or highest
-    row for a bottom or top one."""
-    (r, c), _ = pair
-    rows, cols = np.nonzero(cells)
-    if side == "left":
-        return c == cols.min()
-    if side == "right":
-        return c == cols.max()
-    if side == "bottom":
-        return r == rows.min()
-    return r == rows.max()
-
-
-def _long_sides(window: Window) -> tuple[str, ...]:
-    """The silhouette sides that run along an elongated object framed by ``window``: left and
-    right for a window at least ``_ELONGATED`` times taller than wide (a column), bottom and
-    top for one that many times wider than tall (a beam), none otherwise."""
-    wide = window.width * math.cos(0.5 * (window.tilt_min + window.tilt_max))
-    if window.height >= _ELONGATED * wide:
-        return ("left", "right")
-    if wide >= _ELONGATED * window.height:
-        return ("bottom", "top")
-    return ()
-
-
-def _interior(pair: tuple, cells: np.ndarray, side: str) -> bool:
-    """Whether a boundary pair's inside cell has object cells on both sides along its side.
-
-    ``pair`` is ``((r, c), (r2, c2))`` (inside cell, outside cell) of ``cells`` (rows, cols)
-    bool. For a left or right pair the cells above and below the inside cell, for a bottom or
-    top pair those left and right of it, must be on the object (and in the raster): the edge
-    then runs on past the pair both ways, and the bisection pins it rather than a row cut
-    short by the object's end (a column's bottom, seen from above).
-    """
-    (r, c), _ = pair
-    rows, cols = cells.shape
-    steps = ((-1, 0), (1, 0)) if side in ("left", "right") else ((0, -1), (0, 1))
-    return all(
-        0 <= r + dr < rows and 0 <= c + dc < cols and bool(cells[r + dr, c + dc])
-        for dr, dc in steps
-    )
-
-
-def _distinct_brackets(pairs: list, axis: int) -> list:
-    """One pair per bracket: the middle one of the pairs sharing their angles along ``axis``.
-
-    Pairs of one side that bracket the same two raster lines (a straight edge crossing many
-    rows between the same two columns) would be bisected into the same angles: the second
-    would pin the same line again, and its shots, sharing angles with the first's, would look
-    like a raster line to the fit. Groups keep the order of their first pair.
-    """
-    groups: dict[tuple, list] = {}
-    for pair in pairs:
-        key = (round(float(pair[0][axis]), 12), round(float(pair[1][axis]), 12))
-        groups.setdefault(key, []).append(pair)
-    return [group[(len(group) - 1) // 2] for group in groups.values()]
-
-
-def _deal_pairs(sides: dict[str, list], count: int) -> list:
-    """Up to ``count`` pairs, dealt in turn to the sides that have any.
-
-    A side's share is taken at evenly spaced quantiles of its pairs in boundary order (its
-    middle one for a share of one), away from the silhouette's corners, where an edge of the
-    window's side meets the next. A side with fewer pairs than its share gives them all and the
-    rest goes to the others. Returns the pairs (``(inside, outside, range, beyond)``), side by
-    side.
-    """
-    available = [side for side in _SIDES if sides[side]]
-    share = dict.fromkeys(available, 0)
-    left = min(count, sum(len(sides[s]) for s in available))
-    while left > 0:
-        for side in available:
-            if left > 0 and share[side] < len(sides[side]):
-                share[side] += 1
-                left -= 1
-    out = []
-    for side in available:
-        pairs = sides[side]
-        k = share[side]
-        picks = np.unique(np.floor((np.arange(k) + 0.5) * len(pairs) / k).astype(int)) if k else []
-        out.extend(pairs[i] for i in picks)
-    return out
-
-
-def _boundary_pairs(cells: np.ndarray) -> dict[str, list]:
-    """(inside cell, outside cell) neighbour pairs that straddle the boundary, by side.
-
-    ``cells`` (rows, cols) bool, row 0 at the lowest tilt and column 0 at the lowest pan. A pair
-    belongs to the side its outside cell is on: ``"left"`` (lower pan), ``"right"``,
-    ``"bottom"`` (lower tilt) or ``"top"``; horizontal pairs are listed row by row, vertical
-    ones column by column (boundary order along each side). An object cell on the raster's
-    border pairs with the (unshot) cell beyond it (row or column index -1, ``rows`` or
-    ``cols``): an operator's window is often only a fraction of a cell wider than the object,
-    so its outer cells are on it and the edge lies beyond them.
-    """
-    rows, cols = cells.shape
-    padded = np.zeros((rows + 2, cols + 2), dtype=bool)
-    padded[1:-1, 1:-1] = cells
-    found: dict[str, list] = {side: [] for side in _SIDES}
-    for r in range(rows):
-        for c in range(-1, cols):
-            a, b = padded[r + 1, c + 1], padded[r + 1, c + 2]
-            if a != b:
-                found["right" if a else "left"].append(
-                    ((r, c), (r, c + 1)) if a else ((r, c + 1), (r, c))
-                )
-    for c in range(cols):
-        for r in range(-1, rows):
-            a, b = padded[r + 1, c + 1], padded[r + 2, c + 1]
-            if a != b:
-                found["top" if a else "bottom"].append(
-                    ((r, c), (r + 1, c)) if a else ((r + 1, c), (r, c))
-                )
-    return found
 
 
 # -- session --------------------------------------------------------------------------------------

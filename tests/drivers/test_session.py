@@ -343,10 +343,10 @@ def test_edge_shots_are_capped_per_object():
     ],
 )
 def test_pairs_are_dealt_to_every_side(counts, want, expected):
-    from asbuilt.drivers.session import _deal_pairs
+    from asbuilt.drivers.edges import deal_pairs
 
     sides = {side: [(side, i) for i in range(k)] for side, k in counts.items()}
-    dealt = _deal_pairs(sides, want)
+    dealt = deal_pairs(sides, want)
     got: dict = {}
     for side, i in dealt:
         got.setdefault(side, []).append(i)
