@@ -16,21 +16,13 @@ import numpy as np
 
 from asbuilt.fit import _faces
 
+#: Tukey biweight tuning constant (95% efficiency at the normal; Beaton and Tukey 1974).
 _TUKEY_C = 4.685
-
-
+#: Median absolute deviation to sigma for normal residuals.
 _MAD_TO_SIGMA = 1.4826
-
-
 _IRLS_ITERATIONS = 6
-
-
 _REFIT_ITERATIONS = 4
-
-
 _EYE3 = np.eye(3)
-
-
 _EYE3.setflags(write=False)
 
 
@@ -255,17 +247,16 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
 
     The best-scoring frame of ``frames`` is fitted first. A plausible fit (:func:`_plausible`)
     that keeps every point cannot be beaten unless one of its faces is a single line of shots
-    (:func:`_on_a_line`). Otherwise the fits of the frames of an
-    exhaustive segmentation (``exhaustive()``: every first-face hypothesis is tried, not only
-    until a frame explains every segmented point, or most of them) that explain at least as
-    many points as the first are
+    (:func:`_on_a_line`). Otherwise the frames of an exhaustive segmentation (``exhaustive()``:
+    every first-face hypothesis is tried, not only until a frame explains every segmented
+    point, or most of them) that explain at least as many points as the first are fitted and
     compared: three raster columns on two narrow faces fit either corner, and only the shots
     the segmentation left out, or the fit rejected, decide. A plausible fit beats an
     implausible one; among those, the lowest MSAC cost over all n points, cut at the noise
     level, wins (background shots that happen to line up with a wrong frame's extra face
     lower its cost a little, but that face is a back face or a plane through the box). If the
     winner still rejects more than ``max_outlier_fraction`` of the points, the frames are
-    fitted in turn and the plausible one keeping the most points wins. ``fit_args`` are
+    taken in turn and the plausible one keeping the most points wins. ``fit_args`` are
     :func:`_fit_frame`'s arguments after the frame; ``raster`` (n,) bool, optional, the points
     that are not edge-bisection shots (for :func:`_on_a_line`). Returns :func:`_fit_frame`'s
     tuple.
@@ -273,27 +264,36 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
     x, noise, floor, cutoff, _, view, trusted = fit_args
     n = x.shape[0]
     cap = cutoff * max(noise, floor)
+    done: list[tuple] = []  # (frame, fit): each frame is fitted once
+
+    def fitted(frame):
+        for other, trial in done:
+            if other is frame or _same_frame(other, frame):
+                return trial
+        trial = _fit_frame(frame, *fit_args)
+        done.append((frame, trial))
+        return trial
 
     def rank(trial, by_cost):
         quality = -_msac(trial[2], cap) if by_cost else int(np.count_nonzero(trial[3]))
         return (_plausible(trial[0], view, trusted), quality)
 
-    best = _fit_frame(frames[0], *fit_args)
+    best = fitted(frames[0])
     best_rank = rank(best, True)
     if not (best_rank[0] and best[3].all()) or _on_a_line(best, x, cap, raster):
         first = int(np.count_nonzero(frames[0].labels >= 0))
-        fitted, frames = frames[0], exhaustive()
+        frames = exhaustive()
         for frame in frames:
-            if np.count_nonzero(frame.labels >= 0) < first or _same_frame(frame, fitted):
+            if np.count_nonzero(frame.labels >= 0) < first:
                 continue
-            trial = _fit_frame(frame, *fit_args)
+            trial = fitted(frame)
             trial_rank = rank(trial, True)
             if trial_rank > best_rank:
                 best, best_rank = trial, trial_rank
     if n - np.count_nonzero(best[3]) > max_outlier_fraction * n:
         best_rank = rank(best, False)
         for frame in frames:
-            trial = _fit_frame(frame, *fit_args)
+            trial = fitted(frame)
             trial_rank = rank(trial, False)
             if trial_rank > best_rank:
                 best, best_rank = trial, trial_rank
