@@ -40,7 +40,7 @@ _MAX_PAIRS = 150
 _MIN_FACE_POINTS = 3
 #: Points enough for a face whose direction two other seen faces fix (only its offset is free).
 _MIN_THIRD_FACE_POINTS = 2
-# Share of a plane's consensus points on one face of a built frame for it to be that face.
+#: Share of a plane's consensus points on one face of a built frame for it to be that face.
 _SAME_FACE = 0.9
 #: A face's points must be spread off a line by this many consensus thresholds (RMS): a raster
 #: line lies in every plane through it and would otherwise pass for a face.
@@ -515,6 +515,75 @@ def _all_facing(points, frame: Frame, viewpoint) -> bool:
     return True
 
 
+class Segmentation:
+    """A cuboid segmentation search that can be taken further (see :func:`segment`).
+
+    :meth:`frames` tries first-face hypotheses until the usual stop (a frame explains every
+    point, or ``_MAX_FIRST`` were tried and the best explains ``_ENOUGH`` of them); asked
+    again ``exhaustive``, it goes on from there to every first face, without redoing the
+    hypotheses already built (same random draws, so the same frames as a fresh exhaustive
+    search).
+    """
+
+    def __init__(
+        self, points, normals, threshold, gap, face_angle_deg, viewpoint=None, visible_only=False
+    ):
+        self.points, self.normals = points, normals
+        self.threshold, self.gap = threshold, gap
+        self.viewpoint, self.visible_only = viewpoint, visible_only
+        self.rng = np.random.default_rng(_RNG_SEED)
+        self.cos_face = float(np.cos(np.radians(face_angle_deg)))
+        self.first = _first_planes(points, normals, threshold, self.cos_face, self.rng)
+        self.tried = 0  # first planes taken so far
+        self.built: list = []  # (score, order, frame)
+        self.best_score = None
+        self.settled = False  # a plausible frame explains every point
+
+    def _stop(self) -> bool:
+        enough = self.best_score is not None and self.best_score[1] >= _ENOUGH * len(self.points)
+        return self.settled or (self.tried >= _MAX_FIRST and enough)
+
+    def _build(self, first) -> None:
+        points, threshold, gap, viewpoint = self.points, self.threshold, self.gap, self.viewpoint
+        d1, o1, mask1 = first
+        if _already_a_face(self.built, d1, mask1, self.cos_face):
+            return  # it would grow into a frame already built
+        second = _second_plane(points, self.normals, first, threshold, gap, self.rng)
+        if second is None:
+            axes = np.vstack([d1, _perpendicular_basis(d1).T])
+            faces = [(0, o1, mask1)]
+        else:
+            d2, o2, mask2 = second
+            d2 = d2 - (d2 @ d1) * d1
+            d2 /= np.linalg.norm(d2)
+            axes = np.vstack([d1, d2, cross3(d1, d2)])
+            faces = [(0, o1, mask1), (1, float(d2 @ points[mask2].mean(axis=0)), mask2)]
+            faces = extra_faces(
+                points, axes, faces, threshold, gap, viewpoint if self.visible_only else None
+            )
+        frame = frame_from(points, axes, faces, threshold, viewpoint)
+        # A frame that cannot be a box (faces on both sides of the points across one axis, or
+        # one turned away from a trusted viewpoint) ranks below every frame that can.
+        plausible = is_box(frame.face_axis, frame.face_sign, frame.face_offset)
+        if self.visible_only and viewpoint is not None:
+            plausible = plausible and _all_facing(points, frame, viewpoint)
+        score = (plausible,) + _score(points, frame, threshold)
+        self.built.append((score, len(self.built), frame))
+        if self.best_score is None or score > self.best_score:
+            self.best_score = score
+        if score[1] == len(points) and plausible:
+            self.settled = True  # no other hypothesis can explain more
+
+    def frames(self, exhaustive: bool = False) -> list[Frame]:
+        """Every frame built so far, best first, after searching on (to the usual stop, or
+        with ``exhaustive`` through every first face)."""
+        while self.tried < len(self.first) and (exhaustive or not self._stop()):
+            self.tried += 1
+            self._build(self.first[self.tried - 1])
+        ranked = sorted(self.built, key=lambda item: (item[0], -item[1]), reverse=True)
+        return [frame for _, _, frame in ranked]
+
+
 def segment(
     points: np.ndarray,
     normals: np.ndarray,
@@ -523,9 +592,7 @@ def segment(
     face_angle_deg: float,
     viewpoint: np.ndarray | None = None,
     visible_only: bool = False,
-    alternatives: bool = False,
-    exhaustive: bool = False,
-) -> Frame | None | list[Frame]:
+) -> Frame | None:
     """Find the cuboid frame and seen faces that explain the most points.
 
     Parameters
@@ -545,57 +612,18 @@ def segment(
         The viewpoint is known to be right: frames with a face turned away from it (impossible
         for points seen from there) rank below every other frame.
 
-    alternatives : bool
-        Return every frame tried, best first, instead of the best one.
-    exhaustive : bool
-        Try every first face (up to ``_MAX_FIRST_HARD``), also after a frame explains every
-        point or most of them (three raster columns on two narrow faces are explained by
-        either corner; only shots left out of the segmentation, or the fit, can tell).
-
     Returns
     -------
-    Frame or None (list of Frame with ``alternatives``)
-        None (an empty list) when no plane has three points.
+    Frame or None
+        None when no plane has three points. :class:`Segmentation` gives every frame tried,
+        and can search on through every first face (three raster columns on two narrow
+        faces are explained by either corner; only shots left out of the segmentation, or
+        the fit, can tell).
     """
-    rng = np.random.default_rng(_RNG_SEED)
-    cos_face = float(np.cos(np.radians(face_angle_deg)))
-    best, best_score = None, None
-    tried_frames: list = []
-    for tried, first in enumerate(_first_planes(points, normals, threshold, cos_face, rng)):
-        if tried >= _MAX_FIRST and best_score[1] >= _ENOUGH * points.shape[0] and not exhaustive:
-            break
-        d1, o1, mask1 = first
-        if _already_a_face(tried_frames, d1, mask1, cos_face):
-            continue  # it would grow into a frame already built
-        second = _second_plane(points, normals, first, threshold, gap, rng)
-        if second is None:
-            axes = np.vstack([d1, _perpendicular_basis(d1).T])
-            faces = [(0, o1, mask1)]
-        else:
-            d2, o2, mask2 = second
-            d2 = d2 - (d2 @ d1) * d1
-            d2 /= np.linalg.norm(d2)
-            axes = np.vstack([d1, d2, cross3(d1, d2)])
-            faces = [(0, o1, mask1), (1, float(d2 @ points[mask2].mean(axis=0)), mask2)]
-            faces = extra_faces(
-                points, axes, faces, threshold, gap, viewpoint if visible_only else None
-            )
-        frame = frame_from(points, axes, faces, threshold, viewpoint)
-        # A frame that cannot be a box (faces on both sides of the points across one axis, or
-        # one turned away from a trusted viewpoint) ranks below every frame that can.
-        plausible = is_box(frame.face_axis, frame.face_sign, frame.face_offset)
-        if visible_only and viewpoint is not None:
-            plausible = plausible and _all_facing(points, frame, viewpoint)
-        score = (plausible,) + _score(points, frame, threshold)
-        tried_frames.append((score, len(tried_frames), frame))
-        if best_score is None or score > best_score:
-            best, best_score = frame, score
-        if score[1] == points.shape[0] and plausible and not exhaustive:
-            break  # every point explained: no other hypothesis can explain more
-    if alternatives:
-        tried_frames.sort(key=lambda item: (item[0], -item[1]), reverse=True)
-        return [frame for _, _, frame in tried_frames]
-    return best
+    frames = Segmentation(
+        points, normals, threshold, gap, face_angle_deg, viewpoint, visible_only
+    ).frames()
+    return frames[0] if frames else None
 
 
 def _hull_2d(xy: np.ndarray) -> np.ndarray:

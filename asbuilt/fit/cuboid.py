@@ -542,18 +542,12 @@ def fit_cuboid(
     reach = median(np.linalg.norm(xs[fourth] - xs, axis=1))
     gap = threshold + 1.5 * reach
 
+    search = _faces.Segmentation(
+        xs, normals, threshold, gap, tolerances.face_angle_deg, viewpoint - origin, trusted
+    )
+
     def segmentation(exhaustive: bool) -> list:
-        frames = _faces.segment(
-            xs,
-            normals,
-            threshold,
-            gap,
-            tolerances.face_angle_deg,
-            viewpoint - origin,
-            visible_only=trusted,
-            alternatives=True,
-            exhaustive=exhaustive,
-        )
+        frames = search.frames(exhaustive)
         return [expand_frame(frame, seg, n) for frame in frames] if seg.size < n else frames
 
     frames = segmentation(False)
