@@ -136,8 +136,9 @@ STATION = Station(
 # --------------------------------------------------------------------------- fits under test
 
 
-def _ours():
-    """Our fit functions by kind (None where the module does not exist yet)."""
+def _ours(sensor: bool = True):
+    """Our fit functions by kind (None where the module does not exist yet); ``sensor`` False
+    calls them as for a scan without a ``sensor`` block (no sigma, no viewpoint)."""
     found = {}
     for kind, module, name in (
         ("cylinder", "asbuilt.fit.cylinder", "fit_cylinder"),
@@ -152,8 +153,8 @@ def _ours():
             continue
         # As the pipeline calls it for a scan that gives its sensor: with the range sigma and,
         # where the fit takes one, the station as the viewpoint.
-        options = {"sigma": SIGMA_R}
-        if "viewpoint" in inspect.signature(function).parameters:
+        options = {"sigma": SIGMA_R} if sensor else {}
+        if sensor and "viewpoint" in inspect.signature(function).parameters:
             options["viewpoint"] = STATION.position
         found[kind] = lambda points, f=function, o=options: f(points, **o)
     return found
@@ -704,6 +705,12 @@ def main(argv=None) -> int:
         help="also acquire every cuboid trial with the scan session's algorithm (raster, fill, "
         "edge bisection; asbuilt.drivers.session) over an operator's window and report it",
     )
+    parser.add_argument(
+        "--no-sensor",
+        action="store_true",
+        help="call our fits as for a scan without a sensor block: no range sigma (the fits "
+        "estimate the noise) and no viewpoint",
+    )
     parser.add_argument("--out", default=None, help="write the markdown here instead of stdout")
     args = parser.parse_args(argv)
 
@@ -714,7 +721,7 @@ def main(argv=None) -> int:
     planes = (3.0,) if args.quick else PLANE_W
     sections = (0.4,) if args.quick else SECTIONS
     kinds = args.only or ["cylinder", "sphere", "plane", "cuboid"]
-    ours = _ours()
+    ours = _ours(sensor=not args.no_sensor)
     sk = _skspatial()
     started = time.perf_counter()
 
@@ -766,6 +773,12 @@ def main(argv=None) -> int:
         "CRB = Cramer-Rao bound (RMS over the cell's trials).",
         "",
     ]
+    if args.no_sensor:
+        out += [
+            "Our fits called without a sensor (`--no-sensor`): no range sigma (each fit "
+            "estimates the noise from its residuals) and no viewpoint.",
+            "",
+        ]
     if missing:
         out += [f"Not run (fit not in this tree yet): {', '.join(missing)}.", ""]
     out += ["#### Targets", "", summary(results), ""]

@@ -13,8 +13,10 @@ cylinder 5, cuboid 9: centre, orientation, sizes) and ``n`` the number of points
   the same.
 * Unknown: first each model's inliers are taken as Gaussian with its own maximum-likelihood
   sigma ``s_k^2 = sum_inliers r^2 / m_k`` and its rejected points as uniform over the points'
-  extent ``W`` (bounding-box diagonal): ``-2 ln L = m_k (1 + ln(2 pi s_k^2)) + (n - m_k) 2 ln W``
-  (only ``s_k / W`` matters, so no unit enters). The best model by that score gives the noise
+  extent ``W`` (bounding-box diagonal), mixed in their maximum-likelihood proportions:
+  ``-2 ln L = m_k (1 + ln(2 pi s_k^2)) + (n - m_k) 2 ln W - 2 (m_k ln(m_k / n) + (n - m_k)
+  ln(1 - m_k / n))`` (only ``s_k / W`` matters, so no unit enters; without the proportions a
+  box split into flat patches of a sphere, fitting 60% of the shots to 0.2 mm, led). The best model by that score gives the noise
   level (its degrees-of-freedom-corrected inlier sigma), and the models are then compared as
   with a known sigma. The second step matters with 20-40 points: a model whose inlier test
   happened to reject a few good points (3 sigma of a small-sample scale) must not lose to one
@@ -36,15 +38,23 @@ import math
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit._common import require_spread, validate_points
+from asbuilt.fit._common import mixing_cost, require_spread, validate_points
 from asbuilt.fit.result import FitResult
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["fit_auto", "CANDIDATES", "PARAMETERS", "WEAK_EVIDENCE", "information_scores"]
+__all__ = [
+    "fit_auto",
+    "CANDIDATES",
+    "PARAMETERS",
+    "WEAK_EVIDENCE",
+    "information_scores",
+    "parameter_count",
+]
 
 #: Kinds tried, simplest first.
 CANDIDATES = ("plane", "sphere", "cylinder", "cuboid")
-#: Free parameters of each kind's surface (what the BIC penalises).
+#: Free parameters of each kind's surface: a cuboid has at most 9 (centre, orientation, sizes),
+#: of which the BIC counts those its residuals depend on (:func:`parameter_count`).
 PARAMETERS = {"plane": 3, "sphere": 4, "cylinder": 5, "cuboid": 9}
 #: BIC difference a more complex model must beat to be chosen ("strong", Kass & Raftery 1995).
 WEAK_EVIDENCE = 6.0
@@ -67,6 +77,28 @@ def _fitter(kind: str):
     from asbuilt.fit.cuboid import fit_cuboid
 
     return fit_cuboid
+
+
+def parameter_count(kind: str, result: FitResult) -> int:
+    """The parameters a fit's residuals depend on, which the BIC penalises.
+
+    A plane, sphere or cylinder: all of them (3, 4, 5). A cuboid: its orientation (3; 2 when
+    one face is seen, whose turn about its normal the residuals do not fix) and one offset per
+    seen face (its ``faces`` diagnostic); the sizes along axes with at most one seen face are
+    set from the points' extent, not fitted to their residuals. A cuboid result without that
+    diagnostic counts all 9.
+    """
+    if kind != "cuboid":
+        return PARAMETERS[kind]
+    faces = int(result.diagnostics.get("faces", 0))
+    if not 1 <= faces <= 6:
+        return PARAMETERS["cuboid"]
+    return min(faces + (2 if faces == 1 else 3), PARAMETERS["cuboid"])
+
+
+def _one_face(result: FitResult) -> bool:
+    """Whether a cuboid fit saw a single face (its ``faces`` diagnostic)."""
+    return int(result.diagnostics.get("faces", 0)) == 1
 
 
 def information_scores(
@@ -107,7 +139,8 @@ def information_scores(
             variance = max(float(np.mean(inliers * inliers)), tolerances.sigma_floor**2)
             data = m * (1.0 + math.log(2.0 * math.pi * variance))
             data += (n - m) * 2.0 * math.log(max(extent, tolerances.sigma_floor))
-        scores[kind] = data + PARAMETERS[kind] * math.log(n)
+            data += mixing_cost((m, n - m))
+        scores[kind] = data + parameter_count(kind, result) * math.log(n)
     return scores
 
 
@@ -163,18 +196,27 @@ def fit_auto(
         reasons = "; ".join(f"{kind}: {why}" for kind, why in failures.items())
         raise FitError(f"No kind fits these points ({reasons}); choose a kind or hull.")
     extent = float(np.linalg.norm(np.ptp(pts, axis=0)))
+    counts = {kind: parameter_count(kind, result) for kind, result in results.items()}
     if sigma is not None:
         scores = information_scores(results, float(sigma), extent, tolerances)
         basis = f"sensor sigma {float(sigma) * 1000:.3g} mm"
     else:
         own = information_scores(results, None, extent, tolerances)
-        leader = min(own, key=lambda kind: (own[kind], PARAMETERS[kind]))
+        leader = min(own, key=lambda kind: (own[kind], counts[kind]))
         noise = max(float(results[leader].sigma), float(tolerances.sigma_floor))
         scores = information_scores(results, noise, extent, tolerances)
         basis = f"sigma {noise * 1000:.3g} mm from the {leader} fit"
-    best = min(scores, key=lambda kind: (scores[kind], PARAMETERS[kind]))
-    close = [kind for kind in scores if scores[kind] <= scores[best] + WEAK_EVIDENCE]
-    chosen = min(close, key=lambda kind: (PARAMETERS[kind], scores[kind]))
+    eligible = dict(scores)
+    if "plane" in results and "cuboid" in results and _one_face(results["cuboid"]):
+        # A cuboid seen on one face is that face's plane. Its depth is made up (not measured),
+        # and points behind the face (a plate's edge, the wall beyond) fall inside it and seem
+        # to fit: the plane stands for it.
+        del eligible["cuboid"]
+    best = min(eligible, key=lambda kind: (eligible[kind], counts[kind]))
+    close = [kind for kind in eligible if eligible[kind] <= eligible[best] + WEAK_EVIDENCE]
+    # Fewest fitted parameters first; between equals, the kind that claims less (a cuboid's
+    # sizes beyond its seen faces come from the points' extent, unverified), then the score.
+    chosen = min(close, key=lambda kind: (counts[kind], PARAMETERS[kind], scores[kind]))
     others = ", ".join(
         f"{kind} {scores[kind]:.1f}" for kind in CANDIDATES if kind in scores and kind != chosen
     )
@@ -186,6 +228,15 @@ def fit_auto(
         why += (
             f" {best} scored {scores[chosen] - scores[best]:.1f} lower, not strong evidence"
             f" (< {WEAK_EVIDENCE:g}); the simpler {chosen} is preferred."
+        )
+    if "cuboid" in scores and "cuboid" not in eligible:
+        why += " The cuboid fit saw one face only: the plane stands for it."
+    rivals = [kind for kind in close if kind != chosen and counts[kind] == counts[chosen]]
+    if rivals:
+        why += (
+            f" A {' or '.join(rivals)} explains the points almost as well with as many "
+            f"parameters (BIC within {WEAK_EVIDENCE:g}): these shots cannot tell them apart; "
+            "set the object's kind if you know it."
         )
     notes = [why]
     for kind, reason in failures.items():

@@ -73,6 +73,7 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette
+from asbuilt.fit._common import mixing_cost, mixture_score
 from asbuilt.fit._joint import FaceModel, best_fit, expand_frame, median, rodrigues
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cuboid, as_points, as_vector
@@ -438,6 +439,96 @@ def _canonical(axes, size, observed):
     return new, size[order], tuple(bool(observed[k]) for k in order), order
 
 
+#: Without the sensor's sigma, the joint fit is also tried at noise levels this many times
+#: apart from the estimated one (:func:`_likeliest_noise`) ...
+NOISE_LADDER_STEP = 3.0
+#: ... with at most this many fits in all ...
+NOISE_LADDER_LEVELS = 6
+#: ... and never above this level (metres): no range finder worth scanning with is noisier.
+NOISE_LADDER_CEILING = 0.03
+
+
+def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolerances):
+    """The noise level, and its fit, that explain the points best when the sensor's is unknown.
+
+    The estimate (:func:`asbuilt.fit._faces.noise_scale`) comes from planes of neighbouring
+    shots. On a sparse raster across narrow faces most neighbourhoods straddle an edge and the
+    estimate can come out ten times the noise: a consensus band that wide takes both faces of a
+    0.2 m column for one plane (residuals of centimetres) or finds no face at all. Where a
+    raster line is the only plane found, it can come out at the sigma floor, and a band that
+    narrow rejects half the shots. So the level is searched: from the estimate down by factors
+    of ``NOISE_LADDER_STEP`` while the likelihood rises, and, when the estimate's fit failed or
+    rejected shots and going down did not help, up likewise (at most ``NOISE_LADDER_LEVELS``
+    fits, between the sigma floor and ``NOISE_LADDER_CEILING``). The likelihood: Gaussian
+    inliers with their own maximum-likelihood sigma and uniform outliers over the points' extent
+    (Torr's mixture, :func:`asbuilt.fit._common.mixture_score`), the description length of
+    which face (or the outliers) each shot belongs to (:func:`~asbuilt.fit._common.mixing_cost`
+    over the faces' counts and the outliers'), and ``ln n`` per fitted parameter (rotation and
+    one offset per face: the Bayesian information criterion, Schwarz 1978). A band too narrow
+    for the noise rejects good shots, or splits one noisy face into parallel slices that each
+    fit their shots closer than the noise; both cost more than they save. A fit that fails or
+    rejects more than ``max_outlier_fraction`` of the points scores nothing; if no level
+    scores, the estimate's result or error stands (the caller reports it).
+
+    Parameters
+    ----------
+    attempt : callable
+        ``attempt(noise) -> best_fit tuple`` (:func:`asbuilt.fit._joint.best_fit`).
+    estimate : float, metres
+    x : ndarray, shape (n, 3), metres
+    tolerances : Tolerances
+
+    Returns
+    -------
+    noise : float, metres
+    fitted : tuple
+        ``attempt(noise)``.
+    """
+    floor = float(tolerances.sigma_floor)
+    n = x.shape[0]
+    extent = float(np.linalg.norm(np.ptp(x, axis=0)))
+    tried: dict[float, tuple] = {}  # level -> (score, fitted or the FitError)
+
+    def scored(level: float) -> float:
+        try:
+            fitted = attempt(level)
+        except FitError as exc:
+            tried[level] = (math.inf, exc)
+            return math.inf
+        model, label, residual, inliers = fitted[:4]
+        score = math.inf
+        if n - int(np.count_nonzero(inliers)) <= tolerances.max_outlier_fraction * n:
+            params = model.rot_basis.shape[1] + model.offset.shape[0]
+            score = mixture_score(residual, inliers, extent, floor) + params * math.log(n)
+            faces = np.bincount(label[inliers], minlength=model.offset.shape[0])
+            score += mixing_cost([*faces.tolist(), n - int(np.count_nonzero(inliers))])
+        tried[level] = (score, fitted)
+        return score
+
+    start = min(max(estimate, floor), NOISE_LADDER_CEILING)
+    best, best_score = start, scored(start)
+    first = tried[start][1]
+    full = not isinstance(first, FitError) and bool(first[3].all())
+    for factor in (1.0 / NOISE_LADDER_STEP, NOISE_LADDER_STEP):
+        if factor > 1.0 and full:
+            break  # the estimate's band kept every shot: a wider one cannot do better
+        level, moved = best * factor, False
+        while len(tried) < NOISE_LADDER_LEVELS and floor <= level <= NOISE_LADDER_CEILING:
+            score = scored(level)
+            if score < best_score:
+                best, best_score, moved = level, score, True
+            elif math.isfinite(best_score):
+                break  # the likelihood fell: farther levels are worse still
+            level *= factor
+        if moved:
+            break
+    if math.isfinite(best_score):
+        return best, tried[best][1]
+    if isinstance(first, FitError):
+        raise first
+    return start, first
+
+
 def fit_cuboid(
     points,
     *,
@@ -533,36 +624,43 @@ def fit_cuboid(
         seg = np.arange(n)
     xs = x[seg]
     normals, local_rms, hood = _faces.local_normals(xs, tolerances.normal_neighbours)
-    if sigma is not None:
-        noise = float(sigma)
-    else:
-        noise = _faces.noise_scale(xs, normals, local_rms, floor)
-    threshold = cutoff * max(noise, floor)
     fourth = hood[:, min(3, hood.shape[1] - 1)]
     reach = median(np.linalg.norm(xs[fourth] - xs, axis=1))
-    gap = threshold + 1.5 * reach
 
-    search = _faces.Segmentation(
-        xs, normals, threshold, gap, tolerances.face_angle_deg, viewpoint - origin, trusted
-    )
-
-    def segmentation(exhaustive: bool) -> list:
-        frames = search.frames(exhaustive)
-        return [expand_frame(frame, seg, n) for frame in frames] if seg.size < n else frames
-
-    frames = segmentation(False)
-    if not frames:
-        raise FitError(
-            "cuboid: no planar face found (no three points on one plane); check the points or "
-            "fit the object as a hull."
+    def attempt(noise: float):
+        """Segmentation and joint fit with the consensus threshold of ``noise`` (metres)."""
+        threshold = cutoff * max(noise, floor)
+        gap = threshold + 1.5 * reach
+        search = _faces.Segmentation(
+            xs, normals, threshold, gap, tolerances.face_angle_deg, viewpoint - origin, trusted
         )
-    model, label, residual, inliers, scale, iterations, one_face = best_fit(
-        frames,
-        lambda: segmentation(True),
-        (x, noise, floor, cutoff, gap, viewpoint - origin, trusted),
-        tolerances.max_outlier_fraction,
-        edges[0] < 0,
-    )
+
+        def segmentation(exhaustive: bool) -> list:
+            frames = search.frames(exhaustive)
+            return [expand_frame(frame, seg, n) for frame in frames] if seg.size < n else frames
+
+        frames = segmentation(False)
+        if not frames:
+            raise FitError(
+                "cuboid: no planar face found (no three points on one plane); check the points "
+                "or fit the object as a hull."
+            )
+        return best_fit(
+            frames,
+            lambda: segmentation(True),
+            (x, noise, floor, cutoff, gap, viewpoint - origin, trusted),
+            tolerances.max_outlier_fraction,
+            edges[0] < 0,
+        )
+
+    if sigma is not None:
+        noise = float(sigma)
+        fitted = attempt(noise)
+    else:
+        noise, fitted = _likeliest_noise(
+            attempt, _faces.noise_scale(xs, normals, local_rms, floor), x, tolerances
+        )
+    model, label, residual, inliers, scale, iterations, one_face = fitted
     notes: list[str] = []
     if one_face:
         notes.append(

@@ -107,6 +107,7 @@ def test_information_scores_with_unknown_sigma_use_each_models_inliers():
     inliers = np.array([True, True, True, True, False])
     scores = information_scores({"cylinder": _result(residuals, inliers)}, None, extent=2.0)
     expected = 4 * (1 + math.log(2 * math.pi * 1e-6)) + 2 * math.log(2.0) + 5 * math.log(5)
+    expected -= 2 * (4 * math.log(4 / 5) + math.log(1 / 5))  # the mixing proportions
     assert scores["cylinder"] == pytest.approx(expected)
 
 
@@ -191,3 +192,77 @@ def test_the_viewpoint_reaches_the_candidate_fits():
     assert chosen.primitive.kind == "cylinder"
     assert chosen.primitive.radius == pytest.approx(direct.primitive.radius, abs=1e-12)
     assert abs(chosen.primitive.radius - scan["radius"]) < 0.003
+
+
+def _with(primitive, residuals, **diagnostics) -> FitResult:
+    residuals = np.asarray(residuals, float)
+    return FitResult(
+        primitive=primitive,
+        residuals=residuals,
+        inliers=np.ones(residuals.size, bool),
+        stderr={},
+        sigma=0.002,
+        sigma_source="sensor",
+        method="test",
+        diagnostics=diagnostics,
+    )
+
+
+_BOX = Cuboid([0, 0, 0], np.eye(3), [0.2, 0.2, 3.0])
+
+
+@pytest.mark.parametrize(
+    "faces, expected", [(1.0, 3), (2.0, 5), (3.0, 6), (4.0, 7), (None, 9), (0.0, 9)]
+)
+def test_a_cuboid_counts_the_parameters_its_residuals_fix(faces, expected):
+    # Orientation (2 with one face) and one offset per seen face; a size that no two opposite
+    # faces bound comes from the points' extent, not from the residuals.
+    diagnostics = {} if faces is None else {"faces": faces}
+    assert auto.parameter_count("cuboid", _with(_BOX, [0.0] * 20, **diagnostics)) == expected
+    for kind in ("plane", "sphere", "cylinder"):
+        assert auto.parameter_count(kind, _with(_BOX, [0.0] * 20)) == PARAMETERS[kind]
+
+
+def test_a_column_seen_on_two_faces_is_not_charged_for_sizes_it_did_not_fit():
+    # The same residuals from a cylinder and a two-face cuboid: 5 parameters each, so the
+    # scores are equal (with all 9 counted the cuboid paid 4 ln n more and always lost).
+    residuals = np.random.default_rng(3).normal(0.0, 0.002, 20)
+    pipe = _with(Cylinder([0, 0, 0], [0, 0, 1], 0.15, 3.0), residuals)
+    column = _with(_BOX, residuals, faces=2.0)
+    scores = information_scores({"cylinder": pipe, "cuboid": column}, 0.002, 3.0)
+    assert scores["cylinder"] == pytest.approx(scores["cuboid"])
+
+
+def test_shots_equally_well_explained_by_two_kinds_are_called_ambiguous(monkeypatch, rng):
+    points = raster_scan(OBJECTS["pipe"][0], SENSOR, 30, rng).points
+    residuals = rng.normal(0.0, 0.002, len(points))
+    fake = {
+        "cylinder": _with(Cylinder([0, 0, 0], [0, 0, 1], 0.15, 3.0), residuals),
+        "cuboid": _with(_BOX, residuals * 1.05, faces=2.0),
+    }
+
+    def fitter(kind):
+        if kind in fake:
+            return lambda points, sigma=None, tolerances=None: fake[kind]
+        raise ImportError(kind)
+
+    monkeypatch.setattr(auto, "_fitter", fitter)
+    result = fit_auto(points, sigma=0.002)
+    assert result.kind == "cylinder"
+    why = next(note for note in result.notes if note.startswith("auto chose"))
+    assert "A cuboid explains the points almost as well" in why
+    assert "set the object's kind" in why
+
+
+def test_a_cuboid_seen_on_one_face_is_the_plane(rng):
+    # A wall with two shots 17 mm behind it (a plate's edge, a recess): the one-face cuboid
+    # puts them inside its made-up depth and seemed to fit them; the plane stands for it.
+    points = raster_scan(OBJECTS["wall"][0], SENSOR, 40, rng).points
+    points[[5, 20]] += np.array([0.017, 0.0, 0.0])  # away from the sensor, behind the wall
+    result = fit_auto(points, sigma=0.002, viewpoint=SENSOR)
+    assert result.kind == "plane"
+    why = next(note for note in result.notes if note.startswith("auto chose"))
+    assert "cuboid" in why
+    cuboid = auto._fitter("cuboid")(points, sigma=0.002, viewpoint=SENSOR)
+    if cuboid.diagnostics["faces"] == 1.0:
+        assert "saw one face only" in why

@@ -548,7 +548,8 @@ def _stored(name: str):
 
 
 def _fit_stored(scan, size_tolerance=None, rejected=0):
-    """The fit of a stored scan, checked against the truth: every axis within 1 degree or 4
+    """The fit of a stored scan (with the file's sensor sigma and viewpoint, either of them
+    null for a scan without them), checked against the truth: every axis within 1 degree or 4
     standard errors, at most ``rejected`` shots rejected (None: not checked) and, with a
     ``size_tolerance``, every size within it (relative). Returns the fit."""
     data = scan["file"]
@@ -624,3 +625,15 @@ def test_a_pier_top_crossed_once_is_a_face_and_the_foot_stays_where_bisection_pu
     # the raster window's half-step rule must not move (it put the foot 0.9 m lower). The
     # lengths were 5-75% long before.
     assert _fit_stored(scan, size_tolerance=0.03).diagnostics["faces"] == 3
+
+
+@_stored("columns_without_sensor.json")
+def test_without_the_sensor_the_noise_level_is_searched_not_guessed(scan):
+    # Clean simulated rasters of columns fitted as for a scan with no sensor block (no sigma,
+    # no viewpoint). The noise estimate from neighbourhood planes straddling the edges came out
+    # up to ten times the noise (both faces taken as one plane: 9-42 degrees off, sizes 6-31%
+    # off), or at the sigma floor (half the shots rejected), or so wide that no face was found.
+    fit = _fit_stored(scan, size_tolerance=0.03, rejected=1)
+    assert fit.sigma_source == "residuals"
+    assert fit.diagnostics["faces"] >= 2
+    assert 0.5e-3 < fit.sigma < 4e-3  # the simulated range noise is 2 mm
