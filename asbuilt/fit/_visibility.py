@@ -23,6 +23,8 @@ from asbuilt.fit._common import (
     GeometricModel,
     RobustFit,
     gauss_newton,
+    mixing_cost,
+    mixture_score,
     robust_geometric_fit,
     robust_scale,
     tukey_weights,
@@ -170,14 +172,15 @@ def reconsidered(
     points: np.ndarray,
     seeds: Sequence[Any],
     model: GeometricModel,
-    excess: Callable[[Any, np.ndarray], np.ndarray],
+    excess: Callable[[Any, np.ndarray], np.ndarray] | None,
     *,
     kind: str,
     sigma: float | None,
     tolerances: Tolerances,
     thorough: bool = True,
 ) -> RobustFit:
-    """The robust fit, or a fit settled from another seed that the shots' beams favour.
+    """The robust fit, or a fit settled from another seed that the shots' beams (or, without a
+    viewpoint, the likelihood) favour.
 
     A robust fit's choice among starts is made on trimmed subsets, before the least-squares
     refinement; on 20 shots a five-parameter surface can fit a subset so closely that the wrong
@@ -195,9 +198,14 @@ def reconsidered(
     seeds : sequence
         Model states to settle.
     model : GeometricModel
-    excess : callable
+    excess : callable or None
         ``excess(states, points) -> (s, n)`` metres, the beam excess of each point for each of a
-        list of states (one call for the several states a differenced Jacobian needs).
+        list of states (one call for the several states a differenced Jacobian needs). None
+        when the viewpoint is unknown: then the settled fits are compared by their likelihood
+        with each fit's own noise level (Gaussian inliers, uniform outliers over the points'
+        extent, in their mixing proportions: :func:`~asbuilt.fit._common.mixture_score` plus
+        :func:`~asbuilt.fit._common.mixing_cost`). The MSAC cost at the robust fit's scale
+        cannot tell a fit of 2 mm from one of 13 mm when that scale is the wrong fit's own.
     kind : str
         Named in errors (which are caught: a seed that cannot be settled is skipped).
     sigma : float or None, metres
@@ -225,13 +233,22 @@ def reconsidered(
     best, best_score = None, np.inf
     uniform = np.ones(len(points))
 
+    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+    floor = float(tolerances.sigma_floor)
+
     def consider(fit) -> np.ndarray | None:
         """Keep ``fit`` if it scores best so far; its points' beam excess (n,) metres."""
         nonlocal best, best_score
         if fit is None:
             return None
-        beyond = excess([fit.state], points)[0]
-        score = visible_score(fit.residuals, beyond, scale, cutoff)
+        if excess is None:
+            beyond = np.zeros(len(points))
+            kept = int(np.count_nonzero(fit.inliers))
+            score = mixture_score(fit.residuals, fit.inliers, extent, floor)
+            score += mixing_cost((kept, len(points) - kept))
+        else:
+            beyond = excess([fit.state], points)[0]
+            score = visible_score(fit.residuals, beyond, scale, cutoff)
         if score < best_score:
             best, best_score = fit, score
         return beyond
@@ -275,7 +292,7 @@ def reconsidered(
                 model, fit.state, points, lambda r: uniform, SETTLE_ITERATIONS, 1e-6
             )
             consider(refined(whole))
-        if thorough and hides:
+        if thorough and hides and excess is not None:
             consider(refined(_settle(model, seed, points, excess, scale)))
     if best is None:
         raise FitError(f"No {kind} explains most of these points; check that they are one {kind}.")

@@ -513,11 +513,8 @@ def fit_cylinder(
             raise
         robust = None
     blind, ignored_view = robust, False
-    if (
-        view is not None
-        and starts
-        and (robust is None or _doubtful(robust, local, view, len(local), sigma, tolerances))
-    ):
+
+    def reconsider(robust, excess):
         # The robust fit itself (settled: its concentration steps fit subsets) and the best
         # starts from other basins: one in the robust fit's basin (or an earlier seed's) would
         # settle where that one did.
@@ -532,18 +529,27 @@ def fit_cylinder(
                 break
             if not any(_same_basin(starts[k], other, extent) for other in [*known, *seeds]):
                 seeds.append(starts[k])
-        robust = reconsidered(
+        return reconsidered(
             robust,
             local,
             known + seeds,
             _MODEL,
-            lambda states, x: cylinder_beam_excess(*_stacked(states), x, view),
+            excess,
             kind="cylinder",
             sigma=sigma,
             tolerances=tolerances,
             # Sparse scans get the thorough search (hidden or rejected good shots decide their
             # fits); on denser ones the plain settle finds the pipe (benchmark) in half the time.
             thorough=len(local) < POLISH_BELOW,
+        )
+
+    if (
+        view is not None
+        and starts
+        and (robust is None or _doubtful(robust, local, view, len(local), sigma, tolerances))
+    ):
+        robust = reconsider(
+            robust, lambda states, x: cylinder_beam_excess(*_stacked(states), x, view)
         )
         if blind is not None and _unseen(robust, local, view):
             # Even the best fit hides a third of the shots behind itself: the shots were not
@@ -552,6 +558,9 @@ def fit_cylinder(
     near = robust
     robust = _drop_far_side(near, local, tolerances)
     far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
+    if view is None and starts and _doubtful_blind(robust, local):
+        # Nearly a plane over the points, and no beams to rule it out: the likelihood decides.
+        robust, far_side = reconsider(robust, None), 0
     robust, relative = _incidence_weighted(robust, local)
     axis, center, radius = robust.state
     kept = local[robust.inliers]
@@ -663,6 +672,20 @@ def _doubtful(robust: RobustFit, points, view, count: int, sigma, tolerances: To
         return True
     threshold = tolerances.outlier_cutoff_sigma * (sigma if sigma is not None else robust.scale)
     return bool(np.any(cylinder_beam_excess(*robust.state, points, view) > threshold))
+
+
+def _doubtful_blind(robust: RobustFit, points: np.ndarray) -> bool:
+    """Without a viewpoint: whether a robust fit deserves a second look at the other starts,
+    judged by likelihood. Only a fit that is nearly a plane over the points (radius above
+    ``PLANE_LIKE`` times their extent) does: on a long thin pipe with
+    background shots, the pipe's silhouette shots and the wall shots beyond them lie in one
+    plane through the station, and a cylinder of kilometres fits them to a centimetre (the
+    beams, with a viewpoint, rule it out). Reconsidering every doubtful fit by likelihood
+    instead turned short stubs' axes by 90 degrees (a likelihood with each fit's own noise
+    level rewards fitting fewer shots more closely)."""
+    middle = np.median(points, axis=0)
+    extent = 4.0 * _median(np.sqrt(np.einsum("ij,ij->i", points - middle, points - middle)))
+    return robust.state[2] > PLANE_LIKE * extent
 
 
 def _drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances) -> RobustFit:
