@@ -136,9 +136,10 @@ STATION = Station(
 # --------------------------------------------------------------------------- fits under test
 
 
-def _ours(sensor: bool = True):
+def _ours(sensor: bool = True, viewpoint: bool = True):
     """Our fit functions by kind (None where the module does not exist yet); ``sensor`` False
-    calls them as for a scan without a ``sensor`` block (no sigma, no viewpoint)."""
+    calls them as for a scan without a ``sensor`` block (no sigma, no viewpoint), ``viewpoint``
+    False as for one whose sensor gives ``range_sigma`` but no ``position``."""
     found = {}
     for kind, module, name in (
         ("cylinder", "asbuilt.fit.cylinder", "fit_cylinder"),
@@ -154,7 +155,7 @@ def _ours(sensor: bool = True):
         # As the pipeline calls it for a scan that gives its sensor: with the range sigma and,
         # where the fit takes one, the station as the viewpoint.
         options = {"sigma": SIGMA_R} if sensor else {}
-        if sensor and "viewpoint" in inspect.signature(function).parameters:
+        if sensor and viewpoint and "viewpoint" in inspect.signature(function).parameters:
             options["viewpoint"] = STATION.position
         found[kind] = lambda points, f=function, o=options: f(points, **o)
     return found
@@ -711,6 +712,12 @@ def main(argv=None) -> int:
         help="call our fits as for a scan without a sensor block: no range sigma (the fits "
         "estimate the noise) and no viewpoint",
     )
+    parser.add_argument(
+        "--no-viewpoint",
+        action="store_true",
+        help="call our fits with the range sigma but no viewpoint (a sensor block without "
+        "position)",
+    )
     parser.add_argument("--out", default=None, help="write the markdown here instead of stdout")
     args = parser.parse_args(argv)
 
@@ -721,7 +728,7 @@ def main(argv=None) -> int:
     planes = (3.0,) if args.quick else PLANE_W
     sections = (0.4,) if args.quick else SECTIONS
     kinds = args.only or ["cylinder", "sphere", "plane", "cuboid"]
-    ours = _ours(sensor=not args.no_sensor)
+    ours = _ours(sensor=not args.no_sensor, viewpoint=not args.no_viewpoint)
     sk = _skspatial()
     started = time.perf_counter()
 
@@ -773,6 +780,11 @@ def main(argv=None) -> int:
         "CRB = Cramer-Rao bound (RMS over the cell's trials).",
         "",
     ]
+    if args.no_viewpoint and not args.no_sensor:
+        out += [
+            "Our fits called with the range sigma but no viewpoint (`--no-viewpoint`).",
+            "",
+        ]
     if args.no_sensor:
         out += [
             "Our fits called without a sensor (`--no-sensor`): no range sigma (each fit "
