@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from asbuilt.fit import _faces
+from asbuilt.fit._common import mixing_cost
 
 #: Tukey biweight tuning constant (95% efficiency at the normal; Beaton and Tukey 1974).
 _TUKEY_C = 4.685
@@ -215,13 +216,18 @@ def _same_frame(a, b) -> bool:
     )
 
 
-def _plausible(model: FaceModel, view: np.ndarray, trusted: bool) -> bool:
+def plausible(model: FaceModel, view: np.ndarray, trusted: bool) -> bool:
     """Whether a fitted frame can be a box seen from ``view`` (3,) metres (centred frame):
     :func:`asbuilt.fit._faces.is_box`, and with a ``trusted`` viewpoint every face facing it
-    (a face turned away, such as a back face opposite a seen one, cannot have been hit)."""
+    (a face turned away, such as a back face opposite a seen one, cannot have been hit).
+    Without one, no two opposite faces: no single station sees both (a scan from several
+    stations says so with each object's ``station``; such a frame still wins when no other
+    explains the points as well)."""
     if not _faces.is_box(model.face_axis, model.face_sign, model.offset):
         return False
-    return not trusted or bool(np.all(model.normals() @ view - model.offset > 0.0))
+    if not trusted:
+        return not _opposite_faces(model)
+    return bool(np.all(model.normals() @ view - model.offset > 0.0))
 
 
 def _on_a_line(trial, x: np.ndarray, width: float, raster: np.ndarray | None = None) -> bool:
@@ -242,10 +248,28 @@ def _on_a_line(trial, x: np.ndarray, width: float, raster: np.ndarray | None = N
     return False
 
 
+def _opposite_faces(model: FaceModel) -> bool:
+    """Whether a fit has two opposite faces seen (two faces across one axis)."""
+    return bool(np.any(np.bincount(model.face_axis, minlength=3) >= 2))
+
+
+def _information(trial, sigma: float, cutoff: float) -> float:
+    """Information criterion of a frame's fit (lower is better): the MSAC cost over all points
+    in units of ``sigma`` (metres; each capped at ``cutoff`` squared), ``ln n`` per fitted parameter
+    (rotation and one offset per face: BIC, Schwarz 1978), and the description length of which
+    face (or the outliers) each point is on (:func:`~asbuilt.fit._common.mixing_cost`)."""
+    model, label, residual, inliers = trial[:4]
+    n = residual.shape[0]
+    faces = np.bincount(label[inliers], minlength=model.offset.shape[0]).tolist()
+    params = model.rot_basis.shape[1] + model.offset.shape[0]
+    cost = float(np.sum(np.minimum((residual / sigma) ** 2, cutoff * cutoff)))
+    return cost + params * math.log(n) + mixing_cost([*faces, n - int(np.count_nonzero(inliers))])
+
+
 def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
     """The robust joint fit of the segmentation frame that every point supports best.
 
-    The best-scoring frame of ``frames`` is fitted first. A plausible fit (:func:`_plausible`)
+    The best-scoring frame of ``frames`` is fitted first. A plausible fit (:func:`plausible`)
     that keeps every point cannot be beaten unless one of its faces is a single line of shots
     (:func:`_on_a_line`). Otherwise the frames of an exhaustive segmentation (``exhaustive()``:
     every first-face hypothesis is tried, not only until a frame explains every segmented
@@ -254,7 +278,11 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
     the segmentation left out, or the fit rejected, decide. A plausible fit beats an
     implausible one; among those, the lowest MSAC cost over all n points, cut at the noise
     level, wins (background shots that happen to line up with a wrong frame's extra face
-    lower its cost a little, but that face is a back face or a plane through the box). If the
+    lower its cost a little, but that face is a back face or a plane through the box).
+    Without a trusted viewpoint, vertical raster columns on two faces of a column fit four
+    planes in another frame as closely as two: there a fit with opposite faces is doubtful
+    (and implausible: no single station sees both), and frames are compared by
+    :func:`_information`, which charges each face its offset and its points' labels. If the
     winner still rejects more than ``max_outlier_fraction`` of the points, the frames are
     taken in turn and the plausible one keeping the most points wins. ``fit_args`` are
     :func:`_fit_frame`'s arguments after the frame; ``raster`` (n,) bool, optional, the points
@@ -275,12 +303,21 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
         return trial
 
     def rank(trial, by_cost):
-        quality = -_msac(trial[2], cap) if by_cost else int(np.count_nonzero(trial[3]))
-        return (_plausible(trial[0], view, trusted), quality)
+        if not by_cost:
+            quality = int(np.count_nonzero(trial[3]))
+        elif trusted:
+            quality = -_msac(trial[2], cap)
+        else:
+            quality = -_information(trial, cap / cutoff, cutoff)
+        return (plausible(trial[0], view, trusted), quality)
 
     best = fitted(frames[0])
     best_rank = rank(best, True)
-    if not (best_rank[0] and best[3].all()) or _on_a_line(best, x, cap, raster):
+    if (
+        not (best_rank[0] and best[3].all())
+        or _on_a_line(best, x, cap, raster)
+        or (not trusted and _opposite_faces(best[0]))
+    ):
         first = int(np.count_nonzero(frames[0].labels >= 0))
         frames = exhaustive()
         for frame in frames:

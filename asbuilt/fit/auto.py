@@ -197,21 +197,27 @@ def fit_auto(
         raise FitError(f"No kind fits these points ({reasons}); choose a kind or hull.")
     extent = float(np.linalg.norm(np.ptp(pts, axis=0)))
     counts = {kind: parameter_count(kind, result) for kind, result in results.items()}
+    # Kinds that may be chosen (every fitted one is scored and named in the note).
+    candidates = set(results)
+    if "plane" in results and "cuboid" in results and _one_face(results["cuboid"]):
+        # A cuboid seen on one face is that face's plane. Its depth is made up (not measured),
+        # and points behind the face (a plate's edge, the wall beyond) fall inside it and seem
+        # to fit: the plane stands for it.
+        candidates.discard("cuboid")
+    elif "cuboid" in results and any(results["cuboid"].observed or ()) and len(results) > 1:
+        # Two opposite faces seen: no single station sees both, so the raster lines of some
+        # other surface (a tank's) were split among four planes.
+        candidates.discard("cuboid")
     if sigma is not None:
         scores = information_scores(results, float(sigma), extent, tolerances)
         basis = f"sensor sigma {float(sigma) * 1000:.3g} mm"
     else:
         own = information_scores(results, None, extent, tolerances)
-        leader = min(own, key=lambda kind: (own[kind], counts[kind]))
+        leader = min(candidates, key=lambda kind: (own[kind], counts[kind]))
         noise = max(float(results[leader].sigma), float(tolerances.sigma_floor))
         scores = information_scores(results, noise, extent, tolerances)
         basis = f"sigma {noise * 1000:.3g} mm from the {leader} fit"
-    eligible = dict(scores)
-    if "plane" in results and "cuboid" in results and _one_face(results["cuboid"]):
-        # A cuboid seen on one face is that face's plane. Its depth is made up (not measured),
-        # and points behind the face (a plate's edge, the wall beyond) fall inside it and seem
-        # to fit: the plane stands for it.
-        del eligible["cuboid"]
+    eligible = {kind: scores[kind] for kind in candidates}
     best = min(eligible, key=lambda kind: (eligible[kind], counts[kind]))
     close = [kind for kind in eligible if eligible[kind] <= eligible[best] + WEAK_EVIDENCE]
     # Fewest fitted parameters first; between equals, the kind that claims less (a cuboid's
@@ -230,7 +236,13 @@ def fit_auto(
             f" (< {WEAK_EVIDENCE:g}); the simpler {chosen} is preferred."
         )
     if "cuboid" in scores and "cuboid" not in eligible:
-        why += " The cuboid fit saw one face only: the plane stands for it."
+        if _one_face(results["cuboid"]):
+            why += " The cuboid fit saw one face only: the plane stands for it."
+        else:
+            why += (
+                " The cuboid fit saw two opposite faces, which no single station sees: it is"
+                " not chosen (set the kind to cuboid for a box scanned from both sides)."
+            )
     rivals = [kind for kind in close if kind != chosen and counts[kind] == counts[chosen]]
     if rivals:
         why += (

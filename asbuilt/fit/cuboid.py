@@ -74,7 +74,7 @@ import numpy as np
 from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette
 from asbuilt.fit._common import mixing_cost, mixture_score
-from asbuilt.fit._joint import FaceModel, best_fit, expand_frame, median, rodrigues
+from asbuilt.fit._joint import FaceModel, best_fit, expand_frame, median, plausible, rodrigues
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cuboid, as_points, as_vector
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
@@ -448,7 +448,7 @@ NOISE_LADDER_LEVELS = 6
 NOISE_LADDER_CEILING = 0.03
 
 
-def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolerances):
+def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolerances, plausible):
     """The noise level, and its fit, that explain the points best when the sensor's is unknown.
 
     The estimate (:func:`asbuilt.fit._faces.noise_scale`) comes from planes of neighbouring
@@ -466,9 +466,10 @@ def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolera
     over the faces' counts and the outliers'), and ``ln n`` per fitted parameter (rotation and
     one offset per face: the Bayesian information criterion, Schwarz 1978). A band too narrow
     for the noise rejects good shots, or splits one noisy face into parallel slices that each
-    fit their shots closer than the noise; both cost more than they save. A fit that fails or
-    rejects more than ``max_outlier_fraction`` of the points scores nothing; if no level
-    scores, the estimate's result or error stands (the caller reports it).
+    fit their shots closer than the noise; both cost more than they save. A fit that fails, is
+    implausible (``plausible``: e.g. two opposite faces without a viewpoint) or rejects more
+    than ``max_outlier_fraction`` of the points scores nothing; if no level scores, the
+    estimate's result or error stands (the caller reports it).
 
     Parameters
     ----------
@@ -477,6 +478,9 @@ def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolera
     estimate : float, metres
     x : ndarray, shape (n, 3), metres
     tolerances : Tolerances
+    plausible : callable
+        ``plausible(model) -> bool`` (:func:`asbuilt.fit._joint.plausible`); an implausible
+        fit scores nothing.
 
     Returns
     -------
@@ -497,7 +501,10 @@ def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolera
             return math.inf
         model, label, residual, inliers = fitted[:4]
         score = math.inf
-        if n - int(np.count_nonzero(inliers)) <= tolerances.max_outlier_fraction * n:
+        if (
+            plausible(model)
+            and n - int(np.count_nonzero(inliers)) <= tolerances.max_outlier_fraction * n
+        ):
             params = model.rot_basis.shape[1] + model.offset.shape[0]
             score = mixture_score(residual, inliers, extent, floor) + params * math.log(n)
             faces = np.bincount(label[inliers], minlength=model.offset.shape[0])
@@ -658,7 +665,11 @@ def fit_cuboid(
         fitted = attempt(noise)
     else:
         noise, fitted = _likeliest_noise(
-            attempt, _faces.noise_scale(xs, normals, local_rms, floor), x, tolerances
+            attempt,
+            _faces.noise_scale(xs, normals, local_rms, floor),
+            x,
+            tolerances,
+            lambda model: plausible(model, viewpoint - origin, trusted),
         )
     model, label, residual, inliers, scale, iterations, one_face = fitted
     notes: list[str] = []

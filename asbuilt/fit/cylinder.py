@@ -160,6 +160,11 @@ SAME_BASIN_RELATIVE = 0.10
 PLANE_LIKE = 3.0
 
 
+def _rms(values: np.ndarray) -> float:
+    """Root mean square of a 1-D array (0 when empty)."""
+    return float(np.sqrt(values @ values / max(values.size, 1)))
+
+
 def _median(values: np.ndarray) -> float:
     """The median of a 1-D array (as :func:`numpy.median`, without its overhead)."""
     size = values.size
@@ -558,9 +563,14 @@ def fit_cylinder(
     near = robust
     robust = _drop_far_side(near, local, tolerances)
     far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
-    if view is None and starts and _doubtful_blind(robust, local):
-        # Nearly a plane over the points, and no beams to rule it out: the likelihood decides.
-        robust, far_side = reconsider(robust, None), 0
+    if view is None and starts and far_side and _doubtful_blind(robust, local):
+        # The refit without the far-side shots slid onto a plane, and no beams rule it out:
+        # the likelihood decides among the other starts' basins, for a fit that explains its
+        # shots more closely (a plate with shots behind it is nearly a plane, and fits it to
+        # the noise; a looser cylinder through some of those shots is no better).
+        settled = reconsider(robust, None)
+        if _rms(settled.residuals[settled.inliers]) < _rms(robust.residuals[robust.inliers]):
+            robust, far_side = settled, 0
     robust, relative = _incidence_weighted(robust, local)
     axis, center, radius = robust.state
     kept = local[robust.inliers]
@@ -675,14 +685,12 @@ def _doubtful(robust: RobustFit, points, view, count: int, sigma, tolerances: To
 
 
 def _doubtful_blind(robust: RobustFit, points: np.ndarray) -> bool:
-    """Without a viewpoint: whether a robust fit deserves a second look at the other starts,
-    judged by likelihood. Only a fit that is nearly a plane over the points (radius above
-    ``PLANE_LIKE`` times their extent) does: on a long thin pipe with
-    background shots, the pipe's silhouette shots and the wall shots beyond them lie in one
-    plane through the station, and a cylinder of kilometres fits them to a centimetre (the
-    beams, with a viewpoint, rule it out). Reconsidering every doubtful fit by likelihood
-    instead turned short stubs' axes by 90 degrees (a likelihood with each fit's own noise
-    level rewards fitting fewer shots more closely)."""
+    """Without a viewpoint: whether a fit is nearly a plane over the points (radius above
+    ``PLANE_LIKE`` times their extent). A long thin pipe's silhouette shots and the wall shots
+    beyond them lie in one plane through the station, which a cylinder of kilometres fits to a
+    centimetre (with a viewpoint, the beams rule it out). Reconsidering every doubtful fit by
+    likelihood instead turned short stubs' axes by 90 degrees: a likelihood with each fit's own
+    noise level rewards fitting fewer shots more closely."""
     middle = np.median(points, axis=0)
     extent = 4.0 * _median(np.sqrt(np.einsum("ij,ij->i", points - middle, points - middle)))
     return robust.state[2] > PLANE_LIKE * extent

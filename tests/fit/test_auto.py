@@ -266,3 +266,17 @@ def test_a_cuboid_seen_on_one_face_is_the_plane(rng):
     cuboid = auto._fitter("cuboid")(points, sigma=0.002, viewpoint=SENSOR)
     if cuboid.diagnostics["faces"] == 1.0:
         assert "saw one face only" in why
+
+
+def test_a_cuboid_that_saw_opposite_faces_is_not_chosen():
+    # The plant sample's tank (a 3 m vertical cylinder), fitted with no sensor: its raster
+    # columns fit four vertical planes, two pairs of opposite faces, as closely as the tank.
+    # No single station sees opposite faces; auto chose that "cuboid" before.
+    scan = json.loads((Path(__file__).parents[2] / "samples" / "plant.json").read_text())
+    points = np.array(next(o["points"] for o in scan["objects"] if o["id"] == "TK1"))
+    result = fit_auto(points)
+    assert result.kind == "cylinder"
+    assert result.primitive.radius == pytest.approx(1.5, abs=0.01)
+    why = next(note for note in result.notes if note.startswith("auto chose"))
+    if any(auto._fitter("cuboid")(points).observed):
+        assert "saw two opposite faces" in why

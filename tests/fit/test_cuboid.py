@@ -637,3 +637,19 @@ def test_without_the_sensor_the_noise_level_is_searched_not_guessed(scan):
     assert fit.sigma_source == "residuals"
     assert fit.diagnostics["faces"] >= 2
     assert 0.5e-3 < fit.sigma < 4e-3  # the simulated range noise is 2 mm
+
+
+def test_without_a_viewpoint_raster_columns_do_not_make_four_faces():
+    # Column C2 of the structural-bay sample, fitted with no sensor: its vertical raster
+    # columns on two faces fit four planes in another frame as closely as two, and the fit
+    # came out 85 x 131 mm with both across sizes "observed" (the column is 350 x 350 mm).
+    scan = json.loads((Path(__file__).parents[2] / "samples" / "structural-bay.json").read_text())
+    points = np.array(next(o["points"] for o in scan["objects"] if o["id"] == "C2"))
+    fit = fit_cuboid(points)
+    assert fit.diagnostics["faces"] == 2.0
+    assert not any(fit.observed)
+    seen = fit_cuboid(points, viewpoint=scan["sensor"]["position"])
+    np.testing.assert_allclose(
+        np.sort(fit.primitive.size)[-1], np.sort(seen.primitive.size)[-1], rtol=0.02
+    )
+    assert max(fit.primitive.size[:2]) == pytest.approx(max(seen.primitive.size[:2]), rel=0.02)
