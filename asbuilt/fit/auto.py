@@ -49,6 +49,7 @@ __all__ = [
     "WEAK_EVIDENCE",
     "information_scores",
     "parameter_count",
+    "RIVAL_PREFIX",
 ]
 
 #: Kinds tried, simplest first.
@@ -58,6 +59,9 @@ CANDIDATES = ("plane", "sphere", "cylinder", "cuboid")
 PARAMETERS = {"plane": 3, "sphere": 4, "cylinder": 5, "cuboid": 9}
 #: BIC difference a more complex model must beat to be chosen ("strong", Kass & Raftery 1995).
 WEAK_EVIDENCE = 6.0
+#: Diagnostics key prefix of a kind that explains the points almost as well with as many fitted
+#: parameters (``auto_rival_cuboid``: its BIC minus the chosen kind's).
+RIVAL_PREFIX = "auto_rival_"
 
 
 def _fitter(kind: str):
@@ -254,4 +258,11 @@ def fit_auto(
     for kind, reason in failures.items():
         notes.append(f"auto could not fit a {kind}: {reason}")
     result = results[chosen]
-    return dataclasses.replace(result, notes=tuple(result.notes) + tuple(notes))
+    # The rivals as data too (the scan-quality rule "ambiguous-kind" reports them): each one's
+    # BIC minus the chosen kind's.
+    diagnostics = dict(result.diagnostics)
+    for kind in rivals:
+        diagnostics[f"{RIVAL_PREFIX}{kind}"] = float(scores[kind] - scores[chosen])
+    return dataclasses.replace(
+        result, notes=tuple(result.notes) + tuple(notes), diagnostics=diagnostics
+    )

@@ -1,4 +1,4 @@
-"""Scan quality rules: too-few-points, weak-geometry, poor-fit, outliers.
+"""Scan quality rules: too-few-points, weak-geometry, poor-fit, outliers, ambiguous-kind.
 
 They judge the fit each component comes from (``component.fit``); merged fittings have none.
 The residual test is a chi-square one in disguise: for ``d`` degrees of freedom the RMS of
@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.findings import Suggestion
+from asbuilt.fit.auto import RIVAL_PREFIX
 
 from ._context import Context, centre_of, stderr_value, verdict
 
@@ -177,9 +178,41 @@ def check_outliers(ctx: Context) -> None:
         )
 
 
+def check_ambiguous_kind(ctx: Context) -> None:
+    """Objects of kind ``auto`` whose shots another kind explains as well (the fit's
+    ``auto_rival_<kind>`` diagnostics, :func:`asbuilt.fit.auto.fit_auto`)."""
+    slug = "ambiguous-kind"
+    for comp in _fitted(ctx):
+        fit = comp.fit
+        rivals = {
+            key[len(RIVAL_PREFIX) :]: float(gap)
+            for key, gap in fit.diagnostics.items()
+            if key.startswith(RIVAL_PREFIX)
+        }
+        if not rivals:
+            continue
+        names = " or a ".join(sorted(rivals))
+        closest = min(rivals.values())
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"auto chose {fit.kind}, but a {names} explains the shots as well (BIC "
+            f"{closest:+.1f}); these shots cannot tell them apart",
+            location=centre_of(comp.geometry),
+            measured=closest,
+            unit="BIC",
+            suggestions=tuple(
+                Suggestion(f"set the kind of {comp.id} to {kind} in the scan if it is one")
+                for kind in (fit.kind, *sorted(rivals))
+            )
+            + (Suggestion(f"take more shots on {comp.id}, across its width"),),
+        )
+
+
 CHECKS = {
     "too-few-points": check_points,
     "weak-geometry": check_weak,
     "poor-fit": check_poor_fit,
     "outliers": check_outliers,
+    "ambiguous-kind": check_ambiguous_kind,
 }

@@ -152,6 +152,15 @@ RULES: tuple[Rule, ...] = (
         "quality",
     ),
     Rule(
+        "AB405",
+        "ambiguous-kind",
+        "warning",
+        "auto chose {kind}, but {rivals} explains the shots as well; they cannot tell them apart",
+        "Bayesian information criterion (Schwarz 1978) within 6 of the chosen kind with as many "
+        "fitted parameters: not strong evidence (Kass & Raftery 1995).",
+        "quality",
+    ),
+    Rule(
         "AB501",
         "clash",
         "error",

@@ -1,6 +1,12 @@
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
 import pytest
 from rules_builders import B36, column, cuboid_fit, model, pipe
 
+from asbuilt.fit.auto import fit_auto
 from asbuilt.model import Component
 from asbuilt.rules import check_model, loads_rules
 
@@ -80,3 +86,31 @@ def test_components_without_fits_are_skipped():
     fit = cuboid_fit([0, 0, 1], [0, 0, 1], (0.3, 0.3, 2.0), n=5)
     comp = Component(id="X", type="cuboid", geometry=fit.primitive)
     assert not only(comp, "too-few-points")
+
+
+def test_an_auto_object_another_kind_explains_as_well_is_reported():
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143)
+    fit = dataclasses.replace(
+        comp.fit, diagnostics={**comp.fit.diagnostics, "auto_rival_cuboid": -0.2}
+    )
+    (f,) = only(dataclasses.replace(comp, fit=fit), "ambiguous-kind")
+    assert f.code == "AB405" and f.severity == "warning"
+    assert "auto chose cylinder, but a cuboid explains the shots as well" in f.message
+    assert f.measured == pytest.approx(-0.2)
+    kinds = [s.description for s in f.suggestions]
+    assert "set the kind of P1 to cylinder in the scan if it is one" in kinds
+    assert "set the kind of P1 to cuboid in the scan if it is one" in kinds
+    assert not only(pipe("P2", [0, 0, 1], [2, 0, 1], 0.1143), "ambiguous-kind")
+
+
+def test_auto_reports_its_rival_as_data_for_the_rule():
+    # The first sparse long pipe of the fit tests: 20 shots that a two-face box explains as
+    # well as the cylinder (tests/fit/test_auto.py).
+    data = json.loads((Path(__file__).parents[1] / "fit" / "sparse_long_pipes.json").read_text())
+    points = np.array(data["scans"][0]["points"])
+    result = fit_auto(points, sigma=data["range_sigma"], viewpoint=np.array(data["viewpoint"]))
+    rivals = {k: v for k, v in result.diagnostics.items() if k.startswith("auto_rival_")}
+    note = next(n for n in result.notes if n.startswith("auto chose"))
+    assert bool(rivals) == ("cannot tell them apart" in note)
+    for value in rivals.values():
+        assert abs(value) <= 6.0
