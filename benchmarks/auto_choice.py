@@ -8,9 +8,9 @@ with 20% edge outliers. Every point set goes through :func:`asbuilt.fit.auto.fit
 * as ``asbuilt fit`` calls it for a scan that gives its sensor (range sigma and station), and
 * without a sensor (no sigma, no viewpoint): the criterion then estimates the noise itself.
 
-The table gives, per true kind and version, how many trials chose each kind; below it, every
-cell with a wrong choice. A wrong choice is a choice of another kind, except that a cuboid with
-one seen face would be a plane (no trial here has one face) and a failure is counted apart.
+The table gives, per true kind and version, how many trials chose each kind (a failure in its
+own column); below it, every cell with a wrong choice: another kind, or a failure. No trial
+here has a cuboid seen on one face, which would rightly be a plane.
 
 Run: ``python benchmarks/auto_choice.py [--trials 20] [--points 20 40] [--out F]``.
 """

@@ -26,6 +26,7 @@ import numpy as np
 from scipy.linalg.lapack import dposv as _dposv
 
 from asbuilt.errors import FitError
+from asbuilt.fit._mixture import mixture_score
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 
 __all__ = [
@@ -619,56 +620,19 @@ def incidence_variance(residuals: np.ndarray, square_on: np.ndarray, mask) -> np
     return np.clip((level + slope * square_on) / top, MIN_RELATIVE_VARIANCE, 1.0)
 
 
-def mixture_score(residuals, mask, extent, floor) -> float:
-    """Minus twice the log-likelihood of a fit's residuals as Gaussian inliers and uniform outliers.
-
-    ``m (1 + ln(2 pi s^2)) + (n - m) 2 ln W`` with ``s`` the inliers' maximum-likelihood sigma
-    and ``W`` the extent outliers may spread over (the mixture of Torr's GRIC, 1998).
-
-    Parameters
-    ----------
-    residuals : ndarray, shape (n,), metres
-    mask : ndarray, shape (n,), bool
-        Inliers.
-    extent : float, metres
-    floor : float, metres
-        Smallest sigma.
-
-    Returns
-    -------
-    float
-    """
-    kept = residuals[mask]
-    variance = max(float(np.mean(kept * kept)), floor * floor)
-    m, n = kept.size, residuals.size
-    return m * (1.0 + np.log(2.0 * np.pi * variance)) + (n - m) * 2.0 * np.log(max(extent, floor))
-
-
-def mixing_cost(counts) -> float:
-    """``-2 ln`` of a mixture's proportions at their maximum-likelihood values: ``-2 sum_k c_k
-    ln(c_k / n)`` over the counts ``c_k`` of the points in each component (``n`` their sum).
-
-    The term of the mixture likelihood that :func:`mixture_score` leaves out: the description
-    length of which component each point belongs to (Rissanen's minimum description length).
-    With the counts of inliers and outliers, it makes each outlier cost more than the uniform
-    density over the points' extent; without it a box split into small flat patches of a
-    sphere, fitting 60% of the shots to 0.2 mm, beats the sphere fitting them all to the noise.
-    With the counts of each face's points too, it prices the segmentation, so that one noisy
-    face split into parallel slices does not win by fitting each slice closer than the noise.
-
-    Parameters
-    ----------
-    counts : sequence of int
-        Points per component (inliers and outliers, or each face's inliers and the outliers).
-
-    Returns
-    -------
-    float
-    """
-    counts = np.asarray([c for c in counts if c > 0], dtype=np.float64)
-    if counts.size < 2:
+def median_spacing(points: np.ndarray) -> float:
+    """Median nearest-neighbour distance of points (n, 3), metres."""
+    if len(points) < 2:
         return 0.0
-    return float(-2.0 * (counts * np.log(counts / counts.sum())).sum())
+    if len(points) <= 600:
+        squares = np.einsum("ij,ij->i", points, points)
+        dist = squares[:, None] + squares[None, :] - 2.0 * (points @ points.T)
+        np.fill_diagonal(dist, np.inf)
+        return float(np.sqrt(max(float(np.median(dist.min(axis=1))), 0.0)))
+    from scipy.spatial import cKDTree
+
+    distance, _ = cKDTree(points).query(points, k=2)
+    return float(np.median(distance[:, 1]))
 
 
 def _likeliest_refit(model, state, points, mask, extent, floor, iterations):

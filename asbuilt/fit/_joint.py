@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from asbuilt.fit import _faces
-from asbuilt.fit._common import mixing_cost
+from asbuilt.fit._mixture import mixing_cost
 
 #: Tukey biweight tuning constant (95% efficiency at the normal; Beaton and Tukey 1974).
 _TUKEY_C = 4.685
@@ -221,8 +221,8 @@ def plausible(model: FaceModel, view: np.ndarray, trusted: bool) -> bool:
     :func:`asbuilt.fit._faces.is_box`, and with a ``trusted`` viewpoint every face facing it
     (a face turned away, such as a back face opposite a seen one, cannot have been hit).
     Without one, no two opposite faces: no single station sees both (a scan from several
-    stations says so with each object's ``station``; such a frame still wins when no other
-    explains the points as well)."""
+    stations says so with each object's ``station``). Such a frame is chosen only when the
+    segmentation offers no plausible one."""
     if not _faces.is_box(model.face_axis, model.face_sign, model.offset):
         return False
     if not trusted:
@@ -257,7 +257,7 @@ def _information(trial, sigma: float, cutoff: float) -> float:
     """Information criterion of a frame's fit (lower is better): the MSAC cost over all points
     in units of ``sigma`` (metres; each capped at ``cutoff`` squared), ``ln n`` per fitted parameter
     (rotation and one offset per face: BIC, Schwarz 1978), and the description length of which
-    face (or the outliers) each point is on (:func:`~asbuilt.fit._common.mixing_cost`)."""
+    face (or the outliers) each point is on (:func:`~asbuilt.fit._mixture.mixing_cost`)."""
     model, label, residual, inliers = trial[:4]
     n = residual.shape[0]
     faces = np.bincount(label[inliers], minlength=model.offset.shape[0]).tolist()

@@ -23,12 +23,11 @@ from asbuilt.fit._common import (
     GeometricModel,
     RobustFit,
     gauss_newton,
-    mixing_cost,
-    mixture_score,
     robust_geometric_fit,
     robust_scale,
     tukey_weights,
 )
+from asbuilt.fit._mixture import mixing_cost, mixture_score
 from asbuilt.tolerances import Tolerances
 
 __all__ = ["cylinder_beam_excess", "reconsidered", "visible_score"]
@@ -203,8 +202,8 @@ def reconsidered(
         list of states (one call for the several states a differenced Jacobian needs). None
         when the viewpoint is unknown: then the settled fits are compared by their likelihood
         with each fit's own noise level (Gaussian inliers, uniform outliers over the points'
-        extent, in their mixing proportions: :func:`~asbuilt.fit._common.mixture_score` plus
-        :func:`~asbuilt.fit._common.mixing_cost`). The MSAC cost at the robust fit's scale
+        extent, in their mixing proportions: :func:`~asbuilt.fit._mixture.mixture_score` plus
+        :func:`~asbuilt.fit._mixture.mixing_cost`). The MSAC cost at the robust fit's scale
         cannot tell a fit of 2 mm from one of 13 mm when that scale is the wrong fit's own.
     kind : str
         Named in errors (which are caught: a seed that cannot be settled is skipped).

@@ -5,8 +5,9 @@ Criterion
 The Bayesian information criterion (Schwarz 1978), ``-2 ln L + p ln n``, of each candidate's
 orthogonal residuals, with outliers handled the same way for every model (a mixture of Gaussian
 inliers and uniform outliers, as in Torr's robust GRIC, Torr 1998, "Geometric motion
-segmentation and model selection"). ``p`` is the kind's parameter count (plane 3, sphere 4,
-cylinder 5, cuboid 9: centre, orientation, sizes) and ``n`` the number of points.
+segmentation and model selection"). ``p`` is the number of parameters the residuals fix
+(:func:`parameter_count`: plane 3, sphere 4, cylinder 5, a cuboid its orientation and one
+offset per seen face) and ``n`` the number of points.
 
 * Sensor sigma ``s`` known: ``-2 ln L = sum_i min((r_i / s)^2, c^2)`` (+ a constant common to all
   models), ``c`` = ``tolerances.outlier_cutoff_sigma``: a point beyond ``c s`` costs every model
@@ -15,18 +16,22 @@ cylinder 5, cuboid 9: centre, orientation, sizes) and ``n`` the number of points
   sigma ``s_k^2 = sum_inliers r^2 / m_k`` and its rejected points as uniform over the points'
   extent ``W`` (bounding-box diagonal), mixed in their maximum-likelihood proportions:
   ``-2 ln L = m_k (1 + ln(2 pi s_k^2)) + (n - m_k) 2 ln W - 2 (m_k ln(m_k / n) + (n - m_k)
-  ln(1 - m_k / n))`` (only ``s_k / W`` matters, so no unit enters; without the proportions a
-  box split into flat patches of a sphere, fitting 60% of the shots to 0.2 mm, led). The best model by that score gives the noise
-  level (its degrees-of-freedom-corrected inlier sigma), and the models are then compared as
+  ln(1 - m_k / n))`` (only ``s_k / W`` matters, so no unit enters; without the proportions
+  a box split into flat patches of a sphere, fitting 60% of the shots to 0.2 mm, led). The
+  best model that may be chosen by that score gives the noise level (its degrees-of-freedom-
+  corrected inlier sigma), and the models are then compared as
   with a known sigma. The second step matters with 20-40 points: a model whose inlier test
   happened to reject a few good points (3 sigma of a small-sample scale) must not lose to one
   that kept them merely because their outlier decisions differ.
 
 A more complex model must win by *strong* evidence, a BIC difference of at least 6 (Kass &
 Raftery 1995: 0-2 barely worth mentioning, 2-6 positive, 6-10 strong): among the candidates
-within 6 of the best, the simplest (fewest parameters) is chosen. With 20-40 points a flat wall
-otherwise passes for a 1 km sphere now and then (a chance drop of the residuals by a few
-sigma^2), while real curved or boxy objects win by tens to hundreds.
+within 6 of the best, the simplest (fewest fitted parameters; between equals, fewest
+parameters in all, so a cylinder before a two-face cuboid) is chosen. With 20-40 points a flat
+wall otherwise passes for a 1 km sphere now and then (a chance drop of the residuals by a few
+sigma^2), while real curved or boxy objects win by tens to hundreds. A cuboid seen on one face
+is left to the plane; one that saw two opposite faces, which no single station sees, only
+wins by strong evidence over every other kind (a box scanned from two stations).
 """
 
 from __future__ import annotations
@@ -38,7 +43,8 @@ import math
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit._common import mixing_cost, require_spread, validate_points
+from asbuilt.fit._common import require_spread, validate_points
+from asbuilt.fit._mixture import mixing_cost
 from asbuilt.fit.result import FitResult
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
@@ -201,26 +207,40 @@ def fit_auto(
         raise FitError(f"No kind fits these points ({reasons}); choose a kind or hull.")
     extent = float(np.linalg.norm(np.ptp(pts, axis=0)))
     counts = {kind: parameter_count(kind, result) for kind, result in results.items()}
-    # Kinds that may be chosen (every fitted one is scored and named in the note).
-    candidates = set(results)
+    # Kinds that may be chosen, in CANDIDATES order (every fitted one is scored and named).
+    candidates = [kind for kind in CANDIDATES if kind in results]
+    opposite = False
     if "plane" in results and "cuboid" in results and _one_face(results["cuboid"]):
         # A cuboid seen on one face is that face's plane. Its depth is made up (not measured),
         # and points behind the face (a plate's edge, the wall beyond) fall inside it and seem
         # to fit: the plane stands for it.
-        candidates.discard("cuboid")
+        candidates.remove("cuboid")
     elif "cuboid" in results and any(results["cuboid"].observed or ()) and len(results) > 1:
-        # Two opposite faces seen: no single station sees both, so the raster lines of some
-        # other surface (a tank's) were split among four planes.
-        candidates.discard("cuboid")
-    if sigma is not None:
-        scores = information_scores(results, float(sigma), extent, tolerances)
-        basis = f"sensor sigma {float(sigma) * 1000:.3g} mm"
-    else:
+        # Two opposite faces seen: no single station sees both. Unless the box beats every
+        # other kind by strong evidence (a box scanned from two stations), the raster lines
+        # of another surface (a tank's) were split among four planes.
+        candidates.remove("cuboid")
+        opposite = True
+
+    def scored(candidates):
+        if sigma is not None:
+            return (
+                information_scores(results, float(sigma), extent, tolerances),
+                f"sensor sigma {float(sigma) * 1000:.3g} mm",
+            )
         own = information_scores(results, None, extent, tolerances)
         leader = min(candidates, key=lambda kind: (own[kind], counts[kind]))
         noise = max(float(results[leader].sigma), float(tolerances.sigma_floor))
-        scores = information_scores(results, noise, extent, tolerances)
-        basis = f"sigma {noise * 1000:.3g} mm from the {leader} fit"
+        return (
+            information_scores(results, noise, extent, tolerances),
+            f"sigma {noise * 1000:.3g} mm from the {leader} fit",
+        )
+
+    scores, basis = scored(candidates)
+    if opposite and scores["cuboid"] + WEAK_EVIDENCE < min(scores[k] for k in candidates):
+        candidates = [kind for kind in CANDIDATES if kind in results]
+        scores, basis = scored(candidates)
+        opposite = False
     eligible = {kind: scores[kind] for kind in candidates}
     best = min(eligible, key=lambda kind: (eligible[kind], counts[kind]))
     close = [kind for kind in eligible if eligible[kind] <= eligible[best] + WEAK_EVIDENCE]
@@ -235,18 +255,20 @@ def fit_auto(
         why += f" (lower is better; {others})"
     why += f"; {basis}."
     if chosen != best:
+        simpler = "simpler" if counts[chosen] < counts[best] else "less claiming"
         why += (
             f" {best} scored {scores[chosen] - scores[best]:.1f} lower, not strong evidence"
-            f" (< {WEAK_EVIDENCE:g}); the simpler {chosen} is preferred."
+            f" (< {WEAK_EVIDENCE:g}); the {simpler} {chosen} is preferred."
         )
     if "cuboid" in scores and "cuboid" not in eligible:
-        if _one_face(results["cuboid"]):
-            why += " The cuboid fit saw one face only: the plane stands for it."
-        else:
+        if opposite:
             why += (
-                " The cuboid fit saw two opposite faces, which no single station sees: it is"
-                " not chosen (set the kind to cuboid for a box scanned from both sides)."
+                " The cuboid fit saw two opposite faces, which no single station sees, and is"
+                " not better by strong evidence: it is not chosen (set the kind to cuboid for a"
+                " box scanned from both sides)."
             )
+        else:
+            why += " The cuboid fit saw one face only: the plane stands for it."
     rivals = [kind for kind in close if kind != chosen and counts[kind] == counts[chosen]]
     if rivals:
         why += (

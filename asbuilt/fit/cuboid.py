@@ -73,8 +73,8 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette
-from asbuilt.fit._common import mixing_cost, mixture_score
 from asbuilt.fit._joint import FaceModel, best_fit, expand_frame, median, plausible, rodrigues
+from asbuilt.fit._mixture import mixing_cost, mixture_score
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cuboid, as_points, as_vector
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
@@ -446,6 +446,9 @@ NOISE_LADDER_STEP = 3.0
 NOISE_LADDER_LEVELS = 6
 #: ... and never above this level (metres): no range finder worth scanning with is noisier.
 NOISE_LADDER_CEILING = 0.03
+#: Levels in a row that score nothing (fail, implausible, too many outliers) after which the
+#: search stops going that way while nothing has scored yet.
+NOISE_LADDER_MISSES = 2
 
 
 def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolerances, plausible):
@@ -461,15 +464,16 @@ def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolera
     rejected shots and going down did not help, up likewise (at most ``NOISE_LADDER_LEVELS``
     fits, between the sigma floor and ``NOISE_LADDER_CEILING``). The likelihood: Gaussian
     inliers with their own maximum-likelihood sigma and uniform outliers over the points' extent
-    (Torr's mixture, :func:`asbuilt.fit._common.mixture_score`), the description length of
-    which face (or the outliers) each shot belongs to (:func:`~asbuilt.fit._common.mixing_cost`
+    (Torr's mixture, :func:`asbuilt.fit._mixture.mixture_score`), the description length of
+    which face (or the outliers) each shot belongs to (:func:`~asbuilt.fit._mixture.mixing_cost`
     over the faces' counts and the outliers'), and ``ln n`` per fitted parameter (rotation and
     one offset per face: the Bayesian information criterion, Schwarz 1978). A band too narrow
     for the noise rejects good shots, or splits one noisy face into parallel slices that each
     fit their shots closer than the noise; both cost more than they save. A fit that fails, is
     implausible (``plausible``: e.g. two opposite faces without a viewpoint) or rejects more
-    than ``max_outlier_fraction`` of the points scores nothing; if no level scores, the
-    estimate's result or error stands (the caller reports it).
+    than ``max_outlier_fraction`` of the points scores nothing, and ``NOISE_LADDER_MISSES``
+    such levels in a row end the search that way (narrower bands end on faces of three shots
+    fitted exactly). If no level scores, the fit nearest the estimate stands, else its error.
 
     Parameters
     ----------
@@ -519,21 +523,37 @@ def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolera
     for factor in (1.0 / NOISE_LADDER_STEP, NOISE_LADDER_STEP):
         if factor > 1.0 and full:
             break  # the estimate's band kept every shot: a wider one cannot do better
-        level, moved = best * factor, False
+        level, moved, misses = best * factor, False, 0
+        if factor < 1.0 and best > floor:
+            level = max(level, floor)  # the floor itself is a level
         while len(tried) < NOISE_LADDER_LEVELS and floor <= level <= NOISE_LADDER_CEILING:
             score = scored(level)
             if score < best_score:
-                best, best_score, moved = level, score, True
+                best, best_score, moved, misses = level, score, True, 0
             elif math.isfinite(best_score):
                 break  # the likelihood fell: farther levels are worse still
-            level *= factor
+            else:
+                misses += 1
+                if misses == NOISE_LADDER_MISSES:
+                    # Narrower and narrower bands that still explain nothing end on a few
+                    # shots per face fitted exactly, far below the noise: stop.
+                    break
+            if factor < 1.0:
+                if level == floor:
+                    break
+                level = max(level * factor, floor)
+            else:
+                level *= factor
         if moved:
             break
     if math.isfinite(best_score):
         return best, tried[best][1]
-    if isinstance(first, FitError):
-        raise first
-    return start, first
+    # No level scored: the fit nearest the estimate (an implausible one, as the segmentation
+    # would return with a known sigma), else the estimate's error.
+    for level in sorted(tried, key=lambda value: abs(math.log(value / start))):
+        if not isinstance(tried[level][1], FitError):
+            return level, tried[level][1]
+    raise first
 
 
 def fit_cuboid(

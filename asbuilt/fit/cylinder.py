@@ -49,6 +49,7 @@ from asbuilt.fit._common import (
     incidence_variance,
     keep_count,
     local_normals,
+    median_spacing,
     mixture_score,
     noise_level,
     orient,
@@ -564,10 +565,8 @@ def fit_cylinder(
     robust = _drop_far_side(near, local, tolerances)
     far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
     if view is None and starts and far_side and _doubtful_blind(robust, local):
-        # The refit without the far-side shots slid onto a plane, and no beams rule it out:
-        # the likelihood decides among the other starts' basins, for a fit that explains its
-        # shots more closely (a plate with shots behind it is nearly a plane, and fits it to
-        # the noise; a looser cylinder through some of those shots is no better).
+        # The far-side refit slid onto a plane: the likeliest other basin replaces it if closer
+        # (a plate with shots behind it is nearly a plane; a looser cylinder is no better).
         settled = reconsider(robust, None)
         if _rms(settled.residuals[settled.inliers]) < _rms(robust.residuals[robust.inliers]):
             robust, far_side = settled, 0
@@ -593,7 +592,7 @@ def fit_cylinder(
     jac[:, 1] -= shift * jac[:, 3]
     covariance = covariance_from_jacobian(jac * np.sqrt(weights)[:, None], noise)
     tilt_var = covariance[0, 0] + covariance[1, 1]
-    spacing = _median_spacing(kept)
+    spacing = median_spacing(kept)
     length_se = stderr_of(spacing**2 / 6.0 + 2.0 * noise**2 + (radius**2) * tilt_var)
     oriented = orient(axis)
     cylinder = Cylinder(mid + offset, oriented, radius, length)
@@ -686,11 +685,10 @@ def _doubtful(robust: RobustFit, points, view, count: int, sigma, tolerances: To
 
 def _doubtful_blind(robust: RobustFit, points: np.ndarray) -> bool:
     """Without a viewpoint: whether a fit is nearly a plane over the points (radius above
-    ``PLANE_LIKE`` times their extent). A long thin pipe's silhouette shots and the wall shots
+    ``PLANE_LIKE`` times their extent): a long thin pipe's silhouette shots and the wall shots
     beyond them lie in one plane through the station, which a cylinder of kilometres fits to a
-    centimetre (with a viewpoint, the beams rule it out). Reconsidering every doubtful fit by
-    likelihood instead turned short stubs' axes by 90 degrees: a likelihood with each fit's own
-    noise level rewards fitting fewer shots more closely."""
+    centimetre. (Reconsidering every doubtful fit by likelihood turned stubs' axes by 90
+    degrees: a likelihood with each fit's own noise rewards fitting fewer shots closely.)"""
     middle = np.median(points, axis=0)
     extent = 4.0 * _median(np.sqrt(np.einsum("ij,ij->i", points - middle, points - middle)))
     return robust.state[2] > PLANE_LIKE * extent
@@ -779,21 +777,6 @@ def _likelier(first, second, points, tolerances: Tolerances) -> bool:
     one = mixture_score(first.residuals, first.inliers, extent, floor)
     two = mixture_score(second.residuals, second.inliers, extent, floor)
     return one < two
-
-
-def _median_spacing(points: np.ndarray) -> float:
-    """Median nearest-neighbour distance of points (n, 3), metres."""
-    if len(points) < 2:
-        return 0.0
-    if len(points) <= 600:
-        squares = np.einsum("ij,ij->i", points, points)
-        dist = squares[:, None] + squares[None, :] - 2.0 * (points @ points.T)
-        np.fill_diagonal(dist, np.inf)
-        return float(np.sqrt(max(float(np.median(dist.min(axis=1))), 0.0)))
-    from scipy.spatial import cKDTree
-
-    distance, _ = cKDTree(points).query(points, k=2)
-    return float(np.median(distance[:, 1]))
 
 
 def _flip_covariance(covariance, axis, oriented):

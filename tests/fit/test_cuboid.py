@@ -630,7 +630,8 @@ def test_a_pier_top_crossed_once_is_a_face_and_the_foot_stays_where_bisection_pu
 @_stored("columns_without_sensor.json")
 def test_without_the_sensor_the_noise_level_is_searched_not_guessed(scan):
     # Clean simulated rasters of columns fitted as for a scan with no sensor block (no sigma,
-    # no viewpoint). The noise estimate from neighbourhood planes straddling the edges came out
+    # no viewpoint given; the raster's origin is then trusted as the viewpoint, as the station
+    # stood there). The noise estimate from neighbourhood planes straddling the edges came out
     # up to ten times the noise (both faces taken as one plane: 9-42 degrees off, sizes 6-31%
     # off), or at the sigma floor (half the shots rejected), or so wide that no face was found.
     fit = _fit_stored(scan, size_tolerance=0.03, rejected=1)
@@ -653,3 +654,23 @@ def test_without_a_viewpoint_raster_columns_do_not_make_four_faces():
         np.sort(fit.primitive.size)[-1], np.sort(seen.primitive.size)[-1], rtol=0.02
     )
     assert max(fit.primitive.size[:2]) == pytest.approx(max(seen.primitive.size[:2]), rel=0.02)
+
+
+def test_without_a_sigma_the_noise_search_does_not_sink_below_the_noise():
+    # A pipe (r 0.11 m) with 3 cm range noise fitted as a cuboid: the estimate's band fails,
+    # narrower ones were implausible, and the search went on down to 0.7 mm, where faces of
+    # three shots fit exactly (sigma 0.7 mm, a third of the shots rejected).
+    from fit_scans import raster_scan
+
+    from asbuilt.primitives import Cylinder
+
+    axis = np.array([0.3, 0.2, 1]) / np.linalg.norm([0.3, 0.2, 1])
+    pipe = Cylinder([5, 1, 1], axis, 0.11, 0.7)
+    rng = np.random.default_rng(7)
+    for _ in range(4):
+        points = raster_scan(pipe, [0, 0, 2.0], 20, rng, sigma_range=0.03).points
+        try:
+            fit = fit_cuboid(points)
+        except FitError:
+            continue
+        assert fit.sigma > 0.003
