@@ -253,17 +253,25 @@ def _opposite_faces(model: FaceModel) -> bool:
     return bool(np.any(np.bincount(model.face_axis, minlength=3) >= 2))
 
 
-def _information(trial, sigma: float, cutoff: float) -> float:
-    """Information criterion of a frame's fit (lower is better): the MSAC cost over all points
-    in units of ``sigma`` (metres; each capped at ``cutoff`` squared), ``ln n`` per fitted parameter
-    (rotation and one offset per face: BIC, Schwarz 1978), and the description length of which
+def complexity(trial) -> float:
+    """The model part of a frame fit's information criterion: ``ln n`` per fitted parameter
+    (rotation and one offset per face: BIC, Schwarz 1978) and the description length of which
     face (or the outliers) each point is on (:func:`~asbuilt.fit._mixture.mixing_cost`)."""
     model, label, residual, inliers = trial[:4]
     n = residual.shape[0]
+    kept = int(np.count_nonzero(inliers))
     faces = np.bincount(label[inliers], minlength=model.offset.shape[0]).tolist()
     params = model.rot_basis.shape[1] + model.offset.shape[0]
+    return params * math.log(n) + mixing_cost([*faces, n - kept])
+
+
+def _information(trial, sigma: float, cutoff: float) -> float:
+    """Information criterion of a frame's fit (lower is better): the MSAC cost over all points
+    in units of ``sigma`` (metres; each capped at ``cutoff`` squared) plus its
+    :func:`complexity`."""
+    residual = trial[2]
     cost = float(np.sum(np.minimum((residual / sigma) ** 2, cutoff * cutoff)))
-    return cost + params * math.log(n) + mixing_cost([*faces, n - int(np.count_nonzero(inliers))])
+    return cost + complexity(trial)
 
 
 def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
@@ -313,11 +321,8 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
 
     best = fitted(frames[0])
     best_rank = rank(best, True)
-    if (
-        not (best_rank[0] and best[3].all())
-        or _on_a_line(best, x, cap, raster)
-        or (not trusted and _opposite_faces(best[0]))
-    ):
+    # (Without a trusted viewpoint a fit with opposite faces is implausible, so doubtful too.)
+    if not (best_rank[0] and best[3].all()) or _on_a_line(best, x, cap, raster):
         first = int(np.count_nonzero(frames[0].labels >= 0))
         frames = exhaustive()
         for frame in frames:

@@ -239,7 +239,8 @@ def fit_auto(
     scores, basis = scored(candidates)
     if opposite and scores["cuboid"] + WEAK_EVIDENCE < min(scores[k] for k in candidates):
         candidates = [kind for kind in CANDIDATES if kind in results]
-        scores, basis = scored(candidates)
+        if sigma is None:  # the noise level may now come from the cuboid
+            scores, basis = scored(candidates)
         opposite = False
     eligible = {kind: scores[kind] for kind in candidates}
     best = min(eligible, key=lambda kind: (eligible[kind], counts[kind]))

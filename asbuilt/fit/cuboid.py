@@ -73,8 +73,16 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette
-from asbuilt.fit._joint import FaceModel, best_fit, expand_frame, median, plausible, rodrigues
-from asbuilt.fit._mixture import mixing_cost, mixture_score
+from asbuilt.fit._joint import (
+    FaceModel,
+    best_fit,
+    complexity,
+    expand_frame,
+    median,
+    plausible,
+    rodrigues,
+)
+from asbuilt.fit._mixture import mixture_score
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cuboid, as_points, as_vector
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
@@ -464,10 +472,10 @@ def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolera
     rejected shots and going down did not help, up likewise (at most ``NOISE_LADDER_LEVELS``
     fits, between the sigma floor and ``NOISE_LADDER_CEILING``). The likelihood: Gaussian
     inliers with their own maximum-likelihood sigma and uniform outliers over the points' extent
-    (Torr's mixture, :func:`asbuilt.fit._mixture.mixture_score`), the description length of
-    which face (or the outliers) each shot belongs to (:func:`~asbuilt.fit._mixture.mixing_cost`
-    over the faces' counts and the outliers'), and ``ln n`` per fitted parameter (rotation and
-    one offset per face: the Bayesian information criterion, Schwarz 1978). A band too narrow
+    (Torr's mixture, :func:`asbuilt.fit._mixture.mixture_score`) plus the fit's
+    :func:`~asbuilt.fit._joint.complexity`: the description length of which face (or the
+    outliers) each shot belongs to, and ``ln n`` per fitted parameter (rotation and one offset
+    per face: the Bayesian information criterion, Schwarz 1978). A band too narrow
     for the noise rejects good shots, or splits one noisy face into parallel slices that each
     fit their shots closer than the noise; both cost more than they save. A fit that fails, is
     implausible (``plausible``: e.g. two opposite faces without a viewpoint) or rejects more
@@ -503,16 +511,13 @@ def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolera
         except FitError as exc:
             tried[level] = (math.inf, exc)
             return math.inf
-        model, label, residual, inliers = fitted[:4]
+        model, _, residual, inliers = fitted[:4]
         score = math.inf
         if (
             plausible(model)
             and n - int(np.count_nonzero(inliers)) <= tolerances.max_outlier_fraction * n
         ):
-            params = model.rot_basis.shape[1] + model.offset.shape[0]
-            score = mixture_score(residual, inliers, extent, floor) + params * math.log(n)
-            faces = np.bincount(label[inliers], minlength=model.offset.shape[0])
-            score += mixing_cost([*faces.tolist(), n - int(np.count_nonzero(inliers))])
+            score = mixture_score(residual, inliers, extent, floor) + complexity(fitted)
         tried[level] = (score, fitted)
         return score
 
