@@ -1,21 +1,29 @@
 """Atomic output: write to a temporary file beside the target, then rename over it.
 
 A failure never leaves a truncated file, and an existing file is replaced only by a complete
-one. :class:`AtomicBatch` extends that to several outputs: all are written first, then all are
-renamed, so a run that fails on its third output leaves none of the new files.
+one. :class:`AtomicBatch` extends that to several outputs: every target is checked and every
+file written first, then all are renamed, so a run that fails on its third output leaves none
+of the new files.
+
+A target that is a symbolic link is written through: the file it points to is replaced and the
+link kept. A target that exists but is not a regular file (a named pipe, ``/dev/stdout``, a
+terminal) cannot be renamed over; it gets the complete content, written into it once every
+output is ready. A target that is a directory is an :class:`~asbuilt.errors.ExportError`.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import shutil
+import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
 from .errors import ExportError
 
-__all__ = ["atomic_write", "AtomicBatch", "default_file_mode"]
+__all__ = ["atomic_write", "AtomicBatch", "check_target", "default_file_mode"]
 
 
 def default_file_mode() -> int:
@@ -25,16 +33,63 @@ def default_file_mode() -> int:
     return 0o666 & ~mask
 
 
+def _target(path) -> tuple[Path, bool]:
+    """The file to publish to for an output ``path``, and whether it is a special file.
+
+    Symbolic links are followed (the file they point to is the output). Raises ExportError for
+    a directory, before anything is written.
+    """
+    given = Path(path)
+    if not str(path):
+        raise ExportError("the output file name is empty; give a file name", source="''")
+    final = Path(os.path.realpath(given)) if given.is_symlink() else given
+    try:
+        info = final.stat()
+    except OSError:
+        return final, False  # a new file (or one the rename will report on)
+    if stat.S_ISDIR(info.st_mode):
+        raise ExportError(
+            "is a directory; give a file name to write (e.g. add /model.step)", source=str(given)
+        )
+    return final, not stat.S_ISREG(info.st_mode)
+
+
+def check_target(path, option: str = "--out") -> Path:
+    """Check, before any work, that an output can be written to ``path``; return the file it
+    will be published to (symbolic links followed).
+
+    Parameters
+    ----------
+    path : str or Path
+    option : str
+        The command-line option that named the output, for the message.
+
+    Raises
+    ------
+    ExportError
+        An empty name, a directory, or a directory that does not exist.
+    """
+    final, special = _target(path)
+    directory = final.parent if str(final.parent) else Path(".")
+    if not special and not directory.is_dir():
+        raise ExportError(
+            f"directory does not exist; create it or choose another {option}", source=str(path)
+        )
+    return final
+
+
 def _temp_beside(path: Path) -> tuple[int, str]:
     directory = path.parent if str(path.parent) else Path(".")
     if not directory.is_dir():
-        raise ExportError("directory does not exist; create it or choose another --out",
-                          source=str(path))
+        raise ExportError(
+            "directory does not exist; create it or choose another --out", source=str(path)
+        )
     try:
         fd, temp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=directory)
     except OSError as exc:
-        raise ExportError(f"cannot write here ({exc.strerror}); choose a writable directory",
-                          source=str(path)) from None
+        raise ExportError(
+            f"cannot write here ({exc.strerror}); choose a writable directory", source=str(path)
+        ) from None
     # mkstemp makes owner-only files; the published file should look like any other output.
     os.chmod(temp, default_file_mode())
     return fd, temp
@@ -53,10 +108,20 @@ def atomic_write(path, mode: str = "wb", encoding: str | None = None) -> Iterato
     encoding : str, optional
         Text encoding (default UTF-8 in text mode).
     """
-    path = Path(path)
+    path, special = _target(path)
+    text_encoding = (encoding or "utf-8") if "b" not in mode else None
+    if special:
+        # A pipe or device: nothing to rename over, and nothing half-written left on disk.
+        try:
+            handle = open(path, mode, encoding=text_encoding)  # noqa: SIM115 - closed below
+        except OSError as exc:
+            raise ExportError(f"cannot write here ({exc.strerror})", source=str(path)) from None
+        with handle as f:
+            yield f
+        return
     fd, temp = _temp_beside(path)
     try:
-        with os.fdopen(fd, mode, encoding=(encoding or "utf-8") if "b" not in mode else None) as f:
+        with os.fdopen(fd, mode, encoding=text_encoding) as f:
             yield f
             f.flush()
             os.fsync(f.fileno())
@@ -76,28 +141,58 @@ class AtomicBatch:
     """
 
     def __init__(self) -> None:
-        self._staged: list[tuple[Path, Path]] = []
+        self._staged: list[tuple[Path, Path, bool]] = []
 
     def stage(self, path) -> Path:
-        """A temporary path beside ``path`` to write to; renamed to ``path`` on commit."""
-        path = Path(path)
-        fd, temp = _temp_beside(path)
+        """A temporary path to write ``path``'s content to: beside it, renamed to it on commit
+        (for a pipe or device, in the temporary directory, copied into it on commit).
+
+        Raises
+        ------
+        ExportError
+            ``path`` is a directory, or its directory is missing or not writable.
+        """
+        final, special = _target(path)
+        if special:
+            fd, temp = tempfile.mkstemp(prefix="asbuilt-", suffix=f"-{final.name}.part")
+        else:
+            fd, temp = _temp_beside(final)
         os.close(fd)
-        self._staged.append((Path(temp), path))
+        self._staged.append((Path(temp), final, special))
         return Path(temp)
 
     def commit(self) -> list[Path]:
-        """Rename every staged file to its target; return the targets."""
+        """Publish every staged file to its target; return the targets.
+
+        Raises
+        ------
+        ExportError
+            A rename or copy failed (the files not yet published are discarded).
+        """
         done = []
-        for temp, final in self._staged:
-            os.replace(temp, final)
-            done.append(final)
-        self._staged.clear()
+        try:
+            while self._staged:
+                temp, final, special = self._staged[0]
+                try:
+                    if special:
+                        with open(temp, "rb") as source, open(final, "wb") as sink:
+                            shutil.copyfileobj(source, sink)
+                        temp.unlink()
+                    else:
+                        os.replace(temp, final)
+                except OSError as exc:
+                    raise ExportError(
+                        f"cannot write the file ({exc.strerror or exc})", source=str(final)
+                    ) from None
+                self._staged.pop(0)
+                done.append(final)
+        finally:
+            self.discard()
         return done
 
     def discard(self) -> None:
         """Delete every staged temporary file."""
-        for temp, _ in self._staged:
+        for temp, _, _ in self._staged:
             with contextlib.suppress(OSError):
                 temp.unlink()
         self._staged.clear()

@@ -50,3 +50,96 @@ def test_published_files_have_the_usual_permissions(tmp_path):
     with atomic_write(target, "w") as f:
         f.write("{}")
     assert target.stat().st_mode & 0o777 == default_file_mode()
+
+
+def test_a_directory_target_fails_before_anything_is_written(tmp_path):
+    (tmp_path / "taken.glb").mkdir()
+    with pytest.raises(ExportError) as info:
+        with AtomicBatch() as batch:
+            batch.stage(tmp_path / "a.step").write_bytes(b"a")
+            batch.stage(tmp_path / "taken.glb").write_bytes(b"b")
+    assert str(info.value).startswith(f"{tmp_path / 'taken.glb'}: is a directory; give a file")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["taken.glb"]
+    with pytest.raises(ExportError, match="is a directory"):
+        with atomic_write(tmp_path / "taken.glb") as f:
+            f.write(b"x")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["taken.glb"]
+
+
+@pytest.mark.parametrize(
+    ("name", "message"),
+    [
+        ("", "'': the output file name is empty; give a file name"),
+        (
+            "no/such/out.json",
+            "no/such/out.json: directory does not exist; create it or choose another --fix",
+        ),
+    ],
+)
+def test_check_target_messages(tmp_path, monkeypatch, name, message):
+    from asbuilt.atomic import check_target
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ExportError) as info:
+        check_target(name, "--fix")
+    assert str(info.value) == message
+
+
+def test_a_symbolic_link_is_written_through(tmp_path):
+    target = tmp_path / "real.json"
+    target.write_text("old")
+    link = tmp_path / "link.json"
+    link.symlink_to(target)
+    with atomic_write(link, "w") as f:
+        f.write("new")
+    assert link.is_symlink() and target.read_text() == "new"
+    with AtomicBatch() as batch:
+        batch.stage(link).write_text("newer")
+    assert link.is_symlink() and target.read_text() == "newer"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.json", "real.json"]
+
+
+def test_a_named_pipe_gets_the_content(tmp_path):
+    import os
+    import threading
+
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    received = []
+    reader = threading.Thread(target=lambda: received.append(fifo.read_bytes()))
+    reader.start()
+    with AtomicBatch() as batch:
+        batch.stage(fifo).write_bytes(b"complete")
+    reader.join(timeout=10)
+    assert received == [b"complete"]
+    assert fifo.is_fifo()  # still a pipe, not replaced by a regular file
+    reader = threading.Thread(target=lambda: received.append(fifo.read_bytes()))
+    reader.start()
+    with atomic_write(fifo, "w") as f:
+        f.write("text")
+    reader.join(timeout=10)
+    assert received[1] == b"text" and fifo.is_fifo()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe.json"]
+
+
+def test_a_failed_rename_discards_what_is_not_published(tmp_path, monkeypatch):
+    import os
+
+    real_replace = os.replace
+    calls = []
+
+    def failing_replace(src, dst):
+        calls.append(dst)
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device")
+        real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", failing_replace)
+    with pytest.raises(ExportError) as info:
+        with AtomicBatch() as batch:
+            for name in ("a.bin", "b.bin", "c.bin"):
+                batch.stage(tmp_path / name).write_bytes(b"x")
+    assert (
+        str(info.value) == f"{tmp_path / 'b.bin'}: cannot write the file (No space left on device)"
+    )
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".part")]

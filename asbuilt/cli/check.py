@@ -180,10 +180,12 @@ def run(args: argparse.Namespace) -> int:
         from asbuilt.design import load_design
 
         design = load_design(args.design)
-    if args.fix:
+    if args.fix is not None:
+        from asbuilt.atomic import check_target
         from asbuilt.export import exporter_for
 
-        exporter_for(args.fix)  # an unknown suffix fails before any work
+        exporter_for(args.fix)  # an unknown suffix, a directory or none fails before any work
+        check_target(args.fix, "--fix")
 
     err = Console(file=sys.stderr, highlight=False, soft_wrap=True)
     with stage_progress(err) as bar:

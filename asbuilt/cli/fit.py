@@ -54,12 +54,14 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.table import Table
 
-    from asbuilt.atomic import atomic_write
+    from asbuilt.atomic import atomic_write, check_target
     from asbuilt.cli._progress import stage_progress
     from asbuilt.fit import fit
     from asbuilt.fit.output import TABLE_COLUMNS, fit_report_to_dict, fit_table_rows
     from asbuilt.scan import load_scan
 
+    if args.output is not None:
+        check_target(args.output, "--output")  # a directory or none fails before any work
     scan = load_scan(args.scan)
     err = Console(file=sys.stderr)
     with stage_progress(err) as bar:
@@ -70,9 +72,9 @@ def run(args: argparse.Namespace) -> int:
         )
 
     units = args.units or scan.units
-    if args.json or args.output:
+    if args.json or args.output is not None:
         text = json.dumps(fit_report_to_dict(report, units), indent=2, ensure_ascii=False) + "\n"
-        if args.output:
+        if args.output is not None:
             with atomic_write(args.output, "w") as handle:
                 handle.write(text)
             err.print(f"wrote {args.output}", highlight=False)

@@ -108,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rich.console import Console
 
+    from asbuilt.atomic import check_target
     from asbuilt.cli._progress import stage_progress
     from asbuilt.errors import ExportError
     from asbuilt.export import export_models, exporter_for
@@ -118,10 +119,7 @@ def run(args: argparse.Namespace) -> int:
     report_path = args.report
     for path in outputs:
         exporter_for(path)  # an unknown suffix or a missing directory fails before any work
-        if not path.parent.is_dir():
-            raise ExportError(
-                "directory does not exist; create it or choose another --out", source=str(path)
-            )
+        check_target(path, "--out")
     if report_path is not None:
         from asbuilt.report import report_format_for
 
@@ -131,11 +129,7 @@ def run(args: argparse.Namespace) -> int:
                 "the report and an --out file are the same; name them apart",
                 source=str(report_path),
             )
-        if not Path(report_path).parent.is_dir():
-            raise ExportError(
-                "directory does not exist; create it or choose another --report",
-                source=str(report_path),
-            )
+        check_target(report_path, "--report")
 
     scan = load_scan(args.scan)
     err = Console(file=sys.stderr)

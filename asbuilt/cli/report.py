@@ -155,6 +155,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rich.console import Console
 
+    from asbuilt.atomic import check_target
     from asbuilt.cli._progress import stage_progress
     from asbuilt.errors import ExportError
     from asbuilt.report import SUFFIXES, report_format_for, write_reports
@@ -162,10 +163,7 @@ def run(args: argparse.Namespace) -> int:
     outputs = [Path(p) for p in args.out]
     for path in outputs:
         report_format_for(path)  # an unknown suffix fails before any work
-        if not path.parent.is_dir():
-            raise ExportError(
-                "directory does not exist; create it or choose another --out", source=str(path)
-            )
+        check_target(path, "--out")
     if args.gltf is not None and Path(args.gltf).suffix.lower() not in (".glb", ".gltf"):
         raise ExportError("--gltf must name a .glb or .gltf file", source=str(args.gltf))
 

@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rich.console import Console
 
-    from asbuilt.atomic import atomic_write
+    from asbuilt.atomic import atomic_write, check_target
     from asbuilt.errors import SceneError
     from asbuilt.sim.scene import load_scene
     from asbuilt.sim.simulate import dumps_scan, simulate_scan
@@ -62,6 +62,8 @@ def run(args: argparse.Namespace) -> int:
         raise SceneError(f"--seed must be a non-negative integer, not {args.seed}")
     if args.points is not None and args.points < 1:
         raise SceneError(f"--points must be a positive integer, not {args.points}")
+    if args.out != "-":
+        check_target(args.out, "--out")  # a directory or none fails before any work
     scene = load_scene(args.scene)
     doc = simulate_scan(scene, seed=args.seed, points=args.points, exact=args.exact)
     text = dumps_scan(doc)

@@ -144,7 +144,7 @@ def test_output_into_a_missing_directory(stand_ins, scan_file, capsys):
     assert code == 2 and out == ""
     assert err == (
         "asbuilt: error: no/such/dir.json: directory does not exist; create it or choose "
-        "another --out\n"
+        "another --output\n"
     )
 
 

@@ -268,3 +268,37 @@ def test_bad_catalog_schedule_rules_design_are_exit_2(
     err = capsys.readouterr().err
     assert err.startswith("asbuilt: error: ") and words in err and err.count("\n") == 1
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["model", "SPOOL", "--out", "a.step", "--out", "b.dxf", "--out", "taken"],
+            "taken: is a directory; give a file name",
+        ),
+        (
+            ["model", "SPOOL", "--out", "a.step", "--report", "taken"],
+            "taken: is a directory; give a file name",
+        ),
+        (["fit", "SPOOL", "--json", "-o", "taken"], "taken: is a directory; give a file name"),
+        (["fit", "SPOOL", "-o", ""], "'': the output file name is empty"),
+        (["check", "SPOOL", "--fix", "taken"], "taken: is a directory; give a file name"),
+        (["report", "SPOOL", "--out", "taken"], "taken: is a directory; give a file name"),
+    ],
+)
+def test_an_output_that_is_a_directory_fails_before_any_work(
+    tmp_path, capsys, monkeypatch, argv, message
+):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "taken").mkdir()
+    argv = [str(ROOT / "samples" / "spool.json") if a == "SPOOL" else a for a in argv]
+    if argv[0] in ("model", "report", "check"):
+        # The suffix picks the format; a directory named like an output is the case users hit.
+        (tmp_path / "taken").rename(tmp_path / "taken.json")
+        argv = ["taken.json" if a == "taken" else a for a in argv]
+        message = message.replace("taken", "taken.json", 1)
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert err.startswith(f"asbuilt: error: {message}") and err.count("\n") == 1
+    assert [p.name for p in tmp_path.iterdir()] in (["taken"], ["taken.json"])
