@@ -324,49 +324,122 @@ def _check_document(document, source: str | None) -> None:
         raise ModelDocumentError(
             "units must be 'm' (documents store metres)", source=source, where="units"
         )
+    if "components" not in document:
+        hint = (
+            'it has "objects", so it looks like a scan: a scan\'s format is "asbuilt-scan"'
+            if "objects" in document
+            else 'add "components": [...] (an asbuilt-model document lists its components)'
+        )
+        raise ModelDocumentError(f"missing; {hint}", source=source, where="components")
     for key in ("components", "spools", "findings"):
         if not isinstance(document.get(key, []), list):
             raise ModelDocumentError("must be a list", source=source, where=key)
 
 
+class _BadField(ValueError):
+    """A component field with the wrong type or shape (``key``, and what it must be)."""
+
+    def __init__(self, key: str, message: str):
+        self.key = key
+        super().__init__(message)
+
+
+def _describe(value) -> str:
+    text = json.dumps(value) if not isinstance(value, float) or math.isfinite(value) else "NaN"
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _number(entry: dict, key: str) -> float:
+    """A finite number field (metres where it is a length)."""
+    value = entry[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise _BadField(key, f"must be a finite number, not {_describe(value)}")
+    return float(value)
+
+
+def _point(entry: dict, key: str, value=None) -> list:
+    """A field of 3 finite numbers [x, y, z]."""
+    value = entry[key] if value is None else value
+    if (
+        not isinstance(value, list)
+        or len(value) != 3
+        or not all(
+            isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
+            for c in value
+        )
+    ):
+        raise _BadField(key, f"must be 3 finite numbers [x, y, z], not {_describe(value)}")
+    return value
+
+
+def _pair(entry: dict, key: str) -> list:
+    """A field of two points [[x, y, z], [x, y, z]]."""
+    value = entry[key]
+    if not isinstance(value, list) or len(value) != 2:
+        raise _BadField(key, f"must be two points [[x, y, z], [x, y, z]], not {_describe(value)}")
+    return [_point(entry, key, item) for item in value]
+
+
+def _require_object(entry, where: str, what: str, source: str | None) -> None:
+    if not isinstance(entry, dict):
+        raise ModelDocumentError(
+            f"must be a JSON object ({what}), not {_describe(entry)}", source=source, where=where
+        )
+
+
+def _wall(entry: dict) -> float:
+    return _number(entry, "wall") if entry.get("wall") is not None else 0.0
+
+
 def _geometry(entry: dict):
     shape = entry.get("shape")
     if shape == "straight":
-        return Straight(entry["start"], entry["end"], entry["od"] / 2, entry.get("wall") or 0.0)
+        return Straight(
+            _point(entry, "start"), _point(entry, "end"), _number(entry, "od") / 2, _wall(entry)
+        )
     if shape == "bend":
-        start, end = entry["ends"]
-        return Bend(start, end, entry["center"], entry["od"] / 2, entry.get("wall") or 0.0)
+        start, end = _pair(entry, "ends")
+        return Bend(start, end, _point(entry, "center"), _number(entry, "od") / 2, _wall(entry))
     if shape == "reducer":
         return Reducer(
-            entry["start"],
-            entry["end"],
-            entry["od_start"] / 2,
-            entry["od_end"] / 2,
-            entry.get("wall") or 0.0,
+            _point(entry, "start"),
+            _point(entry, "end"),
+            _number(entry, "od_start") / 2,
+            _number(entry, "od_end") / 2,
+            _wall(entry),
         )
     if shape == "tee":
-        run_start, run_end = entry["run"]
+        run_start, run_end = _pair(entry, "run")
         return Tee(
-            entry["center"],
+            _point(entry, "center"),
             run_start,
             run_end,
-            entry["branch_end"],
-            entry["od"] / 2,
-            entry["branch_od"] / 2,
-            entry.get("wall") or 0.0,
+            _point(entry, "branch_end"),
+            _number(entry, "od") / 2,
+            _number(entry, "branch_od") / 2,
+            _wall(entry),
         )
     if shape == "cylinder":
-        return Cylinder(entry["center"], entry["axis"], entry["radius"], entry["length"])
+        return Cylinder(
+            _point(entry, "center"),
+            _point(entry, "axis"),
+            _number(entry, "radius"),
+            _number(entry, "length"),
+        )
     if shape == "cuboid":
-        return Cuboid(entry["center"], entry["axes"], entry["size"])
+        return Cuboid(_point(entry, "center"), entry["axes"], _point(entry, "size"))
     if shape == "sphere":
-        return Sphere(entry["center"], entry["radius"])
+        return Sphere(_point(entry, "center"), _number(entry, "radius"))
     if shape == "plane":
         outline = entry.get("outline") or np.zeros((0, 3))
-        return Plane(entry["point"], entry["normal"], outline)
+        return Plane(_point(entry, "point"), _point(entry, "normal"), outline)
     if shape == "hull":
         return Hull(entry["vertices"], entry["faces"])
-    raise ValueError(f"unknown shape {shape!r}")
+    raise _BadField(
+        "shape",
+        f"unknown shape {_describe(shape)}; use one of straight, bend, reducer, tee, cylinder, "
+        "cuboid, sphere, plane, hull",
+    )
 
 
 def _optional_float(value):
@@ -384,7 +457,8 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
     _check_document(document, source)
     components = []
     for index, entry in enumerate(document.get("components", [])):
-        where = f"components[{index}] ({entry.get('id') if isinstance(entry, dict) else '?'})"
+        _require_object(entry, f"components[{index}]", "a component", source)
+        where = f"components[{index}] ({entry.get('id')})"
         try:
             sources = tuple(
                 entry.get("sources") or ([entry["source"]] if entry.get("source") else [])
@@ -417,10 +491,13 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
             raise ModelDocumentError(
                 f"missing field {exc.args[0]!r}", source=source, where=where
             ) from None
+        except _BadField as exc:
+            raise ModelDocumentError(str(exc), source=source, where=f"{where}.{exc.key}") from None
         except (TypeError, ValueError, AttributeError) as exc:
             raise ModelDocumentError(str(exc), source=source, where=where) from None
     findings = []
     for index, entry in enumerate(document.get("findings", [])):
+        _require_object(entry, f"findings[{index}]", "a finding", source)
         try:
             findings.append(
                 Finding(
@@ -453,6 +530,7 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
             raise ModelDocumentError(str(exc), source=source, where=f"findings[{index}]") from None
     spools = []
     for index, entry in enumerate(document.get("spools", [])):
+        _require_object(entry, f"spools[{index}]", "a spool", source)
         try:
             spools.append(
                 Spool(

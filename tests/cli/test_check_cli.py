@@ -267,3 +267,16 @@ def test_list_rules_shows_the_rules_files_view(tmp_path, capsys):
 def test_no_scan_is_bad_input(capsys):
     code, out, err = run([], capsys)
     assert code == 2 and out == "" and "SCAN" in err
+
+
+def test_a_scan_that_calls_itself_a_model_is_not_checked_as_an_empty_one(tmp_path, capsys):
+    path = scan_file(tmp_path, PIPE)
+    document = json.loads(path.read_text())
+    document["format"] = "asbuilt-model"
+    path.write_text(json.dumps(document))
+    code, out, err = run([path], capsys)
+    assert code == 2 and out == ""
+    assert err == (
+        f'asbuilt: error: {path}: components: missing; it has "objects", so it looks like a '
+        'scan: a scan\'s format is "asbuilt-scan"\n'
+    )

@@ -142,29 +142,87 @@ def test_bad_documents_name_the_file_and_field(tmp_path, text, message):
 
 
 @pytest.mark.parametrize(
-    ("component", "message"),
+    ("component", "field", "message"),
     [
         (
             {"id": "P1", "type": "pipe", "shape": "straight", "start": [0, 0, 0]},
+            "",
             "missing field 'end'",
         ),
-        ({"id": "P1", "type": "pipe", "shape": "blob"}, "unknown shape 'blob'"),
+        ({"id": "P1", "type": "pipe", "shape": "blob"}, ".shape", 'unknown shape "blob"; use'),
         (
             {"id": "P1", "type": "bolt", "shape": "sphere", "center": [0, 0, 0], "radius": 1},
+            "",
             "component type must be one of",
         ),
         (
             {"id": "S", "type": "sphere", "shape": "sphere", "center": [0, 0], "radius": 1},
-            "center must have shape (3,)",
+            ".center",
+            "must be 3 finite numbers [x, y, z], not [0, 0]",
+        ),
+        (
+            {"id": "P1", "type": "pipe", "shape": "straight", "start": None, "end": [1, 0, 0]},
+            ".start",
+            "must be 3 finite numbers [x, y, z], not null",
+        ),
+        (
+            {
+                "id": "P1",
+                "type": "pipe",
+                "shape": "straight",
+                "start": [0, 0, 0],
+                "end": [1, 0, 0],
+                "od": "4in",
+            },
+            ".od",
+            'must be a finite number, not "4in"',
+        ),
+        (
+            {
+                "id": "E",
+                "type": "elbow",
+                "shape": "bend",
+                "ends": [[0, 0, 0]],
+                "center": [0, 0, 0],
+                "od": 0.1,
+            },
+            ".ends",
+            "must be two points [[x, y, z], [x, y, z]], not [[0, 0, 0]]",
         ),
     ],
 )
-def test_bad_components_are_located(component, message):
+def test_bad_components_are_located(component, field, message):
     document = {"format": FORMAT, "version": 1, "components": [component]}
     with pytest.raises(ModelDocumentError) as info:
         model_from_document(document, source="m.json")
-    assert str(info.value).startswith(f"m.json: components[0] ({component['id']}): ")
+    assert str(info.value).startswith(f"m.json: components[0] ({component['id']}){field}: ")
     assert message in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("document", "message"),
+    [
+        ({"format": FORMAT, "version": 1}, 'components: missing; add "components": [...]'),
+        (
+            {"format": FORMAT, "version": 1, "units": "m", "objects": []},
+            'components: missing; it has "objects", so it looks like a scan',
+        ),
+        (
+            {"format": FORMAT, "version": 1, "components": [5]},
+            "components[0]: must be a JSON object (a component), not 5",
+        ),
+        (
+            {"format": FORMAT, "version": 1, "components": [], "findings": ["x"]},
+            'findings[0]: must be a JSON object (a finding), not "x"',
+        ),
+    ],
+)
+def test_documents_that_are_not_models(document, message):
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value) == f"m.json: {message}" or str(info.value).startswith(
+        f"m.json: {message}"
+    )
 
 
 @pytest.mark.parametrize(
@@ -186,7 +244,7 @@ def test_bad_components_are_located(component, message):
     ],
 )
 def test_bad_spools_and_findings_are_located(key, entry, where, message):
-    document = {"format": FORMAT, "version": 1, key: [entry]}
+    document = {"format": FORMAT, "version": 1, "components": [], key: [entry]}
     with pytest.raises(ModelDocumentError) as info:
         model_from_document(document, source="m.json")
     assert str(info.value).startswith(f"m.json: {where}: ")
