@@ -219,8 +219,9 @@ def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
         raise ScanReadError(_too_large(source, len(text)))
     if isinstance(text, (bytes, bytearray)):
         text = _decode(bytes(text), source)
+    repeated: list[bool] = []
     try:
-        document = json.loads(text)
+        document = json.loads(text, object_pairs_hook=lambda pairs: _object_from(pairs, repeated))
     except json.JSONDecodeError as exc:
         raise ScanError(
             f"invalid JSON ({exc.msg}); fix the syntax there",
@@ -230,7 +231,59 @@ def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
     except RecursionError:
         raise ScanError("invalid JSON (nested too deeply)", source=source) from None
     context = _Context(source, may_hold_bools="true" in text or "false" in text)
+    if repeated:
+        where, key = _first_repeated(document, None)
+        raise context.error(
+            f"{where}.{key}" if where else key,
+            "given twice in one JSON object; keep one (JSON readers differ on which one counts)",
+        )
     return _scan_from_document(document, context)
+
+
+class _Repeated(dict):
+    """A JSON object in which a key appeared more than once (``repeated``: the first such)."""
+
+    repeated = ""
+
+
+def _object_from(pairs: list, repeated: list) -> dict:
+    """``json.loads`` object hook: a dict, marked (and ``repeated`` flagged) when a key repeats;
+    the last value wins, as in a plain ``json.loads``, until the repeat is reported."""
+    result = dict(pairs)
+    if len(result) == len(pairs):
+        return result
+    marked = _Repeated(result)
+    seen: set[str] = set()
+    for key, _ in pairs:
+        if key in seen:
+            marked.repeated = key
+            break
+        seen.add(key)
+    repeated.append(True)
+    return marked
+
+
+def _first_repeated(value, where: str | None):
+    """``(where, key)`` of the first object (depth first, in file order) with a repeated key;
+    ``where`` as in the error messages (``objects[3] (P4)``), None at the top level."""
+    if isinstance(value, _Repeated):
+        return where, value.repeated
+    if isinstance(value, dict):
+        for key, item in value.items():
+            if isinstance(item, (dict, list)):
+                found = _first_repeated(item, f"{where}.{key}" if where else key)
+                if found:
+                    return found
+    elif isinstance(value, list):
+        for index, item in enumerate(value):
+            if isinstance(item, (dict, list)):
+                label = f"{where}[{index}]"
+                if isinstance(item, dict) and isinstance(item.get("id"), str):
+                    label += f" ({item['id']})"
+                found = _first_repeated(item, label)
+                if found:
+                    return found
+    return None
 
 
 # --------------------------------------------------------------------------------------------

@@ -140,6 +140,24 @@ BAD = (
         schema_catches=False,  # not JSON at all
     ),
     Bad(
+        "a key given twice",
+        _text(
+            '{"format": "asbuilt-scan", "version": 1, "units": "mm", "units": "m", "objects": []}'
+        ),
+        "units: given twice in one JSON object; keep one (JSON readers differ on which one counts)",
+        schema_catches=False,  # a parsed document keeps one of the two
+    ),
+    Bad(
+        "an object's key given twice",
+        _text(
+            '{"format": "asbuilt-scan", "version": 1, "units": "m", "objects": [{"id": "K1", '
+            '"kind": "plane", "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "kind": "plane"}]}'
+        ),
+        "objects[0] (K1).kind: given twice in one JSON object; keep one (JSON readers differ on "
+        "which one counts)",
+        schema_catches=False,
+    ),
+    Bad(
         "top level not an object",
         _text("[1, 2, 3]"),
         "the top level is an array; an asbuilt-scan file is a JSON object starting "
