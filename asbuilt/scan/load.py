@@ -32,6 +32,7 @@ __all__ = [
     "VERSION",
     "MAX_FILE_BYTES",
     "MAX_POINTS",
+    "PLAUSIBLE_RANGE_SIGMA",
     "IDENTICAL_RTOL",
     "COLLINEAR_RTOL",
     "TOP_LEVEL_KEYS",
@@ -54,6 +55,11 @@ MAX_POINTS = 1_000_000
 IDENTICAL_RTOL = 1e-9
 #: Points whose second singular value is below this fraction of the first lie on a line.
 COLLINEAR_RTOL = 1e-6
+
+#: Range sigmas (metres) a range finder can have: a laser tracker's 10 micrometres to a cheap
+#: distance meter's few centimetres at long range, with margin. Outside, the value is almost
+#: surely in the wrong unit (a metre value in a millimetre file is 1000 times too small).
+PLAUSIBLE_RANGE_SIGMA = (1e-5, 0.1)
 
 #: Top-level keys the format defines; any other key is kept in ``Scan.extra`` and ignored.
 TOP_LEVEL_KEYS = ("format", "version", "units", "name", "sensor", "objects", "links")
@@ -300,7 +306,7 @@ def _scan_from_document(document, ctx: _Context) -> Scan:
     _check_format(document, ctx)
     factor = _check_units(document, ctx)
     name = _optional_string(document, "name", "name", ctx)
-    sensor = _sensor(document.get("sensor"), factor, ctx)
+    sensor = _sensor(document.get("sensor"), document["units"], ctx)
     objects = _objects(document, factor, ctx)
     links = _links(document.get("links"), objects, ctx)
     extra = {key: value for key, value in document.items() if key not in TOP_LEVEL_KEYS}
@@ -367,7 +373,8 @@ def _position(raw, factor: float, where: str, ctx: _Context) -> np.ndarray | Non
     return position
 
 
-def _sensor(raw, factor: float, ctx: _Context) -> Sensor:
+def _sensor(raw, units: str, ctx: _Context) -> Sensor:
+    factor = UNITS[units]
     if raw is None:
         return Sensor()
     if not isinstance(raw, dict):
@@ -384,6 +391,14 @@ def _sensor(raw, factor: float, ctx: _Context) -> Sensor:
                 "sensor.range_sigma",
                 f"must be a positive number (the range noise in the file's units), "
                 f"not {_describe(sigma)}",
+            )
+        low, high = PLAUSIBLE_RANGE_SIGMA
+        if not low <= float(sigma) * factor <= high:
+            raise ctx.error(
+                "sensor.range_sigma",
+                f"{float(sigma):g} {units} is not a range finder's noise (expected "
+                f"{low / factor:g} to {high / factor:g} {units}); it is in the file's units "
+                f"({units}): check the value and the units",
             )
         sigma = float(sigma) * factor
     return Sensor(position=position, range_sigma=sigma)

@@ -345,6 +345,13 @@ BAD = (
         "not -0.002",
     ),
     Bad(
+        "sensor sigma in the wrong unit",
+        _set("sensor", {"range_sigma": 2}),
+        "sensor.range_sigma: 2 m is not a range finder's noise (expected 1e-05 to 0.1 m); it is "
+        "in the file's units (m): check the value and the units",
+        schema_catches=False,  # the plausible range depends on the units
+    ),
+    Bad(
         "sensor position of 2 numbers",
         _set("sensor", {"position": [0.0, 0.0]}),
         "sensor.position: must be 3 finite numbers [x, y, z] in the file's units",

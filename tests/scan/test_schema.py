@@ -53,7 +53,11 @@ def test_schema_is_built_from_the_code_constants():
 @pytest.mark.parametrize("units", list(UNITS))
 def test_good_documents_pass_both(units):
     doc = make_doc(units)
-    doc.update(name="x", sensor={"position": [0, 0, 1], "range_sigma": 0.5}, links=[["K1", "K2"]])
+    doc.update(
+        name="x",
+        sensor={"position": [0, 0, 1], "range_sigma": 0.002 / UNITS[units]},
+        links=[["K1", "K2"]],
+    )
     doc["objects"][0]["measurements"] = [[1.0, 2.0, 3.0]] * len(doc["objects"][0]["points"])
     doc["objects"][0]["extra_key"] = {"anything": [1, 2]}
     doc["future_key"] = True
