@@ -13,6 +13,7 @@ on first use: :func:`asbuilt.fit.plane.fit_plane`, :func:`asbuilt.fit.sphere.fit
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import inspect
 import sys
@@ -103,10 +104,64 @@ def fit_points(
         array = as_points(points)
     except ValueError as exc:
         raise FitError(str(exc), where="points") from None
+    if sigma is not None and kind != "hull":
+        _require_spread_beyond_noise(array, kind, float(sigma))
     options = {}
     if viewpoint is not None and _accepts_viewpoint(function):
         options["viewpoint"] = np.asarray(viewpoint, dtype=np.float64)
-    return function(np.array(array), sigma=sigma, tolerances=tolerances, **options)
+    result = function(np.array(array), sigma=sigma, tolerances=tolerances, **options)
+    note = _undetermined(result)
+    if note is not None:
+        result = dataclasses.replace(result, notes=(*result.notes, note))
+    return result
+
+
+def _require_spread_beyond_noise(points: np.ndarray, kind: str, sigma: float) -> None:
+    """Raise FitError when the points (n, 3) metres lie within the range noise ``sigma``
+    (metres) of one line: no surface is measured, whatever primitive the fit would return (a
+    cylinder of micrometres around the line, a plane turned anyhow about it)."""
+    centred = points - points.mean(axis=0)
+    spread = np.linalg.svd(centred, compute_uv=False) / np.sqrt(len(points))
+    if spread.size > 1 and spread[1] <= sigma:
+        raise FitError(
+            f"The points lie within the range noise ({sigma * 1000:.3g} mm) of one line (RMS "
+            f"{spread[1] * 1000:.3g} mm across it); a {kind} needs points spread over its "
+            "surface.",
+            where="points",
+        )
+
+
+#: A fit whose size is known only to more than this fraction of itself (one standard error),
+#: or whose axis only to more than ``UNDETERMINED_AXIS_DEG``, is reported as not determined by
+#: its points (the weak-geometry compliance rule flags far milder cases).
+UNDETERMINED_RELATIVE = 0.5
+UNDETERMINED_AXIS_DEG = 30.0
+
+
+def _undetermined(result: FitResult) -> str | None:
+    """A note when the points do not determine the fitted primitive (standard errors of the
+    order of the values themselves), else None."""
+    stderr, primitive = result.stderr or {}, result.primitive
+    reasons = []
+    radius = getattr(primitive, "radius", None)
+    if radius is not None and stderr.get("radius") is not None:
+        if not stderr["radius"] <= UNDETERMINED_RELATIVE * radius:
+            reasons.append(f"radius +-{stderr['radius'] / radius:.0%}")
+    sizes = getattr(primitive, "size", None)
+    if sizes is not None and stderr.get("size") is not None:
+        observed = result.observed if result.observed is not None else (True,) * len(sizes)
+        relative = [se / size for se, size, seen in zip(stderr["size"], sizes, observed) if seen]
+        if relative and not max(relative) <= UNDETERMINED_RELATIVE:
+            reasons.append(f"size +-{max(relative):.0%}")
+    axis_deg = stderr.get("axis_deg")
+    if axis_deg is not None and not axis_deg <= UNDETERMINED_AXIS_DEG:
+        reasons.append(f"axis +-{axis_deg:.0f} deg")
+    if not reasons:
+        return None
+    return (
+        f"These points do not determine the {result.kind} (one standard error: "
+        f"{', '.join(reasons)}); measure more of its surface, or check its kind."
+    )
 
 
 @functools.cache

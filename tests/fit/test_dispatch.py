@@ -306,3 +306,39 @@ def test_real_auto_end_to_end():
     item = fit_object(ScanObject(id="X", kind="auto", points=points, index=0))
     assert item.requested == "auto" and item.result.kind == "cylinder"
     assert item.result.primitive.radius == pytest.approx(truth["radius"], abs=1e-3)
+
+
+@pytest.mark.parametrize("kind", ["cylinder", "plane", "sphere", "cuboid", "auto"])
+def test_points_within_the_noise_of_a_line_are_refused(kind):
+    # 30 shots along a 1 m line, 0.1 mm off it: no surface is measured at 2 mm noise.
+    rng = np.random.default_rng(7)
+    points = np.column_stack([np.linspace(0, 1, 30), 1e-4 * rng.standard_normal((30, 2))])
+    with pytest.raises(FitError) as info:
+        fit_points(kind, points, sigma=0.002)
+    assert info.value.where == "points"
+    assert info.value.message.startswith(
+        "The points lie within the range noise (2 mm) of one line (RMS 0.0"
+    )
+    assert info.value.message.endswith(f"a {kind} needs points spread over its surface.")
+
+
+def test_an_undetermined_fit_says_so():
+    # Six noise-free shots along a 1 m helix over 66 degrees of a 0.1 m pipe: at 1 mm noise
+    # they do not fix its radius or axis (standard errors larger than the values).
+    angles = np.radians(np.linspace(-33, 33, 6))
+    points = np.column_stack(
+        [np.linspace(0, 1, 6), 3.0 - 0.1 * np.cos(angles), 1.0 + 0.1 * np.sin(angles)]
+    )
+    result = fit_points("cylinder", points, sigma=0.001)
+    note = result.notes[-1]
+    assert note.startswith("These points do not determine the cylinder (one standard error: ")
+    assert note.endswith("); measure more of its surface, or check its kind.")
+    along, phi = np.meshgrid(np.linspace(0, 1, 6), np.radians(np.linspace(-60, 60, 5)))
+    well = fit_points(
+        "cylinder",
+        np.column_stack(
+            [along.ravel(), 3.0 - 0.1 * np.cos(phi.ravel()), 1.0 + 0.1 * np.sin(phi.ravel())]
+        ),
+        sigma=0.001,
+    )
+    assert not any(n.startswith("These points do not determine") for n in well.notes)
