@@ -5,6 +5,7 @@ The library API never prints. The main entry points::
     import asbuilt
     scan = asbuilt.load_scan("samples/spool.json")   # validated, metres inside
     report = asbuilt.fit(scan)                         # one FitResult per object
+    data = asbuilt.fit_report_to_dict(report)          # what `asbuilt fit --json` prints
 
 Importing :mod:`asbuilt` is cheap: fitting and scan loading use numpy/scipy only, and the CAD
 kernel (CadQuery) is imported only by :mod:`asbuilt.cad` and :mod:`asbuilt.export`.
@@ -37,6 +38,7 @@ _LAZY = {
     "fit_points": "asbuilt.fit",
     "FitResult": "asbuilt.fit",
     "FitReport": "asbuilt.fit",
+    "fit_report_to_dict": "asbuilt.fit.output",
     "Tolerances": "asbuilt.tolerances",
     "DEFAULT_TOLERANCES": "asbuilt.tolerances",
     "AsbuiltError": "asbuilt.errors",

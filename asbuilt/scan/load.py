@@ -111,7 +111,7 @@ def _is_finite_number(value) -> bool:
 
 
 def _article(kind: str) -> str:
-    return "an object" if kind == "auto" else f"a {kind}"
+    return 'an object of kind "auto"' if kind == "auto" else f"a {kind}"
 
 
 class _Context:
@@ -150,6 +150,8 @@ def load_scan(path) -> Scan:
         The content is not a valid version-1 scan (one located line says where and why).
     """
     source = os.fspath(path)
+    if not source:
+        raise ScanReadError("'': the scan file name is empty; give the scan's JSON file")
     try:
         size = os.stat(source).st_size
     except FileNotFoundError:

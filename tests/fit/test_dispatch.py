@@ -208,6 +208,10 @@ def test_package_level_names(stand_ins):
     assert isinstance(report, FitReport) and report.get("P1").result.kind == "sphere"
     report = asbuilt.fit(scan_of("plane"), DEFAULT_TOLERANCES, progress=None)
     assert len(report) == 1
+    from asbuilt.fit.output import fit_report_to_dict
+
+    assert asbuilt.fit_report_to_dict is fit_report_to_dict
+    assert asbuilt.fit_report_to_dict(report)["objects"][0]["kind"] == "plane"
 
 
 # --------------------------------------------------------------------------------------------

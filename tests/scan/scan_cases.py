@@ -277,6 +277,14 @@ BAD = (
         "the object",
     ),
     Bad(
+        "too few points for auto",
+        _set(
+            "objects.5.points", [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [1, 0, 1]]
+        ),
+        'objects[5] (K6).points: has 6 points; an object of kind "auto" needs at least 7; scan '
+        "more points on the object",
+    ),
+    Bad(
         "no points",
         _set("objects.0.points", []),
         "objects[0] (K1).points: has 0 points; a cylinder needs at least 6; scan more points on "

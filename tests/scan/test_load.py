@@ -331,3 +331,9 @@ def test_bad_object_station(station):
     assert str(err.value) == (
         "objects[0] (K1).station: must be 3 finite numbers [x, y, z] in the file's units"
     )
+
+
+def test_an_empty_file_name_is_named():
+    with pytest.raises(ScanReadError) as err:
+        load_scan("")
+    assert str(err.value) == "'': the scan file name is empty; give the scan's JSON file"
