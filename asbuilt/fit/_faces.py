@@ -37,6 +37,9 @@ _MAX_FIRST = 3
 _MAX_FIRST_HARD = 6
 _ENOUGH = 0.75
 _MAX_PAIRS = 150
+#: Above this many points, pairwise work is sampled or sorted instead of done on dense
+#: matrices (the fit stays linear-ish in the number of points).
+_DENSE_LIMIT = 600
 _MIN_FACE_POINTS = 3
 #: Points enough for a face whose direction two other seen faces fix (only its offset is free).
 _MIN_THIRD_FACE_POINTS = 2
@@ -298,17 +301,25 @@ def _second_plane(points, normals, first, threshold, gap, rng):
     basis = _perpendicular_basis(d1)
     # Point pairs: the plane through both that contains d1 (exactly perpendicular to face 1).
     r = rest.size
-    i, j = np.triu_indices(r, 1)
-    if i.size > _MAX_PAIRS:
-        keep = rng.choice(i.size, _MAX_PAIRS, replace=False)
-        i, j = i[keep], j[keep]
+    if r > _DENSE_LIMIT:
+        # Dense: draw the pairs directly (all pairs of 10,000 points would take 800 MB).
+        i, j = rng.integers(0, r, (2, 2 * _MAX_PAIRS))
+        distinct = i != j
+        i, j = np.minimum(i, j)[distinct][:_MAX_PAIRS], np.maximum(i, j)[distinct][:_MAX_PAIRS]
+    else:
+        i, j = np.triu_indices(r, 1)
+        if i.size > _MAX_PAIRS:
+            keep = rng.choice(i.size, _MAX_PAIRS, replace=False)
+            i, j = i[keep], j[keep]
     raw = cross_rows(d1, sub[j] - sub[i])
     pair_n, ok = _unit_rows(raw)
     ok &= np.linalg.norm(raw, axis=1) > 2 * threshold
     # Local normals made perpendicular to d1.
-    loc_n, loc_ok = _unit_rows(normals[rest] - np.outer(normals[rest] @ d1, d1))
+    # (Dense: the local normals of 200 points at random, as for the first planes.)
+    seeds = np.arange(r) if r <= _DENSE_LIMIT else rng.choice(r, 200, replace=False)
+    loc_n, loc_ok = _unit_rows(normals[rest[seeds]] - np.outer(normals[rest[seeds]] @ d1, d1))
     cand_n = np.concatenate([pair_n[ok], loc_n[loc_ok]])
-    cand_p = np.concatenate([sub[i[ok]], sub[loc_ok]])
+    cand_p = np.concatenate([sub[i[ok]], sub[seeds][loc_ok]])
     if cand_n.shape[0] == 0:
         return None
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
@@ -384,7 +395,7 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
                 else _MIN_FACE_POINTS
             )
             proj = proj_all[free, k]
-            counts = (np.abs(proj[:, None] - proj[None, :]) < threshold).sum(axis=1)
+            counts = _within(proj, threshold)
             c = int(np.argmax(counts))
             if counts[c] < least or (best is not None and counts[c] <= best[0]):
                 continue
@@ -397,6 +408,18 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
         if best is None:
             return faces
         faces = faces + [(best[1], best[2], best[3])]
+
+
+def _within(values: np.ndarray, threshold: float) -> np.ndarray:
+    """How many of ``values`` (m,) lie within ``threshold`` of each (itself included); above
+    ``_DENSE_LIMIT`` values by sorting (a pair exactly ``threshold`` apart may then round the
+    other way)."""
+    if values.size <= _DENSE_LIMIT:
+        return (np.abs(values[:, None] - values[None, :]) < threshold).sum(axis=1)
+    ordered = np.sort(values)
+    return np.searchsorted(ordered, values + threshold, "left") - np.searchsorted(
+        ordered, values - threshold, "right"
+    )
 
 
 def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap, view_proj=None) -> bool:

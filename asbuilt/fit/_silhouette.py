@@ -250,16 +250,17 @@ def _in_progression(v: float, others: np.ndarray, tol: float) -> bool:
     the raster shot they started from (each step at most halves the previous one, and the
     bracket's far end missed).
     """
-    for a in others:
-        d = a - v
-        if abs(d) <= tol:
-            continue
-        for target in (a + d, v - d):  # v, a, a + d; or v - d, v, a
-            k = int(np.searchsorted(others, target))
-            for m in (k - 1, k):
-                if 0 <= m < others.size and abs(others[m] - target) <= tol:
-                    return True
-    return False
+    step = others - v
+    apart = np.abs(step) > tol
+    if not apart.any():
+        return False
+    # v, a, a + d or v - d, v, a for every a = v + d of the others: is a third value there?
+    targets = np.concatenate([others[apart] + step[apart], v - step[apart]])
+    k = np.searchsorted(others, targets)
+    last = others.size - 1
+    below = others[np.clip(k - 1, 0, last)]
+    above = others[np.clip(k, 0, last)]
+    return bool(np.any((np.abs(below - targets) <= tol) | (np.abs(above - targets) <= tol)))
 
 
 def edge_shots(points: np.ndarray, viewpoint: np.ndarray):

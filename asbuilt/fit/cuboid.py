@@ -97,6 +97,11 @@ METHOD = (
 )
 
 
+#: Above this many points the nearest-neighbour searches use a k-d tree instead of a dense
+#: distance matrix (same result; a dense matrix of 10,000 points is 2.4 GB).
+_DENSE_LIMIT = 600
+
+
 def _spread_subset(x: np.ndarray, base: np.ndarray) -> np.ndarray:
     """Indices of the ``base`` points (n,) bool plus the others that stand apart from them.
 
@@ -107,10 +112,24 @@ def _spread_subset(x: np.ndarray, base: np.ndarray) -> np.ndarray:
     if len(taken) < 2 or len(taken) == x.shape[0]:
         return np.flatnonzero(base) if len(taken) >= 2 else np.arange(x.shape[0])
     pts = x[taken]
+    others = np.flatnonzero(~base)
+    if len(taken) > _DENSE_LIMIT or others.size > _DENSE_LIMIT:
+        from scipy.spatial import cKDTree
+
+        tree = cKDTree(pts)
+        least = 0.5 * median(tree.query(pts, k=2)[0][:, 1])
+        # Only a point far enough from every base point can join; those are few (bisection
+        # shots), so the greedy pass over them is cheap.
+        apart = others[tree.query(x[others], k=1)[0] >= least]
+        joined: list[int] = []
+        for i in apart:
+            if not joined or np.linalg.norm(x[joined] - x[i], axis=1).min() >= least:
+                joined.append(int(i))
+        return np.sort(np.array(taken + joined, dtype=np.int64))
     d = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=2)
     np.fill_diagonal(d, np.inf)
     least = 0.5 * median(d.min(axis=1))
-    for i in np.flatnonzero(~base):
+    for i in others:
         if np.linalg.norm(x[taken] - x[i], axis=1).min() >= least:
             taken.append(i)
     return np.sort(np.array(taken, dtype=np.int64))

@@ -86,3 +86,24 @@ def test_segment_returns_none_when_no_face_spans_two_dimensions():
     pts[:, 0] += np.random.default_rng(6).normal(0.0, 1e-6, 8)
     normals, _, _ = _faces.local_normals(pts, 4)
     assert _faces.segment(pts, normals, 0.001, 0.1, 20.0) is None
+
+
+def test_dense_paths_give_what_the_dense_matrices_give(monkeypatch):
+    # Above _DENSE_LIMIT points the pair counts are sorted, not a dense matrix: same counts
+    # (but for a pair exactly the threshold apart, where rounding may go either way).
+    rng = np.random.default_rng(5)
+    values = rng.uniform(0, 1, 900)
+    sorted_counts = _faces._within(values, 0.01)
+    dense = (np.abs(values[:, None] - values[None, :]) < 0.01).sum(axis=1)
+    np.testing.assert_array_equal(sorted_counts, dense)
+
+
+def test_spread_subset_with_a_tree_matches_the_dense_one(monkeypatch):
+    from asbuilt.fit import cuboid
+
+    rng = np.random.default_rng(11)
+    x = rng.uniform(0, 1, (300, 3))
+    base = rng.uniform(size=300) < 0.8
+    dense = cuboid._spread_subset(x, base)
+    monkeypatch.setattr(cuboid, "_DENSE_LIMIT", 10)
+    np.testing.assert_array_equal(cuboid._spread_subset(x, base), dense)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from asbuilt.fit import _silhouette
 
@@ -137,3 +139,27 @@ def test_raster_grid_pins_the_sides_that_bisection_shots_reach_beyond():
     # and the plain raster's window is unchanged by the check
     plain = _silhouette.raster_window(_points(view, raster), view)
     assert plain[1][2] == pytest.approx(-0.11)
+
+
+def _in_progression_reference(v, others, tol):
+    """The definition, one value at a time."""
+    for a in others:
+        d = a - v
+        if abs(d) <= tol:
+            continue
+        for target in (a + d, v - d):
+            if np.any(np.abs(others - target) <= tol):
+                return True
+    return False
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.integers(-40, 40), min_size=0, max_size=12, unique=True),
+    st.integers(-40, 40),
+    st.sampled_from([0.0, 0.5, 1.5]),
+)
+def test_in_progression_matches_its_definition(values, v, tol):
+    others = np.sort(np.array(values, dtype=float) * 0.37)
+    v = v * 0.37
+    assert _silhouette._in_progression(v, others, tol) == _in_progression_reference(v, others, tol)
