@@ -234,8 +234,14 @@ class Hull:
         keep = norms > 1e-15
         normals = normals[keep] / norms[keep, None]
         offsets = np.einsum("ij,ij->i", normals, tri[keep, 0])
-        pts = np.asarray(points, dtype=np.float64)
-        return (pts @ normals.T - offsets).max(axis=1)
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        # In blocks of rows: a dense cloud against a many-faced hull would be a huge matrix.
+        rows = max(1, 4_000_000 // max(len(normals), 1))
+        out = np.empty(len(pts))
+        for start in range(0, len(pts), rows):
+            block = pts[start : start + rows]
+            out[start : start + rows] = (block @ normals.T - offsets).max(axis=1)
+        return out
 
 
 Primitive = Cylinder | Cuboid | Sphere | Plane | Hull

@@ -77,3 +77,23 @@ def test_arrays_are_read_only_float64_copies():
         cyl.center[0] = 1.0
     with pytest.raises(AttributeError):
         cyl.radius = 2.0  # type: ignore[misc]
+
+
+def test_hull_distance_in_blocks_equals_the_direct_product():
+    from scipy.spatial import ConvexHull
+
+    rng = np.random.default_rng(2)
+    sphere = rng.normal(size=(3000, 3))
+    sphere /= np.linalg.norm(sphere, axis=1)[:, None]
+    hull = ConvexHull(sphere)
+    used = np.unique(hull.simplices)
+    remap = np.full(len(sphere), -1)
+    remap[used] = np.arange(len(used))
+    shape = Hull(sphere[used], remap[hull.simplices])
+    points = rng.uniform(-1.5, 1.5, (3000, 3))  # 3,000 x ~6,000 faces: several blocks
+    tri = shape.vertices[shape.faces]
+    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    offsets = np.einsum("ij,ij->i", normals, tri[:, 0])
+    direct = (points @ normals.T - offsets).max(axis=1)
+    np.testing.assert_allclose(shape.distance(points), direct, rtol=0, atol=1e-12)

@@ -18,6 +18,7 @@ Everything here is a pure numpy function on float64 arrays in metres. The fits i
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -618,6 +619,21 @@ def incidence_variance(residuals: np.ndarray, square_on: np.ndarray, mask) -> np
     if not (np.isfinite(top) and top > 0 and slope > EVIDENCE * np.sqrt(max(slope_var, 0.0))):
         return None
     return np.clip((level + slope * square_on) / top, MIN_RELATIVE_VARIANCE, 1.0)
+
+
+#: Most points a batch of random-sample starts is scored on: a dense cloud is subsampled for
+#: that (the scores are starts x points matrices), then the chosen start is refined on all.
+SCORED_POINTS = 2000
+
+
+def scoring_subset(points: np.ndarray, keep: int, rng) -> tuple[np.ndarray, int]:
+    """The points (n, 3) metres to score random-sample starts on, and the trimmed count for
+    them: all of them up to ``SCORED_POINTS``, else that many at random with ``keep`` scaled."""
+    n = len(points)
+    if n <= SCORED_POINTS:
+        return points, keep
+    pick = np.sort(rng.choice(n, SCORED_POINTS, replace=False))
+    return points[pick], max(1, int(math.ceil(keep * SCORED_POINTS / n)))
 
 
 def median_spacing(points: np.ndarray) -> float:

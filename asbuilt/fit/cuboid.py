@@ -100,6 +100,9 @@ METHOD = (
 #: Above this many points the nearest-neighbour searches use a k-d tree instead of a dense
 #: distance matrix (same result; a dense matrix of 10,000 points is 2.4 GB).
 _DENSE_LIMIT = 600
+#: Most points the face segmentation looks at (a dense cloud is subsampled for it: its plane
+#: hypotheses are scored against every segmented point).
+_SEGMENTED_POINTS = 2000
 
 
 def _spread_subset(x: np.ndarray, base: np.ndarray) -> np.ndarray:
@@ -673,6 +676,10 @@ def fit_cuboid(
     seg = _spread_subset(x, edges[0] < 0)
     if seg.size < max(MIN_POINTS["cuboid"], n // 2):
         seg = np.arange(n)
+    if seg.size > _SEGMENTED_POINTS:
+        # A dense cloud: faces are found on a random subsample; the fit still uses every point.
+        pick = np.random.default_rng(seg.size).choice(seg.size, _SEGMENTED_POINTS, replace=False)
+        seg = seg[np.sort(pick)]
     xs = x[seg]
     normals, local_rms, hood = _faces.local_normals(xs, tolerances.normal_neighbours)
     fourth = hood[:, min(3, hood.shape[1] - 1)]

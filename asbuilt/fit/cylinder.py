@@ -159,6 +159,9 @@ SAME_BASIN_COS = float(np.cos(np.radians(5.0)))
 SAME_BASIN_RELATIVE = 0.10
 #: A cylinder this many times wider than the points' extent is, over them, nearly a plane.
 PLANE_LIKE = 3.0
+#: Above this many points (a dense cloud, not a sparse scan) the starts are found on this many
+#: of them at random (memory and time otherwise grow with starts x samples x points).
+DENSE_POINTS = 2000
 
 
 def _rms(values: np.ndarray) -> float:
@@ -473,6 +476,13 @@ def fit_cylinder(
     pts = validate_points(points, "cylinder")
     offset = pts.mean(axis=0)
     local = pts - offset
+    everything = None
+    if len(local) > DENSE_POINTS:
+        # A dense cloud: the starts and the robust choice run on a random subsample (their
+        # batched circles grow as starts x samples x points), and the chosen fit is then
+        # settled on every point.
+        pick = np.random.default_rng(len(local)).choice(len(local), DENSE_POINTS, replace=False)
+        everything, local = local, local[np.sort(pick)]
     _, spread, directions = principal_axes(local)
     check_spread(spread, "cylinder", 3)
     normals, flatness = local_normals(local, tolerances.normal_neighbours)
@@ -561,6 +571,11 @@ def fit_cylinder(
             # Even the best fit hides a third of the shots behind itself: the shots were not
             # taken from this viewpoint.
             robust, ignored_view = blind, True
+    if everything is not None:
+        local = everything
+        robust = robust_geometric_fit(
+            local, [robust.state], _MODEL, kind="cylinder", sigma=sigma, tolerances=tolerances
+        )
     near = robust
     robust = _drop_far_side(near, local, tolerances)
     far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))

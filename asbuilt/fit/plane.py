@@ -28,6 +28,7 @@ from asbuilt.fit._common import (
     principal_axes,
     require_spread,
     robust_geometric_fit,
+    scoring_subset,
     stderr_of,
     validate_points,
 )
@@ -86,6 +87,7 @@ def _triple_start(points: np.ndarray, keep: int, samples: int = 48):
     if not np.any(good):
         return None
     normal, a = normal[good] / norm[good, None], a[good]
+    points, keep = scoring_subset(points, keep, rng)
     distance = np.einsum("snk,sk->sn", points[None, :, :] - a[:, None, :], normal)
     cost = np.partition(distance * distance, keep - 1, axis=1)[:, :keep].sum(axis=1)
     best = int(np.argmin(cost))

@@ -26,6 +26,7 @@ from asbuilt.fit._common import (
     noise_level,
     require_spread,
     robust_geometric_fit,
+    scoring_subset,
     stderr_of,
     validate_points,
 )
@@ -104,6 +105,7 @@ def _quad_start(points: np.ndarray, keep: int, samples: int = 64):
     offset = np.linalg.solve(rest[good], rhs[good][:, :, None])[:, :, 0]
     center = base[good] + offset
     radius = np.linalg.norm(offset, axis=1)
+    points, keep = scoring_subset(points, keep, rng)
     rel = points[None, :, :] - center[:, None, :]
     residual = np.sqrt(np.einsum("snk,snk->sn", rel, rel)) - radius[:, None]
     cost = np.partition(residual * residual, keep - 1, axis=1)[:, :keep].sum(axis=1)

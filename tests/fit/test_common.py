@@ -237,3 +237,16 @@ def test_gauss_newton_steps_solve_singular_normal_equations_by_least_squares():
     )
     singular = np.array([[1.0, 0.0], [0.0, 0.0]])
     np.testing.assert_allclose(common._newton_step(singular, np.array([2.0, 0.0])), [-2.0, 0.0])
+
+
+def test_scoring_subset_keeps_sparse_scans_whole_and_scales_keep():
+    from asbuilt.fit._common import SCORED_POINTS, scoring_subset
+
+    rng = np.random.default_rng(0)
+    sparse = rng.uniform(size=(40, 3))
+    same, keep = scoring_subset(sparse, 30, rng)
+    assert same is sparse and keep == 30
+    dense = rng.uniform(size=(4 * SCORED_POINTS, 3))
+    subset, keep = scoring_subset(dense, 3 * SCORED_POINTS, rng)
+    assert subset.shape == (SCORED_POINTS, 3) and keep == 3 * SCORED_POINTS // 4
+    assert len(np.unique(subset, axis=0)) == SCORED_POINTS  # drawn without replacement

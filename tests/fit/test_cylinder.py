@@ -418,3 +418,22 @@ def test_without_a_viewpoint_a_thin_pipe_is_not_a_plane_through_the_station(scan
     assert abs(fit.primitive.radius - scan["radius"]) < 0.003
     assert angle_deg(fit.primitive.axis, scan["axis"]) < 2.0
     assert fit.n_points - fit.n_inliers == 4
+
+
+def test_a_dense_cloud_is_fitted_from_a_subsample_then_on_every_point():
+    # 6,000 points (above DENSE_POINTS) on 150 degrees of an NPS 8 pipe, 1 mm noise.
+    from asbuilt.fit.cylinder import DENSE_POINTS
+
+    rng = np.random.default_rng(4)
+    n = 6000
+    assert n > DENSE_POINTS
+    angle = np.radians(rng.uniform(-75, 75, n))
+    along = rng.uniform(-0.75, 0.75, n)
+    radius = 0.10955
+    points = np.column_stack(
+        [along, 3.0 - radius * np.cos(angle), 1.0 + radius * np.sin(angle)]
+    ) + rng.normal(0, 0.001, (n, 3))
+    result = fit_cylinder(points, sigma=0.001, viewpoint=np.array([0.0, 0.0, 1.0]))
+    assert result.primitive.radius == pytest.approx(radius, abs=0.0005)
+    assert abs(result.primitive.axis[0]) > np.cos(np.radians(0.2))
+    assert result.inliers.sum() > 0.99 * n  # refined on every point, not the subsample
