@@ -116,16 +116,25 @@ def fit_points(
     return result
 
 
+#: Points whose RMS spread across their best line is at most this many range sigmas are taken
+#: as shots of a line: pure noise scatters them by about one sigma across it (more with the
+#: pointing noise), while the thinnest pipe worth fitting spreads its shots by about a third
+#: of its diameter (7 mm for a 21 mm NPS 1/2 pipe).
+LINE_SPREAD_SIGMAS = 2.0
+
+
 def _require_spread_beyond_noise(points: np.ndarray, kind: str, sigma: float) -> None:
     """Raise FitError when the points (n, 3) metres lie within the range noise ``sigma``
-    (metres) of one line: no surface is measured, whatever primitive the fit would return (a
-    cylinder of micrometres around the line, a plane turned anyhow about it)."""
+    (metres) of one line (``LINE_SPREAD_SIGMAS``): no surface is measured, whatever primitive
+    the fit would return (a cylinder of a few millimetres around the line, a plane turned
+    anyhow about it)."""
     centred = points - points.mean(axis=0)
     spread = np.linalg.svd(centred, compute_uv=False) / np.sqrt(len(points))
-    if spread.size > 1 and spread[1] <= sigma:
+    if spread.size > 1 and spread[1] <= LINE_SPREAD_SIGMAS * sigma:
+        what = 'an object of kind "auto"' if kind == "auto" else f"a {kind}"
         raise FitError(
             f"The points lie within the range noise ({sigma * 1000:.3g} mm) of one line (RMS "
-            f"{spread[1] * 1000:.3g} mm across it); a {kind} needs points spread over its "
+            f"{spread[1] * 1000:.3g} mm across it); {what} needs points spread over its "
             "surface.",
             where="points",
         )
