@@ -40,18 +40,27 @@ def _target(path) -> tuple[Path, bool]:
     a directory, before anything is written.
     """
     given = Path(path)
-    if not str(path):
+    text = os.fspath(path)
+    if not text:
         raise ExportError("the output file name is empty; give a file name", source="''")
-    final = Path(os.path.realpath(given)) if given.is_symlink() else given
     try:
-        info = final.stat()
+        info = os.stat(given)  # through any links
     except OSError:
-        return final, False  # a new file (or one the rename will report on)
-    if stat.S_ISDIR(info.st_mode):
+        info = None  # a new file (or one the rename will report on)
+    if info is not None and stat.S_ISDIR(info.st_mode):
         raise ExportError(
-            "is a directory; give a file name to write (e.g. add /model.step)", source=str(given)
+            "is a directory; give a file name to write (e.g. add /model.step)", source=text
         )
-    return final, not stat.S_ISREG(info.st_mode)
+    if text.endswith(("/", os.sep)):
+        raise ExportError(
+            "ends with a slash, so it names a directory; give a file name", source=text
+        )
+    if info is not None and not stat.S_ISREG(info.st_mode):
+        # A pipe or device, possibly behind links (/dev/stdout -> /proc/self/fd/1 -> pipe:[..],
+        # which has no path of its own): opened as given.
+        return given, True
+    # A link to a file (or a dangling one) is written through: its target is replaced.
+    return (Path(os.path.realpath(given)) if given.is_symlink() else given), False
 
 
 def check_target(path, option: str = "--out") -> Path:

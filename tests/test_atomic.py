@@ -143,3 +143,34 @@ def test_a_failed_rename_discards_what_is_not_published(tmp_path, monkeypatch):
         str(info.value) == f"{tmp_path / 'b.bin'}: cannot write the file (No space left on device)"
     )
     assert not [p for p in tmp_path.iterdir() if p.name.endswith(".part")]
+
+
+def test_a_link_to_a_pipe_writes_into_the_pipe(tmp_path):
+    # As /dev/stdout -> /proc/self/fd/1 -> pipe:[...] when the output is piped.
+    import os
+    import threading
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    link = tmp_path / "out.json"
+    link.symlink_to(fifo)
+    received = []
+    reader = threading.Thread(target=lambda: received.append(fifo.read_bytes()))
+    reader.start()
+    with atomic_write(link, "w") as f:
+        f.write("through the link")
+    reader.join(timeout=10)
+    assert received == [b"through the link"]
+    assert link.is_symlink() and fifo.is_fifo()
+
+
+def test_a_name_ending_in_a_slash_is_refused(tmp_path, monkeypatch):
+    from asbuilt.atomic import check_target
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ExportError) as info:
+        check_target("newdir/")
+    assert (
+        str(info.value) == "newdir/: ends with a slash, so it names a directory; give a file name"
+    )
+    assert list(tmp_path.iterdir()) == []
