@@ -345,7 +345,7 @@ class _BadField(ValueError):
 
 
 def _describe(value) -> str:
-    text = json.dumps(value) if not isinstance(value, float) or math.isfinite(value) else "NaN"
+    text = json.dumps(value)  # NaN and Infinity as JSON readers that allow them write them
     return text if len(text) <= 40 else text[:37] + "..."
 
 
@@ -378,6 +378,66 @@ def _pair(entry: dict, key: str) -> list:
     if not isinstance(value, list) or len(value) != 2:
         raise _BadField(key, f"must be two points [[x, y, z], [x, y, z]], not {_describe(value)}")
     return [_point(entry, key, item) for item in value]
+
+
+def _optional_text(entry: dict, key: str) -> None:
+    value = entry.get(key)
+    if value is not None and not isinstance(value, str):
+        raise _BadField(key, f"must be text or null, not {_describe(value)}")
+
+
+def _check_component_fields(entry: dict) -> None:
+    """The non-geometric fields a component is rebuilt from, by type (``_BadField`` if not)."""
+    if not isinstance(entry["id"], str) or not entry["id"]:
+        raise _BadField("id", f"must be non-empty text, not {_describe(entry['id'])}")
+    for key in ("source", "spool", "group", "label", "nominal", "schedule"):
+        _optional_text(entry, key)
+    sources = entry.get("sources")
+    if sources is not None and (
+        not isinstance(sources, list) or not all(isinstance(item, str) for item in sources)
+    ):
+        raise _BadField("sources", f"must be a list of object ids, not {_describe(sources)}")
+    snap = entry.get("snap")
+    if snap is not None and not isinstance(snap, dict):
+        raise _BadField("snap", f"must be an object or null, not {_describe(snap)}")
+    corrections = entry.get("corrections")
+    if corrections is None:
+        return
+    if not isinstance(corrections, list):
+        raise _BadField("corrections", f"must be a list, not {_describe(corrections)}")
+    for number, item in enumerate(corrections):
+        key = f"corrections[{number}]"
+        if not isinstance(item, dict):
+            raise _BadField(key, f"must be an object, not {_describe(item)}")
+        if not isinstance(item.get("what"), str):
+            raise _BadField(f"{key}.what", f"must be text, not {_describe(item.get('what'))}")
+        if "size" not in item:
+            raise _BadField(f"{key}.size", "missing; give the correction's size (a number)")
+        try:
+            _number(item, "size")
+        except _BadField as exc:
+            raise _BadField(f"{key}.size", str(exc)) from None
+
+
+def _points(entry: dict, key: str, count: int | None = None) -> list:
+    """A field holding a list of points (``count`` of them when given)."""
+    value = entry[key]
+    if not isinstance(value, list) or (count is not None and len(value) != count):
+        what = f"{count} points" if count is not None else "a list of points"
+        raise _BadField(key, f"must be {what} [[x, y, z], ...], not {_describe(value)}")
+    return [_point(entry, key, item) for item in value]
+
+
+def _faces(entry: dict) -> list:
+    value = entry["faces"]
+    if not isinstance(value, list) or not all(
+        isinstance(face, list)
+        and len(face) == 3
+        and all(isinstance(i, int) and not isinstance(i, bool) for i in face)
+        for face in value
+    ):
+        raise _BadField("faces", f"must be triangles [[i, j, k], ...], not {_describe(value)}")
+    return value
 
 
 def _require_object(entry, where: str, what: str, source: str | None) -> None:
@@ -427,14 +487,14 @@ def _geometry(entry: dict):
             _number(entry, "length"),
         )
     if shape == "cuboid":
-        return Cuboid(_point(entry, "center"), entry["axes"], _point(entry, "size"))
+        return Cuboid(_point(entry, "center"), _points(entry, "axes", 3), _point(entry, "size"))
     if shape == "sphere":
         return Sphere(_point(entry, "center"), _number(entry, "radius"))
     if shape == "plane":
-        outline = entry.get("outline") or np.zeros((0, 3))
+        outline = _points(entry, "outline") if entry.get("outline") else np.zeros((0, 3))
         return Plane(_point(entry, "point"), _point(entry, "normal"), outline)
     if shape == "hull":
-        return Hull(entry["vertices"], entry["faces"])
+        return Hull(_points(entry, "vertices"), _faces(entry))
     raise _BadField(
         "shape",
         f"unknown shape {_describe(shape)}; use one of straight, bend, reducer, tee, cylinder, "
@@ -460,12 +520,13 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
         _require_object(entry, f"components[{index}]", "a component", source)
         where = f"components[{index}] ({entry.get('id')})"
         try:
+            _check_component_fields(entry)
             sources = tuple(
                 entry.get("sources") or ([entry["source"]] if entry.get("source") else [])
             )
             components.append(
                 Component(
-                    id=str(entry["id"]),
+                    id=entry["id"],
                     type=entry["type"],
                     geometry=_geometry(entry),
                     sources=sources,

@@ -285,7 +285,7 @@ def _first_repeated(value, where: str | None):
     elif isinstance(value, list):
         for index, item in enumerate(value):
             if isinstance(item, (dict, list)):
-                label = f"{where}[{index}]"
+                label = f"{where or ''}[{index}]"
                 if isinstance(item, dict) and isinstance(item.get("id"), str):
                     label += f" ({item['id']})"
                 found = _first_repeated(item, label)

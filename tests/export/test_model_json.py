@@ -291,3 +291,33 @@ def test_schema_rejects_broken_documents(zoo, change, path):
     errors = list(jsonschema.Draft202012Validator(model_schema()).iter_errors(document))
     assert errors
     assert any(list(error.absolute_path)[: len(path)] == path for error in errors)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"id": [1]}, "components[0] ([1]).id: must be non-empty text, not [1]"),
+        ({"sources": "P1"}, 'components[0] (P1).sources: must be a list of object ids, not "P1"'),
+        ({"snap": [1]}, "components[0] (P1).snap: must be an object or null, not [1]"),
+        ({"corrections": "x"}, 'components[0] (P1).corrections: must be a list, not "x"'),
+        (
+            {"corrections": [{"what": "moved", "size": "big"}]},
+            'components[0] (P1).corrections[0].size: must be a finite number, not "big"',
+        ),
+        ({"od": float("inf")}, "components[0] (P1).od: must be a finite number, not Infinity"),
+    ],
+)
+def test_component_fields_are_checked_by_type(change, message):
+    component = {
+        "id": "P1",
+        "type": "pipe",
+        "shape": "straight",
+        "start": [0, 0, 0],
+        "end": [1, 0, 0],
+        "od": 0.1143,
+        **change,
+    }
+    document = {"format": FORMAT, "version": 1, "components": [component]}
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value) == f"m.json: {message}"
