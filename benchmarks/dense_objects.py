@@ -2,8 +2,8 @@
 
 asbuilt is built for sparse scans, but a scan may hold up to 1,000,000 points and users do
 load dense clouds of one object. This script fits a pipe (OD 200 mm, 1.5 m seen over 150
-degrees) and a column (0.4 x 0.3 m, two faces, 2 m tall) with 1 mm noise, at growing point
-counts, with every kind, and reports the wall-clock time per fit and the process's peak memory
+degrees), a column (0.4 x 0.3 m, two faces, 2 m tall), a tank head (half a 0.6 m sphere) and a
+wall (3 x 2 m), with 1 mm noise, at growing point counts, with every kind, and reports the wall-clock time per fit and the process's peak memory
 so far (``ru_maxrss``; it only grows, so read it as an upper bound for the rows above).
 
 Run: ``python benchmarks/dense_objects.py [--counts 1000 10000] [--large]``
@@ -54,6 +54,23 @@ def column(n: int, rng) -> np.ndarray:
     return points + rng.normal(0.0, NOISE, points.shape)
 
 
+def tank_head(n: int, rng) -> np.ndarray:
+    """``n`` points (n, 3) metres on the half of a 0.6 m sphere facing the sensor."""
+    centre = np.array([0.0, 4.0, 1.0])
+    toward = (SENSOR - centre) / np.linalg.norm(SENSOR - centre)
+    direction = rng.normal(size=(n, 3))
+    direction /= np.linalg.norm(direction, axis=1)[:, None]
+    direction *= np.where(direction @ toward < 0, -1.0, 1.0)[:, None]
+    points = centre + 0.3 * direction
+    return points + rng.normal(0.0, NOISE, points.shape)
+
+
+def wall(n: int, rng) -> np.ndarray:
+    """``n`` points (n, 3) metres on a 3 x 2 m wall 6 m away."""
+    points = np.column_stack([rng.uniform(-1.5, 1.5, n), np.full(n, 6.0), rng.uniform(0.0, 2.0, n)])
+    return points + rng.normal(0.0, NOISE, points.shape)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--counts", type=int, nargs="+", default=[1000, 10000])
@@ -66,10 +83,12 @@ def main(argv=None) -> int:
     for name, make, kinds in (
         ("pipe", pipe, ("cylinder", "auto")),
         ("column", column, ("cuboid", "auto")),
+        ("tank head", tank_head, ("sphere", "auto")),
+        ("wall", wall, ("plane", "auto")),
     ):
         for n in counts:
             points = make(n, rng)
-            for kind in (*kinds, "plane", "sphere", "hull"):
+            for kind in dict.fromkeys((*kinds, "plane", "sphere", "hull")):
                 start = time.perf_counter()
                 try:
                     result = fit_points(kind, points, sigma=NOISE, viewpoint=SENSOR)
