@@ -372,14 +372,6 @@ def _point(entry: dict, key: str, value=None) -> list:
     return value
 
 
-def _pair(entry: dict, key: str) -> list:
-    """A field of two points [[x, y, z], [x, y, z]]."""
-    value = entry[key]
-    if not isinstance(value, list) or len(value) != 2:
-        raise _BadField(key, f"must be two points [[x, y, z], [x, y, z]], not {_describe(value)}")
-    return [_point(entry, key, item) for item in value]
-
-
 def _optional_text(entry: dict, key: str) -> None:
     value = entry.get(key)
     if value is not None and not isinstance(value, str):
@@ -423,8 +415,9 @@ def _points(entry: dict, key: str, count: int | None = None) -> list:
     """A field holding a list of points (``count`` of them when given)."""
     value = entry[key]
     if not isinstance(value, list) or (count is not None and len(value) != count):
-        what = f"{count} points" if count is not None else "a list of points"
-        raise _BadField(key, f"must be {what} [[x, y, z], ...], not {_describe(value)}")
+        what = {None: "a list of points [[x, y, z], ...]", 2: "two points [[x, y, z], [x, y, z]]"}
+        shape = what.get(count, f"{count} points [[x, y, z], ...]")
+        raise _BadField(key, f"must be {shape}, not {_describe(value)}")
     return [_point(entry, key, item) for item in value]
 
 
@@ -458,7 +451,7 @@ def _geometry(entry: dict):
             _point(entry, "start"), _point(entry, "end"), _number(entry, "od") / 2, _wall(entry)
         )
     if shape == "bend":
-        start, end = _pair(entry, "ends")
+        start, end = _points(entry, "ends", 2)
         return Bend(start, end, _point(entry, "center"), _number(entry, "od") / 2, _wall(entry))
     if shape == "reducer":
         return Reducer(
@@ -469,7 +462,7 @@ def _geometry(entry: dict):
             _wall(entry),
         )
     if shape == "tee":
-        run_start, run_end = _pair(entry, "run")
+        run_start, run_end = _points(entry, "run", 2)
         return Tee(
             _point(entry, "center"),
             run_start,

@@ -626,14 +626,21 @@ def incidence_variance(residuals: np.ndarray, square_on: np.ndarray, mask) -> np
 SCORED_POINTS = 2000
 
 
+def random_subset(values: np.ndarray, most: int, rng) -> np.ndarray:
+    """``values`` (rows of an array) as they are when at most ``most``, else ``most`` of them
+    drawn at random without replacement, in their original order."""
+    if len(values) <= most:
+        return values
+    return values[np.sort(rng.choice(len(values), most, replace=False))]
+
+
 def scoring_subset(points: np.ndarray, keep: int, rng) -> tuple[np.ndarray, int]:
     """The points (n, 3) metres to score random-sample starts on, and the trimmed count for
     them: all of them up to ``SCORED_POINTS``, else that many at random with ``keep`` scaled."""
     n = len(points)
     if n <= SCORED_POINTS:
         return points, keep
-    pick = np.sort(rng.choice(n, SCORED_POINTS, replace=False))
-    return points[pick], max(1, int(math.ceil(keep * SCORED_POINTS / n)))
+    return random_subset(points, SCORED_POINTS, rng), max(1, math.ceil(keep * SCORED_POINTS / n))
 
 
 def median_spacing(points: np.ndarray) -> float:

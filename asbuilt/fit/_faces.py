@@ -317,7 +317,8 @@ def _second_plane(points, normals, first, threshold, gap, rng):
     # Local normals made perpendicular to d1.
     # (Dense: the local normals of 200 points at random, as for the first planes.)
     seeds = np.arange(r) if r <= _DENSE_LIMIT else rng.choice(r, 200, replace=False)
-    loc_n, loc_ok = _unit_rows(normals[rest[seeds]] - np.outer(normals[rest[seeds]] @ d1, d1))
+    seed_normals = normals[rest[seeds]]
+    loc_n, loc_ok = _unit_rows(seed_normals - np.outer(seed_normals @ d1, d1))
     cand_n = np.concatenate([pair_n[ok], loc_n[loc_ok]])
     cand_p = np.concatenate([sub[i[ok]], sub[seeds][loc_ok]])
     if cand_n.shape[0] == 0:

@@ -73,6 +73,7 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette
+from asbuilt.fit._common import random_subset
 from asbuilt.fit._joint import (
     FaceModel,
     best_fit,
@@ -97,9 +98,6 @@ METHOD = (
 )
 
 
-#: Above this many points the nearest-neighbour searches use a k-d tree instead of a dense
-#: distance matrix (same result; a dense matrix of 10,000 points is 2.4 GB).
-_DENSE_LIMIT = 600
 #: Most points the face segmentation looks at (a dense cloud is subsampled for it: its plane
 #: hypotheses are scored against every segmented point).
 _SEGMENTED_POINTS = 2000
@@ -116,7 +114,9 @@ def _spread_subset(x: np.ndarray, base: np.ndarray) -> np.ndarray:
         return np.flatnonzero(base) if len(taken) >= 2 else np.arange(x.shape[0])
     pts = x[taken]
     others = np.flatnonzero(~base)
-    if len(taken) > _DENSE_LIMIT or others.size > _DENSE_LIMIT:
+    # Dense (``_faces._DENSE_LIMIT``): a k-d tree instead of a distance matrix, same result (a
+    # matrix of 10,000 points is 2.4 GB).
+    if max(len(taken), others.size) > _faces._DENSE_LIMIT:
         from scipy.spatial import cKDTree
 
         tree = cKDTree(pts)
@@ -678,8 +678,7 @@ def fit_cuboid(
         seg = np.arange(n)
     if seg.size > _SEGMENTED_POINTS:
         # A dense cloud: faces are found on a random subsample; the fit still uses every point.
-        pick = np.random.default_rng(seg.size).choice(seg.size, _SEGMENTED_POINTS, replace=False)
-        seg = seg[np.sort(pick)]
+        seg = random_subset(seg, _SEGMENTED_POINTS, np.random.default_rng(seg.size))
     xs = x[seg]
     normals, local_rms, hood = _faces.local_normals(xs, tolerances.normal_neighbours)
     fourth = hood[:, min(3, hood.shape[1] - 1)]

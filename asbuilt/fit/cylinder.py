@@ -55,6 +55,7 @@ from asbuilt.fit._common import (
     orient,
     orthonormal_basis,
     principal_axes,
+    random_subset,
     robust_geometric_fit,
     robust_scale,
     stderr_of,
@@ -481,8 +482,8 @@ def fit_cylinder(
         # A dense cloud: the starts and the robust choice run on a random subsample (their
         # batched circles grow as starts x samples x points), and the chosen fit is then
         # settled on every point.
-        pick = np.random.default_rng(len(local)).choice(len(local), DENSE_POINTS, replace=False)
-        everything, local = local, local[np.sort(pick)]
+        rng = np.random.default_rng(len(local))
+        everything, local = local, random_subset(local, DENSE_POINTS, rng)
     _, spread, directions = principal_axes(local)
     check_spread(spread, "cylinder", 3)
     normals, flatness = local_normals(local, tolerances.normal_neighbours)

@@ -105,5 +105,5 @@ def test_spread_subset_with_a_tree_matches_the_dense_one(monkeypatch):
     x = rng.uniform(0, 1, (300, 3))
     base = rng.uniform(size=300) < 0.8
     dense = cuboid._spread_subset(x, base)
-    monkeypatch.setattr(cuboid, "_DENSE_LIMIT", 10)
+    monkeypatch.setattr(_faces, "_DENSE_LIMIT", 10)
     np.testing.assert_array_equal(cuboid._spread_subset(x, base), dense)
