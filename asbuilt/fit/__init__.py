@@ -109,7 +109,7 @@ def fit_points(
     options = {}
     if viewpoint is not None and _accepts_viewpoint(function):
         options["viewpoint"] = np.asarray(viewpoint, dtype=np.float64)
-    result = function(np.array(array), sigma=sigma, tolerances=tolerances, **options)
+    result = _fit_with_noise(kind, function, array, sigma, tolerances, options)
     note = _undetermined(result)
     if note is not None:
         result = dataclasses.replace(result, notes=(*result.notes, note))
@@ -138,6 +138,81 @@ def _require_spread_beyond_noise(points: np.ndarray, kind: str, sigma: float) ->
             "surface.",
             where="points",
         )
+
+
+#: The residuals' own noise estimate must exceed the sensor's range sigma by this factor before
+#: it replaces the sensor's: at 20 inliers the estimate's standard error is about 16% of sigma,
+#: so 1.5 is three standard errors; below it an optimistic sigma costs a shot or two, not the fit.
+WIDER_NOISE_RATIO = 1.5
+#: ... and by at most this factor: points scattered wider than five times the sensor's noise
+#: about the best primitive are not that primitive (a box labelled a cylinder), and the fit's
+#: error stands.
+WIDER_NOISE_LIMIT = 5.0
+
+
+def _fit_with_noise(
+    kind: str, function, points: np.ndarray, sigma, tolerances, options
+) -> FitResult:
+    """The fit with the sensor's ``sigma`` (metres), refitted with the residuals' noise level
+    when the points scatter significantly wider than the sensor's noise.
+
+    The inlier test is ``outlier_cutoff_sigma`` sensor sigmas, so a rough, corroded or
+    insulated surface, or a range sigma copied from an optimistic data sheet, makes good shots
+    look like outliers: a third of them can be rejected and the standard errors come out too
+    small. The noise level is estimated from the likeliest inlier set of the fit's residuals
+    (nested by size, Gaussian inliers and uniform outliers, as in
+    :func:`asbuilt.fit._common._best_inlier_set`); when it is above ``WIDER_NOISE_RATIO`` times
+    the sensor's sigma, the object is refitted with it and a note says so. A fit that fails on
+    too many outliers is tried once without the sensor's sigma and kept when its noise level is
+    within ``WIDER_NOISE_LIMIT`` sensor sigmas.
+    """
+    if sigma is None or kind == "hull":
+        return function(np.array(points), sigma=sigma, tolerances=tolerances, **options)
+    sigma = float(sigma)
+    try:
+        result = function(np.array(points), sigma=sigma, tolerances=tolerances, **options)
+    except FitError as first:
+        try:
+            result = function(np.array(points), sigma=None, tolerances=tolerances, **options)
+        except FitError:
+            raise first from None
+        if not WIDER_NOISE_RATIO * sigma < result.sigma <= WIDER_NOISE_LIMIT * sigma:
+            raise first from None
+        return _noted_wider(result, result.sigma, sigma)
+    noise = _residual_noise(result, points, tolerances)
+    if not WIDER_NOISE_RATIO * sigma < noise <= WIDER_NOISE_LIMIT * sigma:
+        return result
+    wider = function(np.array(points), sigma=noise, tolerances=tolerances, **options)
+    return _noted_wider(wider, noise, sigma)
+
+
+def _residual_noise(result: FitResult, points: np.ndarray, tolerances: Tolerances) -> float:
+    """The noise level (metres) of a fit's likeliest inlier set: RMS with the degrees of
+    freedom of the fit's covariance taken off."""
+    from asbuilt.fit._common import _best_inlier_set
+
+    residuals = np.asarray(result.residuals, dtype=np.float64)
+    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+    chosen = _best_inlier_set(residuals, result.inliers, extent, float(tolerances.sigma_floor))
+    used = 0 if result.covariance is None else len(result.covariance)
+    dof = int(np.count_nonzero(chosen)) - used
+    if dof <= 0:
+        return 0.0
+    kept = residuals[chosen]
+    return float(np.sqrt(kept @ kept / dof))
+
+
+def _noted_wider(result: FitResult, noise: float, sigma: float) -> FitResult:
+    """``result`` (fitted with the residuals' noise level) marked as such, with a note."""
+    note = (
+        f"The points scatter by {noise * 1000:.3g} mm about the {result.kind}, more than the "
+        f"sensor's range sigma ({sigma * 1000:.3g} mm): a rough or coated surface, or an "
+        f"optimistic sigma. The fit used {noise * 1000:.3g} mm for its outlier test and "
+        "standard errors."
+    )
+    return dataclasses.replace(
+        result, sigma=noise, sigma_source="residuals", notes=(*result.notes, note)
+    )
 
 
 #: A fit whose size is known only to more than this fraction of itself (one standard error),

@@ -226,7 +226,7 @@ def fit_auto(
         if sigma is not None:
             return (
                 information_scores(results, float(sigma), extent, tolerances),
-                f"sensor sigma {float(sigma) * 1000:.3g} mm",
+                f"noise sigma {float(sigma) * 1000:.3g} mm",
             )
         own = information_scores(results, None, extent, tolerances)
         leader = min(candidates, key=lambda kind: (own[kind], counts[kind]))

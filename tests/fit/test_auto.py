@@ -61,7 +61,7 @@ def test_with_the_sensor_sigma_the_criterion_says_so(rng):
     result = fit_auto(raster_scan(primitive, SENSOR, 30, rng).points, sigma=0.002)
     assert result.kind == "cylinder"
     assert result.sigma_source == "sensor"
-    assert any("sensor sigma 2 mm" in note for note in result.notes)
+    assert any("noise sigma 2 mm" in note for note in result.notes)
 
 
 def test_without_a_sigma_the_noise_comes_from_the_leading_fit(rng):

@@ -16,7 +16,16 @@ import pytest
 
 import asbuilt
 from asbuilt.errors import FitError
-from asbuilt.fit import FITTERS, FitReport, FitResult, ObjectFit, fit, fit_object, fit_points
+from asbuilt.fit import (
+    FITTERS,
+    FitReport,
+    FitResult,
+    ObjectFit,
+    fit,
+    fit_object,
+    fit_points,
+    fitter_for,
+)
 from asbuilt.primitives import Sphere
 from asbuilt.scan import ScanObject, loads_scan
 from asbuilt.scan.model import Scan, Sensor
@@ -361,3 +370,77 @@ def test_an_undetermined_fit_says_so():
         sigma=0.001,
     )
     assert not any(n.startswith("These points do not determine") for n in well.notes)
+
+
+def _rough_pipe(rng, roughness: float, count: int = 40) -> np.ndarray:
+    """Shots on the near side of an NPS 4 pipe (OD 114.3 mm) 5 m away: 2 mm range noise plus a
+    surface roughness (metres) along the normal."""
+    angle = rng.uniform(-1.2, 1.2, count)
+    radius = 0.05715 + rng.normal(0, roughness, count) + rng.normal(0, 0.002, count)
+    return np.column_stack(
+        [5.0 - radius * np.cos(angle), radius * np.sin(angle), rng.uniform(0, 1, count)]
+    )
+
+
+def _rough_wall(rng, roughness: float, count: int = 30) -> np.ndarray:
+    depth = 4.0 + rng.normal(0, roughness, count) + rng.normal(0, 0.002, count)
+    return np.column_stack([rng.uniform(0, 2, count), depth, rng.uniform(0, 2, count)])
+
+
+@pytest.mark.parametrize("kind, make", [("cylinder", _rough_pipe), ("plane", _rough_wall)])
+def test_points_scattered_wider_than_the_sensor_sigma_keep_their_shots(kind, make):
+    # 5 mm roughness on 2 mm noise: the 6 mm inlier test would reject a third of the shots and
+    # the standard errors would assume 2 mm. The fit takes the residuals' noise level instead.
+    rng = np.random.default_rng(11)
+    points = make(rng, 0.005)
+    naive = fitter_for(kind)(points, sigma=0.002)
+    result = fit_points(kind, points, sigma=0.002, viewpoint=np.zeros(3))
+    assert naive.inliers.sum() <= len(points) - 4  # what the sensor sigma alone does
+    assert result.inliers.sum() >= len(points) - 1
+    assert result.sigma_source == "residuals"
+    assert 0.003 < result.sigma < 0.008
+    note = result.notes[-1]
+    assert note.startswith(f"The points scatter by {result.sigma * 1000:.3g} mm about the {kind}")
+    assert "more than the sensor's range sigma (2 mm)" in note
+
+
+@pytest.mark.parametrize("kind, make", [("cylinder", _rough_pipe), ("plane", _rough_wall)])
+def test_points_within_the_sensor_sigma_keep_it(kind, make):
+    result = fit_points(kind, make(np.random.default_rng(12), 0.0), sigma=0.002)
+    assert result.sigma_source == "sensor" and result.sigma == 0.002
+    assert not any("scatter by" in note for note in result.notes)
+
+
+def test_a_fit_refused_for_outliers_is_retried_with_the_residuals_noise():
+    # 8 mm roughness on 2 mm noise: with the sensor sigma alone more than 45% of the shots are
+    # outliers (refused); the noise level the shots support (about 8 mm) is within five sigmas.
+    rng = np.random.default_rng(3)
+    points = _rough_pipe(rng, 0.008)
+    from asbuilt.fit.cylinder import fit_cylinder
+
+    for _ in range(20):
+        try:
+            fit_cylinder(points, sigma=0.002, viewpoint=np.zeros(3))
+        except FitError:
+            break
+        points = _rough_pipe(rng, 0.008)
+    else:
+        pytest.fail("no refused scan in 20 draws")
+    result = fit_points("cylinder", points, sigma=0.002, viewpoint=np.zeros(3))
+    assert result.sigma_source == "residuals" and result.sigma > 0.004
+    assert "scatter by" in result.notes[-1]
+
+
+def test_a_box_labelled_a_cylinder_is_still_refused():
+    # Two faces of a 0.4 m column: no cylinder explains them within five sensor sigmas.
+    rng = np.random.default_rng(7)
+    across = rng.uniform(-0.2, 0.2, (20, 2))
+    points = np.vstack(
+        [
+            np.column_stack([np.full(20, -0.2), across[:, 0], rng.uniform(0, 2, 20)]),
+            np.column_stack([across[:, 1], np.full(20, -0.2), rng.uniform(0, 2, 20)]),
+        ]
+    ) + [4.0, 0.5, 0.0]
+    points += rng.normal(0, 0.002, points.shape)
+    with pytest.raises(FitError, match="cylinder"):
+        fit_points("cylinder", points, sigma=0.002, viewpoint=np.zeros(3))
