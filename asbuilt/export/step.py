@@ -23,7 +23,7 @@ from OCP.STEPCAFControl import STEPCAFControl_Reader, STEPCAFControl_Writer
 from OCP.STEPControl import STEPControl_StepModelType
 from OCP.TCollection import TCollection_ExtendedString, TCollection_HAsciiString
 from OCP.TDataStd import TDataStd_Name
-from OCP.TDF import TDF_Label, TDF_LabelSequence
+from OCP.TDF import TDF_ChildIterator, TDF_Label, TDF_LabelSequence
 from OCP.TDocStd import TDocStd_Document
 from OCP.TopAbs import TopAbs_SOLID
 from OCP.TopExp import TopExp_Explorer
@@ -48,6 +48,47 @@ def _set(name: str, value: str) -> str:
     previous = Interface_Static.CVal_s(name)
     Interface_Static.SetCVal_s(name, value)
     return previous
+
+
+def _utf8_name(text: str) -> TCollection_ExtendedString:
+    """A label name holding ``text`` exactly (the multibyte flag reads the bytes as UTF-8)."""
+    return TCollection_ExtendedString(text, True)
+
+
+def _repair_names(doc: TDocStd_Document) -> None:
+    """Fix the names CadQuery's ``toCAF`` set and name the group instances it left unnamed.
+
+    ``toCAF`` makes each name with ``TCollection_ExtendedString(name)``, which reads the UTF-8
+    bytes as Latin-1 ("Säule" becomes "SÃ¤ule" in the file); undoing that decoding is exact, as
+    every character is then below U+0100. A group's instance in its parent gets no name at all
+    (the writer falls back to a number in NEXT_ASSEMBLY_USAGE_OCCURRENCE), so it takes the
+    name of the group it places.
+    """
+    main = doc.Main()
+    shape_tool = XCAFDoc_DocumentTool.ShapeTool_s(main)
+    for label in _labels(main):
+        text = _name(label)
+        if text.isascii():
+            continue
+        try:
+            fixed = text.encode("latin-1").decode("utf-8")
+        except UnicodeError:  # not a name toCAF garbled: keep it
+            continue
+        TDataStd_Name.Set_s(label, _utf8_name(fixed))
+    for label in _labels(main):
+        if shape_tool.IsComponent_s(label) and not _name(label):
+            ref = TDF_Label()
+            if shape_tool.GetReferredShape_s(label, ref) and _name(ref):
+                TDataStd_Name.Set_s(label, _utf8_name(_name(ref)))
+
+
+def _labels(root: TDF_Label):
+    """Every label below ``root``; each is valid only until the next one is asked for (the
+    iterator hands out its own label)."""
+    iterator = TDF_ChildIterator(root, True)
+    while iterator.More():
+        yield iterator.Value()
+        iterator.Next()
 
 
 def write_step(cad, path, *, schema: str = "AP214", file_name: str | None = None) -> None:
@@ -86,6 +127,7 @@ def write_step(cad, path, *, schema: str = "AP214", file_name: str | None = None
     }
     try:
         _, doc = toCAF(cad.assembly(), True)  # True: colours as STEP colours
+        _repair_names(doc)
         writer.Transfer(doc, STEPControl_StepModelType.STEPControl_AsIs)
         model = writer.ChangeWriter().Model()
         header = APIHeaderSection_MakeHeader(model)
@@ -118,6 +160,8 @@ class StepSolid:
 
 
 def _name(label: TDF_Label) -> str:
+    if not label.IsAttribute(TDataStd_Name.GetID_s()):
+        return ""  # (FindAttribute on a label without one crashes through OCP)
     attr = TDataStd_Name()
     if label.FindAttribute(TDataStd_Name.GetID_s(), attr):
         return str(attr.Get().ToExtString())

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 
@@ -102,3 +103,89 @@ def test_not_a_step_file(tmp_path):
     path.write_text("hello")
     with pytest.raises(ExportError, match="not a readable STEP file"):
         read_step(path)
+
+
+UNICODE_IDS = ('Säule 1 "Nord" – Ø300', "储罐 TK-1", "col 2 'west' \\ x")
+UNICODE_GROUP = 'Struktur – Halle "A" / Achse 1'
+UNICODE_SCAN = "Anlage Ü – Nord"
+
+
+def _unicode_model() -> Model:
+    components = tuple(
+        Component(
+            name,
+            "pipe",
+            Straight([i, 0, 0], [i + 0.5, 0, 0], 0.05),
+            group=UNICODE_GROUP if i else None,
+        )
+        for i, name in enumerate(UNICODE_IDS)
+    )
+    return Model(components=components, units="m", name=UNICODE_SCAN)
+
+
+def _xcaf_names(path) -> list[tuple[str, str]]:
+    """(instance name, product name) of every node, read by OpenCASCADE's XCAF reader."""
+    from OCP.STEPCAFControl import STEPCAFControl_Reader
+    from OCP.TCollection import TCollection_ExtendedString
+    from OCP.TDataStd import TDataStd_Name
+    from OCP.TDF import TDF_Label, TDF_LabelSequence
+    from OCP.TDocStd import TDocStd_Document
+    from OCP.XCAFDoc import XCAFDoc_DocumentTool
+
+    reader = STEPCAFControl_Reader()
+    reader.SetNameMode(True)
+    reader.ReadFile(str(path))
+    doc = TDocStd_Document(TCollection_ExtendedString("XmlXCAF"))
+    reader.Transfer(doc)
+    tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+
+    def name(label):
+        if not label.IsAttribute(TDataStd_Name.GetID_s()):
+            return ""
+        attr = TDataStd_Name()
+        label.FindAttribute(TDataStd_Name.GetID_s(), attr)
+        return attr.Get().ToExtString()
+
+    found = []
+
+    def visit(label):
+        components = TDF_LabelSequence()
+        tool.GetComponents_s(label, components)
+        for i in range(1, components.Length() + 1):
+            comp = components.Value(i)
+            ref = TDF_Label()
+            tool.GetReferredShape_s(comp, ref)
+            found.append((name(comp), name(ref)))
+            if tool.IsAssembly_s(ref):
+                visit(ref)
+
+    roots = TDF_LabelSequence()
+    tool.GetFreeShapes(roots)
+    for i in range(1, roots.Length() + 1):
+        found.append(("", name(roots.Value(i))))
+        visit(roots.Value(i))
+    return found
+
+
+def test_unicode_names_survive_the_round_trip(tmp_path):
+    path = tmp_path / "unicode.step"
+    write_step(prepare(_unicode_model()), path)
+    names = _xcaf_names(path)
+    products = [product for _, product in names]
+    assert products[0] == UNICODE_SCAN
+    assert set(UNICODE_IDS) | {UNICODE_GROUP} <= set(products)
+    assert all(instance == product for instance, product in names[1:])
+    paths = {s.name: s.path for s in read_step(path)}
+    assert paths[UNICODE_IDS[1]] == (UNICODE_SCAN, UNICODE_GROUP, UNICODE_IDS[1])
+    # The file itself holds the names as UTF-8 (ISO 10303-21 edition 3), not their Latin-1
+    # reading ("SÃ¤ule").
+    text = path.read_text(encoding="utf-8")
+    assert "PRODUCT('储罐 TK-1'" in text
+    assert "SÃ" not in text
+
+
+def test_group_instances_are_named_by_their_group(step_file):
+    text = step_file.read_text(encoding="latin-1")
+    usages = re.findall(r"NEXT_ASSEMBLY_USAGE_OCCURRENCE\('[^']*','([^']*)'", text)
+    assert {"S1", "S2", "frame"} <= set(usages)
+    assert not [name for name in usages if name.isdigit()]
