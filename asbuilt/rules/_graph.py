@@ -21,6 +21,7 @@ __all__ = [
     "adjacency",
     "inferred_pairs",
     "contiguous_pipes",
+    "could_join",
     "FITTING_PASS",
 ]
 
@@ -98,8 +99,15 @@ def adjacency(model: Model, touch: float, infer: float | None = None) -> dict[st
     return graph
 
 
+#: Largest bend (degrees) between two pipe ends that an elbow can join: ASME B16.9 elbows turn
+#: 45 or 90 degrees; the 10 degrees beyond are the fits' and the construction's latitude.
+ELBOW_BEND_MAX_DEG = 100.0
+
+
 def inferred_pairs(model: Model, touch: float, infer: float) -> set[frozenset]:
-    """Pipes whose *free* ends (joined to nothing within ``touch``) lie within ``infer`` metres."""
+    """Pipes whose *free* ends (joined to nothing within ``touch``) lie within ``infer`` metres
+    and could be joined there (:func:`could_join`): pipes side by side in a rack, whose ends are
+    close but run the same way, are not contiguous."""
     points, owners = _ends(model.components)
     if len(points) < 2:
         return set()
@@ -108,17 +116,61 @@ def inferred_pairs(model: Model, touch: float, infer: float) -> set[frozenset]:
     for i, j in tree.query_pairs(touch):
         if owners[i] != owners[j]:
             free[i] = free[j] = False
-    types = {c.id: c.type for c in model.components}
+    comps = {c.id: c for c in model.components}
     pairs = set()
     for i, j in tree.query_pairs(infer):
+        a, b = comps[owners[i]], comps[owners[j]]
         if (
-            owners[i] != owners[j]
+            a.id != b.id
             and free[i]
             and free[j]
-            and all(types[owners[k]] in ("pipe", "cylinder") for k in (i, j))
+            and a.type in ("pipe", "cylinder")
+            and b.type in ("pipe", "cylinder")
+            and could_join(a.geometry, points[i], b.geometry, points[j], infer)
         ):
-            pairs.add(frozenset((owners[i], owners[j])))
+            pairs.add(frozenset((a.id, b.id)))
     return pairs
+
+
+def _outward(geometry, end: np.ndarray) -> np.ndarray | None:
+    """Unit direction out of a straight pipe at its end ``end`` (3,) m (None if not two-ended)."""
+    ends = ends_of(geometry)
+    if len(ends) != 2:
+        return None
+    other = ends[1] if np.linalg.norm(ends[0] - end) <= np.linalg.norm(ends[1] - end) else ends[0]
+    direction = end - other
+    norm = float(np.linalg.norm(direction))
+    return None if norm == 0 else direction / norm
+
+
+def _outer_radius(geometry) -> float:
+    return float(getattr(geometry, "outer_radius", getattr(geometry, "radius", 0.0)))
+
+
+def could_join(ga, ea: np.ndarray, gb, eb: np.ndarray, reach: float) -> bool:
+    """Whether straight pipes ``ga`` and ``gb`` could be joined at their ends ``ea``, ``eb``
+    ((3,) m): in line (ends facing each other, axes within the larger outer radius of one line),
+    or by an elbow of at most ``ELBOW_BEND_MAX_DEG`` (axis lines meeting within that radius, the
+    corner ahead of both ends, less than ``reach`` metres behind either)."""
+    oa, ob = _outward(ga, ea), _outward(gb, eb)
+    if oa is None or ob is None:
+        return False
+    radius = max(_outer_radius(ga), _outer_radius(gb))
+    bend = float(np.degrees(np.arccos(np.clip(-(oa @ ob), -1.0, 1.0))))  # 0: facing, in line
+    rel = eb - ea
+    if bend <= 5.0:
+        lateral = rel - (rel @ oa) * oa
+        return float(np.linalg.norm(lateral)) <= radius
+    if bend > ELBOW_BEND_MAX_DEG:
+        return False
+    # Closest points of the lines ea + s oa and eb + t ob (not parallel here).
+    b = float(oa @ ob)
+    d, e = float(oa @ -rel), float(ob @ -rel)
+    denom = 1.0 - b * b
+    s = (b * e - d) / denom
+    t = (e - b * d) / denom
+    skew = float(np.linalg.norm((ea + s * oa) - (eb + t * ob)))
+    return skew <= radius and s >= -reach and t >= -reach
 
 
 def contiguous_pipes(model: Model, graph: dict[str, set[str]], pipe_ids) -> list[tuple]:

@@ -169,6 +169,21 @@ def check_hint(ctx: Context, table: SizeTable | None) -> None:
         hint_od = info.get("od")
         if hint_od is None and table is not None:
             hint_od = table.od(hint)
+        if hint_od is None and table is not None:
+            catalog = table.standard
+            ctx.emit(
+                slug,
+                [comp.id],
+                f"the hint {hint!r} names no {catalog} size, so it was not used",
+                location=centre_of(comp.geometry),
+                suggestions=(
+                    Suggestion(
+                        f"write {comp.id}'s hint as a nominal size of {catalog} (e.g. 4\" or "
+                        "DN100), or choose the catalog it belongs to (--catalog)"
+                    ),
+                ),
+            )
+            continue
         od, se = measured_od(comp)
         if hint_od is None or od is None:
             continue
@@ -246,13 +261,17 @@ def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
         if oda is None or odb is None:
             continue
         (fa, sa), (fb, sb) = measured_od(ca), measured_od(cb)
-        diff = abs((fa if fa is not None else oda) - (fb if fb is not None else odb))
+        fa, fb = (fa if fa is not None else oda), (fb if fb is not None else odb)
+        diff = abs(fa - fb)
         se = float(np.hypot(sa or 0.0, sb or 0.0))
         outcome = verdict(diff, tol, se, ctx.k)
+        same_model = abs(oda - odb) <= 1e-6
         if na is not None and nb is not None and na != nb:
             outcome = "unverifiable" if outcome == "pass" else outcome  # sizes differ, fits agree
         elif na is not None and na == nb:
             continue
+        elif same_model and outcome != "violation":
+            continue  # merging gave both one size; an undecided size is ambiguous-size's finding
         if outcome == "pass":
             continue
         # the shared size: the inverse-variance mean of the two measured ODs, snapped
@@ -264,6 +283,7 @@ def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
             mean = float(weights @ values / weights.sum())
             mean_se = float(1.0 / np.sqrt(weights.sum()))
             shared = table.within(mean, _window(ctx, mean_se))
+            undecided = any(size_status(ctx, comps[c], table) == "ambiguous" for c in (a, b))
             if len(shared) == 1:
                 n, s = shared[0]
                 targets = [c for c in (a, *path, b) if _size_of(comps[c], table)[1] != s]
@@ -272,18 +292,26 @@ def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
                         f"make {', '.join(targets)} {_label(table, n)} ({mm(s)}), the size both fits "
                         "agree on",
                         {"objects": targets, "field": "nominal", "value": n, "od": s},
-                        unambiguous=True,
+                        # merging found the size undecidable: a person decides, not --fix
+                        unambiguous=not undecided,
                     )
                 )
         suggestions.append(
             Suggestion(f"if the size really changes, add a reducer between {a} and {b}")
         )
-        la = _label(table, na) if na else mm(oda)
-        lb = _label(table, nb) if nb else mm(odb)
+        if same_model:  # one modelled size: the fits are what disagree
+            text = (
+                f"the fits of {a} ({mm(fa)}) and the contiguous {b} ({mm(fb)}) disagree by "
+                f"{mm(diff)} with no reducer"
+            )
+        else:
+            la = _label(table, na) if na else mm(oda)
+            lb = _label(table, nb) if nb else mm(odb)
+            text = f"{a} is {la} but the contiguous {b} is {lb} with no reducer"
         ctx.emit(
             slug,
             [a, *path, b],
-            f"{a} is {la} but the contiguous {b} is {lb} with no reducer",
+            text,
             location=0.5 * (centre_of(ca.geometry) + centre_of(cb.geometry)),
             measured=diff,
             allowed=tol,

@@ -237,3 +237,43 @@ def test_nonstandard_without_catalog_uses_the_merge_record():
     (f,) = [f for f in check_model(model(comp)) if f.slug == "nonstandard-diameter"]
     assert "nearest NPS 4 = 114.3 mm, 3.9 mm off" in f.message
     assert f.severity == "error"
+
+
+def test_a_hint_naming_no_catalog_size_is_reported():
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143)
+    (f,) = only(run(comp, scan=scan_with_hint("P1", "100 mm")), "hint-mismatch")
+    assert f.message.startswith("the hint '100 mm' names no ASME B36.10M")
+    assert f.message.endswith(" size, so it was not used")
+    assert "DN100" in f.suggestions[0].description
+
+
+def test_pipes_merged_to_one_undecided_size_are_not_a_mismatch():
+    # Merging joined P1 and P2 through an elbow and gave both one OD (110.2 mm) between NPS 3 1/2
+    # and 4: the fits (104.3 +- 4.0 and 111.8 +- 2.0 mm) do not clearly disagree, and the
+    # undecided size is ambiguous-size's finding, not a size change.
+    common = dict(status="ambiguous", candidates=[("4", 0.1143), ("3 1/2", 0.1016)])
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1102, od_fit=0.1043, od_stderr=0.004, **common)
+    b = pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.1102, od_fit=0.1118, od_stderr=0.002, **common)
+    assert not only(run(a, b), "contiguous-diameter-mismatch")
+
+
+def test_fits_disagreeing_under_one_modelled_size_say_so_and_leave_the_size_open():
+    common = dict(status="ambiguous", candidates=[("4", 0.1143), ("3 1/2", 0.1016)])
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1080, od_fit=0.1016, od_stderr=0.0005, **common)
+    b = pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.1080, od_fit=0.1143, od_stderr=0.0005, **common)
+    (f,) = only(run(a, b), "contiguous-diameter-mismatch")
+    assert f.message == (
+        "the fits of P1 (101.6 mm) and the contiguous P2 (114.3 mm) disagree by 12.7 mm with no "
+        "reducer"
+    )
+    assert not any(s.unambiguous for s in f.suggestions)
+
+
+@pytest.mark.parametrize("spacing", [0.08, 0.10, 0.14])
+def test_pipes_side_by_side_in_a_rack_are_not_contiguous(spacing):
+    # NPS 2 and NPS 2 1/2 running side by side, ends level: close ends, but no fitting joins
+    # two pipes that run the same way.
+    a = pipe("R0", [0, 0, 1], [3, 0, 1], 0.0730, nominal="2-1/2")
+    b = pipe("R1", [0, spacing, 1], [3, spacing, 1], 0.0603, nominal="2")
+    found = check_model(model(a, b), catalog=B36)
+    assert not [f for f in found if f.slug in ("contiguous-diameter-mismatch", "joint-gap")]
