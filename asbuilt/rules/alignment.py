@@ -84,18 +84,26 @@ def _elevation_deg(axis) -> float:
     return float(np.degrees(np.arcsin(min(abs(float(axis[2])), 1.0))))
 
 
+def _words(component: Component) -> set[str]:
+    """The whole words (lower case) of a component's label, group and id."""
+    text = " ".join(filter(None, (component.label, component.group, component.id))).lower()
+    return set(re.split(r"[^a-z0-9-]+", text))
+
+
 def material_of(ctx: Context, component: Component) -> str:
     """``"steel"`` or ``"concrete"`` from label/group keywords, else the rules' default."""
-    words = set(
-        re.split(
-            r"[^a-z0-9-]+",
-            " ".join(filter(None, (component.label, component.group, component.id))).lower(),
-        )
-    )
+    words = _words(component)
     for material in ("concrete", "steel"):
         if words & {k.lower() for k in ctx.general(f"{material}_keywords")}:
             return material
     return str(ctx.general("default_material"))
+
+
+def is_round_column(ctx: Context, component: Component) -> bool:
+    """Whether a cylinder is a column, not a pipe: a word of its label, group or id is in
+    ``column_keywords`` or ``concrete_keywords`` (a steel keyword alone names a steel pipe too)."""
+    keys = [*ctx.general("column_keywords"), *ctx.general("concrete_keywords")]
+    return bool(_words(component) & {k.lower() for k in keys})
 
 
 def _plan_azimuth(component: Component) -> float | None:
@@ -257,7 +265,7 @@ def check_plumb(ctx: Context) -> None:
         if lean_deg >= intended:
             continue
         se_deg = axis_stderr_deg(comp)
-        if comp.type == "cuboid":
+        if comp.type == "cuboid" or is_round_column(ctx, comp):
             material = material_of(ctx, comp)
         else:
             material = "pipe"

@@ -257,3 +257,25 @@ def test_pieces_of_one_fitted_pipe_give_one_plumb_finding():
     upper = replace(whole, id="P1b", geometry=Straight([0.05, 0, 1.0], [0.1, 0, 2.0], 0.05715))
     (f,) = only(run(lower, upper), "out-of-plumb")
     assert f.objects == ("P1a", "P1b")
+
+
+@pytest.mark.parametrize(
+    "label, allowed, standard",
+    [
+        ("concrete column", 0.003 * 3.96, "ACI 117-10"),  # 11.9 mm: an 11.5 mm lean passes
+        ("steel column", 3.96 / 500, "AISC 303-16"),  # 7.9 mm
+        ("round pier", 0.003 * 3.96, "ACI 117-10"),  # a concrete keyword names a column too
+        ("carbon steel riser", 3.96 / 500, "pipe_ratio"),  # a steel pipe stays a pipe
+    ],
+)
+def test_round_columns_are_judged_as_columns_of_their_material(label, allowed, standard):
+    # A cylinder leaning 11.5 mm and 20 mm over 3.96 m, well measured.
+    for lean in (0.0115, 0.020):
+        comp = pipe("C1", [0, 0, 0], [lean, 0, 3.96], 0.3, axis_deg=0.001, label=label)
+        found = only(run(comp), "out-of-plumb")
+        if lean <= allowed:
+            assert not found
+            continue
+        (f,) = found
+        assert f.allowed == pytest.approx(allowed, rel=1e-3)
+        assert standard in f.message
