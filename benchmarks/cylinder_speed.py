@@ -2,8 +2,9 @@
 
 The accuracy benchmark times every fit inside a long run that also simulates the scans; this
 script generates the same trials first (same seed, same cells) and then times only the fit
-calls, with and without the viewpoint, clean and with 20% edge outliers, repeated, so the
-figure can be checked on its own.
+calls (through :func:`asbuilt.fit.fit_points`, as the pipeline calls them), with and without
+the viewpoint, clean and with 20% edge outliers, repeated, so the figure can be checked on its
+own.
 
 Run: ``python benchmarks/cylinder_speed.py [--points 40] [--trials 50] [--repeat 2]``.
 """
@@ -24,7 +25,7 @@ sys.path.insert(0, str(HERE.parent))
 
 import fit_accuracy  # noqa: E402
 
-from asbuilt.fit.cylinder import fit_cylinder  # noqa: E402
+from asbuilt.fit import fit_points  # noqa: E402
 
 
 def trials(points: int, count: int, seed: int) -> list:
@@ -45,7 +46,7 @@ def timed(data: list, viewpoint, repeat: int) -> list[float]:
         for points in data:
             start = time.perf_counter()
             try:
-                fit_cylinder(points, sigma=fit_accuracy.SIGMA_R, viewpoint=viewpoint)
+                fit_points("cylinder", points, sigma=fit_accuracy.SIGMA_R, viewpoint=viewpoint)
             except Exception:  # a failed fit is timed too, as in the accuracy benchmark
                 pass
             times.append(time.perf_counter() - start)

@@ -62,7 +62,6 @@ from __future__ import annotations
 
 import argparse
 import copy
-import inspect
 import itertools
 import math
 import sys
@@ -137,28 +136,21 @@ STATION = Station(
 
 
 def _ours(sensor: bool = True, viewpoint: bool = True):
-    """Our fit functions by kind (None where the module does not exist yet); ``sensor`` False
-    calls them as for a scan without a ``sensor`` block (no sigma, no viewpoint), ``viewpoint``
-    False as for one whose sensor gives ``range_sigma`` but no ``position``."""
-    found = {}
-    for kind, module, name in (
-        ("cylinder", "asbuilt.fit.cylinder", "fit_cylinder"),
-        ("sphere", "asbuilt.fit.sphere", "fit_sphere"),
-        ("plane", "asbuilt.fit.plane", "fit_plane"),
-        ("cuboid", "asbuilt.fit.cuboid", "fit_cuboid"),
-    ):
-        try:
-            function = getattr(__import__(module, fromlist=[name]), name)
-        except ImportError:
-            found[kind] = None
-            continue
-        # As the pipeline calls it for a scan that gives its sensor: with the range sigma and,
-        # where the fit takes one, the station as the viewpoint.
-        options = {"sigma": SIGMA_R} if sensor else {}
-        if sensor and viewpoint and "viewpoint" in inspect.signature(function).parameters:
-            options["viewpoint"] = STATION.position
-        found[kind] = lambda points, f=function, o=options: f(points, **o)
-    return found
+    """Our fits by kind, called through :func:`asbuilt.fit.fit_points` exactly as the pipeline
+    calls them (its checks included: points within the noise of a line, noise wider than the
+    sensor's sigma, undetermined fits); ``sensor`` False calls them as for a scan without a
+    ``sensor`` block (no sigma, no viewpoint), ``viewpoint`` False as for one whose sensor gives
+    ``range_sigma`` but no ``position``."""
+    from asbuilt.fit import fit_points
+
+    options = {"sigma": SIGMA_R} if sensor else {}
+    if sensor and viewpoint:
+        # fit_points passes the viewpoint only to the fits that take one (cylinder, cuboid).
+        options["viewpoint"] = STATION.position
+    return {
+        kind: (lambda points, k=kind: fit_points(k, points, **options))
+        for kind in ("cylinder", "sphere", "plane", "cuboid")
+    }
 
 
 def _skspatial():
