@@ -451,6 +451,14 @@ def _object(index: int, raw, factor: float, ctx: _Context) -> ScanObject:
             "missing" if "id" not in raw else f"must be non-empty text, not {_describe(object_id)}"
         )
         raise ctx.error(f"{where}.id", f'{what}; give the object an id such as "P1"')
+    if object_id != object_id.strip():
+        # CAD files drop or keep the spaces differently (STEP trims them), so the object could
+        # not be matched across formats by its id.
+        raise ctx.error(
+            f"{where}.id",
+            f"{json.dumps(object_id, ensure_ascii=False)} starts or ends with white space (or is "
+            "only white space); remove it",
+        )
     where = f"{where} ({object_id})"
     kind = raw.get("kind")
     if "kind" not in raw:

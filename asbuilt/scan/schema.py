@@ -65,7 +65,9 @@ def _object_schema() -> dict:
             "id": {
                 "type": "string",
                 "minLength": 1,
-                "description": "Unique within the scan (uniqueness is checked by the loader).",
+                "pattern": "^\\S([\\s\\S]*\\S)?$",
+                "description": "Unique within the scan (uniqueness is checked by the loader); no "
+                "white space at either end.",
             },
             "kind": {
                 "enum": list(KINDS),

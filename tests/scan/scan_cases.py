@@ -326,6 +326,16 @@ BAD = (
         'objects[1].id: must be non-empty text, not a string (""); give the object an id such as "P1"',
     ),
     Bad(
+        "blank id",
+        _set("objects.1.id", "  "),
+        'objects[1].id: "  " starts or ends with white space (or is only white space); remove it',
+    ),
+    Bad(
+        "id with a trailing space",
+        _set("objects.1.id", "H1 "),
+        'objects[1].id: "H1 " starts or ends with white space (or is only white space); remove it',
+    ),
+    Bad(
         "missing points",
         _delete_in_object(5, "points"),
         "objects[5] (K6).points: missing; add the measured points [[x, y, z], ...]",
