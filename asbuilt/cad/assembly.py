@@ -19,20 +19,26 @@ from asbuilt.model import Component, Model
 from .colours import colour_for, component_status
 from .mesh import LINEAR_DEFLECTION, Mesh, tessellate
 from .meshgen import mesh_for
-from .solids import check_solid, solid_for
+from .solids import check_solid, place, placed_solid
 
 __all__ = ["CadPart", "CadModel", "prepare", "build_assembly", "fused_spool_solid"]
 
 
 @dataclass(frozen=True, eq=False)
 class CadPart:
-    """One component's solid (metres), colour (RGBA 0..1), worst finding severity and group."""
+    """One component's solid (metres), colour (RGBA 0..1), worst finding severity and group.
+
+    ``solid`` is in place (scan frame); ``local`` is the same solid built about ``origin``
+    ((3,) metres), which the assembly places by a transform (:func:`asbuilt.cad.solids.placed_solid`).
+    """
 
     component: Component
     solid: cq.Solid
     colour: tuple[float, float, float, float]
     status: str | None = None
     group: str | None = None
+    local: cq.Solid | None = None
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     @property
     def id(self) -> str:
@@ -133,17 +139,26 @@ def _cq_colour(colour) -> cq.Color:
     return cq.Color(*(float(c) for c in colour))
 
 
+def _add(node: cq.Assembly, part: CadPart) -> None:
+    """Add a leaf: the part's local solid placed at its origin (its solid as is without one)."""
+    colour = _cq_colour(part.colour)
+    if part.local is None:
+        node.add(part.solid, name=part.id, color=colour)
+    else:
+        node.add(part.local, name=part.id, color=colour, loc=cq.Location(cq.Vector(*part.origin)))
+
+
 def _assemble(cad: CadModel) -> cq.Assembly:
     root = cq.Assembly(name=cad.name)
     node_names = cad.group_node_names()
     for group, parts in cad.groups().items():
         if group is None:
             for part in parts:
-                root.add(part.solid, name=part.id, color=_cq_colour(part.colour))
+                _add(root, part)
             continue
         node = cq.Assembly(name=node_names[group])
         for part in parts:
-            node.add(part.solid, name=part.id, color=_cq_colour(part.colour))
+            _add(node, part)
         root.add(node)
     return root
 
@@ -188,7 +203,7 @@ def prepare(
     source = model.scan.source if model.scan is not None else None
     for done, component in enumerate(model.components, start=1):
         try:
-            solid = solid_for(component, plate_thickness=thickness)
+            local, origin = placed_solid(component, plate_thickness=thickness)
         except SolidBuildError as exc:
             if source is None or exc.source is not None:
                 raise
@@ -199,10 +214,12 @@ def prepare(
         parts.append(
             CadPart(
                 component=component,
-                solid=solid,
+                solid=place(local, origin),
                 colour=colour_for(component.type, state),
                 status=state,
                 group=group_of(component),
+                local=local,
+                origin=tuple(float(v) for v in origin),
             )
         )
         if progress is not None:

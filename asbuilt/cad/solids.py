@@ -7,9 +7,18 @@ bores), cuboids are transformed boxes, spheres are spheres, planes become plates
 their outline (centred on the plane), hulls are polyhedra sewn from their triangles. Every
 result is checked with the kernel's validity check (``BRepCheck_Analyzer`` via
 :meth:`cadquery.Shape.isValid`) and must enclose a positive volume.
+
+Every solid is built near the origin, about a *local origin* (the geometry's mean position
+rounded to whole metres), and placed by a location: at survey coordinates (5e6 m) the kernel's
+precision (1e-7) is below a double's resolution of the coordinates in millimetres, and a STEP
+reader then turned extruded and cut solids inside out. :func:`placed_solid` gives the local
+solid and its origin (the STEP assembly places it by a transform); :func:`solid_for` the solid
+moved into place.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import cadquery as cq
 import numpy as np
@@ -21,7 +30,13 @@ from asbuilt.model import Bend, Component, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 from asbuilt.tolerances import DEFAULT_TOLERANCES
 
-__all__ = ["solid_for", "check_solid", "plate_solid"]
+__all__ = ["solid_for", "placed_solid", "place", "local_origin", "check_solid", "plate_solid"]
+
+#: Geometry fields that are positions (shape (3,) or (k, 3) metres), shifted to the local origin;
+#: the others (axes, normals, sizes, radii, faces) do not change under a translation.
+_POSITION_FIELDS = frozenset(
+    ("start", "end", "center", "run_start", "run_end", "branch_end", "point", "outline", "vertices")
+)
 
 #: Points of an outline closer than this (metres) are merged before building a plate.
 _POINT_MERGE = 1e-7
@@ -298,8 +313,37 @@ def check_solid(shape: cq.Shape, name: str) -> cq.Solid:
     return solid
 
 
+def local_origin(geometry) -> np.ndarray:
+    """The point a geometry's solid is built about: its mean position, whole metres, shape (3,).
+
+    Whole metres so the placement is exact in a STEP file (13 significant digits, millimetres).
+    """
+    points = [
+        np.asarray(getattr(geometry, f.name), dtype=np.float64).reshape(-1, 3)
+        for f in dataclasses.fields(geometry)
+        if f.name in _POSITION_FIELDS and getattr(geometry, f.name) is not None
+    ]
+    points = [p for p in points if len(p)]
+    if not points:
+        return np.zeros(3)
+    return np.round(np.concatenate(points).mean(axis=0)) + 0.0  # + 0.0: no -0.0
+
+
+def _shifted(geometry, offset: np.ndarray):
+    """``geometry`` translated by ``-offset`` ((3,) metres)."""
+    changes = {
+        f.name: np.asarray(getattr(geometry, f.name), dtype=np.float64) - offset
+        for f in dataclasses.fields(geometry)
+        if f.name in _POSITION_FIELDS and getattr(geometry, f.name) is not None
+    }
+    return dataclasses.replace(geometry, **changes)
+
+
 def solid_for(component: Component, *, plate_thickness: float | None = None) -> cq.Solid:
     """The valid CadQuery solid of one component, in metres in the scan frame.
+
+    Built about :func:`local_origin` and moved into place by a location (see
+    :func:`placed_solid`).
 
     Parameters
     ----------
@@ -313,16 +357,45 @@ def solid_for(component: Component, *, plate_thickness: float | None = None) -> 
     SolidBuildError
         Naming the object, when the kernel cannot build a valid solid for it.
     """
+    local, origin = placed_solid(component, plate_thickness=plate_thickness)
+    return place(local, origin)
+
+
+def place(local: cq.Solid, origin: np.ndarray) -> cq.Solid:
+    """``local`` moved by ``origin`` ((3,) metres) through a location (its geometry stays)."""
+    return local.moved(cq.Location(_v(origin)))
+
+
+def placed_solid(
+    component: Component, *, plate_thickness: float | None = None
+) -> tuple[cq.Solid, np.ndarray]:
+    """The component's valid solid built about its local origin, and that origin.
+
+    Returns
+    -------
+    local : cadquery.Solid
+        Metres, in the scan frame's axes shifted to ``origin``.
+    origin : ndarray, shape (3,), metres
+        :func:`local_origin` of the geometry; ``local`` moved by it is the solid in place.
+
+    Raises
+    ------
+    SolidBuildError
+        Naming the object, when the kernel cannot build a valid solid for it.
+    """
     geometry = component.geometry
     if plate_thickness is None:
         plate_thickness = DEFAULT_TOLERANCES.plate_thickness
+    origin = np.zeros(3)
     try:
-        if isinstance(geometry, Plane):
+        builder = _BUILDERS.get(type(geometry))
+        if builder is None and not isinstance(geometry, Plane):
+            raise ValueError(f"there is no solid for geometry {type(geometry).__name__}")
+        origin = local_origin(geometry)
+        geometry = _shifted(geometry, origin)
+        if builder is None:
             shape = plate_solid(geometry, float(plate_thickness))
         else:
-            builder = _BUILDERS.get(type(geometry))
-            if builder is None:
-                raise ValueError(f"there is no solid for geometry {type(geometry).__name__}")
             shape = builder(geometry)
     except SolidBuildError:
         raise
@@ -332,4 +405,4 @@ def solid_for(component: Component, *, plate_thickness: float | None = None) -> 
             f"cannot build its {component.type} solid: {reason}; check its fitted geometry",
             where=f"object {component.id}",
         ) from None
-    return check_solid(shape, component.id)
+    return check_solid(shape, component.id), origin

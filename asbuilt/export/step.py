@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
+from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepGProp import BRepGProp
 from OCP.GProp import GProp_GProps
 from OCP.IFSelect import IFSelect_RetDone
@@ -148,8 +149,9 @@ class StepSolid:
     """One solid read back from a STEP file.
 
     ``name`` is its product (instance) name, ``path`` the names from the root down to it,
-    ``volume`` in cubic millimetres, ``colour`` RGBA 0..1 (sRGB, as in the file) or None, ``solids`` the number of
-    solids in the leaf shape.
+    ``volume`` in cubic millimetres, ``colour`` RGBA 0..1 (sRGB, as in the file) or None,
+    ``solids`` the number of solids in the leaf shape, ``valid`` the kernel's validity check
+    (``BRepCheck_Analyzer``) of the leaf shape as read.
     """
 
     name: str
@@ -157,6 +159,7 @@ class StepSolid:
     volume: float
     colour: tuple[float, float, float, float] | None
     solids: int
+    valid: bool = True
 
 
 def _name(label: TDF_Label) -> str:
@@ -224,7 +227,8 @@ def read_step(path) -> list[StepSolid]:
         props = GProp_GProps()
         BRepGProp.VolumeProperties_s(shape, props)
         colour = _colour(color_tool, instance, shape) or _colour(color_tool, label, shape)
-        found.append(StepSolid(trail[-1], trail, props.Mass(), colour, _count_solids(shape)))
+        valid = BRepCheck_Analyzer(shape).IsValid()
+        found.append(StepSolid(trail[-1], trail, props.Mass(), colour, _count_solids(shape), valid))
 
     def visit(label: TDF_Label, trail: tuple[str, ...]) -> None:
         components = TDF_LabelSequence()
