@@ -134,9 +134,10 @@ class FittingDims:
     ``bend_radius`` is the centre-line radius of elbows (long or short radius as asked);
     ``tee_run``/``tee_outlet`` the equal tee's centre-to-end of run and outlet;
     ``reducer_length`` the concentric reducer's length by its large end; ``elbow45_end`` the
-    long-radius 45 degree elbow's centre-to-end when the table lists it; ``source`` is the
-    fittings catalog's name, or ``"rule"`` when a rule of thumb stood in (see :func:`fitting_dims`);
-    ``notes`` say which values came from a rule.
+    long-radius 45 degree elbow's centre-to-end (also when short radius is asked: ASME B16.9 has
+    no short-radius 45 degree elbow), ``elbow45_notes`` what a 45 degree elbow's record should
+    say about it; ``source`` is the fittings catalog's name, or ``"rule"`` when a rule of thumb
+    stood in (see :func:`fitting_dims`); ``notes`` say which values came from a rule.
     """
 
     bend_radius: float
@@ -146,6 +147,7 @@ class FittingDims:
     source: str
     notes: tuple[str, ...] = ()
     elbow45_end: float | None = None
+    elbow45_notes: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -691,7 +693,15 @@ def fitting_dims(
         reducer = od
         notes.append("reducer length by rule = large-end OD")
     source = catalog.fitting_table.name if row is not None and catalog.fitting_table else "rule"
-    elbow45 = dims.get("elbow45_lr") if elbow_radius == "long" else None
+    elbow45 = dims.get("elbow45_lr")
+    elbow45_notes: tuple[str, ...] = ()
+    if elbow_radius == "short":
+        # ASME B16.9 has no short-radius 45 degree elbow: a 45 is the long-radius one, B from
+        # the table, else the long-radius rule R tan(22.5 degrees)
+        if elbow45 is None:
+            long_radius = dims.get("elbow90_lr") or 1.5 * bore
+            elbow45 = max(long_radius, 0.5 * od * 1.01) * math.tan(math.radians(22.5))
+        elbow45_notes = ("no short-radius 45 degree elbow in ASME B16.9: long-radius 45 used",)
     return FittingDims(
         bend_radius=radius,
         tee_run=tee_run,
@@ -700,4 +710,5 @@ def fitting_dims(
         source=source,
         notes=tuple(notes),
         elbow45_end=elbow45,
+        elbow45_notes=elbow45_notes,
     )

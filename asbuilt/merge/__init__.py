@@ -35,7 +35,14 @@ from asbuilt.model import Component, Correction, Model, model_from_fits
 from asbuilt.primitives import Cylinder
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
-from .contiguity import Joint, connected_groups, find_joints, joint_pairs
+from .contiguity import (
+    LINK_MARGIN,
+    Joint,
+    connected_groups,
+    elbow_bend_limit,
+    find_joints,
+    joint_pairs,
+)
 from .joint import find_runs, joint_estimate
 from .regularize import align_lines, regularize_directions
 from .snap import SnapResult, snap_diameter
@@ -304,7 +311,24 @@ def merge_model(
     )
 
     # 2. joints
-    joints = find_joints(centers, axes, lengths, ods, links=links, tolerances=tol, slack=slack)
+    joint_notes: list[tuple[tuple[int, ...], str]] = []
+    joints = find_joints(
+        centers,
+        axes,
+        lengths,
+        ods,
+        links=links,
+        tolerances=tol,
+        slack=slack,
+        notes=joint_notes,
+        names=ids,
+    )
+    notes_of: dict[int, list[str]] = {}
+    for pipes, text in joint_notes:
+        for m in pipes:
+            notes_of.setdefault(m, []).append(text)
+    for m, text in _links_to_other_objects(report, index_of, cyls, slack, tol):
+        notes_of.setdefault(m, []).append(text)
 
     # 3. runs, joint estimates, snapping
     runs = find_runs(ods, ses, joint_pairs(joints), tol.diameter_tolerance)
@@ -494,10 +518,15 @@ def merge_model(
                 component=pipe_comp,
                 nominal=size.nominal if size else None,
                 schedule=schedule_used,
+                notes=list(notes_of.get(m, [])),
+                slack=float(slack[m]),
+                spacing=_mean_spacing(items[m], cyls[m]),
             )
         )
     group_of = [item.object.group for item in items]
-    pipe_components, spools = build_spools(specs, joints, group_of)
+    pipe_components, spools = build_spools(
+        specs, joints, group_of, max_bend_deg=elbow_bend_limit(tol)
+    )
 
     # assemble in scan order: each pipe's components where the pipe was
     by_source: dict[str, list[Component]] = {}
@@ -516,6 +545,58 @@ def merge_model(
         else:
             ordered.append(others.get(k, comp))
     return base.replace(components=tuple(ordered), spools=tuple(spools), catalog=catalog.name)
+
+
+def _mean_spacing(item, cylinder) -> float:
+    """Mean spacing (metres) of a pipe's inlier shots along its axis: extent / (shots - 1)."""
+    pts = np.asarray(item.object.points, float)
+    mask = np.asarray(item.result.inliers, bool)
+    if mask.shape == (len(pts),):
+        pts = pts[mask]
+    if len(pts) < 2:
+        return 0.0
+    along = (pts - np.asarray(cylinder.center)) @ np.asarray(cylinder.axis)
+    return float(np.ptp(along)) / (len(pts) - 1)
+
+
+def _links_to_other_objects(report, index_of, cyls, slack, tol):
+    """``(pipe index, sentence)`` for each scan link from a pipe to an object that is not a pipe.
+
+    Merging joins pipes only, so such a link builds nothing; it is said, with how far the pipe is
+    from the object's shots (more than ``joint_distance`` + :data:`.contiguity.LINK_MARGIN` + the
+    pipe's slack is implausible).
+    """
+    objects = {item.object.id: item for item in report.fits}
+    found = []
+    for a, b in report.scan.links:
+        for pipe_id, other_id in ((a, b), (b, a)):
+            if pipe_id not in index_of or other_id in index_of:
+                continue
+            m = index_of[pipe_id]
+            other = objects.get(other_id)
+            kind = other.result.primitive.kind if other is not None else "object"
+            if kind == "cylinder":
+                kind = "cylinder, not a pipe"
+            text = (
+                f"the scan links {pipe_id} to {other_id} (a {kind}): merging joins pipes only, so "
+                "no fitting or spool connects them"
+            )
+            if other is not None and len(other.object.points):
+                c = cyls[m]
+                half = 0.5 * c.length * np.asarray(c.axis)
+                p0, p1 = np.asarray(c.center) - half, np.asarray(c.center) + half
+                shots = np.asarray(other.object.points, float)
+                along = np.clip((shots - p0) @ (p1 - p0) / max(c.length**2, 1e-12), 0.0, 1.0)
+                gaps = np.linalg.norm(shots - (p0 + along[:, None] * (p1 - p0)), axis=1)
+                apart = max(float(gaps.min()) - c.radius, 0.0)
+                allowed = tol.joint_distance + LINK_MARGIN + float(slack[m])
+                if apart > allowed:
+                    text += (
+                        f"; they are {apart:.2f} m apart (a link may bridge {allowed:.2f} m): "
+                        "check the link"
+                    )
+            found.append((m, text))
+    return found
 
 
 def _constraints(joints: tuple[Joint, ...]):

@@ -24,9 +24,17 @@ meets it square-on is taken first, as a **tee** (stronger evidence than an elbow
 those ends); then the other pairs. A pipe end left over whose axis meets an inline joint
 square-on becomes the branch of a **tee** there; one whose axis meets the inside
 of another pipe square-on (within ``intended_angle_deg`` of 90 degrees) becomes the branch of a
-tee that splits that pipe. ``links`` in the scan are honoured first and without the distance
-limits; a linked pair whose geometry fits no joint is still reported (kind ``contact``) so the
-pair is estimated jointly.
+tee that splits that pipe. ``links`` in the scan are honoured first, with distance limits
+widened by :data:`LINK_MARGIN`; a linked pair whose geometry fits no joint is still reported
+(kind ``contact``) so the pair is estimated jointly, when the two pipes come within
+``joint_distance`` + :data:`LINK_MARGIN` (+ slack) of each other. A link farther apart than that
+is not modelled: no fitting is invented over a gap nobody measured, and a note says why.
+
+ASME B16.9 elbows turn 45 or 90 degrees: two ends whose bend would exceed 90 degrees plus
+``intended_angle_deg`` are never an elbow. An inline pair with a third end meeting it at an
+oblique angle (a **lateral** or wye, which the catalog does not have) becomes ``contact`` joints
+among the three pipes (one spool, no fitting: no coupling across the lateral's gap either), with
+a note; no elbow may take one of their ends.
 """
 
 from __future__ import annotations
@@ -39,13 +47,32 @@ from scipy.spatial import cKDTree
 
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["End", "Joint", "find_joints", "line_closest_points", "pipe_ends", "skew_tolerance"]
+__all__ = [
+    "End",
+    "Joint",
+    "elbow_bend_limit",
+    "find_joints",
+    "line_closest_points",
+    "pipe_ends",
+    "segment_distance",
+    "skew_tolerance",
+]
 
 #: Largest slack (metres) a pipe end may get: shots sparser than this cannot place a joint.
 SLACK_CAP = 2.0
 
 #: Spacing (metres) of the points sampled along each pipe to find tees in the middle of pipes.
 SAMPLE_STEP = 0.5
+
+#: How much farther (metres) than an inferred joint allows the ends of pipes the scan links may
+#: lie: the operator vouches for contiguity the scan could not show (an end hidden behind a
+#: support, a few missed shots). A longer gap holds a part nobody measured (a valve, a spool
+#: piece); it is reported, never bridged by an invented fitting.
+LINK_MARGIN = 0.5
+
+#: Largest elbow bend (degrees) before ``intended_angle_deg`` is added: ASME B16.9 elbows turn 45
+#: or 90 degrees (180 degree returns join parallel pipes, whose axes do not meet).
+ELBOW_MAX_DEG = 90.0
 
 #: A pipe end: (pipe index, 0 for the start end / 1 for the end end).
 End = tuple[int, int]
@@ -58,7 +85,8 @@ class Joint:
     Attributes
     ----------
     kind : str
-        ``"elbow"``, ``"inline"``, ``"tee"`` or ``"contact"`` (contiguous, no fitting).
+        ``"elbow"``, ``"inline"``, ``"tee"`` or ``"contact"`` (contiguous, no fitting: a link
+        whose axes do not meet, or the oblique branch of a lateral).
     ends : tuple of End
         elbow/inline/contact: the two joined ends; tee: the run ends (two for a tee at an inline
         joint, none for a tee in the middle of a pipe) followed by the branch end.
@@ -141,8 +169,18 @@ class _Candidate:
     explicit: bool
 
 
+def elbow_bend_limit(tol: Tolerances) -> float:
+    """Largest bend (degrees) an elbow joint may have: 90 + ``intended_angle_deg``."""
+    return ELBOW_MAX_DEG + tol.intended_angle_deg
+
+
 def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: bool, slack=None):
-    """Classify the pair of ends; return a _Candidate or None."""
+    """Classify the pair of ends; return a _Candidate or None.
+
+    ``relaxed`` (a scan link): the distance limits grow by :data:`LINK_MARGIN`. A pair whose axes
+    meet within reach but bend beyond :func:`elbow_bend_limit` is returned with kind
+    ``"oblique"``: not a joint, only a fact to report.
+    """
     ei, ej = pts[i, ki], pts[j, kj]
     oi, oj = out[i, ki], out[j, kj]
     ri, rj = 0.5 * ods[i], 0.5 * ods[j]
@@ -163,7 +201,8 @@ def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: 
         )
         if lateral > skew_tol:
             return None
-        if not relaxed and not (-jd <= gap <= 2 * jd + 2 * max(ods[i], ods[j]) + si + sj):
+        extra = LINK_MARGIN if relaxed else 0.0
+        if not (-jd - extra <= gap <= 2 * jd + 2 * max(ods[i], ods[j]) + si + sj + extra):
             return None
         return _Candidate(abs(gap) + lateral, "inline", (i, ki), (j, kj), relaxed)
     s, t, qi, qj = line_closest_points(ei, oi, ej, oj)
@@ -173,21 +212,22 @@ def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: 
     bend = float(np.degrees(np.arccos(np.clip(-(oi @ oj), -1.0, 1.0))))
     if bend >= 180.0 - tol.intended_angle_deg:
         return None
-    reach = 1.5 * max(ods[i], ods[j]) * np.tan(np.radians(bend) / 2) + jd
-    if relaxed:
-        if s < -jd - 0.5 * np.linalg.norm(ei - ej) or t < -jd - 0.5 * np.linalg.norm(ei - ej):
-            return None
-    elif not (-jd <= s <= reach + si and -jd <= t <= reach + sj):
+    reach = (
+        1.5 * max(ods[i], ods[j]) * np.tan(np.radians(min(bend, elbow_bend_limit(tol))) / 2) + jd
+    )
+    extra = LINK_MARGIN if relaxed else 0.0
+    if not (-jd - extra <= s <= reach + si + extra and -jd - extra <= t <= reach + sj + extra):
         return None
-    return _Candidate(abs(s) + abs(t) + skew, "elbow", (i, ki), (j, kj), relaxed)
+    kind = "elbow" if bend <= elbow_bend_limit(tol) else "oblique"
+    return _Candidate(abs(s) + abs(t) + skew, kind, (i, ki), (j, kj), relaxed)
 
 
-def _best_for_link(i, j, pts, out, axes, ods, tol):
+def _best_for_link(i, j, pts, out, axes, ods, tol, slack):
     best = None
     for ki in (0, 1):
         for kj in (0, 1):
-            cand = _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol, relaxed=True)
-            if cand is not None:
+            cand = _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol, relaxed=True, slack=slack)
+            if cand is not None and cand.kind != "oblique":
                 # prefer the ends nearest each other among valid configurations
                 cost = cand.cost + float(np.linalg.norm(pts[i, ki] - pts[j, kj]))
                 if best is None or cost < best[0]:
@@ -201,14 +241,26 @@ def _tee_at_inline(joint: Joint, b: End, pts, out, axes, ods, tol, slack) -> flo
     return _branch_cost(b, point, axes[i], ods[i], pts, out, axes, ods, tol, slack)
 
 
-def _branch_cost(b: End, point, run_axis, run_od, pts, out, axes, ods, tol, slack) -> float | None:
+def _branch_cost(
+    b: End, point, run_axis, run_od, pts, out, axes, ods, tol, slack, oblique=False
+) -> float | None:
+    """Cost of end ``b`` as a branch at ``point`` of a run, or None.
+
+    A tee branch meets the run square-on (within ``intended_angle_deg`` of 90 degrees); with
+    ``oblique`` the branch of a lateral instead: between ``intended_angle_deg`` and 90 degrees
+    less it, its end up to the inline gap allowance (divided by the sine of the angle: an oblique
+    branch must clear the run pipe) from the run axis.
+    """
     pipe, k = b
     eb, ob = pts[pipe, k], out[pipe, k]
     cos = abs(float(axes[pipe] @ run_axis))
-    if (
-        np.degrees(np.arcsin(min(1.0, np.sqrt(max(0.0, 1 - cos * cos)))))
-        < 90 - tol.intended_angle_deg
-    ):
+    angle = float(np.degrees(np.arccos(min(1.0, cos))))
+    if oblique:
+        if not tol.intended_angle_deg < angle < 90 - tol.intended_angle_deg:
+            return None
+        if float(ob @ (point - eb)) <= 0:
+            return None  # the branch end points away from the run
+    elif angle < 90 - tol.intended_angle_deg:
         return None
     s, _, q, _ = line_closest_points(eb, ob, point, run_axis)
     rel = q - point
@@ -219,7 +271,12 @@ def _branch_cost(b: End, point, run_axis, run_od, pts, out, axes, ods, tol, slac
     along = abs(float(rel @ run_axis))
     if along > skew_tol + tol.joint_distance:
         return None
-    if not (-tol.joint_distance <= s <= run_od + tol.joint_distance + float(slack[pipe])):
+    if oblique:
+        limit = 2 * tol.joint_distance + 2 * max(run_od, ods[pipe])
+        limit = limit / np.sin(np.radians(angle)) + float(slack[pipe])
+    else:
+        limit = run_od + tol.joint_distance + float(slack[pipe])
+    if not (-tol.joint_distance <= s <= limit):
         return None
     return abs(s) + along + lateral_on_run
 
@@ -233,6 +290,8 @@ def find_joints(
     links: Iterable[tuple[int, int]] = (),
     tolerances: Tolerances = DEFAULT_TOLERANCES,
     slack=None,
+    notes: list | None = None,
+    names: Sequence[str] | None = None,
 ) -> tuple[Joint, ...]:
     """Find the joints between pipes (see the module docstring for the rules).
 
@@ -250,6 +309,11 @@ def find_joints(
         How far each pipe's fitted ends may fall short of its real ends beyond
         ``joint_distance`` (e.g. its coarsest shot spacing along the axis); default 0; at most
         :data:`SLACK_CAP`.
+    notes : list, optional
+        Receives ``(pipe indices, sentence)`` for what was found but not joined: a link too far
+        apart to model, two ends bending beyond an elbow, the oblique branch of a lateral.
+    names : sequence of str, optional
+        Pipe ids for the sentences (default ``"#i"``).
 
     Returns
     -------
@@ -266,6 +330,8 @@ def find_joints(
     tol = tolerances
     slack = np.zeros(n) if slack is None else np.asarray(slack, float).reshape(-1)
     slack = np.clip(slack, 0.0, SLACK_CAP)
+    names = [f"#{i}" for i in range(n)] if names is None else list(names)
+    notes = [] if notes is None else notes
 
     used: set[End] = set()
     joints: list[Joint] = []
@@ -278,10 +344,24 @@ def find_joints(
             continue
         linked_pairs.add(key)
 
-    # 1. explicit links first (no distance limits)
+    # 1. explicit links first (distance limits widened by LINK_MARGIN)
     contacts = []
     for i, j in sorted(linked_pairs):
-        cand = _best_for_link(i, j, pts, out, axes, ods, tol)
+        cand = _best_for_link(i, j, pts, out, axes, ods, tol, slack)
+        if cand is None:
+            apart = segment_distance(pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1])
+            apart -= 0.5 * (ods[i] + ods[j])
+            allowed = tol.joint_distance + LINK_MARGIN + float(slack[i] + slack[j])
+            if apart > allowed:
+                notes.append(
+                    (
+                        (i, j),
+                        f"the scan links {names[i]} and {names[j]}, but they are "
+                        f"{apart:.2f} m apart (a link may bridge {allowed:.2f} m): not joined "
+                        "and no fitting invented; check the link or scan what lies between",
+                    )
+                )
+                continue
         if cand is None or cand.a in used or cand.b in used:
             contacts.append((i, j))
             continue
@@ -302,6 +382,7 @@ def find_joints(
             if b != a:
                 pairs.add((min(a, b), max(a, b)))
     candidates: list[_Candidate] = []
+    obliques: list[_Candidate] = []
     for a, b in sorted(pairs):
         i, ki = divmod(int(a), 2)
         j, kj = divmod(int(b), 2)
@@ -309,7 +390,7 @@ def find_joints(
             continue
         cand = _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol, relaxed=False, slack=slack)
         if cand is not None:
-            candidates.append(cand)
+            (obliques if cand.kind == "oblique" else candidates).append(cand)
     candidates.sort(key=lambda c: c.cost)
 
     # 2a. tees first: an inline pair with a third end meeting it square-on is stronger evidence
@@ -337,6 +418,12 @@ def find_joints(
         used.update((cand.a, cand.b, b))
         joints.append(Joint("tee", (cand.a, cand.b, b)))
 
+    # 2b. laterals: an inline pair with a third end meeting it obliquely; all three become
+    # contacts (no lateral in the catalog), and no elbow may take one of their ends
+    joints.extend(
+        _laterals(candidates, used, tree, radius, pts, out, axes, ods, tol, slack, notes, names)
+    )
+
     for cand in candidates:
         if cand.a in used or cand.b in used:
             continue
@@ -349,7 +436,81 @@ def find_joints(
         joints = _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, slack)
     for i, j in contacts:
         joints.append(Joint("contact", ((i, 0), (j, 0)), explicit=True))
+    noted = set()
+    for cand in sorted(obliques, key=lambda c: c.cost):
+        (i, ki), (j, kj) = cand.a, cand.b
+        if cand.a in used or cand.b in used or (i, j) in noted:
+            continue
+        noted.add((i, j))
+        bend = float(np.degrees(np.arccos(np.clip(-(out[i, ki] @ out[j, kj]), -1.0, 1.0))))
+        notes.append(
+            (
+                (i, j),
+                f"the ends of {names[i]} and {names[j]} meet at a {bend:.0f} degree bend, beyond "
+                f"an elbow's {elbow_bend_limit(tol):.0f} (ASME B16.9 elbows turn 45 or 90 "
+                "degrees): not joined",
+            )
+        )
     return tuple(joints)
+
+
+def _laterals(candidates, used, tree, radius, pts, out, axes, ods, tol, slack, notes, names):
+    """Inline candidates with an oblique third end (a lateral): contacts among the three pipes
+    (the lateral fitting fills the gap, so no coupling is built); return the joints."""
+    found = []
+    for cand in candidates:
+        if cand.kind != "inline" or cand.a in used or cand.b in used:
+            continue
+        point = 0.5 * (pts[cand.a] + pts[cand.b])
+        run_axis = axes[cand.a[0]]
+        best = None
+        for e in tree.query_ball_point(point, radius):
+            b = divmod(int(e), 2)
+            if b[0] in (cand.a[0], cand.b[0]) or b in used:
+                continue
+            cost = _branch_cost(
+                b, point, run_axis, ods[cand.a[0]], pts, out, axes, ods, tol, slack, oblique=True
+            )
+            if cost is not None and (best is None or cost < best[0]):
+                best = (cost, b)
+        if best is not None:
+            found.append((cand.cost + best[0], cand, best[1]))
+    joints = []
+    for _, cand, b in sorted(found, key=lambda t: t[0]):
+        if cand.a in used or cand.b in used or b in used:
+            continue
+        used.update((cand.a, cand.b, b))
+        # the lateral fitting fills the gap between the run ends: no coupling or butt weld there
+        joints.append(Joint("contact", (cand.a, cand.b)))
+        near = min((cand.a, cand.b), key=lambda e: float(np.linalg.norm(pts[e] - pts[b])))
+        joints.append(Joint("contact", (b, near)))
+        i, j, k = cand.a[0], cand.b[0], b[0]
+        cos = abs(float(axes[k] @ axes[i]))
+        angle = float(np.degrees(np.arccos(min(1.0, cos))))
+        notes.append(
+            (
+                (k, i, j),
+                f"{names[k]} meets the joint of {names[i]} and {names[j]} at {angle:.0f} "
+                "degrees: a lateral (wye), which the catalog does not have; no fitting built "
+                "(the three pipes kept in one spool without one)",
+            )
+        )
+    return joints
+
+
+def segment_distance(p0, p1, q0, q1) -> float:
+    """Closest distance (metres) between segments ``p0 p1`` and ``q0 q1`` (points (3,) m)."""
+    d1, d2, r = p1 - p0, q1 - q0, p0 - q0
+    a, e, f = float(d1 @ d1), float(d2 @ d2), float(d2 @ r)
+    c, b = float(d1 @ r), float(d1 @ d2)
+    denom = a * e - b * b
+    s = float(np.clip((b * f - c * e) / denom, 0.0, 1.0)) if denom > 1e-12 * a * e else 0.0
+    t = (b * s + f) / e
+    if t < 0.0:
+        t, s = 0.0, float(np.clip(-c / a, 0.0, 1.0))
+    elif t > 1.0:
+        t, s = 1.0, float(np.clip((b - c) / a, 0.0, 1.0))
+    return float(np.linalg.norm(p0 + s * d1 - q0 - t * d2))
 
 
 def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, slack):

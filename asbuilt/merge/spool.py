@@ -53,6 +53,17 @@ BUTT_GAP = 0.005
 ELBOW45_WINDOW_DEG = 2.0
 #: Shortest pipe piece left after trimming, metres.
 MIN_PIPE_LENGTH = 0.001
+#: Largest elbow bend built by default (degrees): ASME B16.9 elbows turn 45 or 90 degrees, plus
+#: the default ``intended_angle_deg`` (10) of latitude; merge passes its own tolerance.
+MAX_BEND_DEG = 100.0
+#: A pipe cut back by more than this (metres) at a fitting gets a note: its fitted end is its
+#: outermost shot, so the fitting then covers pipe the scan measured; 10 mm allows for shots
+#: on the weld bead and bevel and for range noise along the axis.
+TRIM_NOTE = 0.010
+#: A pipe extended by more than this (metres), and by more than its mean shot spacing, gets a
+#: note: that much pipe was never measured (a sparse scan's last shot is normally within one
+#: spacing of the end).
+EXTEND_NOTE = 0.025
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +89,14 @@ class PipeSpec:
         Index of its run of one size.
     component : Component
         The pipe component so far (snap, corrections...); geometry is replaced here.
+    nominal, schedule : str or None
+    notes : list of str
+        Sentences for ``snap["merge_notes"]`` (merging adds its own).
+    slack : float
+        Coarsest spacing of the pipe's shots along its axis, metres (for the notes).
+    spacing : float
+        Mean spacing of its shots along its axis, metres: an extension longer than this (and
+        than :data:`EXTEND_NOTE`) gets a note.
     """
 
     id: str
@@ -92,6 +111,8 @@ class PipeSpec:
     nominal: str | None = None
     schedule: str | None = None
     notes: list = field(default_factory=list)
+    slack: float = 0.0
+    spacing: float = 0.0
 
 
 def _vec(x) -> tuple[float, float, float]:
@@ -114,10 +135,12 @@ class _Builder:
             self.out[i] = (-p.axis, p.axis)
         self.ends = self.base.copy()
         self.splits: dict[int, list[tuple[float, float]]] = {}
+        self.fitting_at: dict[tuple[int, int], str] = {}
 
     def reset(self):
         self.ends = self.base.copy()
         self.splits = {}
+        self.fitting_at = {}
 
     def param(self, i: int, point) -> float:
         """Position of ``point`` along pipe i's axis from its start end, metres."""
@@ -141,10 +164,12 @@ def _elbow(b: _Builder, joint: Joint):
     big = pi if pi.od >= pj.od else pj
     radius = max(pi.dims.bend_radius, pj.dims.bend_radius)
     reach = radius * np.tan(theta / 2)
+    notes = list(big.dims.notes)
     if big.dims.elbow45_end is not None and abs(np.degrees(theta) - 45.0) <= ELBOW45_WINDOW_DEG:
         # a catalog 45 degree elbow: keep its centre-to-end, the radius follows
         reach = big.dims.elbow45_end
         radius = reach / np.tan(theta / 2)
+        notes.extend(big.dims.elbow45_notes)
     ti = point - reach * oi
     tj = point - reach * oj
     inward = (-oj) - ((-oj) @ oi) * oi
@@ -158,7 +183,7 @@ def _elbow(b: _Builder, joint: Joint):
     )
     b.ends[i, ki] = ti
     b.ends[j, kj] = tj
-    notes = list(big.dims.notes)
+    b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"elbow {pi.id}-{pj.id}"
     if not _same_size(pi, pj):
         notes.append("pipes of different sizes meet at this elbow: built at the larger size")
     snap = {
@@ -183,6 +208,8 @@ def _inline(b: _Builder, joint: Joint):
             mid = 0.5 * (ei + ej)
             b.ends[i, ki] = mid
             b.ends[j, kj] = mid
+            b.fitting_at[i, ki] = f"butt weld with {pj.id}"
+            b.fitting_at[j, kj] = f"butt weld with {pi.id}"
             return []
         geometry = Straight(start=ei, end=ej, outer_radius=0.5 * pi.od, wall=pi.wall)
         snap = {
@@ -199,6 +226,7 @@ def _inline(b: _Builder, joint: Joint):
     end = mid + 0.5 * length * oi
     b.ends[i, ki] = start
     b.ends[j, kj] = end
+    b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"reducer {pi.id}-{pj.id}"
     wall = min(pi.wall, pj.wall) if pi.wall and pj.wall else 0.0
     geometry = Reducer(
         start=start,
@@ -252,6 +280,8 @@ def _tee(b: _Builder, joint: Joint):
     center = anchor + t * run_dir
     geometry = _tee_geometry(center, run_dir, -ob, pi, pb)
     b.ends[branch_i, branch_k] = geometry.branch_end
+    b.fitting_at[branch_i, branch_k] = "a tee"
+
     notes = list(pi.dims.notes)
     if not _same_size(pi, pb):
         notes.append("reducing outlet: built with the equal tee's dimensions of the run size")
@@ -259,6 +289,8 @@ def _tee(b: _Builder, joint: Joint):
         b.ends[i, ki] = geometry.run_start
         b.ends[j, kj] = geometry.run_end
         name = f"{pi.id}-{pj.id}-{pb.id}"
+        b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"tee {name}"
+        b.fitting_at[branch_i, branch_k] = f"tee {name}"
         connects = [pi.id, pj.id, pb.id]
     else:
         at = b.param(i, center)
@@ -297,6 +329,8 @@ def build_spools(
     pipes: Sequence[PipeSpec],
     joints: Sequence[Joint],
     group_of: Sequence[str | None],
+    *,
+    max_bend_deg: float = MAX_BEND_DEG,
 ) -> tuple[list[Component], list[Spool]]:
     """Place fittings at the joints, trim pipes and group everything into spools.
 
@@ -307,6 +341,8 @@ def build_spools(
         Indices refer to ``pipes``.
     group_of : sequence of str or None
         Each pipe's scan group (a spool takes the group's name when all its pipes share it).
+    max_bend_deg : float
+        An elbow joint bending more than this (degrees) is not built (the pipes get a note).
 
     Returns
     -------
@@ -316,7 +352,22 @@ def build_spools(
     spools : list of Spool
     """
     b = _Builder(pipes)
-    active = [jt for jt in joints if jt.kind != "contact"]
+    active = []
+    for jt in joints:
+        if jt.kind == "contact":
+            continue
+        if jt.kind == "elbow":
+            (i, ki), (j, kj) = jt.ends
+            bend = float(np.degrees(np.arccos(np.clip(-(b.out[i, ki] @ b.out[j, kj]), -1, 1))))
+            if bend > max_bend_deg:
+                names = f"{pipes[i].id}, {pipes[j].id}"
+                for k in (i, j):
+                    pipes[k].notes.append(
+                        f"no elbow built between {names}: their {bend:.0f} degree bend is beyond "
+                        f"an elbow's {max_bend_deg:.0f} (ASME B16.9 elbows turn 45 or 90 degrees)"
+                    )
+                continue
+        active.append(jt)
     failed: list[Joint] = []
     for _ in range(len(active) + 1):
         b.reset()
@@ -414,8 +465,21 @@ def build_spools(
         spool = spool_of[i]
         base = p.component
         corrections = list(base.corrections)
+        end_notes = []
         for k, label in ((0, "start"), (1, "end")):
             moved = float((b.ends[i, k] - b.base[i, k]) @ b.out[i, k])
+            at = b.fitting_at.get((i, k), "the joint")
+            if -moved > TRIM_NOTE:
+                end_notes.append(
+                    f"cut back {-moved * 1000:.0f} mm at its {label} for {at}: the fitting covers "
+                    "pipe the scan measured there"
+                )
+            elif moved > max(EXTEND_NOTE, p.spacing):
+                end_notes.append(
+                    f"extended {moved * 1000:.0f} mm at its {label} to {at}, beyond its last shot "
+                    f"(shots every {p.spacing * 1000:.0f} mm on average): that pipe was not "
+                    "measured"
+                )
             if abs(moved) > 1e-7:
                 corrections.append(
                     Correction(
@@ -427,8 +491,8 @@ def build_spools(
                     )
                 )
         snap = dict(base.snap)
-        if p.notes:
-            snap["merge_notes"] = list(p.notes)
+        if p.notes or end_notes:
+            snap["merge_notes"] = list(p.notes) + end_notes
         for pid, start, end in by_pipe[i]:
             geometry = Straight(start=start, end=end, outer_radius=0.5 * p.od, wall=p.wall)
             comp = Component(

@@ -338,3 +338,20 @@ def test_loaded_catalogs_are_read_only_and_cached():
         cat.size("4").walls["STD"] = 1.0  # type: ignore[index]
     with pytest.raises(TypeError):
         cat.fitting(cat.size("4")).dims["tee_run"] = 1.0  # type: ignore[index]
+
+
+def test_short_radius_has_no_45_degree_elbow_so_the_long_radius_45_stands_in():
+    """ASME B16.9 has no short-radius 45 degree elbow (standards reference): B = 64 mm at NPS 4."""
+    steel = load_catalog("asme-b36.10m")
+    four = steel.size("4")
+    short = fitting_dims(steel, four, four.od, "short")
+    assert short.bend_radius == pytest.approx(0.102)  # the 90 degree SR elbow stays
+    assert short.elbow45_end == pytest.approx(0.064)
+    assert "no short-radius 45 degree elbow" in short.elbow45_notes[0]
+    long = fitting_dims(steel, four, four.od, "long")
+    assert long.elbow45_end == pytest.approx(0.064) and long.elbow45_notes == ()
+    # without a fittings table: the long-radius rule 1.5 x NPS, B = R tan(22.5 degrees)
+    copper = load_catalog("astm-b88")
+    two = copper.size("2")
+    ruled = fitting_dims(copper, two, two.od, "short")
+    assert ruled.elbow45_end == pytest.approx(1.5 * 2 * 0.0254 * math.tan(math.radians(22.5)))

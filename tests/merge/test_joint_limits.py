@@ -1,0 +1,230 @@
+"""What merging must not invent: elbows beyond 90 degrees, laterals, far links, silent
+extensions and trims (the audit's findings; ASME B16.9 values from the standards reference)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from synthetic_pipes import Pipe, report_of
+
+from asbuilt.fit.result import FitResult
+from asbuilt.merge import merge_model
+from asbuilt.merge.contiguity import find_joints
+from asbuilt.merge.spool import connection_mismatches
+from asbuilt.primitives import Cuboid
+from asbuilt.scan.model import ScanObject
+
+NPS4 = 0.1143
+NPS6 = 0.1683
+LR90_NPS4 = 0.152  # B16.9 NPS 4 90 degree long-radius centre-to-end
+LR45_NPS4 = 0.064  # B16.9 NPS 4 45 degree long-radius centre-to-end
+
+
+def by_id(model):
+    return {c.id: c for c in model.components}
+
+
+def notes(model, component_id):
+    return by_id(model)[component_id].snap.get("merge_notes", [])
+
+
+def types(model):
+    return [c.type for c in model.components]
+
+
+# --- 1. elbows turn at most 90 degrees (plus intended_angle_deg) ------------------------------
+
+
+def test_a_135_degree_bend_is_not_built_as_an_elbow():
+    a = math.radians(135.0)
+    d = np.array([math.cos(a), math.sin(a), 0.0])
+    corner = np.array([2.0, 0, 0])
+    gap = 0.2
+    pipes = [
+        Pipe("P1", (0, 0, 0), (2 - gap, 0, 0), NPS4),
+        Pipe("P2", tuple(corner + gap * d), tuple(corner + 2 * d), NPS4),
+    ]
+    model = merge_model(report_of(pipes))
+    assert types(model) == ["pipe", "pipe"]
+    assert len(model.spools) == 2
+    assert any("135 degree bend" in n and "not joined" in n for n in notes(model, "P1"))
+
+
+def test_a_lateral_gets_no_elbow_and_no_coupling():
+    """A 45 degree lateral: run P1, P2 (0.4 m gap for the fitting) and a branch P3 whose end is
+    0.25 m from the junction. Before the fix P2-P3 could be a 135 degree elbow or P1-P2 a 400 mm
+    coupling; a lateral is not in the catalog, so the three are one spool without fittings."""
+    branch = np.array([1.0, 0, 1.0]) / math.sqrt(2)
+    junction = np.array([0.0, 0, 1.0])
+    pipes = [
+        Pipe("P1", (-2.0, 0, 1.0), (-0.2, 0, 1.0), NPS4),
+        Pipe("P2", (0.2, 0, 1.0), (2.0, 0, 1.0), NPS4),
+        Pipe("P3", tuple(junction + 0.25 * branch), tuple(junction + 1.8 * branch), NPS4),
+    ]
+    model = merge_model(report_of(pipes))
+    assert types(model) == ["pipe", "pipe", "pipe"]
+    assert [s.components for s in model.spools] == [("P1", "P2", "P3")]
+    assert any("45 degrees: a lateral" in n for n in notes(model, "P3"))
+    # the pipes keep their measured ends: nothing was trimmed or extended for a fitting
+    assert by_id(model)["P2"].geometry.start == pytest.approx([0.2, 0, 1.0], abs=1e-6)
+
+
+def test_a_lateral_is_contacts_in_find_joints():
+    branch = np.array([1.0, 1.0, 0]) / math.sqrt(2)
+    starts = np.array([[-2.0, 0, 0], [0.2, 0, 0], 0.25 * branch])
+    ends = np.array([[-0.2, 0, 0], [2.0, 0, 0], 1.8 * branch])
+    vec = ends - starts
+    lengths = np.linalg.norm(vec, axis=1)
+    found = []
+    joints = find_joints(
+        (starts + ends) / 2,
+        vec / lengths[:, None],
+        lengths,
+        np.full(3, NPS4),
+        notes=found,
+        names=["A", "B", "C"],
+    )
+    assert sorted(j.kind for j in joints) == ["contact", "contact"]
+    assert {frozenset(j.pipes) for j in joints} == {frozenset((0, 1)), frozenset((2, 1))}
+    assert [pipes for pipes, _ in found] == [(2, 0, 1)]
+
+
+# --- 2. links must be geometrically plausible ------------------------------------------------
+
+
+def test_a_link_between_collinear_pipes_3_m_apart_invents_no_coupling():
+    pipes = [Pipe("P1", (0, 0, 1), (2, 0, 1), NPS4), Pipe("P2", (5, 0, 1), (7, 0, 1), NPS4)]
+    model = merge_model(report_of(pipes, links=[("P1", "P2")]))
+    assert types(model) == ["pipe", "pipe"]  # was a 3 m "coupling" nobody measured
+    assert len(model.spools) == 2
+    # pipe ends 3 m apart, less the two radii: 3 - 0.1143 = 2.89 m
+    for pid in ("P1", "P2"):
+        assert any("2.89 m apart" in n and "not joined" in n for n in notes(model, pid))
+    assert sum(s.pipe_length for s in model.spools) == pytest.approx(4.0)
+
+
+def test_a_link_between_parallel_pipes_2_m_apart_is_not_one_spool():
+    pipes = [Pipe("P1", (0, 0, 1), (2, 0, 1), NPS4), Pipe("P2", (0, 2, 1), (2, 2, 1), NPS4)]
+    model = merge_model(report_of(pipes, links=[("P1", "P2")]))
+    assert len(model.spools) == 2
+    assert any("not joined" in n for n in notes(model, "P2"))
+
+
+def test_a_plausible_link_still_joins_and_a_near_contact_stays_a_contact():
+    # ends 0.6 m from the corner: beyond the inferred reach, within the link margin
+    elbow = merge_model(
+        report_of(
+            [Pipe("P1", (0, 0, 0), (1.4, 0, 0), NPS4), Pipe("P2", (2, 0.6, 0), (2, 2, 0), NPS4)],
+            links=[("P1", "P2")],
+        )
+    )
+    assert types(elbow) == ["pipe", "elbow", "pipe"]
+    side_by_side = merge_model(
+        report_of(
+            [Pipe("P1", (0, 0, 0), (2, 0, 0), NPS4), Pipe("P2", (0, 0.3, 0), (2, 0.3, 0), NPS4)],
+            links=[("P1", "P2")],
+        )
+    )
+    assert len(side_by_side.spools) == 1 and "merge_notes" not in by_id(side_by_side)["P1"].snap
+
+
+def _cuboid(center, size):
+    center = np.asarray(center, float)
+    rng = np.random.default_rng(0)
+    points = center + (rng.uniform(-0.5, 0.5, (30, 3)) * np.asarray(size))
+    obj = ScanObject(id="B1", kind="cuboid", points=points, index=5)
+    result = FitResult(
+        primitive=Cuboid(center=center, axes=np.eye(3), size=list(size)),
+        residuals=np.zeros(30),
+        inliers=np.ones(30, bool),
+        stderr={},
+        sigma=0.002,
+        sigma_source="sensor",
+        method="synthetic",
+    )
+    return obj, result
+
+
+@pytest.mark.parametrize(("center", "far"), [((2.3, 0, 1), False), ((6.0, 0, 1), True)])
+def test_a_link_from_a_pipe_to_a_cuboid_is_said(center, far):
+    pipe = Pipe("P1", (0, 0, 1), (2, 0, 1), NPS4)
+    model = merge_model(
+        report_of([pipe], links=[("P1", "B1")], extra=[_cuboid(center, (0.4, 0.4, 0.4))])
+    )
+    said = notes(model, "P1")
+    assert len(said) == 1 and "links P1 to B1 (a cuboid)" in said[0]
+    assert ("m apart" in said[0]) is far
+
+
+def test_segment_distance():
+    from asbuilt.merge.contiguity import segment_distance
+
+    p = [np.array(v, float) for v in ((0, 0, 0), (2, 0, 0), (3, 1, 0), (3, 4, 0))]
+    assert segment_distance(*p) == pytest.approx(math.hypot(1, 1))
+    q = [np.array(v, float) for v in ((0, 0, 0), (2, 0, 0), (0, 2, 0), (2, 2, 0))]
+    assert segment_distance(*q) == pytest.approx(2.0)
+
+
+# --- 4. large extensions and trims are said --------------------------------------------------
+
+
+def test_a_long_extension_to_an_elbow_is_said():
+    # pipes end 0.40 m short of the corner; the NPS 4 LR elbow needs 0.152 m
+    pipes = [Pipe("P1", (0, 0, 0), (1.6, 0, 0), NPS4), Pipe("P2", (2, 0.4, 0), (2, 2, 0), NPS4)]
+    model = merge_model(report_of(pipes, links=[("P1", "P2")]))
+    assert types(model) == ["pipe", "elbow", "pipe"]
+    extension = (0.40 - LR90_NPS4) * 1000  # 248 mm
+    assert f"extended {extension:.0f} mm at its end to elbow P1-P2" in notes(model, "P1")[0]
+    assert f"extended {extension:.0f} mm at its start" in notes(model, "P2")[0]
+    assert connection_mismatches(model.components)[1] == []
+
+
+def test_a_reducer_cutting_back_measured_pipe_is_said():
+    # 6" and 4" end to end with a 40 mm gap: the B16.9 NPS 6 reducer is 140 mm long, so each
+    # pipe loses (140 - 40) / 2 = 50 mm it was measured over
+    pipes = [Pipe("P1", (0, 0, 0), (2.98, 0, 0), NPS6), Pipe("P2", (3.02, 0, 0), (6, 0, 0), NPS4)]
+    model = merge_model(report_of(pipes))
+    assert types(model) == ["pipe", "reducer", "pipe"]
+    assert notes(model, "P1") == [
+        "cut back 50 mm at its end for reducer P1-P2: the fitting covers pipe the scan measured "
+        "there"
+    ]
+    assert notes(model, "P2")[0].startswith("cut back 50 mm at its start")
+
+
+def test_small_end_moves_are_corrections_without_notes():
+    # the scan stops 20 mm short of an LR elbow's ends: within EXTEND_NOTE (25 mm)
+    gap = LR90_NPS4 + 0.020
+    pipes = [
+        Pipe("P1", (0, 0, 0), (2 - gap, 0, 0), NPS4),
+        Pipe("P2", (2, gap, 0), (2, 2, 0), NPS4),
+    ]
+    model = merge_model(report_of(pipes))
+    p1 = by_id(model)["P1"]
+    assert "merge_notes" not in p1.snap
+    assert [c.size for c in p1.corrections if c.what == "extended at end"] == [pytest.approx(20)]
+
+
+# --- 5. no short-radius 45 degree elbow in B16.9 ---------------------------------------------
+
+
+def test_short_radius_45_is_built_as_the_long_radius_45_with_a_note():
+    a = math.radians(45.0)
+    d = np.array([math.cos(a), math.sin(a), 0.0])
+    corner = np.array([2.0, 0, 0])
+    gap = 0.1
+    pipes = [
+        Pipe("P1", (0, 0, 0), (2 - gap, 0, 0), NPS4),
+        Pipe("P2", tuple(corner + gap * d), tuple(corner + 2 * d), NPS4),
+    ]
+    elbow = by_id(merge_model(report_of(pipes), elbow_radius="short"))["P1-P2"]
+    assert np.linalg.norm(elbow.geometry.start - corner) == pytest.approx(LR45_NPS4)
+    assert elbow.geometry.bend_radius == pytest.approx(LR45_NPS4 / math.tan(a / 2))
+    assert "no short-radius 45 degree elbow in ASME B16.9" in elbow.snap["notes"][0]
+    # a 90 degree bend still gets the short radius (B16.9 NPS 4 SR: 102 mm)
+    l_pipes = [Pipe("P1", (0, 0, 0), (1.8, 0, 0), NPS4), Pipe("P2", (2, 0.2, 0), (2, 2, 0), NPS4)]
+    l_elbow = by_id(merge_model(report_of(l_pipes), elbow_radius="short"))["P1-P2"]
+    assert l_elbow.geometry.bend_radius == pytest.approx(0.102)
+    assert l_elbow.snap["notes"] == []
