@@ -4,6 +4,10 @@ STL holds one solid (every object's closed mesh, concatenated, binary STL); OBJ 
 named object (``o <id>``) per component. Neither format declares a unit, so coordinates are
 written in the model's output unit (``Model.units``, the scan's unit unless changed), z up as
 in the scan frame.
+
+Binary STL stores float32 coordinates: about 7 significant digits, so far from the origin (survey
+coordinates) a vertex would be snapped to a coarse grid (0.5 m at 5,000 km). :func:`write_stl`
+refuses such a model with an :class:`~asbuilt.errors.ExportError` rather than write it.
 """
 
 from __future__ import annotations
@@ -14,9 +18,14 @@ import numpy as np
 import trimesh
 
 from asbuilt import __version__
+from asbuilt.errors import ExportError
 from asbuilt.units import unit_factor
 
-__all__ = ["write_stl", "write_obj", "trimesh_scene"]
+__all__ = ["write_stl", "write_obj", "trimesh_scene", "STL_RESOLUTION"]
+
+#: Worst float32 rounding (metres) an STL may have: 0.1 mm, a tenth of the usual 1 mm survey
+#: tolerance, so the STL is as good as the fit; more would silently move the geometry.
+STL_RESOLUTION = 1e-4
 
 
 def trimesh_scene(cad, *, units: str | None = None) -> trimesh.Scene:
@@ -49,15 +58,38 @@ def write_stl(cad, path, *, units: str | None = None) -> None:
         Written directly; callers stage it for atomicity.
     units : str, optional
         Default the model's ``units``.
+
+    Raises
+    ------
+    ExportError
+        When float32 cannot hold the coordinates to :data:`STL_RESOLUTION` (0.1 mm), before
+        anything is written.
     """
     scene = trimesh_scene(cad, units=units)
     meshes = list(scene.geometry.values())
+    _check_float32(meshes, units or cad.model.units, path)
     combined = (
         trimesh.util.concatenate(meshes)
         if meshes
         else trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
     )
     Path(path).write_bytes(trimesh.exchange.stl.export_stl(combined))
+
+
+def _check_float32(meshes, unit: str, path) -> None:
+    """Refuse coordinates that float32 cannot hold to :data:`STL_RESOLUTION`."""
+    if not meshes:
+        return
+    largest = max(float(np.abs(mesh.vertices).max(initial=0.0)) for mesh in meshes)
+    # Rounding to the nearest float32 moves a value by at most half its spacing.
+    error = 0.5 * float(np.spacing(np.float32(largest))) * unit_factor(unit)
+    if error > STL_RESOLUTION:
+        raise ExportError(
+            f"binary STL stores float32 coordinates, which {largest:.6g} {unit} from the origin "
+            f"round by up to {error * 1000:.3g} mm; write .obj, .glb/.gltf, .step or .dxf "
+            "(they keep full precision) or move the scan's origin near the objects",
+            source=str(path),
+        )
 
 
 def write_obj(cad, path, *, units: str | None = None) -> None:
