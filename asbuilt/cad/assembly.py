@@ -19,7 +19,7 @@ from asbuilt.model import Component, Model
 from .colours import colour_for, component_status
 from .mesh import LINEAR_DEFLECTION, Mesh, tessellate
 from .meshgen import mesh_for
-from .solids import check_solid, place, placed_solid
+from .solids import check_solid, place, placed_solid, split_closed_faces
 
 __all__ = ["CadPart", "CadModel", "prepare", "build_assembly", "fused_spool_solid"]
 
@@ -111,7 +111,8 @@ class CadModel:
 
     def assembly(self) -> cq.Assembly:
         """The CadQuery assembly (built once): root > group > object, each leaf named by its id
-        and coloured by kind or status."""
+        and coloured by kind or status; its solids are local, placed by the leaf's location,
+        with closed faces split (for files, not for booleans)."""
         if self._assembly is None:
             self._assembly = _assemble(self)
         return self._assembly
@@ -140,12 +141,14 @@ def _cq_colour(colour) -> cq.Color:
 
 
 def _add(node: cq.Assembly, part: CadPart) -> None:
-    """Add a leaf: the part's local solid placed at its origin (its solid as is without one)."""
+    """Add a leaf: the part's local solid placed at its origin (its solid as is without one),
+    closed faces split so STEP readers rebuild them valid (:func:`split_closed_faces`)."""
     colour = _cq_colour(part.colour)
     if part.local is None:
-        node.add(part.solid, name=part.id, color=colour)
+        node.add(split_closed_faces(part.solid), name=part.id, color=colour)
     else:
-        node.add(part.local, name=part.id, color=colour, loc=cq.Location(cq.Vector(*part.origin)))
+        local = split_closed_faces(part.local)
+        node.add(local, name=part.id, color=colour, loc=cq.Location(cq.Vector(*part.origin)))
 
 
 def _assemble(cad: CadModel) -> cq.Assembly:

@@ -24,13 +24,22 @@ import cadquery as cq
 import numpy as np
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
 from OCP.gp import gp_Trsf
+from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
 
 from asbuilt.errors import SolidBuildError
 from asbuilt.model import Bend, Component, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 from asbuilt.tolerances import DEFAULT_TOLERANCES
 
-__all__ = ["solid_for", "placed_solid", "place", "local_origin", "check_solid", "plate_solid"]
+__all__ = [
+    "solid_for",
+    "placed_solid",
+    "place",
+    "local_origin",
+    "split_closed_faces",
+    "check_solid",
+    "plate_solid",
+]
 
 #: Geometry fields that are positions (shape (3,) or (k, 3) metres), shifted to the local origin;
 #: the others (axes, normals, sizes, radii, faces) do not change under a translation.
@@ -127,6 +136,20 @@ def _tee(geometry: Tee) -> cq.Shape:
         )
         shape = shape.cut(bore.fuse(branch_bore))
     return shape.clean()
+
+
+def split_closed_faces(shape: cq.Shape) -> cq.Shape:
+    """``shape`` with every closed (periodic) face cut in two, for writing to files.
+
+    The run's cylinder face of a tee is closed and holds the branch hole; in a STEP round trip
+    readers rebuild its wires and, when the hole lies near the seam, get intersecting wires
+    (``BRepCheck_IntersectingWires``: an invalid solid). Split faces have no seam in them. Not
+    for solids that are fused later (the kernel's fuse of split tees can come out invalid).
+    """
+    divider = ShapeUpgrade_ShapeDivideClosed(shape.wrapped)
+    divider.SetNbSplitPoints(1)
+    divider.Perform()
+    return cq.Shape.cast(divider.Result())
 
 
 def _transformed(shape: cq.Shape, rotation: np.ndarray, translation: np.ndarray) -> cq.Shape:
