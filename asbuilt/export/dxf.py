@@ -20,6 +20,7 @@ from __future__ import annotations
 import re
 
 import ezdxf
+import ezdxf.bbox
 import numpy as np
 from ezdxf import colors as dxf_colors
 from scipy.spatial import ConvexHull, QhullError
@@ -124,7 +125,6 @@ def dxf_document(cad) -> ezdxf.document.Drawing:
     doc.header["$MEASUREMENT"] = 1
     doc.header["$LTSCALE"] = 20.0
     doc.header["$PROJECTNAME"] = cad.name
-    doc.set_modelspace_vport(height=10_000)
     msp = doc.modelspace()
     for name, (colour, linetype) in VIEW_LAYERS.items():
         doc.layers.add(name, color=colour, linetype=linetype)
@@ -197,10 +197,38 @@ def dxf_document(cad) -> ezdxf.document.Drawing:
             msp.add_text(
                 part.id, height=text_height, dxfattribs={"layer": f"{prefix}-TEXT"}
             ).set_placement((anchor[0], anchor[1] + 0.5 * text_height))
-    doc.header["$EXTMIN"] = (float(low[0]), float(high[2] - elevation_shift - extent), 0.0)
-    doc.header["$EXTMAX"] = tuple(float(v) for v in high)
+    _set_extents(doc)
     doc.ezdxf_metadata()["CREATED_BY"] = f"asbuilt {__version__}"
     return doc
+
+
+#: The viewport's aspect ratio assumed when fitting the drawing's width (a 4:3 window; wider ones
+#: show a margin) and the margin around the drawing.
+_VIEW_ASPECT = 4 / 3
+_VIEW_MARGIN = 1.1
+
+
+def _set_extents(doc) -> None:
+    """Record the model space's extents ($EXTMIN/$EXTMAX) and centre the *Active viewport on them.
+
+    ezdxf writes the header's extents from the model space layout's ``extmin``/``extmax`` on
+    save, so those are set (from ezdxf's bounding box of every entity, millimetres).
+    """
+    msp = doc.modelspace()
+    box = ezdxf.bbox.extents(msp, fast=True)
+    if not box.has_data:
+        doc.set_modelspace_vport(height=10_000)
+        return
+    low, high = (tuple(float(v) for v in box.extmin), tuple(float(v) for v in box.extmax))
+    msp.dxf.extmin = low
+    msp.dxf.extmax = high
+    doc.header["$EXTMIN"] = low
+    doc.header["$EXTMAX"] = high
+    width, height = high[0] - low[0], high[1] - low[1]
+    doc.set_modelspace_vport(
+        height=_VIEW_MARGIN * max(height, width / _VIEW_ASPECT, 1.0),
+        center=(0.5 * (low[0] + high[0]), 0.5 * (low[1] + high[1])),
+    )
 
 
 def write_dxf(cad, path) -> None:

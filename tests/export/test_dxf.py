@@ -126,3 +126,38 @@ def test_layer_names(type_, nominal, group, expected):
     name = layer_name(component, group)
     assert name == expected
     assert is_valid_layer_name(name)
+
+
+def _drawn_points(doc) -> np.ndarray:
+    """Every vertex, polyline point, text insert and circle bound of the model space (mm)."""
+    points = []
+    for entity in doc.modelspace():
+        kind = entity.dxftype()
+        if kind == "MESH":
+            points.extend(tuple(v) for v in entity.vertices)
+        elif kind == "POLYLINE":
+            points.extend(tuple(v.dxf.location) for v in entity.vertices)
+        elif kind == "LWPOLYLINE":
+            points.extend((x, y, 0.0) for x, y in entity.get_points("xy"))
+        elif kind == "TEXT":
+            points.append(tuple(entity.dxf.insert))
+        elif kind == "CIRCLE":
+            c, r = entity.dxf.center, entity.dxf.radius
+            points.extend([(c.x - r, c.y - r, c.z), (c.x + r, c.y + r, c.z)])
+    return np.array(points, dtype=float)
+
+
+def test_extents_and_view_cover_the_drawing(written):
+    doc = ezdxf.readfile(written)
+    low = np.array(doc.header["$EXTMIN"], dtype=float)
+    high = np.array(doc.header["$EXTMAX"], dtype=float)
+    points = _drawn_points(doc)
+    assert np.all(low <= points.min(axis=0) + 1e-6)
+    assert np.all(high >= points.max(axis=0) - 1e-6)
+    # ...and no more than the texts' widths beyond them (not the 1e20 "unset" values).
+    assert np.all(points.min(axis=0) - low < 2000.0)
+    assert np.all(high - points.max(axis=0) < 2000.0)
+    (active,) = doc.viewports.get("*Active")
+    centre = np.array(tuple(active.dxf.center)[:2], dtype=float)
+    assert centre == pytest.approx(0.5 * (low[:2] + high[:2]))
+    assert active.dxf.height >= high[1] - low[1]
