@@ -17,6 +17,7 @@ TEXT entities in both views.
 
 from __future__ import annotations
 
+import hashlib
 import re
 
 import ezdxf
@@ -30,7 +31,14 @@ from asbuilt.cad.colours import KIND_COLOURS, rgb255
 from asbuilt.model import Bend, Reducer, Straight, Tee
 from asbuilt.primitives import Cylinder, Sphere
 
-__all__ = ["dxf_document", "write_dxf", "layer_name", "VIEW_LAYERS", "PIPING_TYPES"]
+__all__ = [
+    "dxf_document",
+    "write_dxf",
+    "layer_name",
+    "VIEW_LAYERS",
+    "PIPING_TYPES",
+    "MAX_LAYER_NAME",
+]
 
 #: Component types drawn on ``P-`` (piping) layers; the others go on ``ASBUILT-`` layers.
 PIPING_TYPES = ("pipe", "elbow", "tee", "reducer", "coupling")
@@ -46,6 +54,12 @@ VIEW_LAYERS = {
 }
 
 _MM = 1000.0
+#: AutoCAD's longest layer name (AutoCAD 2000 and later): longer ones are refused or truncated
+#: by readers, so longer names are shortened here.
+MAX_LAYER_NAME = 255
+#: Hex digits of the hash that keeps shortened layer names apart (32 bits: a clash is ~1e-9 likely
+#: even for hundreds of long group names).
+_HASH_DIGITS = 8
 _INVALID = re.compile(r"[<>/\\\":;?*|=',`\s]+")
 
 
@@ -58,7 +72,8 @@ def layer_name(component, group: str | None) -> str:
 
     ``P-PIPE-NPS4-S1`` for a 4" pipe of spool S1, ``P-ELBOW-NPS4`` for an ungrouped elbow,
     ``ASBUILT-CUBOID-COLUMNS`` for a cuboid of group "columns". Characters DXF forbids in layer
-    names become ``_`` (``1-1/2`` -> ``NPS1-1_2``).
+    names become ``_`` (``1-1/2`` -> ``NPS1-1_2``). Names longer than 255 characters (a long
+    group name) keep their first 246 and end in ``~`` and 8 hex digits of a hash of the whole.
     """
     prefix = "P" if component.type in PIPING_TYPES else "ASBUILT"
     parts = [prefix, component.type.upper()]
@@ -66,7 +81,16 @@ def layer_name(component, group: str | None) -> str:
         parts.append("NPS" + _clean(str(component.nominal)))
     if group:
         parts.append(_clean(group))
-    return "-".join(parts)
+    return _shortened("-".join(parts))
+
+
+def _shortened(name: str) -> str:
+    """``name`` itself when it fits :data:`MAX_LAYER_NAME`, else its head and ``~`` with a hash of
+    the whole name (deterministic, and distinct for distinct names)."""
+    if len(name) <= MAX_LAYER_NAME:
+        return name
+    digest = hashlib.sha256(name.encode("utf-8")).hexdigest()[:_HASH_DIGITS].upper()
+    return f"{name[: MAX_LAYER_NAME - _HASH_DIGITS - 1]}~{digest}"
 
 
 def _nearest_aci(rgb: tuple[int, int, int]) -> int:

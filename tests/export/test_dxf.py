@@ -161,3 +161,27 @@ def test_extents_and_view_cover_the_drawing(written):
     centre = np.array(tuple(active.dxf.center)[:2], dtype=float)
     assert centre == pytest.approx(0.5 * (low[:2] + high[:2]))
     assert active.dxf.height >= high[1] - low[1]
+
+
+def test_long_group_names_give_distinct_layers_within_255_characters(tmp_path):
+    from asbuilt.cad import prepare
+    from asbuilt.model import Model
+
+    groups = ["Halle A " + "x" * 300 + " Achse 1", "Halle A " + "x" * 300 + " Achse 2"]
+    components = tuple(
+        Component(f"P{i}", "pipe", Straight([i, 0, 0], [i + 1, 0, 0], 0.05), group=group)
+        for i, group in enumerate(groups)
+    )
+    names = [layer_name(c, c.group) for c in components]
+    assert all(len(name) <= 255 for name in names)  # AutoCAD's limit
+    assert names[0] != names[1]
+    assert names[0].startswith("P-PIPE-HALLE_A_XXX")
+    assert names == [layer_name(c, c.group) for c in components]  # deterministic
+    short = Component("S", "pipe", Straight([0, 0, 0], [1, 0, 0], 0.05))
+    assert layer_name(short, "S1") == "P-PIPE-S1"  # short names unchanged
+    path = tmp_path / "long.dxf"
+    write_dxf(prepare(Model(components=components, units="m", name="long")), path)
+    doc = ezdxf.readfile(path)
+    assert not doc.audit().has_errors
+    layers = {layer.dxf.name for layer in doc.layers}
+    assert set(names) <= layers and all(len(name) <= 255 for name in layers)
