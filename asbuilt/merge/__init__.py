@@ -177,13 +177,18 @@ def resolve_schedule(catalog: Catalog, schedule: str | None) -> str | None:
     return "STD" if "STD" in catalog.schedules else None
 
 
-def _stderr_od(result) -> float:
-    se = result.stderr.get("radius") if result.stderr else None
+def _stderr_value(result, key: str) -> float:
+    """A fit's standard error ``key`` as a float; NaN when missing or not a number."""
+    se = result.stderr.get(key) if result.stderr else None
     try:
         se = float(se)
     except (TypeError, ValueError):
         return float("nan")
-    return 2.0 * se if np.isfinite(se) else float("nan")
+    return se if np.isfinite(se) else float("nan")
+
+
+def _stderr_od(result) -> float:
+    return 2.0 * _stderr_value(result, "radius")
 
 
 def shot_spacing(points, inliers, center, axis) -> float:
@@ -373,8 +378,14 @@ def merge_model(
             parallel_groups.append([joint.ends[0][0], joint.ends[1][0]])
         elif joint.kind == "tee" and joint.through is None:
             parallel_groups.append([joint.ends[0][0], joint.ends[1][0]])
+    axis_se = np.array([_stderr_value(item.result, "axis_deg") for item in items])
     directions = regularize_directions(
-        axes, lengths, tol_deg=tol.angle_snap_deg, parallel_groups=parallel_groups, names=ids
+        axes,
+        lengths,
+        tol_deg=tol.angle_snap_deg,
+        parallel_groups=parallel_groups,
+        names=ids,
+        stderr_deg=axis_se,
     )
     new_axes = directions.axes
     meets, coaxial = _constraints(joints)

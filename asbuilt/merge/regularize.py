@@ -7,12 +7,18 @@ exactly. Here, for pipe axes:
 
 1. **Parallel**: axes within ``angle_snap_deg`` of each other (and pipes joined inline, which
    must share an axis) are clustered; each cluster gets one direction, the principal direction of
-   its members' axes weighted by length.
+   its members' axes weighted by length (by inverse variance when the axes' standard errors are
+   given).
 2. **Vertical / horizontal**: a cluster within ``angle_snap_deg`` of the vertical becomes exactly
    vertical; one within ``angle_snap_deg`` of horizontal loses its vertical component.
 3. **Perpendicular**: clusters are fixed in order of weight (the vertical first); a cluster within
    ``angle_snap_deg`` of perpendicular to fixed directions is projected onto their orthogonal
    complement (the smallest rotation making it exactly perpendicular).
+
+Given the axes' standard errors, every relation must also be *insignificant*: the angle it
+removes at most :data:`SNAP_SIGMA` combined standard errors. A well-measured 1% drain slope
+(0.57 degrees, known to 0.02) is real and kept; a short, noisy axis 1 degree off level (known
+to 0.5) is made level. Without standard errors the tolerance alone decides.
 
 Then :func:`align_lines` moves each pipe's line sideways (never rotating it again) by the
 smallest weighted amount that makes joined lines meet exactly: elbows and tee branches
@@ -31,6 +37,15 @@ import numpy as np
 __all__ = ["DirectionResult", "regularize_directions", "align_lines", "perpendicular_basis"]
 
 _Z = np.array([0.0, 0.0, 1.0])
+
+#: A relation is made exact only when the angle it removes is within this many combined
+#: standard errors of the axes (as merging's diameter windows use 3 standard errors): beyond
+#: that the deviation is measured, not noise (a drain's slope, a deliberately tilted line).
+SNAP_SIGMA = 3.0
+
+#: Smallest axis standard error believed (degrees): 0.2 mm over a metre, below a range
+#: finder's noise; keeps noise-free synthetic fits from refusing every relation.
+AXIS_SE_FLOOR_DEG = 0.01
 
 
 @dataclass(frozen=True)
@@ -75,6 +90,8 @@ def regularize_directions(
     tol_deg: float,
     parallel_groups: Sequence[Sequence[int]] = (),
     names: Sequence[str] | None = None,
+    stderr_deg=None,
+    k_sigma: float = SNAP_SIGMA,
 ) -> DirectionResult:
     """Make near-parallel, near-vertical, near-horizontal and near-perpendicular axes exact.
 
@@ -90,6 +107,12 @@ def regularize_directions(
         Pipes that must end up parallel whatever their angle (pipes joined inline).
     names : sequence of str, optional
         Pipe ids for the relation texts (default ``"#i"``).
+    stderr_deg : array_like, shape (n,), optional
+        Standard error of each axis, degrees (NaN: unknown). A relation is made exact only when
+        the angle it removes is also within ``k_sigma`` combined standard errors (floored at
+        :data:`AXIS_SE_FLOOR_DEG`); unknown errors leave the tolerance alone to decide.
+    k_sigma : float
+        See ``stderr_deg``; default :data:`SNAP_SIGMA`.
 
     Returns
     -------
@@ -101,6 +124,24 @@ def regularize_directions(
     names = list(names) if names is not None else [f"#{i}" for i in range(n)]
     if n == 0:
         return DirectionResult(np.zeros((0, 3)), (), np.zeros(0), np.zeros(0, int))
+    se = np.full(n, np.inf) if stderr_deg is None else np.asarray(stderr_deg, float).reshape(-1)
+    se = np.where(np.isfinite(se), np.maximum(se, AXIS_SE_FLOOR_DEG), np.inf)
+
+    def combined(members) -> float:
+        """Standard error (degrees) of a cluster's direction: inverse-variance combination."""
+        values = se[list(members)]
+        if not np.all(np.isfinite(values)):
+            return float("inf")
+        return float(1.0 / np.sqrt(np.sum(1.0 / values**2)))
+
+    # a cluster's direction: members weighted by 1 / se^2 when every error is known (a
+    # well-measured axis must not be turned by more than its own error to suit a noisy one),
+    # else by the given weights
+    dir_weight = 1.0 / se**2 if np.all(np.isfinite(se)) else weights
+
+    def allowed(*errors: float) -> float:
+        """The largest angle (degrees) a relation may remove between axes of these errors."""
+        return min(tol_deg, k_sigma * float(np.hypot.reduce(errors)))
 
     # clusters: forced groups first, then greedy merge of near-parallel clusters
     parent = list(range(n))
@@ -124,21 +165,29 @@ def regularize_directions(
     for i in range(n):
         clusters.setdefault(find(i), []).append(i)
     groups = sorted(clusters.values(), key=lambda g: -weights[g].sum())
-    dirs = [_principal(axes[g], weights[g]) if len(g) > 1 else axes[g[0]] for g in groups]
+    dirs = [_principal(axes[g], dir_weight[g]) if len(g) > 1 else axes[g[0]] for g in groups]
     # leader clustering: groups (heaviest first) join the first cluster whose leading direction
     # is within the tolerance; each cluster's direction is computed once its members are known
     merged: list[list[int]] = []
     leaders = np.zeros((0, 3))
-    cos_tol = np.cos(np.radians(tol_deg))
+    leader_se: list[float] = []
     for group, d in zip(groups, dirs):
-        close = np.nonzero(np.abs(leaders @ d) >= cos_tol)[0] if len(leaders) else []
-        if len(close):
-            merged[int(close[0])].extend(group)
+        group_se = combined(group)
+        close = [
+            k
+            for k in range(len(leaders))
+            if _angle(leaders[k], d) <= allowed(leader_se[k], group_se)
+        ]
+        if close:
+            merged[close[0]].extend(group)
         else:
             merged.append(list(group))
             leaders = np.vstack([leaders, d])
+            leader_se.append(group_se)
     merged_dirs = [
-        _principal(axes[g], weights[g]) if len(g) > 1 else axes[g[0]] / np.linalg.norm(axes[g[0]])
+        _principal(axes[g], dir_weight[g])
+        if len(g) > 1
+        else axes[g[0]] / np.linalg.norm(axes[g[0]])
         for g in merged
     ]
     order = np.argsort([-weights[g].sum() for g in merged])
@@ -150,11 +199,12 @@ def regularize_directions(
     # Fixed directions as (regular direction, label, measured direction). Relations are found
     # between measured directions, so snaps cannot chain: a pipe 2.1 degrees off square to
     # another is not made square because the other was first made horizontal.
-    fixed: list[tuple[np.ndarray, str, np.ndarray]] = [(_Z, "vertical", _Z)]
+    fixed: list[tuple[np.ndarray, str, np.ndarray, float]] = [(_Z, "vertical", _Z, 0.0)]
     final_dirs = []
     for index, (group, d) in enumerate(zip(merged, merged_dirs)):
         cluster_of[group] = index
         measured = d
+        d_se = combined(group)
         rel: list[str] = []
         if len(group) > 1:
             lead = names[max(group, key=lambda m: weights[m])]
@@ -165,24 +215,26 @@ def regularize_directions(
                     relations[member].append(f"parallel to {lead}")
         # parallel to a fixed direction (vertical, or an earlier cluster)?
         snapped = False
-        for f, label, seen in fixed:
-            if _angle(measured, seen) <= tol_deg and _angle(measured, f) <= tol_deg:
+        for f, label, seen, f_se in fixed:
+            limit = allowed(d_se, f_se)
+            if _angle(measured, seen) <= limit and _angle(measured, f) <= limit:
                 d = f * np.sign(float(d @ f) or 1.0)
                 rel.append(label if label == "vertical" else f"parallel to {label}")
                 snapped = True
                 break
         if not snapped:
             near_perp = [
-                (f, label)
-                for f, label, seen in fixed
-                if abs(90.0 - _angle(measured, seen)) <= tol_deg
+                (f, label, f_se)
+                for f, label, seen, f_se in fixed
+                if abs(90.0 - _angle(measured, seen)) <= allowed(d_se, f_se)
             ]
             if near_perp:
-                d, kept = _make_perpendicular(d, near_perp, tol_deg)
+                limit = allowed(d_se, max(f_se for _, _, f_se in near_perp))
+                d, kept = _make_perpendicular(d, [(f, lab) for f, lab, _ in near_perp], limit)
                 for label in kept:
                     rel.append("horizontal" if label == "vertical" else f"perpendicular to {label}")
         lead_name = names[max(group, key=lambda m: weights[m])]
-        fixed.append((d, lead_name, measured))
+        fixed.append((d, lead_name, measured, d_se))
         final_dirs.append(d)
         for member in group:
             relations[member].extend(rel)

@@ -23,9 +23,10 @@ class Pipe:
     nominal: str | None = None
     group: str | None = None
     label: str | None = None
+    se_axis_deg: float = 0.2
 
 
-def cylinder_fit(start, end, od, se_radius=0.0005) -> FitResult:
+def cylinder_fit(start, end, od, se_radius=0.0005, se_axis_deg=0.2) -> FitResult:
     start, end = np.asarray(start, float), np.asarray(end, float)
     axis = (end - start) / np.linalg.norm(end - start)
     cyl = Cylinder(
@@ -39,7 +40,7 @@ def cylinder_fit(start, end, od, se_radius=0.0005) -> FitResult:
         primitive=cyl,
         residuals=np.zeros(n),
         inliers=np.ones(n, bool),
-        stderr={"radius": se_radius, "axis_deg": 0.2, "center": 0.001, "length": 0.01},
+        stderr={"radius": se_radius, "axis_deg": se_axis_deg, "center": 0.001, "length": 0.01},
         sigma=0.002,
         sigma_source="sensor",
         method="synthetic",
@@ -60,7 +61,8 @@ def report_of(pipes, links=(), extra=()) -> FitReport:
             nominal=p.nominal,
         )
         objects.append(obj)
-        fits.append(ObjectFit(obj, cylinder_fit(p.start, p.end, p.od, p.se_radius), "cylinder"))
+        fit = cylinder_fit(p.start, p.end, p.od, p.se_radius, p.se_axis_deg)
+        fits.append(ObjectFit(obj, fit, "cylinder"))
     for obj, result in extra:
         objects.append(obj)
         fits.append(ObjectFit(obj, result, obj.kind))

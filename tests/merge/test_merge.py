@@ -186,7 +186,11 @@ def test_unsnapped_pipe_keeps_its_fitted_diameter_and_is_solid():
 
 
 def test_axis_regularisation_is_recorded():
-    pipes = [Pipe("P1", (0, 0, 0), (1.8, 0, 0.03), NPS4), Pipe("P2", (2, 0.2, 0), (2, 2, 0), NPS4)]
+    # 0.95 degrees off level, with an axis known to 0.5 degrees: noise, made level
+    pipes = [
+        Pipe("P1", (0, 0, 0), (1.8, 0, 0.03), NPS4, se_axis_deg=0.5),
+        Pipe("P2", (2, 0.2, 0), (2, 2, 0), NPS4),
+    ]
     p1 = by_id(merge_model(report_of(pipes)))["P1"]
     corr = next(c for c in p1.corrections if c.what.startswith("axis regularised"))
     assert "horizontal" in corr.what and corr.unit == "deg"
