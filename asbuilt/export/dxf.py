@@ -2,7 +2,9 @@
 
 Model space holds, all in millimetres (``$INSUNITS`` = 4):
 
-* each object's tessellated solid as a MESH entity on its own kind/size/group layer, e.g.
+* each object's tessellated solid as a polyface mesh (a POLYLINE with the polyface flag, read
+  by every DXF reader since R12, where MESH entities are skipped by many; one per 10,000
+  triangles) on its own kind/size/group layer, e.g.
   ``P-PIPE-NPS4-S1`` (piping), ``ASBUILT-CUBOID-COLUMNS`` (fitted objects); components with
   findings carry the status colour (error red, warning amber) as true colour;
 * a plan view (XY, drawn at z = 0) on the layers ``PLAN-CENTRELINE``, ``PLAN-OUTLINE`` and
@@ -91,6 +93,35 @@ def _shortened(name: str) -> str:
         return name
     digest = hashlib.sha256(name.encode("utf-8")).hexdigest()[:_HASH_DIGITS].upper()
     return f"{name[: MAX_LAYER_NAME - _HASH_DIGITS - 1]}~{digest}"
+
+
+#: Triangles per polyface: face records index vertices with 16-bit integers (at most 32767
+#: vertices), and 10,000 triangles have at most 30,000.
+_POLYFACE_TRIANGLES = 10_000
+
+
+def _add_polyfaces(msp, vertices: np.ndarray, faces: np.ndarray, attribs: dict) -> None:
+    """Add a triangle mesh (vertices (n, 3) mm, faces (m, 3) indices) as polyface meshes
+    (POLYLINE with the polyface flag), one per :data:`_POLYFACE_TRIANGLES` triangles.
+
+    Built from the indexed mesh directly (vertex records, then one face record per triangle
+    with 1-based vertex indices), ~50x faster than ezdxf's ``append_faces``, which re-merges
+    coincident points.
+    """
+    for first in range(0, len(faces), _POLYFACE_TRIANGLES):
+        chunk = faces[first : first + _POLYFACE_TRIANGLES]
+        used, local = np.unique(chunk, return_inverse=True)
+        local = local.reshape(chunk.shape) + 1  # face records count vertices from 1
+        polyface = msp.add_polyface(dxfattribs=attribs)
+        polyface.append_vertices([tuple(p) for p in vertices[used].tolist()])
+        records_from = len(polyface.vertices)
+        polyface.append_vertices([(0.0, 0.0, 0.0)] * len(chunk))
+        for record, (a, b, c) in zip(polyface.vertices[records_from:], local.tolist()):
+            record.dxf.flags = ezdxf.const.VTX_3D_POLYFACE_MESH_VERTEX  # a face record
+            record.dxf.vtx0, record.dxf.vtx1, record.dxf.vtx2 = a, b, c
+            if "true_color" in attribs:
+                record.dxf.true_color = attribs["true_color"]
+        polyface.update_count(len(used), len(chunk))
 
 
 def _nearest_aci(rgb: tuple[int, int, int]) -> int:
@@ -189,10 +220,7 @@ def dxf_document(cad) -> ezdxf.document.Drawing:
         if part.status in ("error", "warning"):
             attribs["true_color"] = dxf_colors.rgb2int(rgb255(part.colour))
         vertices, faces = mesh.merged()
-        entity = msp.add_mesh(dxfattribs=attribs)
-        with entity.edit_data() as data:
-            data.vertices = [tuple(v) for v in (vertices * _MM).tolist()]
-            data.faces = [tuple(f) for f in faces.tolist()]
+        _add_polyfaces(msp, vertices * _MM, faces, attribs)
 
         lines = [line * _MM for line in _centrelines(part.component.geometry)]
         points = mesh.vertices * _MM

@@ -42,11 +42,16 @@ def test_units_are_millimetres(written):
     assert doc.header["$MEASUREMENT"] == 1
 
 
-def test_one_mesh_per_object_on_kind_size_group_layers(zoo_cad, written):
+def _polyfaces(doc) -> list:
+    return [e for e in doc.modelspace() if e.dxftype() == "POLYLINE" and e.is_poly_face_mesh]
+
+
+def test_one_polyface_per_object_on_kind_size_group_layers(zoo_cad, written):
     doc = ezdxf.readfile(written)
-    meshes = [e for e in doc.modelspace() if e.dxftype() == "MESH"]
-    assert len(meshes) == len(zoo_cad.parts)
-    layers = [m.dxf.layer for m in meshes]
+    assert not doc.modelspace().query("MESH")  # skipped by many readers
+    polyfaces = _polyfaces(doc)
+    assert len(polyfaces) == len(zoo_cad.parts)
+    layers = [m.dxf.layer for m in polyfaces]
     assert layers == [
         "P-PIPE-NPS4-S1",
         "P-ELBOW-NPS4-S1",
@@ -61,22 +66,59 @@ def test_one_mesh_per_object_on_kind_size_group_layers(zoo_cad, written):
     ]
 
 
-def test_mesh_vertices_are_the_model_in_millimetres(zoo_cad, written):
+def test_polyfaces_are_the_model_in_millimetres(zoo_cad, written):
+    """Vertices span the mesh's box and the faces enclose its volume (divergence theorem)."""
     doc = ezdxf.readfile(written)
-    meshes = [e for e in doc.modelspace() if e.dxftype() == "MESH"]
-    for part, entity in zip(zoo_cad.parts, meshes):
-        vertices = np.array(list(entity.vertices))
-        expected = zoo_cad.mesh(part).vertices * 1000.0
-        assert vertices.min(axis=0) == pytest.approx(expected.min(axis=0), abs=1e-6)
-        assert vertices.max(axis=0) == pytest.approx(expected.max(axis=0), abs=1e-6)
+    polyfaces = _polyfaces(doc)
+    assert len(polyfaces) == len(zoo_cad.parts)
+    for part, entity in zip(zoo_cad.parts, polyfaces):
+        tri = _triangles(entity)
+        points = tri.reshape(-1, 3)
+        expected = zoo_cad.mesh(part)
+        assert points.min(axis=0) == pytest.approx(expected.vertices.min(axis=0) * 1e3, abs=1e-6)
+        assert points.max(axis=0) == pytest.approx(expected.vertices.max(axis=0) * 1e3, abs=1e-6)
+        volume = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6
+        assert volume == pytest.approx(expected.volume * 1e9, rel=1e-6), part.id
 
 
 def test_findings_colour_the_entities(written):
     doc = ezdxf.readfile(written)
-    mesh = next(
-        e for e in doc.modelspace().query("MESH") if e.dxf.layer.startswith("ASBUILT-CUBOID")
-    )
-    assert mesh.rgb == rgb255(STATUS_COLOURS["error"])
+    cuboid = next(e for e in _polyfaces(doc) if e.dxf.layer.startswith("ASBUILT-CUBOID"))
+    assert cuboid.rgb == rgb255(STATUS_COLOURS["error"])
+
+
+def _triangles(polyface) -> np.ndarray:
+    """A polyface's triangles (k, 3, 3) from its records: vertices first (flags 64 + 128),
+    then face records (flag 128 only) with 1-based indices vtx0..vtx2 (negative: edge hidden)."""
+    points, faces = [], []
+    for vertex in polyface.vertices:
+        if vertex.dxf.flags & ezdxf.const.VTX_3D_POLYGON_MESH_VERTEX:
+            points.append(tuple(vertex.dxf.location))
+        else:
+            faces.append([abs(vertex.dxf.get(f"vtx{k}")) - 1 for k in range(3)])
+    return np.array(points)[np.array(faces)]
+
+
+def test_large_meshes_are_split_into_polyfaces_of_at_most_32767_vertices(tmp_path, monkeypatch):
+    """Face records index vertices with 16-bit integers; the split is tested at a small size."""
+    from asbuilt.export import dxf
+
+    assert 3 * dxf._POLYFACE_TRIANGLES <= 32767
+    monkeypatch.setattr(dxf, "_POLYFACE_TRIANGLES", 50)
+    doc = ezdxf.new("R2018")
+    rng = np.random.default_rng(3)
+    vertices = rng.uniform(0, 1000, size=(200, 3))
+    faces = rng.integers(0, len(vertices), size=(120, 3))
+    dxf._add_polyfaces(doc.modelspace(), vertices, faces, {"layer": "X"})
+    path = tmp_path / "big.dxf"
+    doc.saveas(path)
+    reread = ezdxf.readfile(path)
+    assert not reread.audit().has_errors
+    polyfaces = _polyfaces(reread)
+    assert [p.dxf.n_count for p in polyfaces] == [50, 50, 20]
+    assert all(p.dxf.m_count <= 150 for p in polyfaces)
+    triangles = np.concatenate([_triangles(p) for p in polyfaces])
+    assert triangles == pytest.approx(vertices[faces], abs=1e-9)
 
 
 def test_plan_and_elevation_views_with_centrelines_outlines_and_ids(zoo_cad, written):
@@ -185,3 +227,56 @@ def test_long_group_names_give_distinct_layers_within_255_characters(tmp_path):
     assert not doc.audit().has_errors
     layers = {layer.dxf.name for layer in doc.layers}
     assert set(names) <= layers and all(len(name) <= 255 for name in layers)
+
+
+_DXF_PARSER_SCRIPT = """
+const DxfParser = require(require('path').join(process.argv[1], 'dxf-parser'));
+const text = require('fs').readFileSync(process.argv[2], 'utf8');
+const doc = new DxfParser().parseSync(text);
+const out = doc.entities.filter((e) => e.type === 'POLYLINE' && e.isPolyfaceMesh).map((e) => {
+  const points = e.vertices.filter((v) => v.faceA === undefined);
+  const faces = e.vertices.filter((v) => v.faceA !== undefined);
+  let volume = 0;  // divergence theorem over the triangles, mm^3
+  for (const f of faces) {
+    const [a, b, c] = [f.faceA, f.faceB, f.faceC].map((i) => points[Math.abs(i) - 1]);
+    volume += (a.x * (b.y * c.z - b.z * c.y) - a.y * (b.x * c.z - b.z * c.x)
+               + a.z * (b.x * c.y - b.y * c.x)) / 6;
+  }
+  return {layer: e.layer, faces: faces.length, volume: volume};
+});
+console.log(JSON.stringify(out));
+"""
+
+
+def test_web_dxf_parser_reads_every_object(zoo_cad, written):
+    """npm dxf-parser (used by web viewers such as three-dxf) drops MESH entities silently; it
+    reads polyface meshes. Set ASBUILT_NODE_MODULES to a node_modules with dxf-parser."""
+    import json
+    import os
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    candidates = [os.environ.get("ASBUILT_NODE_MODULES"), root / ".ci" / "node" / "node_modules"]
+    modules = next(
+        (Path(c) for c in candidates if c and (Path(c) / "dxf-parser" / "package.json").is_file()),
+        None,
+    )
+    node = shutil.which("node")
+    if node is None or modules is None:
+        pytest.skip("node or the npm package dxf-parser not found (set ASBUILT_NODE_MODULES)")
+    result = subprocess.run(
+        [node, "-e", _DXF_PARSER_SCRIPT, str(modules), str(written)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    )
+    read = json.loads(result.stdout)
+    assert [entry["layer"] for entry in read] == [
+        layer_name(part.component, part.group) for part in zoo_cad.parts
+    ]
+    for entry, part in zip(read, zoo_cad.parts):
+        assert entry["faces"] == len(zoo_cad.mesh(part).merged()[1])
+        assert entry["volume"] == pytest.approx(zoo_cad.mesh(part).volume * 1e9, rel=1e-6)
