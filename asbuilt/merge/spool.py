@@ -61,9 +61,11 @@ MAX_BEND_DEG = 100.0
 #: on the weld bead and bevel and for range noise along the axis.
 TRIM_NOTE = 0.010
 #: A pipe extended by more than this (metres), and by more than its mean shot spacing, gets a
-#: note: that much pipe was never measured (a sparse scan's last shot is normally within one
-#: spacing of the end).
-EXTEND_NOTE = 0.025
+#: note: that much pipe was never measured. It is Tolerances.joint_distance's default: sparse
+#: scans stop short of fittings by a shot spacing or so, and operators keep the beam off the
+#: fitting (the simulated perfect spool's pipes end 30-70 mm short of every fitting); farther
+#: than that, the extension is the model's guess, not the scan's.
+EXTEND_NOTE = 0.15
 
 
 @dataclass(frozen=True, eq=False)

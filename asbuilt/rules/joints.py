@@ -1,4 +1,4 @@
-"""Joint rule: joint-gap.
+"""Joint rules: joint-gap and merge-note.
 
 Two pipes are *contiguous* when the scan links them or their ends lie within
 ``Tolerances.joint_distance``; merged spools join such pipes end to end or through a fitting.
@@ -15,7 +15,7 @@ import numpy as np
 from asbuilt.findings import Suggestion
 
 from ._catalog import SizeTable, nps_value
-from ._context import Context, mm, stderr_value, verdict
+from ._context import Context, centre_of, mm, stderr_value, verdict
 from ._graph import adjacency, inferred_pairs, linked_pairs
 
 __all__ = ["CHECKS", "joint_geometry"]
@@ -164,4 +164,30 @@ def check_joint_gap(ctx: Context, table: SizeTable | None) -> None:
         )
 
 
-CHECKS = {"joint-gap": check_joint_gap}
+def check_merge_notes(ctx: Context, table: SizeTable | None = None) -> None:
+    """One finding per note merging left on pipes (``snap["merge_notes"]``): what it could not
+    join as the scan asked, or pipe it added or removed to fit a fitting. A note on several
+    pipes (a link between two, a lateral's three, the pieces of a split pipe) is one finding
+    naming them all."""
+    slug = "merge-note"
+    carriers: dict[str, list] = {}
+    for comp in ctx.pipes:
+        for note in (comp.snap or {}).get("merge_notes") or ():
+            carriers.setdefault(str(note), []).append(comp)
+    for note, comps in carriers.items():
+        ids = list(dict.fromkeys(comp.id for comp in comps))
+        ctx.emit(
+            slug,
+            ids,
+            note,
+            location=centre_of(comps[0].geometry),
+            suggestions=(
+                Suggestion(
+                    f"check {', '.join(ids)} against the site and the scan's links; scan the "
+                    "pipe ends up to the fittings"
+                ),
+            ),
+        )
+
+
+CHECKS = {"joint-gap": check_joint_gap, "merge-note": check_merge_notes}

@@ -117,6 +117,16 @@ RULES: tuple[Rule, ...] = (
         "joints",
     ),
     Rule(
+        "AB302",
+        "merge-note",
+        "warning",
+        "{note}",
+        "Merging's own account of what it could not do as the scan asked or had to invent: a "
+        "link no fitting can make, a bend no B16.9 elbow turns, a pipe extended beyond its last "
+        "shot or cut back over measured pipe to fit a fitting.",
+        "joints",
+    ),
+    Rule(
         "AB401",
         "too-few-points",
         "warning",

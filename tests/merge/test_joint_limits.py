@@ -195,8 +195,9 @@ def test_a_reducer_cutting_back_measured_pipe_is_said():
 
 
 def test_small_end_moves_are_corrections_without_notes():
-    # the scan stops 20 mm short of an LR elbow's ends: within EXTEND_NOTE (25 mm)
-    gap = LR90_NPS4 + 0.020
+    # the scan stops 70 mm short of an LR elbow's ends (as the simulated spool's pipes do): within
+    # EXTEND_NOTE (0.15 m)
+    gap = LR90_NPS4 + 0.070
     pipes = [
         Pipe("P1", (0, 0, 0), (2 - gap, 0, 0), NPS4),
         Pipe("P2", (2, gap, 0), (2, 2, 0), NPS4),
@@ -204,7 +205,7 @@ def test_small_end_moves_are_corrections_without_notes():
     model = merge_model(report_of(pipes))
     p1 = by_id(model)["P1"]
     assert "merge_notes" not in p1.snap
-    assert [c.size for c in p1.corrections if c.what == "extended at end"] == [pytest.approx(20)]
+    assert [c.size for c in p1.corrections if c.what == "extended at end"] == [pytest.approx(70)]
 
 
 # --- 5. no short-radius 45 degree elbow in B16.9 ---------------------------------------------

@@ -72,3 +72,19 @@ def test_joint_geometry_of_a_corner():
     assert geo["angle_deg"] == pytest.approx(90.0)
     np.testing.assert_allclose(geo["corner"], [1.2, 0, 0], atol=1e-12)
     assert geo["da"] == pytest.approx(0.2) and geo["db"] == pytest.approx(0.3)
+
+
+def test_merge_notes_are_findings_once_per_note():
+    # A note merging left on both pipes of a link it could not make is one finding naming both;
+    # a note on one pipe is its own finding.
+    link = "the scan links P1 and P2, but they are 2.93 m apart: not joined"
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4")
+    b = pipe("P2", [4.93, 0, 1], [6, 0, 1], 0.1143, nominal="4")
+    a.snap["merge_notes"] = [link, "extended 269 mm at its end beyond its last shot"]
+    b.snap["merge_notes"] = [link]
+    found = [f for f in check_model(model(a, b), catalog=B36) if f.slug == "merge-note"]
+    assert sorted((f.objects, f.message) for f in found) == [
+        (("P1",), "extended 269 mm at its end beyond its last shot"),
+        (("P1", "P2"), link),
+    ]
+    assert all(f.code == "AB302" and f.severity == "warning" for f in found)
