@@ -2,9 +2,9 @@
 
 Model space holds, all in millimetres (``$INSUNITS`` = 4):
 
-* each object's tessellated solid as a polyface mesh (a POLYLINE with the polyface flag, read
-  by every DXF reader since R12, where MESH entities are skipped by many; one per 10,000
-  triangles) on its own kind/size/group layer, e.g.
+* each object's tessellated solid as a polyface mesh (a POLYLINE with the polyface flag, DXF's
+  3D mesh since R12, which common readers such as the npm dxf-parser read while they skip MESH
+  entities; one per 10,000 triangles) on its own kind/size/group layer, e.g.
   ``P-PIPE-NPS4-S1`` (piping), ``ASBUILT-CUBOID-COLUMNS`` (fitted objects); components with
   findings carry the status colour (error red, warning amber) as true colour;
 * a plan view (XY, drawn at z = 0) on the layers ``PLAN-CENTRELINE``, ``PLAN-OUTLINE`` and
