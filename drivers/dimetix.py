@@ -5,13 +5,19 @@ CR LF; a single distance ``sNg`` is answered ``gNg+xxxxxxxx`` in 0.1 mm, an erro
 Error codes are shared with the DISTO OEM family: E203 bad command, E222/E223/E224 interface
 overflow/framing/buffer, E252/E254 temperature too high/low, E255 signal too weak, E256 too
 strong, E257 too much background light. At power-up the device sends ``gN?``, which is skipped.
+
+Keeping replies with their shots: the input is cleared before every ``sNg``; after a timeout
+(or a reply that made no sense) the next measurement first sends ``sNc`` (stop) and reads up to
+its ``gN?``, so a late answer to the earlier ``sNg`` is dropped instead of being taken for the
+next shot's range. Only replies naming this device's id count; commands seen on the line (an
+RS-485 adapter's echo, another host on the bus) are skipped.
 """
 
 from __future__ import annotations
 
 import re
 
-from asbuilt.errors import DeviceProtocolError
+from asbuilt.errors import DeviceProtocolError, DeviceTimeout
 
 from .rangefinder import (
     RangeFinderCommandError,
@@ -41,6 +47,8 @@ DIMETIX_ERRORS = {
 _DISTANCE = re.compile(r"^g(\d)g([+-]\d{1,9})$")
 _ERROR = re.compile(r"^g(\d)@E(\d{3})$")
 _IDLE = re.compile(r"^g(\d)\?$")
+_FROM = re.compile(r"^g(\d)")  # any reply names the id of the device that sent it
+_COMMAND = re.compile(r"^s\d", re.IGNORECASE)  # a command on the bus: an echo or another host's
 
 
 class DimetixDLS:
@@ -59,6 +67,7 @@ class DimetixDLS:
             raise ValueError(f"device_id must be 0-9, got {device_id}")
         self.channel = channel
         self.device_id = int(device_id)
+        self._unsynced = False  # a reply may still be on its way (timeout, garbage)
 
     @classmethod
     def open(
@@ -93,21 +102,24 @@ class DimetixDLS:
         )
         raise cls(f"{self.channel.name}: E{code:03d} {meaning}; {action}", code=f"E{code:03d}")
 
-    def _reply(self, what: str, timeout: float | None = None) -> str:
+    def _line(self, what: str, timeout: float | None = None) -> str:
+        """The next line from this device: echoed commands and other ids' replies skipped."""
         while True:
             line = self.channel.read_line(timeout, expecting=what)
-            m = _IDLE.match(line)
-            if m and int(m.group(1)) == self.device_id:
-                continue  # power-up or stop acknowledgement
-            m = _ERROR.match(line)
-            if m:
-                if int(m.group(1)) != self.device_id:
-                    continue  # another device on the bus
-                self._raise_code(int(m.group(2)))
+            if _COMMAND.match(line):
+                continue  # our own command echoed by a bus adapter, or another host's
+            m = _FROM.match(line)
+            if m and int(m.group(1)) != self.device_id:
+                continue  # another device on the bus
             return line
 
     def measure(self, timeout: float | None = None) -> float:
         """One distance (``sNg``), metres.
+
+        Parameters
+        ----------
+        timeout : float, optional
+            Seconds to wait for the reply (default: the channel's).
 
         Returns
         -------
@@ -120,40 +132,61 @@ class DimetixDLS:
         RangeFinderCommandError
             The device's error code.
         DeviceTimeout
-            No reply within the timeout.
+            No reply within the timeout (the next call stops the device first).
         DeviceProtocolError
             A reply that is not ``gNg+xxxxxxxx``.
         """
-        self.channel.write(f"s{self.device_id}g\r\n")
-        while True:
-            line = self._reply("distance reply", timeout)
-            m = _DISTANCE.match(line)
-            if m is None:
-                raise DeviceProtocolError(
-                    f"{self.channel.name}: unexpected reply {line!r} to s{self.device_id}g "
-                    "(expected gNg+xxxxxxxx); check baud rate, 7E1 and the device id"
-                )
-            if int(m.group(1)) == self.device_id:
+        n = self.device_id
+        if self._unsynced:
+            self.stop()
+        self.channel.discard_input()  # nothing received before the command can be its answer
+        self.channel.write(f"s{n}g\r\n")
+        try:
+            while True:
+                line = self._line(f"distance reply from device id {n}", timeout)
+                if _IDLE.match(line):
+                    continue  # power-up or stop acknowledgement
+                m = _ERROR.match(line)
+                if m:
+                    self._raise_code(int(m.group(2)))
+                m = _DISTANCE.match(line)
+                if m is None:
+                    raise DeviceProtocolError(
+                        f"{self.channel.name}: unexpected reply {line!r} to s{n}g "
+                        "(expected gNg+xxxxxxxx); check the baud rate, 7E1 and the device id"
+                    )
                 return int(m.group(2)) * 1e-4
+        except (DeviceTimeout, DeviceProtocolError):
+            self._unsynced = True
+            raise
 
     def stop(self) -> None:
-        """``sNc``: stop the current measurement (reply ``gN?``), clearing stale input first."""
+        """``sNc``: stop the current measurement and read up to its acknowledgement ``gN?``.
+
+        Whatever the device sent before the acknowledgement (a late distance) is dropped.
+
+        Raises
+        ------
+        DeviceTimeout
+            No ``gN?`` from this device id within the timeout.
+        """
         self.channel.discard_input()
         self.channel.write(f"s{self.device_id}c\r\n")
-        line = self.channel.read_line(expecting="stop acknowledgement")
-        if not _IDLE.match(line):
-            raise DeviceProtocolError(f"{self.channel.name}: unexpected reply {line!r} to stop")
+        while not _IDLE.match(self._line(f"stop acknowledgement from device id {self.device_id}")):
+            pass  # a late reply to an earlier command
+        self._unsynced = False
+
+    def probe(self) -> None:
+        """Check that the sensor answers on these line settings (a stop, :meth:`stop`)."""
+        self.stop()
 
     def laser(self, on: bool) -> None:
         """``sNo`` / ``sNp``: laser pointer on or off (acknowledged ``gN?``)."""
+        self.channel.discard_input()
         self.channel.write(f"s{self.device_id}{'o' if on else 'p'}\r\n")
-        line = self._reply_ack()
-        if not _IDLE.match(line):
-            raise DeviceProtocolError(f"{self.channel.name}: unexpected reply {line!r} to laser")
-
-    def _reply_ack(self) -> str:
-        line = self.channel.read_line(expecting="acknowledgement")
+        line = self._line("acknowledgement")
         m = _ERROR.match(line)
         if m:
             self._raise_code(int(m.group(2)))
-        return line
+        if not _IDLE.match(line):
+            raise DeviceProtocolError(f"{self.channel.name}: unexpected reply {line!r} to laser")

@@ -16,9 +16,10 @@ from __future__ import annotations
 
 import math
 import re
+import time
 from dataclasses import dataclass
 
-from asbuilt.errors import DeviceError, DeviceProtocolError
+from asbuilt.errors import DeviceError, DeviceProtocolError, DeviceTimeout
 
 from .transport import LineChannel, open_port
 
@@ -97,7 +98,14 @@ class PanTiltUnit:
     def __init__(self, channel: LineChannel, *, move_timeout: float = 30.0):
         self.channel = channel
         self.move_timeout = float(move_timeout)
+        if not (math.isfinite(self.move_timeout) and self.move_timeout > 0):
+            raise ValueError(
+                f"move_timeout must be a finite number of seconds > 0, got {move_timeout!r}"
+            )
         self.limits: PTULimits | None = None
+        self._notices: list[str] = []  # limit notices since the current move was commanded
+        self._unsynced = False  # a reply may be owed (timeout): resynchronise first
+        self._verify = False  # check the head's position after the next move
 
     @classmethod
     def open(
@@ -146,7 +154,7 @@ class PanTiltUnit:
         self.channel.close()
 
     # -- protocol --------------------------------------------------------------------------
-    def command(self, text: str, *, timeout: float | None = None) -> str:
+    def command(self, text: str, *, timeout: float | None = None, query: bool = False) -> str:
         """Send one command and return the reply's payload (text after ``*``, maybe empty).
 
         Parameters
@@ -155,39 +163,67 @@ class PanTiltUnit:
             The command without delimiter, e.g. ``"PP100"``.
         timeout : float, optional
             Seconds to wait for the reply.
+        query : bool
+            The reply must carry a value: a bare ``*`` is a late reply to an earlier command
+            and is skipped.
 
         Raises
         ------
         PTUCommandError
             ``! <message>``.
         PTULimitError
-            ``!P`` / ``!T`` arrived before the reply (the reply itself is consumed first).
+            ``A`` (await) ended with ``!P`` / ``!T`` received since the move was commanded (with
+            or without the ``*``; after a notice the ``*`` is awaited for the ordinary reply
+            timeout only).
         DeviceTimeout, DeviceProtocolError
-            Silence or a reply the protocol does not allow.
+            Silence or a reply the protocol does not allow; the next command first
+            resynchronises (:meth:`_sync`) and the next move checks where the head is.
         """
         cmd = text.strip()
+        if self._unsynced:
+            self._sync()
+        self._collect_pending()
         self.channel.write(cmd + " ")
-        notices: list[str] = []
+        try:
+            return self._reply(cmd, timeout, query)
+        except (DeviceTimeout, DeviceProtocolError):
+            self._unsynced = True
+            self._verify = True
+            raise
+
+    def _reply(self, cmd: str, timeout: float | None, query: bool) -> str:
+        upper = cmd.upper()
+        notice_seen = False
         while True:
-            line = self.channel.read_line(timeout, expecting=f"reply to {cmd!r}")
+            wait = timeout
+            if notice_seen:  # the notice may have replaced the '*' (it came "on its own")
+                wait = min(self.channel.timeout, self.move_timeout if timeout is None else timeout)
+            try:
+                line = self.channel.read_line(wait, expecting=f"reply to {cmd!r}")
+            except DeviceTimeout:
+                if notice_seen:
+                    self._unsynced = self._verify = True  # a '*' may still come
+                    raise self._limit_error(cmd) from None
+                raise
             line = self._strip_echo(line, cmd)
             if not line:
                 continue  # the echo came on its own line
-            compact = line.replace(" ", "")
-            if _LIMIT_NOTICE.match(compact):
-                notices.extend(ch for ch in compact.upper() if ch in "PT")
+            if self._take_notice(line):
+                notice_seen = upper == "A"
                 continue
+            compact = line.replace(" ", "")
             if compact.endswith("*") and _LIMIT_NOTICE.match(compact[:-1]):
-                notices.extend(ch for ch in compact[:-1].upper() if ch in "PT")
+                self._take_notice(compact[:-1])
                 line = "*"  # e.g. the reset sweep's "!T!T!P!P*"
             if line.startswith("*"):
-                if notices and cmd.upper() not in ("R",):
-                    axes = " and ".join(sorted({"pan" if n == "P" else "tilt" for n in notices}))
-                    raise PTULimitError(
-                        f"{self.channel.name}: the {axes} axis hit its limit during {cmd!r}; "
-                        "aim inside the limits"
-                    )
-                return line[1:].strip()
+                payload = line[1:].strip()
+                if query and not payload:
+                    continue  # a late '*' of an earlier command, not this query's answer
+                if upper == "R":
+                    self._notices.clear()
+                elif upper == "A" and self._notices:
+                    raise self._limit_error(cmd)
+                return payload
             if line.startswith("!"):
                 raise PTUCommandError(
                     f"{self.channel.name}: {cmd!r} refused: {line[1:].strip() or 'error'}"
@@ -197,6 +233,57 @@ class PanTiltUnit:
                 "'!'); check the baud rate and that this is a FLIR/DP ASCII unit"
             )
 
+    def _take_notice(self, line: str) -> bool:
+        """Keep a limit notice (``!P``, ``!T``, ``!P!T``...) for the move; False if ``line`` is none."""
+        compact = line.replace(" ", "")
+        if not _LIMIT_NOTICE.match(compact):
+            return False
+        self._notices.extend(ch for ch in compact.upper() if ch in "PT")
+        return True
+
+    def _limit_error(self, cmd: str) -> PTULimitError:
+        axes = " and ".join(sorted({"pan" if n == "P" else "tilt" for n in self._notices}))
+        self._notices.clear()
+        return PTULimitError(
+            f"{self.channel.name}: the {axes} axis hit its limit during {cmd!r}; "
+            "aim inside the limits"
+        )
+
+    def _collect_pending(self) -> None:
+        """Read what arrived unasked: limit notices are kept, late replies dropped."""
+        for line in self.channel.pending_lines():
+            if not self._take_notice(line):
+                self._verify = True  # a reply nobody waited for: check the next move
+
+    def _sync(self) -> None:
+        """Get back in step with the unit: a lone delimiter ends any half-written command (its
+        reply, if any, is skipped), then the ``PR`` query's answer marks the point where every
+        earlier reply has been read (late ``*`` and ``!`` lines before it are dropped).
+
+        Raises
+        ------
+        DeviceTimeout, DeviceProtocolError
+            No answer to ``PR``; bytes that are not ASCII.
+        """
+        self._unsynced = False
+        self.channel.discard_input()
+        self.channel.write(" PR ")
+        known = self.limits.pan_resolution if self.limits is not None else None
+        try:
+            while True:
+                line = self._strip_echo(self.channel.read_line(expecting="reply to 'PR'"), "PR")
+                if self._take_notice(line) or not line.startswith("*"):
+                    continue  # a notice, or the reply to a half-written command
+                match = _NUMBER.search(line)
+                if match is None:
+                    continue  # a late '*'
+                value = float(match.group())
+                if known is None or math.isclose(value, known, rel_tol=1e-6):
+                    return
+        except (DeviceTimeout, DeviceProtocolError):
+            self._unsynced = True
+            raise
+
     @staticmethod
     def _strip_echo(line: str, cmd: str) -> str:
         if line.upper().startswith(cmd.upper()) and cmd:
@@ -205,7 +292,7 @@ class PanTiltUnit:
 
     def query_number(self, text: str) -> float:
         """Send a query (``PP``, ``PR``...) and parse the number of its reply (terse or verbose)."""
-        payload = self.command(text)
+        payload = self.command(text, query=True)
         match = _NUMBER.search(payload)
         if match is None:
             raise DeviceProtocolError(
@@ -214,14 +301,16 @@ class PanTiltUnit:
         return float(match.group())
 
     def initialize(self) -> PTULimits:
-        """Terse feedback, echo off, immediate mode, then read resolution and limits.
+        """Resynchronise (:meth:`_sync`: a lone delimiter ends a command a killed program left
+        half-written), then terse feedback, echo off, immediate mode, resolution and limits.
 
         Returns
         -------
         PTULimits
             Also kept as :attr:`limits`.
         """
-        self.channel.discard_input()
+        self._notices.clear()
+        self._sync()
         self.command("FT")
         self.command("ED")
         self.command("I")
@@ -239,6 +328,19 @@ class PanTiltUnit:
                 f"{self.limits.pan_resolution} / {self.limits.tilt_resolution} arcsec"
             )
         return self.limits
+
+    def limit_hit_after_move(self) -> bool:
+        """Whether ``!P`` / ``!T`` arrived after the last move's ``*`` (read without waiting).
+
+        A notice comes when a move runs into a limit, so a shot taken at that move is not
+        where it was aimed; the next move then checks the head's position.
+        """
+        self._collect_pending()
+        hit = bool(self._notices)
+        if hit:
+            self._notices.clear()
+            self._verify = True
+        return hit
 
     def _need_limits(self) -> PTULimits:
         if self.limits is None:
@@ -296,11 +398,40 @@ class PanTiltUnit:
                 f"{self.channel.name}: tilt {math.degrees(tilt):.3f} deg is outside the unit's "
                 f"limits [{math.degrees(lo):.3f}, {math.degrees(hi):.3f}] deg; aim inside them"
             )
+        self.limit_hit_after_move()  # a notice now is the previous move's, not this one's
         self.command(f"PP{pc}")
         self.command(f"TP{tc}")
         if wait:
             self.await_completion()
+            if self._verify:
+                self._check_position(pc, tc)
         return self.to_angles(pc, tc)
+
+    def _check_position(self, pan_counts: int, tilt_counts: int) -> None:
+        """After a resynchronisation: query the position until the head is at the target.
+
+        A late ``*`` can end an ``A`` early; the position queries (``PP``, ``TP``) say whether
+        the move is really over, and ``A`` is sent again until it is, up to ``move_timeout``.
+
+        Raises
+        ------
+        DeviceTimeout
+            The head is not at the target within ``move_timeout``.
+        """
+        deadline = time.monotonic() + self.move_timeout
+        while True:
+            at = self.position_counts()
+            if at == (pan_counts, tilt_counts):
+                self._verify = False
+                return
+            if time.monotonic() > deadline:
+                self._verify = True
+                raise DeviceTimeout(
+                    f"{self.channel.name}: the head is at {at[0]} / {at[1]} counts, not at the "
+                    f"target {pan_counts} / {tilt_counts}, {self.move_timeout:g} s after the "
+                    "move; check the unit and the move timeout"
+                )
+            self.await_completion()
 
     def await_completion(self) -> None:
         """Send ``A`` and wait up to ``move_timeout`` for the ``*`` that ends the move."""

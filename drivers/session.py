@@ -216,7 +216,7 @@ class DeviceShooter:
         self.ptu = ptu
         self.lrf = lrf
         self.settings = settings
-        self.timeouts_in_a_row = 0
+        self.lost_in_a_row = 0  # shots whose every attempt timed out or was unreadable
 
     def __call__(self, pan: float, tilt: float, phase: str) -> Shot:
         from .ptu import PTULimitError
@@ -226,38 +226,36 @@ class DeviceShooter:
             pan_at, tilt_at = self._move(pan, tilt)
         except PTULimitError:
             return Shot(pan, tilt, pan, tilt, None, "limit", 0, phase)
-        error = None
+        error = failure = None
         attempts = 0
         for _ in range(1 + self.settings.retries):
             attempts += 1
             try:
                 value = float(self.lrf.measure())
             except RangeFinderError as exc:
-                error = exc.code or type(exc).__name__
+                error, failure = exc.code or type(exc).__name__, None
                 continue
-            except DeviceTimeout:
-                error = "timeout"
-                continue
-            except DeviceProtocolError:
-                error = "protocol"
-                discard = getattr(getattr(self.lrf, "channel", None), "discard_input", None)
-                if discard is not None:
-                    discard()
+            except (DeviceTimeout, DeviceProtocolError) as exc:  # silence, wrong line settings
+                error = "timeout" if isinstance(exc, DeviceTimeout) else "protocol"
+                failure = exc
                 continue
             if not math.isfinite(value) or value <= 0:
-                error = "range<=0"
+                error, failure = "range<=0", None
                 continue
-            self.timeouts_in_a_row = 0
+            self.lost_in_a_row = 0
+            limit_hit = getattr(self.ptu, "limit_hit_after_move", None)
+            if limit_hit is not None and limit_hit():  # '!P'/'!T' after the move's '*'
+                return Shot(pan, tilt, pan_at, tilt_at, None, "limit", attempts, phase)
             return Shot(pan, tilt, pan_at, tilt_at, value, None, attempts, phase)
-        if error == "timeout":
-            self.timeouts_in_a_row += 1
-            if self.timeouts_in_a_row >= self.settings.lost_after:
-                raise DeviceTimeout(
-                    f"range finder silent on {self.timeouts_in_a_row} shots in a row; check its "
-                    "cable and power, then continue with asbuilt scan --resume"
-                )
+        if failure is None:
+            self.lost_in_a_row = 0
         else:
-            self.timeouts_in_a_row = 0
+            self.lost_in_a_row += 1
+            if self.lost_in_a_row >= self.settings.lost_after:
+                raise type(failure)(
+                    f"{failure} ({self.lost_in_a_row} shots in a row); then continue with "
+                    "asbuilt scan --resume"
+                )
         return Shot(pan, tilt, pan_at, tilt_at, None, error, attempts, phase)
 
     def _move(self, pan: float, tilt: float) -> tuple[float, float]:

@@ -13,6 +13,7 @@ Reads never block past an explicit deadline: a lost or silent device raises
 
 from __future__ import annotations
 
+import math
 import time
 
 import serial
@@ -96,6 +97,14 @@ def open_port(
         ) from None
 
 
+def _seconds(value, what: str, zero: bool = False) -> float:
+    """``value`` as seconds: finite and > 0 (>= 0 with ``zero``), else ValueError."""
+    seconds = float(value)
+    if not math.isfinite(seconds) or seconds < 0 or (seconds == 0 and not zero):
+        raise ValueError(f"{what} must be a finite number of seconds > 0, got {value!r}")
+    return seconds
+
+
 class LineChannel:
     """Line-oriented ASCII exchange over an open port, with deadlines.
 
@@ -115,7 +124,7 @@ class LineChannel:
     def __init__(self, port: serial.SerialBase, name: str, timeout: float = 1.0):
         self.port = port
         self.name = name
-        self.timeout = float(timeout)
+        self.timeout = _seconds(timeout, "timeout")
         self._buffer = bytearray()
 
     def write(self, text: str) -> None:
@@ -139,6 +148,33 @@ class LineChannel:
             self.port.reset_input_buffer()
         except (serial.SerialException, OSError) as exc:
             raise DeviceError(f"{self.name}: cannot reset the input ({exc})") from None
+
+    def pending_lines(self) -> list[str]:
+        """The complete lines already received, without waiting (a partial line stays buffered).
+
+        Raises
+        ------
+        DeviceError, DeviceProtocolError
+            The port fails, or a line holds non-ASCII bytes.
+        """
+        try:
+            while self.port.in_waiting:
+                chunk = self.port.read(self.port.in_waiting)
+                if not chunk:
+                    break
+                self._buffer.extend(chunk)
+                if len(self._buffer) > 4096:
+                    raise DeviceProtocolError(
+                        f"{self.name}: 4 KiB without a line end; check the baud rate"
+                    )
+        except (serial.SerialException, OSError, _TermiosError) as exc:
+            raise DeviceError(
+                f"{self.name}: read failed ({exc}); the cable may be unplugged"
+            ) from None
+        lines = []
+        while (line := self._pop_line()) is not None:
+            lines.append(line)
+        return lines
 
     def _pop_line(self) -> str | None:
         while True:
@@ -174,15 +210,17 @@ class LineChannel:
             No complete line arrived before the deadline.
         DeviceProtocolError
             The line holds non-ASCII bytes (wrong baud rate, noise).
+        ValueError
+            ``timeout`` is not a finite number >= 0 (a NaN deadline would never expire).
         """
-        wait = self.timeout if timeout is None else float(timeout)
+        wait = self.timeout if timeout is None else _seconds(timeout, "timeout", zero=True)
         deadline = time.monotonic() + wait
         while True:
             line = self._pop_line()
             if line is not None:
                 return line
             remaining = deadline - time.monotonic()
-            if remaining <= 0:
+            if not remaining > 0:  # also true for NaN: never wait without a deadline
                 partial = f" (partial {bytes(self._buffer)!r})" if self._buffer else ""
                 raise DeviceTimeout(
                     f"{self.name}: no {expecting} within {wait:g} s{partial}; check the cable, "

@@ -218,7 +218,7 @@ def test_silent_unit_fails_within_the_timeout(site, capsys):
     )
     assert code == 2
     assert time.monotonic() - start < 10  # generous: it must not hang
-    assert "no reply to 'FT' within 0.3 s" in capsys.readouterr().err
+    assert "no reply to 'PR' within 0.3 s" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(

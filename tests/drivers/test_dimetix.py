@@ -77,7 +77,7 @@ def test_dimetix_garbage_is_a_protocol_error(scripted, reply):
 
 def test_dimetix_silence_times_out(scripted):
     lrf, _ = _dimetix(scripted, [], timeout=0.2)
-    with pytest.raises(DeviceTimeout, match="no distance reply within 0.2 s"):
+    with pytest.raises(DeviceTimeout, match="no distance reply from device id 0 within 0.2 s"):
         lrf.measure()
 
 

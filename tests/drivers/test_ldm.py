@@ -4,11 +4,7 @@ from __future__ import annotations
 
 import pytest
 from asbuilt.drivers.ldm import LDM4x
-from asbuilt.drivers.rangefinder import (
-    RangeFinderCommandError,
-    RangeFinderError,
-    SignalTooWeak,
-)
+from asbuilt.drivers.rangefinder import RangeFinderError, SignalTooWeak
 
 from asbuilt.errors import DeviceProtocolError
 
@@ -39,8 +35,9 @@ def test_ldm_decimal_formats(scripted, reply, metres, quality):
     "reply, cls",
     [
         (b"E15\r\n", SignalTooWeak),
-        (b"E16\r\n", SignalTooWeak),
-        (b"E17\r\n", RangeFinderCommandError),
+        (b"E16\r\n", RangeFinderError),
+        (b"E17\r\n", RangeFinderError),
+        (b"E19\r\n", RangeFinderError),
         (b"E99\r\n", RangeFinderError),
     ],
 )
@@ -48,7 +45,17 @@ def test_ldm_error_codes(scripted, reply, cls):
     lrf, _ = _ldm(scripted, [("DM", reply)])
     with pytest.raises(cls) as info:
         lrf.measure()
+    assert type(info.value) is cls
     assert info.value.code == reply.strip().decode()
+
+
+@pytest.mark.parametrize("code", ["E16", "E17", "E18", "E19"])
+def test_ldm_codes_without_a_documented_meaning_get_no_invented_one(scripted, code):
+    # the reference (protocols.md) gives only E15's meaning
+    lrf, _ = _ldm(scripted, [("DM", f"{code}\r\n".encode())])
+    with pytest.raises(RangeFinderError) as info:
+        lrf.measure()
+    assert f"{code} device error; see the LDM manual" in str(info.value)
 
 
 @pytest.mark.parametrize("reply", [b"1388\r\n", b"??\r\n"])

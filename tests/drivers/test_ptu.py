@@ -15,6 +15,7 @@ ARCSEC = math.pi / 180 / 3600
 
 # An E-series-like unit: not the D46's resolution or limits, verbose feedback and echo on.
 INIT_VERBOSE_ECHO = [
+    ("PR", b" PR * 46.2857\r\n"),  # the resynchronising query after a lone delimiter
     ("FT", b"FT *\r\n"),  # echo on: the command comes back before the reply
     ("ED", b"ED *\r\n"),
     ("I", b"*\r\n"),
@@ -36,11 +37,12 @@ def test_initialize_reads_resolution_and_limits_from_the_unit(scripted):
     ptu, port = _unit(scripted, INIT_VERBOSE_ECHO)
     limits = ptu.initialize()
     assert limits == PTULimits(-7000, 7000, -3000, 1500, 46.2857, 11.5714)
-    assert port.written[:2] == ["FT", "ED"]  # terse feedback and echo off first
+    assert port.written[1:3] == ["FT", "ED"]  # terse feedback and echo off first
 
 
 def test_verbose_replies_are_parsed(scripted):
     script = [
+        ("PR", b"* 185.1428 seconds arc per Pan position\r\n"),
         ("FT", b"*\r\n"),
         ("ED", b"*\r\n"),
         ("I", b"*\r\n"),
@@ -123,7 +125,7 @@ def test_query_without_number_is_a_protocol_error(scripted):
 
 def test_silent_unit_times_out(scripted):
     ptu, _ = _unit(scripted, [], timeout=0.2)
-    with pytest.raises(DeviceTimeout, match="no reply to 'FT'"):
+    with pytest.raises(DeviceTimeout, match="no reply to 'PR'"):
         ptu.initialize()
 
 

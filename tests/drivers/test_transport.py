@@ -103,3 +103,13 @@ def test_loop_url_round_trip():
     assert channel.read_line() == "hello"
     channel.close()
     channel.close()  # idempotent
+
+
+@pytest.mark.parametrize("timeout", [float("nan"), float("inf"), -1.0])
+def test_a_deadline_that_could_never_expire_is_refused(timeout):
+    # NaN compares false with everything: read_line would wait forever
+    with pytest.raises(ValueError, match="finite number of seconds"):
+        LineChannel(Feed(b""), "dev", timeout=timeout)
+    channel = LineChannel(Feed(b""), "dev", timeout=0.1)
+    with pytest.raises(ValueError, match="finite number of seconds"):
+        channel.read_line(timeout)
