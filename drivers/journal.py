@@ -3,7 +3,8 @@
 ``scan.json`` gets ``scan.json.journal`` beside it. Records (see docs/acquisition.md):
 ``session`` (settings, calibration), ``object`` (the target), ``shot`` (requested and reached
 angles, raw range or error), ``done`` / ``failed`` and ``resume``. A torn last line (a crash in
-the middle of a write) is ignored when reading; a bad line elsewhere is an error.
+the middle of a write) is ignored when reading and cut off before the next record is appended
+(a complete last record that only lacks its newline gets one); a bad line elsewhere is an error.
 """
 
 from __future__ import annotations
@@ -15,6 +16,8 @@ from pathlib import Path
 from asbuilt.errors import ScanError
 
 __all__ = ["Journal", "read_journal", "journal_path_for"]
+
+_TAIL_BLOCK = 65536  # bytes read at a time when looking for the journal's last line break
 
 
 def journal_path_for(out) -> Path:
@@ -29,6 +32,7 @@ class Journal:
     def __init__(self, path):
         self.path = Path(path)
         try:
+            _mend_tail(self.path)
             self._f = open(self.path, "a", encoding="utf-8")  # kept open for the session
         except OSError as exc:
             raise ScanError(
@@ -45,6 +49,47 @@ class Journal:
     def close(self) -> None:
         """Close the file."""
         self._f.close()
+
+
+def _mend_tail(path: Path) -> None:
+    """End an existing journal at a line break before appending to it.
+
+    A crash mid-write leaves a last line without its newline. If that line is a complete record
+    (the crash came just before the newline), the newline is added; otherwise the torn bytes,
+    which :func:`read_journal` ignores, are cut off. Either way the next record starts a line
+    of its own instead of being glued onto the torn one.
+    """
+    try:
+        f = open(path, "r+b")
+    except FileNotFoundError:
+        return
+    with f:
+        size = f.seek(0, os.SEEK_END)
+        if size == 0:
+            return
+        f.seek(size - 1)
+        if f.read(1) == b"\n":
+            return
+        start = size
+        while start > 0:  # find the last line break, reading backwards in blocks
+            block = min(start, _TAIL_BLOCK)
+            f.seek(start - block)
+            data = f.read(block)
+            newline = data.rfind(b"\n")
+            if newline >= 0:
+                start = start - block + newline + 1
+                break
+            start -= block
+        f.seek(start)
+        tail = f.read()
+        try:
+            json.loads(tail)
+        except ValueError:  # torn: not a record (JSONDecodeError, or bytes that are not UTF-8)
+            f.truncate(start)
+        else:
+            f.write(b"\n")
+        f.flush()
+        os.fsync(f.fileno())
 
 
 def read_journal(path) -> list[dict]:

@@ -72,3 +72,30 @@ def test_unwritable_directory(tmp_path):
 def test_missing_directory(tmp_path):
     with pytest.raises(ScanError, match="cannot write the journal"):
         Journal(tmp_path / "nowhere" / "s.json.journal")
+
+
+def test_a_resumed_journal_is_not_glued_onto_a_torn_last_line(tmp_path):
+    # crash mid-write: the torn record is ignored, and the next record starts its own line
+    path = tmp_path / "s.json.journal"
+    path.write_text('{"type":"session"}\n{"type":"shot","seq":1}\n{"type":"shot","se')
+    journal = Journal(path)
+    journal.append({"type": "resume"})
+    journal.close()
+    assert read_journal(path) == [
+        {"type": "session"},
+        {"type": "shot", "seq": 1},
+        {"type": "resume"},
+    ]
+    journal = Journal(path)  # and the next resume reads it again
+    journal.append({"type": "resume"})
+    journal.close()
+    assert len(read_journal(path)) == 4
+
+
+def test_a_complete_last_record_without_its_newline_is_kept(tmp_path):
+    path = tmp_path / "s.json.journal"
+    path.write_text('{"type":"session"}\n{"type":"shot","seq":1}')  # crash before the newline
+    journal = Journal(path)
+    journal.append({"type": "resume"})
+    journal.close()
+    assert [r["type"] for r in read_journal(path)] == ["session", "shot", "resume"]
