@@ -57,6 +57,13 @@ def register(subparsers) -> argparse.ArgumentParser:
         help="range finder baud rate (dimetix 19200 7E1, ldm 9600 8N1)",
     )
     parser.add_argument(
+        "--lrf-id",
+        type=int,
+        default=None,
+        metavar="N",
+        help="Dimetix device id 0-9 (the N of sNg; several sensors share a bus by id) (0)",
+    )
+    parser.add_argument(
         "--lrf-8n1",
         action="store_true",
         help="open a Dimetix sensor 8N1 instead of 7E1 (reconfigured units, ptys)",
@@ -113,6 +120,25 @@ def register(subparsers) -> argparse.ArgumentParser:
     )
     parser.set_defaults(handler=run)
     return parser
+
+
+def _check_devices_options(args) -> None:
+    """Refuse device options the devices cannot take (one line each)."""
+    import math
+
+    from asbuilt.errors import ScanError
+
+    for key in ("timeout", "move_timeout"):
+        value = getattr(args, key)
+        if not (math.isfinite(value) and value > 0):
+            raise ScanError(
+                f"--{key.replace('_', '-')} must be a number of seconds > 0, not {value}"
+            )
+    if args.lrf_id is not None:
+        if args.lrf_protocol != "dimetix":
+            raise ScanError("--lrf-id is the Dimetix device id; the LDM has none (leave it out)")
+        if not 0 <= args.lrf_id <= 9:
+            raise ScanError(f"--lrf-id must be a Dimetix device id 0-9, not {args.lrf_id}")
 
 
 def _settings(args, plan):
@@ -250,6 +276,7 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.units import unit_factor
 
     err = Console(stderr=True)
+    _check_devices_options(args)
     try:
         unit_factor(args.units)
     except ValueError as exc:
@@ -269,6 +296,8 @@ def run(args: argparse.Namespace) -> int:
         lrf_options["baudrate"] = args.lrf_baud
     if args.lrf_8n1 and args.lrf_protocol == "dimetix":
         lrf_options.update(bytesize=8, parity="N")
+    if args.lrf_id is not None:
+        lrf_options["device_id"] = args.lrf_id
     ptu = PanTiltUnit.open(
         args.ptu, baudrate=args.ptu_baud, timeout=args.timeout, move_timeout=args.move_timeout
     )
@@ -302,6 +331,9 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         lrf = open_range_finder(args.lrf, args.lrf_protocol, timeout=args.timeout, **lrf_options)
+        probe = getattr(lrf, "probe", None)
+        if probe is not None:
+            probe()  # wrong line settings, id or cable: one error now, before the head moves
         shooter = DeviceShooter(ptu, lrf, settings)
         session = ScanSession(
             shooter,

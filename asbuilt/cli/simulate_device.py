@@ -7,8 +7,9 @@ exactly), and prints the two /dev/pts paths on standard output::
     ptu /dev/pts/3
     lrf /dev/pts/4
 
-then serves until Ctrl-C. Point ``asbuilt scan --ptu /dev/pts/3 --lrf /dev/pts/4 --lrf-8n1`` (a
-pseudo-terminal cannot take 7E1 after opening) at them to exercise the real drivers over a tty.
+then serves until Ctrl-C. Point ``asbuilt scan --ptu /dev/pts/3 --lrf /dev/pts/4`` at them to
+exercise the real drivers over a tty (a pseudo-terminal takes 7E1 or 8N1 alike and passes the
+bytes through unchanged, so ``--lrf-8n1`` is optional).
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     )
     parser.add_argument("--lrf-protocol", choices=("dimetix", "ldm"), default="dimetix")
     parser.add_argument("--station", help="scene station the rig stands at (default: the first)")
-    parser.add_argument("--device-id", type=int, default=0, help="Dimetix device id (0)")
+    parser.add_argument("--device-id", type=int, default=0, help="Dimetix device id 0-9 (0)")
     parser.add_argument(
         "--calibration",
         metavar="FILE",
@@ -69,6 +70,10 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.drivers.simrig import SimNoise, SimulatedRig, load_world, station_defaults
     from asbuilt.errors import DeviceError
 
+    if not 0 <= args.device_id <= 9:
+        raise DeviceError(
+            f"simulate-device: --device-id must be a Dimetix device id 0-9, not {args.device_id}"
+        )
     world = load_world(args.scene)
     calibration, noise = station_defaults(world, args.station)
     if args.calibration:
