@@ -51,8 +51,9 @@ finished objects come back as they were and the interrupted object's algorithm i
 its recorded shots served from the journal until it needs new ones.
 
 Shots with device errors are retried ``retries`` times, then skipped and counted; a range finder
-that times out on ``lost_after`` consecutive shots, or a port that fails, ends the session with
-a :class:`~asbuilt.errors.DeviceError` (the journal keeps everything up to that shot).
+that times out or answers unreadably (wrong line settings) on ``lost_after`` consecutive shots,
+or a port that fails, ends the session with a :class:`~asbuilt.errors.DeviceError` (the journal
+keeps everything up to that shot).
 """
 
 from __future__ import annotations
