@@ -192,8 +192,12 @@ def _residual_noise(result: FitResult, points: np.ndarray, tolerances: Tolerance
     from asbuilt.fit._common import _best_inlier_set
 
     residuals = np.asarray(result.residuals, dtype=np.float64)
-    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
-    chosen = _best_inlier_set(residuals, result.inliers, extent, float(tolerances.sigma_floor))
+    if result.inliers.all():
+        chosen = result.inliers  # the likeliest set is at least the inliers: here every point
+    else:
+        extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+        floor = float(tolerances.sigma_floor)
+        chosen = _best_inlier_set(residuals, result.inliers, extent, floor)
     used = 0 if result.covariance is None else len(result.covariance)
     dof = int(np.count_nonzero(chosen)) - used
     if dof <= 0:
