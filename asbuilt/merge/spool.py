@@ -60,8 +60,9 @@ MAX_BEND_DEG = 100.0
 #: outermost shot, so the fitting then covers pipe the scan measured; 10 mm allows for shots
 #: on the weld bead and bevel and for range noise along the axis.
 TRIM_NOTE = 0.010
-#: A pipe extended by more than this (metres), and by more than its mean shot spacing, gets a
-#: note: that much pipe was never measured. It is Tolerances.joint_distance's default: sparse
+#: A pipe extended by more than this (metres) plus its mean shot spacing along the axis (the
+#: last shot is typically within a spacing of the end) gets a note: that much pipe was never
+#: measured. It is Tolerances.joint_distance's default: sparse
 #: scans stop short of fittings by a shot spacing or so, and operators keep the beam off the
 #: fitting (the simulated perfect spool's pipes end 30-70 mm short of every fitting); farther
 #: than that, the extension is the model's guess, not the scan's.
@@ -97,8 +98,8 @@ class PipeSpec:
     slack : float
         Coarsest spacing of the pipe's shots along its axis, metres (for the notes).
     spacing : float
-        Mean spacing of its shots along its axis, metres: an extension longer than this (and
-        than :data:`EXTEND_NOTE`) gets a note.
+        Mean spacing of its shots along its axis, metres: an extension longer than this plus
+        :data:`EXTEND_NOTE` gets a note.
     """
 
     id: str
@@ -476,7 +477,7 @@ def build_spools(
                     f"cut back {-moved * 1000:.0f} mm at its {label} for {at}: the fitting covers "
                     "pipe the scan measured there"
                 )
-            elif moved > max(EXTEND_NOTE, p.spacing):
+            elif moved > EXTEND_NOTE + p.spacing:
                 end_notes.append(
                     f"extended {moved * 1000:.0f} mm at its {label} to {at}, beyond its last shot "
                     f"(shots every {p.spacing * 1000:.0f} mm on average): that pipe was not "

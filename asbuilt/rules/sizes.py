@@ -169,7 +169,8 @@ def check_hint(ctx: Context, table: SizeTable | None) -> None:
         hint_od = info.get("od")
         if hint_od is None and table is not None:
             hint_od = table.od(hint)
-        if hint_od is None and table is not None:
+        if hint_od is None and table is not None and comp.type == "pipe":
+            # only a pipe's hint names a catalog size (a tank's "3000 ID" does not)
             catalog = table.standard
             ctx.emit(
                 slug,

@@ -277,3 +277,11 @@ def test_pipes_side_by_side_in_a_rack_are_not_contiguous(spacing):
     b = pipe("R1", [0, spacing, 1], [3, spacing, 1], 0.0603, nominal="2")
     found = check_model(model(a, b), catalog=B36)
     assert not [f for f in found if f.slug in ("contiguous-diameter-mismatch", "joint-gap")]
+
+
+def test_a_tanks_hint_is_not_a_pipe_size():
+    # samples/plant.json's tank TK1 says "3000 ID": a vessel's size, not a catalog pipe size.
+    from dataclasses import replace
+
+    tank = replace(pipe("TK1", [0, 0, 0], [0, 0, 4], 3.0), type="cylinder")
+    assert not only(run(tank, scan=scan_with_hint("TK1", "3000 ID")), "hint-mismatch")
