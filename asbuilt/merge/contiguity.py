@@ -399,16 +399,7 @@ def find_joints(
     for cand in candidates:
         if cand.kind != "inline":
             continue
-        point = 0.5 * (pts[cand.a] + pts[cand.b])
-        run_axis = axes[cand.a[0]]
-        best = None
-        for e in tree.query_ball_point(point, radius):
-            b = divmod(int(e), 2)
-            if b[0] in (cand.a[0], cand.b[0]):
-                continue
-            cost = _branch_cost(b, point, run_axis, ods[cand.a[0]], pts, out, axes, ods, tol, slack)
-            if cost is not None and (best is None or cost < best[0]):
-                best = (cost, b)
+        best = _best_branch(cand, tree, radius, pts, out, axes, ods, tol, slack)
         if best is not None:
             tees.append((cand.cost + best[0], cand, best[1]))
     tees.sort(key=lambda t: t[0])
@@ -454,6 +445,24 @@ def find_joints(
     return tuple(joints)
 
 
+def _best_branch(cand, tree, radius, pts, out, axes, ods, tol, slack, skip=(), oblique=False):
+    """The cheapest third end (not of the run's pipes, not in ``skip``) meeting the inline
+    candidate ``cand`` as a branch (square-on, or ``oblique``): ``(cost, end)`` or None."""
+    point = 0.5 * (pts[cand.a] + pts[cand.b])
+    run_axis = axes[cand.a[0]]
+    best = None
+    for e in tree.query_ball_point(point, radius):
+        b = divmod(int(e), 2)
+        if b[0] in (cand.a[0], cand.b[0]) or b in skip:
+            continue
+        cost = _branch_cost(
+            b, point, run_axis, ods[cand.a[0]], pts, out, axes, ods, tol, slack, oblique=oblique
+        )
+        if cost is not None and (best is None or cost < best[0]):
+            best = (cost, b)
+    return best
+
+
 def _laterals(candidates, used, tree, radius, pts, out, axes, ods, tol, slack, notes, names):
     """Inline candidates with an oblique third end (a lateral): contacts among the three pipes
     (the lateral fitting fills the gap, so no coupling is built); return the joints."""
@@ -461,18 +470,9 @@ def _laterals(candidates, used, tree, radius, pts, out, axes, ods, tol, slack, n
     for cand in candidates:
         if cand.kind != "inline" or cand.a in used or cand.b in used:
             continue
-        point = 0.5 * (pts[cand.a] + pts[cand.b])
-        run_axis = axes[cand.a[0]]
-        best = None
-        for e in tree.query_ball_point(point, radius):
-            b = divmod(int(e), 2)
-            if b[0] in (cand.a[0], cand.b[0]) or b in used:
-                continue
-            cost = _branch_cost(
-                b, point, run_axis, ods[cand.a[0]], pts, out, axes, ods, tol, slack, oblique=True
-            )
-            if cost is not None and (best is None or cost < best[0]):
-                best = (cost, b)
+        best = _best_branch(
+            cand, tree, radius, pts, out, axes, ods, tol, slack, skip=used, oblique=True
+        )
         if best is not None:
             found.append((cand.cost + best[0], cand, best[1]))
     joints = []

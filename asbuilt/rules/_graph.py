@@ -11,7 +11,9 @@ from collections import defaultdict
 import numpy as np
 from scipy.spatial import cKDTree
 
+from asbuilt.merge.contiguity import elbow_bend_limit, line_closest_points
 from asbuilt.model import Component, Model
+from asbuilt.tolerances import DEFAULT_TOLERANCES
 
 from ._context import ends_of
 
@@ -99,9 +101,9 @@ def adjacency(model: Model, touch: float, infer: float | None = None) -> dict[st
     return graph
 
 
-#: Largest bend (degrees) between two pipe ends that an elbow can join: ASME B16.9 elbows turn
-#: 45 or 90 degrees; the 10 degrees beyond are the fits' and the construction's latitude.
-ELBOW_BEND_MAX_DEG = 100.0
+#: Largest bend (degrees) between two pipe ends that an elbow can join: merging's limit (ASME
+#: B16.9 elbows turn 45 or 90 degrees, plus ``intended_angle_deg``).
+ELBOW_BEND_MAX_DEG = elbow_bend_limit(DEFAULT_TOLERANCES)
 
 
 def inferred_pairs(model: Model, touch: float, infer: float) -> set[frozenset]:
@@ -163,14 +165,8 @@ def could_join(ga, ea: np.ndarray, gb, eb: np.ndarray, reach: float) -> bool:
         return float(np.linalg.norm(lateral)) <= radius
     if bend > ELBOW_BEND_MAX_DEG:
         return False
-    # Closest points of the lines ea + s oa and eb + t ob (not parallel here).
-    b = float(oa @ ob)
-    d, e = float(oa @ -rel), float(ob @ -rel)
-    denom = 1.0 - b * b
-    s = (b * e - d) / denom
-    t = (e - b * d) / denom
-    skew = float(np.linalg.norm((ea + s * oa) - (eb + t * ob)))
-    return skew <= radius and s >= -reach and t >= -reach
+    s, t, qa, qb = line_closest_points(ea, oa, eb, ob)
+    return float(np.linalg.norm(qa - qb)) <= radius and s >= -reach and t >= -reach
 
 
 def contiguous_pipes(model: Model, graph: dict[str, set[str]], pipe_ids) -> list[tuple]:
