@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 from asbuilt.drivers.calibration import calibration_to_dict, load_calibration
 from asbuilt.drivers.kinematics import Calibration, aim, forward
-from asbuilt.drivers.simrig import forget_rigs
 
 from asbuilt.cli import main
 
@@ -33,13 +32,6 @@ ROOM = {
     "right": ([2.0, -2.505, 1.5], [0, -1, 0], 2.5, [[0.8, -2.5, 0.4], [3.2, -2.5, 2.6]]),
     "ceiling": ([2.5, 0, 3.005], [0, 0, 1], 3.0, [[1.6, -1.2, 3], [3.6, 1.2, 3]]),
 }
-
-
-@pytest.fixture(autouse=True)
-def _fresh_rigs():
-    forget_rigs()
-    yield
-    forget_rigs()
 
 
 @pytest.fixture

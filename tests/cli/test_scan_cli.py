@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from asbuilt.drivers.simrig import forget_rigs
 
 from asbuilt.cli import main
 
@@ -76,13 +75,6 @@ PLAN = {
 
 #: No random noise: a resumed session must reproduce an uninterrupted one exactly.
 EXACT = "&range_sigma=0&angle_sigma=0"
-
-
-@pytest.fixture(autouse=True)
-def _fresh_rigs():
-    forget_rigs()
-    yield
-    forget_rigs()
 
 
 @pytest.fixture

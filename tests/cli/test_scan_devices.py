@@ -11,7 +11,7 @@ import threading
 
 import pytest
 from asbuilt.drivers.pty_sim import PtyServer
-from asbuilt.drivers.simrig import SimulatedRig, forget_rigs, load_world, station_defaults
+from asbuilt.drivers.simrig import SimulatedRig, load_world, station_defaults
 
 from asbuilt.cli import main
 
@@ -42,13 +42,6 @@ PLAN = {
     "settings": {"edge_pairs": 0},
     "targets": [{"id": "W1", "kind": "plane", "window_deg": [80, -5, 100, 5]}],
 }
-
-
-@pytest.fixture(autouse=True)
-def _fresh_rigs():
-    forget_rigs()
-    yield
-    forget_rigs()
 
 
 @pytest.fixture
