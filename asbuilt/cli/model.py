@@ -1,8 +1,7 @@
 """``asbuilt model SCAN --out FILE [--out FILE ...]``: scan to as-built CAD in one run.
 
 Fits every object, merges pipes into spools with fittings, checks the compliance rules, then
-writes every ``--out`` (format by suffix: .step/.stp, .glb/.gltf, .dxf, .stl, .obj, .json),
-all or nothing. Progress goes to standard error; one summary line per file and the findings
+writes every ``--out`` (format by suffix, :data:`asbuilt.export.SUFFIXES`), all or nothing. Progress goes to standard error; one summary line per file and the findings
 counts go to standard output.
 """
 
@@ -11,17 +10,19 @@ from __future__ import annotations
 import argparse
 
 from asbuilt.cli._args import positive_number
+from asbuilt.export import SUFFIXES
 
 __all__ = ["register", "run"]
 
-_SUFFIXES = ".step .stp .glb .gltf .dxf .stl .obj .json"
+#: The registry's suffixes (importing asbuilt.export does not load CadQuery).
+_SUFFIXES = " ".join(SUFFIXES)
 
 
 def register(subparsers) -> argparse.ArgumentParser:
     """Add the ``model`` subcommand to ``subparsers``."""
     parser = subparsers.add_parser(
         "model",
-        help="fit, merge and check a scan, then write CAD (STEP, glTF, DXF, STL, OBJ, JSON)",
+        help="fit, merge and check a scan, then write CAD and piping files (STEP, glTF, DXF, ...)",
         description="Turn an asbuilt-scan file into an as-built model: fit every object, merge "
         "pipes into spools with standard fittings, check the compliance rules, and write each "
         f"--out file in the format its suffix names ({_SUFFIXES}). Either every file is "

@@ -1,4 +1,5 @@
-"""Exports chosen by the output's suffix: STEP, glTF, DXF, STL, OBJ and the JSON model document.
+"""Exports chosen by the output's suffix: STEP, glTF, DXF, STL, OBJ, PCF and the JSON model
+document.
 
 ``export_models(model, paths)`` writes several outputs in one run: every suffix is checked
 first, the solids are built once (only if a CAD format is asked for) and shared, every file is
@@ -90,6 +91,22 @@ _EXPORTERS = (
         "write_obj",
     ),
     Exporter(
+        ".pcf",
+        "PCF",
+        "ISOGEN piping component file (piping only), millimetres",
+        False,
+        "pcf",
+        "write_pcf",
+    ),
+    Exporter(
+        ".ifc",
+        "IFC",
+        "IFC4 pipe segments, fittings and building elements, metres (needs ifcopenshell)",
+        False,
+        "ifc",
+        "write_ifc",
+    ),
+    Exporter(
         ".json",
         "JSON",
         "the asbuilt-model document (metres)",
@@ -131,7 +148,11 @@ class ExportResult:
 
 
 def _writer_options(
-    exporter: Exporter, target: Path, step_schema: str, mesh_units: str | None
+    exporter: Exporter,
+    target: Path,
+    step_schema: str,
+    mesh_units: str | None,
+    plate_thickness: float | None = None,
 ) -> dict:
     if exporter.module == "step":
         return {"schema": step_schema, "file_name": target.name}
@@ -139,6 +160,8 @@ def _writer_options(
         return {"binary": exporter.suffix == ".glb"}
     if exporter.module == "mesh" and mesh_units is not None:
         return {"units": mesh_units}
+    if exporter.module == "ifc":
+        return {"plate_thickness": plate_thickness}
     return {}
 
 
@@ -210,7 +233,7 @@ def export_models(
 
             cad = prepare(model, plate_thickness=plate_thickness, progress=solids_progress)
         for done, (exporter, temp, target) in enumerate(zip(exporters, temps, targets), 1):
-            options = _writer_options(exporter, target, step_schema, mesh_units)
+            options = _writer_options(exporter, target, step_schema, mesh_units, plate_thickness)
             try:
                 exporter.write(cad if exporter.needs_cad else model, temp, **options)
             except AsbuiltError as exc:

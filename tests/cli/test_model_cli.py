@@ -124,7 +124,7 @@ def test_no_merge_no_check_plate_thickness(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("outputs", "message"),
     [
-        (["model.ifc"], "model.ifc: unknown output format '.ifc'"),
+        (["model.xyz"], "model.xyz: unknown output format '.xyz'"),
         (["missing/model.step"], "missing/model.step: directory does not exist"),
         (["model.json", "model.json"], "model.json: this output is given twice"),
     ],

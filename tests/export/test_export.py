@@ -15,7 +15,17 @@ from asbuilt.export import SUFFIXES, export_model, export_models, exporter_for
 from asbuilt.model import Component
 from asbuilt.primitives import Plane
 
-ALL = ["zoo.step", "zoo.stp", "zoo.glb", "zoo.gltf", "zoo.dxf", "zoo.stl", "zoo.obj", "zoo.json"]
+ALL = [
+    "zoo.step",
+    "zoo.stp",
+    "zoo.glb",
+    "zoo.gltf",
+    "zoo.dxf",
+    "zoo.stl",
+    "zoo.obj",
+    "zoo.pcf",
+    "zoo.json",
+]
 
 
 @pytest.mark.parametrize(
@@ -38,7 +48,7 @@ def test_exporter_for_suffix(name, format_):
 @pytest.mark.parametrize(
     ("name", "message"),
     [
-        ("model.ifc", "unknown output format '.ifc'; use one of .step, .stp"),
+        ("model.xyz", "unknown output format '.xyz'; use one of .step, .stp"),
         ("model", "the output has no suffix; use one of"),
     ],
 )

@@ -1,0 +1,187 @@
+"""PCF: the piping as ISOGEN component records, read back by a parser written from the format's
+layout (unindented identifiers, indented attribute records)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from asbuilt.cli import main
+from asbuilt.errors import ExportError
+from asbuilt.export import export_model
+from asbuilt.export.pcf import pcf_text, write_pcf
+from asbuilt.model import Component, Model, Spool, Straight
+from asbuilt.pipeline import build_model
+from asbuilt.scan import load_scan
+
+R4, W4 = 0.1143 / 2, 0.00602  # NPS 4 STD (ASME B36.10M)
+R6, W6 = 0.1683 / 2, 0.00711  # NPS 6 STD
+
+
+def parse(text: str) -> tuple[dict, list[dict]]:
+    """(header records, blocks): each block is ``{"type", "pipeline", records...}`` where a
+    record name maps to the list of its value lists (floats where they parse)."""
+    header: dict = {}
+    blocks: list[dict] = []
+    pipeline = None
+    current = None
+    for line in text.splitlines():
+        if not line.strip():
+            continue
+        indented = line.startswith(" ")
+        name, *values = line.split()
+        if not indented:
+            if name.startswith("UNITS-") or name == "ISOGEN-FILES":
+                header[name] = values
+                current = None
+                continue
+            if name == "PIPELINE-REFERENCE":
+                pipeline = " ".join(values)
+                current = {"type": name, "pipeline": pipeline}
+            else:
+                current = {"type": name, "pipeline": pipeline, "values": values}
+            blocks.append(current)
+            continue
+        parsed = []
+        for value in values:
+            try:
+                parsed.append(float(value))
+            except ValueError:
+                parsed.append(value)
+        current.setdefault(name, []).append(parsed)
+    return header, blocks
+
+
+def _components(blocks):
+    return [b for b in blocks if b["type"] not in ("PIPELINE-REFERENCE", "MATERIALS", "ITEM-CODE")]
+
+
+def _by_id(blocks):
+    return {b["COMPONENT-ATTRIBUTE1"][0][0]: b for b in _components(blocks)}
+
+
+def _point(record) -> np.ndarray:
+    return np.array(record[:3], dtype=float) / 1000.0
+
+
+def test_zoo_piping_is_written_once_each_and_nothing_else(zoo, tmp_path):
+    path = tmp_path / "zoo.pcf"
+    write_pcf(zoo, path)
+    raw = path.read_bytes()
+    assert raw.isascii() and b"\r\n" in raw
+    header, blocks = parse(raw.decode("ascii"))
+    assert header["UNITS-CO-ORDS"] == ["MM"] and header["UNITS-BORE"] == ["INCH"]
+    found = _by_id(blocks)
+    assert set(found) == {"P1", "E1", "P2", "T1", "R1"}  # no cylinder, cuboid, sphere...
+    assert [found[i]["type"] for i in ("P1", "E1", "T1", "R1")] == [
+        "PIPE",
+        "ELBOW",
+        "TEE",
+        "REDUCER-CONCENTRIC",
+    ]
+    # Spool S1 is one pipeline; the tee and reducer, in no spool, one each.
+    assert {found[i]["pipeline"] for i in ("P1", "E1", "P2")} == {"S1"}
+    # Every item code is described under MATERIALS.
+    codes = {b["ITEM-CODE"][0][0] for b in _components(blocks)}
+    described = {b["values"][0] for b in blocks if b["type"] == "ITEM-CODE"}
+    assert codes == described
+
+
+def test_end_points_and_bores_match_the_model_and_the_catalog(zoo):
+    _, blocks = parse(pcf_text(zoo))
+    found = _by_id(blocks)
+    p1 = zoo.component("P1").geometry
+    ends = found["P1"]["END-POINT"]
+    assert _point(ends[0]) == pytest.approx(p1.start, abs=5e-5)
+    assert _point(ends[1]) == pytest.approx(p1.end, abs=5e-5)
+    assert [e[3] for e in ends] == [4.0, 4.0]  # NPS 4
+    reducer = found["R1"]["END-POINT"]
+    assert [e[3] for e in reducer] == [4.0, 3.0]  # 114.3 -> 88.9 mm OD: NPS 4 x 3
+    tee = found["T1"]
+    assert tee["BRANCH1-POINT"][0][3] == 3.0
+    assert _point(tee["CENTRE-POINT"][0]) == pytest.approx([3, 0, 0], abs=5e-5)
+    assert found["T1"]["SKEY"] == [["TEBW"]] and found["R1"]["SKEY"] == [["RCBW"]]
+
+
+def test_elbow_centre_point_is_where_the_end_tangents_meet(zoo):
+    """A 90 degree elbow's tangent point lies one centre-to-end dimension (here the bend
+    radius, 0.2 m) from each end, along each end's direction."""
+    _, blocks = parse(pcf_text(zoo))
+    elbow = _by_id(blocks)["E1"]
+    corner = _point(elbow["CENTRE-POINT"][0])
+    assert corner == pytest.approx([1.2, 0.0, 0.0], abs=5e-5)
+    assert elbow["ANGLE"] == [[9000.0]]
+
+
+def test_spool_sample_elbow_and_tee_dimensions_are_b16_9(tmp_path):
+    """Centre-to-end of the sample's NPS 6 long-radius elbow (229 mm), NPS 4 elbow (152 mm) and
+    NPS 6 tee run (143 mm): ASME B16.9 tables (standards.md), within the 2 mm tolerance."""
+    model = build_model(load_scan("samples/spool.json"))
+    _, blocks = parse(pcf_text(model))
+    spans = {}
+    for block in _components(blocks):
+        if block["type"] in ("ELBOW", "TEE"):
+            corner = np.array(block["CENTRE-POINT"][0])
+            bore = block["END-POINT"][0][3]
+            spans.setdefault((block["type"], bore), []).extend(
+                float(np.linalg.norm(np.array(e[:3]) - corner)) for e in block["END-POINT"]
+            )
+    assert spans[("ELBOW", 6.0)] == pytest.approx([229.0] * len(spans[("ELBOW", 6.0)]), abs=2)
+    assert spans[("ELBOW", 4.0)] == pytest.approx([152.0] * len(spans[("ELBOW", 4.0)]), abs=2)
+    assert spans[("TEE", 6.0)] == pytest.approx([143.0] * len(spans[("TEE", 6.0)]), abs=2)
+
+
+def test_dn_catalog_writes_millimetre_bores():
+    """EN 10220 DN 100 has OD 114.3 mm; its bore is written as 100 with UNITS-BORE MM."""
+    pipe = Component("P1", "pipe", Straight([0, 0, 0], [1, 0, 0], 0.1143 / 2), nominal="100")
+    model = Model(components=(pipe,), catalog="en-10220")
+    header, blocks = parse(pcf_text(model))
+    assert header["UNITS-BORE"] == ["MM"]
+    assert [e[3] for e in _by_id(blocks)["P1"]["END-POINT"]] == [100.0, 100.0]
+
+
+def test_unsnapped_pipe_writes_its_outside_diameter_as_bore():
+    pipe = Component("P1", "pipe", Straight([0, 0, 0], [1, 0, 0], 0.05))  # 100 mm: no NPS
+    model = Model(components=(pipe,), catalog="asme-b36.10m")
+    _, blocks = parse(pcf_text(model))
+    assert _by_id(blocks)["P1"]["END-POINT"][0][3] == pytest.approx(100 / 25.4, abs=1e-3)
+
+
+def test_names_are_written_as_ascii():
+    pipe = Component("Säule-1", "pipe", Straight([0, 0, 0], [1, 0, 0], R4, W4), nominal="4")
+    model = Model(
+        components=(pipe,),
+        catalog="asme-b36.10m",
+        name="储罐 line\nnext",
+        spools=(Spool("S1", ("Säule-1",)),),
+    )
+    text = pcf_text(model)
+    assert text.isascii()
+    assert "PROJECT-IDENTIFIER ?? line next" in text
+    assert "COMPONENT-ATTRIBUTE1 S?ule-1" in text
+
+
+def test_a_model_without_piping_is_refused(tmp_path):
+    column = Component("C1", "cylinder", Straight([0, 0, 0], [0, 0, 3], 0.15))
+    model = Model(components=(column,))
+    target = tmp_path / "x.pcf"
+    with pytest.raises(ExportError, match="no piping"):
+        export_model(model, target)
+    assert not target.exists()
+
+
+def test_cli_writes_pcf_and_refuses_a_scan_without_piping(tmp_path, capsys):
+    target = tmp_path / "spool.pcf"
+    assert main(["model", "samples/spool.json", "--out", str(target), "--quiet"]) == 0
+    _, blocks = parse(target.read_text(encoding="ascii"))
+    assert {b["type"] for b in _components(blocks)} >= {"PIPE", "ELBOW", "TEE"}
+    scan = tmp_path / "wall.json"
+    scan.write_text(
+        '{"format": "asbuilt-scan", "version": 1, "units": "m", "objects": [{"id": "W1", '
+        '"kind": "plane", "points": [[0, 5, 0], [1, 5, 0], [0, 5, 1], [1, 5, 1], [0.5, 5, 0.5]]}]}'
+    )
+    capsys.readouterr()
+    assert main(["model", str(scan), "--out", str(tmp_path / "wall.pcf"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no piping" in err[0] and "wall.pcf" in err[0]
+    assert not (tmp_path / "wall.pcf").exists()
