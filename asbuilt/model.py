@@ -35,8 +35,16 @@ __all__ = [
 
 #: Component types: piping parts made by merging, then the plain fitted kinds.
 COMPONENT_TYPES = (
-    "pipe", "elbow", "tee", "reducer", "coupling",
-    "cylinder", "cuboid", "sphere", "plane", "hull",
+    "pipe",
+    "elbow",
+    "tee",
+    "reducer",
+    "coupling",
+    "cylinder",
+    "cuboid",
+    "sphere",
+    "plane",
+    "hull",
 )
 
 
@@ -122,10 +130,30 @@ class Bend:
         return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
 
 
+#: Slack (metres) in a reducer's offset checks (beyond the difference of the end radii, along
+#: the run) and the smallest offset that makes it eccentric: a micrometre is rounding of
+#: coordinates written to a file, not geometry.
+OFFSET_SLACK = 1e-6
+
+
 @dataclass(frozen=True, eq=False)
 class Reducer:
-    """A concentric reducer (a truncated cone) from ``start`` (radius ``outer_radius_start``) to
-    ``end`` (``outer_radius_end``); points (3,) metres, radii and wall metres."""
+    """A reducer: a (possibly oblique) truncated cone between two pipe sizes.
+
+    ``start`` and ``end`` (each (3,) metres) are the centres of its two end circles, of outer
+    radius ``outer_radius_start`` and ``outer_radius_end`` (metres); both circles lie in planes
+    perpendicular to the run direction :attr:`direction`. ``offset`` (3,) metres is the
+    sideways step from the start end's axis to the end end's axis, perpendicular to the run:
+    zero (the default) for a **concentric** reducer (the run is ``end - start``); for an
+    **eccentric** reducer (ASME B16.9, flat on one side) its length is the difference of the
+    radii, and the run is ``end - start - offset``. ``wall`` metres, 0 for solid.
+
+    Raises
+    ------
+    ValueError
+        Coinciding ends, an offset not perpendicular to the run, or one longer than the
+        difference of the radii (the small end would stick out of the large one's outline).
+    """
 
     kind: ClassVar[str] = "reducer"
     start: np.ndarray
@@ -133,15 +161,56 @@ class Reducer:
     outer_radius_start: float
     outer_radius_end: float
     wall: float = 0.0
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self):
         object.__setattr__(self, "start", as_vector(self.start, "start"))
         object.__setattr__(self, "end", as_vector(self.end, "end"))
+        object.__setattr__(self, "offset", as_vector(self.offset, "reducer offset"))
         for name in ("outer_radius_start", "outer_radius_end"):
             object.__setattr__(self, name, _nonneg(getattr(self, name), name.replace("_", " ")))
         object.__setattr__(
             self, "wall", _wall(min(self.outer_radius_start, self.outer_radius_end), self.wall)
         )
+        run = self.end - self.start - self.offset
+        length = float(np.linalg.norm(run))
+        if length <= 0:
+            raise ValueError("A reducer needs distinct start and end points along its run.")
+        size = float(np.linalg.norm(self.offset))
+        if abs(float(self.offset @ run)) / length > OFFSET_SLACK:
+            raise ValueError(
+                "The reducer offset must be perpendicular to the run (end - start - offset)."
+            )
+        step = abs(self.outer_radius_start - self.outer_radius_end)
+        if size > step + OFFSET_SLACK:
+            raise ValueError(
+                f"The reducer offset ({size * 1000:.3f} mm) must not exceed the difference of "
+                f"the end radii ({step * 1000:.3f} mm)."
+            )
+
+    @property
+    def length(self) -> float:
+        """Length along the run, metres (the B16.9 end-to-end length H)."""
+        return float(np.linalg.norm(self.end - self.start - self.offset))
+
+    @property
+    def direction(self) -> np.ndarray:
+        """Unit run direction from the start end to the end end, shape (3,)."""
+        return (self.end - self.start - self.offset) / self.length
+
+    @property
+    def eccentric(self) -> bool:
+        """True when the two axes are offset (more than a micrometre): an eccentric reducer."""
+        return bool(np.linalg.norm(self.offset) > OFFSET_SLACK)
+
+    @property
+    def flat_side(self) -> np.ndarray | None:
+        """Unit vector (3,) from the axes towards the flat side of an eccentric reducer (where
+        both pipes' outsides are flush), perpendicular to the run; None when concentric."""
+        if not self.eccentric:
+            return None
+        towards = self.offset / np.linalg.norm(self.offset)
+        return towards if self.outer_radius_start >= self.outer_radius_end else -towards
 
 
 @dataclass(frozen=True, eq=False)

@@ -103,6 +103,8 @@ def _geometry_fields(geometry) -> dict:
             "od_start": 2 * geometry.outer_radius_start,
             "od_end": 2 * geometry.outer_radius_end,
             "wall": geometry.wall,
+            "offset": geometry.offset,
+            "eccentric": geometry.eccentric,
         }
     if isinstance(geometry, Tee):
         return {
@@ -460,6 +462,7 @@ def _geometry(entry: dict):
             _number(entry, "od_start") / 2,
             _number(entry, "od_end") / 2,
             _wall(entry),
+            _point(entry, "offset") if entry.get("offset") is not None else np.zeros(3),
         )
     if shape == "tee":
         run_start, run_end = _points(entry, "run", 2)

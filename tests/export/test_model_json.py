@@ -321,3 +321,67 @@ def test_component_fields_are_checked_by_type(change, message):
     with pytest.raises(ModelDocumentError) as info:
         model_from_document(document, source="m.json")
     assert str(info.value) == f"m.json: {message}"
+
+
+def _reducer_model(offset):
+    from asbuilt.model import Component, Model, Reducer
+
+    # NPS 6 x 4 (OD 168.3 / 114.3 mm, B36.10M), H = 140 mm (B16.9), axes 27 mm apart
+    end = np.array([0.14, 0.0, 1.0]) + np.asarray(offset, float)
+    geometry = Reducer([0, 0, 1.0], end, 0.08415, 0.05715, 0.00711, offset=offset)
+    return Model(components=(Component(id="R1", type="reducer", geometry=geometry),))
+
+
+@pytest.mark.parametrize("offset", [[0, 0, 0], [0, 0, 0.027], [0, -0.027, 0]])
+def test_reducer_offset_round_trips(tmp_path, offset):
+    import jsonschema
+
+    from asbuilt.export.model_json import model_schema
+
+    model = _reducer_model(offset)
+    document = json.loads(dumps_model(model))
+    entry = document["components"][0]
+    assert entry["offset"] == pytest.approx(offset)
+    assert entry["eccentric"] is bool(np.any(offset))
+    jsonschema.Draft202012Validator(model_schema()).validate(document)
+    path = tmp_path / "m.json"
+    write_model_json(model, path)
+    back = load_model(path).components[0].geometry
+    assert back.offset == pytest.approx(offset)
+    assert back.eccentric is bool(np.any(offset))
+    assert back.end == pytest.approx(model.components[0].geometry.end)
+
+
+def test_reducer_without_offset_loads_concentric():
+    """Documents written before eccentric reducers have no ``offset``: concentric."""
+    entry = {
+        "id": "R1",
+        "type": "reducer",
+        "shape": "reducer",
+        "start": [0, 0, 1],
+        "end": [0.14, 0, 1],
+        "od_start": 0.1683,
+        "od_end": 0.1143,
+        "wall": 0.0,
+    }
+    document = {"format": FORMAT, "version": 1, "components": [entry]}
+    geometry = model_from_document(document, source="old.json").components[0].geometry
+    assert not geometry.eccentric and geometry.offset.tolist() == [0.0, 0.0, 0.0]
+
+
+def test_reducer_offset_too_large_is_located():
+    entry = {
+        "id": "R1",
+        "type": "reducer",
+        "shape": "reducer",
+        "start": [0, 0, 1],
+        "end": [0.14, 0, 1.05],
+        "od_start": 0.1683,
+        "od_end": 0.1143,
+        "offset": [0, 0, 0.05],
+    }
+    document = {"format": FORMAT, "version": 1, "components": [entry]}
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value).startswith("m.json: components[0] (R1)")
+    assert "must not exceed the difference of the end radii" in str(info.value)

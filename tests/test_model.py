@@ -1,0 +1,79 @@
+"""The model's value objects: the reducer's eccentricity (ASME B16.9 eccentric reducers)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from asbuilt.model import Reducer
+
+# NPS 6 x 4: OD 168.3 and 114.3 mm (ASME B36.10M), H = 140 mm (ASME B16.9)
+R6, R4, H = 0.16830 / 2, 0.11430 / 2, 0.140
+
+
+def test_concentric_by_default():
+    r = Reducer([0, 0, 1], [H, 0, 1], R6, R4)
+    assert not r.eccentric
+    assert r.flat_side is None
+    assert r.offset.tolist() == [0.0, 0.0, 0.0]
+    assert r.length == pytest.approx(H)
+    assert r.direction == pytest.approx([1, 0, 0])
+
+
+@pytest.mark.parametrize(
+    ("start_radius", "end_radius", "step", "flat"),
+    [
+        (R6, R4, R6 - R4, [0, 0, 1]),  # large to small, small end raised: flat on top
+        (R6, R4, R4 - R6, [0, 0, -1]),
+        (R4, R6, R6 - R4, [0, 0, -1]),  # small to large, large end raised: flat on bottom
+        (R4, R6, R4 - R6, [0, 0, 1]),
+    ],
+)
+def test_eccentric_run_length_and_flat_side(start_radius, end_radius, step, flat):
+    offset = [0, 0, step]
+    r = Reducer([1, 2, 1], [1 + H, 2, 1 + step], start_radius, end_radius, offset=offset)
+    assert r.eccentric
+    assert r.length == pytest.approx(H)
+    assert r.direction == pytest.approx([1, 0, 0])
+    assert r.flat_side == pytest.approx(flat)
+    # both outsides flush on the flat side: start + R_start f == end + R_end f along the run
+    f = np.asarray(flat, float)
+    top_start = r.start + start_radius * f
+    top_end = r.end + end_radius * f
+    assert (top_end - top_start) - H * r.direction == pytest.approx([0, 0, 0], abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        (
+            {"end": [H, 0, 0.030], "offset": [0, 0, 0.030]},
+            "The reducer offset (30.000 mm) must not exceed the difference of the end radii "
+            "(27.000 mm).",
+        ),
+        (
+            {"end": [H + 0.01, 0, 0.027], "offset": [0.01, 0, 0.027]},
+            "The reducer offset must be perpendicular to the run (end - start - offset).",
+        ),
+        (
+            {"end": [0, 0, 0.027], "offset": [0, 0, 0.027]},
+            "A reducer needs distinct start and end points along its run.",
+        ),
+        ({"offset": [0, 0]}, "The reducer offset must have shape (3,), not (2,)."),
+        ({"offset": [0, 0, np.nan]}, "The reducer offset must be finite."),
+    ],
+)
+def test_invalid_offsets_are_refused_with_one_clear_message(kwargs, message):
+    args = {"start": [0, 0, 0], "end": [H, 0, 0], "outer_radius_start": R6}
+    args.update(outer_radius_end=R4, **kwargs)
+    with pytest.raises(ValueError) as caught:
+        Reducer(**args)
+    assert str(caught.value) == message
+
+
+def test_replace_keeps_the_offset():
+    r = Reducer([0, 0, 0], [H, 0, R6 - R4], R6, R4, offset=[0, 0, R6 - R4])
+    moved = dataclasses.replace(r, start=r.start + 5, end=r.end + 5)
+    assert moved.eccentric and moved.offset == pytest.approx(r.offset)
