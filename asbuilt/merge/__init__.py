@@ -43,6 +43,7 @@ from .contiguity import (
     find_joints,
     joint_pairs,
 )
+from .eccentric import eccentric_joints
 from .joint import find_runs, joint_estimate
 from .regularize import align_lines, regularize_directions
 from .snap import SnapResult, snap_diameter
@@ -388,7 +389,12 @@ def merge_model(
         stderr_deg=axis_se,
     )
     new_axes = directions.axes
-    meets, coaxial = _constraints(joints)
+    build_ods = np.array([float(s.od) if s.size is not None else np.nan for s in snaps])
+    center_se = np.array([_stderr_value(item.result, "center") for item in items])
+    eccentric = eccentric_joints(
+        joints, centers, axes, lengths, new_axes, build_ods, run_of, center_se, axis_se
+    )
+    meets, coaxial, offsets = _constraints(joints, eccentric)
     new_centers = centers.copy()
     groups = connected_groups(len(ids), joints)
     group_of_pipe = np.zeros(len(ids), int)
@@ -398,21 +404,38 @@ def merge_model(
         local[group] = np.arange(len(group))
     group_meets: dict[int, list] = {}
     group_coaxial: dict[int, list] = {}
+    group_offsets: dict[int, list] = {}
     for pairs, table in ((meets, group_meets), (coaxial, group_coaxial)):
         for a, b in pairs:
             table.setdefault(int(group_of_pipe[a]), []).append((int(local[a]), int(local[b])))
+    for (a, _), step in zip(coaxial, offsets):
+        group_offsets.setdefault(int(group_of_pipe[a]), []).append(step)
     for g, group in enumerate(groups):
         lm = group_meets.get(g, [])
         lc = group_coaxial.get(g, [])
         if lm or lc:
             new_centers[group] = align_lines(
-                centers[group], new_axes[group], lm, lc, weights=np.maximum(lengths[group], 0.05)
+                centers[group],
+                new_axes[group],
+                lm,
+                lc,
+                weights=np.maximum(lengths[group], 0.05),
+                offsets=group_offsets.get(g),
             )
+    eccentric_with: dict[int, dict[int, str]] = {}
+    reducer_notes: dict[tuple[int, int], str] = {}
+    for found in eccentric.values():
+        i, j = found.pipes
+        eccentric_with.setdefault(i, {})[j] = found.flat
+        eccentric_with.setdefault(j, {})[i] = found.flat
+        reducer_notes[min(i, j), max(i, j)] = found.note(ids)
 
     coaxial_with: dict[int, set[int]] = {}
     meets_with: dict[int, set[int]] = {}
     for pairs, table in ((coaxial, coaxial_with), (meets, meets_with)):
         for a, b in pairs:
+            if b in eccentric_with.get(a, {}):
+                continue
             table.setdefault(a, set()).add(b)
             table.setdefault(b, set()).add(a)
 
@@ -458,7 +481,10 @@ def merge_model(
         if directions.angles_deg[m] > 1e-6:
             what = "axis regularised"
             if directions.relations[m]:
-                what += ": " + ", ".join(dict.fromkeys(directions.relations[m]))
+                relations = directions.relations[m]
+                if eccentric_with.get(m) and not coaxial_with.get(m):
+                    relations = [r.replace("coaxial run", "parallel run") for r in relations]
+                what += ": " + ", ".join(dict.fromkeys(relations))
             corrections.append(
                 Correction(
                     what,
@@ -476,6 +502,8 @@ def merge_model(
                 parts.append(
                     "made coaxial with " + ", ".join(sorted(ids[k] for k in coaxial_with[m]))
                 )
+            for k, flat in sorted(eccentric_with.get(m, {}).items()):
+                parts.append(f"placed eccentric to {ids[k]} (eccentric reducer, flat on {flat})")
             if meets_with.get(m):
                 parts.append("shifted to meet " + ", ".join(sorted(ids[k] for k in meets_with[m])))
             corrections.append(
@@ -536,7 +564,11 @@ def merge_model(
         )
     group_of = [item.object.group for item in items]
     pipe_components, spools = build_spools(
-        specs, joints, group_of, max_bend_deg=elbow_bend_limit(tol)
+        specs,
+        joints,
+        group_of,
+        max_bend_deg=elbow_bend_limit(tol),
+        reducer_notes=reducer_notes,
     )
 
     # assemble in scan order: each pipe's components where the pipe was
@@ -610,19 +642,26 @@ def _links_to_other_objects(report, index_of, cyls, slack, tol):
     return found
 
 
-def _constraints(joints: tuple[Joint, ...]):
+def _constraints(joints: tuple[Joint, ...], eccentric=None):
+    """Pairs of lines that must meet, pairs that must be coaxial (or, for an eccentric reducer,
+    offset) and each coaxial pair's required sideways step (3,) metres, None for coaxial."""
     meets: list[tuple[int, int]] = []
     coaxial: list[tuple[int, int]] = []
-    for joint in joints:
+    offsets: list[np.ndarray | None] = []
+    eccentric = eccentric or {}
+    for index, joint in enumerate(joints):
         if joint.kind == "elbow":
             meets.append((joint.ends[0][0], joint.ends[1][0]))
         elif joint.kind == "inline":
             coaxial.append((joint.ends[0][0], joint.ends[1][0]))
+            found = eccentric.get(index)
+            offsets.append(None if found is None else found.offset)
         elif joint.kind == "tee":
             branch = joint.ends[-1][0]
             if joint.through is None:
                 coaxial.append((joint.ends[0][0], joint.ends[1][0]))
+                offsets.append(None)
                 meets.append((branch, joint.ends[0][0]))
             else:
                 meets.append((branch, joint.through))
-    return meets, coaxial
+    return meets, coaxial, offsets

@@ -3,7 +3,8 @@
 Pipes are lines with two ends. Two pipe ends are a joint when
 
 * their axes are nearly parallel (within ``Tolerances.intended_angle_deg``), nearly the same line
-  (lateral offset within the skew tolerance) and the ends face each other with a gap no larger
+  (lateral offset within the skew tolerance of 0, or of the difference of the two fitted radii:
+  an eccentric reducer's offset) and the ends face each other with a gap no larger
   than twice ``joint_distance`` plus twice the larger OD (room for a reducer or the run of a tee): an
   **inline** joint (butt weld, coupling, reducer or the run of a tee);
 * or their axes are nearly coplanar (closest distance within the skew tolerance) and meet at a
@@ -199,6 +200,8 @@ def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: 
             float(np.linalg.norm(rel - (rel @ axes[i]) * axes[i])),
             float(np.linalg.norm(rel - (rel @ axes[j]) * axes[j])),
         )
+        # an eccentric reducer offsets the axes by the difference of the radii
+        lateral = min(lateral, abs(lateral - abs(ri - rj)))
         if lateral > skew_tol:
             return None
         extra = LINK_MARGIN if relaxed else 0.0

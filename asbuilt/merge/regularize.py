@@ -293,13 +293,15 @@ def align_lines(
     weights=None,
     *,
     delta: float = 1e-14,
+    offsets=None,
 ) -> np.ndarray:
     """Shift lines sideways so that joined lines meet exactly.
 
     Minimises ``sum_i w_i |t_i|^2`` over sideways offsets ``t_i`` (perpendicular to each axis)
     subject to the linear constraints: for each ``meets`` pair, ``c_i + t_i + s_i a_i =
     c_j + t_j + s_j a_j`` (3 rows, with free meeting parameters ``s``); for each ``coaxial``
-    pair, ``(c_j + t_j - c_i - t_i)`` has no component across ``a_i`` (2 rows). It is solved as
+    pair, ``(c_j + t_j - c_i - t_i)`` has no component across ``a_i`` (2 rows; or, with an
+    offset ``e`` for the pair, its component across ``a_i`` is ``e``). It is solved as
     one sparse, regularised KKT system ``[[H, C^T], [C, -delta I]]`` (quasi-definite, so a
     sparse LU factorises it stably; ``delta`` keeps redundant constraints of closed loops
     solvable and equals a penalty of weight ``1/delta``); the meeting parameters carry a
@@ -319,6 +321,9 @@ def align_lines(
         Resistance of each line to moving (default 1).
     delta : float
         Regularisation of the constraint block.
+    offsets : sequence of (array_like (3,) or None), optional
+        Per ``coaxial`` pair, the required sideways step (metres, perpendicular to ``a_i``)
+        from line i to line j (an eccentric reducer); None or absent: coaxial.
 
     Returns
     -------
@@ -363,11 +368,13 @@ def align_lines(
             vals.extend((axes[i][k], -axes[j][k]))
             rhs.append(centers[j][k] - centers[i][k])
             row += 1
-    for i, j in coaxial:
+    offsets = list(offsets) if offsets is not None else []
+    for pair, (i, j) in enumerate(coaxial):
+        step = offsets[pair] if pair < len(offsets) and offsets[pair] is not None else np.zeros(3)
         for w in bases[i]:
             put(row, j, w, 1.0)
             put(row, i, w, -1.0)
-            rhs.append(float(w @ (centers[i] - centers[j])))
+            rhs.append(float(w @ (centers[i] - centers[j] + np.asarray(step, float))))
             row += 1
     h = np.full(n_var, 1e-13)
     for i in involved:

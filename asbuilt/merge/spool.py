@@ -15,8 +15,10 @@ axes):
   ``T_k``.
 * **inline**, one size: ends within 5 mm (or overlapping) meet at their midpoint (a butt weld);
   a larger gap is filled by a **coupling** (a straight of the pipe size).
-* **inline**, two sizes: a concentric **reducer** of the catalog length (by its large end)
-  centred on the gap; both pipes end at its ends.
+* **inline**, two sizes: a **reducer** of the catalog length (by its large end) centred on the
+  gap; both pipes end at its ends. It is concentric when the aligned axes coincide, eccentric
+  (``Reducer.offset`` the sideways step between them) when merging placed them apart
+  (:mod:`asbuilt.merge.eccentric`); ASME B16.9 gives both the same length H.
 * **tee**: centre ``J`` where the branch axis meets the run axis; run ends ``J -+ C d``,
   branch end ``J + M b`` (``C``, ``M``: catalog centre-to-end of run and outlet). A tee in the
   middle of a pipe splits it into pieces ``<id>.1``, ``<id>.2``...
@@ -34,7 +36,16 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from asbuilt.catalog import FittingDims
-from asbuilt.model import Bend, Component, Correction, Reducer, Spool, Straight, Tee
+from asbuilt.model import (
+    OFFSET_SLACK,
+    Bend,
+    Component,
+    Correction,
+    Reducer,
+    Spool,
+    Straight,
+    Tee,
+)
 
 from .contiguity import Joint, connected_groups, line_closest_points
 
@@ -127,8 +138,9 @@ def _unit(v):
 
 
 class _Builder:
-    def __init__(self, pipes: Sequence[PipeSpec]):
+    def __init__(self, pipes: Sequence[PipeSpec], reducer_notes=None):
         self.pipes = pipes
+        self.reducer_notes = dict(reducer_notes or {})
         n = len(pipes)
         self.base = np.zeros((n, 2, 3))
         self.out = np.zeros((n, 2, 3))
@@ -225,8 +237,12 @@ def _inline(b: _Builder, joint: Joint):
     large = pi if pi.od > pj.od else pj
     length = large.dims.reducer_length
     mid = 0.5 * (ei + ej)
-    start = mid - 0.5 * length * oi
-    end = mid + 0.5 * length * oi
+    # sideways step from pipe i's axis to pipe j's: zero when aligned coaxial
+    offset = (ej - ei) - float((ej - ei) @ oi) * oi
+    if np.linalg.norm(offset) <= OFFSET_SLACK:
+        offset = np.zeros(3)
+    start = mid - 0.5 * length * oi - 0.5 * offset
+    end = mid + 0.5 * length * oi + 0.5 * offset
     b.ends[i, ki] = start
     b.ends[j, kj] = end
     b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"reducer {pi.id}-{pj.id}"
@@ -237,16 +253,37 @@ def _inline(b: _Builder, joint: Joint):
         outer_radius_start=0.5 * pi.od,
         outer_radius_end=0.5 * pj.od,
         wall=wall,
+        offset=offset,
     )
+    notes = list(large.dims.notes)
+    note = b.reducer_notes.get((min(i, j), max(i, j)))
+    if geometry.eccentric and note:
+        notes.insert(0, note)
     snap = {
         "status": "fitting",
         "dimensions": large.dims.source,
         "length": length,
         "sizes": [pi.nominal, pj.nominal],
         "connects": [pi.id, pj.id],
-        "notes": list(large.dims.notes),
+        "notes": notes,
     }
+    if geometry.eccentric:
+        snap["eccentric"] = {
+            "flat": _flat_word(geometry.flat_side),
+            "offset": float(np.linalg.norm(offset)),
+        }
     return [("reducer", f"{pi.id}-{pj.id}", geometry, large, snap)]
+
+
+def _flat_word(flat) -> str:
+    """``"top"``, ``"bottom"`` or ``"side"`` for an eccentric reducer's flat side (3,)."""
+    if flat is None:
+        return "none"
+    if flat[2] > 1 - 1e-9:
+        return "top"
+    if flat[2] < -1 + 1e-9:
+        return "bottom"
+    return "side"
 
 
 def _tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
@@ -334,6 +371,7 @@ def build_spools(
     group_of: Sequence[str | None],
     *,
     max_bend_deg: float = MAX_BEND_DEG,
+    reducer_notes=None,
 ) -> tuple[list[Component], list[Spool]]:
     """Place fittings at the joints, trim pipes and group everything into spools.
 
@@ -346,6 +384,8 @@ def build_spools(
         Each pipe's scan group (a spool takes the group's name when all its pipes share it).
     max_bend_deg : float
         An elbow joint bending more than this (degrees) is not built (the pipes get a note).
+    reducer_notes : mapping of (int, int) to str, optional
+        A note for the eccentric reducer between pipes (i, j), ``i < j`` (why it is eccentric).
 
     Returns
     -------
@@ -354,7 +394,7 @@ def build_spools(
         pipe it joins.
     spools : list of Spool
     """
-    b = _Builder(pipes)
+    b = _Builder(pipes, reducer_notes)
     active = []
     for jt in joints:
         if jt.kind == "contact":
@@ -548,7 +588,9 @@ def ports(component: Component) -> list[tuple[np.ndarray, np.ndarray]]:
         end. Other components have no ports (empty list).
     """
     g = component.geometry
-    if isinstance(g, Straight | Reducer):
+    if isinstance(g, Reducer):
+        return [(g.start, -g.direction), (g.end, g.direction)]
+    if isinstance(g, Straight):
         d = _unit(g.end - g.start)
         return [(g.start, -d), (g.end, d)]
     if isinstance(g, Bend):

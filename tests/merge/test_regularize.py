@@ -140,3 +140,21 @@ def test_align_lines_makes_parallel_lines_coaxial_weighted():
 def test_align_lines_without_constraints_changes_nothing():
     centers = np.array([[1.0, 2, 3]])
     assert np.array_equal(align_lines(centers, np.array([Z]), [], []), centers)
+
+
+def test_align_lines_keeps_an_eccentric_pair_at_its_offset():
+    """Two parallel lines 24 mm apart asked to sit 27 mm apart (eccentric NPS 6 x 4) move
+    sideways only, sharing the 3 mm change in inverse proportion to their weights."""
+    centers = np.array([[-1.25, 0.0, 1.0], [1.39, 0.002, 1.024]])
+    axes = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    new = align_lines(
+        centers, axes, [], [(0, 1)], weights=[1.0, 2.0], offsets=[np.array([0, 0, 0.027])]
+    )
+    step = new[1] - new[0]
+    assert step[1:] == pytest.approx([0.0, 0.027], abs=1e-9)
+    assert new[:, 0] == pytest.approx(centers[:, 0])
+    # the weight-2 line moves half as far as the weight-1 line: 1 mm up, 2 mm down
+    assert new[1, 2] - centers[1, 2] == pytest.approx(0.001, abs=1e-9)
+    assert new[0, 2] - centers[0, 2] == pytest.approx(-0.002, abs=1e-9)
+    coaxial = align_lines(centers, axes, [], [(0, 1)], offsets=[None])
+    assert coaxial[1, 1:] == pytest.approx(coaxial[0, 1:], abs=1e-9)
