@@ -300,11 +300,15 @@ def mesh_for(geometry, *, plate_thickness: float) -> Mesh | None:
         start, end = geometry.ends
         return _line_tube(start, end, geometry.radius, geometry.radius, 0.0)
     if isinstance(geometry, Reducer):
-        return _line_tube(
-            geometry.start,
-            geometry.end,
-            geometry.outer_radius_start,
-            geometry.outer_radius_end,
+        # rings in planes perpendicular to the run (an eccentric reducer's end circles are
+        # offset sideways): the oblique frustum of two similar polygons has the volume of the
+        # right one, h/3 (A1 + A2 + sqrt(A1 A2)), so the equal-area rings keep it exact
+        u, v = _perpendicular(geometry.direction)
+        return tube_mesh(
+            np.array([geometry.start, geometry.end]),
+            np.array([u, u]),
+            np.array([v, v]),
+            np.array([geometry.outer_radius_start, geometry.outer_radius_end]),
             geometry.wall,
         )
     if isinstance(geometry, Bend):

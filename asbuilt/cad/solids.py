@@ -2,7 +2,8 @@
 
 Each geometry has its own builder: straights and fitted cylinders are cylinders (an annulus
 extruded along the axis when the wall is known), bends revolve their cross-section about the
-bend axis, reducers are truncated cones, tees fuse the run and branch cylinders (then cut the
+bend axis, reducers are truncated cones (eccentric ones a ruled loft between their end circles,
+an oblique cone), tees fuse the run and branch cylinders (then cut the
 bores), cuboids are transformed boxes, spheres are spheres, planes become plates extruded from
 their outline (centred on the plane), hulls are polyhedra sewn from their triangles. Every
 result is checked with the kernel's validity check (``BRepCheck_Analyzer`` via
@@ -109,13 +110,30 @@ def _bend(geometry: Bend) -> cq.Shape:
     )
 
 
+def _oblique_frustum(geometry: Reducer, inset: float) -> cq.Solid:
+    """A ruled loft between the two end circles (radii less ``inset`` metres), each in the plane
+    perpendicular to the run: an eccentric reducer's oblique truncated cone."""
+    normal = _v(geometry.direction)
+    circles = [
+        cq.Wire.makeCircle(radius - inset, _v(centre), normal)
+        for centre, radius in (
+            (geometry.start, geometry.outer_radius_start),
+            (geometry.end, geometry.outer_radius_end),
+        )
+    ]
+    return cq.Solid.makeLoft(circles, True)
+
+
 def _reducer(geometry: Reducer) -> cq.Shape:
-    axis = geometry.end - geometry.start
-    length = float(np.linalg.norm(axis))
+    """A truncated cone from ``start`` to ``end``; oblique (a loft) when eccentric."""
+    length = geometry.length
     if length <= 0:
         raise ValueError("its start and end coincide")
-    direction = _v(axis / length)
     r1, r2, wall = geometry.outer_radius_start, geometry.outer_radius_end, geometry.wall
+    if geometry.eccentric:
+        outer = _oblique_frustum(geometry, 0.0)
+        return outer if wall <= 0 else outer.cut(_oblique_frustum(geometry, wall))
+    direction = _v(geometry.direction)
     outer = cq.Solid.makeCone(r1, r2, length, _v(geometry.start), direction)
     if wall <= 0:
         return outer

@@ -102,3 +102,46 @@ def test_clockwise_outline_gives_the_same_plate():
     ccw = mesh_for(Plane([0.5, 0.5, 0], [0, 0, 1], square), plate_thickness=0.02)
     cw = mesh_for(Plane([0.5, 0.5, 0], [0, 0, 1], square[::-1]), plate_thickness=0.02)
     assert ccw.volume == pytest.approx(0.02) and cw.volume == pytest.approx(0.02)
+
+
+def _eccentric(r1, r2, direction, wall=0.0, turn=0.0, length=0.3):
+    """An eccentric reducer from the origin along ``direction``, its end axis stepped sideways
+    by the radii's difference in a direction ``turn`` radians around the run."""
+    d = np.array(direction, float) / np.linalg.norm(direction)
+    helper = np.array([1.0, 0, 0]) if abs(d[0]) < 0.9 else np.array([0, 1.0, 0])
+    u = np.cross(d, helper)
+    u /= np.linalg.norm(u)
+    v = np.cross(d, u)
+    offset = abs(r1 - r2) * (math.cos(turn) * u + math.sin(turn) * v)
+    return Reducer([0, 0, 0], length * d + offset, r1, r2, wall, offset=offset)
+
+
+def _frustum(r1, r2, h):
+    """Volume of a truncated cone, right or oblique (Cavalieri): pi h (r1^2 + r1 r2 + r2^2) / 3."""
+    return math.pi * h * (r1 * r1 + r1 * r2 + r2 * r2) / 3
+
+
+@given(
+    r1=st.floats(0.01, 0.5),
+    r2=st.floats(0.01, 0.5),
+    direction=st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1),
+    turn=st.floats(0, 2 * math.pi),
+)
+@settings(max_examples=30, deadline=None)
+def test_eccentric_reducer_meshes_keep_the_oblique_frustum_volume(r1, r2, direction, turn):
+    mesh = mesh_for(_eccentric(r1, r2, direction, turn=turn), plate_thickness=0.01)
+    assert mesh.volume == pytest.approx(_frustum(r1, r2, 0.3), rel=1e-9)
+    assert _closed(mesh).is_watertight
+
+
+def test_hollow_eccentric_reducer_mesh():
+    # NPS 6 x 4 STD (B36.10M: OD 168.3 / 114.3 mm, wall 7.11 / 6.02 mm), H 140 mm (B16.9)
+    r6, r4, wall = 0.08415, 0.05715, 0.00602
+    g = Reducer([0, 0, 0], [0.14, 0, r6 - r4], r6, r4, wall, offset=[0, 0, r6 - r4])
+    mesh = mesh_for(g, plate_thickness=0.01)
+    expected = _frustum(r6, r4, 0.14) - _frustum(r6 - wall, r4 - wall, 0.14)
+    assert mesh.volume == pytest.approx(expected, rel=1e-9)
+    assert _closed(mesh).is_watertight
+    # the end rings are centred on the end centres, in planes across the run
+    ring_end = mesh.vertices[np.isclose(mesh.vertices[:, 0], 0.14)]
+    assert ring_end[:, 1:].mean(axis=0) == pytest.approx([0, r6 - r4], abs=1e-9)

@@ -183,3 +183,35 @@ def test_non_convex_closed_mesh_keeps_its_triangles():
     solid = solid_for(Component("HL", "hull", Hull(vertices, faces)))
     assert solid.isValid()
     assert solid.Volume() == pytest.approx(3.0 * 0.5)
+
+
+@pytest.mark.parametrize("wall", [0.0, 0.00602])
+@pytest.mark.parametrize("offset", [[0, 0, 0.027], [0, -0.027, 0], [0, 0.0191, -0.0191]])
+def test_eccentric_reducer_is_a_valid_oblique_frustum(wall, offset):
+    """NPS 6 x 4 (OD 168.3 / 114.3 mm, B36.10M), H = 140 mm (B16.9), axes 27 mm apart: the
+    volume of an oblique frustum equals the right frustum's (Cavalieri)."""
+    from asbuilt.model import Reducer
+
+    r6, r4, h = 0.08415, 0.05715, 0.14
+    offset = np.array(offset) * (r6 - r4) / np.linalg.norm(offset)
+    g = Reducer([2, 1, 1], np.array([2 + h, 1, 1]) + offset, r6, r4, wall, offset=offset)
+    solid = solid_for(Component("R1", "reducer", g))
+
+    def frustum(a, b):
+        return math.pi * h * (a * a + a * b + b * b) / 3
+
+    assert solid.isValid() and len(solid.Solids()) == 1
+    expected = frustum(r6, r4) - (frustum(r6 - wall, r4 - wall) if wall else 0.0)
+    assert solid.Volume() == pytest.approx(expected, rel=1e-6)
+    # flush on the flat side (the small end is stepped towards it): both outer end circles
+    # reach the large radius along it
+    flat = offset / np.linalg.norm(offset)
+    reach = {}
+    for edge in solid.Edges():
+        if edge.geomType() == "CIRCLE" and edge.radius() in (pytest.approx(r6), pytest.approx(r4)):
+            points = np.array([edge.positionAt(t).toTuple() for t in np.linspace(0, 1, 721)])
+            reach[round(edge.radius(), 5)] = float(((points - [2, 1, 1]) @ flat).max())
+    assert reach == {
+        round(r6, 5): pytest.approx(r6, abs=1e-5),
+        round(r4, 5): pytest.approx(r6, abs=1e-5),
+    }

@@ -173,3 +173,31 @@ def test_json_alone_does_not_load_the_cad_kernel(tmp_path):
         [sys.executable, "-c", code], capture_output=True, text=True, cwd=root, check=True
     )
     assert out.stdout.split() == ["False", "False"]
+
+
+def test_an_eccentric_reducer_reaches_step_gltf_and_dxf(tmp_path):
+    """NPS 6 x 4 eccentric reducer (OD 168.3 / 114.3 mm, H 140 mm, axes 27 mm apart): the STEP
+    solid reads back valid with the oblique frustum's volume, glTF and DXF carry its mesh."""
+    import math
+
+    import ezdxf
+    import numpy as np
+
+    from asbuilt.export.step import read_step
+    from asbuilt.model import Model, Reducer
+
+    r6, r4, h = 0.08415, 0.05715, 0.14
+    geometry = Reducer([0, 0, 1], [h, 0, 1 + r6 - r4], r6, r4, offset=[0, 0, r6 - r4])
+    model = Model(components=(Component("R1", "reducer", geometry),), name="ecc")
+    paths = [tmp_path / "ecc.step", tmp_path / "ecc.glb", tmp_path / "ecc.dxf"]
+    export_models(model, paths)
+    (read,) = read_step(paths[0])
+    volume_mm3 = math.pi * h * (r6 * r6 + r6 * r4 + r4 * r4) / 3 * 1e9
+    assert read.valid and read.volume == pytest.approx(volume_mm3, rel=1e-4)
+    assert paths[1].stat().st_size > 0
+    doc = ezdxf.readfile(paths[2])
+    # the elevation's centreline runs from centre to centre of the end circles: 140 mm along,
+    # 27 mm up (millimetres)
+    (line,) = doc.modelspace().query('LWPOLYLINE[layer=="ELEV-CENTRELINE"]')
+    points = np.array([p[:2] for p in line.get_points()])
+    assert points[-1] - points[0] == pytest.approx([h * 1000, (r6 - r4) * 1000], abs=1e-6)
