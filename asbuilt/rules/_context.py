@@ -88,9 +88,13 @@ def _unit(v) -> np.ndarray:
 def axis_of(geometry) -> tuple[np.ndarray, float, np.ndarray] | None:
     """The main axis of a straight geometry: (unit axis (3,), length m, centre (3,) m), or None.
 
-    Straight and reducer: start to end; cylinder: its axis; cuboid: its longest edge direction.
+    Straight: start to end; reducer: its run direction and length, centred between its end
+    centres (an eccentric reducer's axis steps sideways); cylinder: its axis; cuboid: its longest
+    edge direction.
     """
-    if isinstance(geometry, (Straight, Reducer)):
+    if isinstance(geometry, Reducer):
+        return geometry.direction, geometry.length, 0.5 * (geometry.start + geometry.end)
+    if isinstance(geometry, Straight):
         d = geometry.end - geometry.start
         length = float(np.linalg.norm(d))
         return d / length, length, 0.5 * (geometry.start + geometry.end)

@@ -31,17 +31,22 @@ from ._graph import end_pairs, linked_pairs
 __all__ = ["CHECKS", "inside", "bounds", "candidate_pairs", "overlap_volume"]
 
 
-def _in_segment(points, start, end, radius_start, radius_end=None, erode=0.0) -> np.ndarray:
+def _in_segment(
+    points, start, end, radius_start, radius_end=None, erode=0.0, offset=None
+) -> np.ndarray:
     """Inside a cylinder or cone frustum from ``start`` to ``end`` shrunk by ``erode`` metres;
-    points (n, 3) m."""
-    d = np.asarray(end) - np.asarray(start)
+    points (n, 3) m. ``offset`` (3,) m: an oblique frustum (eccentric reducer) whose axis steps
+    sideways by it from start to end, its circles across ``end - start - offset``."""
+    offset = np.zeros(3) if offset is None else np.asarray(offset, float)
+    d = np.asarray(end) - np.asarray(start) - offset
     length = np.linalg.norm(d)
     u = d / length
     rel = points - start
     t = rel @ u
-    radial = np.linalg.norm(rel - np.outer(t, u), axis=1)
+    f = np.clip(t / length, 0.0, 1.0)
+    radial = np.linalg.norm(rel - np.outer(t, u) - np.outer(f, offset), axis=1)
     r_end = radius_start if radius_end is None else radius_end
-    r = radius_start + (r_end - radius_start) * np.clip(t / length, 0.0, 1.0)
+    r = radius_start + (r_end - radius_start) * f
     return (t >= erode) & (t <= length - erode) & (radial <= r - erode)
 
 
@@ -90,7 +95,9 @@ def inside(geometry, points, plate_thickness: float = 0.01, erode: float = 0.0) 
     if isinstance(g, Straight):
         return _in_segment(points, g.start, g.end, g.outer_radius, erode=e)
     if isinstance(g, Reducer):
-        return _in_segment(points, g.start, g.end, g.outer_radius_start, g.outer_radius_end, e)
+        return _in_segment(
+            points, g.start, g.end, g.outer_radius_start, g.outer_radius_end, e, g.offset
+        )
     if isinstance(g, Tee):
         return _in_segment(points, g.run_start, g.run_end, g.outer_radius, erode=e) | (
             _in_segment(points, g.center, g.branch_end, g.branch_outer_radius, erode=e)
@@ -224,6 +231,8 @@ def surface_stderr(component) -> float:
 def member_ends(geometry) -> np.ndarray:
     """Where a member ends, shape (k, 3) metres: the axis end points of pipes, cylinders, cuboids
     (long axis) and reducers, a bend's ends and a tee's three ends; empty for the rest."""
+    if isinstance(geometry, Reducer):  # its end centres (an eccentric one's are offset)
+        return np.array([geometry.start, geometry.end])
     found = axis_of(geometry)
     if found is not None:
         axis, length, centre = found

@@ -36,7 +36,11 @@ def rotate_geometry(geometry, rotation, about):
         return v / np.linalg.norm(v)
 
     g = geometry
-    if isinstance(g, (Straight, Reducer)):
+    if isinstance(g, Reducer):
+        return dataclasses.replace(
+            g, start=point(g.start), end=point(g.end), offset=r @ np.asarray(g.offset)
+        )
+    if isinstance(g, Straight):
         return dataclasses.replace(g, start=point(g.start), end=point(g.end))
     if isinstance(g, Bend):
         return dataclasses.replace(
@@ -89,7 +93,9 @@ def _od(geometry) -> float | None:
 
 
 def _axis(geometry):
-    if isinstance(geometry, (Straight, Reducer)):
+    if isinstance(geometry, Reducer):
+        return geometry.direction
+    if isinstance(geometry, Straight):
         d = geometry.end - geometry.start
         return d / np.linalg.norm(d)
     if isinstance(geometry, Cylinder):

@@ -205,3 +205,29 @@ def test_box_overlap_matches_the_exact_product(offset, size):
     truth = float(np.prod(np.clip(hi - lo, 0, None)))
     v, se, _ = volume(a, b, samples=4096)
     assert abs(v - truth) <= 4 * se + 1e-9
+
+
+def _eccentric_6x4():
+    """NPS 6 x 4 eccentric reducer (OD 168.3 / 114.3 mm, H 140 mm), flat on top, at z = 1."""
+    from asbuilt.model import Reducer
+
+    r6, r4 = 0.08415, 0.05715
+    return Reducer([0, 0, 1], [0.14, 0, 1 + r6 - r4], r6, r4, offset=[0, 0, r6 - r4])
+
+
+def test_inside_an_eccentric_reducer_follows_its_oblique_axis():
+    g = _eccentric_6x4()
+    top = 1 + 0.08415
+    points = np.array(
+        [
+            [0.139, 0, top - 0.001],  # just under the flat top at the small end: inside
+            [0.139, 0, 1 - 0.05],  # 50 mm below the large end's axis, at the small end: outside
+            [0.001, 0, 1 - 0.08],  # near the bottom of the large end: inside
+            [0.07, 0, 1.0 + 0.0135 + 0.07],  # mid-length, 70 mm above the mid axis: inside
+            [0.07, 0, 1.0 + 0.0135 - 0.0715],  # 71.5 mm below the mid axis (radius 70.65 mm)
+        ]
+    )
+    assert inside(g, points).tolist() == [True, False, True, True, False]
+    from asbuilt.rules.clash import member_ends
+
+    assert member_ends(g) == pytest.approx(np.array([g.start, g.end]))

@@ -31,3 +31,15 @@ def test_verdict(measured, allowed, stderr, expected):
 )
 def test_verdict_min(measured, required, stderr, expected):
     assert verdict_min(measured, required, stderr, 2.0) == expected
+
+
+def test_axis_of_an_eccentric_reducer_is_its_run():
+    import numpy as np
+
+    from asbuilt.model import Reducer
+    from asbuilt.rules._context import axis_of
+
+    g = Reducer([0, 0, 1], [0.14, 0, 1.027], 0.08415, 0.05715, offset=[0, 0, 0.027])
+    axis, length, centre = axis_of(g)
+    assert axis == pytest.approx([1, 0, 0]) and length == pytest.approx(0.14)
+    assert centre == pytest.approx(np.array([0.07, 0, 1.0135]))

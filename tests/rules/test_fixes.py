@@ -132,3 +132,16 @@ def test_rotation_is_rigid():
     assert turned.bend_radius == pytest.approx(1.0)
     assert turned.angle_deg == pytest.approx(90.0)
     np.testing.assert_allclose(turned.start, [np.cos(t), np.sin(t), 0])
+
+
+def test_rotating_an_eccentric_reducer_turns_its_offset():
+    from asbuilt.model import Reducer
+
+    r6, r4 = 0.08415, 0.05715
+    g = Reducer([0, 0, 1], [0.14, 0, 1 + r6 - r4], r6, r4, offset=[0, 0, r6 - r4])
+    quarter = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # 90 degrees about x
+    turned = rotate_geometry(g, quarter, [0, 0, 1])
+    assert turned.offset == pytest.approx([0, -(r6 - r4), 0])
+    assert turned.end == pytest.approx([0.14, -(r6 - r4), 1])
+    assert turned.direction == pytest.approx([1, 0, 0])
+    assert turned.flat_side == pytest.approx([0, -1, 0])
