@@ -106,7 +106,7 @@ def component_pieces(component: Component) -> list[np.ndarray]:
         start, end = g.ends
         return [np.vstack([_ring(start, g.axis, g.radius), _ring(end, g.axis, g.radius)])]
     if isinstance(g, Reducer):
-        d = g.end - g.start
+        d = g.direction  # the end circles lie across the run (offset when eccentric)
         return [
             np.vstack(
                 [_ring(g.start, d, g.outer_radius_start), _ring(g.end, d, g.outer_radius_end)]

@@ -38,6 +38,8 @@ __all__ = [
     "FOOT",
     "PipeLine",
     "FittingCount",
+    "FITTING_KINDS",
+    "fitting_kind",
     "SolidQuantity",
     "ComponentRow",
     "SpoolQuantity",
@@ -59,6 +61,17 @@ FOOT = UNITS["ft"]
 
 #: Component types counted as fittings (by size and angle).
 FITTING_TYPES = ("elbow", "tee", "reducer", "coupling")
+
+#: The fitting kinds of the take-off, in its order: reducers are bought as concentric or
+#: eccentric (ASME B16.9 makes both, of the same length H), so they are counted apart.
+FITTING_KINDS = ("elbow", "tee", "concentric reducer", "eccentric reducer", "coupling")
+
+
+def fitting_kind(component: Component) -> str:
+    """The take-off's kind of a fitting: its type, with reducers told concentric or eccentric."""
+    if component.type == "reducer" and isinstance(component.geometry, Reducer):
+        return "eccentric reducer" if component.geometry.eccentric else "concentric reducer"
+    return component.type
 
 
 def severity_rank(severity: str | None) -> int:
@@ -112,8 +125,9 @@ class PipeLine:
 
 @dataclass(frozen=True)
 class FittingCount:
-    """Fittings of one type, size, schedule and angle: ``angle_deg`` (elbows, whole degrees,
-    else None), ``bend_radius`` metres (elbows, else None), ``count`` and the ids."""
+    """Fittings of one type, size, schedule and angle: ``type`` one of :data:`FITTING_KINDS`
+    (``"concentric reducer"`` and ``"eccentric reducer"`` apart), ``angle_deg`` (elbows, whole
+    degrees, else None), ``bend_radius`` metres (elbows, else None), ``count`` and the ids."""
 
     type: str
     size: str
@@ -270,7 +284,7 @@ def _straight_length(g) -> float | None:
     if isinstance(g, (Straight, Cylinder)):
         return float(g.length)
     if isinstance(g, Reducer):
-        return float(np.linalg.norm(g.end - g.start))
+        return float(g.length)
     return None
 
 
@@ -447,7 +461,7 @@ def take_off(model: Model, *, density: float | None = None) -> TakeOff:
             angle = round(g.angle_deg) if isinstance(g, Bend) else None
             radius = round(g.bend_radius, 4) if isinstance(g, Bend) else None
             size = _fitting_size(comp, sizes)
-            key = (comp.type, size, comp.schedule, angle, radius)
+            key = (fitting_kind(comp), size, comp.schedule, angle, radius)
             entry = fittings.setdefault(key, {"od": od or 0.0, "ids": []})
             entry["ids"].append(comp.id)
             unit, quantity = "ea", 1.0
@@ -513,7 +527,7 @@ def take_off(model: Model, *, density: float | None = None) -> TakeOff:
         )
         for (kind, size, schedule, angle, radius), e in sorted(
             fittings.items(),
-            key=lambda kv: (FITTING_TYPES.index(kv[0][0]), -kv[1]["od"], kv[0][1], kv[0][3] or 0),
+            key=lambda kv: (FITTING_KINDS.index(kv[0][0]), -kv[1]["od"], kv[0][1], kv[0][3] or 0),
         )
     )
     volumes: dict[str, float] = {}

@@ -168,3 +168,19 @@ def test_histogram_of_nothing_or_zeros():
     assert "0 points" in histogram_svg(np.array([]))
     svg = histogram_svg(np.zeros(5))
     assert len(bars(svg, "#777")) == 1 and not bars(svg, "#d62728")
+
+
+def test_eccentric_reducer_elevation_is_a_trapezoid_flat_on_top():
+    """NPS 6 x 4 eccentric (radii 84.15 / 57.15 mm, H 140 mm), small end raised 27 mm: in
+    elevation the end circles are vertical segments, the outline a trapezoid of area
+    H (R6 + R4) with a level top at 1 + R6."""
+    from asbuilt.model import Reducer
+
+    r6, r4, h = 0.08415, 0.05715, 0.14
+    g = Reducer([0, 0, 1], [h, 0, 1 + r6 - r4], r6, r4, offset=[0, 0, r6 - r4])
+    (elev,) = projected_outlines(Component("R1", "reducer", g), ELEVATION)
+    assert elev[:, 0].min() == pytest.approx(0, abs=1e-12)
+    assert elev[:, 0].max() == pytest.approx(h, abs=1e-12)
+    assert area(elev) == pytest.approx(h * (r6 + r4), rel=1e-9)
+    top = elev[np.isclose(elev[:, 1], 1 + r6)]
+    assert sorted(top[:, 0]) == pytest.approx([0, h])

@@ -143,6 +143,14 @@ def test_reducer_and_reducing_tee_sizes():
             schedule="STD",
         ),  # sizes from the catalog by OD
         Component(
+            "R3",
+            "reducer",
+            Reducer([0, 4, 0], [0.14, 4, 0.027], 0.08415, 0.05715, offset=[0, 0, 0.027]),
+            nominal="6",
+            schedule="STD",
+            snap={"sizes": ["6", "4"]},
+        ),  # eccentric (flat on top), bought as its own item
+        Component(
             "T1",
             "tee",
             Tee([0, 2, 0], [-0.14, 2, 0], [0.14, 2, 0], [0, 2.14, 0], 0.08415, 0.05715),
@@ -158,10 +166,18 @@ def test_reducer_and_reducing_tee_sizes():
     t = take_off(Model(components=comps, catalog="asme-b36.10m"))
     sizes = sorted((f.type, f.size, f.count) for f in t.fittings)
     assert sizes == [
-        ("reducer", "NPS 6 x 4", 2),
+        ("concentric reducer", "NPS 6 x 4", 2),
+        ("eccentric reducer", "NPS 6 x 4", 1),
         ("tee", "NPS 6", 1),
         ("tee", "NPS 6 x 4", 1),
     ]
+    assert [f.type for f in t.fittings] == [
+        "tee",
+        "tee",
+        "concentric reducer",
+        "eccentric reducer",
+    ]
+    assert {r.id: r.type for r in t.rows}["R3"] == "reducer"  # the component type is unchanged
 
 
 def test_sphere_plane_and_hull_quantities():
