@@ -13,12 +13,14 @@
    to the catalog (:mod:`.snap`);
 4. **orientation regularisation** (:mod:`.regularize`, after GlobFit) and line alignment so
    joined axes meet exactly;
-5. **fittings and spools** (:mod:`.spool`): elbows/bends, tees, reducers and couplings, pipes
-   trimmed to them, everything grouped into spools.
+5. **fittings and spools** (:mod:`.spool`): elbows/bends, tees, reducers (concentric, or
+   eccentric where the axes are offset by the radii's difference, :mod:`.eccentric`, decided
+   before step 4's alignment) and couplings, pipes trimmed to them, everything grouped into
+   spools.
 
 Every change to a fitted value is recorded on the component as a
-:class:`~asbuilt.model.Correction` (diameter snapped, axis regularised, made coaxial, axis
-shifted, end trimmed/extended), the way a spell checker lists what it corrected.
+:class:`~asbuilt.model.Correction` (diameter snapped, axis regularised, made coaxial or placed
+eccentric, axis shifted, end trimmed/extended), the way a spell checker lists what it corrected.
 """
 
 from __future__ import annotations
