@@ -298,14 +298,23 @@ def _parse_number(text: str) -> float | None:
     return value if math.isfinite(value) and value > 0 else None
 
 
+#: A schedule, weight class or pressure rating written after a size (``4" sch 40``, ``4" STD``,
+#: ``DN100 PN16``, ``4" 150#``): the size is read and the rest is left to the catalog.
+_TRAILING_RATING = re.compile(
+    r"\s*(?:,\s*)?(?:sch(?:edule)?\.?\s*\w+|std|xs|xxs|pn\s*\d+|class\s*\d+|\d+\s*#|"
+    r"\d+\s*lbs?)$"
+)
+
+
 def parse_nominal(text: str | None) -> NominalHint | None:
     """Parse an operator's nominal size hint.
 
-    Understood forms: ``4"``, ``4 in``, ``4in``, ``4 inch``, ``NPS 4``, ``1 1/2"``, ``1-1/2"``,
-    ``1½"``,
-    ``3/4``, ``DN100``, ``DN 100``, and a bare number such as ``4`` or ``100`` (read as the
-    catalog's own designation first: NPS for ASME catalogs, DN for EN 10220). Returns None for
-    anything else.
+    Understood forms: ``4"``, ``4 in``, ``4in``, ``4 in.``, ``4 inch``, ``4-inch``, ``NPS 4``,
+    ``1 1/2"``, ``1-1/2"``, ``1½"``, ``3/4``, ``DN100``, ``DN 100``, the JIS designations
+    ``100A`` (millimetres, as DN) and ``4B`` (inches), and a bare number such as ``4`` or
+    ``100`` (read as the catalog's own designation first: NPS for ASME catalogs, DN for
+    EN 10220). A schedule, weight class or rating after the size (``4" sch 40``, ``4" STD``,
+    ``DN100 PN16``, ``6" 150#``) is ignored. Returns None for anything else.
     """
     if text is None:
         return None
@@ -314,14 +323,16 @@ def parse_nominal(text: str | None) -> NominalHint | None:
     for glyph, text in _VULGAR.items():
         lowered = lowered.replace(glyph, f" {text}")
     lowered = " ".join(lowered.split())
-    match = re.match(r"^dn\s*(\d+(?:\.\d+)?)$", lowered)
+    for _ in range(2):  # "4\" sch 40 150#": a schedule and a rating
+        lowered = _TRAILING_RATING.sub("", lowered).strip()
+    match = re.match(r"^dn\s*(\d+(?:\.\d+)?)$", lowered) or re.match(r"^(\d+)\s*a$", lowered)
     if match:
         return NominalHint("dn", float(match.group(1)), raw)
     match = re.match(r"^nps\s*(.+)$", lowered)
     if match:
         value = _parse_number(match.group(1))
         return NominalHint("nps", value, raw) if value else None
-    match = re.match(r'^(.+?)\s*(?:"|in|inch|inches)$', lowered)
+    match = re.match(r'^(.+?)\s*-?\s*(?:"|in\.?|inch|inches|b)$', lowered)
     if match:
         value = _parse_number(match.group(1))
         return NominalHint("nps", value, raw) if value else None
@@ -381,7 +392,8 @@ def _load_packaged(name: str) -> Catalog:
 
 def _load_path(resolved: str, shown: str) -> Catalog:
     try:
-        content = Path(resolved).read_text(encoding="utf-8")
+        # utf-8-sig: spreadsheets save "CSV UTF-8" with a byte order mark.
+        content = Path(resolved).read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise CatalogError("catalog file not found; check the path", source=shown) from None
     except (OSError, UnicodeDecodeError) as exc:

@@ -123,12 +123,17 @@ def snap_diameter(
     hint_info: dict = {}
     hinted: PipeSize | None = None
     if hint:
-        hinted = catalog.match_hint(parse_nominal(hint))
+        parsed = parse_nominal(hint)
+        hinted = catalog.match_hint(parsed)
         if hinted is None:
             hint_info = {
                 "nominal": hint,
                 "agrees": None,
-                "reason": f"{hint!r} names no size of catalog {catalog.name}",
+                "reason": (
+                    f"{hint!r} cannot be read as a nominal size"
+                    if parsed is None
+                    else f"{hint!r} names no size of catalog {catalog.name}"
+                ),
             }
         else:
             agrees = hinted in inside

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from asbuilt.catalog import parse_nominal
 from asbuilt.findings import Suggestion
 from asbuilt.model import Component
 
@@ -172,10 +173,13 @@ def check_hint(ctx: Context, table: SizeTable | None) -> None:
         if hint_od is None and table is not None and comp.type == "pipe":
             # only a pipe's hint names a catalog size (a tank's "3000 ID" does not)
             catalog = table.standard
+            unread = parse_nominal(hint) is None
             ctx.emit(
                 slug,
                 [comp.id],
-                f"the hint {hint!r} names no {catalog} size, so it was not used",
+                f"the hint {hint!r} "
+                + ("cannot be read as a nominal size" if unread else f"names no {catalog} size")
+                + ", so it was not used",
                 location=centre_of(comp.geometry),
                 suggestions=(
                     Suggestion(

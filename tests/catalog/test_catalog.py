@@ -227,6 +227,18 @@ def test_fitting_dims_from_table_and_by_rule():
         ("100", "number", 100.0, "4", "100"),
         ("4", "number", 4.0, "4", "100"),
         ("3/4", "number", 0.75, "3/4", "20"),
+        # Forms operators write (audit): JIS A (mm) and B (inch) sizes, "in." and "-inch",
+        # and a schedule, weight class or rating after the size.
+        ("100A", "dn", 100.0, "4", "100"),
+        ("4B", "nps", 4.0, "4", "100"),
+        ("4 in.", "nps", 4.0, "4", "100"),
+        ("4-inch", "nps", 4.0, "4", "100"),
+        ('4" sch 40', "nps", 4.0, "4", "100"),
+        ('4" STD', "nps", 4.0, "4", "100"),
+        ('1 1/2" XS', "nps", 1.5, "1 1/2", "40"),
+        ("4 in, Schedule 80", "nps", 4.0, "4", "100"),
+        ('6" 150#', "nps", 6.0, "6", "150"),
+        ("DN100 PN16", "dn", 100.0, "4", "100"),
     ],
 )
 def test_nominal_hints(text, system, value, steel, metric):
@@ -236,7 +248,9 @@ def test_nominal_hints(text, system, value, steel, metric):
     assert load_catalog("en-10220").match_hint(hint).nominal == metric
 
 
-@pytest.mark.parametrize("text", ["", "abc", "DN", "NPS", "-4", "4/0", None])
+@pytest.mark.parametrize(
+    "text", ["", "abc", "DN", "NPS", "-4", "4/0", None, "sch 40", "PN16", "3000 ID", "100 mm"]
+)
 def test_nominal_hints_not_understood(text):
     assert parse_nominal(text) is None
 
@@ -257,6 +271,13 @@ nominal,od,wall_std,source
 2,60.3,3.91,table A
 4,114.3,6.02,table A
 """
+
+
+def test_user_catalog_saved_with_a_byte_order_mark(tmp_path):
+    """Spreadsheets save "CSV UTF-8" with a BOM before the first header line."""
+    path = tmp_path / "bom.csv"
+    path.write_bytes(GOOD.encode("utf-8-sig"))
+    assert load_catalog(path).name == "mine"
 
 
 def test_user_catalog_by_path(tmp_path):

@@ -241,9 +241,16 @@ def test_nonstandard_without_catalog_uses_the_merge_record():
 
 def test_a_hint_naming_no_catalog_size_is_reported():
     comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143)
+    (f,) = only(run(comp, scan=scan_with_hint("P1", "NPS 5 1/2")), "hint-mismatch")
+    assert f.message == "the hint 'NPS 5 1/2' names no ASME B36.10M size, so it was not used"
+    assert "DN100" in f.suggestions[0].description
+
+
+def test_a_hint_that_is_no_size_is_reported_as_unreadable():
+    """Not "names no catalog size" (audit): the catalog is not at fault."""
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143)
     (f,) = only(run(comp, scan=scan_with_hint("P1", "100 mm")), "hint-mismatch")
-    assert f.message.startswith("the hint '100 mm' names no ASME B36.10M")
-    assert f.message.endswith(" size, so it was not used")
+    assert f.message == "the hint '100 mm' cannot be read as a nominal size, so it was not used"
     assert "DN100" in f.suggestions[0].description
 
 
