@@ -10,7 +10,7 @@ from asbuilt.cli import main
 from asbuilt.errors import ExportError
 from asbuilt.export import export_model
 from asbuilt.export.pcf import pcf_text, write_pcf
-from asbuilt.model import Component, Model, Spool, Straight
+from asbuilt.model import Component, Model, Reducer, Spool, Straight
 from asbuilt.pipeline import build_model
 from asbuilt.scan import load_scan
 
@@ -129,6 +129,26 @@ def test_spool_sample_elbow_and_tee_dimensions_are_b16_9(tmp_path):
     assert spans[("ELBOW", 6.0)] == pytest.approx([229.0] * len(spans[("ELBOW", 6.0)]), abs=2)
     assert spans[("ELBOW", 4.0)] == pytest.approx([152.0] * len(spans[("ELBOW", 4.0)]), abs=2)
     assert spans[("TEE", 6.0)] == pytest.approx([143.0] * len(spans[("TEE", 6.0)]), abs=2)
+
+
+@pytest.mark.parametrize(
+    ("flat", "expected"), [((0, 0, 1), "UP"), ((0, 0, -1), "DOWN"), ((0, -1, 0), "SOUTH")]
+)
+def test_eccentric_reducer_names_its_flat_side(flat, expected):
+    flat = np.array(flat, dtype=float)
+    step = R6 - R4
+    # From the large end: the small end's axis moves towards the flat side by the radii's step.
+    reducer = Reducer([0, 0, 0], np.array([0.14, 0, 0]) + step * flat, R6, R4, offset=step * flat)
+    model = Model(
+        components=(Component("R1", "reducer", reducer, nominal="6", schedule="STD"),),
+        catalog="asme-b36.10m",
+    )
+    _, blocks = parse(pcf_text(model))
+    block = _by_id(blocks)["R1"]
+    assert block["type"] == "REDUCER-ECCENTRIC"
+    assert block["SKEY"] == [["REBW"]]
+    assert block["FLAT-DIRECTION"] == [[expected]]
+    assert [e[3] for e in block["END-POINT"]] == [6.0, 4.0]
 
 
 def test_dn_catalog_writes_millimetre_bores():
