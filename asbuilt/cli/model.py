@@ -86,8 +86,10 @@ def register(subparsers) -> argparse.ArgumentParser:
     parser.add_argument(
         "--report",
         metavar="FILE",
+        action="append",
         default=None,
-        help="also write a QA report (.html, .csv or .json by suffix), after the --out files",
+        help="also write a QA report (.html, .csv or .json by suffix), after the --out files; "
+        "give --report several times for several reports",
     )
     parser.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
     parser.set_defaults(handler=run)
@@ -117,19 +119,21 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.scan import load_scan
 
     outputs = [Path(p) for p in args.out]
-    report_path = args.report
+    reports = [Path(p) for p in args.report or ()]
     for path in outputs:
         exporter_for(path)  # an unknown suffix or a missing directory fails before any work
         check_target(path, "--out")
-    if report_path is not None:
+    seen = {path.resolve() for path in outputs}
+    for report_path in reports:
         from asbuilt.report import report_format_for
 
         report_format_for(report_path)  # an unknown report suffix fails before any work too
-        if Path(report_path).resolve() in {path.resolve() for path in outputs}:
+        if report_path.resolve() in seen:
             raise ExportError(
-                "the report and an --out file are the same; name them apart",
+                "this report is also an --out file or another --report; name them apart",
                 source=str(report_path),
             )
+        seen.add(report_path.resolve())
         check_target(report_path, "--report")
 
     scan = load_scan(args.scan)
@@ -167,17 +171,12 @@ def run(args: argparse.Namespace) -> int:
             step_schema=args.step_schema,
             progress=progress,
         )
-        if report_path is not None:
-            from asbuilt.report import write_report
+        if reports:
+            from asbuilt.report import write_reports
 
-            # The HTML report can embed a 3-D view from a glTF written in this run.
+            # An HTML report can embed a 3-D view from a glTF written in this run.
             views = [r.path for r in results if r.path.suffix.lower() in (".glb", ".gltf")]
-            options = (
-                {"gltf": views[0]}
-                if views and Path(report_path).suffix.lower() in (".html", ".htm")
-                else {}
-            )
-            write_report(model, report_path, **options)
+            write_reports(model, reports, **({"gltf": views[0]} if views else {}))
 
     if args.quiet:
         return 0
@@ -187,7 +186,7 @@ def run(args: argparse.Namespace) -> int:
             f"wrote {result.path} ({result.name}, {_size(result.size)}, "
             f"{result.objects} object{'s' if result.objects != 1 else ''})"
         )
-    if report_path is not None:
+    for report_path in reports:
         out.print(f"wrote {report_path} (report)")
     counts = {severity: 0 for severity in ("error", "warning", "info")}
     for finding in model.findings:

@@ -234,17 +234,34 @@ def test_report_is_written_after_the_outputs(tmp_path, capsys):
     assert html.read_text(encoding="utf-8").lstrip().lower().startswith("<!doctype html")
 
 
+def test_every_report_given_is_written(tmp_path, capsys):
+    """--report twice wrote only the last one (audit D12)."""
+    reports = [tmp_path / "qa.csv", tmp_path / "qa.html", tmp_path / "qa.json"]
+    argv = ["model", str(ROOT / "samples" / "spool.json"), "--out", str(tmp_path / "m.json")]
+    for report in reports:
+        argv += ["--report", str(report)]
+    assert main(argv) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert [line for line in out if line.endswith("(report)")] == [
+        f"wrote {report} (report)" for report in reports
+    ]
+    assert all(report.stat().st_size > 0 for report in reports)
+
+
 @pytest.mark.parametrize(
-    ("report", "message"),
+    ("reports", "message"),
     [
-        ("r.pdf", "r.pdf: unknown report format '.pdf'"),
-        ("x.json", "x.json: the report and an --out file are the same"),
-        ("nope/r.html", "nope/r.html: directory does not exist"),
+        (["r.pdf"], "r.pdf: unknown report format '.pdf'"),
+        (["x.json"], "x.json: this report is also an --out file or another --report"),
+        (["r.csv", "r.csv"], "r.csv: this report is also an --out file or another --report"),
+        (["r.csv", "nope/r.html"], "nope/r.html: directory does not exist"),
     ],
 )
-def test_bad_report_fails_before_any_work(tmp_path, capsys, monkeypatch, report, message):
+def test_bad_report_fails_before_any_work(tmp_path, capsys, monkeypatch, reports, message):
     monkeypatch.chdir(tmp_path)
-    argv = ["model", str(ROOT / "samples" / "spool.json"), "--out", "x.json", "--report", report]
+    argv = ["model", str(ROOT / "samples" / "spool.json"), "--out", "x.json"]
+    for report in reports:
+        argv += ["--report", report]
     assert main(argv) == 2
     assert capsys.readouterr().err.startswith(f"asbuilt: error: {message}")
     assert list(tmp_path.iterdir()) == []
