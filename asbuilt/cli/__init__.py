@@ -9,7 +9,9 @@ exit code (2 for bad input); anything else is a bug and keeps its traceback.
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 from importlib import import_module
 
 from .. import __version__
@@ -50,21 +52,40 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, a service manager, a CI timeout): handled like Ctrl-C, so that every
+    ``finally`` runs: staged outputs are removed, journals are closed, devices released."""
+
+
+def _terminate(signum, frame):
+    raise Terminated()
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; return the process exit code (0 ok, 1 findings, 2 bad input, 130 interrupted)."""
+    """Run the CLI; return the process exit code (0 ok, 1 findings, 2 bad input, 130 interrupted,
+    143 terminated by SIGTERM)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     handler = getattr(args, "handler", None)
     if handler is None:
         parser.print_help()
         return 2
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         return int(handler(args) or 0)
     except AsbuiltError as exc:
         print(f"asbuilt: error: {exc}", file=sys.stderr)
         return exc.exit_code
+    except Terminated:
+        print("asbuilt: terminated", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print("asbuilt: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)

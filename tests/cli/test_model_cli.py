@@ -319,3 +319,29 @@ def test_an_output_that_is_a_directory_fails_before_any_work(
     out, err = capsys.readouterr()
     assert err.startswith(f"asbuilt: error: {message}") and err.count("\n") == 1
     assert [p.name for p in tmp_path.iterdir()] in (["taken"], ["taken.json"])
+
+
+def test_sigterm_while_writing_leaves_no_partial_files(tmp_path, capsys, monkeypatch):
+    """A ``kill`` (SIGTERM) during writing is handled like Ctrl-C: the staged files are removed
+    and the exit code is 143 (audit D13: hidden ``.part`` files were left behind)."""
+    import os
+    import signal
+    import time
+
+    from asbuilt.export import pcf
+
+    def killed_while_writing(model, path):
+        with open(path, "w") as stream:
+            stream.write("ISOGEN-FILES")
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)  # the handler raises before this ends
+        raise AssertionError("SIGTERM was not handled")
+
+    monkeypatch.setattr(pcf, "write_pcf", killed_while_writing)
+    before = signal.getsignal(signal.SIGTERM)
+    argv = ["model", str(ROOT / "samples" / "spool.json"), "--quiet"]
+    argv += ["--out", str(tmp_path / "m.json"), "--out", str(tmp_path / "m.pcf")]
+    assert main(argv) == 143
+    assert capsys.readouterr().err.strip() == "asbuilt: terminated"
+    assert list(tmp_path.iterdir()) == []
+    assert signal.getsignal(signal.SIGTERM) is before  # restored for the caller
