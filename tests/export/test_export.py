@@ -6,6 +6,7 @@ import os
 import stat
 import subprocess
 import sys
+from importlib.util import find_spec
 from pathlib import Path
 
 import pytest
@@ -14,6 +15,9 @@ from asbuilt.errors import ExportError, SolidBuildError, UnknownFormatError
 from asbuilt.export import SUFFIXES, export_model, export_models, exporter_for
 from asbuilt.model import Component
 from asbuilt.primitives import Plane
+
+#: IFC needs the optional ifcopenshell package (the test extra installs it).
+HAS_IFC = find_spec("ifcopenshell") is not None
 
 ALL = [
     "zoo.step",
@@ -24,6 +28,7 @@ ALL = [
     "zoo.stl",
     "zoo.obj",
     "zoo.pcf",
+    *(["zoo.ifc"] if HAS_IFC else []),
     "zoo.json",
 ]
 
@@ -38,6 +43,7 @@ ALL = [
         ("a.Dxf", "DXF"),
         ("a.stl", "STL"),
         ("a.obj", "OBJ"),
+        ("a.IFC", "IFC"),
         ("dir.v2/a.json", "JSON"),
     ],
 )
@@ -60,7 +66,7 @@ def test_unknown_suffix_is_one_clear_line(name, message):
 
 
 def test_every_suffix_is_registered_once():
-    assert set(SUFFIXES) == {Path(n).suffix for n in ALL}
+    assert set(SUFFIXES) == {Path(n).suffix for n in ALL} | {".ifc"}
 
 
 def test_all_formats_in_one_run(zoo, tmp_path):
@@ -120,7 +126,7 @@ def test_an_object_without_a_solid_is_named_and_nothing_is_written(zoo, tmp_path
 
 def test_unknown_suffix_fails_before_anything_is_written(zoo, tmp_path):
     with pytest.raises(UnknownFormatError):
-        export_models(zoo, [tmp_path / "a.json", tmp_path / "a.ifc"])
+        export_models(zoo, [tmp_path / "a.json", tmp_path / "a.xyz"])
     assert list(tmp_path.iterdir()) == []
 
 
