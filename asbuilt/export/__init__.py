@@ -1,5 +1,5 @@
-"""Exports chosen by the output's suffix: STEP, glTF, DXF, STL, OBJ, PCF and the JSON model
-document.
+"""Exports chosen by the output's suffix: STEP, glTF, DXF, STL, OBJ, PCF, IFC and the JSON
+model document.
 
 ``export_models(model, paths)`` writes several outputs in one run: every suffix is checked
 first, the solids are built once (only if a CAD format is asked for) and shared, every file is
