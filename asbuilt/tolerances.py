@@ -42,6 +42,19 @@ class Tolerances:
         "0.1 mm: the smallest noise level a hand-held/pan-tilt range finder can claim; keeps "
         "robust scales finite on synthetic noise-free data.",
     )
+    min_noise_dof: int = _why(
+        5,
+        "Residual degrees of freedom (inliers less parameters) a noise level estimated from the "
+        "residuals needs: with fewer, the estimate scatters by a factor of two or more (a "
+        "chi-square with 1-4 degrees of freedom), so a 3-sigma outlier test on it rejects good "
+        "shots and standard errors scaled by it claim precision the points cannot give.",
+    )
+    prior_range_sigma: float = _why(
+        0.002,
+        "2 mm: the range noise assumed for the degrees of freedom a scan without a sensor sigma "
+        "lacks (below min_noise_dof); typical of the inexpensive laser range finders asbuilt "
+        "targets (1-3 mm), and the benchmark sensor's.",
+    )
     normal_neighbours: int = _why(
         6,
         "Neighbours used for a local surface normal: the paper uses 2 (three-point sets); 6 "

@@ -104,16 +104,39 @@ def fit_points(
         array = as_points(points)
     except ValueError as exc:
         raise FitError(str(exc), where="points") from None
-    if sigma is not None and kind != "hull":
-        _require_spread_beyond_noise(array, kind, float(sigma))
+    if kind != "hull":
+        if sigma is not None:
+            _require_spread_beyond_noise(array, kind, LINE_SPREAD_SIGMAS * float(sigma))
+        else:
+            # No sensor sigma: one prior sigma across the line, so that a head stuck on one
+            # spot (shots scattered along its beam only) is refused while a 10 mm tube is not.
+            _require_spread_beyond_noise(array, kind, float(tolerances.prior_range_sigma), True)
     options = {}
     if viewpoint is not None and _accepts_viewpoint(function):
         options["viewpoint"] = np.asarray(viewpoint, dtype=np.float64)
     result = _fit_with_noise(kind, function, array, sigma, tolerances, options)
-    note = _undetermined(result)
-    if note is not None:
-        result = dataclasses.replace(result, notes=(*result.notes, note))
+    for note in (_prior_noise(result, tolerances), _undetermined(result)):
+        if note is not None:
+            result = dataclasses.replace(result, notes=(*result.notes, note))
     return result
+
+
+def _prior_noise(result: FitResult, tolerances: Tolerances) -> str | None:
+    """A note when a fit without a sensor sigma had too few residual degrees of freedom for a
+    noise level of its own (:func:`asbuilt.fit._common.noise_level` then leans on the prior)."""
+    from asbuilt.fit._common import few_residual_dof
+
+    if result.sigma_source != "residuals" or result.covariance is None:
+        return None
+    n_params = int(result.covariance.shape[0])
+    if not few_residual_dof(result.n_inliers, n_params, tolerances):
+        return None
+    return (
+        f"{result.n_inliers} points for {n_params} parameters leave too few to estimate the "
+        f"noise: no point was rejected as an outlier, and the standard errors assume a "
+        f"{tolerances.prior_range_sigma * 1000:g} mm range noise for the missing degrees of "
+        "freedom; give the scan's sensor.range_sigma, or take more shots."
+    )
 
 
 #: Points whose RMS spread across their best line is at most this many range sigmas are taken
@@ -123,19 +146,26 @@ def fit_points(
 LINE_SPREAD_SIGMAS = 2.0
 
 
-def _require_spread_beyond_noise(points: np.ndarray, kind: str, sigma: float) -> None:
-    """Raise FitError when the points (n, 3) metres lie within the range noise ``sigma``
-    (metres) of one line (``LINE_SPREAD_SIGMAS``): no surface is measured, whatever primitive
-    the fit would return (a cylinder of a few millimetres around the line, a plane turned
-    anyhow about it)."""
+def _require_spread_beyond_noise(
+    points: np.ndarray, kind: str, limit: float, assumed: bool = False
+) -> None:
+    """Raise FitError when the points (n, 3) metres lie within ``limit`` (metres; the range
+    noise times ``LINE_SPREAD_SIGMAS``, or the prior noise when the scan gives no sigma and
+    ``assumed``) of one line: no surface is measured, whatever primitive the fit would return
+    (a cylinder of a few millimetres around the line, a plane turned anyhow about it)."""
     centred = points - points.mean(axis=0)
     spread = np.linalg.svd(centred, compute_uv=False) / np.sqrt(len(points))
-    if spread.size > 1 and spread[1] <= LINE_SPREAD_SIGMAS * sigma:
+    if spread.size > 1 and spread[1] <= limit:
         what = 'an object of kind "auto"' if kind == "auto" else f"a {kind}"
+        noise = (
+            f"the {limit * 1000:.3g} mm noise assumed without a sensor sigma"
+            if assumed
+            else f"the range noise ({limit / LINE_SPREAD_SIGMAS * 1000:.3g} mm)"
+        )
         raise FitError(
-            f"The points lie within the range noise ({sigma * 1000:.3g} mm) of one line (RMS "
-            f"{spread[1] * 1000:.3g} mm across it); {what} needs points spread over its "
-            "surface.",
+            f"The points lie within {noise} of one line (RMS {spread[1] * 1000:.3g} mm across "
+            f"it); {what} needs points spread over its surface"
+            + (" (give sensor.range_sigma if the range finder is more precise)." if assumed else "."),
             where="points",
         )
 

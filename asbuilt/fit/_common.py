@@ -40,6 +40,7 @@ __all__ = [
     "robust_scale",
     "tukey_weights",
     "residual_scale",
+    "few_residual_dof",
     "trimmed_cost",
     "keep_count",
     "noise_level",
@@ -349,17 +350,29 @@ def noise_level(
     -------
     sigma : float, metres
         The sensor's sigma, else ``sqrt(sum r^2 / (m - n_params))`` floored by
-        ``tolerances.sigma_floor``.
+        ``tolerances.sigma_floor``. With fewer than ``tolerances.min_noise_dof`` residual
+        degrees of freedom the missing ones count as residuals of the prior noise level
+        ``tolerances.prior_range_sigma`` (the scaled inverse chi-square prior of a Bayesian
+        variance estimate, Gelman et al., "Bayesian Data Analysis", section 2.6): an exact fit
+        of 5 points by 5 parameters no longer claims the 0.1 mm floor.
     source : str
         ``"sensor"`` or ``"residuals"``.
     """
     if sigma is not None:
         return float(sigma), "sensor"
-    dof = residuals.size - n_params
-    if dof <= 0:
-        return float(tolerances.sigma_floor), "residuals"
-    estimate = float(np.sqrt(np.sum(residuals * residuals) / dof))
+    dof = max(residuals.size - n_params, 0)
+    squares = float(np.sum(residuals * residuals))
+    missing = max(int(tolerances.min_noise_dof) - dof, 0)
+    squares += missing * float(tolerances.prior_range_sigma) ** 2
+    estimate = float(np.sqrt(squares / (dof + missing))) if dof + missing > 0 else 0.0
     return max(estimate, float(tolerances.sigma_floor)), "residuals"
+
+
+def few_residual_dof(n_inliers: int, n_params: int, tolerances: Tolerances) -> bool:
+    """Whether a fit without a sensor sigma has too few residual degrees of freedom
+    (``tolerances.min_noise_dof``) for a noise level of its own: then no point is rejected by
+    a test on that level, and :func:`noise_level` leans on the prior."""
+    return n_inliers - n_params < int(tolerances.min_noise_dof)
 
 
 def stderr_of(variance: float) -> float:
@@ -790,6 +803,10 @@ def robust_geometric_fit(
         else:
             scale = residual_scale(residuals, floor, model.n_params)
         new_mask = np.abs(residuals) <= tolerances.outlier_cutoff_sigma * scale
+        if sigma is None and few_residual_dof(n, model.n_params, tolerances):
+            # Too few points for a noise level of their own: a 3-sigma test on it would throw
+            # out good shots (and leave an exact fit claiming 0.1 mm).
+            new_mask = np.ones(n, dtype=bool)
         if not rescued and not new_mask.all():
             rescued = True
             extent = float(np.linalg.norm(np.ptp(points, axis=0)))

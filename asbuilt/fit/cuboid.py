@@ -73,7 +73,7 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette
-from asbuilt.fit._common import random_subset
+from asbuilt.fit._common import noise_level, random_subset
 from asbuilt.fit._joint import (
     FaceModel,
     best_fit,
@@ -772,11 +772,8 @@ def fit_cuboid(
     # Uncertainty: covariance of the inlier refit, scaled by the sensor or by the residuals.
     used = int(np.count_nonzero(inliers))
     n_par = model.rot_basis.shape[1] + model.offset.shape[0]
-    if sigma is not None:
-        sig, source = max(float(sigma), floor), "sensor"
-    else:
-        rss = float(np.sum(residual[inliers] ** 2))
-        sig, source = max(np.sqrt(rss / max(used - n_par, 1)), floor), "residuals"
+    sig, source = noise_level(residual[inliers], n_par, sigma, tolerances)
+    sig = max(sig, floor)
     cov = _covariance(model, x[inliers], label[inliers], sig)
     size_se, centre_se = _propagate(
         model, xb, cov, (lo_pt, hi_pt, lo_face, hi_face, pad), sig, one_face

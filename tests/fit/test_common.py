@@ -111,8 +111,15 @@ def test_noise_level_prefers_the_sensor_and_corrects_for_degrees_of_freedom():
     assert common.noise_level(residuals, 2, 0.002, DEFAULT_TOLERANCES) == (0.002, "sensor")
     sigma, source = common.noise_level(residuals, 2, None, DEFAULT_TOLERANCES)
     assert source == "residuals"
-    assert sigma == pytest.approx(0.003 * np.sqrt(6 / 4))
-    assert common.noise_level(residuals[:2], 2, None, DEFAULT_TOLERANCES)[0] == 1e-4
+    # 4 residual degrees of freedom, one short of min_noise_dof: the missing one counts as a
+    # residual of the 2 mm prior (scaled inverse chi-square prior).
+    assert sigma == pytest.approx(np.sqrt((6 * 0.003**2 + 0.002**2) / 5))
+    many = np.tile(residuals, 3)  # 16 degrees of freedom: the residuals alone
+    assert common.noise_level(many, 2, None, DEFAULT_TOLERANCES)[0] == pytest.approx(
+        0.003 * np.sqrt(18 / 16)
+    )
+    # An exact fit (no degree of freedom) no longer claims the 0.1 mm floor: the prior's 2 mm.
+    assert common.noise_level(residuals[:2] * 0, 2, None, DEFAULT_TOLERANCES)[0] == 0.002
 
 
 def test_covariance_from_jacobian_matches_the_straight_line_textbook_formula():

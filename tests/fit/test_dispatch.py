@@ -338,6 +338,39 @@ def test_points_within_the_noise_of_a_line_are_refused(kind):
         assert info.value.message.endswith(f"{what} needs points spread over its surface.")
 
 
+@pytest.mark.parametrize("kind", ["cylinder", "plane", "sphere", "cuboid", "auto"])
+def test_a_stuck_head_without_a_sensor_sigma_is_refused(kind):
+    """30 shots at one spot (a stuck pan-tilt head): they scatter along the beam by the range
+    noise and across it by the pointing noise only. Without a sensor sigma this was fitted
+    (a 2 mm "pipe", audit); the prior noise now refuses it."""
+    rng = np.random.default_rng(11)
+    beam = np.array([0.6, 0.8, 0.0])
+    ranges = 5.0 + 0.002 * rng.standard_normal(30)
+    across = 5.0 * np.radians(0.01) * rng.standard_normal((30, 2))
+    side, up = np.array([-0.8, 0.6, 0.0]), np.array([0.0, 0.0, 1.0])
+    points = ranges[:, None] * beam + across[:, :1] * side + across[:, 1:] * up
+    with pytest.raises(FitError) as info:
+        fit_points(kind, points)
+    assert "the 2 mm noise assumed without a sensor sigma" in info.value.message
+    assert info.value.message.endswith("(give sensor.range_sigma if the range finder is more precise).")
+
+
+def test_few_points_without_a_sigma_keep_every_shot_and_say_so():
+    """A sphere of 6 shots without a sensor sigma: one residual degree of freedom gave a
+    0.1 mm noise level, rejected a good shot and claimed +-0.1 mm (audit); now no shot is
+    rejected and the standard error leans on the 2 mm prior, with a note."""
+    rng = np.random.default_rng(5)
+    directions = rng.normal(size=(6, 3))
+    directions[:, 1] = -np.abs(directions[:, 1])  # the side facing the station
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    points = np.array([0, 6, 1]) + 0.5 * directions
+    points += 0.002 * directions * rng.standard_normal((6, 1))
+    result = fit_points("sphere", points)
+    assert result.n_inliers == 6
+    assert result.stderr["radius"] > 0.0005
+    assert any("too few to estimate the noise" in note for note in result.notes)
+
+
 def test_a_thin_pipe_is_not_taken_for_a_line():
     # NPS 1/2 (OD 21.3 mm) seen over 150 degrees at 2 mm noise: its shots spread about 7 mm.
     rng = np.random.default_rng(3)
