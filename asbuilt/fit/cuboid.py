@@ -770,7 +770,6 @@ def fit_cuboid(
     centre = origin + model.axes.T @ (0.5 * (hi + lo))
 
     # Uncertainty: covariance of the inlier refit, scaled by the sensor or by the residuals.
-    used = int(np.count_nonzero(inliers))
     n_par = model.rot_basis.shape[1] + model.offset.shape[0]
     sig, source = noise_level(residual[inliers], n_par, sigma, tolerances)
     sig = max(sig, floor)
