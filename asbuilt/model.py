@@ -315,7 +315,11 @@ class Model:
     """The as-built model of one scan.
 
     ``units`` is the unit outputs are written in (the scan's unless asked otherwise); the data
-    stay in metres. ``catalog`` names the pipe catalog used for snapping, if any.
+    stay in metres. ``catalog`` names the pipe catalog used for snapping, if any;
+    ``catalog_file`` is the absolute path of that catalog's CSV file when it was a user's file
+    rather than a shipped catalog (so that it can be read again: its name alone may name no
+    shipped catalog, or a different one). ``source`` is the scan file a model read from a model
+    document was built from (``scan.source`` when the scan is attached).
     """
 
     components: tuple[Component, ...]
@@ -326,6 +330,8 @@ class Model:
     findings: tuple[Finding, ...] = ()
     scan: Scan | None = None
     fits: FitReport | None = None
+    catalog_file: str | None = None
+    source: str | None = None
 
     def component(self, component_id: str) -> Component:
         for comp in self.components:

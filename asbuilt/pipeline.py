@@ -9,12 +9,33 @@ Every stage is a pure function of the previous one's output; this module only ch
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 from asbuilt.model import Model, model_from_fits
 from asbuilt.scan.model import Scan
 from asbuilt.tolerances import Tolerances
 
-__all__ = ["build_model"]
+__all__ = ["build_model", "catalog_file"]
+
+
+def catalog_file(catalog) -> str | None:
+    """The absolute path of a catalog read from a user's file; None for a shipped catalog.
+
+    A model records it (:attr:`~asbuilt.model.Model.catalog_file`) so that reports and exports
+    made later read the same file: the catalog's name alone may name no shipped catalog, or a
+    shipped one with other data.
+
+    Parameters
+    ----------
+    catalog : Catalog
+        As loaded by :func:`asbuilt.catalog.load_catalog`.
+    """
+    from asbuilt.catalog import catalog_names, load_catalog
+
+    if catalog.name in catalog_names() and load_catalog(catalog.name) is catalog:
+        return None  # the shipped one (load_catalog caches shipped catalogs)
+    path = Path(catalog.path) if catalog.path else None
+    return str(path.resolve()) if path is not None and path.is_file() else None
 
 
 def build_model(
@@ -60,7 +81,8 @@ def build_model(
     Returns
     -------
     Model
-        Metres, scan frame; ``findings`` sorted by severity.
+        Metres, scan frame; ``findings`` sorted by severity; ``catalog_file`` set when the
+        catalog came from a user's file.
 
     Raises
     ------
@@ -68,12 +90,14 @@ def build_model(
         Located one-line errors for bad input.
     """
     from asbuilt.fit import fit
-    from asbuilt.merge import merge_model
+    from asbuilt.merge import merge_model, resolve_catalog
     from asbuilt.rules import RulesConfig, check_model, load_rules
 
     config = rules if isinstance(rules, RulesConfig) else load_rules(rules)
     if tolerances is None:
         tolerances = config.tolerances
+    if merge or catalog is not None:
+        catalog = resolve_catalog(catalog)  # once: the merge, the rules and the model share it
     report = fit(scan, tolerances, progress=progress)
     if merge:
         model = merge_model(
@@ -83,6 +107,7 @@ def build_model(
             schedule=schedule,
             elbow_radius=elbow_radius,
         )
+        model = model.replace(catalog_file=catalog_file(catalog))
     else:
         model = model_from_fits(report)
     if check:

@@ -107,28 +107,46 @@ def register(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
+#: Options that shape how a scan is built; a model document is already built.
+_BUILD_OPTIONS = (("schedule", "--schedule"), ("catalog", "--catalog"), ("no_merge", "--no-merge"))
+
+
 def _model(args, progress):
-    from asbuilt.export.model_json import is_model_document
+    """The model and the catalog it was built with (None: the report reads the model's)."""
+    from asbuilt.export.model_json import ModelDocumentError, is_model_document
 
     if is_model_document(args.scan):
+        given = [flag for name, flag in _BUILD_OPTIONS if getattr(args, name)]
+        if given:
+            raise ModelDocumentError(
+                f"{', '.join(given)} only apply when building from a scan; this is an "
+                "asbuilt-model document, already built: give the scan instead, or leave "
+                f"{'them' if len(given) > 1 else 'it'} out",
+                source=str(args.scan),
+            )
         from asbuilt.export.model_json import load_model
 
         model = load_model(args.scan)
         if args.no_check or (args.rules is None and args.design is None):
-            return model  # the findings the document records
+            return model, None  # the findings the document records
+        from asbuilt.report.takeoff import model_catalog
         from asbuilt.rules import check_model, load_rules
 
+        catalog = model_catalog(model)[0]
         config = load_rules(args.rules) if args.rules else None
-        options = {"catalog": args.catalog} if args.catalog else {}
-        return model.replace(findings=tuple(check_model(model, config, args.design, **options)))
+        options = {"catalog": catalog} if catalog is not None else {}
+        findings = check_model(model, config, args.design, **options)
+        return model.replace(findings=tuple(findings)), catalog
+    from asbuilt.merge import resolve_catalog
     from asbuilt.pipeline import build_model
     from asbuilt.scan import load_scan
 
+    catalog = resolve_catalog(args.catalog) if args.catalog is not None else None
     scan = load_scan(args.scan)
     progress.total = len(scan.objects)
-    return build_model(
+    model = build_model(
         scan,
-        catalog=args.catalog,
+        catalog=catalog,
         schedule=args.schedule,
         rules=args.rules,
         design=args.design,
@@ -136,6 +154,7 @@ def _model(args, progress):
         check=not args.no_check,
         progress=progress,
     )
+    return model, catalog
 
 
 def _size(n: int) -> str:
@@ -177,13 +196,15 @@ def run(args: argparse.Namespace) -> int:
             def __call__(self, done, total, oid):
                 bar.update(task, completed=done, total=total, description=oid)
 
-        model = _model(args, _Progress())
+        model, catalog = _model(args, _Progress())
         bar.update(task, completed=0, total=len(outputs), description="", stage="writing")
         options = {"figure_format": args.figures, "label_limit": args.labels}
         if args.density is not None:
             options["density"] = args.density
         if args.gltf is not None:
             options["gltf"] = args.gltf
+        if catalog is not None:
+            options["catalog"] = catalog
         written = write_reports(model, outputs, **options)
 
     if args.quiet:

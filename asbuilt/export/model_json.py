@@ -238,8 +238,9 @@ def model_document(model: Model) -> dict:
         "units": "m",
         "display_units": model.units,
         "name": model.name,
-        "source": model.scan.source if model.scan is not None else None,
+        "source": model.scan.source if model.scan is not None else model.source,
         "catalog": model.catalog,
+        "catalog_file": model.catalog_file,
         "components": [_component(c) for c in model.components],
         "spools": [
             {"id": s.id, "components": list(s.components), "pipe_length": s.pipe_length}
@@ -498,6 +499,16 @@ def _geometry(entry: dict):
     )
 
 
+def _document_text(document: dict, key: str, source: str | None) -> str | None:
+    """An optional top-level text field (absent in older documents)."""
+    value = document.get(key)
+    if value is not None and not isinstance(value, str):
+        raise ModelDocumentError(
+            f"must be text or null, not {_describe(value)}", source=source, where=key
+        )
+    return value
+
+
 def _optional_float(value):
     return None if value is None else float(value)
 
@@ -610,6 +621,8 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
         catalog=document.get("catalog"),
         spools=tuple(spools),
         findings=tuple(findings),
+        catalog_file=_document_text(document, "catalog_file", source),
+        source=_document_text(document, "source", source),
     )
 
 

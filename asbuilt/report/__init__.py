@@ -89,7 +89,7 @@ _FORMATS = (
 #: Report suffixes mapped to their format.
 SUFFIXES: dict[str, ReportFormat] = {f.suffix: f for f in _FORMATS}
 
-_OPTIONS = {"density", "figure_format", "label_limit", "gltf", "generated"}
+_OPTIONS = {"density", "figure_format", "label_limit", "gltf", "generated", "catalog"}
 
 
 def report_format_for(path) -> ReportFormat:
@@ -135,7 +135,8 @@ def write_reports(model, paths: Iterable, **options) -> list[Path]:
         ``density`` (kg/m3, pipe weights; default from the catalog's material),
         ``figure_format`` (``"svg"`` or ``"png"``, HTML), ``label_limit`` (HTML pictures),
         ``gltf`` (a glTF/GLB file of the model for the HTML's optional 3-D view),
-        ``generated`` (datetime stamp, default now).
+        ``generated`` (datetime stamp, default now), ``catalog`` (the Catalog the model was
+        built with; default the model's ``catalog_file``, else the shipped catalog it names).
 
     Returns
     -------
@@ -157,7 +158,12 @@ def write_reports(model, paths: Iterable, **options) -> list[Path]:
                 "this report is given twice; name each output once", source=str(target)
             )
         seen.add(target.resolve())
-    data = report_data(model, density=options.get("density"), generated=options.get("generated"))
+    data = report_data(
+        model,
+        density=options.get("density"),
+        generated=options.get("generated"),
+        catalog=options.get("catalog"),
+    )
     with AtomicBatch() as batch:
         for fmt, target in zip(formats, targets):
             temp = batch.stage(target)

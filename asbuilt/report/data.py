@@ -19,7 +19,7 @@ import numpy as np
 from asbuilt.findings import SEVERITIES, Finding
 from asbuilt.model import Model
 
-from .takeoff import TakeOff, severity_rank, take_off
+from .takeoff import TakeOff, model_catalog, severity_rank, take_off
 
 __all__ = ["FitQuality", "ReportData", "report_data", "fit_quality"]
 
@@ -103,6 +103,11 @@ class ReportData:
     generated : str
         When the report was made, ISO 8601 UTC.
     catalog, catalog_title, units : str or None
+    catalog_file : str or None
+        The user's catalog file the model was built with (None: a shipped catalog).
+    catalog_problem : str or None
+        Why the model's catalog could not be read, if it could not (sizes are then shown
+        without catalog labels, walls or weights).
     counts : Mapping[str, int]
         Components by type, plus ``"components"``, ``"spools"``, ``"objects"``, ``"points"``.
     severities : Mapping[str, int]
@@ -128,6 +133,8 @@ class ReportData:
     quality: tuple[FitQuality, ...]
     findings: tuple[Finding, ...] = field(default_factory=tuple)
     scan_file_modified: str | None = None
+    catalog_file: str | None = None
+    catalog_problem: str | None = None
 
 
 def _float(value) -> float | None:
@@ -220,21 +227,18 @@ def _file_modified(source) -> str | None:
     return _iso(_dt.datetime.fromtimestamp(seconds, _dt.timezone.utc))
 
 
-def _catalog_title(name: str | None) -> str | None:
-    if not name:
-        return None
-    from asbuilt.catalog import load_catalog
-    from asbuilt.errors import CatalogError
-
-    try:
-        catalog = load_catalog(name)
-    except CatalogError:
+def _catalog_title(catalog) -> str | None:
+    if catalog is None:
         return None
     return f"{catalog.standard} ({catalog.title})" if catalog.standard else catalog.title
 
 
 def report_data(
-    model: Model, *, density: float | None = None, generated: _dt.datetime | None = None
+    model: Model,
+    *,
+    density: float | None = None,
+    generated: _dt.datetime | None = None,
+    catalog=None,
 ) -> ReportData:
     """Gather what a report shows.
 
@@ -247,8 +251,12 @@ def report_data(
         :data:`asbuilt.report.takeoff.DENSITIES`).
     generated : datetime, optional
         The report's time stamp (default now, UTC).
+    catalog : Catalog, str or Path, optional
+        The catalog the model was built with (default: the model's ``catalog_file``, else the
+        shipped catalog its ``catalog`` names; see :func:`~asbuilt.report.takeoff.model_catalog`).
     """
-    takeoff = take_off(model, density=density)
+    catalog, catalog_problem = model_catalog(model, catalog)
+    takeoff = take_off(model, density=density, catalog=catalog)
     quality = fit_quality(model, takeoff)
     findings = tuple(
         sorted(
@@ -266,7 +274,7 @@ def report_data(
     if model.scan is not None:
         counts["objects"] = len(model.scan.objects)
         counts["points"] = int(sum(len(obj.points) for obj in model.scan.objects))
-    source = model.scan.source if model.scan is not None else None
+    source = model.scan.source if model.scan is not None else model.source
     title = model.name or (str(source) if source else "as-built model")
     stamp = generated or _dt.datetime.now(_dt.timezone.utc)
     return ReportData(
@@ -275,8 +283,10 @@ def report_data(
         source=None if source is None else str(source),
         scan_date=_scan_date(model),
         generated=_iso(stamp),
-        catalog=model.catalog,
-        catalog_title=_catalog_title(model.catalog),
+        catalog=model.catalog or (catalog.name if catalog is not None else None),
+        catalog_title=_catalog_title(catalog),
+        catalog_file=model.catalog_file,
+        catalog_problem=catalog_problem,
         units=model.units,
         counts=counts,
         severities=severities,

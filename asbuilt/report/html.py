@@ -165,6 +165,11 @@ def _header(data: ReportData) -> str:
     catalog = _e(data.catalog) if data.catalog else "none"
     if data.catalog_title:
         catalog += f" &mdash; {_e(data.catalog_title)}"
+    if data.catalog_file:
+        catalog += f" (file {_e(data.catalog_file)})"
+    if data.catalog_problem:
+        problem = _e(data.catalog_problem)
+        catalog += f'<br><span class="sev warning" id="catalog-problem">{problem}</span>'
     nav = "".join(
         f'<a href="#{target}">{label}</a>'
         for target, label in (

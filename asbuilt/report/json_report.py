@@ -2,7 +2,7 @@
 
 Top level (``"format": "asbuilt-report"``, ``"version": 1``, ``"units": "m"``): ``title``,
 ``source``, ``scan_date``, ``scan_file_modified``, ``generated``, ``catalog``,
-``catalog_title``, ``display_units``, ``counts``, ``findings_summary`` (by severity),
+``catalog_title``, ``catalog_file``, ``catalog_problem``, ``display_units``, ``counts``, ``findings_summary`` (by severity),
 ``takeoff`` (``spools``, ``pipes``, ``fittings``, ``solids``, ``totals``), ``components`` (the
 CSV rows, same names without unit suffixes: lengths m, areas m2, volumes m3, weights kg),
 ``quality`` (per fitted object; residuals in metres) and ``findings`` (as in the
@@ -61,6 +61,8 @@ def report_document(data: ReportData) -> dict:
         "generated": data.generated,
         "catalog": data.catalog,
         "catalog_title": data.catalog_title,
+        "catalog_file": data.catalog_file,
+        "catalog_problem": data.catalog_problem,
         "display_units": data.units,
         "counts": dict(data.counts),
         "findings_summary": dict(data.severities),

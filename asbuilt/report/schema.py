@@ -190,6 +190,8 @@ def build_report_schema() -> dict:
             },
             "catalog": _STRING_OR_NULL,
             "catalog_title": _STRING_OR_NULL,
+            "catalog_file": _STRING_OR_NULL,
+            "catalog_problem": _STRING_OR_NULL,
             "display_units": {"type": "string"},
             "counts": {
                 "type": "object",

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -46,6 +47,7 @@ __all__ = [
     "TakeOff",
     "pipe_weight_per_metre",
     "take_off",
+    "model_catalog",
     "severity_rank",
 ]
 
@@ -302,19 +304,52 @@ def _outer_diameter(g) -> float | None:
 # catalog look-ups (optional: a model may name a catalog file that is gone)
 
 
+def model_catalog(model: Model, catalog=None):
+    """The catalog a report of ``model`` takes size labels, walls and the material from.
+
+    Parameters
+    ----------
+    model : Model
+    catalog : Catalog, str or Path, optional
+        The catalog the model was built with, when the caller has it (a name or path is
+        loaded; its errors are raised). Default: the model's ``catalog_file`` when it records
+        one (a user's catalog file), else the shipped catalog its ``catalog`` names.
+
+    Returns
+    -------
+    (Catalog or None, str or None)
+        The catalog, and when the model names a catalog that cannot be read, one line saying
+        so (the report then shows nominal sizes without walls, weights or catalog labels).
+    """
+    from asbuilt.catalog import Catalog, load_catalog
+    from asbuilt.errors import CatalogError
+
+    if isinstance(catalog, Catalog):
+        return catalog, None
+    if catalog is not None:
+        return load_catalog(catalog), None
+    if model.catalog_file:
+        try:
+            return load_catalog(Path(model.catalog_file)), None
+        except CatalogError as exc:
+            return None, f"the model's catalog file cannot be read ({exc})"
+    if model.catalog:
+        try:
+            return load_catalog(model.catalog), None
+        except CatalogError:
+            return None, (
+                f"catalog {model.catalog!r} is no shipped catalog and the model does not "
+                "record its file (made before the file was recorded); build the model again "
+                "from the scan with --catalog FILE"
+            )
+    return None, None
+
+
 class _Sizes:
-    """Labels and walls from the model's catalog when it can be loaded."""
+    """Labels and walls from the model's catalog (None: labels are the nominal sizes)."""
 
-    def __init__(self, catalog_name: str | None):
-        self.catalog = None
-        if catalog_name:
-            from asbuilt.catalog import load_catalog
-            from asbuilt.errors import CatalogError
-
-            try:
-                self.catalog = load_catalog(catalog_name)
-            except CatalogError:
-                self.catalog = None
+    def __init__(self, catalog):
+        self.catalog = catalog
 
     @property
     def material(self) -> str | None:
@@ -407,7 +442,7 @@ def _spools(model: Model, rows: list[ComponentRow]) -> tuple[SpoolQuantity, ...]
     return tuple(result)
 
 
-def take_off(model: Model, *, density: float | None = None) -> TakeOff:
+def take_off(model: Model, *, density: float | None = None, catalog=None) -> TakeOff:
     """Count what was built.
 
     Parameters
@@ -417,6 +452,9 @@ def take_off(model: Model, *, density: float | None = None) -> TakeOff:
     density : float, kg/m3, optional
         Pipe material density for weights; default from the catalog's material
         (:data:`DENSITIES`), none (no weights) for materials not listed there.
+    catalog : Catalog, str or Path, optional
+        The catalog for size labels, walls and the material; default the model's (see
+        :func:`model_catalog`).
 
     Returns
     -------
@@ -424,7 +462,7 @@ def take_off(model: Model, *, density: float | None = None) -> TakeOff:
         Pipe lines sorted by outside diameter then schedule; fittings by type, size, angle;
         solids and rows in the model's order.
     """
-    sizes = _Sizes(model.catalog)
+    sizes = _Sizes(model_catalog(model, catalog)[0])
     material = sizes.material
     if density is None and material is not None:
         density = DENSITIES.get(material.lower())

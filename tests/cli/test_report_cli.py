@@ -137,3 +137,81 @@ def test_help_lists_report():
     )
     assert result.returncode == 0
     assert "--out" in result.stdout and ".html .csv .json" in result.stdout
+
+
+SPOOL = ROOT / "samples" / "spool.json"
+# A user's catalog (docs/catalogs.md format) with the ASME B36.10M-2004 NPS 4 and 6 rows.
+USER_CATALOG = (
+    "# name: my-pipes\n# title: Our plant's pipe\n# standard: PS-7\n# kind: pipe\n# units: mm\n"
+    "# material: carbon steel\n# designation: NPS\n# default_schedule: STD\n"
+    "nominal,dn,od,wall_std,source\n"
+    "4,100,114.3,6.02,ASME B36.10M-2004 Table 1\n6,150,168.3,7.11,ASME B36.10M-2004 Table 1\n"
+)
+
+
+def _csv_rows(path):
+    with open(path, newline="", encoding="utf-8-sig") as handle:
+        return {r["id"]: r for r in csv.DictReader(handle)}
+
+
+def test_user_catalog_in_every_way_to_a_report(tmp_path, capsys):
+    """--catalog FILE: sizes, walls and weights from the file, whether the report is made from
+    the scan, by 'asbuilt model --report', or later from the model document (audit D1)."""
+    catalog = tmp_path / "pipes.csv"
+    catalog.write_text(USER_CATALOG, encoding="utf-8")
+    direct, by_model, later = tmp_path / "a.csv", tmp_path / "b.csv", tmp_path / "c.json"
+    document = tmp_path / "model.json"
+    assert run(["report", SPOOL, "--catalog", catalog, "--out", direct, "-q"], capsys)[0] == 0
+    argv = ["model", SPOOL, "--catalog", catalog, "--out", document, "--report", by_model, "-q"]
+    assert run(argv, capsys)[0] == 0
+    assert run(["report", document, "--out", later, "-q"], capsys)[0] == 0
+    for path in (direct, by_model):
+        row = _csv_rows(path)["P1"]
+        # NPS 6 STD: 0.0246615 (168.3 - 7.11) 7.11 = 28.26 kg/m (B36.10M) times the length
+        assert row["size"] == "NPS 6" and row["nominal"] == "6"
+        expected = 0.0246615 * (168.3 - 7.11) * 7.11 * float(row["length_m"])
+        assert float(row["weight_kg"]) == pytest.approx(expected, abs=0.02)
+    report = json.loads(later.read_text(encoding="utf-8"))
+    assert report["catalog"] == "my-pipes" and report["catalog_title"] == "PS-7 (Our plant's pipe)"
+    assert report["catalog_file"] == str(catalog.resolve())
+    p1 = next(c for c in report["components"] if c["id"] == "P1")
+    assert p1["size"] == "NPS 6" and p1["weight"] is not None
+
+
+@pytest.mark.parametrize(
+    ("extra", "named"),
+    [
+        (["--schedule", "XS"], "--schedule only apply"),
+        (["--catalog", "en-10220"], "--catalog only apply"),
+        (["--no-merge"], "--no-merge only apply"),
+        (["--schedule", "XS", "--catalog", "en-10220"], "--schedule, --catalog only apply"),
+    ],
+)
+def test_build_options_on_a_model_document_are_refused(tmp_path, capsys, extra, named):
+    """They only shape how a scan is built; a model document was built already (audit D6)."""
+    import numpy as np
+
+    from asbuilt.export.model_json import write_model_json
+    from asbuilt.model import Component, Model
+    from asbuilt.primitives import Cuboid
+
+    column = Component("C1", "cuboid", Cuboid([0, 0, 1.5], np.eye(3), [0.4, 0.4, 3.0]))
+    document = tmp_path / "model.json"
+    write_model_json(Model(components=(column,)), document)
+    out = tmp_path / "qa.json"
+    code, stdout, err = run(["report", document, "--out", out, *extra], capsys)
+    assert code == 2 and stdout == "" and named in err
+    assert err.startswith(f"asbuilt: error: {document}: ") and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_report_from_a_model_document_names_the_scan(tmp_path, capsys):
+    """The document's "source" is the scan; the report shows it (audit D11)."""
+    out, document = tmp_path / "qa.html", tmp_path / "model.json"
+    assert run(["model", BAY, "--out", document, "-q"], capsys)[0] == 0
+    assert json.loads(document.read_text(encoding="utf-8"))["source"] == str(BAY)
+    assert (
+        run(["report", document, "--out", out, "--out", tmp_path / "qa.json", "-q"], capsys)[0] == 0
+    )
+    assert f"<dt>Scan</dt><dd>{BAY}</dd>" in out.read_text(encoding="utf-8")
+    assert json.loads((tmp_path / "qa.json").read_text(encoding="utf-8"))["source"] == str(BAY)
