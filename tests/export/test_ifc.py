@@ -8,6 +8,7 @@ its schema validator including the EXPRESS where rules.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import subprocess
 import sys
@@ -301,6 +302,61 @@ def test_volumes_equal_the_formulas(shapes):
     for name, volume in expected.items():
         measured = ifcopenshell.util.shape.get_volume(shapes[name])
         assert measured == pytest.approx(volume, rel=2e-3), name
+
+
+#: The audit's survey shift (UTM-like easting/northing and a height), metres.
+SURVEY_OFFSET = np.array([500_000.0, 5_000_000.0, 250.0])
+_POSITIONS = ("start", "end", "center", "run_start", "run_end", "branch_end", "point", "outline")
+
+
+@needs_ifc
+def test_survey_coordinates_keep_the_solids(tmp_path):
+    """5,000 km north: each element is placed at its own anchor, so the solids come back whole
+    and in place (volumes summed about the shift, as doubles cannot resolve mm3 at 5e6 m)."""
+    import ifcopenshell
+    import ifcopenshell.geom
+
+    def shifted(geometry):
+        return dataclasses.replace(
+            geometry,
+            **{
+                f.name: np.asarray(getattr(geometry, f.name)) + SURVEY_OFFSET
+                for f in dataclasses.fields(geometry)
+                if f.name in (*_POSITIONS, "vertices")
+            },
+        )
+
+    zoo = zoo_model()
+    model = zoo.replace(
+        components=tuple(
+            dataclasses.replace(c, geometry=shifted(c.geometry)) for c in zoo.components
+        )
+    )
+    export_model(model, tmp_path / "survey.ifc")
+    settings = ifcopenshell.geom.settings()
+    settings.set("use-world-coords", True)
+    settings.set("mesher-linear-deflection", 2e-4)
+    settings.set("mesher-angular-deflection", 0.1)
+    expected = expected_volumes()
+    # The lowest corner of some solids, from the zoo's definitions (metres, before the shift).
+    low = {
+        "P1": [0.0, -R4, -R4],
+        "E1": [1.0, -R4, -R4],
+        "T1": [2.8, -R4, -R4],
+        "R1": [3.2, -R4, -R4],
+        "SP": [6.5, -0.5, 0.5],
+        "PL": [7.0, -1.0, -0.005],
+        "CY": [4.85, -0.15, 0.0],
+    }
+    document = ifcopenshell.open(str(tmp_path / "survey.ifc"))  # kept: elements need it alive
+    for element in document.by_type("IfcElement"):
+        geometry = ifcopenshell.geom.create_shape(settings, element).geometry
+        vertices = _vertices(geometry) - SURVEY_OFFSET
+        tri = vertices[np.asarray(geometry.faces).reshape(-1, 3)]
+        volume = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6
+        assert volume == pytest.approx(expected[element.Name], rel=2e-3), element.Name
+        if element.Name in low:
+            assert vertices.min(axis=0) == pytest.approx(low[element.Name], abs=1e-3)
 
 
 @needs_ifc
