@@ -52,9 +52,20 @@ _RING = 16
 _ARC_STEPS = 8
 
 
+#: Characters an anchor keeps as they are (safe in an HTML id, a URL fragment and SVG).
+_ANCHOR_SAFE = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.:-")
+
+
 def anchor(component_id: str) -> str:
-    """The HTML id of a component's row: ``obj-`` and the id with unsafe characters as ``_``."""
-    return "obj-" + re.sub(r"[^A-Za-z0-9_.:-]", "_", component_id)
+    """The HTML id of a component's row: ``obj-`` and the id, every character other than ASCII
+    letters, digits and ``_ . : -`` written as ``~`` + its code point in hex + ``~``
+    (``"P 1"`` -> ``obj-P~20~1``, ``"Rohr-Ä1"`` -> ``obj-Rohr-~c4~1``).
+
+    Injective: kept characters are never ``~`` and every escape is delimited, so the id can be
+    read back from its anchor and two ids never share one (``"P 1"``, ``"P/1"`` and ``"P_1"``
+    get three anchors).
+    """
+    return "obj-" + "".join(c if c in _ANCHOR_SAFE else f"~{ord(c):x}~" for c in component_id)
 
 
 def _ring(center: np.ndarray, axis: np.ndarray, radius: float, n: int = _RING) -> np.ndarray:
@@ -361,6 +372,7 @@ def render_view(
                 ha="center",
                 va="center",
                 zorder=6,
+                parse_math=False,  # ids are drawn literally: "$" starts no mathtext
                 bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.7},
             )
             text.set_url(f"#{anchor(oid)}")

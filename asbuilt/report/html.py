@@ -540,6 +540,11 @@ def _findings(data: ReportData) -> str:
             '<section id="findings"><h2>Findings</h2>'
             '<p id="no-findings">No findings: every rule passed.</p></section>'
         )
+    rows = {comp.id for comp in data.model.components}  # the ids that have a row to link to
+
+    def named(oid: str) -> str:  # a design's missing object has no row: plain text
+        return _link(oid) if oid in rows else f'<span class="missing">{_e(oid)}</span>'
+
     items = []
     for index, f in enumerate(data.findings, 1):
         values = []
@@ -558,7 +563,7 @@ def _findings(data: ReportData) -> str:
             f'<li id="finding-{index}"><span class="sev {f.severity}">{_e(f.severity)}</span> '
             f"<code>{_e(f.code)}</code> {_e(f.slug)}"
             f"{' (unverifiable)' if f.unverifiable else ''} &mdash; "
-            f"{', '.join(_link(o) for o in f.objects)}<br>{_e(f.message)}"
+            f"{', '.join(named(o) for o in f.objects)}<br>{_e(f.message)}"
             + (f'<br><span class="muted">{"; ".join(values)}</span>' if values else "")
             + (f"<ul>{suggestions}</ul>" if suggestions else "")
             + "</li>"

@@ -2,6 +2,7 @@
 and the residual histograms."""
 
 import base64
+import dataclasses
 import math
 import re
 
@@ -120,6 +121,28 @@ def test_svg_views_are_inline_and_ids_do_not_collide():
             assert f'href="#{anchor(comp.id)}"' in svg
             assert f">{comp.id}<" in svg  # labels are text, not glyph paths
     assert not set(re.findall(r'id="([^"]+)"', plan)) & set(re.findall(r'id="([^"]+)"', elevation))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.text(max_size=12), st.text(max_size=12))
+@example("P 1", "P/1")
+@example("Rohr-Ä1", "Rohr-Ö1")
+@example("P_1", "P 1")
+def test_anchor_is_injective_and_safe(a, b):
+    """Two ids never share an anchor, and an anchor uses only URL- and id-safe characters."""
+    assert re.fullmatch(r"obj-[A-Za-z0-9_.:~-]*", anchor(a))
+    assert (anchor(a) == anchor(b)) == (a == b)
+
+
+def test_mathtext_ids_are_drawn_literally():
+    """'$' in an id starts no mathtext (it crashed the report, audit D2)."""
+    model = known_model()
+    comps = model.components[:3] + tuple(
+        dataclasses.replace(c, id=new)
+        for c, new in zip(model.components[3:], ("C$^$1", "$\\frac{1}{2}$"))
+    )
+    svg = render_view(model.replace(components=comps), "plan")
+    assert ">C$^$1</text>" in svg and ">$\\frac{1}{2}$</text>" in svg
 
 
 def test_png_view_is_a_png():

@@ -135,7 +135,58 @@ def test_ids_with_unusual_characters_are_safe():
     comps[3] = Component('C "1"/<a>', odd.type, odd.geometry, label="odd <id>")
     text = html_text(report_data(model.replace(components=tuple(comps)), generated=STAMP))
     check_html(text)
-    assert 'id="obj-C__1___a_"' in text
+    assert 'id="obj-C~20~~22~1~22~~2f~~3c~a~3e~"' in text
+
+
+# Ids that the old anchor (unsafe characters as "_") sent to one anchor, and ids that matplotlib
+# read as mathtext (audit D2, D4): all drawn literally, each with its own row and anchor.
+ODD_IDS = ("Rohr-Ä1", "Rohr-Ö1", "Rohr-_1", "P 1", "P/1", "P_1", "C$^$1", "$x$", r"\alpha{")
+
+
+def _odd_model():
+    import numpy as np
+
+    from asbuilt.model import Component
+    from asbuilt.primitives import Cuboid
+
+    model = known_model()
+    extra = tuple(
+        Component(oid, "cuboid", Cuboid([3.0 * k, 6.0, 1.5], np.eye(3), [0.4, 0.4, 3.0]))
+        for k, oid in enumerate(ODD_IDS)
+    )
+    return model.replace(components=model.components + extra)
+
+
+@pytest.mark.parametrize("figure_format", ["svg", "png"])
+def test_colliding_and_mathtext_ids_get_rows_anchors_and_literal_labels(figure_format):
+    from asbuilt.report.figures import anchor
+
+    model = _odd_model()
+    model = model.replace(findings=many_findings(model, per_object=1))
+    text = html_text(report_data(model, generated=STAMP), figure_format=figure_format)
+    checker = check_html(text)  # unique ids, every #link resolves
+    assert len({anchor(oid) for oid in ODD_IDS}) == len(ODD_IDS)
+    for oid in ODD_IDS:
+        assert anchor(oid) in checker.ids
+    if figure_format == "svg":
+        plan = text.split('id="view-plan"', 1)[1].split("</figure>", 1)[0]
+        for oid in ODD_IDS:  # the label is the id itself, not mathtext glyphs
+            assert f">{oid.replace('&', '&amp;')}</text>" in plan, oid
+
+
+def test_a_finding_naming_no_component_is_not_linked():
+    """A design's missing object has no row: its id is shown, not linked (audit D10)."""
+    from asbuilt.findings import Finding
+
+    model = known_model()
+    missing = Finding(
+        "DV101", "design-missing", "error", ("D-MISSING <x>", "P1"), "in the design, not built"
+    )
+    text = html_text(report_data(model.replace(findings=(missing,)), generated=STAMP))
+    check_html(text)  # would fail: a link to #obj-D-MISSING~20~~3c~x~3e~ with no such row
+    item = text.split('<li id="finding-1">', 1)[1].split("</li>", 1)[0]
+    assert '<span class="missing">D-MISSING &lt;x&gt;</span>' in item
+    assert '<a href="#obj-P1">P1</a>' in item
 
 
 def test_spool_table(plant_model, plant_html):
