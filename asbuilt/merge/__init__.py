@@ -391,10 +391,25 @@ def merge_model(
         stderr_deg=axis_se,
     )
     new_axes = directions.axes
-    build_ods = np.array([float(s.od) if s.size is not None else np.nan for s in snaps])
+    build_ods = np.array([float(s.od) for s in snaps])
+    build_od_se = np.array(
+        [
+            0.0 if s.size is not None else float(run_info[m]["od_joint_stderr"])
+            for m, s in enumerate(snaps)
+        ]
+    )
     center_se = np.array([_stderr_value(item.result, "center") for item in items])
     eccentric = eccentric_joints(
-        joints, centers, axes, lengths, new_axes, build_ods, run_of, center_se, axis_se
+        joints,
+        centers,
+        axes,
+        lengths,
+        new_axes,
+        build_ods,
+        run_of,
+        center_se,
+        axis_se,
+        od_se=build_od_se,
     )
     meets, coaxial, offsets = _constraints(joints, eccentric)
     new_centers = centers.copy()

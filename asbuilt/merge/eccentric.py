@@ -11,9 +11,10 @@ keeps them coaxial. The decision is made from the fitted axes at the joint:
 * each position's standard error is ``sqrt(se_center^2 + (s * se_axis)^2)`` (the fit's
   ``center`` standard error, and its axis error, radians, times the distance ``s`` from the
   fit's centre to the joint); ``tol = k_sigma * hypot(sigma_i, sigma_j) + ECCENTRIC_MARGIN``;
-* **eccentric** when ``|m| > tol`` (clearly not coaxial) and ``| |m| - dR | <= tol``
-  (consistent with the radii); otherwise concentric, as merging always did. Unknown standard
-  errors never make an eccentric reducer;
+* **eccentric** when ``|m| > tol`` (clearly not coaxial) and ``| |m| - dR | <= tol`` (consistent
+  with the radii; for a pipe without a catalog size the window grows by ``k_sigma`` standard
+  errors of ``dR`` from its run's diameter estimate); otherwise concentric, as merging always
+  did. Unknown standard errors never make an eccentric reducer;
 * the imposed offset has length ``dR`` exactly, along ``m``; it is snapped to the vertical of the
   plane across the run (flat on top or bottom) when that moves it by no more than ``tol``.
 """
@@ -83,6 +84,7 @@ def eccentric_joints(
     center_se,
     axis_se_deg,
     *,
+    od_se=None,
     k_sigma: float = 3.0,
     margin: float = ECCENTRIC_MARGIN,
 ) -> dict[int, Eccentricity]:
@@ -100,14 +102,16 @@ def eccentric_joints(
     run_axes : array_like, shape (n, 3)
         Regularised unit axes (inline pipes are exactly parallel).
     ods : array_like, shape (n,), metres
-        Outside diameters to build with: the catalog's, NaN for a pipe without a catalog size
-        (its radius is too uncertain to tell an offset from noise: never eccentric).
+        Outside diameters to build with (the catalog's, else the run's estimate).
     runs : array_like, shape (n,), int
         Run of one size of each pipe (same run: no reducer).
     center_se : array_like, shape (n,), metres
         Standard error of each fitted axis position across the axis (NaN: unknown).
     axis_se_deg : array_like, shape (n,), degrees
         Standard error of each fitted axis direction (NaN: unknown).
+    od_se : array_like, shape (n,), metres, optional
+        Standard error of each diameter in ``ods``: 0 for a catalog size (the default for all),
+        the run estimate's for a pipe without one (NaN: unknown, never eccentric).
     k_sigma : float
         Width of the window in combined standard errors (merging's 3).
     margin : float
@@ -126,6 +130,7 @@ def eccentric_joints(
     runs = np.asarray(runs).reshape(-1)
     center_se = np.asarray(center_se, float).reshape(-1)
     axis_se = np.radians(np.asarray(axis_se_deg, float).reshape(-1))
+    od_se = np.zeros(len(ods)) if od_se is None else np.asarray(od_se, float).reshape(-1)
     found: dict[int, Eccentricity] = {}
     for index, joint in enumerate(joints):
         if joint.kind != "inline":
@@ -144,8 +149,11 @@ def eccentric_joints(
         if not all(np.isfinite(sigmas)):
             continue
         tolerance = k_sigma * float(np.hypot(*sigmas)) + margin
+        step_se = 0.5 * float(np.hypot(od_se[i], od_se[j]))
+        if not np.isfinite(step_se):
+            continue
         size = float(np.linalg.norm(measured))
-        if size <= tolerance or abs(size - step) > tolerance:
+        if size <= tolerance or abs(size - step) > tolerance + k_sigma * step_se:
             continue
         towards = measured / size
         offset = step * towards

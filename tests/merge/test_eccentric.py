@@ -133,10 +133,18 @@ def test_eccentric_joints_needs_known_errors_and_a_size_change():
     assert found[0].flat == "top"
     assert found[0].offset == pytest.approx([0, 0, 0.027])
     assert eccentric_joints(*args, [0, 1], [np.nan, 0.002], [0.05, 0.05]) == {}
-    no_size = (joints, centers, axes, lengths, axes, np.array([0.1683, np.nan]))
-    assert eccentric_joints(*no_size, [0, 1], [0.002, 0.002], [0.05, 0.05]) == {}
+    unknown = [0.0, np.nan]  # a diameter without a catalog size or an error: never eccentric
+    assert eccentric_joints(*args, [0, 1], [0.002, 0.002], [0.05, 0.05], od_se=unknown) == {}
+    # an unsized 110 mm pipe (+-3 mm): 29.15 mm expected, measured 15 mm: 14.15 mm off, beyond
+    # the 12.8 mm window, within it widened by 3 x 1.5 mm (half the diameter's error)
+    centers[1, 2] = 1.015
+    wide = (joints, centers, axes, lengths, axes, np.array([0.1683, 0.110]))
+    assert eccentric_joints(*wide, [0, 1], [0.002, 0.002], [0.05, 0.05]) == {}
+    found = eccentric_joints(*wide, [0, 1], [0.002, 0.002], [0.05, 0.05], od_se=[0, 0.003])
+    assert np.linalg.norm(found[0].offset) == pytest.approx(0.02915)
     assert eccentric_joints(*args, [0, 0], [0.002, 0.002], [0.05, 0.05]) == {}
-    # 12 mm apart is neither clearly off-axis nor the radii's difference (window 11.5 mm)
+    # 12 mm apart is neither clearly off-axis nor the radii's difference: the window is
+    # 3 x hypot(2.28, 2.28) + 3 = 12.8 mm (2 mm centre and 0.05 deg x 1.25 m axis errors)
     centers[1, 2] = 1.012
     assert eccentric_joints(*args, [0, 1], [0.002, 0.002], [0.05, 0.05]) == {}
 
@@ -149,3 +157,19 @@ def test_coaxial_synthetic_reducer_unchanged():
     assert not reducer.geometry.eccentric
     assert reducer.geometry.start == pytest.approx([2.0, 0, 1])
     assert reducer.geometry.end == pytest.approx([2.14, 0, 1])
+
+
+def test_an_unsized_pipe_still_gets_its_eccentric_reducer():
+    """Seed 1 without hints: the NPS 4 pipe's fitted 110.7 mm is ambiguous (NPS 4 or 3 1/2), so
+    it is built at its estimate; the axes' 27 mm step is still an eccentric reducer whose
+    offset is the built radii's difference, and the pipes stay where scanned."""
+    report, truth = _scan("6x4", "top", np.random.default_rng(1), hint=False)
+    model = merge_model(report)
+    reducer = _reducer(model)
+    assert model.component("P2").snap["status"] == "ambiguous"
+    g = reducer.geometry
+    assert g.eccentric and reducer.snap["eccentric"]["flat"] == "top"
+    step = g.outer_radius_start - g.outer_radius_end
+    assert np.linalg.norm(g.offset) == pytest.approx(step, abs=1e-9)
+    small = model.component("P2").geometry
+    assert small.start[1:] == pytest.approx(truth[1][0][1:], abs=0.004)
