@@ -6,8 +6,15 @@ for a reducer), ``schedule``, ``length_m`` and ``length_ft`` (straight length of
 cylinders, longest edge of cuboids; empty for fittings), ``quantity_unit`` (``m``, ``ea``,
 ``m3`` or ``m2``), ``quantity``, ``weight_kg`` (pipes with a known wall), ``surface_area_m2``,
 ``findings`` (finding codes, worst first, separated by spaces) and ``severity`` (the worst).
-Empty cells mean "not applicable or unknown". Decimal point, comma separated, UTF-8, CRLF line
-ends (RFC 4180, Python's ``csv`` excel dialect).
+Empty cells mean "not applicable or unknown". Decimal point, comma separated, CRLF line ends
+(RFC 4180, Python's ``csv`` excel dialect).
+
+Spreadsheet safety: a text cell (id, label, spool, size...) that begins with ``=``, ``+``,
+``-``, ``@``, a tab or a carriage return would be run as a formula by a spreadsheet (CSV
+injection: ``=HYPERLINK(...)`` as a label), so it is written with a leading ``'`` (OWASP's
+advice; spreadsheets show the text, not the quote). Numbers are written as they are. The file is
+UTF-8 with a byte order mark, so that Excel shows non-ASCII labels (``Rohr-Ä1``) instead of
+reading the file in the Windows code page; read it with ``encoding="utf-8-sig"``.
 """
 
 from __future__ import annotations
@@ -20,7 +27,7 @@ from asbuilt.atomic import atomic_write
 from .data import ReportData
 from .takeoff import FOOT
 
-__all__ = ["COLUMNS", "csv_text", "write_csv"]
+__all__ = ["COLUMNS", "FORMULA_STARTS", "csv_text", "text_cell", "write_csv"]
 
 #: The CSV header, in order.
 COLUMNS = (
@@ -43,6 +50,17 @@ COLUMNS = (
 
 _DECIMALS = {"m": 3, "m2": 3, "m3": 4, "ea": 0}
 
+#: First characters that make a spreadsheet read a cell as a formula (OWASP, CSV injection).
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def text_cell(value: str | None) -> str:
+    """A text cell safe to open in a spreadsheet: ``""`` for None, a leading ``'`` when it
+    begins with one of :data:`FORMULA_STARTS`, else the text as it is."""
+    if not value:
+        return ""
+    return "'" + value if value.startswith(FORMULA_STARTS) else value
+
 
 def _number(value: float | None, decimals: int) -> str:
     if value is None:
@@ -58,28 +76,28 @@ def csv_text(data: ReportData) -> str:
     for row in data.takeoff.rows:
         writer.writerow(
             [
-                row.id,
-                row.type,
-                row.spool or "",
-                row.label or "",
-                row.nominal or "",
-                row.size or "",
-                row.schedule or "",
+                text_cell(row.id),
+                text_cell(row.type),
+                text_cell(row.spool),
+                text_cell(row.label),
+                text_cell(row.nominal),
+                text_cell(row.size),
+                text_cell(row.schedule),
                 _number(row.length, 3),
                 _number(None if row.length is None else row.length / FOOT, 3),
                 row.quantity_unit,
                 _number(row.quantity, _DECIMALS[row.quantity_unit]),
                 _number(row.weight, 2),
                 _number(row.area, 3),
-                " ".join(row.findings),
-                row.severity or "",
+                text_cell(" ".join(row.findings)),
+                text_cell(row.severity),
             ]
         )
     return buffer.getvalue()
 
 
 def write_csv(data: ReportData, path) -> None:
-    """Write the CSV take-off to ``path`` atomically."""
+    """Write the CSV take-off to ``path`` atomically (UTF-8 with a byte order mark)."""
     text = csv_text(data)
-    with atomic_write(path, "w", encoding="utf-8") as handle:
+    with atomic_write(path, "w", encoding="utf-8-sig") as handle:
         handle.write(text)

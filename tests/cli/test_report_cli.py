@@ -30,7 +30,7 @@ def test_three_reports_in_one_run(tmp_path, capsys):
     assert lines[1].startswith(f"wrote {outs[1]} (CSV report, ")
     assert lines[2].startswith(f"wrote {outs[2]} (JSON report, ")
     assert lines[3].startswith("15 components; findings: ")
-    with open(outs[1], newline="", encoding="utf-8") as handle:
+    with open(outs[1], newline="", encoding="utf-8-sig") as handle:
         rows = list(csv.DictReader(handle))
     document = json.loads(outs[2].read_text(encoding="utf-8"))
     assert [r["id"] for r in rows] == [c["id"] for c in document["components"]]
@@ -52,7 +52,7 @@ def test_options(tmp_path, capsys):
 def test_no_merge_counts_cylinders(tmp_path, capsys):
     out = tmp_path / "qa.csv"
     assert run(["report", PLANT, "--out", out, "--no-merge", "-q"], capsys)[0] == 0
-    with open(out, newline="", encoding="utf-8") as handle:
+    with open(out, newline="", encoding="utf-8-sig") as handle:
         types = {r["type"] for r in csv.DictReader(handle)}
     assert "pipe" not in types and "cylinder" in types
 

@@ -160,3 +160,48 @@ def test_shipped_schema_is_up_to_date():
 
     assert report_schema() == build_report_schema()
     assert main(["--check"]) == 0
+
+
+@pytest.mark.parametrize(
+    ("text", "cell"),
+    [
+        ('=HYPERLINK("http://x","C1")', '\'=HYPERLINK("http://x","C1")'),
+        ("+SUM(A1:A9)", "'+SUM(A1:A9)"),
+        ("-2+3", "'-2+3"),
+        ("@cmd", "'@cmd"),
+        ("\tTAB", "'\tTAB"),
+        ("\rCR", "'\rCR"),
+        ("column 1", "column 1"),
+        ("Rohr-Ä1 = main", "Rohr-Ä1 = main"),  # only a leading character matters
+    ],
+)
+def test_csv_text_cells_cannot_become_formulas(text, cell):
+    """OWASP CSV injection: a spreadsheet runs a cell starting = + - @ tab CR (audit D3)."""
+    import numpy as np
+
+    from asbuilt.model import Component, Model
+    from asbuilt.primitives import Cuboid
+
+    column = Component(
+        text, "cuboid", Cuboid([0, 0, 1.5], np.eye(3), [0.4, 0.4, 3.0]), label=text, spool=text
+    )
+    (row,) = rows_of(csv_text(report_data(Model(components=(column,)), generated=STAMP)))
+    assert row["id"] == row["label"] == row["spool"] == cell
+    assert row["quantity"] == "0.4800" and row["length_m"] == "3.000"  # numbers as they are
+    assert report_document(report_data(Model(components=(column,))))["components"][0]["id"] == text
+
+
+def test_csv_file_has_a_byte_order_mark_for_spreadsheets(tmp_path):
+    """Excel reads a CSV without a BOM in the Windows code page (Rohr-Ä1 -> Rohr-Ã„1)."""
+    from asbuilt.model import Component
+    from asbuilt.report import write_report
+
+    model = known_model()
+    column = model.components[3]
+    comps = model.components + (Component("Rohr-Ä1", column.type, column.geometry),)
+    path = write_report(model.replace(components=comps), tmp_path / "qa.csv")
+    raw = path.read_bytes()
+    assert raw.startswith(b"\xef\xbb\xbfid,type,")
+    assert "Rohr-Ä1".encode() in raw
+    with open(path, newline="", encoding="utf-8-sig") as handle:
+        assert list(csv.DictReader(handle))[-1]["id"] == "Rohr-Ä1"

@@ -22,7 +22,7 @@ from asbuilt.report import SUFFIXES, report_format_for, write_report, write_repo
 def test_format_by_suffix(tmp_path, name, start):
     path = write_report(known_model(), tmp_path / name)
     assert path == tmp_path / name
-    assert path.read_text(encoding="utf-8").startswith(start)
+    assert path.read_text(encoding="utf-8-sig").startswith(start)
 
 
 def test_registry_lists_the_formats():
