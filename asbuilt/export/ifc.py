@@ -368,12 +368,14 @@ class _Writer:
     def catalog(self):
         if not self._catalog_loaded:
             self._catalog_loaded = True
-            if self.model.catalog:
+            # A user catalog file (recorded by the model) wins over a shipped one of its name.
+            source = getattr(self.model, "catalog_file", None) or self.model.catalog
+            if source:
                 from asbuilt.catalog import load_catalog
                 from asbuilt.errors import CatalogError
 
                 try:
-                    self._catalog = load_catalog(self.model.catalog)
+                    self._catalog = load_catalog(source)
                 except CatalogError:
                     self._catalog = None
         return self._catalog

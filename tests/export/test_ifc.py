@@ -545,3 +545,23 @@ def test_importing_asbuilt_and_the_ifc_module_does_not_load_ifcopenshell():
         "assert 'cadquery' not in sys.modules, 'cadquery loaded'"
     )
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
+
+
+@needs_ifc
+def test_nominal_diameter_from_the_models_own_catalog_file(tmp_path):
+    """A user catalog recorded by the model wins over the shipped catalog of the same name."""
+    import ifcopenshell
+
+    lines = (ROOT / "catalogs" / "asme-b36.10m.csv").read_text(encoding="utf-8").splitlines()
+    edited = [
+        line.replace("4,100,", "4,101,", 1) if line.startswith("4,100,") else line for line in lines
+    ]
+    assert edited != lines
+    user = tmp_path / "mine.csv"
+    user.write_text("\n".join(edited) + "\n", encoding="utf-8")
+    zoo = zoo_model()
+    model = zoo.replace(components=zoo.components[:1], catalog_file=str(user))
+    export_model(model, tmp_path / "p.ifc")
+    document = ifcopenshell.open(str(tmp_path / "p.ifc"))
+    (pipe,) = document.by_type("IfcPipeSegment")
+    assert _psets(pipe)["Pset_PipeSegmentTypeCommon"]["NominalDiameter"] == pytest.approx(0.101)
