@@ -134,6 +134,32 @@ def _link(oid: str) -> str:
     return f'<a href="#{anchor(oid)}">{_e(oid)}</a>'
 
 
+def _weight(total: float | None, missing: int) -> str:
+    """A weight total (kg) that says how many pipes it leaves out; blank when none has one."""
+    if total is None:
+        return ""
+    if not missing:
+        return _num(total, 1)
+    pipes = "pipe" if missing == 1 else "pipes"
+    return f'{_num(total, 1)}<br><span class="muted">without {missing} {pipes}</span>'
+
+
+def _weight_note(t) -> str:
+    """Which pipes the weight leaves out for want of a wall (a sentence; "" when none)."""
+    if not t.pipes_without_weight or t.density is None:
+        return ""  # no density: the page already says there are no weights
+    pieces = sum(p.count for p in t.pipes)
+    which = (
+        "No pipe has a weight"
+        if t.pipe_weight is None
+        else f"{t.pipes_without_weight} of {pieces} pipes have no weight and are not in the total"
+    )
+    return (
+        f' <span id="weight-note">{which}: their wall thickness is not known (no schedule, '
+        "or the catalog lists no wall for it).</span>"
+    )
+
+
 def _scan_date(data: ReportData) -> str:
     if data.scan_date:
         return _e(data.scan_date)
@@ -229,7 +255,7 @@ def _takeoff(data: ReportData) -> str:
             + _td(str(sp.pipes), True)
             + _td(_num(sp.pipe_length), True)
             + _td(_num(sp.pipe_length / FOOT, 2), True)
-            + _td(_num(sp.pipe_weight, 1), True)
+            + _td(_weight(sp.pipe_weight, sp.pipes_without_weight), True)
             + "".join(_td(str(sp.fittings.get(kind, 0)), True) for kind in kinds)
             + _td(" ".join(_e(code) for code in sp.findings))
             + "</tr>"
@@ -278,7 +304,7 @@ def _takeoff(data: ReportData) -> str:
             + _td(_num(t.pipe_length), True)
             + _td(_num(t.pipe_length / FOOT, 2), True)
             + "<td></td>"
-            + _td(_num(t.pipe_weight, 1) if any(p.weight for p in t.pipes) else "", True)
+            + _td(_weight(t.pipe_weight, t.pipes_without_weight), True)
             + _td(_num(sum(p.area for p in t.pipes), 2), True)
             + "</tr>"
         )
@@ -304,7 +330,8 @@ def _takeoff(data: ReportData) -> str:
             out.append(
                 f'<p class="muted">Weights: plain-end pipe, density {t.density:.0f} kg/m³ '
                 f"({_e(t.material or 'given')}), w = &rho; &pi; (OD &minus; t) t "
-                "(ASME B36.10M). Lengths are straight pipe between fittings.</p>"
+                "(ASME B36.10M). Lengths are straight pipe between fittings."
+                f"{_weight_note(t)}</p>"
             )
         else:
             out.append(

@@ -75,6 +75,7 @@ def report_document(data: ReportData) -> dict:
                 "pipe_length": t.pipe_length,
                 "pipe_length_ft": t.pipe_length / FOOT,
                 "pipe_weight": t.pipe_weight,
+                "pipes_without_weight": t.pipes_without_weight,
                 "density": t.density,
                 "material": t.material,
                 "volumes": dict(t.volumes),

@@ -54,6 +54,7 @@ def build_report_schema() -> dict:
             "pipe_length": _NONNEG,
             "pipe_weight": _NUMBER_OR_NULL,
             "pipes": _COUNT,
+            "pipes_without_weight": _COUNT,
             "fittings": {"type": "object", "additionalProperties": _COUNT},
             "sizes": _IDS,
             "findings": _IDS,
@@ -168,7 +169,8 @@ def build_report_schema() -> dict:
         {
             "pipe_length": _NONNEG,
             "pipe_length_ft": _NONNEG,
-            "pipe_weight": _NONNEG,
+            "pipe_weight": {"anyOf": [_NONNEG, {"type": "null"}]},
+            "pipes_without_weight": _COUNT,
             "density": _NUMBER_OR_NULL,
             "material": _STRING_OR_NULL,
             "volumes": {"type": "object", "additionalProperties": _NUMBER},

@@ -187,9 +187,11 @@ class ComponentRow:
 @dataclass(frozen=True)
 class SpoolQuantity:
     """One spool (the unit piping progress is tracked in): straight ``pipe_length`` metres and
-    ``pipe_weight`` kg (None when no pipe of it has a weight), the number of ``pipes`` and of
-    each fitting type (``fittings``: type -> count), its ``sizes`` (display labels) and
-    ``findings`` (codes on its components, worst first)."""
+    ``pipe_weight`` kg (None when no pipe of it has a weight; the sum of those that have one
+    otherwise), the number of ``pipes``, how many of them have no weight
+    (``pipes_without_weight``: no wall or no density known), the number of each fitting type
+    (``fittings``: type -> count), its ``sizes`` (display labels) and ``findings`` (codes on its
+    components, worst first)."""
 
     id: str
     pipe_length: float
@@ -199,12 +201,14 @@ class SpoolQuantity:
     sizes: tuple[str, ...]
     findings: tuple[str, ...]
     components: tuple[str, ...]
+    pipes_without_weight: int = 0
 
 
 @dataclass(frozen=True)
 class TakeOff:
-    """The whole take-off. Totals: ``pipe_length`` metres, ``pipe_weight`` kg (of the lines
-    with a weight), ``volumes`` m3 and ``areas`` m2 by solid category, ``density`` kg/m3 used
+    """The whole take-off. Totals: ``pipe_length`` metres, ``pipe_weight`` kg (the sum over the
+    pipes that have a weight; None when none has one), ``pipes_without_weight`` (pipe pieces
+    left out of ``pipe_weight``: no wall or no density known), ``volumes`` m3 and ``areas`` m2 by solid category, ``density`` kg/m3 used
     (None: no weight) and ``material``; ``spools`` per spool in the model's order."""
 
     pipes: tuple[PipeLine, ...]
@@ -212,13 +216,14 @@ class TakeOff:
     solids: tuple[SolidQuantity, ...]
     rows: tuple[ComponentRow, ...]
     pipe_length: float
-    pipe_weight: float
+    pipe_weight: float | None
     volumes: Mapping[str, float] = field(default_factory=dict)
     areas: Mapping[str, float] = field(default_factory=dict)
     density: float | None = None
     material: str | None = None
     counts: Mapping[str, int] = field(default_factory=dict)
     spools: tuple[SpoolQuantity, ...] = ()
+    pipes_without_weight: int = 0
 
 
 # ----------------------------------------------------------------------------------------------
@@ -437,6 +442,7 @@ def _spools(model: Model, rows: list[ComponentRow]) -> tuple[SpoolQuantity, ...]
                 sizes=tuple(dict.fromkeys(r.size for r in pipes if r.size)),
                 findings=tuple(dict.fromkeys(code for _, code in codes)),
                 components=tuple(r.id for r in parts),
+                pipes_without_weight=len(pipes) - len(weights),
             )
         )
     return tuple(result)
@@ -581,7 +587,12 @@ def take_off(model: Model, *, density: float | None = None, catalog=None) -> Tak
         solids=tuple(solids),
         rows=tuple(rows),
         pipe_length=float(sum(p.length for p in pipes)),
-        pipe_weight=float(sum(p.weight for p in pipes if p.weight is not None)),
+        pipe_weight=(
+            float(sum(p.weight for p in pipes if p.weight is not None))
+            if any(p.weight is not None for p in pipes)
+            else None
+        ),
+        pipes_without_weight=sum(p.count for p in pipes if p.weight is None),
         volumes=volumes,
         areas=areas,
         density=density,

@@ -242,3 +242,47 @@ def test_spool_findings_and_unlisted_spools():
     (spool,) = take_off(model).spools
     assert spool.id == "SP-1" and spool.pipes == 2
     assert set(spool.findings) == {"AB900", "AB901", "AB902"}
+
+
+def _without_wall(model, ids):
+    """The model with the pipes ``ids`` of unknown schedule and wall (no weight)."""
+    import dataclasses
+
+    comps = tuple(
+        dataclasses.replace(c, schedule=None, geometry=dataclasses.replace(c.geometry, wall=0.0))
+        if c.id in ids
+        else c
+        for c in model.components
+    )
+    return model.replace(components=comps)
+
+
+def test_pipe_weight_total_says_which_pipes_it_leaves_out(known):
+    """Audit D7: a partial total says how many pipes it leaves out; none is null, not 0.0."""
+    from asbuilt.report import report_data
+    from asbuilt.report.json_report import report_document
+
+    # P2 has no wall: the total is P1's 1 m of NPS 4 STD, 16.08 kg (B36.10M: 16.07 kg/m)
+    partial = take_off(_without_wall(known_model(), {"P2"}))
+    assert partial.pipe_weight == pytest.approx(16.0755, abs=0.01)
+    assert partial.pipes_without_weight == 1
+    (spool,) = partial.spools
+    assert spool.pipe_weight == pytest.approx(16.0755, abs=0.01)
+    assert spool.pipes_without_weight == 1
+    none = report_data(_without_wall(known_model(), {"P1", "P2"}))
+    assert none.takeoff.pipe_weight is None and none.takeoff.pipes_without_weight == 2
+    totals = report_document(none)["takeoff"]["totals"]
+    assert totals["pipe_weight"] is None and totals["pipes_without_weight"] == 2
+    assert known.pipes_without_weight == 0
+
+
+def test_pipe_weight_total_in_the_page():
+    from asbuilt.report import report_data
+    from asbuilt.report.html import html_text
+
+    text = html_text(report_data(_without_wall(known_model(), {"P2"})))
+    total = text.split('<table class="pipes">', 1)[1].split('<tr class="total">', 1)[1]
+    assert '>16.1<br><span class="muted">without 1 pipe</span></td>' in total.split("</tr>")[0]
+    assert "1 of 2 pipes have no weight and are not in the total" in text
+    text = html_text(report_data(_without_wall(known_model(), {"P1", "P2"})))
+    assert "No pipe has a weight: their wall thickness is not known" in text
