@@ -69,7 +69,13 @@ def _norm2(dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
 
 
 def circle_starts(
-    points: np.ndarray, axes: list, keep: int, rng, samples: int = 24, keep_invalid: bool = False
+    points: np.ndarray,
+    axes: list,
+    keep: int,
+    rng,
+    samples: int = 24,
+    keep_invalid: bool = False,
+    cutoff: float | None = None,
 ):
     """Centre and radius for each candidate axis, robust to background shots.
 
@@ -90,6 +96,12 @@ def circle_starts(
     keep_invalid : bool
         Return a state for every axis (cost infinite where no circle was found) instead of
         dropping those.
+    cutoff : float, optional, metres
+        When given, circles compete by MSAC cost (Torr & Zisserman 2000: ``sum min(d^2,
+        cutoff^2)``) and are polished on the points within ``cutoff`` instead: the trimmed
+        cost keeps ``keep`` points, so when more than ``n - keep`` shots are background (whole
+        raster lines on the wall behind a pipe) it prefers a large circle through pipe and
+        wall shots alike.
 
     Returns
     -------
@@ -120,6 +132,8 @@ def circle_starts(
 
     def trimmed(distance):
         squared = distance * distance
+        if cutoff is not None:
+            return np.minimum(squared, cutoff * cutoff).sum(axis=1)
         return np.partition(squared, keep - 1, axis=1)[:, :keep].sum(axis=1)
 
     center, radius = kasa_batch(xy, np.ones((count, n)), design)
@@ -141,16 +155,22 @@ def circle_starts(
         sq -= tr[..., None]
         sq *= sq
     sq[~np.isfinite(sq)] = np.inf
-    tcost = np.partition(sq, keep - 1, axis=2)[:, :, :keep].sum(axis=2)  # (a, t)
+    if cutoff is not None:
+        tcost = np.minimum(sq, cutoff * cutoff).sum(axis=2)  # (a, t)
+    else:
+        tcost = np.partition(sq, keep - 1, axis=2)[:, :, :keep].sum(axis=2)  # (a, t)
     best = np.argmin(tcost, axis=1)
     better = tcost[rows, best] < np.where(np.isfinite(cost), cost, np.inf)
     center = np.where(better[:, None], np.stack([ux[rows, best], uy[rows, best]], 1), center)
     radius = np.where(better, tr[rows, best], radius)
     weights = np.empty((count, n))
     for _ in range(2):
-        closest = np.argpartition(distances(center, radius), keep - 1, axis=1)[:, :keep]
-        weights.fill(0.0)
-        weights[rows[:, None], closest] = 1.0
+        if cutoff is not None:
+            weights[:] = distances(center, radius) <= cutoff
+        else:
+            closest = np.argpartition(distances(center, radius), keep - 1, axis=1)[:, :keep]
+            weights.fill(0.0)
+            weights[rows[:, None], closest] = 1.0
         new_center, new_radius = kasa_batch(xy, weights, design)
         ok = np.isfinite(new_radius)
         center = np.where(ok[:, None], new_center, center)

@@ -422,7 +422,11 @@ def _pair_starts(points, normals, keep: int, count: int, samples: int = 48):
 
 
 def fit_cylinder(
-    points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES, viewpoint=None
+    points,
+    *,
+    sigma=None,
+    tolerances: Tolerances = DEFAULT_TOLERANCES,
+    viewpoint=None,
 ) -> FitResult:
     """Fit a bounded circular cylinder to points on its visible side.
 
@@ -525,10 +529,15 @@ def fit_cylinder(
         robust = _robust_fit(local, starts, costs, robust_from, polished, tolerances)
     except FitError:
         # Too many outliers to the robust choice; with the beams to judge, the other starts
-        # may still settle on the pipe.
-        if view is None or sigma is None or not starts:
+        # may still settle on the pipe, and without them the MSAC circles may.
+        if sigma is None or not starts:
             raise
-        robust = None
+        if view is None:
+            robust = _msac_rescue(None, local, axes, None, sigma, tolerances, keep, rng)
+            if robust is None:
+                raise
+        else:
+            robust = None
     blind, ignored_view = robust, False
 
     def reconsider(robust, excess):
@@ -565,13 +574,40 @@ def fit_cylinder(
         and starts
         and (robust is None or _doubtful(robust, local, view, len(local), sigma, tolerances))
     ):
-        robust = reconsider(
-            robust, lambda states, x: cylinder_beam_excess(*_stacked(states), x, view)
-        )
-        if blind is not None and _unseen(robust, local, view):
+        try:
+            robust = reconsider(
+                robust, lambda states, x: cylinder_beam_excess(*_stacked(states), x, view)
+            )
+        except FitError:
+            # No seed settled on the pipe: the MSAC rescue below is the last chance.
+            if sigma is None or robust is not None:
+                raise
+            rescued = _msac_rescue(None, local, axes, view, sigma, tolerances, keep, rng)
+            if rescued is None:
+                raise
+            robust = rescued
+        rescued = None
+        if (robust is None or _unseen(robust, local, view)) and sigma is not None:
+            rescued = _msac_rescue(robust, local, axes, view, sigma, tolerances, keep, rng)
+        if rescued is not None:
+            robust = rescued
+        elif blind is not None and _unseen(robust, local, view):
             # Even the best fit hides a third of the shots behind itself: the shots were not
             # taken from this viewpoint.
             robust, ignored_view = blind, True
+    if (
+        sigma is not None
+        and robust is not None
+        and everything is None
+        and np.mean(~robust.inliers) >= RESCUE_REJECTED
+    ):
+        # A quarter of the shots rejected: as much background as the trimmed cost can take,
+        # so the circles chosen by MSAC get their say (every shot decides).
+        rescued = _msac_rescue(
+            robust, local, axes, None if ignored_view else view, sigma, tolerances, keep, rng
+        )
+        if rescued is not None:
+            robust = rescued
     if everything is not None:
         local = everything
         robust = robust_geometric_fit(
@@ -673,6 +709,65 @@ FAR_SIDE_DEG = 95.0
 #: Fraction of the best fit's inliers seen through the pipe beyond which the viewpoint is taken
 #: as wrong: from a wrong viewpoint about half of the shots of the true pipe are.
 UNSEEN_FRACTION = 1.0 / 3.0
+
+
+#: Circles (best by MSAC cost, one per candidate axis) settled by :func:`_msac_rescue`, and
+#: the random triples it tries per axis: MSAC needs one triple of pipe shots from three raster
+#: columns, 1 in 6 triples when a third of the shots are background.
+RESCUE_STARTS = 4
+RESCUE_SAMPLES = 96
+#: Share of rejected shots from which a fit is compared with the MSAC circles' fits.
+RESCUE_REJECTED = 0.2
+#: Candidate axes within this many degrees of plumb or level also get their plumb/level twin.
+SNAP_DEG = 5.0
+
+
+def _msac_rescue(robust, points, axes, view, sigma: float, tolerances, keep, rng):
+    """A fit from circles chosen by MSAC cost (``circle_starts(cutoff=...)``), for when the
+    beams reject the robust choice (it hides a third of the shots behind the pipe, or no start
+    settled) or it rejected ``RESCUE_REJECTED`` of the shots: whole raster lines on the wall behind a pipe are more background than the
+    trimmed cost allows, and a large circle through pipe and wall shots wins it. Each of the
+    ``RESCUE_STARTS`` best circles is settled by least squares on its inliers; the one with
+    the lowest MSAC cost (every shot, ``outlier_cutoff_sigma * sigma``) that hides no third of
+    the shots from ``view`` (when known) is returned if it beats ``robust``, else None."""
+    cutoff = tolerances.outlier_cutoff_sigma * sigma
+
+    def cost(fit):
+        return float(np.minimum(fit.residuals**2, cutoff**2).sum())
+
+    # Background shots tilt every axis estimate by a degree or two, which smears a 3 m pipe's
+    # projection by centimetres; plant pipes are mostly plumb or level, so each candidate
+    # within SNAP_DEG of either gets its plumb or level twin (least squares then settles the
+    # axis freely).
+    snapped = []
+    for axis in axes:
+        if abs(axis[2]) >= np.cos(np.radians(SNAP_DEG)):
+            snapped.append(np.array([0.0, 0.0, 1.0]))
+        elif abs(axis[2]) <= np.sin(np.radians(SNAP_DEG)):
+            level = np.array([axis[0], axis[1], 0.0])
+            snapped.append(level / np.linalg.norm(level))
+    starts, costs = circle_starts(
+        points, list(axes) + snapped, keep, rng, samples=RESCUE_SAMPLES, cutoff=cutoff
+    )
+    best, best_cost = None, np.inf if robust is None else cost(robust)
+    for k in np.argsort(costs)[:RESCUE_STARTS]:
+        try:
+            fit = robust_geometric_fit(
+                points,
+                [starts[k]],
+                _MODEL,
+                kind="cylinder",
+                sigma=sigma,
+                tolerances=tolerances,
+                start_iterations=0,
+                always_refine=1,
+                max_starts=1,
+            )
+        except FitError:
+            continue
+        if cost(fit) < best_cost and (view is None or not _unseen(fit, points, view)):
+            best, best_cost = fit, cost(fit)
+    return best
 
 
 def _unseen(robust: RobustFit, points, view) -> bool:

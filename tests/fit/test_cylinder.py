@@ -353,11 +353,15 @@ def test_the_viewpoint_rules_out_thin_pipes_seen_through_themselves(scan):
     assert abs(got.radius - scan["radius"]) <= 4.5 * seen.stderr["radius"] + 1e-3
     assert angle_deg(got.axis, scan["axis"]) < 2.0
     blind = fit_cylinder(points, sigma=sigma).primitive
-    assert abs(blind.radius - scan["radius"]) > abs(got.radius - scan["radius"])
-    assert (
-        cylinder_beam_excess(blind.axis, blind.center, blind.radius, points, viewpoint).max()
-        > 3 * sigma
-    )
+    # Without the viewpoint the fit is never better; where it differs, it is one that hides
+    # shots behind itself. (Since the MSAC circles are compared with fits that reject a fifth
+    # of the shots, some blind fits find the pipe too.)
+    assert abs(blind.radius - scan["radius"]) >= abs(got.radius - scan["radius"]) - 1e-6
+    if abs(blind.radius - got.radius) > 1e-4:
+        assert (
+            cylinder_beam_excess(blind.axis, blind.center, blind.radius, points, viewpoint).max()
+            > 3 * sigma
+        )
 
 
 def test_a_viewpoint_does_not_change_a_clear_fit(rng):
@@ -437,3 +441,25 @@ def test_a_dense_cloud_is_fitted_from_a_subsample_then_on_every_point():
     assert result.primitive.radius == pytest.approx(radius, abs=0.0005)
     assert abs(result.primitive.axis[0]) > np.cos(np.radians(0.2))
     assert result.inliers.sum() > 0.99 * n  # refined on every point, not the subsample
+
+
+_WALL_LINES = json.loads((Path(__file__).parent / "background_lines.json").read_text())
+
+
+@pytest.mark.parametrize("scan", _WALL_LINES["scans"], ids=lambda s: s["name"])
+@pytest.mark.parametrize("with_viewpoint", [True, False])
+def test_whole_raster_lines_on_the_wall_behind_do_not_make_a_bigger_pipe(scan, with_viewpoint):
+    """Scans from an independent ray caster (audit): a raster a little wider than the pipe, two
+    of its lines or columns on the wall behind (10 of 35 shots). The trimmed-cost starts chose
+    a pipe three to six times too large through pipe and wall shots (NPS 4 fitted at 167 mm,
+    NPS 6 at 472 mm, with +-1-2 mm), or no fit at all; the MSAC circles find the pipe."""
+    points = np.array(scan["points_mm"]) / 1000.0
+    viewpoint = np.array(scan["station_mm"]) / 1000.0 if with_viewpoint else None
+    result = fit_cylinder(points, sigma=scan["range_sigma_mm"] / 1000.0, viewpoint=viewpoint)
+    got = result.primitive
+    assert abs(got.radius * 1000 - scan["radius_mm"]) < 5.0
+    assert angle_deg(got.axis, scan["axis"]) < 1.0
+    offset = np.array(scan["axis_point_mm"]) / 1000.0 - got.center
+    across = offset - (offset @ got.axis) * got.axis
+    assert np.linalg.norm(across) < 0.005
+    assert result.n_points - result.n_inliers >= 10  # the wall shots are reported
