@@ -100,7 +100,8 @@ def register(subparsers) -> argparse.ArgumentParser:
         metavar="FILE",
         default=None,
         help="a glTF/GLB file of the same model (from 'asbuilt model --out'): the HTML offers "
-        "an optional interactive 3-D view of it (needs network access when opened)",
+        "an optional interactive 3-D view of it (the file is embedded up to 10 MB; the viewer "
+        "needs network access when opened)",
     )
     parser.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
     parser.set_defaults(handler=run)
@@ -183,8 +184,14 @@ def run(args: argparse.Namespace) -> int:
     for path in outputs:
         report_format_for(path)  # an unknown suffix fails before any work
         check_target(path, "--out")
-    if args.gltf is not None and Path(args.gltf).suffix.lower() not in (".glb", ".gltf"):
-        raise ExportError("--gltf must name a .glb or .gltf file", source=str(args.gltf))
+    if args.gltf is not None:
+        if Path(args.gltf).suffix.lower() not in (".glb", ".gltf"):
+            raise ExportError("--gltf must name a .glb or .gltf file", source=str(args.gltf))
+        if not Path(args.gltf).is_file():
+            raise ExportError(
+                "--gltf file not found; write it first (asbuilt model SCAN --out model.glb)",
+                source=str(args.gltf),
+            )
 
     err = Console(file=sys.stderr)
     with stage_progress(err, quiet=args.quiet) as bar:

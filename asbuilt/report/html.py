@@ -8,14 +8,18 @@ quality of every fitted object with a residual histogram, and the findings with 
 suggestions. Ids link both ways: a label in a picture or a finding's object jumps to the
 component's row; a row's finding codes jump to the finding.
 
-An optional interactive 3-D view (``gltf=`` a glTF/GLB file of the same model, linked by a
-relative path) is loaded only when the reader presses its button, from the model-viewer web
-component on a CDN; nothing else on the page uses the network.
+An optional interactive 3-D view (``gltf=`` a glTF/GLB file of the same model: embedded in the
+page as a ``data:`` URI up to :data:`GLTF_EMBED_LIMIT` bytes, so that it works from disk, else
+linked by a relative path, which needs the page served over HTTP) is loaded only when the reader
+presses its button, from the model-viewer web component on a CDN; nothing else on the page uses
+the network.
 """
 
 from __future__ import annotations
 
+import base64
 import html as _html
+import json
 import os
 from collections.abc import Iterable
 from pathlib import Path
@@ -23,15 +27,21 @@ from pathlib import Path
 import numpy as np
 
 from asbuilt.atomic import atomic_write
+from asbuilt.errors import ExportError
 
 from .data import ReportData
 from .figures import VIEWS, anchor, histogram_svg, render_view
 from .takeoff import FOOT
 
-__all__ = ["html_text", "write_html", "MODEL_VIEWER_URL"]
+__all__ = ["html_text", "write_html", "gltf_source", "MODEL_VIEWER_URL", "GLTF_EMBED_LIMIT"]
 
 #: Where the optional 3-D viewer's script comes from (only fetched on the reader's request).
 MODEL_VIEWER_URL = "https://ajax.googleapis.com/ajax/libs/model-viewer/3.5.0/model-viewer.min.js"
+
+#: Largest glTF/GLB file (bytes) embedded in the page for the 3-D view. Base64 makes it a third
+#: larger (10 MB -> 13.3 MB of page), still under the 20-25 MB attachment limit of common mail
+#: services; the 60-component plant sample's GLB is about 100 kB. Larger files are linked.
+GLTF_EMBED_LIMIT = 10_000_000
 
 _CSS = """
 :root { --err:#d62728; --warn:#ff7f0e; --info:#1f77b4; --ok:#2ca02c; --line:#ddd; }
@@ -605,10 +615,22 @@ def _findings(data: ReportData) -> str:
 def _viewer(gltf: str | None) -> str:
     if not gltf:
         return ""
+    if gltf.startswith("data:"):
+        where = (
+            "The model is embedded in this page, so the view works from a file on disk or an "
+            "e-mail attachment too"
+        )
+    else:
+        where = (
+            f'The model is linked: <a href="{_e(gltf)}">{_e(gltf)}</a>. A page opened from '
+            "disk (file://) may not read another file, so the view needs the page and the model "
+            "served over HTTP (for example <code>python -m http.server</code> in their folder)"
+        )
     return (
         '<section id="viewer3d"><h2>Interactive 3-D view</h2><div class="viewer">'
-        f'<p>The model <a href="{_e(gltf)}">{_e(gltf)}</a> can be viewed here in 3-D; this '
-        "needs network access (the viewer is loaded from the web) and is optional.</p>"
+        f"<p>{where}. The viewer itself is loaded from the web when the button is pressed "
+        "(network access needed); the view is optional and the rest of this report does not "
+        "need it.</p>"
         f'<button id="load-3d" type="button" data-src="{_e(MODEL_VIEWER_URL)}" '
         f'data-model="{_e(gltf)}">Load the 3-D viewer</button> '
         '<span id="viewer-status" class="muted"></span><div id="viewer-slot"></div>'
@@ -662,6 +684,61 @@ def html_text(
     )
 
 
+def _self_contained_gltf(content: bytes) -> bool:
+    """True when a ``.gltf`` (JSON) file refers to no other file (buffers and images are data
+    URIs), so that it can be embedded on its own."""
+    try:
+        document = json.loads(content.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError):
+        return False
+    if not isinstance(document, dict):
+        return False
+    for key in ("buffers", "images"):
+        for entry in document.get(key) or ():
+            uri = entry.get("uri") if isinstance(entry, dict) else None
+            if uri is not None and not str(uri).startswith("data:"):
+                return False
+    return True
+
+
+def gltf_source(gltf, report_path) -> str:
+    """What the HTML's 3-D view loads: the glTF file embedded as a ``data:`` URI when it is at
+    most :data:`GLTF_EMBED_LIMIT` bytes (a ``.glb``, or a ``.gltf`` that refers to no other
+    file), else its path relative to the report. ``http(s):`` and ``data:`` URLs are kept.
+
+    Raises
+    ------
+    ExportError
+        The file does not exist or cannot be read.
+    """
+    text = str(gltf)
+    if text.startswith(("http://", "https://", "data:")):
+        return text
+    target = Path(gltf)
+    try:
+        size = target.stat().st_size
+        if not target.is_file():
+            raise FileNotFoundError
+    except OSError:
+        raise ExportError(
+            "glTF file for the 3-D view not found; give a .glb or .gltf file that exists "
+            "(e.g. written by 'asbuilt model --out model.glb')",
+            source=text,
+        ) from None
+    if size <= GLTF_EMBED_LIMIT:
+        try:
+            content = target.read_bytes()
+        except OSError as exc:
+            raise ExportError(f"cannot read the glTF file ({exc.strerror})", source=text) from None
+        suffix = target.suffix.lower()
+        if suffix == ".glb":
+            return "data:model/gltf-binary;base64," + base64.b64encode(content).decode("ascii")
+        if suffix == ".gltf" and _self_contained_gltf(content):
+            return "data:model/gltf+json;base64," + base64.b64encode(content).decode("ascii")
+    base = Path(report_path).resolve().parent
+    return Path(os.path.relpath(target.resolve(), base)).as_posix()
+
+
 def write_html(
     data: ReportData,
     path,
@@ -672,12 +749,11 @@ def write_html(
 ) -> None:
     """Write the HTML report to ``path`` atomically; see :func:`html_text` for the options.
 
-    ``gltf`` may be a path: it is linked relative to the report's directory.
+    ``gltf`` may be a path: the file is embedded in the page up to :data:`GLTF_EMBED_LIMIT`
+    bytes, else linked relative to the report's directory (see :func:`gltf_source`).
     """
-    if gltf is not None and not str(gltf).startswith(("http://", "https://", "data:")):
-        target = Path(gltf)
-        base = Path(path).resolve().parent
-        gltf = Path(os.path.relpath(target.resolve(), base)).as_posix()
+    if gltf is not None:
+        gltf = gltf_source(gltf, path)
     text = html_text(data, figure_format=figure_format, label_limit=label_limit, gltf=gltf)
     with atomic_write(path, "w", encoding="utf-8") as handle:
         handle.write(text)

@@ -63,6 +63,7 @@ def test_no_merge_counts_cylinders(tmp_path, capsys):
         (["--out", "{tmp}/qa.pdf"], "unknown report format '.pdf'"),
         (["--out", "{tmp}/nowhere/qa.html"], "directory does not exist"),
         (["--out", "{tmp}/qa.html", "--gltf", "{tmp}/model.step"], "--gltf must name"),
+        (["--out", "{tmp}/qa.html", "--gltf", "{tmp}/none.glb"], "none.glb: --gltf file not found"),
     ],
 )
 def test_bad_outputs_exit_2_with_one_line(tmp_path, capsys, extra, needle):

@@ -65,6 +65,18 @@ def known_model(findings=()) -> Model:
     )
 
 
+def tiny_glb(path: Path) -> Path:
+    """Write a minimal valid GLB (glTF 2.0 binary: 12-byte header and one JSON chunk padded with
+    spaces to 4 bytes, as the glTF 2.0 specification's "GLB File Format" section lays out)."""
+    import struct
+
+    content = json.dumps({"asset": {"version": "2.0", "generator": "asbuilt tests"}}).encode()
+    content += b" " * (-len(content) % 4)
+    chunk = struct.pack("<II", len(content), 0x4E4F534A) + content  # "JSON"
+    path.write_bytes(struct.pack("<III", 0x46546C67, 2, 12 + len(chunk)) + chunk)  # "glTF"
+    return path
+
+
 def many_findings(model: Model, per_object: int = 3) -> tuple[Finding, ...]:
     """Several findings of every severity on every component (for the 'many findings' cases)."""
     severities = ("error", "warning", "info")

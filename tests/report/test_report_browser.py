@@ -8,7 +8,7 @@ Chromium fails instead (see the ``browser`` fixture in conftest.py).
 import datetime as dt
 
 import pytest
-from report_helpers import known_model, many_findings
+from report_helpers import known_model, many_findings, tiny_glb
 
 from asbuilt.report import write_report
 
@@ -33,7 +33,7 @@ def test_the_console_check_catches_errors(browser, tmp_path):
 @pytest.fixture(scope="module")
 def plant_page(browser, plant_model, tmp_path_factory):
     path = tmp_path_factory.mktemp("browser") / "plant.html"
-    write_report(plant_model, path, generated=STAMP, gltf=path.with_suffix(".glb"))
+    write_report(plant_model, path, generated=STAMP, gltf=tiny_glb(path.with_suffix(".glb")))
     page = browser.open(path.as_uri(), width=1280, height=2000)
     page.screenshot(path.with_suffix(".png"))  # to look at when a test fails
     return page
@@ -107,7 +107,7 @@ def test_3d_view_button_fails_gracefully_or_loads(browser, plant_model, tmp_path
     import time
 
     path = tmp_path / "plant.html"
-    write_report(plant_model, path, generated=STAMP, gltf=tmp_path / "plant.glb")
+    write_report(plant_model, path, generated=STAMP, gltf=tiny_glb(tmp_path / "plant.glb"))
     plant_page = browser.open(path.as_uri())  # a page of its own: the click changes it
     assert plant_page.problems() == []
     plant_page.evaluate("document.getElementById('load-3d').click()")
@@ -129,3 +129,36 @@ def test_3d_view_button_fails_gracefully_or_loads(browser, plant_model, tmp_path
     assert exceptions == []
     # the rest of the page is untouched
     assert plant_page.evaluate("document.querySelectorAll('#pictures figure > svg').length") == 2
+
+
+def _fetch_model(page) -> str:
+    """Fetch the 3-D view's model as the viewer would; "bytes N" or "failed ..."."""
+    import time
+
+    page.evaluate(
+        "window.got = null; fetch(document.getElementById('load-3d').dataset.model)"
+        ".then(r => r.arrayBuffer()).then(b => { window.got = 'bytes ' + b.byteLength; })"
+        ".catch(e => { window.got = 'failed ' + e; })"
+    )
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        got = page.evaluate("window.got")
+        if got is not None:
+            return got
+        time.sleep(0.1)
+    return "timed out"
+
+
+def test_3d_model_is_readable_from_a_page_opened_from_disk(browser, tmp_path, monkeypatch):
+    """The embedded model loads in a file:// page; a linked one does not (audit D5: browsers
+    refuse a file:// page's fetch of another file, so the page says it needs HTTP)."""
+    import asbuilt.report.html as html_module
+
+    glb = tiny_glb(tmp_path / "plant.glb")
+    embedded = tmp_path / "embedded.html"
+    write_report(known_model(), embedded, generated=STAMP, gltf=glb)
+    assert _fetch_model(browser.open(embedded.as_uri())) == f"bytes {glb.stat().st_size}"
+    monkeypatch.setattr(html_module, "GLTF_EMBED_LIMIT", 0)
+    linked = tmp_path / "linked.html"
+    write_report(known_model(), linked, generated=STAMP, gltf=glb)
+    assert _fetch_model(browser.open(linked.as_uri())).startswith("failed")

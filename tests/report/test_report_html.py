@@ -4,10 +4,10 @@ import datetime as dt
 import re
 
 import pytest
-from report_helpers import check_html, known_model, many_findings
+from report_helpers import check_html, known_model, many_findings, tiny_glb
 
 from asbuilt.report import report_data
-from asbuilt.report.html import MODEL_VIEWER_URL, html_text, write_html
+from asbuilt.report.html import MODEL_VIEWER_URL, gltf_source, html_text, write_html
 
 STAMP = dt.datetime(2026, 11, 21, 7, 0, tzinfo=dt.timezone.utc)
 
@@ -115,15 +115,54 @@ def test_png_figures(plant_model):
     assert text.count('<img src="data:image/png;base64,') == 2
 
 
-def test_optional_3d_view_loads_only_on_request(plant_model, tmp_path):
-    glb = tmp_path / "models" / "plant.glb"
+def test_optional_3d_view_embeds_the_model_and_loads_only_on_request(tmp_path):
+    """The GLB is in the page (a file:// page may not fetch another file, audit D5)."""
+    import base64
+
+    glb = tiny_glb(tmp_path / "plant.glb")
     target = tmp_path / "qa.html"
-    write_html(report_data(plant_model, generated=STAMP), target, gltf=glb)
+    write_html(report_data(known_model(), generated=STAMP), target, gltf=glb)
+    text = target.read_text(encoding="utf-8")
+    check_html(text)
+    (uri,) = re.findall(r'data-model="data:model/gltf-binary;base64,([^"]+)"', text)
+    assert base64.b64decode(uri) == glb.read_bytes()
+    assert "embedded in this page" in text
+    assert f'data-src="{MODEL_VIEWER_URL}"' in text
+    assert "<script src=" not in text  # nothing loads until the button is pressed
+
+
+def test_a_self_contained_gltf_is_embedded_and_one_with_files_is_linked(tmp_path):
+    import json
+
+    alone = tmp_path / "alone.gltf"
+    alone.write_text(json.dumps({"asset": {"version": "2.0"}, "buffers": []}), encoding="utf-8")
+    linked = tmp_path / "linked.gltf"
+    linked.write_text(json.dumps({"asset": {"version": "2.0"}, "buffers": [{"uri": "b.bin"}]}))
+    assert gltf_source(alone, tmp_path / "qa.html").startswith("data:model/gltf+json;base64,")
+    assert gltf_source(linked, tmp_path / "qa.html") == "linked.gltf"
+
+
+def test_a_large_model_is_linked_and_the_page_says_it_needs_http(tmp_path, monkeypatch):
+    import asbuilt.report.html as html_module
+
+    (tmp_path / "models").mkdir()
+    glb = tiny_glb(tmp_path / "models" / "plant.glb")
+    monkeypatch.setattr(html_module, "GLTF_EMBED_LIMIT", glb.stat().st_size - 1)
+    target = tmp_path / "qa.html"
+    write_html(report_data(known_model(), generated=STAMP), target, gltf=glb)
     text = target.read_text(encoding="utf-8")
     check_html(text)
     assert 'data-model="models/plant.glb"' in text  # relative to the report
-    assert f'data-src="{MODEL_VIEWER_URL}"' in text
-    assert "<script src=" not in text  # nothing loads until the button is pressed
+    assert "served over HTTP" in text
+
+
+def test_a_missing_gltf_is_an_error_and_nothing_is_written(tmp_path):
+    from asbuilt.errors import ExportError
+    from asbuilt.report import write_reports
+
+    with pytest.raises(ExportError, match="glTF file for the 3-D view not found"):
+        write_reports(known_model(), [tmp_path / "qa.html"], gltf=tmp_path / "none.glb")
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_ids_with_unusual_characters_are_safe():
