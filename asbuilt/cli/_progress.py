@@ -15,10 +15,11 @@ def stage_progress(console, *, quiet: bool = False):
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
     return Progress(
-        TextColumn("{task.fields[stage]:<8}"),
+        TextColumn("{task.fields[stage]:<8}", markup=False),
         BarColumn(),
         MofNCompleteColumn(),
-        TextColumn("{task.description}"),
+        # The description is an object id: shown as written ("P[1]" is not rich markup).
+        TextColumn("{task.description}", markup=False),
         console=console,
         transient=True,
         disable=quiet or not console.is_terminal,

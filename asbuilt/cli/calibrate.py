@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     )
     save_calibration(result.calibration, args.out, estimate=result.summary())
 
-    out = Console()
+    out = Console(markup=False)
     table = Table(title=f"calibration from {result.n_shots} shots at {len(shots)} targets")
     for col in ("parameter", "initial", "estimate", "stderr"):
         table.add_column(col, justify="left" if col == "parameter" else "right")

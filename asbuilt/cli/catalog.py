@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.catalog import FITTING_COLUMNS, catalog_names, load_catalog
 
     action = getattr(args, "action", None)
-    console = Console(file=sys.stdout, width=160)
+    console = Console(file=sys.stdout, width=160, markup=False)
     if action is None:
         print("usage: asbuilt catalog {list,show NAME}", file=sys.stderr)
         return 2

@@ -144,7 +144,7 @@ def _list_rules(config) -> None:
             "yes" if config.is_active(r.slug) else "no",
             r.source,
         )
-    Console(file=sys.stdout, soft_wrap=False, width=160).print(table)
+    Console(file=sys.stdout, soft_wrap=False, width=160, markup=False).print(table)
 
 
 def _plural(n: int, word: str) -> str:

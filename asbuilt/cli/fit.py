@@ -20,7 +20,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "fit",
         help="fit a primitive to every object of a scan and show the dimensions",
-        description="Fit a cylinder, cuboid, sphere, plane or hull to every object of an "
+        description="Fit a cylinder, cuboid, sphere, plane or hull (or, for kind auto, the likeliest of "
+        "them) to every object of an "
         "asbuilt-scan file (docs/scan-format.md) and show the result.",
         epilog="Example: asbuilt fit samples/spool.json --json --units mm",
     )
@@ -63,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     if args.output is not None:
         check_target(args.output, "--output")  # a directory or none fails before any work
     scan = load_scan(args.scan)
-    err = Console(file=sys.stderr)
+    err = Console(file=sys.stderr, markup=False)
     with stage_progress(err) as bar:
         task = bar.add_task("", total=len(scan.objects), stage="fitting")
         report = fit(
@@ -89,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
         table.add_column(column, no_wrap=column in ("id", "kind", "inliers"))
     for row in fit_table_rows(report, units):
         table.add_row(*row)
-    out = Console(file=sys.stdout, highlight=False)
+    out = Console(file=sys.stdout, highlight=False, markup=False)
     if not out.is_terminal and "COLUMNS" not in os.environ:
         out.width = 160  # piped to a file or pager: room for one line per object
     out.print(table)

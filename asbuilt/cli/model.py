@@ -137,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
         check_target(report_path, "--report")
 
     scan = load_scan(args.scan)
-    err = Console(file=sys.stderr)
+    err = Console(file=sys.stderr, markup=False)
     with stage_progress(err, quiet=args.quiet) as bar:
         task = bar.add_task("", total=len(scan.objects), stage="fitting")
         model = build_model(
@@ -180,7 +180,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.quiet:
         return 0
-    out = Console(file=sys.stdout, highlight=False, soft_wrap=True)
+    out = Console(file=sys.stdout, highlight=False, soft_wrap=True, markup=False)
     for result in results:
         out.print(
             f"wrote {result.path} ({result.name}, {_size(result.size)}, "

@@ -263,6 +263,7 @@ def _interactive_targets(ptu, lrf, session):
 def run(args: argparse.Namespace) -> int:
     """Open the devices, run the session, print a summary; see the module docstring."""
     from rich.console import Console
+    from rich.markup import escape
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
     from rich.table import Table
 
@@ -304,7 +305,7 @@ def run(args: argparse.Namespace) -> int:
     lrf = None
     session = None
     progress = Progress(
-        TextColumn("{task.description}"),
+        TextColumn("{task.description}", markup=False),
         BarColumn(),
         MofNCompleteColumn(),
         TextColumn("skipped {task.fields[skipped]}"),
@@ -327,7 +328,9 @@ def run(args: argparse.Namespace) -> int:
             done = progress.tasks[tasks[object_id]].completed
             progress.update(tasks[object_id], total=done)
         if result is None:
-            err.print(f"[red]{object_id}: {session.failed.get(object_id, 'failed')}[/]")
+            err.print(
+                f"[red]{escape(f'{object_id}: ' + session.failed.get(object_id, 'failed'))}[/]"
+            )
 
     try:
         lrf = open_range_finder(args.lrf, args.lrf_protocol, timeout=args.timeout, **lrf_options)
@@ -347,7 +350,7 @@ def run(args: argparse.Namespace) -> int:
         )
         with progress:
             if session.pending is not None:
-                err.print(f"resuming {session.pending.id} from the journal")
+                err.print(f"resuming {escape(session.pending.id)} from the journal")
                 finish(session.pending.id, session.scan(session.pending))
             if plan is not None:
                 targets = plan.targets
@@ -359,7 +362,8 @@ def run(args: argparse.Namespace) -> int:
                 finish(target.id, session.scan(target))
     except KeyboardInterrupt:
         err.print(
-            f"stopped: every shot is in {session.journal_path if session else 'the journal'};"
+            f"stopped: every shot is in "
+            f"{escape(str(session.journal_path)) if session else 'the journal'};"
             " continue with --resume"
         )
         return 130
@@ -377,7 +381,7 @@ def run(args: argparse.Namespace) -> int:
             lrf.close()
         ptu.close()
 
-    table = Table(title=f"scan {args.out}")
+    table = Table(title=f"scan {escape(str(args.out))}")
     for col in ("id", "kind", "points", "shots", "skipped", "background"):
         table.add_column(col, justify="left" if col in ("id", "kind") else "right")
     for result in session.objects.values():
@@ -386,7 +390,7 @@ def run(args: argparse.Namespace) -> int:
             1 for s, on in zip(result.shots, result.on_object) if s.range is not None and not on
         )
         table.add_row(
-            result.target.id,
+            escape(result.target.id),
             result.target.kind,
             str(n),
             str(len(result.shots)),
@@ -395,5 +399,5 @@ def run(args: argparse.Namespace) -> int:
         )
     err.print(table)
     for oid, reason in session.failed.items():
-        err.print(f"[red]{oid}: not in the scan: {reason}[/]")
+        err.print(f"[red]{escape(f'{oid}: not in the scan: {reason}')}[/]")
     return 1 if session.failed else 0

@@ -513,6 +513,8 @@ def _triples(raw, where: str, item: str, form: str, ctx: _Context) -> np.ndarray
         clean = bool(np.isfinite(array).all())
     if not clean:
         _locate_bad_triple(raw, where, item, form, ctx)
+        # Every entry is a finite number, yet numpy kept objects: integers beyond 64 bits.
+        array = np.array([[float(c) for c in row] for row in raw], dtype=np.float64)
     return np.array(array, dtype=np.float64)
 
 
@@ -540,9 +542,6 @@ def _locate_bad_triple(raw: list, where: str, item: str, form: str, ctx: _Contex
                 raise ctx.error(here, "coordinate is NaN")
             if math.isinf(number):
                 raise ctx.error(here, "coordinate is infinite")
-    raise AssertionError(
-        f"{where}: numpy rejected the array but no entry is bad"
-    )  # pragma: no cover
 
 
 def _check_spread(points: np.ndarray, kind: str, where: str, ctx: _Context) -> None:
@@ -565,6 +564,19 @@ def _check_spread(points: np.ndarray, kind: str, where: str, ctx: _Context) -> N
             "surface (re-aim and rescan)",
         )
     if singular[1] <= COLLINEAR_RTOL * singular[0]:
+        # One point far from all the others (a survey-frame point pasted in, a unit slip) makes
+        # any set look collinear: name it rather than blame the aim.
+        middle = np.median(points, axis=0)
+        distance = np.linalg.norm(points - middle, axis=1)
+        far = int(np.argmax(distance))
+        rest = np.delete(points, far, axis=0)
+        rest_singular = np.linalg.svd(rest - rest.mean(axis=0), compute_uv=False)
+        if rest_singular[1] > COLLINEAR_RTOL * rest_singular[0]:
+            raise ctx.error(
+                f"{where}[{far}]",
+                f"this point lies {distance[far]:.4g} m from the others' median, which makes "
+                "them look collinear; check its coordinates (units, a point from another frame)",
+            )
         raise ctx.error(
             where,
             f"the points are collinear; {_article(kind)} needs points spread across its surface "

@@ -282,3 +282,24 @@ def test_samples_fit_in_process(sample, capsys):
     for obj, raw in zip(data["objects"], document["objects"]):
         assert obj["kind"] == raw["kind"] and obj["n_points"] == len(raw["points"])
         assert obj["rms"] is not None and obj["rms"] < 10.0  # mm: range noise is 2 mm
+
+
+def test_names_and_ids_are_shown_as_written_not_as_rich_markup(tmp_path, capsys):
+    """A scan name with "[/]" crashed the table (rich markup), and "S[red]2" lost its brackets
+    (audit)."""
+    angles = np.radians(np.linspace(-60, 60, 6))
+    ring = [[0.0, 5.0 - 0.5 * np.cos(a), 1.0 + 0.5 * np.sin(a)] for a in angles]
+    points = [[x + dx, y, z] for dx in (0.0, 0.2, 0.4, 0.6, 0.8) for x, y, z in ring]
+    doc = {
+        "format": "asbuilt-scan",
+        "version": 1,
+        "units": "m",
+        "name": "Tank farm [/] east",
+        "objects": [{"id": "S[red]2", "kind": "cylinder", "points": points}],
+    }
+    path = tmp_path / "markup.json"
+    path.write_text(json.dumps(doc))
+    assert main(["fit", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "Tank farm [/] east" in out
+    assert "S[red]2" in out

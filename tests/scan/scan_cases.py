@@ -118,6 +118,17 @@ def _collinear(doc: dict):
     return doc
 
 
+def _far_point(value):
+    """Point 7 of object K1 moved ``value`` metres away in x (a survey-frame point pasted in;
+    an integer beyond 64 bits)."""
+
+    def build(doc: dict):
+        doc["objects"][0]["points"][7][0] = value
+        return doc
+
+    return build
+
+
 @dataclass(frozen=True)
 class Bad:
     """A bad document: how to build it from :func:`make_doc`, and the loader's exact message.
@@ -302,6 +313,20 @@ BAD = (
         _collinear,
         "objects[0] (K1).points: the points are collinear; a cylinder needs points spread across "
         "its surface (re-aim and rescan)",
+        schema_catches=False,
+    ),
+    Bad(
+        "one point far from the others",
+        _far_point(5000000.0),
+        "objects[0] (K1).points[7]: this point lies 5e+06 m from the others' median, which "
+        "makes them look collinear; check its coordinates (units, a point from another frame)",
+        schema_catches=False,
+    ),
+    Bad(
+        "an integer coordinate beyond 64 bits",
+        _far_point(10**20),
+        "objects[0] (K1).points[7]: this point lies 1e+20 m from the others' median, which "
+        "makes them look collinear; check its coordinates (units, a point from another frame)",
         schema_catches=False,
     ),
     Bad(
