@@ -787,6 +787,11 @@ def fit_cuboid(
     axes_deg = float(np.degrees(np.sqrt(max(np.mean(axis_var), 0.0))))
 
     observed = lo_face & hi_face
+    if one_face:
+        # The depth behind a single seen face is assumed (the smaller visible width), not
+        # measured: no standard error can be given for it.
+        size_se = np.array(size_se, dtype=np.float64)
+        size_se[int(model.face_axis[0])] = np.inf
     faces_per_axis = np.bincount(model.face_axis, minlength=3)
     axes, size, observed_t, order = _canonical(model.axes, size, observed)
     size_se = size_se[order]
@@ -806,6 +811,10 @@ def fit_cuboid(
         "silhouette": float(used_window),
         "mended": float(mended),
     }
+    if one_face:
+        diagnostics["assumed_size"] = float(
+            np.flatnonzero(np.asarray(order) == model.face_axis[0])[0]
+        )
     if not any(observed_t):
         notes.append("no two opposite faces seen: every size is bounded by the points' extent")
     return FitResult(

@@ -253,7 +253,8 @@ def fit_table_rows(report: FitReport, units: str | None = None) -> list[tuple[st
 
     Display units follow :func:`display_units` of ``units`` (default: the scan's unit): mm and m
     for metric files, inches and feet for imperial ones. A cuboid size only bounded by the
-    points (not measured between two seen faces) is marked with ``≥``.
+    points (not measured between two seen faces) is marked with ``≥``; the depth assumed behind a
+    single seen face (no standard error) with ``~``.
     """
     units = report.scan.units if units is None else units
     small, large = display_units(units)
@@ -264,9 +265,10 @@ def fit_table_rows(report: FitReport, units: str | None = None) -> list[tuple[st
         dimensions = _dimensions(result.primitive, small, large)
         if isinstance(result.primitive, Cuboid) and result.observed is not None:
             unit = dimensions.rsplit(" ", 1)[1]
+            assumed = result.diagnostics.get("assumed_size")
             sizes = [
-                ("" if seen else "≥") + _fmt(s, unit)
-                for s, seen in zip(result.primitive.size, result.observed)
+                ("~" if k == assumed else "" if seen else "≥") + _fmt(s, unit)
+                for k, (s, seen) in enumerate(zip(result.primitive.size, result.observed))
             ]
             dimensions = " × ".join(sizes) + f" {unit}"
         center = "(" + ", ".join(_fmt(c, large) for c in _center(result.primitive)) + f") {large}"

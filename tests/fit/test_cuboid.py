@@ -278,6 +278,11 @@ def test_one_face_seen():
     assert near == pytest.approx(5.8, abs=0.002)
     widths = [box.size[k] for k in range(3) if k != normal_row]
     assert box.size[normal_row] == pytest.approx(min(widths))
+    # The depth is assumed, not measured: no standard error (it claimed the range sigma, 2 mm,
+    # for a 0.4 m depth set to 0.5 m; audit), and the diagnostics name it.
+    assert result.diagnostics["assumed_size"] == normal_row
+    assert result.stderr["size"][normal_row] == np.inf
+    assert all(np.isfinite(result.stderr["size"][k]) for k in range(3) if k != normal_row)
     assert sorted(widths) == pytest.approx([0.5, 0.8], rel=0.1)
 
 
