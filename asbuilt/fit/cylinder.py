@@ -469,8 +469,9 @@ def fit_cylinder(
         one, so ``s / sqrt(6)`` with ``s`` the median nearest-neighbour spacing of the
         points, plus the noise and the axis-tilt effect, in quadrature). Measured against the
         scatter of repeated simulated scans (range 2 mm, angle 0.01 degree): the radius error
-        is overstated by up to 1.4x at 3 m and understated by up to 1.25x at 10 m; the axis
-        error is within 10%. Diagnostics: ``arc_deg`` (angular coverage of the inliers about
+        is overstated by up to 1.4x at 3 m and understated by up to 1.25x at 10 m on the
+        benchmark's raster, overstated up to 3.4x on rasters reaching the silhouette (oblique
+        shots' noise lies mostly along the beam); see docs/fitting.md. Diagnostics: ``arc_deg`` (angular coverage of the inliers about
         the axis), ``length_over_diameter``, ``starts`` (starts tried).
 
     Raises
