@@ -193,7 +193,7 @@ def run(args: argparse.Namespace) -> int:
                 source=str(args.gltf),
             )
 
-    err = Console(file=sys.stderr)
+    err = Console(file=sys.stderr, markup=False)
     with stage_progress(err, quiet=args.quiet) as bar:
         task = bar.add_task("", total=None, stage="fitting")
 
@@ -216,7 +216,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.quiet:
         return 0
-    out = Console(file=sys.stdout, highlight=False, soft_wrap=True)
+    out = Console(file=sys.stdout, highlight=False, soft_wrap=True, markup=False)
     for path in written:
         name = SUFFIXES[path.suffix.lower()].name
         out.print(f"wrote {path} ({name} report, {_size(path.stat().st_size)})")

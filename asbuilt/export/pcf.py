@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -117,9 +118,13 @@ class _Bores:
 
 def _bores(model: Model) -> _Bores:
     catalog = None
-    if model.catalog:
+    # A user's catalog file the model recorded first (its name may shadow a shipped one).
+    for source in (model.catalog_file and Path(model.catalog_file), model.catalog):
+        if not source:
+            continue
         try:
-            catalog = load_catalog(model.catalog)
+            catalog = load_catalog(source)
+            break
         except AsbuiltError:
             catalog = None  # a user catalog moved away since: bores from the ODs
     unit = "INCH"

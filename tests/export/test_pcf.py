@@ -205,3 +205,18 @@ def test_cli_writes_pcf_and_refuses_a_scan_without_piping(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no piping" in err[0] and "wall.pcf" in err[0]
     assert not (tmp_path / "wall.pcf").exists()
+
+
+def test_a_user_catalog_file_gives_the_bores(tmp_path):
+    """A user catalog whose name is a shipped one's: its own sizes give the bores (here a
+    110 mm OD pipe, size "110", in a DN catalog), read from the file the model records."""
+    path = tmp_path / "mine.csv"
+    path.write_text(
+        "# name: asme-b36.10m\n# title: PE pipe\n# standard: none\n# kind: pipe\n"
+        "# units: mm\n# designation: DN\nnominal,dn,od,source\n110,100,110.0,table A\n"
+    )
+    pipe = Component("P1", "pipe", Straight([0, 0, 0], [1, 0, 0], 0.055), nominal="110")
+    model = Model(components=(pipe,), catalog="asme-b36.10m", catalog_file=str(path))
+    header, blocks = parse(pcf_text(model))
+    assert header["UNITS-BORE"] == ["MM"]
+    assert _by_id(blocks)["P1"]["END-POINT"][0][3] == 100.0
