@@ -41,6 +41,7 @@ __all__ = [
     "tukey_weights",
     "residual_scale",
     "few_residual_dof",
+    "settled_fit",
     "trimmed_cost",
     "keep_count",
     "noise_level",
@@ -834,3 +835,31 @@ def robust_geometric_fit(
             (residuals, jacobian),
         )
     return RobustFit(state, residuals, mask, jacobian[mask], scale)
+
+
+def settled_fit(
+    points: np.ndarray,
+    state,
+    model: GeometricModel,
+    *,
+    kind: str,
+    sigma: float | None,
+    tolerances: Tolerances,
+) -> RobustFit | None:
+    """One start settled without concentration steps: least squares on its inliers until they
+    are stable (:func:`robust_geometric_fit` with that start alone), or None when it fails (too
+    many outliers, no finite residuals). Used to compare starts from other basins."""
+    try:
+        return robust_geometric_fit(
+            points,
+            [state],
+            model,
+            kind=kind,
+            sigma=sigma,
+            tolerances=tolerances,
+            start_iterations=0,
+            always_refine=1,
+            max_starts=1,
+        )
+    except FitError:
+        return None

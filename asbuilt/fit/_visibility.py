@@ -23,8 +23,8 @@ from asbuilt.fit._common import (
     GeometricModel,
     RobustFit,
     gauss_newton,
-    robust_geometric_fit,
     robust_scale,
+    settled_fit,
     tukey_weights,
 )
 from asbuilt.fit._mixture import mixing_cost, mixture_score
@@ -253,20 +253,7 @@ def reconsidered(
         return beyond
 
     def refined(state):
-        try:
-            return robust_geometric_fit(
-                points,
-                [state],
-                model,
-                kind=kind,
-                sigma=sigma,
-                tolerances=tolerances,
-                start_iterations=0,
-                always_refine=1,
-                max_starts=1,
-            )
-        except FitError:
-            return None
+        return settled_fit(points, state, model, kind=kind, sigma=sigma, tolerances=tolerances)
 
     consider(robust)
     for seed in seeds:
