@@ -733,7 +733,8 @@ def _msac_rescue(robust, points, axes, view, sigma: float, tolerances, keep, rng
     trimmed cost allows, and a large circle through pipe and wall shots wins it. Each of the
     ``RESCUE_STARTS`` best circles is settled by least squares on its inliers; the one with
     the lowest MSAC cost (every shot, ``outlier_cutoff_sigma * sigma``) that hides no third of
-    the shots from ``view`` (when known) is returned if it beats ``robust``, else None."""
+    the shots from ``view`` (when known) and is no plane-like cylinder (:func:`_doubtful_blind`)
+    is returned if it beats ``robust``, else None."""
     cutoff = tolerances.outlier_cutoff_sigma * sigma
 
     def cost(fit):
@@ -758,7 +759,8 @@ def _msac_rescue(robust, points, axes, view, sigma: float, tolerances, keep, rng
         fit = settled_fit(
             points, starts[k], _MODEL, kind="cylinder", sigma=sigma, tolerances=tolerances
         )
-        if fit is None:
+        if fit is None or _doubtful_blind(fit, points):
+            # A cylinder metres wide is a plane through pipe and wall shots, not a pipe.
             continue
         if cost(fit) < best_cost and (view is None or not _unseen(fit, points, view)):
             best, best_cost = fit, cost(fit)

@@ -463,3 +463,13 @@ def test_whole_raster_lines_on_the_wall_behind_do_not_make_a_bigger_pipe(scan, w
     across = offset - (offset @ got.axis) * got.axis
     assert np.linalg.norm(across) < 0.005
     assert result.n_points - result.n_inliers >= 10  # the wall shots are reported
+
+
+def test_the_msac_rescue_never_returns_a_plane_like_cylinder():
+    """An NPS 2 pipe whose edge shots hit the wall: a 22.6 m "pipe" through pipe and wall
+    shots had the lower MSAC cost; a cylinder metres wide is a plane, not a rescue."""
+    scan = json.loads((Path(__file__).parent / "plane_like_rescue.json").read_text())
+    result = fit_cylinder(
+        np.array(scan["points"]), sigma=scan["range_sigma"], viewpoint=np.array(scan["viewpoint"])
+    )
+    assert abs(result.primitive.radius - scan["radius"]) < 0.01
