@@ -525,6 +525,14 @@ def fit_cylinder(
         return starts[:1] + better + starts[1:], costs[:1] + better_costs + costs[1:]
 
     view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64) - offset
+    msac: list = []  # the MSAC circles' fits, made once, when a rescue first needs them
+
+    def rescue(current, seen_from):
+        if not msac:
+            msac.append(_msac_fits(local, axes, sigma, tolerances, keep, rng))
+        cutoff = tolerances.outlier_cutoff_sigma * sigma
+        return _better_fit(msac[0], current, local, seen_from, cutoff)
+
     if starts and len(local) < POLISH_BELOW:
         starts, costs = polished(starts, costs)
     try:
@@ -535,7 +543,7 @@ def fit_cylinder(
         if sigma is None or not starts:
             raise
         if view is None:
-            robust = _msac_rescue(None, local, axes, None, sigma, tolerances, keep, rng)
+            robust = rescue(None, None)
             if robust is None:
                 raise
         else:
@@ -584,13 +592,13 @@ def fit_cylinder(
             # No seed settled on the pipe: the MSAC rescue below is the last chance.
             if sigma is None or robust is not None:
                 raise
-            rescued = _msac_rescue(None, local, axes, view, sigma, tolerances, keep, rng)
+            rescued = rescue(None, view)
             if rescued is None:
                 raise
             robust = rescued
         rescued = None
         if (robust is None or _unseen(robust, local, view)) and sigma is not None:
-            rescued = _msac_rescue(robust, local, axes, view, sigma, tolerances, keep, rng)
+            rescued = rescue(robust, view)
         if rescued is not None:
             robust = rescued
         elif blind is not None and _unseen(robust, local, view):
@@ -603,11 +611,9 @@ def fit_cylinder(
         and everything is None
         and np.mean(~robust.inliers) >= RESCUE_REJECTED
     ):
-        # A quarter of the shots rejected: as much background as the trimmed cost can take,
-        # so the circles chosen by MSAC get their say (every shot decides).
-        rescued = _msac_rescue(
-            robust, local, axes, None if ignored_view else view, sigma, tolerances, keep, rng
-        )
+        # A fifth of the shots rejected: near the background the trimmed cost can take, so
+        # the circles chosen by MSAC get their say (every shot decides).
+        rescued = rescue(robust, None if ignored_view else view)
         if rescued is not None:
             robust = rescued
     if everything is not None:
@@ -713,7 +719,7 @@ FAR_SIDE_DEG = 95.0
 UNSEEN_FRACTION = 1.0 / 3.0
 
 
-#: Circles (best by MSAC cost, one per candidate axis) settled by :func:`_msac_rescue`, and
+#: Circles (best by MSAC cost, one per candidate axis) settled by :func:`_msac_fits`, and
 #: the random triples it tries per axis: MSAC needs one triple of pipe shots from three raster
 #: columns, 1 in 6 triples when a third of the shots are background.
 RESCUE_STARTS = 4
@@ -726,20 +732,15 @@ RESCUE_REJECTED = 0.2
 SNAP_DEG = 5.0
 
 
-def _msac_rescue(robust, points, axes, view, sigma: float, tolerances, keep, rng):
-    """A fit from circles chosen by MSAC cost (``circle_starts(cutoff=...)``), for when the
+def _msac_fits(points, axes, sigma: float, tolerances, keep, rng) -> list:
+    """Fits from circles chosen by MSAC cost (``circle_starts(cutoff=...)``), for when the
     beams reject the robust choice (it hides a third of the shots behind the pipe, or no start
-    settled) or it rejected ``RESCUE_REJECTED`` of the shots: whole raster lines on the wall behind a pipe are more background than the
-    trimmed cost allows, and a large circle through pipe and wall shots wins it. Each of the
-    ``RESCUE_STARTS`` best circles is settled by least squares on its inliers; the one with
-    the lowest MSAC cost (every shot, ``outlier_cutoff_sigma * sigma``) that hides no third of
-    the shots from ``view`` (when known) and is no plane-like cylinder (:func:`_doubtful_blind`)
-    is returned if it beats ``robust``, else None."""
+    settled) or it rejected ``RESCUE_REJECTED`` of the shots: whole raster lines on the wall
+    behind a pipe are more background than the trimmed cost allows, and a large circle through
+    pipe and wall shots wins it. Each of the ``RESCUE_STARTS`` best circles is settled by least
+    squares on its inliers; plane-like cylinders (:func:`_doubtful_blind`) are left out.
+    :func:`_better_fit` chooses among them."""
     cutoff = tolerances.outlier_cutoff_sigma * sigma
-
-    def cost(fit):
-        return float(np.minimum(fit.residuals**2, cutoff**2).sum())
-
     # Background shots tilt every axis estimate by a degree or two, which smears a 3 m pipe's
     # projection by centimetres; plant pipes are mostly plumb or level, so each candidate
     # within SNAP_DEG of either gets its plumb or level twin (least squares then settles the
@@ -754,14 +755,27 @@ def _msac_rescue(robust, points, axes, view, sigma: float, tolerances, keep, rng
     starts, costs = circle_starts(
         points, list(axes) + snapped, keep, rng, samples=RESCUE_SAMPLES, cutoff=cutoff
     )
-    best, best_cost = None, np.inf if robust is None else cost(robust)
+    fits = []
     for k in np.argsort(costs)[:RESCUE_STARTS]:
         fit = settled_fit(
             points, starts[k], _MODEL, kind="cylinder", sigma=sigma, tolerances=tolerances
         )
-        if fit is None or _doubtful_blind(fit, points):
-            # A cylinder metres wide is a plane through pipe and wall shots, not a pipe.
-            continue
+        # A cylinder metres wide is a plane through pipe and wall shots, not a pipe.
+        if fit is not None and not _doubtful_blind(fit, points):
+            fits.append(fit)
+    return fits
+
+
+def _better_fit(candidates, robust, points, view, cutoff: float):
+    """The candidate with the lowest MSAC cost (every shot, threshold ``cutoff`` metres) that
+    hides no third of the shots from ``view`` (when known), if it beats ``robust``; else
+    None."""
+
+    def cost(fit):
+        return float(np.minimum(fit.residuals**2, cutoff**2).sum())
+
+    best, best_cost = None, np.inf if robust is None else cost(robust)
+    for fit in candidates:
         if cost(fit) < best_cost and (view is None or not _unseen(fit, points, view)):
             best, best_cost = fit, cost(fit)
     return best
