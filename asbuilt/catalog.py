@@ -39,6 +39,7 @@ __all__ = [
     "Catalog",
     "catalog_names",
     "load_catalog",
+    "model_catalog",
     "parse_nominal",
     "fitting_dims",
 ]
@@ -375,6 +376,45 @@ def load_catalog(name_or_path) -> Catalog:
     if isinstance(name_or_path, Path) or _looks_like_path(text):
         return _load_path(str(Path(text).resolve()), text)
     return _load_packaged(text)
+
+
+def model_catalog(model, catalog=None):
+    """The catalog ``model`` was built with, for the readers of a model (reports, exports):
+    size labels, walls, DN and NPS values, the material.
+
+    Parameters
+    ----------
+    model : asbuilt.model.Model
+    catalog : Catalog, str or Path, optional
+        The catalog the model was built with, when the caller has it (a name or path is
+        loaded; its errors are raised). Default: the model's ``catalog_file`` when it records
+        one (a user's catalog file), else the shipped catalog its ``catalog`` names.
+
+    Returns
+    -------
+    (Catalog or None, str or None)
+        The catalog, and when the model names a catalog that cannot be read, one line saying
+        so (a report then shows nominal sizes without walls, weights or catalog labels).
+    """
+    if isinstance(catalog, Catalog):
+        return catalog, None
+    if catalog is not None:
+        return load_catalog(catalog), None
+    if model.catalog_file:
+        try:
+            return load_catalog(Path(model.catalog_file)), None
+        except CatalogError as exc:
+            return None, f"the model's catalog file cannot be read ({exc})"
+    if model.catalog:
+        try:
+            return load_catalog(model.catalog), None
+        except CatalogError:
+            return None, (
+                f"catalog {model.catalog!r} is no shipped catalog and the model does not "
+                "record its file (made before the file was recorded); build the model again "
+                "from the scan with --catalog FILE"
+            )
+    return None, None
 
 
 @functools.cache

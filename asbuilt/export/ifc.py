@@ -368,16 +368,10 @@ class _Writer:
     def catalog(self):
         if not self._catalog_loaded:
             self._catalog_loaded = True
-            # A user catalog file (recorded by the model) wins over a shipped one of its name.
-            source = getattr(self.model, "catalog_file", None) or self.model.catalog
-            if source:
-                from asbuilt.catalog import load_catalog
-                from asbuilt.errors import CatalogError
+            from asbuilt.catalog import model_catalog
 
-                try:
-                    self._catalog = load_catalog(source)
-                except CatalogError:
-                    self._catalog = None
+            # A user catalog file (recorded by the model) wins over a shipped one of its name.
+            self._catalog = model_catalog(self.model)[0]
         return self._catalog
 
     def nominal_diameter(self, component: Component) -> float | None:

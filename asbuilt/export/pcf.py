@@ -27,12 +27,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from asbuilt.catalog import PipeSize, load_catalog
-from asbuilt.errors import AsbuiltError, ExportError
+from asbuilt.catalog import PipeSize, model_catalog
+from asbuilt.errors import ExportError
 from asbuilt.model import Bend, Component, Model, Reducer, Straight, Tee
 
 __all__ = ["pcf_text", "write_pcf", "PCF_COMPONENTS"]
@@ -117,16 +116,7 @@ class _Bores:
 
 
 def _bores(model: Model) -> _Bores:
-    catalog = None
-    # A user's catalog file the model recorded first (its name may shadow a shipped one).
-    for source in (model.catalog_file and Path(model.catalog_file), model.catalog):
-        if not source:
-            continue
-        try:
-            catalog = load_catalog(source)
-            break
-        except AsbuiltError:
-            catalog = None  # a user catalog moved away since: bores from the ODs
+    catalog = model_catalog(model)[0]  # None: bores from the ODs
     unit = "INCH"
     if catalog is not None and catalog.designation.upper() == "DN":
         unit = "MM"

@@ -26,10 +26,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
+from asbuilt.catalog import model_catalog
 from asbuilt.model import Bend, Component, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 from asbuilt.units import UNITS
@@ -307,47 +307,6 @@ def _outer_diameter(g) -> float | None:
 
 # ----------------------------------------------------------------------------------------------
 # catalog look-ups (optional: a model may name a catalog file that is gone)
-
-
-def model_catalog(model: Model, catalog=None):
-    """The catalog a report of ``model`` takes size labels, walls and the material from.
-
-    Parameters
-    ----------
-    model : Model
-    catalog : Catalog, str or Path, optional
-        The catalog the model was built with, when the caller has it (a name or path is
-        loaded; its errors are raised). Default: the model's ``catalog_file`` when it records
-        one (a user's catalog file), else the shipped catalog its ``catalog`` names.
-
-    Returns
-    -------
-    (Catalog or None, str or None)
-        The catalog, and when the model names a catalog that cannot be read, one line saying
-        so (the report then shows nominal sizes without walls, weights or catalog labels).
-    """
-    from asbuilt.catalog import Catalog, load_catalog
-    from asbuilt.errors import CatalogError
-
-    if isinstance(catalog, Catalog):
-        return catalog, None
-    if catalog is not None:
-        return load_catalog(catalog), None
-    if model.catalog_file:
-        try:
-            return load_catalog(Path(model.catalog_file)), None
-        except CatalogError as exc:
-            return None, f"the model's catalog file cannot be read ({exc})"
-    if model.catalog:
-        try:
-            return load_catalog(model.catalog), None
-        except CatalogError:
-            return None, (
-                f"catalog {model.catalog!r} is no shipped catalog and the model does not "
-                "record its file (made before the file was recorded); build the model again "
-                "from the scan with --catalog FILE"
-            )
-    return None, None
 
 
 class _Sizes:
