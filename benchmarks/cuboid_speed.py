@@ -1,0 +1,84 @@
+"""Cuboid fit time alone, on the trials of ``benchmarks/fit_accuracy.py``.
+
+The accuracy benchmark times every fit inside a long run that also simulates the scans; this
+script generates the same cuboid trials first (same seed, same cells: every section, two and
+three seen faces) and then times only the fit calls (through :func:`asbuilt.fit.fit_points`,
+as the pipeline calls them, with the range sigma), with and without the viewpoint, clean and
+with 20% edge outliers, repeated, so the figure can be checked on its own.
+
+Run: ``python benchmarks/cuboid_speed.py [--points 40] [--trials 50] [--repeat 2]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent))
+
+import fit_accuracy  # noqa: E402
+
+from asbuilt.fit import fit_points  # noqa: E402
+
+#: Seen faces of the accuracy benchmark's cuboid cells (a column side-on, a pier from above).
+FACES = (2, 3)
+
+
+def trials(points: int, count: int, seed: int) -> list:
+    """The accuracy benchmark's cuboid trials with ``points`` shots, every section and face
+    count."""
+    out = []
+    for section in fit_accuracy.SECTIONS:
+        for faces in FACES:
+            key = (section, faces, points)
+            rng = np.random.default_rng([seed, fit_accuracy.hash_key("cuboid", key)])
+            out.extend(fit_accuracy.cuboid_trial(rng, *key) for _ in range(count))
+    return out
+
+
+def timed(data: list, viewpoint, repeat: int) -> list[float]:
+    """Seconds per fit call, every scan ``repeat`` times."""
+    times = []
+    for _ in range(repeat):
+        for points in data:
+            start = time.perf_counter()
+            try:
+                fit_points("cuboid", points, sigma=fit_accuracy.SIGMA_R, viewpoint=viewpoint)
+            except Exception:  # a failed fit is timed too, as in the accuracy benchmark
+                pass
+            times.append(time.perf_counter() - start)
+    return times
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--points", type=int, default=40)
+    parser.add_argument("--trials", type=int, default=50, help="trials per cell (50)")
+    parser.add_argument("--repeat", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=2004)
+    args = parser.parse_args(argv)
+    data = trials(args.points, args.trials, args.seed)
+    print(f"{len(data)} scans of {args.points} points; median and p90 ms per fit")
+    print("| data | viewpoint | median ms | p90 ms |")
+    print("|---|---|---|---|")
+    for name in ("clean", "dirty"):
+        scans = [getattr(trial, name) for trial in data]
+        for label, viewpoint in (("none", None), ("station", fit_accuracy.STATION.position)):
+            ms = np.array(timed(scans, viewpoint, args.repeat)) * 1e3
+            version = "clean" if name == "clean" else "20% edge outliers"
+            print(
+                f"| {version} | {label} | {statistics.median(ms):.2f} | "
+                f"{float(np.percentile(ms, 90)):.2f} |"
+            )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
