@@ -14,6 +14,7 @@ explaining the most points wins.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,6 +46,8 @@ _MIN_FACE_POINTS = 3
 _MIN_THIRD_FACE_POINTS = 2
 #: Share of a plane's consensus points on one face of a built frame for it to be that face.
 _SAME_FACE = 0.9
+_EYE3 = np.eye(3)
+_EYE3.setflags(write=False)
 #: A face's points must be spread off a line by this many consensus thresholds (RMS): a raster
 #: line lies in every plane through it and would otherwise pass for a face.
 _MIN_SPREAD = 1.5
@@ -183,8 +186,11 @@ def cross3(a, b) -> np.ndarray:
     )
 
 
-def _unit_rows(vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    norms = np.linalg.norm(vectors, axis=1)
+def _unit_rows(vectors: np.ndarray, norms: np.ndarray | None = None):
+    """Unit rows of ``vectors`` (k, 3) and which rows had a length (k,) bool; ``norms`` (k,),
+    their lengths, may be passed when already computed."""
+    if norms is None:
+        norms = np.linalg.norm(vectors, axis=1)
     ok = norms > 1e-12
     out = np.zeros_like(vectors)
     out[ok] = vectors[ok] / norms[ok, None]
@@ -216,6 +222,8 @@ def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
     outer = (coords[:, :, None] * coords[:, None, :]).reshape(coords.shape[0], dim * dim)
     for _ in range(rounds + 1):
         masks = np.abs(normals @ points.T - offsets[:, None]) < threshold
+        if _ == rounds and basis is not None:
+            break  # only the masks are wanted (no spread within a basis)
         weight = masks.astype(np.float64)
         count = np.maximum(weight.sum(axis=1), 1.0)
         mean = weight @ coords / count[:, None]
@@ -238,10 +246,13 @@ def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
 
 def _perpendicular_basis(direction: np.ndarray) -> np.ndarray:
     """Two unit columns, shape (3, 2), perpendicular to ``direction`` and to each other."""
-    helper = np.eye(3)[int(np.argmin(np.abs(direction)))]
+    helper = _EYE3[int(np.argmin(np.abs(direction)))]
     first = cross3(direction, helper)
-    first /= np.linalg.norm(first)
-    return np.stack([first, cross3(direction, first)], axis=1)
+    first /= math.sqrt(first @ first)  # np.linalg.norm's own sum for a vector, without its checks
+    out = np.empty((3, 2))
+    out[:, 0] = first
+    out[:, 1] = cross3(direction, first)
+    return out
 
 
 def _distinct(normals, offsets, order, cos_face, threshold, limit):
@@ -306,19 +317,19 @@ def _second_plane(points, normals, first, threshold, gap, rng):
         i, j = rng.integers(0, r, (2, 2 * _MAX_PAIRS))
         distinct = i != j
         i, j = np.minimum(i, j)[distinct][:_MAX_PAIRS], np.maximum(i, j)[distinct][:_MAX_PAIRS]
+    elif r * (r - 1) // 2 > _MAX_PAIRS:
+        i, j = _pairs(r, rng.choice(r * (r - 1) // 2, _MAX_PAIRS, replace=False))
     else:
-        i, j = np.triu_indices(r, 1)
-        if i.size > _MAX_PAIRS:
-            keep = rng.choice(i.size, _MAX_PAIRS, replace=False)
-            i, j = i[keep], j[keep]
+        i, j = _pairs(r, np.arange(r * (r - 1) // 2))
     raw = cross_rows(d1, sub[j] - sub[i])
-    pair_n, ok = _unit_rows(raw)
-    ok &= np.linalg.norm(raw, axis=1) > 2 * threshold
+    length = np.linalg.norm(raw, axis=1)
+    pair_n, ok = _unit_rows(raw, length)
+    ok &= length > 2 * threshold
     # Local normals made perpendicular to d1.
     # (Dense: the local normals of 200 points at random, as for the first planes.)
     seeds = np.arange(r) if r <= _DENSE_LIMIT else rng.choice(r, 200, replace=False)
     seed_normals = normals[rest[seeds]]
-    loc_n, loc_ok = _unit_rows(seed_normals - np.outer(seed_normals @ d1, d1))
+    loc_n, loc_ok = _unit_rows(seed_normals - (seed_normals @ d1)[:, None] * d1)
     cand_n = np.concatenate([pair_n[ok], loc_n[loc_ok]])
     cand_p = np.concatenate([sub[i[ok]], sub[seeds][loc_ok]])
     if cand_n.shape[0] == 0:
@@ -344,6 +355,16 @@ def _second_plane(points, normals, first, threshold, gap, rng):
     return None
 
 
+def _pairs(r: int, index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows i < j (each (k,) int) of the pairs at positions ``index`` (k,) int in the
+    row-major list of all pairs of r items (``np.triu_indices(r, 1)``'s order), without
+    building that list."""
+    a = np.arange(r - 1)
+    starts = a * (2 * r - a - 1) // 2  # position of pair (a, a + 1)
+    row = np.searchsorted(starts, index, "right") - 1
+    return row, index - starts[row] + row + 1
+
+
 def _contiguous(points, face_a, face_b, threshold, gap) -> bool:
     """Whether two perpendicular faces' points meet at their common edge like a convex corner.
 
@@ -354,9 +375,9 @@ def _contiguous(points, face_a, face_b, threshold, gap) -> bool:
         dist = points[mb] @ na - oa
         near = np.abs(dist) <= threshold
         far = dist[~near]
-        if far.size and np.any(far > 0) and np.any(far < 0):
+        if far.size and far.max() > 0 and far.min() < 0:
             return False
-        if np.min(np.abs(dist)) > gap:
+        if np.abs(dist).min() > gap:
             return False
     return True
 
@@ -400,8 +421,8 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
             c = int(np.argmax(counts))
             if counts[c] < least or (best is not None and counts[c] <= best[0]):
                 continue
-            members = free[np.abs(proj - proj[c]) < threshold]
-            offset = float(np.mean(proj_all[members, k]))
+            members = proj_all[free[np.abs(proj - proj[c]) < threshold], k]
+            offset = float(members.sum()) / members.size  # np.mean's sum and division
             mask = np.zeros(points.shape[0], bool)
             mask[free[np.abs(proj - offset) < threshold]] = True
             if _acceptable(proj_all, explained, faces, k, offset, mask, threshold, gap, view_proj):
@@ -439,18 +460,19 @@ def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap, view_pr
         other_side = -1.0 if proj[fmask, k].mean() < body[:, k].mean() else 1.0
         if other_side == side or abs(off - offset) < 2 * threshold:
             return False
+    new = proj[mask]
     for j in range(3):
         if j == k:
             continue
         lo, hi = body[:, j].min() - gap, body[:, j].max() + gap
-        if np.any(proj[mask, j] < lo) or np.any(proj[mask, j] > hi):
+        if (new[:, j] < lo).any() or (new[:, j] > hi).any():
             return False
     for axis, off, fmask in faces:
         if axis == k or not fmask.any():
             continue
-        if np.min(np.abs(proj[fmask, k] - offset)) > gap:
+        if np.abs(proj[fmask, k] - offset).min() > gap:
             continue
-        if np.min(np.abs(proj[mask, axis] - off)) > gap:
+        if np.abs(new[:, axis] - off).min() > gap:
             continue
         return True
     return False
@@ -463,11 +485,12 @@ def is_box(face_axis: np.ndarray, face_sign: np.ndarray, face_offset: np.ndarray
     ``face_axis`` (m,) int, ``face_sign`` (m,) +1/-1 and ``face_offset`` (m,) metres as in
     :class:`Frame`.
     """
+    axis = face_axis.tolist()  # a handful of faces: plain Python is cheaper than numpy here
     for k in range(3):
-        on = np.flatnonzero(face_axis == k)
-        if on.size > 2:
+        on = [f for f, fk in enumerate(axis) if fk == k]
+        if len(on) > 2:
             return False
-        if on.size == 2:
+        if len(on) == 2:
             a, b = on
             if face_sign[a] == face_sign[b]:
                 return False
@@ -489,7 +512,7 @@ def frame_from(points, axes, faces, threshold, viewpoint) -> Frame:
             if jdx != idx:
                 others |= omask
         others &= ~mask
-        if np.any(others):
+        if others.any():
             sign = _orient(axes[k], off, points[others])
         else:
             view = np.zeros(3) if viewpoint is None else viewpoint

@@ -32,8 +32,8 @@ def rodrigues(omega: np.ndarray) -> np.ndarray:
     angle = math.sqrt(float(omega @ omega))
     if angle < 1e-15:
         return _EYE3
-    k = omega / angle
-    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    k0, k1, k2 = (omega / angle).tolist()  # Python floats build the small matrix faster
+    kx = np.array([[0.0, -k2, k1], [k2, 0.0, -k0], [-k1, k0, 0.0]])
     return _EYE3 + math.sin(angle) * kx + (1.0 - math.cos(angle)) * (kx @ kx)
 
 
@@ -66,8 +66,14 @@ class FaceModel:
         """
         if normal is None:
             normal = self.normals()[label]
-        offsets = -(label[:, None] == np.arange(self.offset.shape[0])).astype(np.float64)
-        return np.hstack([_faces.cross_rows(normal, x) @ self.rot_basis, offsets])
+        q = self.rot_basis.shape[1]
+        # Filled in place (a hot path): rotation columns, then -1 in each point's face column
+        # (-0.0 elsewhere, as negating a 0/1 indicator gives).
+        jac = np.empty((x.shape[0], q + self.offset.shape[0]))
+        jac[:, :q] = _faces.cross_rows(normal, x) @ self.rot_basis
+        jac[:, q:] = -0.0
+        jac[np.arange(x.shape[0]), q + label] = -1.0
+        return jac
 
     def step(self, x, label, weights) -> float:
         """One weighted Gauss-Newton step; returns the step's size (radians + metres)."""
@@ -76,7 +82,7 @@ class FaceModel:
         jac = self.jacobian(x, label, normal)
         weighted = jac.T * weights
         matrix = weighted @ jac
-        matrix.flat[:: matrix.shape[0] + 1] += 1e-12 * max(float(np.trace(matrix)), 1e-30)
+        matrix.flat[:: matrix.shape[0] + 1] += 1e-12 * max(float(matrix.trace()), 1e-30)
         delta = np.linalg.solve(matrix, -(weighted @ residual))
         q = self.rot_basis.shape[1]
         rotation = rodrigues(self.rot_basis @ delta[:q])
