@@ -36,6 +36,7 @@ __all__ = [
     "require_spread",
     "check_spread",
     "orthonormal_basis",
+    "orthonormal_bases",
     "orient",
     "robust_scale",
     "tukey_weights",
@@ -206,6 +207,39 @@ def orthonormal_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ux, uy, uz = ux / norm, uy / norm, uz / norm
     v = (ay * uz - az * uy, az * ux - ax * uz, ax * uy - ay * ux)
     return np.array((ux, uy, uz)), np.array(v)
+
+
+def orthonormal_bases(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`orthonormal_basis` of many axes at once, bit for bit the same.
+
+    Parameters
+    ----------
+    axes : ndarray, shape (a, 3)
+        Unit vectors.
+
+    Returns
+    -------
+    u, v : ndarray, shape (a, 3)
+    """
+    ax, ay, az = axes[:, 0], axes[:, 1], axes[:, 2]
+    mx, my, mz = np.abs(ax), np.abs(ay), np.abs(az)
+    first = (mx <= my) & (mx <= mz)
+    second = ~first & (my <= mz)
+    third = ~(first | second)
+    u = np.zeros_like(axes)
+    u[first, 1], u[first, 2] = az[first], -ay[first]
+    u[second, 0], u[second, 2] = -az[second], ax[second]
+    u[third, 0], u[third, 1] = ay[third], -ax[third]
+    ux, uy, uz = u[:, 0], u[:, 1], u[:, 2]
+    squares = ux * ux + uy * uy + uz * uz
+    # Python's ``** 0.5`` (C pow) as in orthonormal_basis: it differs from np.sqrt in the last
+    # bit now and then, which would change the fits' frames.
+    u /= np.array([value**0.5 for value in squares.tolist()])[:, None]
+    v = np.empty_like(axes)
+    v[:, 0] = ay * uz - az * uy
+    v[:, 1] = az * ux - ax * uz
+    v[:, 2] = ax * uy - ay * ux
+    return u, v
 
 
 def orient(direction: np.ndarray) -> np.ndarray:
@@ -445,7 +479,9 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
 
         _, index = cKDTree(points).query(points, k=k)
     hood = points[index]
-    hood -= hood.mean(axis=1, keepdims=True)
+    # The neighbourhoods' means as numpy's mean computes them (sum, then divide by the count),
+    # without its per-call overhead.
+    hood -= hood.sum(axis=1, keepdims=True) / k
     scatter = hood.transpose(0, 2, 1) @ hood
     values, vectors = np.linalg.eigh(scatter)
     flatness = values[:, 0] / np.maximum(values[:, 1], 1e-300)
@@ -548,7 +584,7 @@ def gauss_newton(model, state, points, weigh, iterations, tolerance, current=Non
             trial = model.update(state, delta, points, weights)
             trial_residuals, trial_jacobian = model.jacobian(trial, points)
             trial_cost = float(weights @ (trial_residuals * trial_residuals))
-            if np.isfinite(trial_cost) and trial_cost <= cost:
+            if math.isfinite(trial_cost) and trial_cost <= cost:
                 accepted = True
                 break
             delta = 0.5 * delta
@@ -665,11 +701,22 @@ def median_spacing(points: np.ndarray) -> float:
         squares = np.einsum("ij,ij->i", points, points)
         dist = squares[:, None] + squares[None, :] - 2.0 * (points @ points.T)
         np.fill_diagonal(dist, np.inf)
-        return float(np.sqrt(max(float(np.median(dist.min(axis=1))), 0.0)))
+        return float(np.sqrt(max(_median(dist.min(axis=1)), 0.0)))
     from scipy.spatial import cKDTree
 
     distance, _ = cKDTree(points).query(points, k=2)
     return float(np.median(distance[:, 1]))
+
+
+def _median(values: np.ndarray) -> float:
+    """The median of a 1-D array without NaNs, as :func:`numpy.median` gives it (the middle
+    value, or half the sum of the two middle ones) without its overhead."""
+    size = values.size
+    half = size // 2
+    if size % 2:
+        return float(np.partition(values, half)[half])
+    part = np.partition(values, (half - 1, half))
+    return float(0.5 * (part[half - 1] + part[half]))
 
 
 def _likeliest_refit(model, state, points, mask, extent, floor, iterations):

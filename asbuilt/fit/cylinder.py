@@ -82,14 +82,16 @@ _FRAME_CACHE: dict[bytes, tuple] = {}
 
 
 def _frame(axis: np.ndarray):
-    """``(u, v, frame)`` for an axis: its :func:`orthonormal_basis` and the (3, 3) matrix whose
-    columns are ``axis, u, v``. Gauss-Newton asks for the same axis several times (the
-    Jacobian at a state, then the update from it), so the last few frames are remembered."""
+    """``(u, v, frame, u_and_v)`` for an axis: its :func:`orthonormal_basis`, the (3, 3) matrix
+    whose columns are ``axis, u, v``, and ``u, v`` as Python floats (six of them, for
+    :func:`_update`'s scalar arithmetic). Gauss-Newton asks for the same axis several times
+    (the Jacobian at a state, then the update from it), so the last few frames are
+    remembered."""
     key = axis.tobytes()
     found = _FRAME_CACHE.get(key)
     if found is None:
         u, v = orthonormal_basis(axis)
-        found = (u, v, np.array((axis, u, v)).T)
+        found = (u, v, np.array((axis, u, v)).T, u.tolist() + v.tolist())
         if len(_FRAME_CACHE) >= 8:
             _FRAME_CACHE.clear()
         _FRAME_CACHE[key] = found
@@ -106,23 +108,31 @@ def _jacobian(state, points):
     axis, center, radius = state
     local = (points - center) @ _frame(axis)[2]  # along, across u, across v
     across = local[:, 1:]
-    rho = np.maximum(np.sqrt(np.einsum("ij,ij->i", across, across)), 1e-300)
+    rho = np.einsum("ij,ij->i", across, across)
+    np.sqrt(rho, out=rho)
+    np.maximum(rho, 1e-300, out=rho)
     jac = np.empty((len(points), 5))
     unit = jac[:, 2:4]
-    np.divide(across, -rho[:, None], out=unit)  # -(eu, ev)
+    np.divide(across, rho[:, None], out=unit)
+    np.negative(unit, out=unit)  # -(eu, ev)
     np.multiply(unit, local[:, :1], out=jac[:, 0:2])  # -along (eu, ev)
     jac[:, 4] = -1.0
-    return rho - radius, jac
+    rho -= radius
+    return rho, jac
 
 
 def _update(state, delta, points, weights):
     axis, center, radius = state
-    u, v, _ = _frame(axis)
+    ux, uy, uz, vx, vy, vz = _frame(axis)[3]
     d0, d1, d2, d3, d4 = delta.tolist()
-    ax, ay, az = (axis + d0 * u + d1 * v).tolist()
+    # Python floats: the same operations in the same order as on the arrays (so the same
+    # rounding), without a numpy call per operation on 3-vectors.
+    ax, ay, az = axis.tolist()
+    ax, ay, az = ax + d0 * ux + d1 * vx, ay + d0 * uy + d1 * vy, az + d0 * uz + d1 * vz
     norm = (ax * ax + ay * ay + az * az) ** 0.5
     ax, ay, az = ax / norm, ay / norm, az / norm
-    cx, cy, cz = (center + d2 * u + d3 * v).tolist()
+    cx, cy, cz = center.tolist()
+    cx, cy, cz = cx + d2 * ux + d3 * vx, cy + d2 * uy + d3 * vy, cz + d2 * uz + d3 * vz
     # Slide the centre along the axis to the weighted centroid's foot (residuals unchanged),
     # which keeps the axis tilts and the centre offsets uncorrelated.
     total = float(weights.sum())
@@ -379,6 +389,8 @@ def _line_distances(points: np.ndarray, base: np.ndarray, direction: np.ndarray)
 
 
 _NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
+#: Two-point samples whose normals are within 10 degrees of parallel give no axis.
+_PAIR_COS = float(np.cos(np.radians(10.0)))
 
 
 def _pair_starts(points, normals, keep: int, count: int, samples: int = 48):
@@ -397,7 +409,7 @@ def _pair_starts(points, normals, keep: int, count: int, samples: int = 48):
     second = rng.integers(0, n, samples)
     d1, d2 = normals[first], normals[second]
     b = np.einsum("ij,ij->i", d1, d2)
-    good = (first != second) & (np.abs(b) < np.cos(np.radians(10.0)))
+    good = (first != second) & (np.abs(b) < _PAIR_COS)
     if not np.any(good):
         return []
     first, second, d1, d2, b = first[good], second[good], d1[good], d2[good], b[good]
@@ -414,7 +426,8 @@ def _pair_starts(points, normals, keep: int, count: int, samples: int = 48):
     center = 0.5 * (p1 + s[:, None] * d1 + p2 + t[:, None] * d2)
     _, squared = _line_distances(points, center, axis)
     rho = np.sqrt(np.maximum(squared, 0.0))
-    radius = 0.5 * (rho[np.arange(len(first)), first] + rho[np.arange(len(first)), second])
+    rows = np.arange(len(first))
+    radius = 0.5 * (rho[rows, first] + rho[rows, second])
     residuals = rho - radius[:, None]
     keep = min(keep, n)
     cost = np.partition(residuals * residuals, keep - 1, axis=1)[:, :keep].sum(axis=1)

@@ -63,6 +63,30 @@ def test_orthonormal_basis_is_a_right_handed_frame(axis):
     assert np.linalg.det(frame) == pytest.approx(1.0)
 
 
+def test_orthonormal_bases_match_orthonormal_basis_bit_for_bit():
+    # Random axes and every tie between coordinate axes (where the branch choice matters).
+    rng = np.random.default_rng(11)
+    random = rng.normal(size=(500, 3))
+    ties = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [1, 0, 1], [0, 1, 1], [1, 1, 1]])
+    axes = np.vstack([random, ties, -ties, [[1e-12, 1, 0]]]).astype(float)
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    u, v = common.orthonormal_bases(axes)
+    for k, axis in enumerate(axes):
+        one_u, one_v = common.orthonormal_basis(axis)
+        assert u[k].tolist() == one_u.tolist() and v[k].tolist() == one_v.tolist()
+
+
+@pytest.mark.parametrize("count", [3, 7, 41])
+def test_median_spacing_is_the_median_nearest_neighbour_distance(count):
+    # Points on a line with known gaps: each point's nearest neighbour is its closer neighbour.
+    # (Odd counts: there the median is one point's distance, whichever way it is averaged.)
+    gaps = np.arange(1.0, count) / 100.0
+    x = np.concatenate([[0.0], np.cumsum(gaps)])
+    points = np.column_stack([x, np.zeros(count), np.zeros(count)])
+    nearest = np.minimum(np.r_[np.inf, gaps], np.r_[gaps, np.inf])
+    assert common.median_spacing(points) == pytest.approx(np.median(nearest), rel=1e-9)
+
+
 @pytest.mark.parametrize(
     "direction, expected",
     [
