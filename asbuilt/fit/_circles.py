@@ -14,13 +14,14 @@ from asbuilt.fit._common import orthonormal_bases
 __all__ = ["circle_starts", "kasa_batch"]
 
 
-def _kasa_design(xy: np.ndarray) -> np.ndarray:
-    """The Kasa least-squares system's rows ``(x, y, 1, -(x^2 + y^2))``, shape (a, n, 4)."""
-    design = np.empty(xy.shape[:2] + (4,))
-    design[:, :, :2] = xy
+def _kasa_design(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The Kasa least-squares system's rows ``(x, y, 1, -(x^2 + y^2))``, shape (a, n, 4), from
+    the projections' coordinates ``x``, ``y`` (a, n), metres."""
+    design = np.empty(x.shape + (4,))
+    design[:, :, 0] = x
+    design[:, :, 1] = y
     design[:, :, 2] = 1.0
-    np.einsum("ank,ank->an", xy, xy, out=design[:, :, 3])
-    design[:, :, 3] *= -1.0
+    np.negative(x * x + y * y, out=design[:, :, 3])
     return design
 
 
@@ -29,10 +30,11 @@ def kasa_batch(xy: np.ndarray, weights: np.ndarray, design: np.ndarray | None = 
 
     Parameters
     ----------
-    xy : ndarray, shape (a, n, 2), metres
+    xy : ndarray, shape (a, n, 2), metres, or None
+        The projections (unused, and may be None, when ``design`` is given).
     weights : ndarray, shape (a, n)
     design : ndarray, shape (a, n, 4), optional
-        ``_kasa_design(xy)`` when the caller has it already.
+        ``_kasa_design(x, y)`` when the caller has it already.
 
     Returns
     -------
@@ -40,7 +42,7 @@ def kasa_batch(xy: np.ndarray, weights: np.ndarray, design: np.ndarray | None = 
     radius : ndarray, shape (a,), metres (NaN where undefined)
     """
     if design is None:
-        design = _kasa_design(xy)
+        design = _kasa_design(xy[:, :, 0], xy[:, :, 1])
     # One product gives the normal matrix (first three columns) and the right-hand side.
     system = (design.transpose(0, 2, 1) * weights[:, None, :]) @ design
     normal, right = system[:, :3, :3], system[:, :3, 3:]
@@ -120,10 +122,11 @@ def circle_starts(
     frame = np.empty((2, count, 3))
     frame[0], frame[1] = orthonormal_bases(axis_array)
     u, v = frame[0], frame[1]
-    xy = (points @ frame.reshape(2 * count, 3).T).reshape(n, 2, count).transpose(2, 0, 1)
-    xy = np.ascontiguousarray(xy)  # (a, n, 2)
-    x, y = xy[:, :, 0], xy[:, :, 1]
-    design = _kasa_design(xy)
+    projected = points @ frame.reshape(2 * count, 3).T  # (n, 2a): every u, then every v
+    # Contiguous (a, n) coordinates: numpy is several times slower on strided views.
+    x = np.ascontiguousarray(projected[:, :count].T)
+    y = np.ascontiguousarray(projected[:, count:].T)
+    design = _kasa_design(x, y)
     rows = np.arange(count)
 
     def distances(center, radius):
@@ -139,14 +142,13 @@ def circle_starts(
             return np.minimum(squared, cutoff * cutoff).sum(axis=1)
         return np.partition(squared, keep - 1, axis=1)[:, :keep].sum(axis=1)
 
-    center, radius = kasa_batch(xy, np.ones((count, n)), design)
+    center, radius = kasa_batch(None, np.ones((count, n)), design)
     cost = trimmed(distances(center, radius))
     # Circumcircles of random triples, shared across axes.
     index = rng.integers(0, n, (samples, 3))
-    pa, pb, pc = xy[:, index[:, 0]], xy[:, index[:, 1]], xy[:, index[:, 2]]  # (a, t, 2)
-    ax_, ay_ = pa[..., 0], pa[..., 1]
-    bx, by = pb[..., 0], pb[..., 1]
-    cx, cy = pc[..., 0], pc[..., 1]
+    ax_, ay_ = x[:, index[:, 0]], y[:, index[:, 0]]  # (a, t)
+    bx, by = x[:, index[:, 1]], y[:, index[:, 1]]
+    cx, cy = x[:, index[:, 2]], y[:, index[:, 2]]
     bcy, cay, aby = by - cy, cy - ay_, ay_ - by
     det = 2.0 * (ax_ * bcy + bx * cay + cx * aby)
     sa, sb, sc = ax_ * ax_ + ay_ * ay_, bx * bx + by * by, cx * cx + cy * cy
@@ -164,7 +166,9 @@ def circle_starts(
         tcost = np.partition(sq, keep - 1, axis=2)[:, :, :keep].sum(axis=2)  # (a, t)
     best = np.argmin(tcost, axis=1)
     better = tcost[rows, best] < np.where(np.isfinite(cost), cost, np.inf)
-    center = np.where(better[:, None], np.stack([ux[rows, best], uy[rows, best]], 1), center)
+    chosen = np.empty((count, 2))
+    chosen[:, 0], chosen[:, 1] = ux[rows, best], uy[rows, best]
+    center = np.where(better[:, None], chosen, center)
     radius = np.where(better, tr[rows, best], radius)
     weights = np.empty((count, n))
     for _ in range(2):
@@ -174,12 +178,12 @@ def circle_starts(
             closest = np.argpartition(distances(center, radius), keep - 1, axis=1)[:, :keep]
             weights.fill(0.0)
             weights[rows[:, None], closest] = 1.0
-        new_center, new_radius = kasa_batch(xy, weights, design)
+        new_center, new_radius = kasa_batch(None, weights, design)
         ok = np.isfinite(new_radius)
         center = np.where(ok[:, None], new_center, center)
         radius = np.where(ok, new_radius, radius)
     cost = trimmed(distances(center, radius))
-    centroid = points.mean(axis=0)
+    centroid = points.sum(axis=0) / n  # points.mean(axis=0), as numpy computes it
     middles = center[:, :1] * u + center[:, 1:] * v + (axis_array @ centroid)[:, None] * axis_array
     valid = np.isfinite(radius) & (radius > 0) & np.isfinite(middles).all(axis=1)
     if keep_invalid:

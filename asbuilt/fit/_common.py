@@ -175,6 +175,23 @@ def check_spread(spread: np.ndarray, kind: str, dimensions: int) -> None:
         )
 
 
+def _basis_floats(ax: float, ay: float, az: float) -> tuple[float, ...]:
+    """``(ux, uy, uz, vx, vy, vz)`` of :func:`orthonormal_basis` in Python floats (one code
+    path for the single and the batched version, so both round alike)."""
+    mx, my, mz = abs(ax), abs(ay), abs(az)
+    # u = axis x e_least (the first least-aligned coordinate axis on ties), written out
+    # (np.cross is slow on single 3-vectors).
+    if mx <= my and mx <= mz:
+        ux, uy, uz = 0.0, az, -ay
+    elif my <= mz:
+        ux, uy, uz = -az, 0.0, ax
+    else:
+        ux, uy, uz = ay, -ax, 0.0
+    norm = (ux * ux + uy * uy + uz * uz) ** 0.5
+    ux, uy, uz = ux / norm, uy / norm, uz / norm
+    return ux, uy, uz, ay * uz - az * uy, az * ux - ax * uz, ax * uy - ay * ux
+
+
 def orthonormal_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit vectors ``u``, ``v`` completing ``axis`` to a right-handed frame.
 
@@ -194,19 +211,8 @@ def orthonormal_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         ax, ay, az = axis.tolist()
     else:
         ax, ay, az = (float(value) for value in axis)
-    mx, my, mz = abs(ax), abs(ay), abs(az)
-    # u = axis x e_least (the first least-aligned coordinate axis on ties), written out
-    # (np.cross is slow on single 3-vectors).
-    if mx <= my and mx <= mz:
-        ux, uy, uz = 0.0, az, -ay
-    elif my <= mz:
-        ux, uy, uz = -az, 0.0, ax
-    else:
-        ux, uy, uz = ay, -ax, 0.0
-    norm = (ux * ux + uy * uy + uz * uz) ** 0.5
-    ux, uy, uz = ux / norm, uy / norm, uz / norm
-    v = (ay * uz - az * uy, az * ux - ax * uz, ax * uy - ay * ux)
-    return np.array((ux, uy, uz)), np.array(v)
+    ux, uy, uz, vx, vy, vz = _basis_floats(ax, ay, az)
+    return np.array((ux, uy, uz)), np.array((vx, vy, vz))
 
 
 def orthonormal_bases(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -221,25 +227,8 @@ def orthonormal_bases(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     -------
     u, v : ndarray, shape (a, 3)
     """
-    ax, ay, az = axes[:, 0], axes[:, 1], axes[:, 2]
-    mx, my, mz = np.abs(ax), np.abs(ay), np.abs(az)
-    first = (mx <= my) & (mx <= mz)
-    second = ~first & (my <= mz)
-    third = ~(first | second)
-    u = np.zeros_like(axes)
-    u[first, 1], u[first, 2] = az[first], -ay[first]
-    u[second, 0], u[second, 2] = -az[second], ax[second]
-    u[third, 0], u[third, 1] = ay[third], -ax[third]
-    ux, uy, uz = u[:, 0], u[:, 1], u[:, 2]
-    squares = ux * ux + uy * uy + uz * uz
-    # Python's ``** 0.5`` (C pow) as in orthonormal_basis: it differs from np.sqrt in the last
-    # bit now and then, which would change the fits' frames.
-    u /= np.array([value**0.5 for value in squares.tolist()])[:, None]
-    v = np.empty_like(axes)
-    v[:, 0] = ay * uz - az * uy
-    v[:, 1] = az * ux - ax * uz
-    v[:, 2] = ax * uy - ay * ux
-    return u, v
+    frames = np.array([_basis_floats(*axis) for axis in axes.tolist()]).reshape(-1, 6)
+    return frames[:, :3], frames[:, 3:]
 
 
 def orient(direction: np.ndarray) -> np.ndarray:

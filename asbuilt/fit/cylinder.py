@@ -106,16 +106,19 @@ def _residuals(state, points):
 
 def _jacobian(state, points):
     axis, center, radius = state
-    local = (points - center) @ _frame(axis)[2]  # along, across u, across v
-    across = local[:, 1:]
-    rho = np.einsum("ij,ij->i", across, across)
+    local = (points - center) @ _frame(axis)[2]
+    # One-dimensional column views: numpy's per-call cost on (n, 2) views is paid per row.
+    along, across_u, across_v = local[:, 0], local[:, 1], local[:, 2]
+    rho = across_u * across_u
+    rho += across_v * across_v
     np.sqrt(rho, out=rho)
     np.maximum(rho, 1e-300, out=rho)
     jac = np.empty((len(points), 5))
-    unit = jac[:, 2:4]
-    np.divide(across, rho[:, None], out=unit)
-    np.negative(unit, out=unit)  # -(eu, ev)
-    np.multiply(unit, local[:, :1], out=jac[:, 0:2])  # -along (eu, ev)
+    minus = np.negative(rho)
+    np.divide(across_u, minus, out=jac[:, 2])  # -(eu, ev)
+    np.divide(across_v, minus, out=jac[:, 3])
+    np.multiply(jac[:, 2], along, out=jac[:, 0])  # -along (eu, ev)
+    np.multiply(jac[:, 3], along, out=jac[:, 1])
     jac[:, 4] = -1.0
     rho -= radius
     return rho, jac
