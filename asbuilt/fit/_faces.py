@@ -262,16 +262,18 @@ def _distinct(normals, offsets, order, cos_face, threshold, limit):
     if order.size == 0:
         return chosen
     sub_n, sub_o = normals[order], offsets[order]
-    same = (np.abs(sub_n @ sub_n.T) > cos_face) & (
-        np.abs(sub_o[:, None] - sub_o[None, :]) < 2 * threshold
+    other = ~(
+        (np.abs(sub_n @ sub_n.T) > cos_face)
+        & (np.abs(sub_o[:, None] - sub_o[None, :]) < 2 * threshold)
     )
     alive = np.ones(order.size, bool)
+    order = order.tolist()
     while len(chosen) < limit:
         pos = int(alive.argmax())
         if not alive[pos]:
             break
-        chosen.append(int(order[pos]))
-        alive &= ~same[pos]
+        chosen.append(order[pos])
+        alive &= other[pos]
     return chosen
 
 
@@ -397,6 +399,7 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
     ``viewpoint`` (3,) a face turned away from it is never added.
     """
     view_proj = None if viewpoint is None else axes @ viewpoint
+    proj_all = None
     while True:
         explained = np.zeros(points.shape[0], bool)
         for _, _, mask in faces:
@@ -405,7 +408,8 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
         if free.size < _MIN_THIRD_FACE_POINTS:
             return faces
         best = None
-        proj_all = points @ axes.T
+        if proj_all is None:
+            proj_all = points @ axes.T  # the axes stay: once for every face added
         seen_axes = {axis for axis, _, _ in faces}
         for k in range(3):
             # A face across the one axis no seen face is normal to has only its offset free
@@ -457,7 +461,9 @@ def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap, view_pr
     for axis, off, fmask in faces:
         if axis != k or not fmask.any():
             continue
-        other_side = -1.0 if proj[fmask, k].mean() < body[:, k].mean() else 1.0
+        theirs, ours = proj[fmask, k], body[:, k]
+        # Means as np.mean computes them (sum, then divide), without its Python overhead.
+        other_side = -1.0 if theirs.sum() / theirs.size < ours.sum() / ours.size else 1.0
         if other_side == side or abs(off - offset) < 2 * threshold:
             return False
     new = proj[mask]
@@ -502,6 +508,11 @@ def is_box(face_axis: np.ndarray, face_sign: np.ndarray, face_offset: np.ndarray
 
 def frame_from(points, axes, faces, threshold, viewpoint) -> Frame:
     """Signs, offsets and labels for faces given as (axis, unsigned offset, mask)."""
+    return _frame_and_distances(points, axes, faces, threshold, viewpoint)[0]
+
+
+def _frame_and_distances(points, axes, faces, threshold, viewpoint):
+    """:func:`frame_from`, and each point's distance (n, m) metres to each face plane."""
     m = len(faces)
     face_axis = np.array([f[0] for f in faces], dtype=np.int64)
     face_sign = np.ones(m)
@@ -523,12 +534,13 @@ def frame_from(points, axes, faces, threshold, viewpoint) -> Frame:
     dist = np.abs(points @ normals.T - face_offset[None, :])
     labels = np.argmin(dist, axis=1)
     labels[dist[np.arange(points.shape[0]), labels] >= threshold] = -1
-    return Frame(axes, face_axis, face_sign, face_offset, labels)
+    return Frame(axes, face_axis, face_sign, face_offset, labels), dist
 
 
-def _score(points, frame: Frame, threshold) -> tuple[int, float]:
-    normals = frame.face_sign[:, None] * frame.axes[frame.face_axis]
-    dist = np.abs(points @ normals.T - frame.face_offset[None, :]).min(axis=1)
+def _score(distances: np.ndarray, threshold) -> tuple[int, float]:
+    """Points within ``threshold`` of a face and minus their squared distances' sum, from the
+    distances (n, m) metres of :func:`_frame_and_distances`."""
+    dist = distances.min(axis=1)
     kept = dist < threshold
     return int(np.count_nonzero(kept)), -float(np.sum(dist[kept] ** 2))
 
@@ -557,7 +569,7 @@ def _all_facing(points, frame: Frame, viewpoint) -> bool:
     normals = frame.face_sign[:, None] * frame.axes[frame.face_axis]
     for f in range(frame.n_faces):
         members = points[frame.labels == f]
-        if members.shape[0] and normals[f] @ (viewpoint - members.mean(axis=0)) <= 0:
+        if members.shape[0] and normals[f] @ (viewpoint - members.sum(axis=0) / len(members)) <= 0:
             return False
     return True
 
@@ -604,17 +616,18 @@ class Segmentation:
             d2 = d2 - (d2 @ d1) * d1
             d2 /= np.linalg.norm(d2)
             axes = np.vstack([d1, d2, cross3(d1, d2)])
-            faces = [(0, o1, mask1), (1, float(d2 @ points[mask2].mean(axis=0)), mask2)]
+            on2 = points[mask2]
+            faces = [(0, o1, mask1), (1, float(d2 @ (on2.sum(axis=0) / len(on2))), mask2)]
             faces = extra_faces(
                 points, axes, faces, threshold, gap, viewpoint if self.visible_only else None
             )
-        frame = frame_from(points, axes, faces, threshold, viewpoint)
+        frame, distances = _frame_and_distances(points, axes, faces, threshold, viewpoint)
         # A frame that cannot be a box (faces on both sides of the points across one axis, or
         # one turned away from a trusted viewpoint) ranks below every frame that can.
         plausible = is_box(frame.face_axis, frame.face_sign, frame.face_offset)
         if self.visible_only and viewpoint is not None:
             plausible = plausible and _all_facing(points, frame, viewpoint)
-        score = (plausible,) + _score(points, frame, threshold)
+        score = (plausible,) + _score(distances, threshold)
         self.built.append((score, len(self.built), frame))
         if self.best_score is None or score > self.best_score:
             self.best_score = score

@@ -231,7 +231,8 @@ def _outward_spacing(proj: np.ndarray, extreme: int, k: int, sign: float) -> flo
     reached the edge), None when there is none.
     """
     delta = sign * (proj[extreme, k] - proj[:, k])
-    lateral = np.linalg.norm(np.delete(proj - proj[extreme], k, axis=1), axis=1)
+    across = [j for j in range(3) if j != k]  # the other two axes (np.delete is slow)
+    lateral = np.linalg.norm((proj - proj[extreme])[:, across], axis=1)
     behind = (delta > 0.0) & (lateral <= delta)
     return float(delta[behind].min()) if np.any(behind) else None
 
@@ -400,12 +401,16 @@ def _derived(model, x, lo_pt, hi_pt, lo_face, hi_face, pad, one_face):
     """Sizes (3,) and local centre (3,) as a function of the model state (for error propagation)."""
     proj = x @ model.axes.T
     lo, hi = np.zeros(3), np.zeros(3)
+    # Called once per parameter by _propagate: plain Python over the few faces.
+    faces = list(zip(model.face_axis.tolist(), model.face_sign.tolist(), model.offset.tolist()))
     for k in range(3):
-        for f in np.flatnonzero(model.face_axis == k):
-            if model.face_sign[f] > 0:
-                hi[k] = model.offset[f]
+        for axis, sign, offset in faces:
+            if axis != k:
+                continue
+            if sign > 0:
+                hi[k] = offset
             else:
-                lo[k] = -model.offset[f]
+                lo[k] = -offset
         if not hi_face[k]:
             hi[k] = proj[hi_pt[k], k] + pad[1, k] if hi_pt[k] >= 0 else hi[k]
         if not lo_face[k]:
