@@ -115,7 +115,7 @@ def principal_axes(points: np.ndarray, weights: np.ndarray | None = None):
         Rows are the unit principal directions, matching ``spread``.
     """
     if weights is None:
-        centroid = points.mean(axis=0)
+        centroid = points.sum(axis=0) / len(points)  # points.mean(axis=0), cheaper
         centred = points - centroid
         total = float(len(points))
     else:

@@ -42,6 +42,7 @@ from asbuilt.fit._circles import circle_starts
 from asbuilt.fit._common import (
     GeometricModel,
     RobustFit,
+    _basis_floats,
     arc_coverage_deg,
     check_spread,
     covariance_from_jacobian,
@@ -90,8 +91,9 @@ def _frame(axis: np.ndarray):
     key = axis.tobytes()
     found = _FRAME_CACHE.get(key)
     if found is None:
-        u, v = orthonormal_basis(axis)
-        found = (u, v, np.array((axis, u, v)).T, u.tolist() + v.tolist())
+        floats = _basis_floats(*axis.tolist())
+        u, v = np.array(floats[:3]), np.array(floats[3:])
+        found = (u, v, np.array((axis, u, v)).T, floats)
         if len(_FRAME_CACHE) >= 8:
             _FRAME_CACHE.clear()
         _FRAME_CACHE[key] = found
@@ -357,7 +359,7 @@ def _line_axis(points: np.ndarray, keep: int, rng, samples: int = 32, steps: int
         along = rel @ axis
         distance = np.einsum("ij,ij->i", rel, rel) - along * along
         closest = points[np.argpartition(distance, keep - 1)[:keep]]
-        point = closest.mean(axis=0)
+        point = closest.sum(axis=0) / len(closest)  # closest.mean(axis=0), less overhead
         centred = closest - point
         # Principal direction: the scatter matrix's leading eigenvector.
         axis = np.linalg.eigh(centred.T @ centred)[1][:, 2]
@@ -497,7 +499,7 @@ def fit_cylinder(
         Too few points, identical, collinear or coplanar points, or too many outliers.
     """
     pts = validate_points(points, "cylinder")
-    offset = pts.mean(axis=0)
+    offset = pts.sum(axis=0) / len(pts)  # pts.mean(axis=0), without its overhead
     local = pts - offset
     everything = None
     if len(local) > DENSE_POINTS:
@@ -832,6 +834,13 @@ def _doubtful_blind(robust: RobustFit, points: np.ndarray) -> bool:
     return robust.state[2] > PLANE_LIKE * extent
 
 
+def _mean_direction(angles: np.ndarray) -> np.ndarray:
+    """The mean of the unit vectors at ``angles`` (m,) radians: ``(mean cos, mean sin)``, shape
+    (2,), summed and divided as :meth:`numpy.ndarray.mean` does."""
+    count = angles.size
+    return np.array([np.cos(angles).sum() / count, np.sin(angles).sum() / count])
+
+
 def _drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances) -> RobustFit:
     """Reject inliers on the far side of a pipe seen from one side, and refit without them.
 
@@ -848,7 +857,7 @@ def _drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances
     rel = points - center
     angles = np.arctan2(rel @ v, rel @ u)
     kept = robust.inliers
-    mean = np.array([np.cos(angles[kept]).mean(), np.sin(angles[kept]).mean()])
+    mean = _mean_direction(angles[kept])
     resultant = float(np.hypot(*mean))
     if resultant <= ONE_SIDED:
         return robust
@@ -891,7 +900,7 @@ def _incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFi
     rel = points - center
     angles = np.arctan2(rel @ v, rel @ u)
     kept = robust.inliers
-    mean = np.array([np.cos(angles[kept]).mean(), np.sin(angles[kept]).mean()])
+    mean = _mean_direction(angles[kept])
     if float(np.hypot(*mean)) <= ONE_SIDED or np.count_nonzero(kept) < 8:
         return robust, uniform
     square_on = np.cos(angles - np.arctan2(mean[1], mean[0])) ** 2
