@@ -133,7 +133,8 @@ def circle_starts(
         distance = _norm2(x - center[:, :1], y - center[:, 1:])
         distance -= radius[:, None]
         np.abs(distance, out=distance)
-        distance[~np.isfinite(distance)] = np.inf
+        # NaN (no circle) to infinity; the rest are >= 0 or infinite, which fmin keeps.
+        np.fmin(distance, np.inf, out=distance)
         return distance
 
     def trimmed(distance):
@@ -159,7 +160,7 @@ def circle_starts(
         sq = _norm2(x[:, None, :] - ux[..., None], y[:, None, :] - uy[..., None])
         sq -= tr[..., None]
         sq *= sq
-    sq[~np.isfinite(sq)] = np.inf
+    np.fmin(sq, np.inf, out=sq)  # NaN (collinear or repeated triples) to infinity
     if cutoff is not None:
         tcost = np.minimum(sq, cutoff * cutoff).sum(axis=2)  # (a, t)
     else:

@@ -430,7 +430,7 @@ def _pair_starts(points, normals, keep: int, count: int, samples: int = 48):
     t = (e - b * d) / denom
     center = 0.5 * (p1 + s[:, None] * d1 + p2 + t[:, None] * d2)
     _, squared = _line_distances(points, center, axis)
-    rho = np.sqrt(np.maximum(squared, 0.0))
+    rho = np.sqrt(np.maximum(squared, 0.0, out=squared), out=squared)
     rows = np.arange(len(first))
     radius = 0.5 * (rho[rows, first] + rho[rows, second])
     residuals = rho - radius[:, None]
