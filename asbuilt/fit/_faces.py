@@ -48,6 +48,9 @@ _MIN_THIRD_FACE_POINTS = 2
 _SAME_FACE = 0.9
 _EYE3 = np.eye(3)
 _EYE3.setflags(write=False)
+#: ``ndarray.sum``'s own reduction, called directly: the hot paths sum small arrays thousands of
+#: times a fit, and the method's Python wrapper costs more than the sum.
+_ADD = np.add.reduce
 #: A face's points must be spread off a line by this many consensus thresholds (RMS): a raster
 #: line lies in every plane through it and would otherwise pass for a face.
 _MIN_SPREAD = 1.5
@@ -186,11 +189,18 @@ def cross3(a, b) -> np.ndarray:
     )
 
 
+def row_norms(vectors: np.ndarray) -> np.ndarray:
+    """Lengths (k,) of the rows of ``vectors`` (k, d): ``np.linalg.norm(vectors, axis=1)``'s
+    own arithmetic (the sum of squares along the row, then its root), without its Python
+    overhead (the cuboid fit calls this thousands of times a fit)."""
+    return np.sqrt(_ADD(vectors * vectors, axis=1))
+
+
 def _unit_rows(vectors: np.ndarray, norms: np.ndarray | None = None):
     """Unit rows of ``vectors`` (k, 3) and which rows had a length (k,) bool; ``norms`` (k,),
     their lengths, may be passed when already computed."""
     if norms is None:
-        norms = np.linalg.norm(vectors, axis=1)
+        norms = row_norms(vectors)
     ok = norms > 1e-12
     out = np.zeros_like(vectors)
     out[ok] = vectors[ok] / norms[ok, None]
@@ -225,7 +235,7 @@ def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
         if _ == rounds and basis is not None:
             break  # only the masks are wanted (no spread within a basis)
         weight = masks.astype(np.float64)
-        count = np.maximum(weight.sum(axis=1), 1.0)
+        count = np.maximum(_ADD(weight, axis=1), 1.0)
         mean = weight @ coords / count[:, None]
         second = (weight @ outer).reshape(-1, dim, dim) / count[:, None, None]
         cov = second - mean[:, :, None] * mean[:, None, :]
@@ -284,20 +294,20 @@ def _first_planes(points, normals, threshold, cos_face, rng, limit=_MAX_FIRST_HA
     tri = rng.integers(0, n, size=(_TRIPLES, 3))
     a, b, c = points[tri[:, 0]], points[tri[:, 1]], points[tri[:, 2]]
     cross = cross_rows(b - a, c - a)
-    scale = np.linalg.norm(b - a, axis=1) * np.linalg.norm(c - a, axis=1)
-    good = np.linalg.norm(cross, axis=1) > 0.05 * np.maximum(scale, 1e-300)
+    scale = row_norms(b - a) * row_norms(c - a)
+    good = row_norms(cross) > 0.05 * np.maximum(scale, 1e-300)
     tri_normals, ok = _unit_rows(cross[good])
     cand_n = np.concatenate([normals[seeds], tri_normals[ok]])
     cand_p = np.concatenate([points[seeds], a[good][ok]])
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
-    counts = (np.abs(cand_n @ points.T - offsets[:, None]) < threshold).sum(axis=1)
+    counts = _ADD(np.abs(cand_n @ points.T - offsets[:, None]) < threshold, axis=1)
     order = np.argsort(-counts, kind="stable")
     top = _distinct(cand_n, offsets, order, cos_face, threshold, 4 * limit)
     top = [i for i in top if counts[i] >= _MIN_FACE_POINTS]
     if not top:
         return []
     ref_n, ref_o, masks, spread = _batch_refine(points, cand_n[top], offsets[top], threshold)
-    sizes = masks.sum(axis=1)
+    sizes = _ADD(masks, axis=1)
     usable = (sizes >= _MIN_FACE_POINTS) & (spread >= _MIN_SPREAD * threshold)
     order = [i for i in np.argsort(-sizes, kind="stable") if usable[i]]
     keep = _distinct(ref_n, ref_o, order, cos_face, threshold, limit)
@@ -324,20 +334,23 @@ def _second_plane(points, normals, first, threshold, gap, rng):
     else:
         i, j = _pairs(r, np.arange(r * (r - 1) // 2))
     raw = cross_rows(d1, sub[j] - sub[i])
-    length = np.linalg.norm(raw, axis=1)
+    length = row_norms(raw)
     pair_n, ok = _unit_rows(raw, length)
     ok &= length > 2 * threshold
     # Local normals made perpendicular to d1.
     # (Dense: the local normals of 200 points at random, as for the first planes.)
-    seeds = np.arange(r) if r <= _DENSE_LIMIT else rng.choice(r, 200, replace=False)
-    seed_normals = normals[rest[seeds]]
+    if r <= _DENSE_LIMIT:
+        seed_normals, seed_points = normals[rest], sub
+    else:
+        seeds = rng.choice(r, 200, replace=False)
+        seed_normals, seed_points = normals[rest[seeds]], sub[seeds]
     loc_n, loc_ok = _unit_rows(seed_normals - (seed_normals @ d1)[:, None] * d1)
     cand_n = np.concatenate([pair_n[ok], loc_n[loc_ok]])
-    cand_p = np.concatenate([sub[i[ok]], sub[seeds][loc_ok]])
+    cand_p = np.concatenate([sub[i[ok]], seed_points[loc_ok]])
     if cand_n.shape[0] == 0:
         return None
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
-    counts = (np.abs(cand_n @ sub.T - offsets[:, None]) < threshold).sum(axis=1)
+    counts = _ADD(np.abs(cand_n @ sub.T - offsets[:, None]) < threshold, axis=1)
     order = np.argsort(-counts, kind="stable")
     top = _distinct(cand_n, offsets, order, 0.999, threshold, 8)
     top = [c for c in top if counts[c] >= _MIN_FACE_POINTS]
@@ -346,7 +359,7 @@ def _second_plane(points, normals, first, threshold, gap, rng):
     ref_n, ref_o, masks, _ = _batch_refine(
         sub, cand_n[top], offsets[top], threshold, basis, rounds=1
     )
-    sizes = masks.sum(axis=1)
+    sizes = _ADD(masks, axis=1)
     order = [c for c in np.argsort(-sizes, kind="stable") if sizes[c] >= _MIN_FACE_POINTS]
     for c in _distinct(ref_n, ref_o, order, 0.999, threshold, 5):
         mask = np.zeros(points.shape[0], bool)
@@ -375,11 +388,11 @@ def _contiguous(points, face_a, face_b, threshold, gap) -> bool:
     """
     for (na, oa, _), (_, _, mb) in ((face_a, face_b), (face_b, face_a)):
         dist = points[mb] @ na - oa
-        near = np.abs(dist) <= threshold
-        far = dist[~near]
+        size = np.abs(dist)
+        far = dist[size > threshold]
         if far.size and far.max() > 0 and far.min() < 0:
             return False
-        if np.abs(dist).min() > gap:
+        if size.min() > gap:
             return False
     return True
 
@@ -441,7 +454,7 @@ def _within(values: np.ndarray, threshold: float) -> np.ndarray:
     ``_DENSE_LIMIT`` values by sorting (a pair exactly ``threshold`` apart may then round the
     other way)."""
     if values.size <= _DENSE_LIMIT:
-        return (np.abs(values[:, None] - values[None, :]) < threshold).sum(axis=1)
+        return _ADD(np.abs(values[:, None] - values[None, :]) < threshold, axis=1)
     ordered = np.sort(values)
     return np.searchsorted(ordered, values + threshold, "left") - np.searchsorted(
         ordered, values - threshold, "right"

@@ -232,7 +232,7 @@ def _outward_spacing(proj: np.ndarray, extreme: int, k: int, sign: float) -> flo
     """
     delta = sign * (proj[extreme, k] - proj[:, k])
     across = [j for j in range(3) if j != k]  # the other two axes (np.delete is slow)
-    lateral = np.linalg.norm((proj - proj[extreme])[:, across], axis=1)
+    lateral = _faces.row_norms((proj - proj[extreme])[:, across])
     behind = (delta > 0.0) & (lateral <= delta)
     return float(delta[behind].min()) if np.any(behind) else None
 
