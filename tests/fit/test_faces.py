@@ -107,3 +107,77 @@ def test_spread_subset_with_a_tree_matches_the_dense_one(monkeypatch):
     dense = cuboid._spread_subset(x, base)
     monkeypatch.setattr(_faces, "_DENSE_LIMIT", 10)
     np.testing.assert_array_equal(cuboid._spread_subset(x, base), dense)
+
+
+# The hot-path helpers below replace numpy conveniences by cheaper calls; each must give the
+# convenience's answer bit for bit (the fit's decisions must not change).
+
+
+@pytest.mark.parametrize("r", [2, 3, 4, 17, 18, 35, 60])
+def test_pairs_by_position_are_triu_indices(r):
+    i, j = np.triu_indices(r, 1)
+    every = np.arange(i.size)
+    got_i, got_j = _faces._pairs(r, every)
+    np.testing.assert_array_equal(got_i, i)
+    np.testing.assert_array_equal(got_j, j)
+    some = np.random.default_rng(r).choice(i.size, min(i.size, 7), replace=False)
+    got_i, got_j = _faces._pairs(r, some)
+    np.testing.assert_array_equal(got_i, i[some])
+    np.testing.assert_array_equal(got_j, j[some])
+
+
+@pytest.mark.parametrize("columns", [2, 3])
+def test_row_norms_are_numpys_norms_exactly(columns):
+    v = np.random.default_rng(columns).normal(0.0, 3.0, (200, columns))
+    v[0] = 0.0
+    np.testing.assert_array_equal(_faces.row_norms(v), np.linalg.norm(v, axis=1))
+
+
+def test_perpendicular_basis_is_the_normalised_cross_products():
+    rng = np.random.default_rng(8)
+    for direction in rng.normal(size=(50, 3)):
+        direction /= np.linalg.norm(direction)
+        helper = np.eye(3)[int(np.argmin(np.abs(direction)))]
+        first = np.cross(direction, helper)
+        first /= np.linalg.norm(first)
+        expected = np.stack([first, np.cross(direction, first)], axis=1)
+        got = _faces._perpendicular_basis(direction)
+        np.testing.assert_allclose(got, expected, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(got.T @ got, np.eye(2), atol=1e-12)
+        np.testing.assert_allclose(got.T @ direction, 0.0, atol=1e-12)
+
+
+def test_distinct_is_the_greedy_suppression_in_order():
+    # Reference: take planes in order, skipping any the same as one already taken (direction
+    # within cos_face and offset within twice the threshold).
+    rng = np.random.default_rng(9)
+    normals = rng.normal(size=(60, 3))
+    normals[20:40] = normals[:20] + rng.normal(0.0, 0.01, (20, 3))  # near-duplicates
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    offsets = rng.choice([0.0, 0.5, 1.0], 60) + rng.normal(0.0, 0.001, 60)
+    order = rng.permutation(60)
+    cos_face, threshold = math.cos(math.radians(10.0)), 0.01
+    for limit in (1, 3, 8, 60):
+        expected: list[int] = []
+        for c in order[: 8 * limit]:
+            same = [
+                abs(normals[c] @ normals[e]) > cos_face
+                and abs(offsets[c] - offsets[e]) < 2 * threshold
+                for e in expected
+            ]
+            if not any(same) and len(expected) < limit:
+                expected.append(int(c))
+        assert _faces._distinct(normals, offsets, order, cos_face, threshold, limit) == expected
+
+
+def test_frame_score_counts_points_near_a_face():
+    # Two faces of a unit cube corner: points on them, one point off both.
+    pts = np.array([[0.5, 0.1, 0.2], [0.5, -0.3, 0.0], [0.1, 0.5, 0.3], [-0.2, 0.5, 0.1]])
+    pts = np.vstack([pts, [[0.0, 0.0, 0.0]]])
+    axes = np.eye(3)
+    faces = [(0, 0.5, np.array([1, 1, 0, 0, 0], bool)), (1, 0.5, np.array([0, 0, 1, 1, 0], bool))]
+    frame, dist = _faces._frame_and_distances(pts, axes, faces, 0.01, None)
+    np.testing.assert_array_equal(frame.labels, [0, 0, 1, 1, -1])
+    assert dist.shape == (5, 2)
+    count, minus_ss = _faces._score(dist, 0.01)
+    assert count == 4 and minus_ss == 0.0

@@ -55,3 +55,19 @@ def test_the_information_criterion_charges_faces_and_their_labels():
     spoiled[0] = 1.0
     outlier = (two[0], two[1], spoiled, inliers & (np.arange(40) != 0))
     assert _information(outlier, 0.002, 3.0) > _information(two, 0.002, 3.0) + 9.0 - 0.1
+
+
+@pytest.mark.parametrize("rot_basis", [np.eye(3), np.eye(3)[:, 1:]])
+def test_jacobian_matches_its_plain_construction(rot_basis):
+    # Rotation columns (face normal x point, in the rotation basis), then -1 in each point's
+    # face column: what the in-place fill must reproduce exactly.
+    rng = np.random.default_rng(4)
+    model = FaceModel(
+        np.eye(3), np.array([0, 1, 2]), np.array([1.0, -1.0, 1.0]), [0.3, 0.2, 0.5], rot_basis
+    )
+    x = rng.normal(size=(25, 3))
+    label = rng.integers(0, 3, 25)
+    normal = model.normals()[label]
+    onehot = (label[:, None] == np.arange(3)).astype(np.float64)
+    expected = np.hstack([np.cross(normal, x) @ rot_basis, -onehot])
+    np.testing.assert_array_equal(model.jacobian(x, label), expected)
