@@ -256,7 +256,7 @@ def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
 
 def _perpendicular_basis(direction: np.ndarray) -> np.ndarray:
     """Two unit columns, shape (3, 2), perpendicular to ``direction`` and to each other."""
-    helper = _EYE3[int(np.argmin(np.abs(direction)))]
+    helper = _EYE3[int(np.abs(direction).argmin())]
     first = cross3(direction, helper)
     first /= math.sqrt(first @ first)  # np.linalg.norm's own sum for a vector, without its checks
     out = np.empty((3, 2))
@@ -301,7 +301,7 @@ def _first_planes(points, normals, threshold, cos_face, rng, limit=_MAX_FIRST_HA
     cand_p = np.concatenate([points[seeds], a[good][ok]])
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = _ADD(np.abs(cand_n @ points.T - offsets[:, None]) < threshold, axis=1)
-    order = np.argsort(-counts, kind="stable")
+    order = (-counts).argsort(kind="stable")
     top = _distinct(cand_n, offsets, order, cos_face, threshold, 4 * limit)
     top = [i for i in top if counts[i] >= _MIN_FACE_POINTS]
     if not top:
@@ -309,7 +309,7 @@ def _first_planes(points, normals, threshold, cos_face, rng, limit=_MAX_FIRST_HA
     ref_n, ref_o, masks, spread = _batch_refine(points, cand_n[top], offsets[top], threshold)
     sizes = _ADD(masks, axis=1)
     usable = (sizes >= _MIN_FACE_POINTS) & (spread >= _MIN_SPREAD * threshold)
-    order = [i for i in np.argsort(-sizes, kind="stable") if usable[i]]
+    order = [i for i in (-sizes).argsort(kind="stable") if usable[i]]
     keep = _distinct(ref_n, ref_o, order, cos_face, threshold, limit)
     return [(ref_n[i], float(ref_o[i]), masks[i]) for i in keep]
 
@@ -317,7 +317,7 @@ def _first_planes(points, normals, threshold, cos_face, rng, limit=_MAX_FIRST_HA
 def _second_plane(points, normals, first, threshold, gap, rng):
     """The best plane perpendicular to ``first`` among the points off it, contiguous with it."""
     d1, o1, mask1 = first
-    rest = np.flatnonzero(~mask1)
+    rest = (~mask1).nonzero()[0]  # np.flatnonzero without its wrapper
     if rest.size < _MIN_FACE_POINTS:
         return None
     sub = points[rest]
@@ -351,7 +351,7 @@ def _second_plane(points, normals, first, threshold, gap, rng):
         return None
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = _ADD(np.abs(cand_n @ sub.T - offsets[:, None]) < threshold, axis=1)
-    order = np.argsort(-counts, kind="stable")
+    order = (-counts).argsort(kind="stable")
     top = _distinct(cand_n, offsets, order, 0.999, threshold, 8)
     top = [c for c in top if counts[c] >= _MIN_FACE_POINTS]
     if not top:
@@ -360,7 +360,7 @@ def _second_plane(points, normals, first, threshold, gap, rng):
         sub, cand_n[top], offsets[top], threshold, basis, rounds=1
     )
     sizes = _ADD(masks, axis=1)
-    order = [c for c in np.argsort(-sizes, kind="stable") if sizes[c] >= _MIN_FACE_POINTS]
+    order = [c for c in (-sizes).argsort(kind="stable") if sizes[c] >= _MIN_FACE_POINTS]
     for c in _distinct(ref_n, ref_o, order, 0.999, threshold, 5):
         mask = np.zeros(points.shape[0], bool)
         mask[rest[masks[c]]] = True
@@ -417,13 +417,20 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
         explained = np.zeros(points.shape[0], bool)
         for _, _, mask in faces:
             explained |= mask
-        free = np.flatnonzero(~explained)
+        free = (~explained).nonzero()[0]
         if free.size < _MIN_THIRD_FACE_POINTS:
             return faces
         best = None
         if proj_all is None:
             proj_all = points @ axes.T  # the axes stay: once for every face added
         seen_axes = {axis for axis, _, _ in faces}
+        free_proj = proj_all[free]
+        if free.size <= _DENSE_LIMIT:
+            # Every axis's counts at once (:func:`_within`'s dense count, per column).
+            diff = np.abs(free_proj[:, None, :] - free_proj[None, :, :])
+            counts = _ADD(diff < threshold, axis=1)
+            peaks = counts.argmax(axis=0).tolist()
+            peak_counts = counts[peaks, [0, 1, 2]].tolist()
         for k in range(3):
             # A face across the one axis no seen face is normal to has only its offset free
             # (the other two fix its direction): two points that agree on it suffice (the top
@@ -433,12 +440,16 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
                 if k not in seen_axes and len(seen_axes) == 2
                 else _MIN_FACE_POINTS
             )
-            proj = proj_all[free, k]
-            counts = _within(proj, threshold)
-            c = int(np.argmax(counts))
-            if counts[c] < least or (best is not None and counts[c] <= best[0]):
+            proj = free_proj[:, k]
+            if free.size <= _DENSE_LIMIT:
+                c, count = peaks[k], peak_counts[k]
+            else:
+                within = _within(proj, threshold)
+                c = int(within.argmax())
+                count = within[c]
+            if count < least or (best is not None and count <= best[0]):
                 continue
-            members = proj_all[free[np.abs(proj - proj[c]) < threshold], k]
+            members = proj[np.abs(proj - proj[c]) < threshold]
             offset = float(members.sum()) / members.size  # np.mean's sum and division
             mask = np.zeros(points.shape[0], bool)
             mask[free[np.abs(proj - offset) < threshold]] = True
@@ -530,12 +541,11 @@ def _frame_and_distances(points, axes, faces, threshold, viewpoint):
     face_axis = np.array([f[0] for f in faces], dtype=np.int64)
     face_sign = np.ones(m)
     face_offset = np.zeros(m)
+    anyone = np.zeros(points.shape[0], bool)
+    for _, _, mask in faces:
+        anyone |= mask
     for idx, (k, off, mask) in enumerate(faces):
-        others = np.zeros(points.shape[0], bool)
-        for jdx, (_, _, omask) in enumerate(faces):
-            if jdx != idx:
-                others |= omask
-        others &= ~mask
+        others = anyone & ~mask  # the other faces' points, but for this face's own
         if others.any():
             sign = _orient(axes[k], off, points[others])
         else:
@@ -545,7 +555,7 @@ def _frame_and_distances(points, axes, faces, threshold, viewpoint):
         face_offset[idx] = sign * off
     normals = face_sign[:, None] * axes[face_axis]
     dist = np.abs(points @ normals.T - face_offset[None, :])
-    labels = np.argmin(dist, axis=1)
+    labels = dist.argmin(axis=1)
     labels[dist[np.arange(points.shape[0]), labels] >= threshold] = -1
     return Frame(axes, face_axis, face_sign, face_offset, labels), dist
 
@@ -555,7 +565,7 @@ def _score(distances: np.ndarray, threshold) -> tuple[int, float]:
     distances (n, m) metres of :func:`_frame_and_distances`."""
     dist = distances.min(axis=1)
     kept = dist < threshold
-    return int(np.count_nonzero(kept)), -float(np.sum(dist[kept] ** 2))
+    return int(np.count_nonzero(kept)), -float(_ADD(dist[kept] ** 2))
 
 
 def _already_a_face(tried_frames, normal, mask, cos_face) -> bool:
@@ -571,7 +581,7 @@ def _already_a_face(tried_frames, normal, mask, cos_face) -> bool:
         if frame.n_faces < 2:
             continue
         normals = frame.face_sign[:, None] * frame.axes[frame.face_axis]
-        for f in np.flatnonzero(np.abs(normals @ normal) > cos_face):
+        for f in (np.abs(normals @ normal) > cos_face).nonzero()[0]:
             if np.count_nonzero(mask & (frame.labels == f)) >= _SAME_FACE * count:
                 return True
     return False

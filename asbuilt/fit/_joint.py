@@ -56,7 +56,7 @@ class FaceModel:
 
     def assign(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         res = self.all_residuals(x)
-        label = np.argmin(np.abs(res), axis=1)
+        label = np.abs(res).argmin(axis=1)
         return label, res[np.arange(x.shape[0]), label]
 
     def jacobian(self, x: np.ndarray, label: np.ndarray, normal=None) -> np.ndarray:
@@ -140,7 +140,7 @@ def _robust_fit(model, x, noise, floor, cutoff):
         label, residual = model.assign(x)
         if moved < 1e-9:
             break
-    if np.any(inliers):
+    if inliers.any():
         scale = _robust_scale(residual[inliers], floor)
     # The final cut is never tighter than the noise level: orthogonal residuals of oblique shots
     # are smaller than the range noise, and a few points' median underestimates it, so a cut at
@@ -233,7 +233,7 @@ def plausible(model: FaceModel, view: np.ndarray, trusted: bool) -> bool:
         return False
     if not trusted:
         return not _opposite_faces(model)
-    return bool(np.all(model.normals() @ view - model.offset > 0.0))
+    return bool((model.normals() @ view - model.offset > 0.0).all())
 
 
 def _on_a_line(trial, x: np.ndarray, width: float, raster: np.ndarray | None = None) -> bool:

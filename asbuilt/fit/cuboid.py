@@ -234,7 +234,7 @@ def _outward_spacing(proj: np.ndarray, extreme: int, k: int, sign: float) -> flo
     across = [j for j in range(3) if j != k]  # the other two axes (np.delete is slow)
     lateral = _faces.row_norms((proj - proj[extreme])[:, across])
     behind = (delta > 0.0) & (lateral <= delta)
-    return float(delta[behind].min()) if np.any(behind) else None
+    return float(delta[behind].min()) if behind.any() else None
 
 
 #: Cosine of the largest angle between a bisection's line and an axis for the bisection to
@@ -275,7 +275,7 @@ def _pinned(x, index, along, sign, axis, edges, tol) -> bool:
     if edges is None:
         return False
     best = None
-    for m in np.flatnonzero(edges[0][index] >= 0):
+    for m in (edges[0][index] >= 0).nonzero()[0]:
         if _bisected(x, axis, index[m], edges):
             value = sign * along[m]
             best = value if best is None else max(best, value)
@@ -307,7 +307,7 @@ def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
     lo_face, hi_face = np.zeros(3, bool), np.zeros(3, bool)
     lo_pt, hi_pt = -np.ones(3, np.int64), -np.ones(3, np.int64)
     pads = np.zeros((2, 3))
-    index = np.flatnonzero(inliers)
+    index = inliers.nonzero()[0]
     inner = proj[index]
     for k in range(3):
         for f in np.flatnonzero(model.face_axis == k):
@@ -319,7 +319,7 @@ def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
         lines = index[model.face_axis[label[index]] != k]
         median = _spacing(proj[lines, k], noise)
         if not hi_face[k]:
-            top = int(np.argmax(along))
+            top = int(along.argmax())
             local = _outward_spacing(inner, top, k, 1.0)
             pads[1, k] = edge_pad * (median if local is None else min(local, median))
             if _pinned(x, index, along, 1.0, model.axes[k], edges, max(noise, 0.5 * pads[1, k])):
@@ -327,7 +327,7 @@ def _bounds(x, label, inliers, model, noise, edge_pad, edges=None):
             hi_pt[k] = index[top]
             hi[k] = along.max() + pads[1, k]
         if not lo_face[k]:
-            bottom = int(np.argmin(along))
+            bottom = int(along.argmin())
             local = _outward_spacing(inner, bottom, k, -1.0)
             pads[0, k] = edge_pad * (median if local is None else min(local, median))
             if _pinned(x, index, along, -1.0, model.axes[k], edges, max(noise, 0.5 * pads[0, k])):
