@@ -138,10 +138,12 @@ def circle_starts(
         return distance
 
     def trimmed(distance):
+        # In place on the temporary squares (np.partition would copy them first).
         squared = distance * distance
         if cutoff is not None:
-            return np.minimum(squared, cutoff * cutoff).sum(axis=1)
-        return np.partition(squared, keep - 1, axis=1)[:, :keep].sum(axis=1)
+            return np.minimum(squared, cutoff * cutoff, out=squared).sum(axis=1)
+        squared.partition(keep - 1, axis=1)
+        return squared[:, :keep].sum(axis=1)
 
     center, radius = kasa_batch(None, np.ones((count, n)), design)
     cost = trimmed(distances(center, radius))
@@ -160,11 +162,14 @@ def circle_starts(
         sq = _norm2(x[:, None, :] - ux[..., None], y[:, None, :] - uy[..., None])
         sq -= tr[..., None]
         sq *= sq
-    np.fmin(sq, np.inf, out=sq)  # NaN (collinear or repeated triples) to infinity
+    # NaN (collinear or repeated triples) costs as much as infinity; in place on the (a, t, n)
+    # squares, the largest arrays of the fit.
     if cutoff is not None:
-        tcost = np.minimum(sq, cutoff * cutoff).sum(axis=2)  # (a, t)
+        tcost = np.fmin(sq, cutoff * cutoff, out=sq).sum(axis=2)  # (a, t)
     else:
-        tcost = np.partition(sq, keep - 1, axis=2)[:, :, :keep].sum(axis=2)  # (a, t)
+        np.fmin(sq, np.inf, out=sq)
+        sq.partition(keep - 1, axis=2)
+        tcost = sq[:, :, :keep].sum(axis=2)  # (a, t)
     best = np.argmin(tcost, axis=1)
     better = tcost[rows, best] < np.where(np.isfinite(cost), cost, np.inf)
     chosen = np.empty((count, 2))
