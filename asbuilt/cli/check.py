@@ -100,6 +100,7 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 
 def _load(args, config, design, progress=None):
+    from asbuilt.errors import CatalogError
     from asbuilt.export.model_json import is_model_document
     from asbuilt.rules import check_model
 
@@ -108,7 +109,12 @@ def _load(args, config, design, progress=None):
 
         model = load_model(args.scan)
         options = {"catalog": args.catalog} if args.catalog else {}
-        findings = check_model(model, config, design, **options)
+        try:
+            findings = check_model(model, config, design, **options)
+        except CatalogError as exc:
+            if exc.source is not None:
+                raise
+            raise CatalogError(exc.message, source=args.scan) from None
         return model.replace(findings=findings)
     from asbuilt.pipeline import build_model
     from asbuilt.scan import load_scan

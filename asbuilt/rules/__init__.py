@@ -66,6 +66,30 @@ def sort_findings(findings) -> tuple[Finding, ...]:
     return tuple(sorted(findings, key=_sort_key))
 
 
+def _built_with(model: Model):
+    """The catalog ``model`` was built with (:func:`asbuilt.catalog.model_catalog`: its recorded
+    user file first, else the shipped catalog it names), or None when it names none.
+
+    Raises
+    ------
+    CatalogError
+        The model names a catalog that cannot be read: its size rules need it.
+    """
+    from asbuilt.catalog import model_catalog
+    from asbuilt.errors import CatalogError
+
+    found, problem = model_catalog(model)
+    if problem is None:
+        return found
+    if model.catalog_file:
+        what = f"its catalog file {model.catalog_file} cannot be read"
+    else:
+        what = f"it names catalog {model.catalog!r}, no shipped one, without recording its file"
+    raise CatalogError(
+        f"the model's sizes cannot be checked: {what}; give the catalog with --catalog FILE"
+    )
+
+
 def check_model(
     model: Model, config: RulesConfig | None = None, design=None, *, catalog=None
 ) -> tuple[Finding, ...]:
@@ -81,12 +105,19 @@ def check_model(
         The design to compare with (``design-deviation``, ``missing-component``,
         ``extra-component`` run only with one).
     catalog : SizeTable, catalog object or catalog name, optional
-        The pipe catalog for the size rules; defaults to ``model.catalog``.
+        The pipe catalog for the size rules; defaults to the one the model was built with
+        (its recorded catalog file, else the shipped catalog ``model.catalog`` names).
 
     Returns
     -------
     tuple of Finding
         Sorted by severity, then position.
+
+    Raises
+    ------
+    CatalogError
+        No ``catalog`` is given and the model names one that cannot be read (a user's catalog
+        whose file it does not record, or a recorded file that is gone).
     """
     if config is None or isinstance(config, (str, Path)):
         config = load_rules(config)
@@ -94,7 +125,7 @@ def check_model(
         from asbuilt.design import load_design
 
         design = load_design(design)
-    table = size_table(catalog if catalog is not None else model.catalog)
+    table = size_table(catalog if catalog is not None else _built_with(model))
     ctx = Context(model=model, config=config, design=design, catalog=table)
     for r in config.active_rules():
         if r.slug in _DESIGN_SLUGS:

@@ -280,3 +280,37 @@ def test_a_scan_that_calls_itself_a_model_is_not_checked_as_an_empty_one(tmp_pat
         f'asbuilt: error: {path}: components: missing; it has "objects", so it looks like a '
         'scan: a scan\'s format is "asbuilt-scan"\n'
     )
+
+
+def _site_catalog(path):
+    """A user's pipe catalog (a renamed copy of the shipped ASME B36.10M table)."""
+    from importlib import resources
+
+    shipped = (resources.files("asbuilt.catalogs") / "asme-b36.10m.csv").read_text("utf-8")
+    path.write_text(shipped.replace("# name: asme-b36.10m", "# name: site-pipe"), "utf-8")
+    return path
+
+
+def test_a_model_built_with_a_user_catalog_is_checked_with_it(tmp_path, capsys):
+    """Re-checking a model document built with a user's catalog looked the catalog up by name
+    among the shipped ones and exited 2 ("unknown catalog"), although the document records its
+    file; a document that does not record it says which option gives it."""
+    from pathlib import Path
+
+    catalog = _site_catalog(tmp_path / "site.csv")
+    spool = Path(__file__).resolve().parents[2] / "samples" / "spool.json"
+    document = tmp_path / "model.json"
+    assert main(["model", str(spool), "--catalog", str(catalog), "--out", str(document)]) == 0
+    capsys.readouterr()
+    code, out, err = run([document], capsys)
+    assert code == 0, err
+    assert "0 errors" in out
+    old = json.loads(document.read_text(encoding="utf-8"))
+    assert old.pop("catalog_file") == str(catalog.resolve())
+    (tmp_path / "old.json").write_text(json.dumps(old), encoding="utf-8")
+    code, out, err = run([tmp_path / "old.json"], capsys)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and "old.json" in err and "'site-pipe'" in err
+    assert "--catalog FILE" in err
+    code, out, err = run([tmp_path / "old.json", "--catalog", catalog], capsys)
+    assert code == 0, err
