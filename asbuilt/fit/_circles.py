@@ -11,7 +11,13 @@ import numpy as np
 
 from asbuilt.fit._common import orthonormal_bases
 
-__all__ = ["circle_starts", "kasa_batch"]
+__all__ = ["circle_starts", "kasa_batch", "INSIDE_CAP"]
+
+#: In MSAC costs (``cutoff`` given), a shot between 1 and this many cutoffs inside a circle
+#: keeps its full square instead of the outlier's capped one: no beam reaches the inside of a
+#: pipe, so such shots are evidence against the circle, not background. Deeper ones are left
+#: to the cap: a mixed return from a wide footprint can land anywhere along its beam.
+INSIDE_CAP = 4.0
 
 
 def _kasa_design(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -103,7 +109,8 @@ def circle_starts(
         dropping those.
     cutoff : float, optional, metres
         When given, circles compete by MSAC cost (Torr & Zisserman 2000: ``sum min(d^2,
-        cutoff^2)``) and are polished on the points within ``cutoff`` instead: the trimmed
+        cutoff^2)``, except that shots 1 to ``INSIDE_CAP`` cutoffs inside the circle count in
+        full) and are polished on the points within ``cutoff`` instead: the trimmed
         cost keeps ``keep`` points, so when more than ``n - keep`` shots are background (whole
         raster lines on the wall behind a pipe) it prefers a large circle through pipe and
         wall shots alike.
@@ -129,24 +136,38 @@ def circle_starts(
     design = _kasa_design(x, y)
     rows = np.arange(count)
 
-    def distances(center, radius):
+    def signed(center, radius):
         distance = _norm2(x - center[:, :1], y - center[:, 1:])
         distance -= radius[:, None]
+        return distance
+
+    def distances(center, radius):
+        distance = signed(center, radius)
         np.abs(distance, out=distance)
         # NaN (no circle) to infinity; the rest are >= 0 or infinite, which fmin keeps.
         np.fmin(distance, np.inf, out=distance)
         return distance
 
-    def trimmed(distance):
-        # In place on the temporary squares (np.partition would copy them first).
+    def msac(distance):
+        # Signed distances (negative inside). A shot 1 to INSIDE_CAP cutoffs inside the circle
+        # keeps its full square: background explains a shot outside a pipe, nothing explains
+        # one inside it. NaN (no circle) costs a cutoff, as an outlier.
+        shallow = (distance < -cutoff) & (distance >= -INSIDE_CAP * cutoff)
         squared = distance * distance
+        capped = np.fmin(squared, cutoff * cutoff)
+        return np.where(shallow, squared, capped).sum(axis=-1)
+
+    def cost_of(center, radius):
         if cutoff is not None:
-            return np.minimum(squared, cutoff * cutoff, out=squared).sum(axis=1)
+            return msac(signed(center, radius))
+        # In place on the temporary squares (np.partition would copy them first).
+        distance = distances(center, radius)
+        squared = np.multiply(distance, distance, out=distance)
         squared.partition(keep - 1, axis=1)
         return squared[:, :keep].sum(axis=1)
 
     center, radius = kasa_batch(None, np.ones((count, n)), design)
-    cost = trimmed(distances(center, radius))
+    cost = cost_of(center, radius)
     # Circumcircles of random triples, shared across axes.
     index = rng.integers(0, n, (samples, 3))
     ax_, ay_ = x[:, index[:, 0]], y[:, index[:, 0]]  # (a, t)
@@ -161,11 +182,12 @@ def circle_starts(
         tr = _norm2(ax_ - ux, ay_ - uy)
         sq = _norm2(x[:, None, :] - ux[..., None], y[:, None, :] - uy[..., None])
         sq -= tr[..., None]
-        sq *= sq
+        if cutoff is None:
+            sq *= sq
     # NaN (collinear or repeated triples) costs as much as infinity; in place on the (a, t, n)
     # squares, the largest arrays of the fit.
     if cutoff is not None:
-        tcost = np.fmin(sq, cutoff * cutoff, out=sq).sum(axis=2)  # (a, t)
+        tcost = msac(sq)  # (a, t)
     else:
         np.fmin(sq, np.inf, out=sq)
         sq.partition(keep - 1, axis=2)
@@ -188,7 +210,7 @@ def circle_starts(
         ok = np.isfinite(new_radius)
         center = np.where(ok[:, None], new_center, center)
         radius = np.where(ok, new_radius, radius)
-    cost = trimmed(distances(center, radius))
+    cost = cost_of(center, radius)
     centroid = points.sum(axis=0) / n  # points.mean(axis=0), as numpy computes it
     middles = center[:, :1] * u + center[:, 1:] * v + (axis_array @ centroid)[:, None] * axis_array
     valid = np.isfinite(radius) & (radius > 0) & np.isfinite(middles).all(axis=1)

@@ -473,3 +473,28 @@ def test_the_msac_rescue_never_returns_a_plane_like_cylinder():
         np.array(scan["points"]), sigma=scan["range_sigma"], viewpoint=np.array(scan["viewpoint"])
     )
     assert abs(result.primitive.radius - scan["radius"]) < 0.01
+
+
+_NARROW_ARC = json.loads((Path(__file__).parent / "narrow_arc_wall.json").read_text())
+
+
+@pytest.mark.parametrize("scan", _NARROW_ARC["scans"], ids=lambda s: s["name"])
+def test_no_shot_inside_the_pipe_decides_a_narrow_arc_without_a_viewpoint(scan):
+    """Scans from an independent ray caster (audit): a pipe seen over a narrow arc (three raster
+    rows on it), the raster 5-10% wider, so that whole raster lines hit a wall behind it; no
+    viewpoint. A circle through the pipe's front shots and the wall shots fitted more of them,
+    so the pipe came out 110-525 mm too large with +-1 mm, its flanks' shots inside it. No
+    beam reaches the inside of a pipe: the cylinder that leaves none there is the pipe."""
+    points = np.array(scan["points_mm"]) / 1000.0
+    result = fit_cylinder(points, sigma=scan["range_sigma_mm"] / 1000.0)
+    got, stderr = result.primitive, result.stderr
+    # Three rows of shots over a narrow arc fix the radius to about 5 mm (the wrong fits were
+    # 110-525 mm off): the error within three of its standard errors, which stay that size.
+    assert stderr["radius"] < 0.01 and stderr["center"] < 0.01
+    assert abs(got.radius * 1000 - scan["radius_mm"]) < 3 * stderr["radius"] * 1000
+    assert angle_deg(got.axis, scan["axis"]) < 1.0
+    offset = np.array(scan["axis_point_mm"]) / 1000.0 - got.center
+    across = offset - (offset @ got.axis) * got.axis
+    assert np.linalg.norm(across) < 3 * stderr["center"]
+    inside = result.residuals < -3 * scan["range_sigma_mm"] / 1000.0
+    assert np.count_nonzero(inside) < 2
