@@ -37,6 +37,7 @@ __all__ = [
     "check_spread",
     "orthonormal_basis",
     "orthonormal_bases",
+    "quick_median",
     "orient",
     "robust_scale",
     "tukey_weights",
@@ -690,14 +691,14 @@ def median_spacing(points: np.ndarray) -> float:
         squares = np.einsum("ij,ij->i", points, points)
         dist = squares[:, None] + squares[None, :] - 2.0 * (points @ points.T)
         np.fill_diagonal(dist, np.inf)
-        return float(np.sqrt(max(_median(dist.min(axis=1)), 0.0)))
+        return float(np.sqrt(max(quick_median(dist.min(axis=1)), 0.0)))
     from scipy.spatial import cKDTree
 
     distance, _ = cKDTree(points).query(points, k=2)
     return float(np.median(distance[:, 1]))
 
 
-def _median(values: np.ndarray) -> float:
+def quick_median(values: np.ndarray) -> float:
     """The median of a 1-D array without NaNs, as :func:`numpy.median` gives it (the middle
     value, or half the sum of the two middle ones) without its overhead."""
     size = values.size

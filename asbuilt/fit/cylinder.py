@@ -56,6 +56,7 @@ from asbuilt.fit._common import (
     orient,
     orthonormal_basis,
     principal_axes,
+    quick_median,
     random_subset,
     robust_geometric_fit,
     robust_scale,
@@ -186,16 +187,6 @@ def _rms(values: np.ndarray) -> float:
     return float(np.sqrt(values @ values / max(values.size, 1)))
 
 
-def _median(values: np.ndarray) -> float:
-    """The median of a 1-D array (as :func:`numpy.median`, without its overhead)."""
-    size = values.size
-    half = size // 2
-    if size % 2:
-        return float(np.partition(values, half)[half])
-    part = np.partition(values, (half - 1, half))
-    return float(0.5 * (part[half - 1] + part[half]))
-
-
 def _same_start(one, other) -> bool:
     """Whether two starts (axis, centre, radius) are one hypothesis (``SAME_START_*``)."""
     axis, center, radius = one
@@ -275,7 +266,7 @@ def _trust_order(starts: list, costs: list) -> tuple[list, list, int]:
 
 def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
     """Eigenvectors of the Tukey-reweighted ``sum n n^T``, most perpendicular to normals first."""
-    weights = 1.0 / (1.0 + flatness / max(_median(flatness), 1e-12))
+    weights = 1.0 / (1.0 + flatness / max(quick_median(flatness), 1e-12))
     vectors = None
     for _ in range(2):
         scatter = (normals * weights[:, None]).T @ normals
@@ -581,7 +572,7 @@ def fit_cylinder(
         # The points' extent, robustly: four times their median distance from their median
         # (about the full length of a pipe seen over its length; background shots ignored).
         middle = np.median(local, axis=0)
-        extent = 4.0 * _median(np.sqrt(np.einsum("ij,ij->i", local - middle, local - middle)))
+        extent = 4.0 * quick_median(np.sqrt(np.einsum("ij,ij->i", local - middle, local - middle)))
         for k in np.argsort(costs):
             if len(seeds) == RECONSIDERED_STARTS:
                 break
@@ -878,7 +869,7 @@ def _doubtful_blind(robust: RobustFit, points: np.ndarray) -> bool:
     centimetre. (Reconsidering every doubtful fit by likelihood turned stubs' axes by 90
     degrees: a likelihood with each fit's own noise rewards fitting fewer shots closely.)"""
     middle = np.median(points, axis=0)
-    extent = 4.0 * _median(np.sqrt(np.einsum("ij,ij->i", points - middle, points - middle)))
+    extent = 4.0 * quick_median(np.sqrt(np.einsum("ij,ij->i", points - middle, points - middle)))
     return robust.state[2] > PLANE_LIKE * extent
 
 
