@@ -11,21 +11,16 @@ Run: ``python benchmarks/cuboid_speed.py [--points 40] [--trials 50] [--repeat 2
 
 from __future__ import annotations
 
-import argparse
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent))
 
+import cylinder_speed  # noqa: E402
 import fit_accuracy  # noqa: E402
-
-from asbuilt.fit import fit_points  # noqa: E402
 
 #: Seen faces of the accuracy benchmark's cuboid cells (a column side-on, a pier from above).
 FACES = (2, 3)
@@ -43,41 +38,8 @@ def trials(points: int, count: int, seed: int) -> list:
     return out
 
 
-def timed(data: list, viewpoint, repeat: int) -> list[float]:
-    """Seconds per fit call, every scan ``repeat`` times."""
-    times = []
-    for _ in range(repeat):
-        for points in data:
-            start = time.perf_counter()
-            try:
-                fit_points("cuboid", points, sigma=fit_accuracy.SIGMA_R, viewpoint=viewpoint)
-            except Exception:  # a failed fit is timed too, as in the accuracy benchmark
-                pass
-            times.append(time.perf_counter() - start)
-    return times
-
-
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--points", type=int, default=40)
-    parser.add_argument("--trials", type=int, default=50, help="trials per cell (50)")
-    parser.add_argument("--repeat", type=int, default=2)
-    parser.add_argument("--seed", type=int, default=2004)
-    args = parser.parse_args(argv)
-    data = trials(args.points, args.trials, args.seed)
-    print(f"{len(data)} scans of {args.points} points; median and p90 ms per fit")
-    print("| data | viewpoint | median ms | p90 ms |")
-    print("|---|---|---|---|")
-    for name in ("clean", "dirty"):
-        scans = [getattr(trial, name) for trial in data]
-        for label, viewpoint in (("none", None), ("station", fit_accuracy.STATION.position)):
-            ms = np.array(timed(scans, viewpoint, args.repeat)) * 1e3
-            version = "clean" if name == "clean" else "20% edge outliers"
-            print(
-                f"| {version} | {label} | {statistics.median(ms):.2f} | "
-                f"{float(np.percentile(ms, 90)):.2f} |"
-            )
-    return 0
+    return cylinder_speed.run("cuboid", trials, __doc__, argv)
 
 
 if __name__ == "__main__":

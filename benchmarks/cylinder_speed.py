@@ -39,41 +39,47 @@ def trials(points: int, count: int, seed: int) -> list:
     return out
 
 
-def timed(data: list, viewpoint, repeat: int) -> list[float]:
-    """Seconds per fit call, every scan ``repeat`` times."""
+def timed(kind: str, data: list, viewpoint, repeat: int) -> list[float]:
+    """Seconds per ``fit_points(kind, ...)`` call, every scan ``repeat`` times."""
     times = []
     for _ in range(repeat):
         for points in data:
             start = time.perf_counter()
             try:
-                fit_points("cylinder", points, sigma=fit_accuracy.SIGMA_R, viewpoint=viewpoint)
+                fit_points(kind, points, sigma=fit_accuracy.SIGMA_R, viewpoint=viewpoint)
             except Exception:  # a failed fit is timed too, as in the accuracy benchmark
                 pass
             times.append(time.perf_counter() - start)
     return times
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def run(kind: str, make_trials, doc: str, argv=None) -> int:
+    """Parse the command line, make the trials with ``make_trials(points, count, seed)`` and
+    print the markdown table of median and p90 ms per fit (shared with ``cuboid_speed.py``)."""
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("--points", type=int, default=40)
     parser.add_argument("--trials", type=int, default=50, help="trials per cell (50)")
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--seed", type=int, default=2004)
     args = parser.parse_args(argv)
-    data = trials(args.points, args.trials, args.seed)
+    data = make_trials(args.points, args.trials, args.seed)
     print(f"{len(data)} scans of {args.points} points; median and p90 ms per fit")
     print("| data | viewpoint | median ms | p90 ms |")
     print("|---|---|---|---|")
     for name in ("clean", "dirty"):
         scans = [getattr(trial, name) for trial in data]
         for label, viewpoint in (("none", None), ("station", fit_accuracy.STATION.position)):
-            ms = np.array(timed(scans, viewpoint, args.repeat)) * 1e3
+            ms = np.array(timed(kind, scans, viewpoint, args.repeat)) * 1e3
             version = "clean" if name == "clean" else "20% edge outliers"
             print(
                 f"| {version} | {label} | {statistics.median(ms):.2f} | "
                 f"{float(np.percentile(ms, 90)):.2f} |"
             )
     return 0
+
+
+def main(argv=None) -> int:
+    return run("cylinder", trials, __doc__, argv)
 
 
 if __name__ == "__main__":
