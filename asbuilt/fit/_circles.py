@@ -184,8 +184,8 @@ def circle_starts(
         sq -= tr[..., None]
         if cutoff is None:
             sq *= sq
-    # NaN (collinear or repeated triples) costs as much as infinity; in place on the (a, t, n)
-    # squares, the largest arrays of the fit.
+    # NaN (collinear or repeated triples) costs a cutoff in MSAC, infinity in the trimmed cost;
+    # the latter in place on the (a, t, n) squares, the largest arrays of the fit.
     if cutoff is not None:
         tcost = msac(sq)  # (a, t)
     else:

@@ -37,6 +37,7 @@ __all__ = [
     "check_spread",
     "orthonormal_basis",
     "orthonormal_bases",
+    "basis_floats",
     "quick_median",
     "orient",
     "robust_scale",
@@ -176,7 +177,7 @@ def check_spread(spread: np.ndarray, kind: str, dimensions: int) -> None:
         )
 
 
-def _basis_floats(ax: float, ay: float, az: float) -> tuple[float, ...]:
+def basis_floats(ax: float, ay: float, az: float) -> tuple[float, ...]:
     """``(ux, uy, uz, vx, vy, vz)`` of :func:`orthonormal_basis` in Python floats (one code
     path for the single and the batched version, so both round alike)."""
     mx, my, mz = abs(ax), abs(ay), abs(az)
@@ -212,7 +213,7 @@ def orthonormal_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         ax, ay, az = axis.tolist()
     else:
         ax, ay, az = (float(value) for value in axis)
-    ux, uy, uz, vx, vy, vz = _basis_floats(ax, ay, az)
+    ux, uy, uz, vx, vy, vz = basis_floats(ax, ay, az)
     return np.array((ux, uy, uz)), np.array((vx, vy, vz))
 
 
@@ -228,7 +229,7 @@ def orthonormal_bases(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     -------
     u, v : ndarray, shape (a, 3)
     """
-    frames = np.array([_basis_floats(*axis) for axis in axes.tolist()]).reshape(-1, 6)
+    frames = np.array([basis_floats(*axis) for axis in axes.tolist()]).reshape(-1, 6)
     return frames[:, :3], frames[:, 3:]
 
 

@@ -42,8 +42,8 @@ from asbuilt.fit._circles import INSIDE_CAP, circle_starts
 from asbuilt.fit._common import (
     GeometricModel,
     RobustFit,
-    _basis_floats,
     arc_coverage_deg,
+    basis_floats,
     check_spread,
     covariance_from_jacobian,
     gauss_newton,
@@ -92,7 +92,7 @@ def _frame(axis: np.ndarray):
     key = axis.tobytes()
     found = _FRAME_CACHE.get(key)
     if found is None:
-        floats = _basis_floats(*axis.tolist())
+        floats = basis_floats(*axis.tolist())
         u, v = np.array(floats[:3]), np.array(floats[3:])
         found = (u, v, np.array((axis, u, v)).T, floats)
         if len(_FRAME_CACHE) >= 8:
@@ -628,8 +628,8 @@ def fit_cylinder(
             >= INSIDE_SHOTS
         )
     ):
-        # A fifth of the shots rejected: near the background the trimmed cost can take, so
-        # the circles chosen by MSAC get their say (every shot decides).
+        # A fifth of the shots rejected (near the background the trimmed cost can take), or
+        # shots inside the pipe: the circles chosen by MSAC get their say (every shot decides).
         rescued = rescue(robust, None if ignored_view else view)
         if rescued is not None:
             robust = rescued
