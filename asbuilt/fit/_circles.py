@@ -87,6 +87,7 @@ def circle_starts(
     samples: int = 24,
     keep_invalid: bool = False,
     cutoff: float | None = None,
+    inside: bool = True,
 ):
     """Centre and radius for each candidate axis, robust to background shots.
 
@@ -114,6 +115,10 @@ def circle_starts(
         cost keeps ``keep`` points, so when more than ``n - keep`` shots are background (whole
         raster lines on the wall behind a pipe) it prefers a large circle through pipe and
         wall shots alike.
+    inside : bool
+        With ``cutoff``: whether shots 1 to ``INSIDE_CAP`` cutoffs inside a circle count in
+        full (the cylinder fit asks this only without a viewpoint, where nothing else says
+        that a shot lies inside the pipe; with one, the beams do). Plain MSAC otherwise.
 
     Returns
     -------
@@ -152,9 +157,11 @@ def circle_starts(
         # Signed distances (negative inside). A shot 1 to INSIDE_CAP cutoffs inside the circle
         # keeps its full square: background explains a shot outside a pipe, nothing explains
         # one inside it. NaN (no circle) costs a cutoff, as an outlier.
-        shallow = (distance < -cutoff) & (distance >= -INSIDE_CAP * cutoff)
         squared = distance * distance
         capped = np.fmin(squared, cutoff * cutoff)
+        if not inside:
+            return capped.sum(axis=-1)
+        shallow = (distance < -cutoff) & (distance >= -INSIDE_CAP * cutoff)
         return np.where(shallow, squared, capped).sum(axis=-1)
 
     def cost_of(center, radius):

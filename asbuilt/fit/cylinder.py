@@ -538,13 +538,16 @@ def fit_cylinder(
         return starts[:1] + better + starts[1:], costs[:1] + better_costs + costs[1:]
 
     view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64) - offset
-    msac: list = []  # the MSAC circles' fits, made once, when a rescue first needs them
+    # The MSAC circles' fits, made once per kind of rescue (judged by the beams, or blind and
+    # by the shots inside the pipe), when a rescue first needs them.
+    msac: dict = {}
 
     def rescue(current, seen_from):
-        if not msac:
-            msac.append(_msac_fits(local, axes, sigma, tolerances, keep, rng))
+        blind = seen_from is None
+        if blind not in msac:
+            msac[blind] = _msac_fits(local, axes, sigma, tolerances, keep, rng, inside=blind)
         cutoff = tolerances.outlier_cutoff_sigma * sigma
-        return _better_fit(msac[0], current, local, seen_from, cutoff)
+        return _better_fit(msac[blind], current, local, seen_from, cutoff)
 
     if starts and len(local) < POLISH_BELOW:
         starts, costs = polished(starts, costs)
@@ -624,12 +627,15 @@ def fit_cylinder(
         and everything is None
         and (
             np.mean(~robust.inliers) >= RESCUE_REJECTED
-            or np.count_nonzero(_inside(robust, local, tolerances.outlier_cutoff_sigma * sigma))
-            >= INSIDE_SHOTS
+            or (
+                (view is None or ignored_view)
+                and not _admissible(robust, local, tolerances.outlier_cutoff_sigma * sigma)
+            )
         )
     ):
-        # A fifth of the shots rejected (near the background the trimmed cost can take), or
-        # shots inside the pipe: the circles chosen by MSAC get their say (every shot decides).
+        # A fifth of the shots rejected (near the background the trimmed cost can take), or,
+        # without the beams to judge, shots inside the pipe: the circles chosen by MSAC get
+        # their say (every shot decides).
         rescued = rescue(robust, None if ignored_view else view)
         if rescued is not None:
             robust = rescued
@@ -753,7 +759,7 @@ INSIDE_SHOTS = 2
 SNAP_DEG = 5.0
 
 
-def _msac_fits(points, axes, sigma: float, tolerances, keep, rng) -> list:
+def _msac_fits(points, axes, sigma: float, tolerances, keep, rng, inside: bool) -> list:
     """Fits from circles chosen by MSAC cost (``circle_starts(cutoff=...)``), for when the
     beams reject the robust choice (it hides a third of the shots behind the pipe, or no start
     settled) or it rejected ``RESCUE_REJECTED`` of the shots: whole raster lines on the wall
@@ -774,14 +780,21 @@ def _msac_fits(points, axes, sigma: float, tolerances, keep, rng) -> list:
             level = np.array([axis[0], axis[1], 0.0])
             snapped.append(level / np.linalg.norm(level))
     starts, costs = circle_starts(
-        points, list(axes) + snapped, keep, rng, samples=RESCUE_SAMPLES, cutoff=cutoff
+        points,
+        list(axes) + snapped,
+        keep,
+        rng,
+        samples=RESCUE_SAMPLES,
+        cutoff=cutoff,
+        inside=inside,
     )
     order = np.argsort(costs)[:RESCUE_STARTS]
-    # A candidate axis a degree off smears a long pipe's circle by centimetres, so the best
-    # circles' axes are searched (on the same cost) before they are settled.
-    starts, costs = _polish_axes(
-        points, [starts[k] for k in order], [costs[k] for k in order], keep, rng, cutoff=cutoff
-    )
+    starts, costs = [starts[k] for k in order], [costs[k] for k in order]
+    if inside:
+        # A candidate axis a degree off smears a long pipe's circle by centimetres and leaves
+        # its flank shots inside, so without the beams the best circles' axes are searched
+        # (on the same cost) before they are settled.
+        starts, costs = _polish_axes(points, starts, costs, keep, rng, cutoff=cutoff)
     fits = []
     for k in range(len(starts)):
         fit = settled_fit(
@@ -818,22 +831,26 @@ def _admissible(robust: RobustFit, points: np.ndarray, cutoff: float) -> bool:
 
 def _better_fit(candidates, robust, points, view, cutoff: float):
     """The candidate with the lowest MSAC cost (every shot, threshold ``cutoff`` metres;
-    Torr & Zisserman 2000) that leaves no shots inside its pipe (:func:`_admissible`) and
-    hides no third of the shots from ``view`` (when known), if it beats ``robust`` (which
-    any admissible candidate beats when ``robust`` itself has shots inside); else None."""
+    Torr & Zisserman 2000) that is consistent with the scan, if it beats ``robust``; else None.
+
+    With ``view`` known, consistent means hiding no third of the shots behind the pipe
+    (:func:`_unseen`). Without it, leaving no shots inside the pipe (:func:`_admissible`),
+    and any consistent candidate beats a ``robust`` fit that is not.
+    """
 
     def cost(fit):
         return float(np.minimum(fit.residuals**2, cutoff**2).sum())
 
+    def consistent(fit):
+        if view is None:
+            return _admissible(fit, points, cutoff)
+        return not _unseen(fit, points, view)
+
     best, best_cost = None, np.inf
-    if robust is not None and _admissible(robust, points, cutoff):
+    if robust is not None and (view is not None or _admissible(robust, points, cutoff)):
         best_cost = cost(robust)
     for fit in candidates:
-        if (
-            cost(fit) < best_cost
-            and _admissible(fit, points, cutoff)
-            and (view is None or not _unseen(fit, points, view))
-        ):
+        if cost(fit) < best_cost and consistent(fit):
             best, best_cost = fit, cost(fit)
     return best
 
