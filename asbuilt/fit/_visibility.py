@@ -30,7 +30,13 @@ from asbuilt.fit._common import (
 from asbuilt.fit._mixture import mixing_cost, mixture_score
 from asbuilt.tolerances import Tolerances
 
-__all__ = ["cylinder_beam_excess", "reconsidered", "visible_score"]
+__all__ = [
+    "cylinder_beam_excess",
+    "edge_on_degrees",
+    "one_side_could_see",
+    "reconsidered",
+    "visible_score",
+]
 
 #: Gauss-Newton steps that bring a seed into its basin (:func:`_settle`); least squares on the
 #: inliers converges from there.
@@ -88,6 +94,76 @@ def cylinder_beam_excess(axis, center, radius, points: np.ndarray, viewpoint) ->
         reach = np.broadcast_to(lengths, a.shape)[hit]
         excess[hit] = np.clip(2.0 * (reach - middle), 0.0, chord)
     return excess[0] if np.ndim(axis) == 1 else excess
+
+
+def edge_on_degrees(axis, center, points: np.ndarray, viewpoint) -> np.ndarray:
+    """Incidence of each shot's beam on a cylinder, measured across the axis, in degrees.
+
+    The angle between the cylinder's outward normal at the point and the beam's part across the
+    axis: 0 for a shot square on the pipe's front, 90 for one grazing its silhouette. Measured
+    across the axis, so a pipe seen obliquely along its length keeps its square-on front shots
+    near 0 (the full 3-D incidence of every shot would approach 90 degrees there).
+
+    Parameters
+    ----------
+    axis : ndarray, shape (3,)
+        Unit axis.
+    center : ndarray, shape (3,), metres
+        A point on the axis.
+    points : ndarray, shape (n, 3), metres
+    viewpoint : array_like, shape (3,), metres
+
+    Returns
+    -------
+    ndarray, shape (n,), degrees
+        In [0, 90]; NaN for a shot on the axis or whose beam runs within about 6 degrees of the
+        axis (seen end-on, its angle across the axis is not defined).
+    """
+    axis = np.asarray(axis, dtype=np.float64)
+    rel = points - center
+    radial = rel - np.outer(rel @ axis, axis)
+    beams = points - np.asarray(viewpoint, dtype=np.float64)
+    across = beams - np.outer(beams @ axis, axis)
+    radial_length = np.sqrt(np.einsum("ij,ij->i", radial, radial))
+    across_length = np.sqrt(np.einsum("ij,ij->i", across, across))
+    beam_length = np.sqrt(np.einsum("ij,ij->i", beams, beams))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cosine = np.abs(np.einsum("ij,ij->i", radial, across)) / (radial_length * across_length)
+        angle = np.degrees(np.arccos(np.clip(cosine, 0.0, 1.0)))
+    angle[(across_length <= 0.1 * beam_length) | (radial_length <= 0.0)] = np.nan
+    return angle
+
+
+def one_side_could_see(
+    angles: np.ndarray, seen_fraction: float, edge_on_deg: float, steps: int = 180
+) -> bool:
+    """Whether one distant station could have seen shots at these angles about a cylinder's
+    axis: from some direction, at least ``seen_fraction`` of them lie on the facing half, and
+    the median of their incidences there is below ``edge_on_deg``.
+
+    A pipe scanned from one unknown station passes; a "pipe" fitted through a thin pipe's front
+    shots and the wall shots behind it (two clusters on opposite sides) does not: from any
+    direction either half its shots face away, or all are seen edge-on.
+
+    Parameters
+    ----------
+    angles : ndarray, shape (m,), radians
+        Each shot's angle about the axis, from any fixed direction across it.
+    seen_fraction : float
+    edge_on_deg : float, degrees
+    steps : int
+        Directions tried, evenly round the axis.
+    """
+    if angles.size == 0:
+        return False
+    directions = np.linspace(0.0, 2.0 * np.pi, steps, endpoint=False)
+    cosines = np.cos(angles[None, :] - directions[:, None])  # (steps, m)
+    facing = cosines > 0.0
+    limit = np.cos(np.radians(edge_on_deg))
+    for row, front in zip(cosines, facing):
+        if np.mean(front) >= seen_fraction and np.median(row[front]) > limit:
+            return True
+    return False
 
 
 def visible_score(residuals: np.ndarray, excess: np.ndarray, scale: float, cutoff: float) -> float:

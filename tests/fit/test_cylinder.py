@@ -498,3 +498,33 @@ def test_no_shot_inside_the_pipe_decides_a_narrow_arc_without_a_viewpoint(scan):
     assert np.linalg.norm(across) < 3 * stderr["center"]
     inside = result.residuals < -3 * scan["range_sigma_mm"] / 1000.0
     assert np.count_nonzero(inside) < 2
+
+
+_THIN = json.loads((Path(__file__).parent / "thin_pipe_mixed_pixels.json").read_text())
+
+
+@pytest.mark.parametrize("scan", _THIN["scans"], ids=lambda s: s["name"])
+def test_mixed_returns_along_the_beams_are_refused_not_fitted(scan):
+    """Scans from an independent ray caster (audit): an NPS 1 pipe 10 m away, three raster
+    rows across it, so one row is on the pipe and the outer rows' shots are mixed returns
+    strung along their beams between the pipe and the wall behind. They were fitted as pipes
+    0.3-6.7 m in radius (some with +-1 mm), or the viewpoint was blamed and a 0.32 m "pipe"
+    through the pipe's shots and the wall's was taken. No pipe radius can be measured from
+    such shots: the fit says so."""
+    points = np.array(scan["points_mm"]) / 1000.0
+    station = np.array(scan["station_mm"]) / 1000.0
+    with pytest.raises(FitError, match="edge-on|any one station") as raised:
+        fit_cylinder(points, sigma=scan["range_sigma_mm"] / 1000.0, viewpoint=station)
+    assert "rescan with more shots" in str(raised.value).lower()
+
+
+def test_a_pipe_seen_obliquely_along_its_length_is_not_edge_on(rng):
+    # Every shot's 3-D incidence is high on a pipe seen 20 degrees off its axis; across the
+    # axis its front is square on, so the fit stands.
+    axis = np.array([np.sin(np.radians(20.0)), np.cos(np.radians(20.0)), 0.0])
+    pipe = Cylinder(np.array([0.0, 6.0, 0.0]), axis, 0.1095, 3.0)
+    sample = raster_scan(pipe, SENSOR, 30, rng)
+    beams = sample.points / np.linalg.norm(sample.points, axis=1)[:, None]
+    assert np.degrees(np.arccos(np.median(np.abs(beams @ axis)))) < 30.0
+    fit = fit_cylinder(sample.points, sigma=0.002, viewpoint=SENSOR)
+    assert fit.primitive.radius == pytest.approx(0.1095, abs=4 * fit.stderr["radius"] + 1e-3)

@@ -7,7 +7,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from asbuilt.fit._visibility import cylinder_beam_excess, visible_score
+from asbuilt.fit._visibility import (
+    cylinder_beam_excess,
+    edge_on_degrees,
+    one_side_could_see,
+    visible_score,
+)
 
 AXIS = np.array([0.0, 0.0, 1.0])
 CENTER = np.zeros(3)
@@ -93,3 +98,35 @@ def test_beam_excess_does_not_depend_on_the_frame(rng):
 def test_visible_score_is_truncated_at_the_cutoff(residuals, excess, expected):
     score = visible_score(np.array(residuals), np.array(excess), 0.002, 3.0)
     assert score == pytest.approx(expected)
+
+
+@pytest.mark.parametrize(
+    "point, viewpoint, expected",
+    [
+        ([1.0, 0.0, 0.0], [10.0, 0.0, 0.0], 0.0),  # the front, square on
+        ([0.0, 1.0, 0.0], [10.0, 1.0, 0.0], 90.0),  # the silhouette, grazing
+        ([np.sqrt(0.5), np.sqrt(0.5), 0.0], [10.0, np.sqrt(0.5), 0.0], 45.0),
+        # Seen obliquely along the axis (beam 20 degrees off it): the front is still square on
+        # across the axis, though the 3-D incidence is 70 degrees.
+        ([1.0, 0.0, 0.0], [1.0 + 10.0 * np.sin(0.349), 0.0, 10.0 * np.cos(0.349)], 0.0),
+        ([1.0, 0.0, 0.0], [1.0, 0.0, 10.0], np.nan),  # beam along the axis: not defined
+    ],
+)
+def test_incidence_across_the_axis(point, viewpoint, expected):
+    got = edge_on_degrees(AXIS, CENTER, np.array([point]), np.array(viewpoint))[0]
+    if np.isnan(expected):
+        assert np.isnan(got)
+    else:
+        assert got == pytest.approx(expected, abs=1e-6)
+
+
+def test_one_station_sees_an_arc_but_not_two_opposite_clusters():
+    # A raster over a pipe's visible side: lateral offsets even across the silhouette.
+    arc = np.arcsin(np.linspace(-0.98, 0.98, 21)) + 1.0
+    assert one_side_could_see(arc, 2.0 / 3.0, 60.0)
+    # A thin pipe's front shots and the wall shots behind it, fitted as one big "pipe": two
+    # clusters 165 degrees apart on its circle.
+    clusters = np.concatenate([np.full(10, -0.16), np.full(12, -3.04)])
+    clusters += np.linspace(-0.02, 0.02, 22)
+    assert not one_side_could_see(clusters, 2.0 / 3.0, 60.0)
+    assert not one_side_could_see(np.array([]), 2.0 / 3.0, 60.0)
