@@ -94,6 +94,40 @@ def _triple_start(points: np.ndarray, keep: int, samples: int = 48):
     return normal[best], a[best]
 
 
+def _support_error(points: np.ndarray, sigma, tolerances: Tolerances) -> FitError | None:
+    """The error to give when too many points are outliers: how many of the ``points`` (n, 3)
+    metres any one plane holds (the best of up to ``SUPPORT_TRIPLES`` point triples, RANSAC:
+    Fischler & Bolles 1981), if fewer than a plane fit needs; else None."""
+    n = len(points)
+    cutoff = tolerances.outlier_cutoff_sigma * (
+        float(sigma) if sigma is not None else tolerances.prior_range_sigma
+    )
+    rng = np.random.default_rng(n)
+    index = rng.integers(0, n, (SUPPORT_TRIPLES, 3))
+    a, b, c = points[index[:, 0]], points[index[:, 1]], points[index[:, 2]]
+    normal = np.cross(b - a, c - a)
+    norm = np.linalg.norm(normal, axis=1)
+    good = norm > 0.0
+    if not np.any(good):
+        return None
+    normal, a = normal[good] / norm[good, None], a[good]
+    distance = np.abs(np.einsum("snk,sk->sn", points[None, :, :] - a[:, None, :], normal))
+    most = int((distance <= cutoff).sum(axis=1).max())
+    needed = int(np.ceil((1.0 - tolerances.max_outlier_fraction) * n))
+    if most >= needed:
+        return None
+    return FitError(
+        f"At most {most} of the {n} points lie on one plane (within {cutoff * 1000:.3g} mm),"
+        f" and a plane fit needs {needed} ({1.0 - tolerances.max_outlier_fraction:.0%}): the"
+        " others are on other surfaces. Give only the points of one surface, or fit them as"
+        ' kind "hull".'
+    )
+
+
+#: Point triples tried by :func:`_support_error` (all of them for up to 25 points' worth).
+SUPPORT_TRIPLES = 2000
+
+
 def plane_outline(points: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """Convex outline of points projected on a plane, counter-clockwise about the normal.
 
@@ -187,16 +221,21 @@ def fit_plane(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES
     triple = _triple_start(local, keep_count(len(local), tolerances))
     if triple is not None:
         starts.append(triple)
-    robust = robust_geometric_fit(
-        local,
-        starts,
-        _MODEL,
-        kind="plane",
-        sigma=sigma,
-        tolerances=tolerances,
-        always_refine=2,
-        max_starts=2,
-    )
+    try:
+        robust = robust_geometric_fit(
+            local,
+            starts,
+            _MODEL,
+            kind="plane",
+            sigma=sigma,
+            tolerances=tolerances,
+            always_refine=2,
+            max_starts=2,
+        )
+    except FitError as error:
+        # The robust fit's count is of its compromise plane (through two surfaces at once),
+        # which says little; the most points any one plane holds says what is wrong.
+        raise _support_error(local, sigma, tolerances) or error from None
     kept = local[robust.inliers]
     # The exact total-least-squares plane of the inliers.
     point, _, directions = principal_axes(kept)

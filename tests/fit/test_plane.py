@@ -144,3 +144,17 @@ def test_normal_error_matches_repeated_scans(rng):
 def test_degenerate_points_raise(points, message):
     with pytest.raises(FitError, match=message):
         fit_plane(points)
+
+
+def test_too_many_outliers_says_how_many_points_one_plane_holds():
+    # A wall with a doorway: 16 shots on the wall, 12 through the door on a wall behind and 8
+    # on the floor. No plane holds the 20 (55%) a plane fit needs; the error says how many the
+    # best one holds, not the count of a compromise plane through two surfaces.
+    y, z = np.meshgrid([-1.7, -0.56, 0.56, 1.7], [0.6, 1.2, 1.8, 2.4])
+    wall = np.column_stack([np.full(16, 6.0), y.ravel(), z.ravel()])
+    far = np.column_stack([np.full(12, 10.0), np.linspace(-5, 5, 12), np.linspace(1, 4, 12)])
+    floor = np.column_stack([np.linspace(5.4, 9.0, 8), np.linspace(-2.7, 4.5, 8), np.zeros(8)])
+    points = np.vstack([wall, far, floor])
+    with pytest.raises(FitError, match=r"At most 16 of the 36 points lie on one plane") as raised:
+        fit_plane(points, sigma=0.002)
+    assert "needs 20" in str(raised.value) and '"hull"' in str(raised.value)
