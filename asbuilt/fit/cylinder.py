@@ -703,9 +703,7 @@ def fit_cylinder(
     length_se = stderr_of(spacing**2 / 6.0 + 2.0 * noise**2 + (radius**2) * tilt_var)
     oriented = orient(axis)
     cylinder = Cylinder(mid + offset, oriented, radius, length)
-    u, v = orthonormal_basis(axis)
-    rel = kept - center
-    angles = np.arctan2(rel @ v, rel @ u)
+    angles = _angles_about(axis, center, kept)
     stderr = {
         "radius": stderr_of(covariance[4, 4]),
         "axis_deg": float(np.degrees(stderr_of(tilt_var))),
@@ -908,9 +906,7 @@ def _one_station_could_see(robust: RobustFit, points: np.ndarray) -> bool:
     """Whether one unknown station could have seen the fit's inliers (:func:`one_side_could_see`,
     with all but ``UNSEEN_FRACTION`` of them facing it, not edge-on)."""
     axis, center, _ = robust.state
-    u, v = orthonormal_basis(axis)
-    rel = points[robust.inliers] - center
-    angles = np.arctan2(rel @ v, rel @ u)
+    angles = _angles_about(axis, center, points[robust.inliers])
     return one_side_could_see(angles, 1.0 - UNSEEN_FRACTION, ONE_STATION_DEG)
 
 
@@ -949,6 +945,14 @@ def _doubtful_blind(robust: RobustFit, points: np.ndarray) -> bool:
     return robust.state[2] > PLANE_LIKE * extent
 
 
+def _angles_about(axis: np.ndarray, center: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Each point's direction about the axis through ``center`` (3,) metres, in radians,
+    shape (m,), measured in the frame ``orthonormal_basis(axis)``; ``points`` (m, 3) metres."""
+    u, v = orthonormal_basis(axis)
+    rel = points - center
+    return np.arctan2(rel @ v, rel @ u)
+
+
 def _mean_direction(angles: np.ndarray) -> np.ndarray:
     """The mean of the unit vectors at ``angles`` (m,) radians: ``(mean cos, mean sin)``, shape
     (2,), summed and divided as :meth:`numpy.ndarray.mean` does."""
@@ -968,9 +972,7 @@ def _drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances
     squares on the rest.
     """
     axis, center, _ = robust.state
-    u, v = orthonormal_basis(axis)
-    rel = points - center
-    angles = np.arctan2(rel @ v, rel @ u)
+    angles = _angles_about(axis, center, points)
     kept = robust.inliers
     mean = _mean_direction(angles[kept])
     resultant = float(np.hypot(*mean))
@@ -1011,9 +1013,7 @@ def _incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFi
     axis, center, radius = robust.state
     if robust.scale > WEIGHTED_NOISE_RATIO * radius:
         return robust, uniform
-    u, v = orthonormal_basis(axis)
-    rel = points - center
-    angles = np.arctan2(rel @ v, rel @ u)
+    angles = _angles_about(axis, center, points)
     kept = robust.inliers
     mean = _mean_direction(angles[kept])
     if float(np.hypot(*mean)) <= ONE_SIDED or np.count_nonzero(kept) < 8:

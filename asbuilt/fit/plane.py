@@ -76,17 +76,28 @@ def _update(state, delta, points, weights):
 _MODEL = GeometricModel(_residuals, _jacobian, _update, 3)
 
 
-def _triple_start(points: np.ndarray, keep: int, samples: int = 48):
+def _triple_planes(points: np.ndarray, samples: int, rng, minimum: float):
+    """Planes through ``samples`` random point triples of ``points`` (n, 3) metres: unit
+    normals (s, 3) and a point of each (s, 3) metres, leaving out triples whose cross product
+    is at most ``minimum`` (m^2; degenerate); None when every triple is."""
     n = len(points)
-    rng = np.random.default_rng(n)
     index = rng.integers(0, n, (samples, 3))
     a, b, c = points[index[:, 0]], points[index[:, 1]], points[index[:, 2]]
     normal = np.cross(b - a, c - a)
     norm = np.linalg.norm(normal, axis=1)
-    good = norm > 1e-12 * max(float(np.ptp(points, axis=0).max()), 1e-12) ** 2
+    good = norm > minimum
     if not np.any(good):
         return None
-    normal, a = normal[good] / norm[good, None], a[good]
+    return normal[good] / norm[good, None], a[good]
+
+
+def _triple_start(points: np.ndarray, keep: int, samples: int = 48):
+    rng = np.random.default_rng(len(points))
+    minimum = 1e-12 * max(float(np.ptp(points, axis=0).max()), 1e-12) ** 2
+    planes = _triple_planes(points, samples, rng, minimum)
+    if planes is None:
+        return None
+    normal, a = planes
     points, keep = scoring_subset(points, keep, rng)
     distance = np.einsum("snk,sk->sn", points[None, :, :] - a[:, None, :], normal)
     cost = np.partition(distance * distance, keep - 1, axis=1)[:, :keep].sum(axis=1)
@@ -102,15 +113,10 @@ def _support_error(points: np.ndarray, sigma, tolerances: Tolerances) -> FitErro
     cutoff = tolerances.outlier_cutoff_sigma * (
         float(sigma) if sigma is not None else tolerances.prior_range_sigma
     )
-    rng = np.random.default_rng(n)
-    index = rng.integers(0, n, (SUPPORT_TRIPLES, 3))
-    a, b, c = points[index[:, 0]], points[index[:, 1]], points[index[:, 2]]
-    normal = np.cross(b - a, c - a)
-    norm = np.linalg.norm(normal, axis=1)
-    good = norm > 0.0
-    if not np.any(good):
+    planes = _triple_planes(points, SUPPORT_TRIPLES, np.random.default_rng(n), 0.0)
+    if planes is None:
         return None
-    normal, a = normal[good] / norm[good, None], a[good]
+    normal, a = planes
     offsets = np.einsum("sk,sk->s", a, normal)
     most = 0
     # In chunks of triples, so a dense object's distances stay a few megabytes.
