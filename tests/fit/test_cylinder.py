@@ -12,13 +12,10 @@ from fit_scans import angle_deg, raster_scan
 from asbuilt.errors import FitError
 from asbuilt.fit._circles import kasa_batch
 from asbuilt.fit._common import RobustFit, orthonormal_basis
+from asbuilt.fit._cylinder_model import MODEL, incidence_weighted
+from asbuilt.fit._cylinder_starts import trust_order
 from asbuilt.fit._visibility import cylinder_beam_excess
-from asbuilt.fit.cylinder import (
-    _MODEL,
-    _incidence_weighted,
-    _trust_order,
-    fit_cylinder,
-)
+from asbuilt.fit.cylinder import fit_cylinder
 from asbuilt.primitives import Cylinder
 
 SENSOR = np.zeros(3)
@@ -254,9 +251,9 @@ def test_noise_that_grows_square_on_is_modelled_and_weighted():
     points = np.column_stack([radial * np.cos(phi), radial * np.sin(phi), s]) + [4, 0, 1]
     fit = fit_cylinder(points)
     robust_state = (np.array([0, 0, 1.0]), np.array([4, 0, 1.0]), 0.3)
-    residuals, jacobian = _MODEL.jacobian(robust_state, points)
+    residuals, jacobian = MODEL.jacobian(robust_state, points)
     inliers = np.ones(phi.size, bool)
-    _, relative = _incidence_weighted(
+    _, relative = incidence_weighted(
         RobustFit(robust_state, residuals, inliers, jacobian, 0.002), points
     )
     assert np.corrcoef(relative, np.cos(phi) ** 2)[0, 1] > 0.95
@@ -270,9 +267,9 @@ def test_a_pipe_seen_all_round_is_not_weighted():
     phi, s = np.meshgrid(np.linspace(0, 2 * np.pi, 24, endpoint=False), np.linspace(0, 1, 4))
     points = np.column_stack([0.2 * np.cos(phi.ravel()), 0.2 * np.sin(phi.ravel()), s.ravel()])
     state = (np.array([0, 0, 1.0]), np.array([0, 0, 0.5]), 0.2)
-    residuals, jacobian = _MODEL.jacobian(state, points)
+    residuals, jacobian = MODEL.jacobian(state, points)
     fit = RobustFit(state, residuals, np.ones(len(points), bool), jacobian, 0.001)
-    same, relative = _incidence_weighted(fit, points)
+    same, relative = incidence_weighted(fit, points)
     assert same is fit
     np.testing.assert_array_equal(relative, 1.0)
 
@@ -328,11 +325,11 @@ def _start(axis, center, radius):
 )
 def test_trust_order_skips_only_redundant_refinements(second, costs, order, trusted):
     starts = [_start([0, 0, 1], [0, 0, 0], 0.1), second, _start([0, 1, 0], [0, 0, 0], 0.5)]
-    got_starts, got_costs, got_trusted = _trust_order(starts, costs)
+    got_starts, got_costs, got_trusted = trust_order(starts, costs)
     assert got_trusted == trusted
     assert [next(k for k, s in enumerate(starts) if s is got) for got in got_starts] == order
     assert got_costs == [costs[k] for k in order]
-    assert _trust_order(starts[:1], costs[:1])[2] == 2
+    assert trust_order(starts[:1], costs[:1])[2] == 2
 
 
 _SPARSE = json.loads((Path(__file__).parent / "sparse_long_pipes.json").read_text())
