@@ -191,7 +191,7 @@ def _fit_with_noise(
     look like outliers: a third of them can be rejected and the standard errors come out too
     small. The noise level is estimated from the likeliest inlier set of the fit's residuals
     (nested by size, Gaussian inliers and uniform outliers, as in
-    :func:`asbuilt.fit._common._best_inlier_set`); when it is above ``WIDER_NOISE_RATIO`` times
+    :func:`asbuilt.fit._robust.best_inlier_set`); when it is above ``WIDER_NOISE_RATIO`` times
     the sensor's sigma, the object is refitted with it and a note says so. A fit that fails on
     too many outliers is tried once without the sensor's sigma and kept when its noise level is
     within ``WIDER_NOISE_LIMIT`` sensor sigmas.
@@ -219,7 +219,7 @@ def _fit_with_noise(
 def _residual_noise(result: FitResult, points: np.ndarray, tolerances: Tolerances) -> float:
     """The noise level (metres) of a fit's likeliest inlier set: RMS with the degrees of
     freedom of the fit's covariance taken off."""
-    from asbuilt.fit._common import _best_inlier_set
+    from asbuilt.fit._robust import best_inlier_set
 
     residuals = np.asarray(result.residuals, dtype=np.float64)
     if result.inliers.all():
@@ -227,7 +227,7 @@ def _residual_noise(result: FitResult, points: np.ndarray, tolerances: Tolerance
     else:
         extent = float(np.linalg.norm(np.ptp(points, axis=0)))
         floor = float(tolerances.sigma_floor)
-        chosen = _best_inlier_set(residuals, result.inliers, extent, floor)
+        chosen = best_inlier_set(residuals, result.inliers, extent, floor)
     used = 0 if result.covariance is None else len(result.covariance)
     dof = int(np.count_nonzero(chosen)) - used
     if dof <= 0:

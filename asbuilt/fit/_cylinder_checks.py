@@ -12,14 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.fit._circles import INSIDE_CAP, circle_starts
-from asbuilt.fit._common import (
-    RobustFit,
-    mixture_score,
-    quick_median,
-    settled_fit,
-)
+from asbuilt.fit._common import mixture_score, quick_median
 from asbuilt.fit._cylinder_model import MODEL, angles_about
 from asbuilt.fit._cylinder_starts import POLISH_BELOW, polish_axes
+from asbuilt.fit._robust import RobustFit, settled_fit
 from asbuilt.fit._visibility import (
     cylinder_beam_excess,
     edge_on_degrees,

@@ -13,14 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from asbuilt.fit._common import (
-    GeometricModel,
-    RobustFit,
-    basis_floats,
-    gauss_newton,
-    incidence_variance,
-    orthonormal_basis,
-)
+from asbuilt.fit._common import basis_floats, incidence_variance, orthonormal_basis
+from asbuilt.fit._robust import GeometricModel, RobustFit, gauss_newton
 from asbuilt.tolerances import Tolerances
 
 __all__ = [

@@ -76,7 +76,7 @@ def same_start(one, other) -> bool:
 
 
 def trust_order(starts: list, costs: list) -> tuple[list, list, int]:
-    """The starts in the order :func:`~asbuilt.fit._common.robust_geometric_fit` trusts them and how many it must
+    """The starts in the order :func:`~asbuilt.fit._robust.robust_geometric_fit` trusts them and how many it must
     refine (its ``always_refine``).
 
     The normal-based start comes first and is refined together with the best other start

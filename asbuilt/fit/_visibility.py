@@ -19,15 +19,9 @@ from typing import Any
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit._common import (
-    GeometricModel,
-    RobustFit,
-    gauss_newton,
-    robust_scale,
-    settled_fit,
-    tukey_weights,
-)
+from asbuilt.fit._common import robust_scale, tukey_weights
 from asbuilt.fit._mixture import mixing_cost, mixture_score
+from asbuilt.fit._robust import GeometricModel, RobustFit, gauss_newton, settled_fit
 from asbuilt.tolerances import Tolerances
 
 __all__ = [
@@ -261,7 +255,7 @@ def reconsidered(
     refinement; on 20 shots a five-parameter surface can fit a subset so closely that the wrong
     basin wins. Here every seed is settled the same way (:func:`_settle` on residuals and beam
     excess together, then least squares on the 3-sigma inliers as in
-    :func:`asbuilt.fit._common.robust_geometric_fit`), and the settled fits, the robust one among
+    :func:`asbuilt.fit._robust.robust_geometric_fit`), and the settled fits, the robust one among
     them, are compared by :func:`visible_score`: their MSAC cost with each point's beam excess
     added to its residual.
 

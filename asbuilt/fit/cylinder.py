@@ -17,7 +17,7 @@ Method
    (Lukacs, Marshall & Martin 1998, "Faithful least-squares fitting of spheres, cylinders,
    cones and tori"; Eberly, "Fitting 3D data with a cylinder"), by Gauss-Newton with an
    analytic Jacobian, wrapped in the robust scheme of
-   :func:`asbuilt.fit._common.robust_geometric_fit` (concentration steps from the best starts,
+   :func:`asbuilt.fit._robust.robust_geometric_fit` (concentration steps from the best starts,
    MSAC choice, then least squares on the inliers). The normal-based start and the best other
    one are both refined unless that is redundant (:func:`~asbuilt.fit._cylinder_starts.trust_order`: the same hypothesis
    twice, or a normal-based start far worse and far off).
@@ -45,11 +45,9 @@ import numpy as np
 from asbuilt.errors import FitError
 from asbuilt.fit._circles import circle_starts
 from asbuilt.fit._common import (
-    RobustFit,
     arc_coverage_deg,
     check_spread,
     covariance_from_jacobian,
-    keep_count,
     local_normals,
     median_spacing,
     noise_level,
@@ -57,7 +55,6 @@ from asbuilt.fit._common import (
     principal_axes,
     quick_median,
     random_subset,
-    robust_geometric_fit,
     stderr_of,
     validate_points,
 )
@@ -93,6 +90,7 @@ from asbuilt.fit._cylinder_starts import (
     polish_axes,
     trust_order,
 )
+from asbuilt.fit._robust import RobustFit, keep_count, robust_geometric_fit
 from asbuilt.fit._visibility import (
     cylinder_beam_excess,
     reconsidered,

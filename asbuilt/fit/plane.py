@@ -9,7 +9,7 @@ three coordinates alike, so vertical walls are fitted as well as floors.
 
 Robustness: starts from the all-points plane and from the best of random point triples by
 trimmed cost (Fischler & Bolles 1981), concentration steps, then the exact SVD plane of the
-inliers (see :func:`asbuilt.fit._common.robust_geometric_fit`).
+inliers (see :func:`asbuilt.fit._robust.robust_geometric_fit`).
 """
 
 from __future__ import annotations
@@ -19,19 +19,17 @@ from scipy.spatial import ConvexHull, QhullError
 
 from asbuilt.errors import FitError
 from asbuilt.fit._common import (
-    GeometricModel,
     covariance_from_jacobian,
-    keep_count,
     noise_level,
     orient,
     orthonormal_basis,
     principal_axes,
     require_spread,
-    robust_geometric_fit,
     scoring_subset,
     stderr_of,
     validate_points,
 )
+from asbuilt.fit._robust import GeometricModel, keep_count, robust_geometric_fit
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Plane
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances

@@ -7,7 +7,7 @@ Starts: the algebraic sphere of all points (Kasa 1976 / Pratt 1987 linearisation
 four-point spheres by trimmed cost (Fischler & Bolles 1981). The final estimate minimises the
 orthogonal distances ``|p - c| - r`` by Gauss-Newton on the four parameters (Lukacs, Marshall &
 Martin 1998), robustly (concentration steps, then least squares on the inliers; see
-:func:`asbuilt.fit._common.robust_geometric_fit`), and finally weighted by a fitted incidence
+:func:`asbuilt.fit._robust.robust_geometric_fit`), and finally weighted by a fitted incidence
 noise model (:func:`_incidence_weighted`). The algebraic fit alone is biased on small caps;
 only the geometric one is reported.
 """
@@ -17,18 +17,20 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.fit._common import (
-    GeometricModel,
-    RobustFit,
     covariance_from_jacobian,
-    gauss_newton,
     incidence_variance,
-    keep_count,
     noise_level,
     require_spread,
-    robust_geometric_fit,
     scoring_subset,
     stderr_of,
     validate_points,
+)
+from asbuilt.fit._robust import (
+    GeometricModel,
+    RobustFit,
+    gauss_newton,
+    keep_count,
+    robust_geometric_fit,
 )
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Sphere

@@ -11,9 +11,10 @@ from fit_scans import angle_deg, raster_scan
 
 from asbuilt.errors import FitError
 from asbuilt.fit._circles import kasa_batch
-from asbuilt.fit._common import RobustFit, orthonormal_basis
+from asbuilt.fit._common import orthonormal_basis
 from asbuilt.fit._cylinder_model import MODEL, incidence_weighted
 from asbuilt.fit._cylinder_starts import trust_order
+from asbuilt.fit._robust import RobustFit
 from asbuilt.fit._visibility import cylinder_beam_excess
 from asbuilt.fit.cylinder import fit_cylinder
 from asbuilt.primitives import Cylinder
