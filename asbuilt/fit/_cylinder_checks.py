@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.fit._circles import INSIDE_CAP, circle_starts
-from asbuilt.fit._common import mixture_score, quick_median
+from asbuilt.fit._common import quick_median
 from asbuilt.fit._cylinder_model import MODEL, angles_about
 from asbuilt.fit._cylinder_starts import POLISH_BELOW, polish_axes
 from asbuilt.fit._robust import RobustFit, settled_fit
@@ -44,7 +44,6 @@ __all__ = [
     "doubtful",
     "doubtful_blind",
     "same_basin",
-    "likelier",
 ]
 
 
@@ -264,13 +263,3 @@ def same_basin(one, other, extent: float) -> bool:
     if abs(float(one[0] @ other[0])) < SAME_BASIN_COS:
         return False
     return abs(one[2] - other[2]) <= SAME_BASIN_RELATIVE * max(one[2], other[2])
-
-
-def likelier(first, second, points, tolerances: Tolerances) -> bool:
-    """Whether robust fit ``first`` explains the points better than ``second``: mixture
-    likelihood of Gaussian inliers (own sigma) and uniform outliers over the points' extent."""
-    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
-    floor = tolerances.sigma_floor
-    one = mixture_score(first.residuals, first.inliers, extent, floor)
-    two = mixture_score(second.residuals, second.inliers, extent, floor)
-    return one < two

@@ -38,6 +38,7 @@ __all__ = [
     "best_inlier_set",
     "gauss_newton",
     "keep_count",
+    "likelier",
     "robust_geometric_fit",
     "settled_fit",
     "trimmed_cost",
@@ -372,3 +373,13 @@ def settled_fit(
         )
     except FitError:
         return None
+
+
+def likelier(first, second, points, tolerances: Tolerances) -> bool:
+    """Whether robust fit ``first`` explains the points better than ``second``: mixture
+    likelihood of Gaussian inliers (own sigma) and uniform outliers over the points' extent."""
+    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+    floor = tolerances.sigma_floor
+    one = mixture_score(first.residuals, first.inliers, extent, floor)
+    two = mixture_score(second.residuals, second.inliers, extent, floor)
+    return one < two

@@ -66,7 +66,6 @@ from asbuilt.fit._cylinder_checks import (
     doubtful,
     doubtful_blind,
     edge_on,
-    likelier,
     msac_fits,
     one_station_could_see,
     same_basin,
@@ -90,7 +89,7 @@ from asbuilt.fit._cylinder_starts import (
     polish_axes,
     trust_order,
 )
-from asbuilt.fit._robust import RobustFit, keep_count, robust_geometric_fit
+from asbuilt.fit._robust import RobustFit, keep_count, likelier, robust_geometric_fit
 from asbuilt.fit._visibility import (
     cylinder_beam_excess,
     reconsidered,

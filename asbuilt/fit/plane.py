@@ -29,7 +29,15 @@ from asbuilt.fit._common import (
     stderr_of,
     validate_points,
 )
-from asbuilt.fit._robust import GeometricModel, keep_count, robust_geometric_fit
+from asbuilt.fit._mixture import mixture_score
+from asbuilt.fit._robust import (
+    GeometricModel,
+    RobustFit,
+    keep_count,
+    likelier,
+    robust_geometric_fit,
+    settled_fit,
+)
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Plane
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
@@ -103,10 +111,11 @@ def _triple_start(points: np.ndarray, keep: int, samples: int = 48):
     return normal[best], a[best]
 
 
-def _support_error(points: np.ndarray, sigma, tolerances: Tolerances) -> FitError | None:
-    """The error to give when too many points are outliers: how many of the ``points`` (n, 3)
-    metres any one plane holds (the best of up to ``SUPPORT_TRIPLES`` point triples, RANSAC:
-    Fischler & Bolles 1981), if fewer than a plane fit needs; else None."""
+def _best_supported(points: np.ndarray, sigma, tolerances: Tolerances):
+    """The plane holding the most of ``points`` (n, 3) metres within the inlier cut (the best of
+    up to ``SUPPORT_TRIPLES`` point triples, RANSAC: Fischler & Bolles 1981): ``(count, cutoff
+    metres, state)`` with ``state = (unit normal (3,), point (3,) metres)``, or None when every
+    triple is degenerate."""
     n = len(points)
     cutoff = tolerances.outlier_cutoff_sigma * (
         float(sigma) if sigma is not None else tolerances.prior_range_sigma
@@ -116,24 +125,62 @@ def _support_error(points: np.ndarray, sigma, tolerances: Tolerances) -> FitErro
         return None
     normal, a = planes
     offsets = np.einsum("sk,sk->s", a, normal)
-    most = 0
+    most, best = -1, 0
     # In chunks of triples, so a dense object's distances stay a few megabytes.
     chunk = max(1, 2_000_000 // n)
     for start in range(0, len(normal), chunk):
         distance = np.abs(points @ normal[start : start + chunk].T - offsets[start : start + chunk])
-        most = max(most, int((distance <= cutoff).sum(axis=0).max()))
-    needed = int(np.ceil((1.0 - tolerances.max_outlier_fraction) * n))
-    if most >= needed:
+        counts = (distance <= cutoff).sum(axis=0)
+        k = int(counts.argmax())
+        if counts[k] > most:
+            most, best = int(counts[k]), start + k
+    return most, cutoff, (normal[best], a[best])
+
+
+def _support_fit(points: np.ndarray, sigma, tolerances: Tolerances, rival: RobustFit | None = None):
+    """The plane that holds the most ``points`` (n, 3) metres (:func:`_best_supported`), settled
+    by least squares on its inliers, when it holds as many as a plane fit needs; else the
+    error that says how many it holds (a :class:`FitError`, returned, not raised). None when
+    every triple is degenerate or the settled fit fails.
+
+    With a ``rival`` (a fit without the sensor's sigma, whose scale the residuals set), that
+    plane answers only where it explains the points better than the rival by the mixture
+    likelihood of Gaussian inliers and uniform outliers (:func:`~asbuilt.fit._robust.likelier`;
+    Torr's GRIC mixture): a rough surface keeps its fit, a plane through two surfaces does not.
+    """
+    found = _best_supported(points, sigma, tolerances)
+    if found is None:
         return None
-    return FitError(
-        f"At most {most} of the {n} points lie on one plane (within {cutoff * 1000:.3g} mm),"
-        f" and a plane fit needs {needed} ({1.0 - tolerances.max_outlier_fraction:.0%}): the"
-        " others are on other surfaces. Give only the points of one surface, or fit them as"
-        ' kind "hull".'
-    )
+    most, cutoff, state = found
+    n = len(points)
+    needed = int(np.ceil((1.0 - tolerances.max_outlier_fraction) * n))
+    if rival is not None:
+        residuals = _residuals(state, points)
+        extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+        floor = tolerances.sigma_floor
+        inliers = np.abs(residuals) <= cutoff
+        if mixture_score(residuals, inliers, extent, floor) >= mixture_score(
+            rival.residuals, rival.inliers, extent, floor
+        ):
+            return None
+    if most < needed:
+        return FitError(
+            f"At most {most} of the {n} points lie on one plane (within {cutoff * 1000:.3g} mm),"
+            f" and a plane fit needs {needed} ({1.0 - tolerances.max_outlier_fraction:.0%}): the"
+            " others are on other surfaces. Give only the points of one surface, or fit them as"
+            ' kind "hull".'
+        )
+    settled = settled_fit(points, state, _MODEL, kind="plane", sigma=sigma, tolerances=tolerances)
+    if settled is None or (rival is not None and not likelier(settled, rival, points, tolerances)):
+        return None
+    return settled
 
 
-#: Point triples tried by :func:`_support_error`: a plane holding 30% of the points is among
+#: Without the sensor's sigma, a plane fit whose inliers were judged at a scale this many times
+#: the prior range sigma (10 mm at 2 mm) is compared with the plane holding the most points.
+ROUGH_SCALE = 5.0
+
+#: Point triples tried by :func:`_best_supported`: a plane holding 30% of the points is among
 #: them about 54 times (0.3^3 x 2,000), so the count is that of the best plane, not a near miss.
 SUPPORT_TRIPLES = 2000
 
@@ -242,10 +289,27 @@ def fit_plane(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES
             always_refine=2,
             max_starts=2,
         )
-    except FitError as error:
+    except FitError:
         # The robust fit's count is of its compromise plane (through two surfaces at once),
-        # which says little; the most points any one plane holds says what is wrong.
-        raise _support_error(local, sigma, tolerances) or error from None
+        # which says little; the plane holding the most points is fitted if it holds enough,
+        # else its count says what is wrong.
+        found = _support_fit(local, sigma, tolerances)
+        if found is None:
+            raise
+        if isinstance(found, FitError):
+            raise found from None
+        robust = found
+    if sigma is None and robust.scale > ROUGH_SCALE * tolerances.prior_range_sigma:
+        # Without the sensor's sigma the residuals set the scale, and a plane through two
+        # surfaces (a wall and the floor, 57% and 43%) explains every point at a scale of
+        # decimetres. The plane holding the most points at the prior noise is settled too, and
+        # the likelier of the two is kept; a likelier plane holding too few points for a fit is
+        # the error it is with the sigma (a rough surface keeps its own fit).
+        found = _support_fit(local, None, tolerances, rival=robust)
+        if isinstance(found, FitError):
+            raise found
+        if found is not None:
+            robust = found
     kept = local[robust.inliers]
     # The exact total-least-squares plane of the inliers.
     point, _, directions = principal_axes(kept)

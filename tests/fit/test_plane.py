@@ -158,3 +158,47 @@ def test_too_many_outliers_says_how_many_points_one_plane_holds():
     with pytest.raises(FitError, match=r"At most 16 of the 36 points lie on one plane") as raised:
         fit_plane(points, sigma=0.002)
     assert "needs 20" in str(raised.value) and '"hull"' in str(raised.value)
+
+
+def _wall_and_floor(rng, wall_share: float, n: int) -> np.ndarray:
+    """A wall at x = 5 m (n * wall_share shots) and the floor in front of it, 2 mm noise."""
+    on_wall = int(round(wall_share * n))
+    wall = np.column_stack(
+        [np.full(on_wall, 5.0), rng.uniform(-2, 2, on_wall), rng.uniform(0, 3, on_wall)]
+    )
+    rest = n - on_wall
+    floor = np.column_stack([rng.uniform(2, 5, rest), rng.uniform(-2, 2, rest), np.zeros(rest)])
+    return np.vstack([wall, floor]) + rng.normal(0, 0.002, (n, 3))
+
+
+@pytest.mark.parametrize("sigma", [0.002, None])
+@pytest.mark.parametrize("wall_share, n", [(0.57, 1000), (0.6, 200), (0.57, 60), (0.65, 40)])
+def test_a_surface_holding_most_points_is_fitted_beside_another_large_one(sigma, wall_share, n):
+    # The trimmed start compromises between two large surfaces (a diagonal plane through wall
+    # and floor); the plane holding the most points is settled instead, the floor rejected.
+    rng = np.random.default_rng(n)
+    fit = fit_plane(_wall_and_floor(rng, wall_share, n), sigma=sigma)
+    assert angle_deg(fit.primitive.normal, [1.0, 0.0, 0.0]) < 0.5
+    on_wall = int(round(wall_share * n))
+    # Floor shots within a few millimetres of the corner also lie on the wall.
+    assert np.count_nonzero(fit.inliers[on_wall:]) <= 3
+    assert np.count_nonzero(fit.inliers[:on_wall]) >= on_wall - 2
+
+
+@pytest.mark.parametrize("sigma", [0.002, None])
+def test_two_equal_surfaces_are_refused_with_or_without_the_sensor_sigma(sigma):
+    # Without the sigma the residuals would set the scale and a diagonal plane through both
+    # explain every point at decimetres; one surface explains its half far better.
+    points = _wall_and_floor(np.random.default_rng(5), 0.5, 400)
+    with pytest.raises(FitError, match=r"At most 2\d\d of the 400 points lie on one plane"):
+        fit_plane(points, sigma=sigma)
+
+
+@pytest.mark.parametrize("roughness", [0.01, 0.05])
+def test_a_rough_wall_without_the_sigma_keeps_its_points(roughness):
+    rng = np.random.default_rng(9)
+    points = np.column_stack([np.full(200, 5.0), rng.uniform(-2, 2, 200), rng.uniform(0, 3, 200)])
+    points[:, 0] += rng.normal(0, roughness, 200)
+    fit = fit_plane(points)
+    assert fit.n_inliers >= 196
+    assert fit.sigma == pytest.approx(roughness, rel=0.2)
