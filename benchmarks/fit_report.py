@@ -64,7 +64,7 @@ def fmt(x, digits=2) -> str:
 
 def _bound_prefix(cell: Cell) -> str:
     """``"retained_"`` for a cell with outliers (its bound is that of the shots the outliers
-    leave, see ``fit_accuracy.Trial``), else ``""``."""
+    leave, see ``trials.Trial``), else ``""``."""
     return "retained_" if cell.bounds.get("retained_radius") else ""
 
 
