@@ -15,13 +15,13 @@ from asbuilt.fit._circles import INSIDE_CAP, circle_starts
 from asbuilt.fit._common import quick_median
 from asbuilt.fit._cylinder_model import MODEL, angles_about
 from asbuilt.fit._cylinder_starts import POLISH_BELOW, polish_axes
-from asbuilt.fit._robust import RobustFit, settled_fit
+from asbuilt.fit._robust import RobustFit, keep_count, settled_fit
 from asbuilt.fit._visibility import (
     cylinder_beam_excess,
     edge_on_degrees,
     one_side_could_see,
 )
-from asbuilt.tolerances import Tolerances
+from asbuilt.tolerances import MIN_POINTS, Tolerances
 
 __all__ = [
     "SAME_BASIN_COS",
@@ -41,6 +41,7 @@ __all__ = [
     "ONE_STATION_DEG",
     "one_station_could_see",
     "unseen",
+    "unhidden_starts",
     "doubtful",
     "doubtful_blind",
     "same_basin",
@@ -263,3 +264,38 @@ def same_basin(one, other, extent: float) -> bool:
     if abs(float(one[0] @ other[0])) < SAME_BASIN_COS:
         return False
     return abs(one[2] - other[2]) <= SAME_BASIN_RELATIVE * max(one[2], other[2])
+
+
+#: How many of the circles found without a fit's hidden shots are settled (:func:`unhidden_starts`).
+UNHIDDEN_STARTS = 3
+
+
+def unhidden_starts(
+    state, inliers, points, excess, axes, scale: float, tolerances: Tolerances
+) -> list:
+    """Starts found without the shots a fit hides behind itself: the ``UNHIDDEN_STARTS`` best
+    robust circles (:func:`~asbuilt.fit._circles.circle_starts`, trimmed cost) on the candidate
+    ``axes`` over the ``points`` (n, 3) metres whose beams do not pass through the pipe
+    ``state`` by more than the inlier cut of ``scale`` metres (``excess(states, points)``,
+    metres), ``inliers`` (n,) bool being its inliers; [] when it hides none.
+
+    A fit that explains inliers only by putting them on its own far side is wrong about them,
+    and wrong about itself when its trimmed cost needed them: two raster lines on a wall behind
+    a pipe (10 of 35 shots, more than the trimmed cost's design contamination) are fitted,
+    with the pipe's front, by a circle five times the pipe's size, on every candidate axis.
+    Left out, they leave the pipe's circle to the trimmed cost. The beams then judge the
+    settled starts against the fit (:func:`asbuilt.fit._visibility.reconsidered`).
+    """
+    beyond = excess([state], points)[0]
+    hidden = inliers & (beyond > tolerances.outlier_cutoff_sigma * scale)
+    if not hidden.any():
+        return []
+    rest = points[~hidden]
+    if len(rest) < MIN_POINTS["cylinder"]:
+        return []
+    # Its own generator, so the rescue's draws (on the shared one) stay as they were.
+    rng = np.random.default_rng(len(rest))
+    found, costs = circle_starts(rest, axes, keep_count(len(rest), tolerances), rng)
+    # A few: a candidate axis a degree off smears a long pipe's circle by centimetres, so the
+    # pipe's circle need not be the cheapest; settling corrects the axis.
+    return [found[k] for k in np.argsort(costs)[:UNHIDDEN_STARTS]]

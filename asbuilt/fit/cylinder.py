@@ -69,6 +69,7 @@ from asbuilt.fit._cylinder_checks import (
     msac_fits,
     one_station_could_see,
     same_basin,
+    unhidden_starts,
     unseen,
 )
 from asbuilt.fit._cylinder_model import (
@@ -264,6 +265,8 @@ def fit_cylinder(
             robust = None
     blind, ignored_view = robust, False
 
+    cutoff_sigma = tolerances.outlier_cutoff_sigma
+
     def reconsider(robust, excess):
         # The robust fit itself (settled: its concentration steps fit subsets) and the best
         # starts from other basins: one in the robust fit's basin (or an earlier seed's) would
@@ -279,19 +282,37 @@ def fit_cylinder(
                 break
             if not any(same_basin(starts[k], other, extent) for other in [*known, *seeds]):
                 seeds.append(starts[k])
-        return reconsidered(
-            robust,
-            local,
-            known + seeds,
-            MODEL,
-            excess,
-            kind="cylinder",
-            sigma=sigma,
-            tolerances=tolerances,
+        options = {
+            "kind": "cylinder",
+            "sigma": sigma,
+            "tolerances": tolerances,
             # Sparse scans get the thorough search (hidden or rejected good shots decide their
             # fits); on denser ones the plain settle finds the pipe (benchmark) in half the time.
-            thorough=len(local) < POLISH_BELOW,
-        )
+            "thorough": len(local) < POLISH_BELOW,
+        }
+        try:
+            chosen = reconsidered(robust, local, known + seeds, MODEL, excess, **options)
+        except FitError:
+            if excess is None:
+                raise
+            chosen = None
+        if excess is not None:
+            # The chosen fit (or, when no seed settled, the cheapest start) still hides shots
+            # behind itself: the starts found without them get a say.
+            if chosen is not None:
+                state, inliers = chosen.state, chosen.inliers
+                scale = sigma if sigma is not None else chosen.scale
+            else:
+                state, scale = starts[int(np.argmin(costs))], sigma
+                inliers = np.abs(MODEL.residuals(state, local)) <= cutoff_sigma * scale
+            unhidden = unhidden_starts(state, inliers, local, excess, axes, scale, tolerances)
+            if unhidden:
+                chosen = reconsidered(chosen, local, unhidden, MODEL, excess, **options)
+        if chosen is None:
+            raise FitError(
+                "No cylinder explains most of these points; check that they are one cylinder."
+            )
+        return chosen
 
     if (
         view is not None
