@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.fit._common import basis_floats, incidence_variance, orthonormal_basis
-from asbuilt.fit._robust import GeometricModel, RobustFit, gauss_newton
+from asbuilt.fit._robust import GeometricModel, RobustFit, gauss_newton, refit_on
 from asbuilt.tolerances import Tolerances
 
 __all__ = [
@@ -179,11 +179,7 @@ def drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances)
     mask = kept & ~far
     if np.count_nonzero(mask) <= MODEL.n_params:
         return robust
-    weights = mask.astype(np.float64)
-    state, residuals, jacobian = gauss_newton(
-        MODEL, robust.state, points, lambda _r, w=weights: w, 50, 1e-9
-    )
-    return RobustFit(state, residuals, mask, jacobian[mask], robust.scale)
+    return refit_on(MODEL, robust, points, mask)
 
 
 def incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFit, np.ndarray]:

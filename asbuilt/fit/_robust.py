@@ -39,6 +39,7 @@ __all__ = [
     "gauss_newton",
     "keep_count",
     "likelier",
+    "refit_on",
     "robust_geometric_fit",
     "settled_fit",
     "trimmed_cost",
@@ -383,3 +384,13 @@ def likelier(first, second, points, tolerances: Tolerances) -> bool:
     one = mixture_score(first.residuals, first.inliers, extent, floor)
     two = mixture_score(second.residuals, second.inliers, extent, floor)
     return one < two
+
+
+def refit_on(model: GeometricModel, robust: RobustFit, points: np.ndarray, mask) -> RobustFit:
+    """Least squares on the points ``mask`` (n,) bool keeps, from ``robust``'s state: the fit
+    after shots it had taken as inliers were rejected (a station cannot see them)."""
+    weights = mask.astype(np.float64)
+    state, residuals, jacobian = gauss_newton(
+        model, robust.state, points, lambda _r, w=weights: w, 50, 1e-9
+    )
+    return RobustFit(state, residuals, mask, jacobian[mask], robust.scale)

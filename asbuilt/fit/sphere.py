@@ -30,6 +30,7 @@ from asbuilt.fit._robust import (
     RobustFit,
     gauss_newton,
     keep_count,
+    refit_on,
     robust_geometric_fit,
 )
 from asbuilt.fit.result import FitResult
@@ -145,11 +146,7 @@ def _drop_far_side(robust: RobustFit, points: np.ndarray) -> RobustFit:
     mask = kept & ~far
     if not far.any() or np.count_nonzero(mask) <= _MODEL.n_params:
         return robust
-    weights = mask.astype(np.float64)
-    state, residuals, jacobian = gauss_newton(
-        _MODEL, robust.state, points, lambda _r, w=weights: w, 50, 1e-9
-    )
-    return RobustFit(state, residuals, mask, jacobian[mask], robust.scale)
+    return refit_on(_MODEL, robust, points, mask)
 
 
 def _incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFit, np.ndarray]:
