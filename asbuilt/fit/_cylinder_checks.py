@@ -44,6 +44,7 @@ __all__ = [
     "unhidden_starts",
     "doubtful",
     "doubtful_blind",
+    "robust_extent",
     "same_basin",
 ]
 
@@ -248,9 +249,15 @@ def doubtful_blind(robust: RobustFit, points: np.ndarray) -> bool:
     beyond them lie in one plane through the station, which a cylinder of kilometres fits to a
     centimetre. (Reconsidering every doubtful fit by likelihood turned stubs' axes by 90
     degrees: a likelihood with each fit's own noise rewards fitting fewer shots closely.)"""
+    return robust.state[2] > PLANE_LIKE * robust_extent(points)
+
+
+def robust_extent(points: np.ndarray) -> float:
+    """The extent of ``points`` (n, 3) metres, robustly: four times their median distance from
+    their median (about the full length of a pipe seen over its length; background shots
+    ignored), metres."""
     middle = np.median(points, axis=0)
-    extent = 4.0 * quick_median(np.sqrt(np.einsum("ij,ij->i", points - middle, points - middle)))
-    return robust.state[2] > PLANE_LIKE * extent
+    return 4.0 * quick_median(np.sqrt(np.einsum("ij,ij->i", points - middle, points - middle)))
 
 
 def same_basin(one, other, extent: float) -> bool:

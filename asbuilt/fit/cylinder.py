@@ -53,7 +53,6 @@ from asbuilt.fit._common import (
     noise_level,
     orient,
     principal_axes,
-    quick_median,
     random_subset,
     stderr_of,
     validate_points,
@@ -68,6 +67,7 @@ from asbuilt.fit._cylinder_checks import (
     edge_on,
     msac_fits,
     one_station_could_see,
+    robust_extent,
     same_basin,
     unhidden_starts,
     unseen,
@@ -273,10 +273,7 @@ def fit_cylinder(
         # settle where that one did.
         seeds = []
         known = [] if robust is None else [robust.state]
-        # The points' extent, robustly: four times their median distance from their median
-        # (about the full length of a pipe seen over its length; background shots ignored).
-        middle = np.median(local, axis=0)
-        extent = 4.0 * quick_median(np.sqrt(np.einsum("ij,ij->i", local - middle, local - middle)))
+        extent = robust_extent(local)
         for k in np.argsort(costs):
             if len(seeds) == RECONSIDERED_STARTS:
                 break
