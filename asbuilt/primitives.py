@@ -145,6 +145,19 @@ class Plane:
         """Signed distance, shape (n,) metres, of points (n, 3) along the normal."""
         return (np.asarray(points, dtype=np.float64) - self.point) @ self.normal
 
+    @property
+    def area(self) -> float:
+        """Area, m², of the outline (0 for fewer than 3 corners; vector shoelace formula).
+
+        The corners are taken about their mean first: in site coordinates (1e6-1e7 m) the
+        products of absolute coordinates would cancel to centimetres squared.
+        """
+        if len(self.outline) < 3:
+            return 0.0
+        corners = self.outline - self.outline.mean(axis=0)
+        cross = np.cross(corners, np.roll(corners, -1, axis=0)).sum(axis=0)
+        return abs(float(cross @ self.normal)) / 2.0
+
 
 @dataclass(frozen=True, eq=False)
 class Cuboid:
@@ -222,6 +235,21 @@ class Hull:
             raise ValueError("The faces must index the vertices.")
         faces.setflags(write=False)
         object.__setattr__(self, "faces", faces)
+
+    @property
+    def volume(self) -> float:
+        """Enclosed volume, m³ (divergence theorem over the triangles, about the vertices'
+        mean: in site coordinates absolute products would cancel)."""
+        tri = self.vertices[self.faces] - self.vertices.mean(axis=0)
+        triple = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2]))
+        return abs(float(triple.sum())) / 6.0
+
+    @property
+    def area(self) -> float:
+        """Surface area, m²."""
+        tri = self.vertices[self.faces]
+        cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        return float(np.linalg.norm(cross, axis=1).sum()) / 2.0
 
     def distance(self, points) -> np.ndarray:
         """Signed distance bound, shape (n,) metres: the largest face-plane distance.

@@ -97,3 +97,36 @@ def test_hull_distance_in_blocks_equals_the_direct_product():
     offsets = np.einsum("ij,ij->i", normals, tri[:, 0])
     direct = (points @ normals.T - offsets).max(axis=1)
     np.testing.assert_allclose(shape.distance(points), direct, rtol=0, atol=1e-12)
+
+
+# Site coordinates (UTM, state plane in feet): eastings and northings of 1e5 to 1.2e7.
+_SITE_OFFSETS = [(0.0, 0.0, 0.0), (512345.678, 5403210.123, 250.0), (4.0e6, 1.2e7, 300.0)]
+
+
+@pytest.mark.parametrize("offset", _SITE_OFFSETS)
+def test_hull_volume_and_area_of_a_rotated_unit_cube_anywhere(offset):
+    # A unit cube (volume 1 m³, area 6 m²) turned 30 degrees about z, as 12 outward triangles.
+    corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    turn = np.radians(30.0)
+    rotation = np.array(
+        [[np.cos(turn), -np.sin(turn), 0], [np.sin(turn), np.cos(turn), 0], [0, 0, 1]]
+    )
+    faces = [
+        [0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+        [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3],
+    ]  # fmt: skip
+    hull = Hull(corners @ rotation.T + np.array(offset), faces)
+    assert hull.volume == pytest.approx(1.0, abs=1e-6)
+    assert hull.area == pytest.approx(6.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("offset", _SITE_OFFSETS)
+def test_plane_area_of_a_sloped_rectangle_anywhere(offset):
+    # A 3 m x 2 m rectangle on a plane sloped 20 degrees: 6 m².
+    slope = np.radians(20.0)
+    u = np.array([1.0, 0.0, 0.0])
+    v = np.array([0.0, np.cos(slope), np.sin(slope)])
+    outline = np.array([0 * u, 3 * u, 3 * u + 2 * v, 2 * v]) + np.array(offset)
+    plane = Plane(point=outline[0], normal=np.cross(u, v), outline=outline)
+    assert plane.area == pytest.approx(6.0, abs=1e-6)
+    assert Plane(point=[0, 0, 0], normal=[0, 0, 1]).area == 0.0

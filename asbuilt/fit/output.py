@@ -199,14 +199,6 @@ def _size(value_m: float, small: str, large: str) -> str:
     return f"{_fmt(value_m, unit)} {unit}"
 
 
-def _polygon_area(outline: np.ndarray, normal: np.ndarray) -> float:
-    """Area, m², of a planar polygon (k, 3) metres with unit ``normal``."""
-    if len(outline) < 3:
-        return 0.0
-    cross = np.cross(outline, np.roll(outline, -1, axis=0)).sum(axis=0)
-    return abs(float(cross @ normal)) / 2.0
-
-
 def _dimensions(primitive: Primitive, small: str, large: str) -> str:
     if isinstance(primitive, Cylinder):
         return (
@@ -218,7 +210,7 @@ def _dimensions(primitive: Primitive, small: str, large: str) -> str:
         unit = small if primitive.size.max() < _SMALL_SIZE_LIMIT else large
         return " × ".join(_fmt(s, unit) for s in primitive.size) + f" {unit}"
     if isinstance(primitive, Plane):
-        area = _polygon_area(primitive.outline, primitive.normal) / unit_factor(large) ** 2
+        area = primitive.area / unit_factor(large) ** 2
         n = ", ".join(f"{c:.2f}" for c in primitive.normal)
         return f"n ({n}), {area:.2f} {large}²"
     if isinstance(primitive, Hull):

@@ -230,22 +230,6 @@ class TakeOff:
 # geometry quantities
 
 
-def _polygon_area(outline: np.ndarray, normal: np.ndarray) -> float:
-    """Area of a planar polygon (k,3) metres about ``normal`` (vector shoelace formula)."""
-    if len(outline) < 3:
-        return 0.0
-    cross = np.cross(outline, np.roll(outline, -1, axis=0)).sum(axis=0)
-    return float(abs(np.dot(cross, normal)) / 2.0)
-
-
-def _hull_volume_area(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, float]:
-    tri = vertices[faces]
-    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    area = float(np.linalg.norm(cross, axis=1).sum() / 2.0)
-    volume = float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6.0)
-    return abs(volume), area
-
-
 def _solid(component: Component) -> SolidQuantity | None:
     g = component.geometry
     if isinstance(g, Cuboid):
@@ -265,13 +249,13 @@ def _solid(component: Component) -> SolidQuantity | None:
         category = "sphere"
     elif isinstance(g, Plane):
         shape, dims = "plane", ()
-        volume, area = None, _polygon_area(g.outline, g.normal)
+        volume, area = None, g.area
         category = "plate/wall"
     elif isinstance(g, Hull):
         shape = "hull"
         extent = g.vertices.max(axis=0) - g.vertices.min(axis=0)
         dims = tuple(float(x) for x in extent)
-        volume, area = _hull_volume_area(g.vertices, g.faces)
+        volume, area = g.volume, g.area
         category = "obstacle"
     else:
         return None
