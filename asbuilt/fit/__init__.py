@@ -25,7 +25,8 @@ import numpy as np
 
 from asbuilt.errors import FitError, located
 from asbuilt.fit.result import FitReport, FitResult, ObjectFit
-from asbuilt.primitives import as_points
+from asbuilt.primitives import as_points, as_vector
+from asbuilt.scan.load import PLAUSIBLE_RANGE_SIGMA
 from asbuilt.scan.model import KINDS, Scan, ScanObject
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
@@ -80,9 +81,10 @@ def fit_points(
     points : array_like, shape (n, 3), metres
         Measured points.
     sigma : float, optional, metres
-        Range noise of the sensor; when None the fit estimates it from its residuals.
-    tolerances : Tolerances
-        Numerical tolerances passed to the fit.
+        Range noise of the sensor (1e-5 to 0.1 m, as a scan's ``sensor.range_sigma``); when
+        None the fit estimates it from its residuals.
+    tolerances : Tolerances, optional
+        Numerical tolerances passed to the fit (None: the defaults).
     viewpoint : array_like, shape (3,), metres, optional
         The sensor's position, passed to the fits that use it (the cuboid fit places unseen
         edges from the raster's angular window as seen from there).
@@ -97,13 +99,23 @@ def fit_points(
     Raises
     ------
     FitError
-        Unknown kind, or the points cannot define the primitive.
+        Unknown kind, a ``sigma`` outside 1e-5 to 0.1 m or not a number, a viewpoint that is
+        not 3 finite numbers, or the points cannot define the primitive.
     """
     function = fitter_for(kind)
     try:
         array = as_points(points)
     except ValueError as exc:
         raise FitError(str(exc), where="points") from None
+    if tolerances is None:
+        tolerances = DEFAULT_TOLERANCES
+    if sigma is not None:
+        sigma = _checked_sigma(sigma)
+    if viewpoint is not None:
+        try:
+            viewpoint = as_vector(viewpoint, "viewpoint")
+        except ValueError as exc:
+            raise FitError(str(exc), where="viewpoint") from None
     if kind != "hull":
         if sigma is not None:
             _require_spread_beyond_noise(array, kind, LINE_SPREAD_SIGMAS * float(sigma))
@@ -115,10 +127,27 @@ def fit_points(
     if viewpoint is not None and _accepts_viewpoint(function):
         options["viewpoint"] = np.asarray(viewpoint, dtype=np.float64)
     result = _fit_with_noise(kind, function, array, sigma, tolerances, options)
-    for note in (_prior_noise(result, tolerances), _undetermined(result)):
+    prior = _prior_noise(result, tolerances) if sigma is None else None
+    for note in (prior, _undetermined(result)):
         if note is not None:
             result = dataclasses.replace(result, notes=(*result.notes, note))
     return result
+
+
+def _checked_sigma(sigma) -> float:
+    """``sigma`` as float metres, or FitError when it is no range finder's noise."""
+    try:
+        value = float(sigma)
+    except (TypeError, ValueError):
+        raise FitError(f"must be a number in metres, not {sigma!r}", where="sigma") from None
+    low, high = PLAUSIBLE_RANGE_SIGMA
+    if not low <= value <= high:  # also False for NaN
+        raise FitError(
+            f"{value:g} m is not a range finder's noise; give it in metres, {low:g} to {high:g}, "
+            "or None to estimate it from the residuals",
+            where="sigma",
+        )
+    return value
 
 
 def _prior_noise(result: FitResult, tolerances: Tolerances) -> str | None:
@@ -165,7 +194,11 @@ def _require_spread_beyond_noise(
         raise FitError(
             f"The points lie within {noise} of one line (RMS {spread[1] * 1000:.3g} mm across "
             f"it); {what} needs points spread over its surface"
-            + (" (give sensor.range_sigma if the range finder is more precise)." if assumed else "."),
+            + (
+                " (give sensor.range_sigma if the range finder is more precise)."
+                if assumed
+                else "."
+            ),
             where="points",
         )
 

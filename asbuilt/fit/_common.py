@@ -70,8 +70,9 @@ def validate_points(points, kind: str) -> np.ndarray:
         raise FitError("The points must be finite (a coordinate is NaN or infinite).")
     need = MIN_POINTS[kind]
     if len(array) < need:
+        what = 'An object of kind "auto"' if kind == "auto" else f"A {kind}"
         raise FitError(
-            f"A {kind} needs at least {need} points, got {len(array)}; measure more points."
+            f"{what} needs at least {need} points, got {len(array)}; measure more points."
         )
     return array
 

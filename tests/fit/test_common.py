@@ -225,3 +225,16 @@ def test_scoring_subset_keeps_sparse_scans_whole_and_scales_keep():
     subset, keep = scoring_subset(dense, 3 * SCORED_POINTS, rng)
     assert subset.shape == (SCORED_POINTS, 3) and keep == 3 * SCORED_POINTS // 4
     assert len(np.unique(subset, axis=0)) == SCORED_POINTS  # drawn without replacement
+
+
+@pytest.mark.parametrize(
+    ("kind", "message"),
+    [
+        ("cylinder", "A cylinder needs at least 6 points, got 5; measure more points."),
+        ("auto", 'An object of kind "auto" needs at least 7 points, got 5; measure more points.'),
+    ],
+)
+def test_too_few_points_name_the_kind(kind, message):
+    with pytest.raises(FitError) as err:
+        common.validate_points(np.eye(5, 3), kind)
+    assert str(err.value) == message

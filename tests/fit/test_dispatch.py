@@ -118,6 +118,38 @@ def test_bad_points(stand_ins, points, message):
     assert str(err.value) == message
 
 
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (
+            {"sigma": 0.0},
+            "sigma: 0 m is not a range finder's noise; give it in metres, 1e-05 to 0.1, or None "
+            "to estimate it from the residuals",
+        ),
+        ({"sigma": -0.002}, "sigma: -0.002 m is not a range finder's noise"),
+        ({"sigma": float("nan")}, "sigma: nan m is not a range finder's noise"),
+        ({"sigma": 2.0}, "sigma: 2 m is not a range finder's noise"),  # millimetres meant
+        ({"sigma": "2 mm"}, "sigma: must be a number in metres, not '2 mm'"),
+        ({"viewpoint": [0.0, 0.0]}, "viewpoint: The viewpoint must have shape (3,), not (2,)."),
+        ({"viewpoint": [0.0, 0.0, np.inf]}, "viewpoint: The viewpoint must be finite."),
+    ],
+)
+@pytest.mark.parametrize("kind", ["cylinder", "auto", "cuboid"])
+def test_bad_sigma_or_viewpoint_is_refused_with_its_name(kind, options, message):
+    """The public API once fitted with sigma 0 (every standard error 0), said "within -6 mm"
+    for a negative one and raised numpy's broadcast error for a 2-number viewpoint."""
+    with pytest.raises(FitError) as err:
+        fit_points(kind, octahedron(), **options)
+    assert str(err.value).startswith(message)
+
+
+def test_no_tolerances_means_the_defaults():
+    points = octahedron()
+    assert fit_points("sphere", points, tolerances=None).primitive.radius == pytest.approx(
+        fit_points("sphere", points).primitive.radius
+    )
+
+
 def test_every_kind_has_a_fitter_named_in_the_contract():
     assert set(FITTERS) == set(asbuilt.scan.KINDS)
     for kind, (module, name) in FITTERS.items():
@@ -369,6 +401,20 @@ def test_few_points_without_a_sigma_keep_every_shot_and_say_so():
     assert result.n_inliers == 6
     assert result.stderr["radius"] > 0.0005
     assert any("too few to estimate the noise" in note for note in result.notes)
+
+
+def test_few_points_with_a_sigma_say_nothing_of_a_missing_sigma():
+    """Seven wall shots with a 2 mm sensor sigma, one of them 3 cm off: the fit rejects it and
+    may refit with the residuals' wider noise, but the note asking for the scan's sigma (which
+    it gives) and saying no point was rejected contradicted both (audit)."""
+    rng = np.random.default_rng(3)
+    points = np.column_stack(
+        [rng.uniform(0, 2, 7), 4.0 + rng.normal(0, 0.004, 7), rng.uniform(0, 2, 7)]
+    )
+    points[3, 1] += 0.03
+    result = fit_points("plane", points, sigma=0.002)
+    assert not result.inliers[3]
+    assert not any("too few to estimate the noise" in note for note in result.notes)
 
 
 def test_a_thin_pipe_is_not_taken_for_a_line():
