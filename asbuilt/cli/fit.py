@@ -1,6 +1,7 @@
 """``asbuilt fit SCAN [--json] [--units U] [--output FILE]``: fit every object and show the result.
 
-A table by default (id, kind, main dimensions, centre, RMS, inliers, standard errors); ``--json``
+A table by default (id, kind, main dimensions, centre, RMS, inliers, standard errors) and each
+fit's notes under it; ``--json``
 prints the shape documented in :mod:`asbuilt.fit.output`, lengths in the scan's units unless
 ``--units`` says otherwise; ``--output FILE`` writes that JSON atomically to FILE instead of
 standard output. Progress goes to standard error.
@@ -58,7 +59,12 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.atomic import atomic_write, check_target
     from asbuilt.cli._progress import stage_progress
     from asbuilt.fit import fit
-    from asbuilt.fit.output import TABLE_COLUMNS, fit_report_to_dict, fit_table_rows
+    from asbuilt.fit.output import (
+        TABLE_COLUMNS,
+        fit_report_to_dict,
+        fit_table_notes,
+        fit_table_rows,
+    )
     from asbuilt.scan import load_scan
 
     if args.output is not None:
@@ -94,4 +100,14 @@ def run(args: argparse.Namespace) -> int:
     if not out.is_terminal and "COLUMNS" not in os.environ:
         out.width = 160  # piped to a file or pager: room for one line per object
     out.print(table)
+    notes = fit_table_notes(report)
+    if notes:
+        # A grid, so that a long note wraps under itself, not under the ids.
+        grid = Table.grid(padding=(0, 2))
+        grid.add_column(no_wrap=True)
+        grid.add_column()
+        for object_id, note in notes:
+            grid.add_row(object_id, note)
+        out.print("notes:")
+        out.print(grid)
     return 0

@@ -33,6 +33,7 @@ __all__ = [
     "primitive_to_dict",
     "display_units",
     "fit_table_rows",
+    "fit_table_notes",
 ]
 
 #: Column headings of :func:`fit_table_rows`.
@@ -245,8 +246,9 @@ def fit_table_rows(report: FitReport, units: str | None = None) -> list[tuple[st
 
     Display units follow :func:`display_units` of ``units`` (default: the scan's unit): mm and m
     for metric files, inches and feet for imperial ones. A cuboid size only bounded by the
-    points (not measured between two seen faces) is marked with ``≥``; the depth assumed behind a
-    single seen face (no standard error) with ``~``.
+    points (not measured between two seen faces: estimated from their extent and the raster,
+    which can put it beyond the points, see docs/fitting.md) is marked with ``≈``; the depth
+    assumed behind a single seen face (no standard error) with ``~``.
     """
     units = report.scan.units if units is None else units
     small, large = display_units(units)
@@ -259,7 +261,7 @@ def fit_table_rows(report: FitReport, units: str | None = None) -> list[tuple[st
             unit = dimensions.rsplit(" ", 1)[1]
             assumed = result.diagnostics.get("assumed_size")
             sizes = [
-                ("~" if k == assumed else "" if seen else "≥") + _fmt(s, unit)
+                ("~" if k == assumed else "" if seen else "≈") + _fmt(s, unit)
                 for k, (s, seen) in enumerate(zip(result.primitive.size, result.observed))
             ]
             dimensions = " × ".join(sizes) + f" {unit}"
@@ -276,3 +278,10 @@ def fit_table_rows(report: FitReport, units: str | None = None) -> list[tuple[st
             )
         )
     return rows
+
+
+def fit_table_notes(report: FitReport) -> list[tuple[str, str]]:
+    """Every fit's notes as ``(object id, note)`` pairs in the scan's order, to show under the
+    table: a fit's warnings (undetermined, viewpoint ignored, wider noise, an assumed size),
+    auto's reason for its choice and the outliers it rejected are part of what it says."""
+    return [(item.object.id, note) for item in report.fits for note in item.result.notes]

@@ -303,3 +303,28 @@ def test_names_and_ids_are_shown_as_written_not_as_rich_markup(tmp_path, capsys)
     out = capsys.readouterr().out
     assert "Tank farm [/] east" in out
     assert "S[red]2" in out
+
+
+def test_the_table_shows_each_fits_notes(tmp_path, capsys):
+    """A flat wall's shots fitted as a cylinder gave "r 179.604 m" in the table, exit 0, and
+    the warning that the points do not determine the cylinder only with --json (audit)."""
+    rng = np.random.default_rng(4)
+    wall = np.column_stack([rng.uniform(0, 1.4, 25), np.full(25, 4.0), rng.uniform(0, 1.4, 25)])
+    wall[:, 1] += rng.normal(0, 0.002, 25)
+    doc = {
+        "format": "asbuilt-scan",
+        "version": 1,
+        "units": "m",
+        "sensor": {"position": [0.7, 0.0, 0.7], "range_sigma": 0.002},
+        "objects": [{"id": "NotAPipe", "kind": "cylinder", "points": wall.tolist()}],
+    }
+    path = tmp_path / "wall_as_pipe.json"
+    path.write_text(json.dumps(doc))
+    assert main(["fit", str(path), "--json"]) == 0
+    notes = json.loads(capsys.readouterr().out)["objects"][0]["notes"]
+    assert any(note.startswith("These points do not determine the cylinder") for note in notes)
+    assert main(["fit", str(path)]) == 0
+    out = capsys.readouterr().out
+    table, _, below = out.partition("notes:")
+    assert below, out
+    assert "NotAPipe" in below and "These points do not determine the cylinder" in below

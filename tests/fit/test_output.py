@@ -207,8 +207,8 @@ def test_table_rows_metric():
         "3/4",
         "radius ±0.3 mm, axis ±0.40°",
     )
-    # a box with a side of 10 m or more is shown in metres; the unseen depth is a lower bound
-    assert box[2] == "1.200 × 0.800 × ≥12.500 m"
+    # a box with a side of 10 m or more is shown in metres; the unseen depth is estimated
+    assert box[2] == "1.200 × 0.800 × ≈12.500 m"
     assert ball[1] == "auto→sphere" and ball[2] == "r 304.8 mm"
     assert wall[2] == "n (0.00, 0.00, 1.00), 3.00 m²" and wall[3] == "(0.000, 0.000, 2.500) m"
     assert rock[2] == "4 vertices, 4 faces" and rock[3] == "(0.250, 0.250, 0.250) m"
