@@ -59,6 +59,7 @@ from asbuilt.fit._common import (
 )
 from asbuilt.fit._cylinder_checks import (
     EDGE_ON_DEG,
+    EDGE_ON_QUARTILE_DEG,
     RESCUE_REJECTED,
     admissible,
     better_fit,
@@ -370,7 +371,8 @@ def fit_cylinder(
         # Shots strung along the viewpoint's own beams also say that the viewpoint is right.
         raise FitError(
             "The shots this cylinder fits were nearly all seen edge-on from the viewpoint (half"
-            f" of them within {90 - EDGE_ON_DEG:g} degrees of grazing): they are returns strung"
+            f" of them within {90 - EDGE_ON_DEG:g} degrees of grazing, or three quarters within"
+            f" {90 - EDGE_ON_QUARTILE_DEG:g}): they are returns strung"
             " along their beams (mixed pixels between a thin pipe and what lies behind it), not"
             " a pipe's surface. Rescan with more shots across the pipe, or check the station.",
         )
