@@ -349,8 +349,34 @@ def find_joints(
 
     # 1. explicit links first (distance limits widened by LINK_MARGIN)
     contacts = []
-    for i, j in sorted(linked_pairs):
-        cand = _best_for_link(i, j, pts, out, axes, ods, tol, slack)
+    link_candidates = {
+        key: _best_for_link(*key, pts, out, axes, ods, tol, slack) for key in sorted(linked_pairs)
+    }
+    # 1a. a linked run (an inline pair) with a pipe linked to it as a square-on branch is a tee:
+    # taking the links one by one in id order made the branch's link an elbow first and left
+    # the run's own link a contact with the tee's length missing
+    teed = set()
+    for key, cand in link_candidates.items():
+        if cand is None or cand.kind != "inline" or cand.a in used or cand.b in used:
+            continue
+        point = 0.5 * (pts[cand.a] + pts[cand.b])
+        best = None
+        for other in {q for pair in linked_pairs for q in pair if set(pair) & set(key)} - set(key):
+            for k in (0, 1):
+                if (other, k) in used:
+                    continue
+                cost = _branch_cost(
+                    (other, k), point, axes[key[0]], ods[key[0]], pts, out, axes, ods, tol, slack
+                )
+                if cost is not None and (best is None or cost < best[0]):
+                    best = (cost, (other, k))
+        if best is None:
+            continue
+        used.update((cand.a, cand.b, best[1]))
+        joints.append(Joint("tee", (cand.a, cand.b, best[1]), explicit=True))
+        teed.update({key, *((min(q, best[1][0]), max(q, best[1][0])) for q in key)})
+    for i, j in sorted(linked_pairs - teed):
+        cand = link_candidates[i, j]
         if cand is None:
             apart = segment_distance(pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1])
             apart -= 0.5 * (ods[i] + ods[j])

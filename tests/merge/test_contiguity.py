@@ -97,6 +97,26 @@ def test_tee_at_an_inline_joint():
     assert set(tee.pipes) == {0, 1, 2}
 
 
+@pytest.mark.parametrize(
+    "links",
+    [
+        [(0, 1), (0, 2)],  # the run and the branch on its first pipe
+        [(0, 2), (0, 1)],
+        [(0, 1), (1, 2)],
+        [(0, 1), (0, 2), (1, 2)],
+    ],
+)
+def test_linked_tees_stay_tees(links):
+    """Links P1-P3 (the run) and P1-P2 (the branch) made an elbow P1-P2 first, in id order,
+    and left the run's link a contact: the tee and 0.44 m of run missing from the model
+    (independent ray-cast plant, audit)."""
+    joints = joints_of(
+        ((0, 0, 0), (1.9, 0, 0)), ((2.1, 0, 0), (4, 0, 0)), ((2, 0.15, 0), (2, 2, 0)), links=links
+    )
+    assert [j.kind for j in joints] == ["tee"]
+    assert joints[0].branch == (2, 0) and set(joints[0].pipes) == {0, 1, 2}
+
+
 def test_tee_in_the_middle_of_a_pipe():
     joints = joints_of(((0, 0, 0), (4, 0, 0)), ((2, 0.15, 0), (2, 2, 0)))
     assert [(j.kind, j.through, j.ends) for j in joints] == [("tee", 0, ((1, 0),))]
