@@ -239,9 +239,11 @@ def _fit_with_noise(
             result = function(np.array(points), sigma=None, tolerances=tolerances, **options)
         except FitError:
             raise first from None
-        if not WIDER_NOISE_RATIO * sigma < result.sigma <= WIDER_NOISE_LIMIT * sigma:
+        if not result.sigma <= WIDER_NOISE_LIMIT * sigma:
             raise first from None
-        return _noted_wider(result, result.sigma, sigma)
+        if result.sigma > WIDER_NOISE_RATIO * sigma:
+            return _noted_wider(result, result.sigma, sigma)
+        return _noted_found(result, sigma)
     noise = _residual_noise(result, points, tolerances)
     if not WIDER_NOISE_RATIO * sigma < noise <= WIDER_NOISE_LIMIT * sigma:
         return result
@@ -267,6 +269,17 @@ def _residual_noise(result: FitResult, points: np.ndarray, tolerances: Tolerance
         return 0.0
     kept = residuals[chosen]
     return float(np.sqrt(kept @ kept / dof))
+
+
+def _noted_found(result: FitResult, sigma: float) -> FitResult:
+    """``result`` (fitted without the sensor's sigma, its own noise level within
+    ``WIDER_NOISE_RATIO`` of it) where the fit with the sensor's sigma failed, with a note."""
+    note = (
+        f"With the sensor's range sigma ({sigma * 1000:.3g} mm) the robust search found no "
+        f"{result.kind} holding most points; the search with the residuals' own noise level did "
+        f"({result.sigma * 1000:.3g} mm, which agrees with the sensor's), and its fit is kept."
+    )
+    return dataclasses.replace(result, notes=(*result.notes, note))
 
 
 def _noted_wider(result: FitResult, noise: float, sigma: float) -> FitResult:
