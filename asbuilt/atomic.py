@@ -63,7 +63,7 @@ def _target(path) -> tuple[Path, bool]:
     return (Path(os.path.realpath(given)) if given.is_symlink() else given), False
 
 
-def check_target(path, option: str = "--out") -> Path:
+def check_target(path, option: str = "--out", inputs=()) -> Path:
     """Check, before any work, that an output can be written to ``path``; return the file it
     will be published to (symbolic links followed).
 
@@ -72,11 +72,14 @@ def check_target(path, option: str = "--out") -> Path:
     path : str or Path
     option : str
         The command-line option that named the output, for the message.
+    inputs : iterable of str or Path
+        The command's input files: an output that is one of them would replace it (a scan's
+        measured points lost under the model written from them).
 
     Raises
     ------
     ExportError
-        An empty name, a directory, or a directory that does not exist.
+        An empty name, a directory, a directory that does not exist, or one of ``inputs``.
     """
     final, special = _target(path)
     directory = final.parent if str(final.parent) else Path(".")
@@ -84,7 +87,22 @@ def check_target(path, option: str = "--out") -> Path:
         raise ExportError(
             f"directory does not exist; create it or choose another {option}", source=str(path)
         )
+    for source in inputs:
+        if _same_file(final, Path(source)):
+            raise ExportError(
+                f"is the input file itself, which the output would replace; choose another "
+                f"{option}",
+                source=str(path),
+            )
     return final
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    """Whether two paths name one existing file (hard and symbolic links included)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
 
 
 def _temp_beside(path: Path) -> tuple[int, str]:

@@ -174,3 +174,22 @@ def test_a_name_ending_in_a_slash_is_refused(tmp_path, monkeypatch):
         str(info.value) == "newdir/: ends with a slash, so it names a directory; give a file name"
     )
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("how", ["same name", "relative name", "symbolic link"])
+def test_an_output_that_is_the_input_is_refused(tmp_path, monkeypatch, how):
+    """`asbuilt check site.json --fix site.json` replaced the scan's measured points with the
+    model written from them (audit): an output naming an input file is refused."""
+    from asbuilt.atomic import check_target
+
+    scan = tmp_path / "site.json"
+    scan.write_text("{}")
+    monkeypatch.chdir(tmp_path)
+    target = {"same name": scan, "relative name": "site.json"}.get(how)
+    if target is None:
+        target = tmp_path / "link.json"
+        target.symlink_to(scan)
+    with pytest.raises(ExportError, match="is the input file itself") as err:
+        check_target(target, "--fix", inputs=[str(scan)])
+    assert "choose another --fix" in str(err.value)
+    assert check_target(tmp_path / "other.json", "--fix", inputs=[str(scan)]).name == "other.json"

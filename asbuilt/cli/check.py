@@ -191,7 +191,7 @@ def run(args: argparse.Namespace) -> int:
         from asbuilt.export import exporter_for
 
         exporter_for(args.fix)  # an unknown suffix, a directory or none fails before any work
-        check_target(args.fix, "--fix")
+        check_target(args.fix, "--fix", inputs=[args.scan])
 
     err = Console(file=sys.stderr, highlight=False, soft_wrap=True)
     with stage_progress(err) as bar:

@@ -68,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.scan import load_scan
 
     if args.output is not None:
-        check_target(args.output, "--output")  # a directory or none fails before any work
+        check_target(args.output, "--output", inputs=[args.scan])  # before any work
     scan = load_scan(args.scan)
     err = Console(file=sys.stderr, markup=False)
     with stage_progress(err) as bar:

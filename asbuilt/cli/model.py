@@ -122,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
     reports = [Path(p) for p in args.report or ()]
     for path in outputs:
         exporter_for(path)  # an unknown suffix or a missing directory fails before any work
-        check_target(path, "--out")
+        check_target(path, "--out", inputs=[args.scan])
     seen = {path.resolve() for path in outputs}
     for report_path in reports:
         from asbuilt.report import report_format_for
@@ -134,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
                 source=str(report_path),
             )
         seen.add(report_path.resolve())
-        check_target(report_path, "--report")
+        check_target(report_path, "--report", inputs=[args.scan])
 
     scan = load_scan(args.scan)
     err = Console(file=sys.stderr, markup=False)

@@ -345,3 +345,29 @@ def test_sigterm_while_writing_leaves_no_partial_files(tmp_path, capsys, monkeyp
     assert capsys.readouterr().err.strip() == "asbuilt: terminated"
     assert list(tmp_path.iterdir()) == []
     assert signal.getsignal(signal.SIGTERM) is before  # restored for the caller
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["model", "site.json", "--out", "site.json"],
+        ["model", "site.json", "--out", "site.step", "--report", "site.json"],
+        ["check", "site.json", "--fix", "site.json"],
+        ["fit", "site.json", "--output", "site.json"],
+        ["report", "site.json", "--out", "site.json"],
+    ],
+    ids=lambda argv: " ".join(argv[:1] + argv[2:3]),
+)
+def test_an_output_naming_the_scan_is_refused_and_the_scan_kept(
+    argv, tmp_path, monkeypatch, capsys
+):
+    """Writing the model over its own scan lost the measured points (audit)."""
+    scan = tmp_path / "site.json"
+    scan.write_bytes((ROOT / "samples" / "spool.json").read_bytes())
+    before = scan.read_bytes()
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "is the input file itself" in err and err.count("\n") == 1
+    assert scan.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["site.json"]
