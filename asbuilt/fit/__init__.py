@@ -27,7 +27,7 @@ from asbuilt.errors import FitError, located
 from asbuilt.fit.result import FitReport, FitResult, ObjectFit
 from asbuilt.primitives import as_points, as_vector
 from asbuilt.scan.load import PLAUSIBLE_RANGE_SIGMA
-from asbuilt.scan.model import KINDS, Scan, ScanObject
+from asbuilt.scan.model import KINDS, Scan, ScanObject, kind_phrase
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
 __all__ = ["FITTERS", "fit", "fit_object", "fit_points", "FitResult", "ObjectFit", "FitReport"]
@@ -118,14 +118,14 @@ def fit_points(
             raise FitError(str(exc), where="viewpoint") from None
     if kind != "hull":
         if sigma is not None:
-            _require_spread_beyond_noise(array, kind, LINE_SPREAD_SIGMAS * float(sigma))
+            _require_spread_beyond_noise(array, kind, LINE_SPREAD_SIGMAS * sigma)
         else:
             # No sensor sigma: one prior sigma across the line, so that a head stuck on one
             # spot (shots scattered along its beam only) is refused while a 10 mm tube is not.
             _require_spread_beyond_noise(array, kind, float(tolerances.prior_range_sigma), True)
     options = {}
     if viewpoint is not None and _accepts_viewpoint(function):
-        options["viewpoint"] = np.asarray(viewpoint, dtype=np.float64)
+        options["viewpoint"] = viewpoint
     result = _fit_with_noise(kind, function, array, sigma, tolerances, options)
     prior = _prior_noise(result, tolerances) if sigma is None else None
     for note in (prior, _undetermined(result)):
@@ -185,7 +185,7 @@ def _require_spread_beyond_noise(
     centred = points - points.mean(axis=0)
     spread = np.linalg.svd(centred, compute_uv=False) / np.sqrt(len(points))
     if spread.size > 1 and spread[1] <= limit:
-        what = 'an object of kind "auto"' if kind == "auto" else f"a {kind}"
+        what = kind_phrase(kind)
         noise = (
             f"the {limit * 1000:.3g} mm noise assumed without a sensor sigma"
             if assumed

@@ -12,6 +12,7 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit._mixture import mixture_score
+from asbuilt.scan.model import kind_phrase
 from asbuilt.tolerances import MIN_POINTS, Tolerances
 
 __all__ = [
@@ -70,9 +71,10 @@ def validate_points(points, kind: str) -> np.ndarray:
         raise FitError("The points must be finite (a coordinate is NaN or infinite).")
     need = MIN_POINTS[kind]
     if len(array) < need:
-        what = 'An object of kind "auto"' if kind == "auto" else f"A {kind}"
+        what = kind_phrase(kind)
         raise FitError(
-            f"{what} needs at least {need} points, got {len(array)}; measure more points."
+            f"{what[0].upper()}{what[1:]} needs at least {need} points, got {len(array)}; "
+            "measure more points."
         )
     return array
 

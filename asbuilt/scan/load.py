@@ -23,7 +23,7 @@ from types import MappingProxyType
 import numpy as np
 
 from asbuilt.errors import ScanError, ScanReadError, located
-from asbuilt.scan.model import KINDS, Scan, ScanObject, Sensor
+from asbuilt.scan.model import KINDS, Scan, ScanObject, Sensor, kind_phrase
 from asbuilt.tolerances import MIN_POINTS
 from asbuilt.units import UNITS
 
@@ -108,10 +108,6 @@ def _is_finite_number(value) -> bool:
         return math.isfinite(float(value))
     except OverflowError:
         return False
-
-
-def _article(kind: str) -> str:
-    return 'an object of kind "auto"' if kind == "auto" else f"a {kind}"
 
 
 class _Context:
@@ -551,7 +547,7 @@ def _check_spread(points: np.ndarray, kind: str, where: str, ctx: _Context) -> N
     if n < need:
         raise ctx.error(
             where,
-            f"has {n} point{'s' if n != 1 else ''}; {_article(kind)} needs at least {need}; "
+            f"has {n} point{'s' if n != 1 else ''}; {kind_phrase(kind)} needs at least {need}; "
             "scan more points on the object",
         )
     centred = points - points.mean(axis=0)
@@ -560,7 +556,7 @@ def _check_spread(points: np.ndarray, kind: str, where: str, ctx: _Context) -> N
     if singular[0] <= IDENTICAL_RTOL * scale:
         raise ctx.error(
             where,
-            f"all {n} points are identical; {_article(kind)} needs points spread across its "
+            f"all {n} points are identical; {kind_phrase(kind)} needs points spread across its "
             "surface (re-aim and rescan)",
         )
     if singular[1] <= COLLINEAR_RTOL * singular[0]:
@@ -579,7 +575,7 @@ def _check_spread(points: np.ndarray, kind: str, where: str, ctx: _Context) -> N
             )
         raise ctx.error(
             where,
-            f"the points are collinear; {_article(kind)} needs points spread across its surface "
+            f"the points are collinear; {kind_phrase(kind)} needs points spread across its surface "
             "(re-aim and rescan)",
         )
 

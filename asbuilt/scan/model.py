@@ -7,10 +7,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["KINDS", "ScanObject", "Sensor", "Scan"]
+__all__ = ["KINDS", "ScanObject", "Sensor", "Scan", "kind_phrase"]
 
 #: Object kinds a scan may ask for; "auto" lets the software choose among the fitted kinds.
 KINDS = ("cylinder", "cuboid", "sphere", "plane", "hull", "auto")
+
+
+def kind_phrase(kind: str) -> str:
+    """``"a cylinder"``, or ``'an object of kind "auto"'``: a kind in a sentence."""
+    return 'an object of kind "auto"' if kind == "auto" else f"a {kind}"
 
 
 @dataclass(frozen=True, eq=False)
