@@ -391,9 +391,9 @@ def fit_cuboid(
         ``primitive`` a :class:`~asbuilt.primitives.Cuboid` (axes rows ordered so the one nearest
         vertical is last); ``residuals`` (n,) metres, the distance of inliers to their face plane
         and of outliers to the box surface; ``observed`` per size (True only between two seen
-        opposite faces); ``stderr`` ``size`` (3 values, metres), ``axes_deg`` (RMS angular error
-        of the three axes, degrees), ``center`` (root of the trace of the centre covariance,
-        metres); ``covariance`` of [rotation vector (radians, world frame, about the inliers'
+        opposite faces); ``stderr`` ``size`` (3 values, metres), ``axes_deg`` (3 values: the
+        angular standard error of each output axis's direction, degrees), ``center`` (root of
+        the trace of the centre covariance, metres); ``covariance`` of [rotation vector (radians, world frame, about the inliers'
         centroid; 2 components with one seen face), face offsets (metres, in face order)];
         ``diagnostics`` ``faces``, ``outliers``, ``iterations``, ``scale`` (robust residual sigma,
         metres), ``faces_axis0..2`` (seen faces normal to each output axis), ``silhouette`` (1.0
@@ -547,8 +547,10 @@ def fit_cuboid(
         longest = float(np.max(size[1:]))
         in_plane_angle = reach / max(longest, 1e-9)
         c_rot = c_rot + in_plane_angle**2 * np.outer(model.axes[0], model.axes[0])
-    axis_var = [float(np.trace(c_rot) - model.axes[k] @ c_rot @ model.axes[k]) for k in range(3)]
-    axes_deg = float(np.degrees(np.sqrt(max(np.mean(axis_var), 0.0))))
+    # Each axis direction's variance: the rotation covariance across that axis (the rotation
+    # about an axis leaves it unmoved). Per axis, because a column's tilt error (its long
+    # axis) is several times smaller than its yaw error (the two across it).
+    axis_var = np.array([np.trace(c_rot) - model.axes[k] @ c_rot @ model.axes[k] for k in range(3)])
 
     observed = lo_face & hi_face
     if one_face:
@@ -559,6 +561,7 @@ def fit_cuboid(
     faces_per_axis = np.bincount(model.face_axis, minlength=3)
     axes, size, observed_t, order = _canonical(model.axes, size, observed)
     size_se = size_se[order]
+    axes_deg = np.degrees(np.sqrt(np.maximum(axis_var[list(order)], 0.0)))
     faces_per_axis = faces_per_axis[order]
     cuboid = Cuboid(center=centre, axes=axes, size=size)
 
@@ -587,7 +590,7 @@ def fit_cuboid(
         inliers=inliers,
         stderr={
             "size": tuple(float(v) for v in size_se),
-            "axes_deg": axes_deg,
+            "axes_deg": tuple(float(v) for v in axes_deg),
             "center": centre_se,
         },
         sigma=float(sig),

@@ -322,7 +322,8 @@ def test_standard_errors_scale_with_the_sensor_sigma():
     two = fit_cuboid(points, sigma=0.004)
     assert set(one.stderr) == {"size", "axes_deg", "center"}
     assert len(one.stderr["size"]) == 3
-    assert two.stderr["axes_deg"] == pytest.approx(2 * one.stderr["axes_deg"], rel=1e-6)
+    assert len(one.stderr["axes_deg"]) == 3
+    assert two.stderr["axes_deg"] == pytest.approx(np.multiply(2, one.stderr["axes_deg"]), rel=1e-6)
     # a size bounded by the points' extent also carries the gap past the last point, which
     # does not scale with the sensor: se^2 = sigma^2 * a + gap, the same gap at every sigma
     three = fit_cuboid(points, sigma=0.003)
@@ -340,18 +341,26 @@ def test_standard_errors_scale_with_the_sensor_sigma():
 
 
 def test_orientation_standard_error_matches_the_scatter():
-    """The reported axes_deg is within a factor 2 of the RMS error over repeated scans."""
+    """Each axis's reported angular error (axes_deg, one per output axis) is within a factor 2
+    of that axis's RMS direction error over repeated scans: a tall column's tilt (its long,
+    vertical axis) is known several times better than its yaw (the two across it), and the
+    plumb rule reads the tilt's own error."""
     truth = column(0.4, 0.4, 2.0, 45.0, 5.0, np.random.default_rng(91))
     errors, reported = [], []
     for seed in range(30):
         rng = np.random.default_rng(1000 + seed)
         points, _ = scan_box(truth, np.zeros(3), 6, 7, rng)
         result = fit_cuboid(points, sigma=SIGMA)
-        _, angle, _ = match(result.primitive, truth)
-        errors.append(angle)
+        axes = result.primitive.axes
+        cosines = np.abs(axes @ truth.axes.T).max(axis=1)  # per fitted axis
+        errors.append(np.degrees(np.arccos(np.clip(cosines, -1.0, 1.0))))
         reported.append(result.stderr["axes_deg"])
-    rms = math.sqrt(np.mean(np.square(errors)))
-    assert 0.5 < rms / np.median(reported) < 2.5
+    rms = np.sqrt(np.mean(np.square(errors), axis=0))
+    median = np.median(reported, axis=0)
+    assert np.all((0.5 < rms / median) & (rms / median < 2.0)), (rms, median)
+    # the vertical axis (last) is the long one: its tilt error is the smallest
+    assert median[2] < 0.5 * min(median[0], median[1]), median
+    assert rms[2] < 0.5 * min(rms[0], rms[1]), rms
 
 
 # --------------------------------------------------------------------------- bad input
@@ -563,7 +572,7 @@ def _fit_stored(scan, size_tolerance=None, rejected=0):
     )
     cosines = np.abs(np.asarray(scan["axes"]) @ fit.primitive.axes.T).max(axis=1)
     error = float(np.degrees(np.arccos(np.clip(cosines.min(), -1.0, 1.0))))
-    assert error < max(1.0, 4 * fit.stderr["axes_deg"]), error
+    assert error < max(1.0, 4 * max(fit.stderr["axes_deg"])), error
     if rejected is not None:
         assert fit.n_points - fit.n_inliers <= rejected
     if size_tolerance is not None:

@@ -30,13 +30,16 @@ def test_compliant_scene_has_no_error(name, seed):
     assert errors == []
 
 
-def test_plumb_column_from_a_sparse_scan_is_unverifiable_not_an_error():
+@pytest.mark.parametrize("seed", [21, 22, 23])
+def test_plumb_columns_from_a_sparse_scan_are_verified_plumb(seed):
+    """Two faces of 36 shots know a 4 m column's tilt to about 0.04 degree (3 mm over its
+    height; its yaw is several times less certain, and does not count): within the 8 mm (AISC 303) and
+    12 mm (ACI 117) allowances, so the rule can say plumb, with neither an error nor an
+    unverifiable warning."""
     model = build_model(
-        loads_scan(json.dumps(simulate_scan(SCENES["plumb columns (2 x 36 pts)"], seed=21)))
+        loads_scan(json.dumps(simulate_scan(SCENES["plumb columns (2 x 36 pts)"], seed=seed)))
     )
-    plumb = [f for f in model.findings if f.slug == "out-of-plumb"]
-    assert plumb and all(f.severity == "warning" and f.unverifiable for f in plumb)
-    assert all("second face" in f.suggestions[0].description for f in plumb)
+    assert [f.message for f in model.findings if f.slug == "out-of-plumb"] == []
 
 
 @pytest.mark.parametrize(
