@@ -21,6 +21,7 @@ from asbuilt.errors import RulesConfigError
 from asbuilt.findings import SEVERITIES
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
+from ._ranges import check_range, check_rows, describe
 from .registry import RULES, Rule, match_rules
 
 try:  # Python 3.11+
@@ -144,8 +145,11 @@ def _type_name(value) -> str:
     }.get(type(value), type(value).__name__)
 
 
-def _check_value(value, default, where: str, source: str | None):
-    """``value`` coerced to the type of ``default`` (int accepted for float); else an error."""
+def _check_value(value, default, where: str, source: str | None, option=None):
+    """``value`` coerced to the type of ``default`` (int accepted for float); else an error.
+
+    ``option`` is ``(table, key)`` when the value has a range to name in the error.
+    """
     if isinstance(default, bool):
         if isinstance(value, bool):
             return value
@@ -167,9 +171,8 @@ def _check_value(value, default, where: str, source: str | None):
                 ]
             if all(isinstance(v, str) for v in value):
                 return list(value)
-    raise RulesConfigError(
-        f"must be {_type_name(default)}, not {value!r}", source=source, where=where
-    )
+    wanted = _type_name(default) if option is None else describe(_type_name(default), *option)
+    raise RulesConfigError(f"must be {wanted}, not {value!r}", source=source, where=where)
 
 
 def _parse(text: str, source: str | None) -> dict:
@@ -229,18 +232,32 @@ def _resolve(user: Mapping, source: str | None) -> RulesConfig:
                 raise RulesConfigError(
                     f"unknown option; [{key}] accepts: {allowed}", source=source, where=where
                 )
-            checked = _check_value(item, target[name], where, source)
+            checked = _check_value(item, target[name], where, source, (key, name))
             if name == "severity" and checked not in SEVERITIES:
                 raise RulesConfigError(
                     f"must be one of {', '.join(SEVERITIES)}, not {item!r}",
                     source=source,
                     where=where,
                 )
-            if isinstance(checked, float) and (checked != checked or checked < 0):
+            if isinstance(checked, (int, float)) and not isinstance(checked, bool):
+                wanted = check_range(checked, _type_name(target[name]), key, name)
+            elif isinstance(checked, list):
+                wanted = check_rows(checked, key, name)
+            else:
+                wanted = None
+            if wanted is not None:
                 raise RulesConfigError(
-                    f"must be a non-negative number, not {item!r}", source=source, where=where
+                    f"must be {wanted}, not {item!r}", source=source, where=where
                 )
             target[name] = checked
+    if general["angle_snap_deg"] > general["intended_angle_deg"]:
+        raise RulesConfigError(
+            f"angle_snap_deg {general['angle_snap_deg']:g} must be at most intended_angle_deg "
+            f"{general['intended_angle_deg']:g} (axes are regularised below the first and "
+            "deliberately skewed above the second); lower it or raise intended_angle_deg",
+            source=source,
+            where="[general].angle_snap_deg",
+        )
     if general["default_material"] not in ("steel", "concrete"):
         raise RulesConfigError(
             f'must be "steel" or "concrete", not {general["default_material"]!r}',

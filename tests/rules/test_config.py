@@ -82,7 +82,7 @@ def test_with_selection_replaces_select_and_extends_ignore():
         ("[clash]\nsamples = 1.5", "[clash].samples", "must be an integer"),
         ('[out-of-plumb]\nseverity = "fatal"', "[out-of-plumb].severity", "error, warning, info"),
         ("[out-of-plumb]\nsteel_rato = 400", "[out-of-plumb].steel_rato", "unknown option"),
-        ("[general]\nk_sigma = -1", "[general].k_sigma", "non-negative"),
+        ("[general]\nk_sigma = -1", "[general].k_sigma", "must be a number at least 0"),
         ('[general]\ndefault_material = "wood"', "[general].default_material", "steel"),
         ("[general]\nsteel_keywords = [1, 2]", "[general].steel_keywords[0]", "string"),
         ('select = ["AB999"]', "select", "unknown rule"),
