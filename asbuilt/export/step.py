@@ -3,8 +3,15 @@
 The solids are in metres; the writer (OpenCASCADE's XCAF STEP writer, fed by CadQuery's
 ``toCAF``) is told so (``xstep.cascade.unit = M``) and declares millimetres in the file
 (``write.step.unit = MM``), so OpenCASCADE scales every length by 1000 on the way out. The
-header names the final file and asbuilt as the originating system. :func:`read_step` reads a file back through the XCAF document (names, tree,
-colours, volumes) for checks.
+header names the final file and asbuilt as the originating system. :func:`read_step` reads a
+file back through the XCAF document (names, tree, colours, volumes) for checks.
+
+The file is pure 7-bit ASCII, as ISO 10303-21 (editions 2 and 3) wants of the strings a strict
+reader takes: OpenCASCADE writes a name's characters beyond ASCII as raw UTF-8 bytes (and may
+break a long string across lines in the middle of one), so :func:`_ascii_strings` rewrites each
+such string with the standard's control directives, ``\\X2\\`` ... ``\\X0\\`` (four hex digits per
+character of the Basic Multilingual Plane) and ``\\X4\\`` ... ``\\X0\\`` (eight per character beyond
+it); apostrophes (``''``) and backslashes (``\\\\``) are already escaped by OpenCASCADE.
 """
 
 from __future__ import annotations
@@ -39,7 +46,7 @@ from OCP.XSControl import XSControl_WorkSession
 from asbuilt import __version__
 from asbuilt.errors import ExportError
 
-__all__ = ["SCHEMAS", "write_step", "read_step", "StepSolid", "declared_length_unit"]
+__all__ = ["SCHEMAS", "p21_escape", "write_step", "read_step", "StepSolid", "declared_length_unit"]
 
 #: Schema names accepted by :func:`write_step` mapped to OpenCASCADE's ``write.step.schema``.
 SCHEMAS = {"AP214": "AP214IS", "AP242": "AP242DIS"}
@@ -49,6 +56,74 @@ def _set(name: str, value: str) -> str:
     previous = Interface_Static.CVal_s(name)
     Interface_Static.SetCVal_s(name, value)
     return previous
+
+
+#: A quoted STEP string as bytes: an apostrophe, then anything but one or a doubled one
+#: (ISO 10303-21 writes an apostrophe inside a string as ``''``), then the closing apostrophe.
+#: UTF-8 never uses the byte 0x27 inside a multibyte character, so this finds whole strings.
+_STRING = re.compile(rb"'(?:[^']|'')*'")
+#: Runs of characters beyond ASCII: those of the Basic Multilingual Plane (``\\X2\\``, UCS-2)
+#: and those beyond it (``\\X4\\``, UCS-4), which need different directives.
+_NON_ASCII = re.compile("([\u0080-\uffff]+)|([\U00010000-\U0010ffff]+)")
+
+
+def p21_escape(text: str) -> str:
+    """``text`` with every character beyond ASCII written as an ISO 10303-21 directive.
+
+    A run of characters up to U+FFFF becomes ``\\X2\\`` followed by four upper-case hex digits
+    per character and ``\\X0\\``; a run beyond U+FFFF becomes ``\\X4\\``, eight hex digits per
+    character and ``\\X0\\``. ASCII characters (apostrophes and backslashes included, which the
+    caller escapes) are left as they are.
+
+    Examples
+    --------
+    >>> p21_escape("Rohr Ø100 泵")
+    'Rohr \\\\X2\\\\00D8\\\\X0\\\\100 \\\\X2\\\\6CF5\\\\X0\\\\'
+    """
+
+    def directive(match: re.Match) -> str:
+        bmp, astral = match.groups()
+        if bmp:
+            return "\\X2\\" + "".join(f"{ord(c):04X}" for c in bmp) + "\\X0\\"
+        return "\\X4\\" + "".join(f"{ord(c):08X}" for c in astral) + "\\X0\\"
+
+    return _NON_ASCII.sub(directive, text)
+
+
+def _escape_string(match: re.Match) -> bytes:
+    quoted = match.group()
+    if quoted.isascii():
+        return quoted
+    # Line breaks inside a string are not part of it (ISO 10303-21); the writer's may split a
+    # UTF-8 character, so drop them before decoding.
+    text = quoted.replace(b"\r", b"").replace(b"\n", b"").decode("utf-8")
+    return p21_escape(text).encode("ascii")
+
+
+def _ascii_strings(path) -> None:
+    """Rewrite the STEP file at ``path`` so that it is pure ASCII (see the module docstring).
+
+    Raises
+    ------
+    ExportError
+        When a byte beyond ASCII is outside every string, or a string is not UTF-8 (neither
+        comes from OpenCASCADE's writer).
+    """
+    path = Path(path)
+    data = path.read_bytes()
+    if data.isascii():
+        return
+    try:
+        fixed = _STRING.sub(_escape_string, data)
+    except UnicodeDecodeError:
+        fixed = None
+    if fixed is None or not fixed.isascii():
+        raise ExportError(
+            "the STEP writer left text beyond ASCII that is not a UTF-8 string; "
+            "report this with the model",
+            source=str(path),
+        )
+    path.write_bytes(fixed)
 
 
 def _utf8_name(text: str) -> TCollection_ExtendedString:
@@ -142,6 +217,7 @@ def write_step(cad, path, *, schema: str = "AP214", file_name: str | None = None
             _set(name, value)
     if not ok:
         raise ExportError("the STEP writer failed; check the disk and try again", source=str(path))
+    _ascii_strings(path)
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ from asbuilt.cad import prepare
 from asbuilt.cad.colours import KIND_COLOURS, STATUS_COLOURS
 from asbuilt.errors import ExportError
 from asbuilt.export import export_model
-from asbuilt.export.step import declared_length_unit, read_step, write_step
+from asbuilt.export.step import declared_length_unit, p21_escape, read_step, write_step
 from asbuilt.model import Component, Model, Straight
 
 
@@ -180,11 +180,69 @@ def test_unicode_names_survive_the_round_trip(tmp_path):
     assert all(instance == product for instance, product in names[1:])
     paths = {s.name: s.path for s in read_step(path)}
     assert paths[UNICODE_IDS[1]] == (UNICODE_SCAN, UNICODE_GROUP, UNICODE_IDS[1])
-    # The file itself holds the names as UTF-8 (ISO 10303-21 edition 3), not their Latin-1
-    # reading ("SÃ¤ule").
-    text = path.read_text(encoding="utf-8")
-    assert "PRODUCT('储罐 TK-1'" in text
-    assert "SÃ" not in text
+    # The file holds the names with ISO 10303-21 directives (储 U+50A8, 罐 U+7F50), not as
+    # raw UTF-8 nor as their Latin-1 reading ("SÃ¤ule", U+00C3).
+    text = path.read_bytes().decode("ascii")
+    assert "PRODUCT('\\X2\\50A87F50\\X0\\ TK-1'" in text
+    assert "00C3" not in text
+
+
+# Names a strict ISO 10303-21 reader must get as 7-bit ASCII: Latin-1 letters, CJK, a
+# character beyond the Basic Multilingual Plane, apostrophes and backslashes, and a name whose
+# UTF-8 form is longer than the writer's 72-byte line (it breaks such strings across lines).
+ESCAPE_IDS = (
+    "Rohrleitung Ø100",
+    "Pumpe ü 泵",
+    "𝔸 axis",
+    "it's a \\ and Ø",
+    "泵" * 30 + " P-101",
+)
+#: The same names as ISO 10303-21 encodes them, written out from the Unicode code points (Ø
+#: U+00D8, ü U+00FC, 泵 U+6CF5, 𝔸 U+1D538) and the standard's rules: \X2\ + four hex digits
+#: per BMP character + \X0\, \X4\ + eight per character beyond it + \X0\, '' and \\.
+ESCAPED = (
+    "'Rohrleitung \\X2\\00D8\\X0\\100'",
+    "'Pumpe \\X2\\00FC\\X0\\ \\X2\\6CF5\\X0\\'",
+    "'\\X4\\0001D538\\X0\\ axis'",
+    "'it''s a \\\\ and \\X2\\00D8\\X0\\'",
+    "'\\X2\\" + "6CF5" * 30 + "\\X0\\ P-101'",
+)
+
+
+@pytest.fixture(scope="module")
+def escaped_step(tmp_path_factory):
+    components = tuple(
+        Component(name, "pipe", Straight([i, 0, 0], [i + 0.5, 0, 0], 0.05), group="Grüppe")
+        for i, name in enumerate(ESCAPE_IDS)
+    )
+    model = Model(components=components, units="m", name="Anlage Ü")
+    path = tmp_path_factory.mktemp("escape") / "Säule Ø.step"
+    export_model(model, path)
+    return path
+
+
+def test_the_file_is_pure_ascii_with_iso_10303_21_directives(escaped_step):
+    data = escaped_step.read_bytes()
+    assert data.isascii()
+    text = data.decode("ascii").replace("\n", "")  # line breaks are not significant
+    for escaped in ESCAPED:
+        assert f"PRODUCT({escaped},{escaped}," in text
+    assert "PRODUCT('Gr\\X2\\00FC\\X0\\ppe'" in text
+    # The header too: the file's own name and the model's name.
+    assert "FILE_NAME('S\\X2\\00E4\\X0\\ule \\X2\\00D8\\X0\\.step'" in text
+    assert "'as-built model: Anlage \\X2\\00DC\\X0\\'" in text
+
+
+def test_the_ocp_reader_decodes_the_exact_names(escaped_step):
+    names = _xcaf_names(escaped_step)
+    assert sorted(product for _, product in names) == sorted([*ESCAPE_IDS, "Grüppe", "Anlage Ü"])
+    assert {s.name for s in read_step(escaped_step)} == set(ESCAPE_IDS)
+    assert all(s.path[:2] == ("Anlage Ü", "Grüppe") for s in read_step(escaped_step))
+
+
+def test_p21_escape_leaves_ascii_alone():
+    assert p21_escape("P-101 'a' \\ b") == "P-101 'a' \\ b"
+    assert p21_escape("Ø𝔸泵") == "\\X2\\00D8\\X0\\\\X4\\0001D538\\X0\\\\X2\\6CF5\\X0\\"
 
 
 def test_group_instances_are_named_by_their_group(step_file):
