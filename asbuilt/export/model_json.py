@@ -3,8 +3,10 @@
 The document (documented field by field in ``docs/model-format.md``) is plain data built
 first (:func:`model_document`) and then written atomically. Lengths are metres, angles
 degrees, in the scan frame (z up). Reading back (:func:`load_model_document`,
-:func:`model_from_document`) restores ids, types, geometry, sizes, spools, corrections and
-findings; the fits' residual arrays are not stored, only their summaries (``fitted``).
+:func:`model_from_document`) restores ids, types, geometry, sizes, spools, corrections,
+findings and each component's fit as a :class:`~asbuilt.export.stored_fit.StoredFit` (from its
+``fitted`` summary: the fitted primitive, standard errors, counts, RMS; the residual arrays are
+not stored), so the rules judge a document as they judge the scan it came from.
 """
 
 from __future__ import annotations
@@ -18,6 +20,13 @@ import numpy as np
 
 from asbuilt.atomic import atomic_write
 from asbuilt.errors import ExportError
+from asbuilt.export.stored_fit import (
+    StoredFit,
+    SummaryFieldError,
+    stored_fit_from_summary,
+    summary_float,
+)
+from asbuilt.export.stored_fit import describe_value as _describe
 from asbuilt.findings import Finding, Suggestion
 from asbuilt.model import Bend, Component, Correction, Model, Reducer, Spool, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
@@ -171,6 +180,7 @@ def _fitted(fit) -> dict | None:
     summary["observed"] = list(fit.observed) if fit.observed is not None else None
     summary["diagnostics"] = dict(fit.diagnostics)
     summary["notes"] = list(fit.notes)
+    summary["primitive"] = _geometry_fields(primitive)
     return summary
 
 
@@ -347,11 +357,6 @@ class _BadField(ValueError):
         super().__init__(message)
 
 
-def _describe(value) -> str:
-    text = json.dumps(value)  # NaN and Infinity as JSON readers that allow them write them
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
 def _number(entry: dict, key: str) -> float:
     """A finite number field (metres where it is a length)."""
     value = entry[key]
@@ -513,8 +518,79 @@ def _optional_float(value):
     return None if value is None else float(value)
 
 
+#: The kinds a fit summary may name, and the document shapes of their primitives.
+_FIT_SHAPES = {
+    "cylinder": Cylinder,
+    "cuboid": Cuboid,
+    "sphere": Sphere,
+    "plane": Plane,
+    "hull": Hull,
+}
+
+
+def _fit_primitive(summary: dict, geometry):
+    """The fitted primitive: the summary's ``primitive``, or (older documents, written without
+    it) the component's own geometry when it is of the fitted kind (a pipe's straight as a
+    cylinder of the fitted radius); None when neither gives one."""
+    kind = summary["kind"]
+    if kind not in _FIT_SHAPES:
+        raise _BadField("kind", f"must be one of {', '.join(_FIT_SHAPES)}, not {_describe(kind)}")
+    stored = summary.get("primitive")
+    if stored is not None:
+        if not isinstance(stored, dict):
+            raise _BadField("primitive", f"must be an object, not {_describe(stored)}")
+        try:
+            primitive = _geometry(stored)
+        except KeyError as exc:
+            raise _BadField(f"primitive.{exc.args[0]}", "missing") from None
+        except _BadField as exc:
+            raise _BadField(f"primitive.{exc.key}", str(exc)) from None
+        if not isinstance(primitive, _FIT_SHAPES[kind]):
+            raise _BadField("primitive.shape", f"must be {kind!r} (the fitted kind)")
+        return primitive
+    if isinstance(geometry, _FIT_SHAPES[kind]):
+        return geometry
+    if kind == "cylinder" and isinstance(geometry, Straight):
+        radius = summary_float(summary, "radius", geometry.outer_radius)
+        middle = 0.5 * (geometry.start + geometry.end)
+        return Cylinder(middle, geometry.direction, radius, geometry.length)
+    return None
+
+
+def _stored_fit(entry: dict, geometry) -> StoredFit | None:
+    """The fit a component comes from, rebuilt from its ``fitted`` summary (None if null)."""
+    summary = entry.get("fitted")
+    if summary is None:
+        return None
+    if not isinstance(summary, dict):
+        raise _BadField("fitted", f"must be an object or null, not {_describe(summary)}")
+    try:
+        primitive = _fit_primitive(summary, geometry)
+        return None if primitive is None else stored_fit_from_summary(summary, primitive)
+    except KeyError as exc:
+        raise _BadField(f"fitted.{exc.args[0]}", "missing") from None
+    except (_BadField, SummaryFieldError) as exc:
+        raise _BadField(f"fitted.{exc.key}", str(exc)) from None
+
+
+def _shared_fit(entry: dict, geometry, fits: dict) -> StoredFit | None:
+    """:func:`_stored_fit`, one object per fit: merging cuts one scanned pipe into pieces at a
+    tee that share its fit, and the rules judge each fit once (by identity)."""
+    summary = entry.get("fitted")
+    if not isinstance(summary, dict):
+        return _stored_fit(entry, geometry)
+    key = (json.dumps(entry.get("sources")), json.dumps(summary, sort_keys=True))
+    if key not in fits:
+        fits[key] = _stored_fit(entry, geometry)
+    return fits[key]
+
+
 def model_from_document(document: dict, *, source: str | None = None) -> Model:
-    """Rebuild a :class:`Model` from an ``asbuilt-model`` document (fits are not restored).
+    """Rebuild a :class:`Model` from an ``asbuilt-model`` document.
+
+    Each component's fit is restored from its ``fitted`` summary as a
+    :class:`~asbuilt.export.stored_fit.StoredFit` (components cut from one fit share one), so
+    that :func:`asbuilt.rules.check_model` and the reports see the fits' uncertainty.
 
     Raises
     ------
@@ -523,6 +599,7 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
     """
     _check_document(document, source)
     components = []
+    fits: dict = {}
     for index, entry in enumerate(document.get("components", [])):
         _require_object(entry, f"components[{index}]", "a component", source)
         where = f"components[{index}] ({entry.get('id')})"
@@ -531,11 +608,12 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
             sources = tuple(
                 entry.get("sources") or ([entry["source"]] if entry.get("source") else [])
             )
+            geometry = _geometry(entry)
             components.append(
                 Component(
                     id=entry["id"],
                     type=entry["type"],
-                    geometry=_geometry(entry),
+                    geometry=geometry,
                     sources=sources,
                     spool=entry.get("spool"),
                     group=entry.get("group"),
@@ -543,6 +621,7 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
                     nominal=entry.get("nominal"),
                     schedule=entry.get("schedule"),
                     snap=entry.get("snap") or {},
+                    fit=_shared_fit(entry, geometry, fits),
                     corrections=tuple(
                         Correction(
                             c["what"],

@@ -510,6 +510,14 @@ def _stderr_text(stderr) -> str:
     return ", ".join(parts)
 
 
+def _residual_cell(q) -> str:
+    """The residual histogram, or a note for fits read from a model document (which stores the
+    fit's summary, not its per-point residuals)."""
+    if q.residuals.size == 0 and q.points > 0:
+        return '<span class="muted">not stored in the model file</span>'
+    return histogram_svg(q.residuals, q.inlier_mask)
+
+
 def _quality(data: ReportData, links) -> str:
     if not data.quality:
         return (
@@ -539,7 +547,7 @@ def _quality(data: ReportData, links) -> str:
             + _td(_mm(q.od_fit), True)
             + _td(_mm(q.od_catalog), True)
             + _td(offset, True)
-            + _td(histogram_svg(q.residuals, q.inlier_mask))
+            + _td(_residual_cell(q))
             + _td(_codes(links.get(q.id, [])))
             + "</tr>"
         )

@@ -1,0 +1,206 @@
+"""A fit read back from a model document's ``fitted`` summary (no residual arrays).
+
+The ``asbuilt-model`` document stores what the compliance rules and the QA report read of a
+fit (its primitive, standard errors, noise level, counts, RMS, notes, diagnostics), not the
+per-point residuals. :class:`StoredFit` carries exactly that, with the attribute names of
+:class:`asbuilt.fit.result.FitResult`, so that ``asbuilt check`` and ``asbuilt report`` judge a
+model document as they judge the scan it was made from. It does not pretend to have the
+points: ``residuals`` and ``inliers`` are empty arrays, and ``n_points``, ``n_inliers``,
+``rms`` and ``max_residual`` are the stored numbers.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from asbuilt.primitives import Primitive
+
+__all__ = ["StoredFit", "SummaryFieldError", "stored_fit_from_summary"]
+
+_EMPTY_RESIDUALS = np.zeros(0, dtype=np.float64)
+_EMPTY_RESIDUALS.setflags(write=False)
+_EMPTY_MASK = np.zeros(0, dtype=bool)
+_EMPTY_MASK.setflags(write=False)
+
+
+@dataclass(frozen=True, eq=False)
+class StoredFit:
+    """A fit's summary as stored in a model document (duck-types ``FitResult`` for readers).
+
+    Attributes
+    ----------
+    primitive : Primitive
+        The fitted primitive (metres), before merging snapped it.
+    stderr : Mapping[str, float or tuple of float]
+        Standard errors as the fit gave them (``_deg`` keys degrees, others metres); a value
+        the document holds as null (not finite) reads back as ``inf`` (cannot be given).
+    sigma : float, metres
+        Noise level the standard errors were scaled by (NaN when the document has null).
+    sigma_source : str
+        ``"sensor"`` or ``"residuals"``.
+    method : str
+        The fit's algorithm.
+    n_points, n_inliers : int
+        Number of measured points and of points the robust estimator kept.
+    rms, max_residual : float, metres
+        RMS and largest absolute inlier residual (NaN when the document has null).
+    observed : tuple of bool or None
+        Cuboids: whether each size was measured between two seen faces.
+    diagnostics : Mapping[str, float]
+        Geometry quality numbers (``arc_deg``, ``faces``...; null reads back as NaN).
+    notes : tuple of str
+        The fit's remarks.
+    """
+
+    primitive: Primitive
+    stderr: Mapping[str, float | tuple[float, ...]]
+    sigma: float
+    sigma_source: str
+    method: str
+    n_points: int
+    n_inliers: int
+    rms: float
+    max_residual: float
+    observed: tuple[bool, bool, bool] | None = None
+    diagnostics: Mapping[str, float] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+    #: Not stored in the document.
+    covariance = None
+
+    @property
+    def kind(self) -> str:
+        """The fitted primitive's kind."""
+        return self.primitive.kind
+
+    @property
+    def residuals(self) -> np.ndarray:
+        """Empty, shape (0,): a model document does not store per-point residuals."""
+        return _EMPTY_RESIDUALS
+
+    @property
+    def inliers(self) -> np.ndarray:
+        """Empty, shape (0,) bool: a model document does not store the inlier mask."""
+        return _EMPTY_MASK
+
+
+class SummaryFieldError(ValueError):
+    """A ``fitted`` summary field with the wrong type (``key``: which one; the message says
+    what it must be)."""
+
+    def __init__(self, key: str, message: str):
+        self.key = key
+        super().__init__(message)
+
+
+def describe_value(value) -> str:
+    """A JSON value, shortened to 40 characters, for error messages."""
+    text = json.dumps(value)  # NaN and Infinity as JSON readers that allow them write them
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def summary_float(summary: Mapping, key: str, missing: float = math.nan) -> float:
+    """A number of a fit summary; null (not finite when written) or absent reads as ``missing``."""
+    value = summary.get(key)
+    if value is None:
+        return missing
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise SummaryFieldError(key, f"must be a number or null, not {describe_value(value)}")
+    return float(value)
+
+
+def _count(summary: Mapping, key: str) -> int:
+    value = summary[key]
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise SummaryFieldError(
+            key, f"must be a whole number of points, not {describe_value(value)}"
+        )
+    return value
+
+
+def _stderr(summary: Mapping) -> dict:
+    """Standard errors; a null (a non-finite value when written) reads back as infinity, the
+    fits' value for a standard error that cannot be given."""
+    value = summary.get("stderr") or {}
+    if not isinstance(value, dict):
+        raise SummaryFieldError("stderr", f"must be an object, not {describe_value(value)}")
+    stderr = {}
+    for name, item in value.items():
+        try:
+            if isinstance(item, list):
+                stderr[name] = tuple(summary_float({"v": v}, "v", math.inf) for v in item)
+            else:
+                stderr[name] = summary_float(value, name, math.inf)
+        except SummaryFieldError:
+            message = f"must be numbers or null, not {describe_value(item)}"
+            raise SummaryFieldError(f"stderr.{name}", message) from None
+    return stderr
+
+
+def _diagnostics(summary: Mapping) -> dict:
+    """Diagnostics; numbers as floats, null (not finite when written) as NaN."""
+    value = summary.get("diagnostics") or {}
+    if not isinstance(value, dict):
+        raise SummaryFieldError("diagnostics", f"must be an object, not {describe_value(value)}")
+    numeric = (int, float)
+    return {
+        name: math.nan
+        if item is None
+        else float(item)
+        if isinstance(item, numeric) and not isinstance(item, bool)
+        else item
+        for name, item in value.items()
+    }
+
+
+def _text(summary: Mapping, key: str, default: str | None = None) -> str:
+    value = summary[key] if default is None else summary.get(key, default)
+    if not isinstance(value, str):
+        raise SummaryFieldError(key, f"must be text, not {describe_value(value)}")
+    return value
+
+
+def stored_fit_from_summary(summary: Mapping, primitive: Primitive) -> StoredFit:
+    """The :class:`StoredFit` of a model document's ``fitted`` summary.
+
+    Parameters
+    ----------
+    summary : Mapping
+        The component's ``fitted`` object as read from JSON (lengths metres, angles degrees).
+    primitive : Primitive
+        The fitted primitive, already rebuilt by the caller.
+
+    Raises
+    ------
+    SummaryFieldError
+        Naming the field with the wrong type.
+    KeyError
+        When ``method``, ``points`` or ``inliers`` is missing.
+    """
+    observed = summary.get("observed")
+    if observed is not None and (
+        not isinstance(observed, list) or not all(isinstance(b, bool) for b in observed)
+    ):
+        message = f"must be a list of true/false, not {describe_value(observed)}"
+        raise SummaryFieldError("observed", message)
+    notes = summary.get("notes") or []
+    if not isinstance(notes, list) or not all(isinstance(n, str) for n in notes):
+        raise SummaryFieldError("notes", f"must be a list of text, not {describe_value(notes)}")
+    return StoredFit(
+        primitive=primitive,
+        stderr=_stderr(summary),
+        sigma=summary_float(summary, "sigma"),
+        sigma_source=_text(summary, "sigma_source", "residuals"),
+        method=_text(summary, "method"),
+        n_points=_count(summary, "points"),
+        n_inliers=_count(summary, "inliers"),
+        rms=summary_float(summary, "rms"),
+        max_residual=summary_float(summary, "max_residual"),
+        observed=None if observed is None else tuple(observed),
+        diagnostics=_diagnostics(summary),
+        notes=tuple(notes),
+    )
