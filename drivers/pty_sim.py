@@ -4,12 +4,21 @@
 raw mode and runs the pan-tilt and range finder simulators on the master ends in a thread.
 A driver opens the slave paths (``/dev/pts/N``) like any serial device; ``asbuilt
 simulate-device`` prints them and serves until Ctrl-C. POSIX only.
+
+A pseudo-terminal cannot do 7-bit characters or parity: Linux keeps its slave at CS8 without
+PARENB whatever is asked, and (recent kernels) fails ``tcsetattr`` with EINVAL when *nothing*
+it was asked could be changed. A 7E1 client (pyserial opening a Dimetix 7E1) that re-opens the
+tty with the settings it left there asks only for CS7 and PARENB, and fails. So the server
+marks the slave as "not configured" by setting ``IXANY`` (harmless: without ``IXON``, which
+every serial client clears, it does nothing) when it starts and whenever the client has sent
+something; the next open clears it again, so its ``tcsetattr`` changes something and succeeds.
 """
 
 from __future__ import annotations
 
 import os
 import select
+import termios
 import threading
 import time
 import tty
@@ -21,11 +30,24 @@ from .simport import make_device
 __all__ = ["PtyServer"]
 
 
+def _mark_unconfigured(fd: int) -> None:
+    """Set ``IXANY`` on the pty slave ``fd`` so that a client's next open changes something.
+
+    See the module docstring: without a change it can make, Linux refuses a 7E1 client's
+    ``tcsetattr`` with EINVAL on its second open of the same tty.
+    """
+    attrs = termios.tcgetattr(fd)
+    if not attrs[0] & termios.IXANY:
+        attrs[0] |= termios.IXANY
+        termios.tcsetattr(fd, termios.TCSANOW, attrs)
+
+
 class _Endpoint:
     def __init__(self, device):
         self.device = device
         self.master, self.slave = os.openpty()
         tty.setraw(self.slave)
+        _mark_unconfigured(self.slave)
         self.path = os.ttyname(self.slave)
         self.outbox: list[tuple[float, bytes]] = list(device.startup())
 
@@ -103,6 +125,7 @@ class PtyServer:
                         except OSError:
                             data = b""
                         if data:
+                            _mark_unconfigured(ep.slave)  # the client has configured the tty
                             with self.rig.lock:
                                 ep.outbox.extend(ep.device.feed(data))
                             ep.outbox.sort(key=lambda item: item[0])

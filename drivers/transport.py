@@ -14,13 +14,16 @@ Reads never block past an explicit deadline: a lost or silent device raises
 from __future__ import annotations
 
 import math
+import os
+import stat
+import sys
 import time
 
 import serial
 
 from asbuilt.errors import DeviceError, DeviceProtocolError, DeviceTimeout
 
-__all__ = ["register_url_handlers", "open_port", "LineChannel", "SIM_SCHEMES"]
+__all__ = ["register_url_handlers", "open_port", "is_pseudo_terminal", "LineChannel", "SIM_SCHEMES"]
 
 #: URL schemes this package serves (pyserial lower-cases the scheme before the lookup).
 SIM_SCHEMES = ("sim-ptu", "sim-lrf")
@@ -80,6 +83,9 @@ def open_port(
         The port cannot be opened (missing device, busy, unknown URL scheme).
     """
     register_url_handlers()
+    pty = is_pseudo_terminal(url)
+    if pty:  # a pty passes bytes unchanged and cannot do 7 bits or parity (Linux refuses them)
+        bytesize, parity = 8, "N"
     try:
         return serial.serial_for_url(
             url,
@@ -91,10 +97,36 @@ def open_port(
             write_timeout=write_timeout,
         )
     except (serial.SerialException, ValueError, OSError, _TermiosError) as exc:
+        if pty or url.startswith("/dev/pts/"):  # a pty, or one whose server has closed it
+            raise DeviceError(
+                f"{url}: cannot open the pseudo-terminal ({exc}); check that the simulator "
+                "(asbuilt simulate-device) or the program serving it is still running"
+            ) from None
         raise DeviceError(
             f"{url}: cannot open the port ({exc}); check the cable, the device path and "
             "that no other program holds it"
         ) from None
+
+
+#: Linux's device numbers (major) of Unix98 pseudo-terminal slaves (/dev/pts/N): 136-143
+#: (Documentation/admin-guide/devices.txt, "Unix98 PTY slaves").
+_PTY_SLAVE_MAJORS = range(136, 144)
+
+
+def is_pseudo_terminal(url: str) -> bool:
+    """Whether ``url`` is a plain path to a Linux pseudo-terminal slave (``/dev/pts/N``).
+
+    Such a tty (the device simulators', ``socat``'s) passes bytes unchanged and keeps 8 data
+    bits without parity whatever is asked; :func:`open_port` opens it 8N1, as a 7E1 request
+    it can change nothing of fails with EINVAL on recent kernels.
+    """
+    if "://" in url or not sys.platform.startswith("linux"):
+        return False
+    try:
+        info = os.stat(url)
+    except (OSError, ValueError):
+        return False
+    return stat.S_ISCHR(info.st_mode) and os.major(info.st_rdev) in _PTY_SLAVE_MAJORS
 
 
 def _seconds(value, what: str, zero: bool = False) -> float:

@@ -155,3 +155,28 @@ def test_simulate_device_refuses_an_id_outside_0_to_9(site):
     assert run.returncode == 2 and run.stdout == ""
     assert "--device-id must be a Dimetix device id 0-9" in run.stderr
     assert len(run.stderr.strip().splitlines()) == 1
+
+
+def test_resume_reopens_the_simulators_7e1_tty(site, monkeypatch, capsys):
+    """Interrupted, then ``--resume`` against the same simulator, 7E1 as a factory Dimetix (no
+    --lrf-8n1): the second open of the pty failed with EINVAL ("check the cable")."""
+    from asbuilt.drivers import session as session_module
+
+    real_call = session_module.DeviceShooter.__call__
+    count = {"n": 0}
+
+    def interrupted(self, pan, tilt, phase):
+        count["n"] += 1
+        if count["n"] > 10:
+            raise KeyboardInterrupt
+        return real_call(self, pan, tilt, phase)
+
+    with _server(site, 0) as server:
+        monkeypatch.setattr(session_module.DeviceShooter, "__call__", interrupted)
+        assert _scan(site, server.ptu_path, server.lrf_path) == 130
+        monkeypatch.setattr(session_module.DeviceShooter, "__call__", real_call)
+        for _ in range(2):  # a second resume (nothing left to shoot) opens it a third time
+            code = _scan(site, server.ptu_path, server.lrf_path, "--resume")
+            assert code == 0, capsys.readouterr().err
+            assert json.loads((site / "scan.json").read_text())["objects"][0]["id"] == "W1"
+        assert server.error is None
