@@ -11,10 +11,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["SEVERITIES", "Suggestion", "Finding"]
+__all__ = ["SEVERITIES", "Suggestion", "Finding", "FIT_REFUSED_CODE", "FIT_REFUSED_SLUG"]
 
 #: Severities from the most to the least serious; ``unverifiable`` findings are warnings.
 SEVERITIES = ("error", "warning", "info")
+
+#: Code and slug of the error finding for a scan object whose fit was refused (it is not in the
+#: model). ``AB0xx`` is the pipeline's own, outside the rule families ``AB1xx``-``AB6xx`` of
+#: :mod:`asbuilt.rules.registry`: no rule checks a model for it, so ``--select``/``--ignore``
+#: cannot drop it and a re-check of a model keeps it (:func:`asbuilt.pipeline.recheck`).
+FIT_REFUSED_CODE = "AB001"
+FIT_REFUSED_SLUG = "fit-refused"
 
 
 @dataclass(frozen=True)

@@ -4,18 +4,112 @@ Every stage is a pure function of the previous one's output; this module only ch
 :func:`asbuilt.fit.fit` (one primitive per scanned object), :func:`asbuilt.merge.merge_model`
 (pipes snapped to catalog sizes and joined into spools with fittings), and
 :func:`asbuilt.rules.check_model` (compliance findings). NumPy/SciPy only: no CAD kernel.
+
+An object whose fit is refused does not stop the others: it is left out of the model and
+becomes an error finding (:data:`~asbuilt.findings.FIT_REFUSED_CODE`, ``fit-refused``) that
+keeps its measured points (:func:`fit_refused_findings`); :func:`recheck` keeps those findings
+when a model is checked again.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
+
+from asbuilt.findings import FIT_REFUSED_CODE, FIT_REFUSED_SLUG, Finding, Suggestion
+from asbuilt.fit.result import FitFailure, FitReport
 from asbuilt.model import Model, model_from_fits
 from asbuilt.scan.model import Scan
 from asbuilt.tolerances import Tolerances
 
-__all__ = ["build_model", "catalog_file"]
+__all__ = [
+    "build_model",
+    "catalog_file",
+    "fit_refused_finding",
+    "fit_refused_findings",
+    "recheck",
+    "refused_findings",
+]
+
+
+def fit_refused_finding(failure: FitFailure) -> Finding:
+    """The error finding for an object whose fit was refused.
+
+    Parameters
+    ----------
+    failure : FitFailure
+        The object (points shape (n, 3) metres) and its located FitError.
+
+    Returns
+    -------
+    Finding
+        Code :data:`~asbuilt.findings.FIT_REFUSED_CODE`, slug ``fit-refused``, severity
+        ``error``, the object's id; the message is the fit's one-line reason (which says what to
+        do); ``location`` the points' mean (3,) metres; one suggestion (not applied by
+        ``--fix``) to rescan, whose ``change`` keeps the measured points:
+        ``{"object": id, "kind": kind, "points": [[x, y, z], ...]}`` in metres, scan frame.
+    """
+    obj = failure.object
+    points = np.asarray(obj.points, dtype=np.float64)
+    keep = Suggestion(
+        f"rescan {obj.id}; its {len(points)} measured points are kept with this finding",
+        {"object": obj.id, "kind": obj.kind, "points": points.tolist()},
+        False,
+    )
+    return Finding(
+        code=FIT_REFUSED_CODE,
+        slug=FIT_REFUSED_SLUG,
+        severity="error",
+        objects=(obj.id,),
+        message=f"{_not_fitted(obj.kind)}, so it is not in the model: {failure.message}",
+        location=points.mean(axis=0) if len(points) else None,
+        suggestions=(keep,),
+    )
+
+
+def _not_fitted(kind: str) -> str:
+    from asbuilt.scan.model import kind_phrase
+
+    return "not fitted (kind auto)" if kind == "auto" else f"not fitted as {kind_phrase(kind)}"
+
+
+def fit_refused_findings(report: FitReport) -> tuple[Finding, ...]:
+    """One :func:`fit_refused_finding` per refused object of ``report``, in the scan's order."""
+    return tuple(fit_refused_finding(failure) for failure in report.failures)
+
+
+def recheck(model: Model, config=None, design=None, *, catalog=None) -> tuple[Finding, ...]:
+    """Check ``model`` against the rules again, keeping the ``fit-refused`` findings it records.
+
+    :func:`asbuilt.rules.check_model` judges the components only; an object whose fit was
+    refused is not one of them, so a re-check (``asbuilt check MODEL.json``, ``--fix``, a
+    report with other rules) would forget it without this.
+
+    Parameters
+    ----------
+    model : Model
+        Lengths metres; ``model.findings`` may hold ``fit-refused`` findings.
+    config, design, catalog
+        As :func:`asbuilt.rules.check_model` takes them (None: its defaults).
+
+    Returns
+    -------
+    tuple of Finding
+        Sorted as :func:`asbuilt.rules.sort_findings` sorts.
+    """
+    from asbuilt.rules import check_model, sort_findings
+
+    options = {"catalog": catalog} if catalog is not None else {}
+    found = check_model(model, config, design, **options)
+    return sort_findings((*refused_findings(model), *found))
+
+
+def refused_findings(model: Model) -> tuple[Finding, ...]:
+    """The ``fit-refused`` findings ``model`` records (objects not in it)."""
+    return tuple(f for f in model.findings if f.code == FIT_REFUSED_CODE)
 
 
 def catalog_file(catalog) -> str | None:
@@ -82,16 +176,19 @@ def build_model(
     -------
     Model
         Metres, scan frame; ``findings`` sorted by severity; ``catalog_file`` set when the
-        catalog came from a user's file.
+        catalog came from a user's file. An object whose fit was refused is not among the
+        components: it is an error finding ``fit-refused`` (also with ``check=False``), and
+        ``model.fits.failures`` holds its FitError.
 
     Raises
     ------
     FitError, CatalogError, RulesConfigError, DesignError
-        Located one-line errors for bad input.
+        Located one-line errors for bad input; a FitError
+        (:class:`~asbuilt.fit.NothingFittedError`) only when no object could be fitted.
     """
     from asbuilt.fit import fit
     from asbuilt.merge import merge_model, resolve_catalog
-    from asbuilt.rules import RulesConfig, check_model, load_rules
+    from asbuilt.rules import RulesConfig, load_rules
 
     config = rules if isinstance(rules, RulesConfig) else load_rules(rules)
     if tolerances is None:
@@ -101,16 +198,27 @@ def build_model(
     report = fit(scan, tolerances, progress=progress)
     if merge:
         model = merge_model(
-            report,
+            _without_refused_links(report),
             catalog=catalog,
             tolerances=tolerances,
             schedule=schedule,
             elbow_radius=elbow_radius,
         )
-        model = model.replace(catalog_file=catalog_file(catalog))
+        model = model.replace(catalog_file=catalog_file(catalog), scan=scan, fits=report)
     else:
         model = model_from_fits(report)
+    model = model.replace(findings=fit_refused_findings(report))
     if check:
-        findings = check_model(model, config, design, catalog=catalog)
-        model = model.replace(findings=tuple(findings))
+        model = model.replace(findings=recheck(model, config, design, catalog=catalog))
     return model
+
+
+def _without_refused_links(report: FitReport) -> FitReport:
+    """``report`` with the scan's links to refused objects left out, for merging: such a link
+    can join nothing (the object has no geometry), and the ``fit-refused`` finding says why."""
+    refused = {failure.object.id for failure in report.failures}
+    scan = report.scan
+    if not refused or not any(a in refused or b in refused for a, b in scan.links):
+        return report
+    links = tuple(link for link in scan.links if not refused.intersection(link))
+    return dataclasses.replace(report, scan=dataclasses.replace(scan, links=links))

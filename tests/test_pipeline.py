@@ -4,11 +4,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
+from refused_scans import spool_with_refused, write  # tests/refused_scans.py
 
-from asbuilt.fit import fit
+from asbuilt.errors import FitError
+from asbuilt.findings import FIT_REFUSED_CODE, FIT_REFUSED_SLUG
+from asbuilt.fit import NothingFittedError, fit, fit_points
 from asbuilt.model import model_from_fits
-from asbuilt.pipeline import build_model
+from asbuilt.pipeline import build_model, recheck
 from asbuilt.scan import load_scan
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -86,3 +90,80 @@ def test_short_elbows_on_request(spool_scan):
     radius = {c.id: c.geometry.bend_radius for c in long.components if c.type == "elbow"}
     shorter = {c.id: c.geometry.bend_radius for c in short.components if c.type == "elbow"}
     assert radius and all(shorter[k] < radius[k] for k in radius)
+
+
+# --- objects whose fit is refused ------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def refused_scan(tmp_path_factory):
+    """The spool sample with a refused NPS 1 scan X1 appended, linked to P5."""
+    path = tmp_path_factory.mktemp("refused") / "scan.json"
+    return load_scan(write(path, spool_with_refused(link=True)))
+
+
+def _geometry(model):
+    return [(c.id, c.type, c.nominal, c.spool) for c in model.components]
+
+
+def test_a_refused_object_does_not_stop_the_others(spool_scan, refused_scan):
+    model = build_model(refused_scan)
+    alone = build_model(spool_scan)  # the same six pipes without the refused one
+    assert _geometry(model) == _geometry(alone) and model.spools == alone.spools
+    for got, want in zip(model.components, alone.components):
+        for name, value in vars(want.geometry).items():
+            np.testing.assert_allclose(getattr(got.geometry, name), value, rtol=0, atol=1e-12)
+    x1 = refused_scan.objects[-1]
+    with pytest.raises(FitError) as direct:  # the fit's own reason, fitted alone
+        fit_points("cylinder", x1.points, sigma=0.002, viewpoint=x1.station)
+    (finding,) = model.findings  # the sample itself is clean: no merge note for the link to X1
+    assert (finding.code, finding.slug, finding.severity) == (
+        FIT_REFUSED_CODE,
+        FIT_REFUSED_SLUG,
+        "error",
+    )
+    assert finding.objects == ("X1",)
+    assert finding.message == (
+        f"not fitted as a cylinder, so it is not in the model: {direct.value.message}"
+    )
+    assert "Rescan" in finding.message and "\n" not in finding.message
+    np.testing.assert_allclose(finding.location, x1.points.mean(axis=0))
+    (keep,) = finding.suggestions
+    assert not keep.unambiguous and keep.change["object"] == "X1"
+    np.testing.assert_array_equal(keep.change["points"], x1.points)  # nothing measured is lost
+    assert [f.object.id for f in model.fits.failures] == ["X1"]
+    assert model.scan is refused_scan and model.scan.links[-1] == ("P5", "X1")
+
+
+def test_the_refusal_is_said_without_the_rules_and_without_merging(refused_scan):
+    for options in ({"check": False}, {"merge": False, "check": False}, {"merge": False}):
+        model = build_model(refused_scan, **options)
+        assert "X1" not in {c.id for c in model.components}
+        assert [f.slug for f in model.findings if f.severity == "error"] == [FIT_REFUSED_SLUG]
+
+
+def test_a_recheck_keeps_the_refusal_through_the_model_document(refused_scan, tmp_path):
+    from asbuilt.export.model_json import load_model, write_model_json
+
+    model = build_model(refused_scan)
+    write_model_json(model, tmp_path / "model.json")
+    again = load_model(tmp_path / "model.json")
+    findings = recheck(again)
+    assert [(f.code, f.objects) for f in findings] == [(FIT_REFUSED_CODE, ("X1",))]
+    np.testing.assert_allclose(
+        findings[0].suggestions[0].change["points"], refused_scan.objects[-1].points
+    )
+
+
+def test_strict_fit_raises_the_first_refusal(refused_scan):
+    with pytest.raises(FitError) as err:
+        fit(refused_scan, strict=True)
+    assert str(err.value).startswith(f"{refused_scan.source}: objects[6] (X1): The shots")
+
+
+def test_a_scan_no_object_of_which_fits_is_refused_whole(tmp_path):
+    scan = load_scan(write(tmp_path / "bad.json", spool_with_refused(3, good=False)))
+    with pytest.raises(NothingFittedError) as err:
+        build_model(scan)
+    assert str(err.value).startswith(f"{scan.source}: objects[0] (X1): The shots")
+    assert str(err.value).endswith("the 2 other objects (X2, X3) were refused too.")

@@ -24,13 +24,23 @@ from importlib import import_module
 import numpy as np
 
 from asbuilt.errors import FitError, located
-from asbuilt.fit.result import FitReport, FitResult, ObjectFit
+from asbuilt.fit.result import FitFailure, FitReport, FitResult, ObjectFit
 from asbuilt.primitives import as_points, as_vector
 from asbuilt.scan.load import PLAUSIBLE_RANGE_SIGMA
 from asbuilt.scan.model import KINDS, Scan, ScanObject, kind_phrase
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["FITTERS", "fit", "fit_object", "fit_points", "FitResult", "ObjectFit", "FitReport"]
+__all__ = [
+    "FITTERS",
+    "fit",
+    "fit_object",
+    "fit_points",
+    "FitResult",
+    "ObjectFit",
+    "FitFailure",
+    "FitReport",
+    "NothingFittedError",
+]
 
 #: kind -> (module, function) of the fit that handles it; imported lazily by :func:`fitter_for`.
 FITTERS: dict[str, tuple[str, str]] = {
@@ -374,13 +384,23 @@ def fit_object(
     return ObjectFit(object=obj, result=result, requested=obj.kind)
 
 
+#: At most this many other refused objects are named in the error when no object of a scan
+#: could be fitted (a line a person reads; the count says how many there are in all).
+NAMED_FAILURES = 5
+
+
 def fit(
     scan: Scan,
     tolerances: Tolerances = DEFAULT_TOLERANCES,
     *,
     progress: Progress | None = None,
+    strict: bool = False,
 ) -> FitReport:
     """Fit every object of a scan, in the scan's order.
+
+    An object whose fit is refused (points seen edge-on, shots no primitive of its kind
+    explains...) does not stop the others: it is recorded in ``FitReport.failures`` with its
+    located one-line :class:`~asbuilt.errors.FitError`, and the other objects are fitted.
 
     Parameters
     ----------
@@ -391,20 +411,26 @@ def fit(
     tolerances : Tolerances
         Numerical tolerances.
     progress : callable, optional
-        Called as ``progress(done, total, object_id)`` after each object (for progress bars).
+        Called as ``progress(done, total, object_id)`` after each object, fitted or refused
+        (for progress bars).
+    strict : bool
+        Raise the first refused object's FitError at once instead of recording it (the
+        behaviour before failures were recorded).
 
     Returns
     -------
     FitReport
-        One :class:`ObjectFit` per object.
+        One :class:`ObjectFit` per fitted object and one :class:`FitFailure` per refused one.
 
     Raises
     ------
     FitError
-        Located at the scan file and object: ``scan.json: objects[2] (P3): ...``.
+        Located at the scan file and object (``scan.json: objects[2] (P3): ...``): with
+        ``strict``, the first refused object; without, only when *no* object could be fitted
+        (the first object's reason, and how many others were refused too).
     """
     sigma = scan.sensor.range_sigma
-    fits = []
+    fits, failures = [], []
     total = len(scan.objects)
     for done, obj in enumerate(scan.objects, start=1):
         try:
@@ -414,10 +440,35 @@ def fit(
                 )
             )
         except FitError as exc:
-            raise FitError(exc.message, source=scan.source, where=exc.where) from exc
+            error = FitError(exc.message, source=scan.source, where=exc.where)
+            if strict:
+                raise error from exc
+            failures.append(FitFailure(object=obj, error=error))
         if progress is not None:
             progress(done, total, obj.id)
-    return FitReport(scan=scan, fits=tuple(fits))
+    if failures and not fits:
+        raise NothingFittedError(failures)
+    return FitReport(scan=scan, fits=tuple(fits), failures=tuple(failures))
+
+
+class NothingFittedError(FitError):
+    """No object of a scan could be fitted: the first refused object's located error, naming
+    the others; ``failures`` holds every :class:`FitFailure` (the CLI prints each one's line)."""
+
+    def __init__(self, failures: list[FitFailure]):
+        first = failures[0].error
+        others = [f.object.id for f in failures[1:]]
+        message = first.message
+        if others:
+            named = ", ".join(others[:NAMED_FAILURES])
+            if len(others) > NAMED_FAILURES:
+                named += ", ..."
+            count = f"{len(others)} other object{'s' if len(others) != 1 else ''}"
+            message += (
+                f" No object of the scan could be fitted: the {count} ({named}) were refused too."
+            )
+        super().__init__(message, source=first.source, where=first.where)
+        self.failures = tuple(failures)
 
 
 class _CallableModule(types.ModuleType):

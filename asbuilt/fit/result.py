@@ -7,10 +7,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import FitError
 from ..primitives import Primitive
 from ..scan.model import Scan, ScanObject
 
-__all__ = ["FitResult", "ObjectFit", "FitReport"]
+__all__ = ["FitResult", "ObjectFit", "FitFailure", "FitReport"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,11 +97,32 @@ class ObjectFit:
 
 
 @dataclass(frozen=True, eq=False)
+class FitFailure:
+    """A scan object whose fit was refused: its points define no primitive of its kind.
+
+    ``error`` is the located :class:`~asbuilt.errors.FitError` (``scan.json: objects[2] (P3):
+    ...``), whose message says why and what to do (e.g. rescan); the object keeps its
+    measured points (``object.points``, shape (n, 3) metres).
+    """
+
+    object: ScanObject
+    error: FitError
+
+    @property
+    def message(self) -> str:
+        """The one-line reason, without the file and object it is located at."""
+        return self.error.message
+
+
+@dataclass(frozen=True, eq=False)
 class FitReport:
-    """Every object's fit, in the scan's order."""
+    """Every object's fit, in the scan's order; ``failures`` are the objects whose fit was
+    refused (in the scan's order; empty unless :func:`asbuilt.fit.fit` ran with
+    ``strict=False``, its default)."""
 
     scan: Scan
     fits: tuple[ObjectFit, ...]
+    failures: tuple[FitFailure, ...] = ()
 
     def __iter__(self):
         return iter(self.fits)

@@ -22,6 +22,7 @@ from asbuilt.fit import (
     FITTERS,
     FitReport,
     FitResult,
+    NothingFittedError,
     ObjectFit,
     fit,
     fit_object,
@@ -180,9 +181,44 @@ def test_fit_errors_are_located_at_the_object(stand_ins, monkeypatch, function, 
         fit_object(obj)
     assert str(err.value) == message
     with pytest.raises(FitError) as err:
-        fit(scan_of("sphere", "plane", "cuboid", "sphere"))
+        fit(scan_of("sphere", "plane", "cuboid", "sphere"), strict=True)
     assert str(err.value) == f"scan.json: {message}"
     assert err.value.source == "scan.json"
+    report = fit(scan_of("sphere", "plane", "cuboid", "sphere"))  # the others go on
+    assert [item.object.id for item in report] == ["P1", "P2", "P4"]
+    (failure,) = report.failures
+    assert failure.object.id == "P3" and str(failure.error) == f"scan.json: {message}"
+    assert failure.message == message.split(": ", 2)[-1]
+
+
+def test_fit_reports_refused_objects_with_progress(stand_ins, monkeypatch):
+    monkeypatch.setitem(FITTERS, "cuboid", ("stand_in_fits", "refuse"))
+    seen = []
+    report = fit(
+        scan_of("cuboid", "sphere", "cuboid"),
+        progress=lambda done, total, oid: seen.append((done, total, oid)),
+    )
+    assert seen == [(1, 3, "P1"), (2, 3, "P2"), (3, 3, "P3")]
+    assert [f.object.id for f in report.failures] == ["P1", "P3"]
+    assert [item.object.id for item in report.fits] == ["P2"] and len(report) == 1
+
+
+def test_a_scan_no_object_of_which_fits_is_one_error_naming_them_all(stand_ins, monkeypatch):
+    monkeypatch.setitem(FITTERS, "cuboid", ("stand_in_fits", "refuse"))
+    with pytest.raises(NothingFittedError) as err:
+        fit(scan_of(*["cuboid"] * 8))
+    assert str(err.value) == (
+        "scan.json: objects[0] (P1): the points are coplanar; scan the far side too No object "
+        "of the scan could be fitted: the 7 other objects (P2, P3, P4, P5, P6, ...) were "
+        "refused too."
+    )
+    assert [f.object.id for f in err.value.failures] == [f"P{i}" for i in range(1, 9)]
+    with pytest.raises(NothingFittedError) as err:
+        fit(scan_of("cuboid"))  # a single object: its own line
+    assert (
+        str(err.value)
+        == "scan.json: objects[0] (P1): the points are coplanar; scan the far side too"
+    )
 
 
 def test_fit_uses_the_sensor_sigma_in_metres(stand_ins):
@@ -386,7 +422,9 @@ def test_a_stuck_head_without_a_sensor_sigma_is_refused(kind):
     with pytest.raises(FitError) as info:
         fit_points(kind, points)
     assert "the 2 mm noise assumed without a sensor sigma" in info.value.message
-    assert info.value.message.endswith("(give sensor.range_sigma if the range finder is more precise).")
+    assert info.value.message.endswith(
+        "(give sensor.range_sigma if the range finder is more precise)."
+    )
 
 
 def test_few_points_without_a_sigma_keep_every_shot_and_say_so():
