@@ -13,7 +13,9 @@ quadrature, split between the two); a shallower overlap (a pipe resting on a sup
 millimetre into it) is an unverifiable warning. Components joined end to end (ends within ``touch_distance``) or linked in the scan are never
 a clash; nor, with ``end_connections`` (the default), is a member whose axis *ends* inside the
 other solid: a beam framing into a column or a nozzle into a tank is a connection. A clash is
-one member passing through another.
+one member passing through another. Two same-size pipes on one axis are judged before those
+exceptions: overlapping by more than a joint's scale (:data:`DUPLICATE_DIAMETERS` ODs or
+``joint_distance``), or one wholly inside the other, they are a clash (a duplicate scan).
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from asbuilt.findings import Suggestion
 from asbuilt.model import Bend, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
-from ._context import Context, axis_of, ends_of, stderr_value
+from ._context import Context, axis_of, ends_of, mm, stderr_value
 from ._graph import end_pairs, linked_pairs
 
 __all__ = ["CHECKS", "inside", "bounds", "candidate_pairs", "overlap_volume"]
@@ -284,6 +286,129 @@ def ends_into(ga, gb, thickness: float = 0.01) -> bool:
     return bool(inside(gb, probes, thickness).any())
 
 
+#: Straight members of one size may overlap along a shared axis by at most
+#: ``max(DUPLICATE_DIAMETERS x OD, Tolerances.joint_distance)`` and still be one joint: fitted
+#: extents end within noise of the last shot, merging treats facing ends up to ``joint_distance``
+#: (0.15 m) apart as one joint, and a pipe pushed into a socket or bell enters it by at most about
+#: one diameter. Beyond that (or when one lies wholly inside the other) the two are the same pipe
+#: twice: a duplicate scan or two runs drawn over each other.
+DUPLICATE_DIAMETERS = 1.0
+
+#: Component types checked for duplicates (fittings are placed by merging, not scanned).
+_DUPLICATE_TYPES = ("pipe", "cylinder")
+
+
+def _segment(geometry):
+    """``(start (3,), end (3,), radius)`` in metres of a straight or cylinder, else None."""
+    if isinstance(geometry, Straight):
+        return np.array(geometry.start), np.array(geometry.end), float(geometry.outer_radius)
+    if isinstance(geometry, Cylinder):
+        half = 0.5 * float(geometry.length) * np.asarray(geometry.axis, float)
+        centre = np.asarray(geometry.center, float)
+        return centre - half, centre + half, float(geometry.radius)
+    return None
+
+
+def _od_stderr(component) -> float:
+    """Standard error (metres) of a component's fitted outside diameter; 0 when unknown."""
+    se = stderr_value(component.fit.stderr, "radius") if component.fit is not None else None
+    if se is not None:
+        return 2.0 * se
+    return float((component.snap or {}).get("od_stderr") or 0.0)
+
+
+def collinear_overlap(ga, gb, max_angle_deg: float, end_tolerance: float = 0.0):
+    """How far two straight members on one axis overlap along it.
+
+    Parameters
+    ----------
+    ga, gb : Straight or Cylinder
+        The members (metres).
+    max_angle_deg : float
+        Largest angle between the axes, degrees, for them to be "one axis".
+    end_tolerance : float
+        Metres by which the shorter member's ends may stick out of the longer and still count
+        as wholly inside it.
+
+    Returns
+    -------
+    tuple (overlap m, contained bool, centre (3,) m) or None
+        None unless each axis runs inside the other solid (lateral offset at most the smaller
+        radius at both ends of the shared stretch) and they share a stretch of positive length.
+    """
+    a, b = _segment(ga), _segment(gb)
+    if a is None or b is None:
+        return None
+    (sa, ea, ra), (sb, eb, rb) = a, b
+    la, lb = float(np.linalg.norm(ea - sa)), float(np.linalg.norm(eb - sb))
+    if la < lb:
+        (sa, ea, ra, la), (sb, eb, rb, lb) = (sb, eb, rb, lb), (sa, ea, ra, la)
+    ua, ub = (ea - sa) / la, (eb - sb) / lb
+    cos = float(ua @ ub)
+    if abs(cos) < np.cos(np.radians(max_angle_deg)):
+        return None
+    t0, t1 = float((sb - sa) @ ua), float((eb - sa) @ ua)
+    lo, hi = max(min(t0, t1), 0.0), min(max(t0, t1), la)
+    if hi <= lo:
+        return None
+    radius = min(ra, rb)
+    for t in (lo, hi):
+        on_b = sb + ((t - t0) / cos) * ub  # the point of b's axis level with t on a's
+        lateral = on_b - sa - float((on_b - sa) @ ua) * ua
+        if np.linalg.norm(lateral) > radius:
+            return None
+    contained = min(t0, t1) >= -end_tolerance and max(t0, t1) <= la + end_tolerance
+    return hi - lo, contained, sa + 0.5 * (lo + hi) * ua
+
+
+def _check_duplicate(ctx: Context, a, b, touch: float) -> bool:
+    """Emit a clash for two same-size straight members overlapping along one axis beyond a
+    joint's scale (a duplicate scan); True when they are such a pair (handled here)."""
+    if a.type not in _DUPLICATE_TYPES or b.type not in _DUPLICATE_TYPES:
+        return False
+    if a.fit is not None and a.fit is b.fit:  # pieces merging cut from one scanned pipe
+        return False
+    found = collinear_overlap(a.geometry, b.geometry, float(ctx.general("angle_snap_deg")), touch)
+    if found is None:
+        return False
+    overlap, contained, centre = found
+    od_a, od_b = 2.0 * _segment(a.geometry)[2], 2.0 * _segment(b.geometry)[2]
+    window = max(
+        float(ctx.general("diameter_tolerance")),
+        3.0 * float(np.hypot(_od_stderr(a), _od_stderr(b))),
+    )
+    if abs(od_a - od_b) > window:
+        return False  # different sizes on one axis: a sleeve or a casing, judged as a connection
+    allowed = max(DUPLICATE_DIAMETERS * max(od_a, od_b), float(ctx.general("joint_distance")))
+    if overlap <= allowed and not contained:
+        return False
+    first, second = sorted((a.id, b.id))
+    noun = "pipe" if a.type == b.type == "pipe" else "object"
+    where = (
+        f"lies wholly inside {first} ({overlap:.2f} m)"
+        if contained
+        else f"overlaps {first} over {overlap:.2f} m"
+    )
+    ctx.emit(
+        "clash",
+        [first, second],
+        f"{second} {where} along the same axis (same size, OD {mm(max(od_a, od_b))}): a "
+        f"duplicate scan of the same {noun}? delete one or relabel",
+        location=centre,
+        measured=overlap,
+        allowed=allowed,
+        unit="m",
+        suggestions=(
+            Suggestion(
+                f"delete {second} or {first} if it is a second scan of the same {noun}, or "
+                "relabel it if it is another one; two runs: cut one back to where the other "
+                "begins"
+            ),
+        ),
+    )
+    return True
+
+
 def check_clash(ctx: Context) -> None:
     slug = "clash"
     comps = list(ctx.model.components)
@@ -304,6 +429,9 @@ def check_clash(ctx: Context) -> None:
     joined = set(end_pairs(keep, touch)) | linked_pairs(ctx.model)
     for i, j in candidate_pairs(boxes):
         a, b = keep[i], keep[j]
+        # before the joint exceptions: a duplicate's ends touch or lie inside the other
+        if _check_duplicate(ctx, a, b, touch):
+            continue
         if frozenset((a.id, b.id)) in joined:
             continue
         if connections and (

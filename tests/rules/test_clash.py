@@ -231,3 +231,95 @@ def test_inside_an_eccentric_reducer_follows_its_oblique_axis():
     from asbuilt.rules.clash import member_ends
 
     assert member_ends(g) == pytest.approx(np.array([g.start, g.end]))
+
+
+# Collinear pipes of one size (new-user audit: a pipe scanned twice under two ids, or two runs
+# drawn 0.5 m over each other, raised no clash: each one's end lies inside the other, which the
+# "ends into" exception took for a joint). NPS 4 (OD 114.3 mm, ASME B36.10M); the joint scale is
+# max(1 OD, joint_distance 0.15 m) = 0.15 m.
+OD4 = 0.1143
+
+
+def clashes(*components, config=None):
+    return [f for f in check_model(model(*components), config) if f.slug == "clash"]
+
+
+def test_duplicate_scan_of_one_pipe_is_a_clash_with_a_suggestion():
+    a = pipe("P1", [-1.5, 0, 1], [1.5, 0, 1], OD4)
+    b = pipe("P2", [-1.5, 0.002, 1], [1.5, 0.002, 1.001], OD4)  # the same pipe, fitted again
+    (f,) = clashes(a, b)
+    assert f.code == "AB501" and f.severity == "error" and f.objects == ("P1", "P2")
+    assert f.unit == "m" and f.measured == pytest.approx(3.0, abs=1e-3)
+    assert "same axis" in f.message and "duplicate scan" in f.message
+    assert "delete P2 or P1" in f.suggestions[0].description
+
+
+def test_identical_pipes_whose_ends_touch_are_still_a_duplicate():
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], OD4)
+    b = pipe("P2", [2, 0, 1], [0, 0, 1], OD4)  # same ends, drawn the other way
+    (f,) = clashes(a, b)
+    assert f.measured == pytest.approx(2.0)
+
+
+def test_partial_overlap_of_half_a_metre_is_a_clash():
+    a = pipe("P1", [-1.5, 0, 1], [0.25, 0, 1], OD4)
+    b = pipe("P2", [-0.25, 0, 1], [1.5, 0, 1], OD4)
+    (f,) = clashes(a, b)
+    assert f.measured == pytest.approx(0.5)
+    assert f.allowed == pytest.approx(0.15)  # joint_distance beats one OD for NPS 4
+    assert "P2 overlaps P1 over 0.50 m along the same axis" in f.message
+    np.testing.assert_allclose(f.location, [0, 0, 1], atol=1e-9)
+
+
+def test_short_pipe_wholly_inside_a_longer_one_is_a_clash():
+    a = pipe("P1", [-1.5, 0, 1], [1.5, 0, 1], OD4)
+    b = pipe("P2", [-0.05, 0, 1], [0.05, 0, 1], OD4)  # 0.1 m: shorter than the joint scale
+    (f,) = clashes(a, b)
+    assert "P2 lies wholly inside P1" in f.message
+
+
+def test_butting_ends_are_no_clash():
+    a = pipe("P1", [-1.5, 0, 1], [0, 0, 1], OD4)
+    b = pipe("P2", [0, 0, 1], [1.5, 0, 1], OD4)
+    assert not clashes(a, b)
+
+
+@pytest.mark.parametrize("enters", [0.01, 0.1, 0.149])
+def test_a_pipe_entering_the_next_within_the_joint_scale_is_no_clash(enters):
+    a = pipe("P1", [-1.5, 0, 1], [enters, 0, 1], OD4)
+    b = pipe("P2", [0, 0, 1], [1.5, 0, 1], OD4)
+    assert not clashes(a, b)
+
+
+def test_the_joint_scale_grows_with_the_diameter():
+    od = 0.6096  # NPS 24: a 0.5 m overlap is within one OD (a bell or socket)
+    a = pipe("P1", [-3, 0, 1], [0.25, 0, 1], od)
+    b = pipe("P2", [-0.25, 0, 1], [3, 0, 1], od)
+    assert not clashes(a, b)
+    c = pipe("P3", [-0.4, 0, 1], [3, 0, 1], od)  # 0.65 m > 0.6096 m
+    (f,) = clashes(a, c)
+    assert f.allowed == pytest.approx(od)
+
+
+def test_parallel_pipes_beside_each_other_keep_their_behaviour():
+    a = pipe("P1", [-1.5, 0, 1], [1.5, 0, 1], OD4)
+    clear = pipe("P2", [-1.5, 0.2, 1], [1.5, 0.2, 1], OD4)
+    assert not clashes(a, clear)
+    # axes 70 mm apart (more than a radius: not one axis) but the solids overlap over the whole
+    # length: neither end of either member is a joint, and the rule's verdict is not a duplicate
+    beside = pipe("P2", [-1.5, 0.07, 1], [1.5, 0.07, 1], OD4)
+    assert all("duplicate" not in f.message for f in clashes(a, beside))
+
+
+def test_different_sizes_on_one_axis_are_not_a_duplicate():
+    carrier = pipe("P1", [-1.5, 0, 1], [1.5, 0, 1], OD4)
+    sleeve = pipe("P2", [-0.1, 0, 1], [0.1, 0, 1], 0.1683)  # NPS 6 sleeve through a wall
+    assert all("duplicate" not in f.message for f in clashes(carrier, sleeve))
+
+
+def test_duplicates_follow_the_clash_selection_and_severity():
+    a = pipe("P1", [-1.5, 0, 1], [1.5, 0, 1], OD4)
+    b = pipe("P2", [-1.5, 0, 1], [1.5, 0, 1], OD4)
+    assert not clashes(a, b, config=loads_rules('ignore = ["clash"]'))
+    (f,) = clashes(a, b, config=loads_rules('[clash]\nseverity = "warning"'))
+    assert f.severity == "warning"
