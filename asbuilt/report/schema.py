@@ -19,7 +19,7 @@ from asbuilt.findings import SEVERITIES
 from asbuilt.model import COMPONENT_TYPES
 
 from .json_report import FORMAT, VERSION
-from .takeoff import FITTING_TYPES
+from .takeoff import FITTING_KINDS
 
 __all__ = ["SCHEMA_PATH", "build_report_schema", "schema_text", "main"]
 
@@ -79,7 +79,7 @@ def build_report_schema() -> dict:
     )
     fitting = _object(
         {
-            "type": {"enum": list(FITTING_TYPES)},
+            "type": {"enum": list(FITTING_KINDS)},
             "size": {"type": "string"},
             "schedule": _STRING_OR_NULL,
             "angle_deg": {"type": ["integer", "null"]},

@@ -70,9 +70,13 @@ FITTING_KINDS = ("elbow", "tee", "concentric reducer", "eccentric reducer", "cou
 
 
 def fitting_kind(component: Component) -> str:
-    """The take-off's kind of a fitting: its type, with reducers told concentric or eccentric."""
-    if component.type == "reducer" and isinstance(component.geometry, Reducer):
-        return "eccentric reducer" if component.geometry.eccentric else "concentric reducer"
+    """The take-off's kind of a fitting (one of :data:`FITTING_KINDS`): its type, with reducers
+    told concentric or eccentric; a reducer without a reducer's geometry (a model document may
+    give one a straight) has no offset, so it is counted concentric."""
+    if component.type == "reducer":
+        geometry = component.geometry
+        eccentric = isinstance(geometry, Reducer) and geometry.eccentric
+        return "eccentric reducer" if eccentric else "concentric reducer"
     return component.type
 
 
