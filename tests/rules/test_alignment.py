@@ -1,9 +1,12 @@
 """Alignment rules: limits computed by hand from AISC 303 (H/500), ACI 117-10 and IPC 704.1."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from rules_builders import B36, column, model, pipe, tilted
 
+from asbuilt.primitives import Cuboid
 from asbuilt.rules import check_model, load_rules, loads_rules
 
 
@@ -279,3 +282,38 @@ def test_round_columns_are_judged_as_columns_of_their_material(label, allowed, s
         (f,) = found
         assert f.allowed == pytest.approx(allowed, rel=1e-3)
         assert standard in f.message
+
+
+# The cuboid fit's stderr["axes_deg"] may be one value or one per axis of the primitive (the lead's
+# change: the angular standard error of each axis's direction, degrees, in the order of
+# Cuboid.axes). The plumb rule must use the long (vertical) axis's own value: by hand, a 8.5 mm
+# lean over 3 m is over the 6 mm limit by 2.5 mm; the long axis's 0.02 deg is +-1.05 mm (error),
+# the short axes' 0.5 deg would be +-26 mm (unverifiable).
+@pytest.mark.parametrize("long_index", [0, 1, 2])
+def test_plumb_uses_the_long_axis_standard_error_of_a_per_axis_tuple(long_index):
+    base = column("C1", [0, 0, 0], lean_deg(0.0085), H)
+    prim = base.fit.primitive
+    order = [0, 1]
+    order.insert(long_index, 2)  # where the long axis (row 2 of the builder's) goes
+    moved = Cuboid(
+        center=prim.center, axes=np.asarray(prim.axes)[order], size=np.asarray(prim.size)[order]
+    )
+    per_axis = [0.5, 0.5, 0.5]
+    per_axis[long_index] = 0.02
+    fit = dataclasses.replace(
+        base.fit, primitive=moved, stderr={**base.fit.stderr, "axes_deg": tuple(per_axis)}
+    )
+    comp = dataclasses.replace(base, geometry=moved, fit=fit)
+    (f,) = only(run(comp), "out-of-plumb")
+    assert f.measured == pytest.approx(0.0085, abs=1e-9)
+    assert f.stderr == pytest.approx(H * np.radians(0.02))
+    assert f.severity == "error" and not f.unverifiable
+
+
+def test_plumb_accepts_a_scalar_and_a_list_of_axes_deg_alike():
+    scalar = column("C1", [0, 0, 0], lean_deg(0.0069), H, axes_deg=0.02)
+    listed = column("C1", [0, 0, 0], lean_deg(0.0069), H, axes_deg=[0.02, 0.02, 0.02])
+    (a,) = only(run(scalar), "out-of-plumb")
+    (b,) = only(run(listed), "out-of-plumb")
+    assert a.stderr == pytest.approx(b.stderr) == pytest.approx(H * np.radians(0.02))
+    assert a.unverifiable and b.unverifiable
