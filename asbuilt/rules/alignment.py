@@ -5,8 +5,9 @@ can regularise further); ``out-of-plumb`` and ``slope`` judge the *measured* axe
 primitive), because regularisation snaps axes within ``angle_snap_deg`` (2 degrees), far more
 than a plumb tolerance of 1:500 (0.11 degree) or a drainage slope of 1% (0.57 degree).
 
-Axis standard errors come from the fit (``stderr["axis_deg"]`` for cylinders, ``"axes_deg"``
-for cuboids); without them they are estimated as for a straight-line fit,
+Axis standard errors come from the fit (``stderr["axis_deg"]`` for cylinders; for cuboids the
+long axis's entry of ``"axes_deg"``, one per axis of ``Cuboid.axes``, or its one value when it is
+a scalar); without them they are estimated as for a straight-line fit,
 ``sigma / (L * sqrt(n / 12))`` radians for ``n`` points spread evenly over a length ``L``.
 """
 
