@@ -586,6 +586,7 @@ def merge_model(
         group_of,
         max_bend_deg=elbow_bend_limit(tol),
         reducer_notes=reducer_notes,
+        taken_ids=[obj.id for obj in scan.objects],
     )
 
     # assemble in scan order: each pipe's components where the pipe was

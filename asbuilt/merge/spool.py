@@ -29,7 +29,7 @@ pipes' ``snap["merge_notes"]``) and the pipes keep their ends there.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -372,6 +372,7 @@ def build_spools(
     *,
     max_bend_deg: float = MAX_BEND_DEG,
     reducer_notes=None,
+    taken_ids: Iterable[str] = (),
 ) -> tuple[list[Component], list[Spool]]:
     """Place fittings at the joints, trim pipes and group everything into spools.
 
@@ -386,6 +387,10 @@ def build_spools(
         An elbow joint bending more than this (degrees) is not built (the pipes get a note).
     reducer_notes : mapping of (int, int) to str, optional
         A note for the eccentric reducer between pipes (i, j), ``i < j`` (why it is eccentric).
+    taken_ids : iterable of str, optional
+        Ids a spool must not take besides the pipes' (every scan object's id): a generated
+        ``S<n>`` or a group's name already used by an object is skipped, so that a spool is
+        never mistaken for an object (a column "S1" and spool "S1").
 
     Returns
     -------
@@ -467,7 +472,7 @@ def build_spools(
     # spools: pipes joined by any joint (including contacts and failed ones)
     roots = {group[0]: group for group in connected_groups(len(pipes), joints)}
     spool_of: dict[int, str] = {}
-    used_names: set[str] = {p.id for p in pipes}
+    used_names: set[str] = {p.id for p in pipes} | set(taken_ids)
     groups_count: dict[str, int] = {}
     for members in roots.values():
         names = {group_of[m] for m in members}

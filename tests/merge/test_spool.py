@@ -83,3 +83,37 @@ def test_a_fitting_too_big_for_its_pipe_is_dropped_with_a_note():
     assert [c.type for c in comps] == ["pipe", "pipe"]
     assert "would not fit" in comps[0].snap["merge_notes"][0]
     assert len(spools) == 1  # still one spool: the pipes are joined, just not by a fitting
+
+
+def test_spool_ids_skip_every_taken_object_id():
+    pipes = [spec("A", (0, 0, 0), (1.8, 0, 0)), spec("B", (2, 0.2, 0), (2, 2, 0))]
+    joints = [Joint("elbow", ((0, 1), (1, 0)))]
+    _, spools = build_spools(pipes, joints, [None, None])
+    assert [s.id for s in spools] == ["S1"]
+    # a column "S1" and a tank "S2" in the scan: the spool takes the next free name
+    _, spools = build_spools(pipes, joints, [None, None], taken_ids=["S1", "S2", "A"])
+    assert [s.id for s in spools] == ["S3"]
+    # a group named like an object is not used as the spool's name either
+    _, spools = build_spools(pipes, joints, ["C1", "C1"], taken_ids=["C1"])
+    assert [s.id for s in spools] == ["S1"]
+
+
+def test_merged_spool_does_not_take_a_scan_object_id():
+    import json
+    from pathlib import Path
+
+    from asbuilt.pipeline import build_model
+    from asbuilt.scan import loads_scan
+
+    root = Path(__file__).resolve().parents[2]
+    scan = json.loads((root / "samples" / "spool.json").read_text())
+    bay = json.loads((root / "samples" / "structural-bay.json").read_text())
+    for obj in scan["objects"]:
+        obj.pop("group", None)  # no group: the spool gets a generated name
+    column = next(o for o in bay["objects"] if o["id"] == "C1")
+    assert bay.get("units", "m") == scan.get("units", "m")
+    scan["objects"].append({"id": "S1", "kind": "cuboid", "points": column["points"]})
+    model = build_model(loads_scan(json.dumps(scan), source="s1.json"), check=False)
+    (spool,) = model.spools
+    assert spool.id != "S1" and model.component("S1").spool is None
+    assert spool.id not in {obj["id"] for obj in scan["objects"]}
