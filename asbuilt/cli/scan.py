@@ -5,18 +5,21 @@ a device path, ``spy://`` for a traffic log, ``sim-ptu://`` / ``sim-lrf://`` sim
 object the operator gives an id, a kind and a window (two corners in the unit's degrees, or
 "aim" to jog the head to each corner); the session shoots a raster, fills it where the object
 is, and bisects hit/miss pairs to pin the object's edges. Every shot is journaled beside the
-output as it is taken; the scan file is rewritten atomically after each object; Ctrl-C stops
-cleanly and ``--resume`` continues. ``--plan`` takes the targets from a plan file instead of
+output as it is taken; the scan file is rewritten atomically after each object; Ctrl-C, a
+SIGHUP (the terminal closed) and the end of the operator's input stop cleanly, say what was saved,
+and ``--resume`` continues. ``--plan`` takes the targets from a plan file instead of
 prompting.
 
 Exit codes: 0 done; 1 some objects got too few points (listed); 2 bad input or a device error
-(one line; the journal keeps every shot); 130 interrupted (resumable).
+(one line; the journal keeps every shot); 130 interrupted by Ctrl-C or SIGHUP (resumable).
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 
 __all__ = ["register", "run"]
 
@@ -168,17 +171,52 @@ def _settings(args, plan):
     return SessionSettings(**values)
 
 
-def _ask(prompt: str) -> str | None:
-    """Prompt on stderr, read one line from stdin; None at end of input."""
-    sys.stderr.write(prompt)
-    sys.stderr.flush()
-    line = sys.stdin.readline()
-    if not line:
-        return None
-    return line.strip()
+class _Input:
+    """The operator's answers from stdin; :attr:`ended` once the input is gone.
+
+    End of input is end of file (Ctrl-D, a piped script that ends), a closed stdin, or a read
+    that fails (a terminal that was closed reads EIO when the hang-up signal is ignored).
+    """
+
+    def __init__(self):
+        self.ended = False
+
+    def ask(self, prompt: str) -> str | None:
+        """Prompt on stderr, read one line from stdin; None at end of input."""
+        if self.ended:
+            return None
+        try:
+            sys.stderr.write(prompt)
+            sys.stderr.flush()
+        except (OSError, ValueError):  # no terminal to prompt on: still read the answer
+            pass
+        try:
+            line = sys.stdin.readline() if sys.stdin is not None else ""
+        except (OSError, ValueError):  # EIO from a hung-up terminal, a closed file
+            line = ""
+        if not line:
+            self.ended = True
+            return None
+        return line.strip()
 
 
-def _aim_corner(ptu, label: str):
+class _HangUp(KeyboardInterrupt):
+    """SIGHUP (the operator's terminal closed): stop like Ctrl-C, so everything is saved."""
+
+
+def _hang_up(signum, frame):
+    raise _HangUp()
+
+
+def _say(err, text: str) -> None:
+    """One line on stderr; silently nothing when stderr is gone (a closed terminal)."""
+    try:
+        err.print(text, soft_wrap=True)  # one line, however narrow the terminal
+    except (OSError, ValueError):
+        pass
+
+
+def _aim_corner(ptu, label: str, ask):
     """Jog the head with 'pan tilt' (degrees) lines until 'ok'; return the unit angles (rad)."""
     import math
 
@@ -186,7 +224,7 @@ def _aim_corner(ptu, label: str):
 
     while True:
         pan, tilt = ptu.position()
-        answer = _ask(
+        answer = ask(
             f"  {label}: head at pan {math.degrees(pan):.3f} tilt {math.degrees(tilt):.3f} deg; "
             "type 'PAN TILT' (deg) to move, 'ok' to take it: "
         )
@@ -217,33 +255,34 @@ def _laser(lrf, on: bool) -> None:
             sys.stderr.write(f"  (laser pointer: {exc})\n")
 
 
-def _interactive_targets(ptu, lrf, session):
-    """Prompt for targets until an empty id or end of input."""
+def _interactive_targets(ptu, lrf, session, answers: _Input):
+    """Prompt for targets until an empty id or end of input (``answers.ended``)."""
     from asbuilt.drivers.plan import Target, Window
     from asbuilt.scan.model import KINDS
 
+    ask = answers.ask
     while True:
-        oid = _ask("object id (empty to finish): ")
+        oid = ask("object id (empty to finish): ")
         if not oid:
             return
         if session.is_done(oid):
             sys.stderr.write(f"  {oid} is already in the scan; choose another id\n")
             continue
-        kind = _ask(f"  kind ({'/'.join(KINDS)}): ")
+        kind = ask(f"  kind ({'/'.join(KINDS)}): ")
         if kind is None:
             return
         if kind not in KINDS:
             sys.stderr.write(f"  unknown kind {kind!r}\n")
             continue
-        text = _ask("  window 'PAN1 TILT1 PAN2 TILT2' (deg) or 'aim': ")
+        text = ask("  window 'PAN1 TILT1 PAN2 TILT2' (deg) or 'aim': ")
         if text is None:
             return
         try:
             if text.lower() == "aim":
                 _laser(lrf, True)
                 try:
-                    c1 = _aim_corner(ptu, "corner 1")
-                    c2 = _aim_corner(ptu, "corner 2") if c1 is not None else None
+                    c1 = _aim_corner(ptu, "corner 1", ask)
+                    c2 = _aim_corner(ptu, "corner 2", ask) if c1 is not None else None
                 finally:
                     _laser(lrf, False)
                 if c2 is None:
@@ -256,24 +295,17 @@ def _interactive_targets(ptu, lrf, session):
         except (ValueError, TypeError) as exc:
             sys.stderr.write(f"  bad window ({exc})\n")
             continue
-        nominal = _ask("  nominal size (optional): ")
+        nominal = ask("  nominal size (optional): ")
         yield Target(oid, kind, window, nominal=nominal or None)
 
 
 def run(args: argparse.Namespace) -> int:
     """Open the devices, run the session, print a summary; see the module docstring."""
     from rich.console import Console
-    from rich.markup import escape
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
-    from rich.table import Table
 
     from asbuilt.drivers.calibration import load_calibration
     from asbuilt.drivers.kinematics import Calibration
     from asbuilt.drivers.plan import load_plan
-    from asbuilt.drivers.ptu import PanTiltUnit
-    from asbuilt.drivers.rangefinder import open_range_finder
-    from asbuilt.drivers.session import DeviceShooter, ScanSession
-    from asbuilt.errors import DeviceError
     from asbuilt.units import unit_factor
 
     err = Console(stderr=True)
@@ -291,6 +323,45 @@ def run(args: argparse.Namespace) -> int:
     else:
         calibration = Calibration()
         err.print("[yellow]no --calibration: using an ideal chain at the origin[/]")
+
+    hang_up = getattr(signal, "SIGHUP", None)  # POSIX: the operator's terminal closed
+    previous = None
+    if hang_up is not None and threading.current_thread() is threading.main_thread():
+        previous = signal.signal(hang_up, _hang_up)
+    try:
+        return _run(args, err, settings, plan, calibration)
+    finally:
+        if previous is not None:
+            signal.signal(hang_up, previous)
+
+
+def _saved(session, out, why: str) -> str:
+    """The one line saying what an ended or interrupted session saved and how to go on.
+
+    The finished objects are written again first (each was written when it finished; this
+    also covers an interruption during that write), so the file holds all of them.
+    """
+    if session.objects:
+        session.write_scan()
+        kept = f"{len(session.objects)} finished object(s) saved in {out}"
+    else:
+        kept = f"no finished object, so no {out}"
+    return (
+        f"{why}: {kept}; every shot is in {session.journal_path}; continue with asbuilt scan "
+        "--resume (same --out)"
+    )
+
+
+def _run(args, err, settings, plan, calibration) -> int:
+    """The session proper (devices open to devices closed); see :func:`run`."""
+    from rich.markup import escape
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+    from rich.table import Table
+
+    from asbuilt.drivers.ptu import PanTiltUnit
+    from asbuilt.drivers.rangefinder import open_range_finder
+    from asbuilt.drivers.session import DeviceShooter, ScanSession
+    from asbuilt.errors import DeviceError
 
     lrf_options = {}
     if args.lrf_baud:
@@ -313,6 +384,8 @@ def run(args: argparse.Namespace) -> int:
         transient=False,
     )
     tasks: dict[str, int] = {}
+    answers = _Input()
+    ended = None  # the line to end with when the operator's input ended
 
     def on_shot(target, shot, taken, planned):
         if target.id not in tasks:
@@ -355,17 +428,19 @@ def run(args: argparse.Namespace) -> int:
             if plan is not None:
                 targets = plan.targets
             else:
-                targets = _interactive_targets(ptu, lrf, session)
+                targets = _interactive_targets(ptu, lrf, session, answers)
             for target in targets:
                 if session.is_done(target.id):
                     continue
                 finish(target.id, session.scan(target))
-    except KeyboardInterrupt:
-        err.print(
-            f"stopped: every shot is in "
-            f"{escape(str(session.journal_path)) if session else 'the journal'};"
-            " continue with --resume"
-        )
+        if answers.ended:
+            ended = _saved(session, args.out, "end of input")
+    except KeyboardInterrupt as exc:
+        if session is None:
+            _say(err, "stopped before the session started; nothing new to save")
+        else:
+            what = "hang-up" if isinstance(exc, _HangUp) else "stopped"
+            _say(err, escape(_saved(session, args.out, what)))
         return 130
     except DeviceError as exc:
         if session is None:
@@ -400,4 +475,6 @@ def run(args: argparse.Namespace) -> int:
     err.print(table)
     for oid, reason in session.failed.items():
         err.print(f"[red]{escape(f'{oid}: not in the scan: {reason}')}[/]")
+    if ended is not None:
+        _say(err, escape(ended))
     return 1 if session.failed else 0

@@ -344,3 +344,75 @@ def test_a_bad_edge_tolerance_is_one_clear_error(value):
     )
     with pytest.raises(ScanError, match="--edge-tolerance must be a length > 0"):
         _settings(args, None)
+
+
+P1_ANSWERS = ["P1", "cylinder", "72 -6.5 108 -1.5", '12"']
+C1_ANSWERS = ["C1", "cuboid", "63.5 -8 73 10", ""]
+
+
+def test_end_of_input_keeps_the_scan_and_says_how_to_resume(site, monkeypatch, capsys):
+    """A piped script that ends after one object (no empty id): the object is in the scan file,
+    the last line says so and how to go on, and --resume adds the next object to it."""
+    monkeypatch.setattr(sys, "stdin", io.StringIO("\n".join(P1_ANSWERS) + "\n"))
+    assert main(_args(site, "eof1")) == 0
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert last.startswith("end of input: 1 finished object(s) saved in ")
+    assert str(site / "scan.json.journal") in last and "asbuilt scan --resume" in last
+    assert [o["id"] for o in json.loads((site / "scan.json").read_text())["objects"]] == ["P1"]
+    monkeypatch.setattr(sys, "stdin", io.StringIO("\n".join([*C1_ANSWERS, ""]) + "\n"))
+    assert main(_args(site, "eof2", more=["--resume"])) == 0
+    assert "end of input" not in capsys.readouterr().err  # ended by the empty id
+    doc = json.loads((site / "scan.json").read_text())
+    assert [o["id"] for o in doc["objects"]] == ["P1", "C1"]
+
+
+def test_a_closed_stdin_is_the_end_of_input_not_a_traceback(site, monkeypatch, capsys):
+    monkeypatch.setattr(sys, "stdin", None)  # started with 0<&-
+    assert main(_args(site, "closed")) == 0
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert last.startswith("end of input: no finished object, so no ")
+    assert not (site / "scan.json").exists()
+
+
+@pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs POSIX pseudo-terminals")
+def test_a_hung_up_terminal_is_the_end_of_input(site, monkeypatch, capsys):
+    """Reading a terminal whose other end closed fails with EIO (when SIGHUP is ignored, e.g.
+    under nohup): that is the end of the input, not a traceback."""
+    master, slave = os.openpty()
+    with os.fdopen(slave, "r", encoding="utf-8") as terminal:
+        os.close(master)  # the terminal window closes
+        monkeypatch.setattr(sys, "stdin", terminal)
+        assert main(_args(site, "hup")) == 0
+    err = capsys.readouterr().err
+    assert err.strip().splitlines()[-1].startswith("end of input: no finished object")
+    assert "Traceback" not in err
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="needs SIGHUP")
+def test_sighup_stops_cleanly_and_keeps_the_scan(site):
+    """The operator's terminal closes (SIGHUP) at the next prompt: exit 130, the finished object
+    in the scan file, one line saying so; --resume continues."""
+    scan = subprocess.Popen(
+        [sys.executable, "-m", "asbuilt", *_args(site, "sighup")],
+        cwd=ROOT,
+        stdin=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        scan.stdin.write("\n".join(P1_ANSWERS) + "\n")
+        scan.stdin.flush()
+        # wait (bounded) for the object to be written, then hang up at the next prompt
+        deadline = time.monotonic() + 60
+        while not (site / "scan.json").exists() and scan.poll() is None:
+            assert time.monotonic() < deadline, "the scan never wrote its first object"
+            time.sleep(0.05)
+        scan.send_signal(signal.SIGHUP)
+        _, err = scan.communicate(timeout=60)
+    finally:
+        scan.kill()
+    assert scan.returncode == 130, err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("hang-up: 1 finished object(s) saved in ") and "--resume" in last
+    assert "Traceback" not in err
+    assert [o["id"] for o in json.loads((site / "scan.json").read_text())["objects"]] == ["P1"]
