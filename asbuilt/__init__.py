@@ -8,7 +8,9 @@ The library API never prints. The main entry points::
     data = asbuilt.fit_report_to_dict(report)          # what `asbuilt fit --json` prints
 
 Importing :mod:`asbuilt` is cheap: fitting and scan loading use numpy/scipy only, and the CAD
-kernel (CadQuery) is imported only by :mod:`asbuilt.cad` and :mod:`asbuilt.export`.
+kernel (CadQuery) is imported only by :mod:`asbuilt.cad` and :mod:`asbuilt.export`. The
+subpackages are attributes without importing them first (``asbuilt.scan.scan_schema()``,
+``asbuilt.rules.check_model``); each is imported when first used.
 """
 
 from __future__ import annotations
@@ -46,14 +48,48 @@ _LAZY = {
     "model_from_fits": "asbuilt.model",
 }
 
+#: The documented subpackages and modules (docs/architecture.md), reachable after a plain
+#: ``import asbuilt`` (``asbuilt.scan.scan_schema()``) and imported on first use, so that
+#: ``import asbuilt`` stays cheap and only ``asbuilt.cad`` / ``asbuilt.export`` load CadQuery.
+_SUBMODULES = frozenset(
+    {
+        "atomic",
+        "cad",
+        "catalog",
+        "catalogs",
+        "cli",
+        "design",
+        "drivers",
+        "errors",
+        "export",
+        "findings",
+        "fit",
+        "merge",
+        "model",
+        "pipeline",
+        "primitives",
+        "report",
+        "rules",
+        "scan",
+        "sim",
+        "tolerances",
+        "units",
+    }
+)
+
 __all__ = ["__version__", *_LAZY]
 
 
 def __getattr__(name: str):
-    try:
-        module = _LAZY[name]
-    except KeyError:
-        raise AttributeError(f"module 'asbuilt' has no attribute {name!r}") from None
-    value = getattr(import_module(module), name)
+    if name in _LAZY:
+        value = getattr(import_module(_LAZY[name]), name)
+    elif name in _SUBMODULES:
+        value = import_module(f"{__name__}.{name}")
+    else:
+        raise AttributeError(f"module 'asbuilt' has no attribute {name!r}")
     globals()[name] = value
     return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY, *_SUBMODULES})

@@ -37,8 +37,18 @@ def wheel(tmp_path_factory) -> Path:
         shutil.copy2(ROOT / name, src / name)
     out = tmp_path_factory.mktemp("dist")
     subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
-         "-w", str(out), str(src)],
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--no-deps",
+            "--no-build-isolation",
+            "-q",
+            "-w",
+            str(out),
+            str(src),
+        ],
         check=True,
     )
     (found,) = out.glob("asbuilt-*.whl")
@@ -56,8 +66,17 @@ def test_wheel_contains_every_data_file(wheel):
 def test_installed_wheel_works_on_its_own(wheel, tmp_path):
     target = tmp_path / "site"
     subprocess.run(
-        [sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target),
-         str(wheel)],
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "--no-deps",
+            "-q",
+            "--target",
+            str(target),
+            str(wheel),
+        ],
         check=True,
     )
     probe = (
@@ -84,3 +103,42 @@ def test_readme_test_command_is_what_ci_runs():
         line.strip() for line in readme.splitlines() if line.strip().endswith(".venv/bin/pytest")
     )
     assert command in ci
+
+
+SUBMODULE_PROBE = r"""
+import json, sys
+import asbuilt
+schema = asbuilt.scan.scan_schema()  # no 'import asbuilt.scan' first
+reached = {
+    "schema_title": schema.get("title"),
+    "check_model": asbuilt.rules.check_model.__name__,
+    "export_model": asbuilt.export.export_model.__name__,
+    "in_dir": sorted({"scan", "rules", "export", "report"} & set(dir(asbuilt))),
+}
+try:
+    asbuilt.no_such_module
+except AttributeError as exc:
+    reached["missing"] = str(exc)
+reached["heavy"] = sorted(m for m in sys.modules if m.split(".")[0] in ("cadquery", "OCP"))
+print(json.dumps(reached))
+"""
+
+
+def test_documented_submodules_are_reachable_after_import_asbuilt(tmp_path):
+    done = subprocess.run(
+        [sys.executable, "-c", SUBMODULE_PROBE],
+        cwd=tmp_path,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    reached = __import__("json").loads(done.stdout.strip().splitlines()[-1])
+    from asbuilt.scan import scan_schema
+
+    assert reached["schema_title"] == scan_schema()["title"]
+    assert (reached["check_model"], reached["export_model"]) == ("check_model", "export_model")
+    assert reached["in_dir"] == ["export", "report", "rules", "scan"]
+    assert reached["missing"] == "module 'asbuilt' has no attribute 'no_such_module'"
+    assert reached["heavy"] == []  # reaching export/report does not load the CAD kernel
