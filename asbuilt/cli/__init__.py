@@ -3,7 +3,8 @@
 Each subcommand lives in its own module here and exposes ``register(subparsers)``; the module's
 heavy imports (CadQuery above all) happen inside its handler, so ``asbuilt fit`` never pays for
 the CAD kernel. Every :class:`~asbuilt.errors.AsbuiltError` becomes one line on stderr and its
-exit code (2 for bad input); anything else is a bug and keeps its traceback.
+exit code (2 for bad input; when no object of a scan could be fitted, one such line per refused
+object); anything else is a bug and keeps its traceback.
 """
 
 from __future__ import annotations
@@ -62,8 +63,8 @@ def _terminate(signum, frame):
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; return the process exit code (0 ok, 1 findings, 2 bad input, 130 interrupted,
-    143 terminated by SIGTERM)."""
+    """Run the CLI; return the process exit code (0 ok, 1 error findings or objects whose fit was
+    refused, 2 bad input, 130 interrupted, 143 terminated by SIGTERM)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     handler = getattr(args, "handler", None)
@@ -77,6 +78,11 @@ def main(argv: list[str] | None = None) -> int:
         return int(handler(args) or 0)
     except AsbuiltError as exc:
         print(f"asbuilt: error: {exc}", file=sys.stderr)
+        from ..fit import NothingFittedError
+
+        if isinstance(exc, NothingFittedError):
+            for failure in exc.failures[1:]:  # the first one is the line above
+                print(f"asbuilt: error: {failure.error}", file=sys.stderr)
         return exc.exit_code
     except Terminated:
         print("asbuilt: terminated", file=sys.stderr)

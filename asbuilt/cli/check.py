@@ -5,6 +5,9 @@ a linter, one per line, sorted by severity then position, then a summary line. E
 no finding is an error, 1 when one is, 2 for bad input, so it runs in a QA pipeline.
 ``--fix OUT`` accepts every unambiguous suggestion, writes the corrected model (any export
 format) and lists what it changed; the findings printed are then those left after the fixes.
+An object whose fit was refused is an error finding ``AB001 fit-refused`` that no selection
+drops and re-checks keep. A model document takes ``--catalog`` only where it decides something
+(unmerged, or its own catalog unreadable) and refuses ``--no-merge``, one line each.
 """
 
 from __future__ import annotations
@@ -93,7 +96,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     parser.add_argument(
         "--no-merge",
         action="store_true",
-        help="check the fitted objects as they are, without merging pipes into spools",
+        help="check the fitted objects as they are, without merging pipes into spools "
+        "(scans only: a model document is already built)",
     )
     parser.set_defaults(handler=run)
     return parser
@@ -102,15 +106,18 @@ def register(subparsers) -> argparse.ArgumentParser:
 def _load(args, config, design, progress=None):
     from asbuilt.errors import CatalogError
     from asbuilt.export.model_json import is_model_document
-    from asbuilt.rules import check_model
+    from asbuilt.pipeline import recheck
 
     if is_model_document(args.scan):
+        from asbuilt.cli._models import refuse_build_options
         from asbuilt.export.model_json import load_model
 
+        refuse_build_options(args.scan, ["--no-merge"] if args.no_merge else [])
         model = load_model(args.scan)
-        options = {"catalog": args.catalog} if args.catalog else {}
+        if args.catalog:
+            _refuse_resizing(args, model)
         try:
-            findings = check_model(model, config, design, **options)
+            findings = recheck(model, config, design, catalog=args.catalog or None)
         except CatalogError as exc:
             if exc.source is not None:
                 raise
@@ -129,6 +136,31 @@ def _load(args, config, design, progress=None):
         merge=not args.no_merge,
         check=True,
         progress=progress,
+    )
+
+
+def _refuse_resizing(args, model) -> None:
+    """Refuse ``--catalog`` for a model document whose pipe sizes were chosen when it was built
+    (their snap records decide the size rules, so another catalog would change nothing) and
+    whose own catalog can be read; it is taken when it names that same catalog, when the
+    model is unmerged (the size rules snap against it) or when its own catalog is unreadable
+    (``--catalog FILE`` is then the remedy)."""
+    from asbuilt.catalog import load_catalog, model_catalog
+    from asbuilt.export.model_json import ModelDocumentError
+
+    own, problem = model_catalog(model)
+    if own is None or problem is not None:
+        return
+    if not any((c.snap or {}).get("status") for c in model.components):
+        return
+    given = load_catalog(args.catalog)
+    if given is own or (given.name == own.name and given.path == own.path):
+        return
+    raise ModelDocumentError(
+        f"--catalog {args.catalog} cannot re-size this model's pipes: their sizes were chosen "
+        f"from {own.name} when it was built; give the scan instead to size them against "
+        "another catalog, or leave --catalog out",
+        source=args.scan,
     )
 
 
@@ -154,7 +186,10 @@ def _list_rules(config) -> None:
 
 
 def _plural(n: int, word: str) -> str:
-    return f"{n} {word}{'' if n == 1 else 's'}"
+    """``n`` and ``word`` in the plural unless n is 1 ("1 fix", "0 fixes", "2 errors")."""
+    if n == 1:
+        return f"{n} {word}"
+    return f"{n} {word}{'es' if word.endswith(('s', 'x', 'z', 'ch', 'sh')) else 's'}"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -167,7 +202,8 @@ def run(args: argparse.Namespace) -> int:
     from rich.markup import escape
 
     from asbuilt.cli._progress import stage_progress
-    from asbuilt.rules import apply_fixes, check_model, load_rules
+    from asbuilt.pipeline import recheck, refused_findings
+    from asbuilt.rules import apply_fixes, load_rules
 
     config = load_rules(args.rules)
     if args.list_rules:
@@ -208,8 +244,8 @@ def run(args: argparse.Namespace) -> int:
         from asbuilt.export import export_model
 
         fixed, changes = apply_fixes(model, findings)
-        options = {"catalog": args.catalog} if args.catalog else {}
-        findings = check_model(fixed, config, design, **options)
+        fixed = fixed.replace(findings=refused_findings(model))  # objects still not in it
+        findings = recheck(fixed, config, design, catalog=args.catalog or None)
         export_model(fixed.replace(findings=findings), Path(args.fix))
 
     out = Console(file=sys.stdout, highlight=False, soft_wrap=True)

@@ -5,6 +5,11 @@ fit's notes under it; ``--json``
 prints the shape documented in :mod:`asbuilt.fit.output`, lengths in the scan's units unless
 ``--units`` says otherwise; ``--output FILE`` writes that JSON atomically to FILE instead of
 standard output. Progress goes to standard error.
+
+An object whose fit is refused does not stop the others: the table is followed by one line per
+refused object (its id, kind and the fit's reason), ``--json`` lists it among the objects, in
+the scan's order, as ``{"id", "kind", "error"}``, and the exit code is 1. When no object can be
+fitted, the error is bad input (exit 2), one line per object.
 """
 
 from __future__ import annotations
@@ -47,8 +52,25 @@ def register(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
+def _report_dict(report, units: str) -> dict:
+    """``fit_report_to_dict`` with the refused objects among the fitted ones, in the scan's
+    order, each as ``{"id", "kind", "error"}`` (``error``: the fit's one-line reason)."""
+    from asbuilt.fit.output import fit_report_to_dict
+
+    data = fit_report_to_dict(report, units)
+    if not report.failures:
+        return data
+    entries = {item.object.id: entry for item, entry in zip(report.fits, data["objects"])}
+    for failure in report.failures:
+        obj = failure.object
+        entries[obj.id] = {"id": obj.id, "kind": obj.kind, "error": failure.message}
+    data["objects"] = [entries[obj.id] for obj in report.scan.objects if obj.id in entries]
+    return data
+
+
 def run(args: argparse.Namespace) -> int:
-    """Load, fit, print; return the exit code (0). Bad input raises an AsbuiltError (exit 2)."""
+    """Load, fit, print; return the exit code: 0, or 1 when an object's fit was refused. Bad
+    input (and a scan of which no object can be fitted) raises an AsbuiltError (exit 2)."""
     import json
     import os
     import sys
@@ -59,12 +81,7 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.atomic import atomic_write, check_target
     from asbuilt.cli._progress import stage_progress
     from asbuilt.fit import fit
-    from asbuilt.fit.output import (
-        TABLE_COLUMNS,
-        fit_report_to_dict,
-        fit_table_notes,
-        fit_table_rows,
-    )
+    from asbuilt.fit.output import TABLE_COLUMNS, fit_table_notes, fit_table_rows
     from asbuilt.scan import load_scan
 
     if args.output is not None:
@@ -78,9 +95,10 @@ def run(args: argparse.Namespace) -> int:
             progress=lambda done, total, oid: bar.update(task, completed=done, description=oid),
         )
 
+    status = 1 if report.failures else 0  # outputs are written, but objects are missing
     units = args.units or scan.units
     if args.json or args.output is not None:
-        text = json.dumps(fit_report_to_dict(report, units), indent=2, ensure_ascii=False) + "\n"
+        text = json.dumps(_report_dict(report, units), indent=2, ensure_ascii=False) + "\n"
         if args.output is not None:
             with atomic_write(args.output, "w") as handle:
                 handle.write(text)
@@ -88,10 +106,13 @@ def run(args: argparse.Namespace) -> int:
         else:
             sys.stdout.write(text)
         if args.json:
-            return 0
+            return status
 
     title = scan.name or args.scan
-    table = Table(title=f"{title}: {len(report)} object{'s' if len(report) != 1 else ''}")
+    heading = f"{title}: {len(report)} object{'s' if len(report) != 1 else ''}"
+    if report.failures:
+        heading = f"{title}: {len(report)} fitted, {len(report.failures)} refused"
+    table = Table(title=heading)
     for column in TABLE_COLUMNS:
         table.add_column(column, no_wrap=column in ("id", "kind", "inliers"))
     for row in fit_table_rows(report, units):
@@ -110,4 +131,12 @@ def run(args: argparse.Namespace) -> int:
             grid.add_row(object_id, note)
         out.print("notes:")
         out.print(grid)
-    return 0
+    if report.failures:
+        grid = Table.grid(padding=(0, 2))
+        grid.add_column(no_wrap=True)
+        grid.add_column()
+        for failure in report.failures:
+            grid.add_row(f"{failure.object.id} ({failure.object.kind})", failure.message)
+        out.print("refused (not fitted; rescan or check these objects):")
+        out.print(grid)
+    return status

@@ -3,6 +3,10 @@
 Fits every object, merges pipes into spools with fittings, checks the compliance rules, then
 writes every ``--out`` (format by suffix, :data:`asbuilt.export.SUFFIXES`), all or nothing. Progress goes to standard error; one summary line per file and the findings
 counts go to standard output.
+
+An object whose fit is refused is left out of the outputs and said on standard error (one line
+each, also with ``--quiet``); the outputs are written and the exit code is 1. When no object can
+be fitted nothing is written (exit 2).
 """
 
 from __future__ import annotations
@@ -105,13 +109,15 @@ def _size(n: int) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Build the model and write the outputs; return 0. Bad input raises AsbuiltError (exit 2)."""
+    """Build the model and write the outputs; return 0, or 1 when an object's fit was refused
+    (left out of the outputs). Bad input raises AsbuiltError (exit 2)."""
     import sys
     from pathlib import Path
 
     from rich.console import Console
 
     from asbuilt.atomic import check_target
+    from asbuilt.cli._models import say_refused
     from asbuilt.cli._progress import stage_progress
     from asbuilt.errors import ExportError
     from asbuilt.export import export_models, exporter_for
@@ -178,8 +184,9 @@ def run(args: argparse.Namespace) -> int:
             views = [r.path for r in results if r.path.suffix.lower() in (".glb", ".gltf")]
             write_reports(model, reports, **({"gltf": views[0]} if views else {}))
 
+    status = 1 if say_refused(err, model, args.scan) else 0  # written, but without them
     if args.quiet:
-        return 0
+        return status
     out = Console(file=sys.stdout, highlight=False, soft_wrap=True, markup=False)
     for result in results:
         out.print(
@@ -198,4 +205,4 @@ def run(args: argparse.Namespace) -> int:
         f"{counts['warning']} warning{'s' if counts['warning'] != 1 else ''}, "
         f"{counts['info']} info"
     )
-    return 0
+    return status

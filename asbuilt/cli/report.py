@@ -6,7 +6,8 @@ given), then writes every ``--out`` in the format its suffix names: a
 self-contained HTML page with pictures, take-off, fit quality and findings; a CSV with one row
 per component; or the same data as JSON. All or nothing. One summary line per file and the
 findings counts go to standard output; the exit code is 0 (findings are in the report, not in
-the exit code: use ``asbuilt check`` for a QA gate).
+the exit code: use ``asbuilt check`` for a QA gate), except 1 when an object's fit was refused:
+the reports are written without it, its finding says why, and standard error says so.
 """
 
 from __future__ import annotations
@@ -114,30 +115,27 @@ _BUILD_OPTIONS = (("schedule", "--schedule"), ("catalog", "--catalog"), ("no_mer
 
 def _model(args, progress):
     """The model and the catalog it was built with (None: the report reads the model's)."""
-    from asbuilt.export.model_json import ModelDocumentError, is_model_document
+    from asbuilt.export.model_json import is_model_document
 
     if is_model_document(args.scan):
-        given = [flag for name, flag in _BUILD_OPTIONS if getattr(args, name)]
-        if given:
-            raise ModelDocumentError(
-                f"{', '.join(given)} only apply when building from a scan; this is an "
-                "asbuilt-model document, already built: give the scan instead, or leave "
-                f"{'them' if len(given) > 1 else 'it'} out",
-                source=str(args.scan),
-            )
+        from asbuilt.cli._models import refuse_build_options
+
+        refuse_build_options(
+            str(args.scan), [flag for name, flag in _BUILD_OPTIONS if getattr(args, name)]
+        )
         from asbuilt.export.model_json import load_model
 
         model = load_model(args.scan)
         if args.no_check or (args.rules is None and args.design is None):
             return model, None  # the findings the document records
+        from asbuilt.pipeline import recheck
         from asbuilt.report.takeoff import model_catalog
-        from asbuilt.rules import check_model, load_rules
+        from asbuilt.rules import load_rules
 
         catalog = model_catalog(model)[0]
         config = load_rules(args.rules) if args.rules else None
-        options = {"catalog": catalog} if catalog is not None else {}
-        findings = check_model(model, config, args.design, **options)
-        return model.replace(findings=tuple(findings)), catalog
+        findings = recheck(model, config, args.design, catalog=catalog)
+        return model.replace(findings=findings), catalog
     from asbuilt.merge import resolve_catalog
     from asbuilt.pipeline import build_model
     from asbuilt.scan import load_scan
@@ -169,13 +167,15 @@ def _size(n: int) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Build the model and write the reports; return 0. Bad input raises AsbuiltError."""
+    """Build the model and write the reports; return 0, or 1 when an object's fit was refused
+    (the reports are written without it). Bad input raises AsbuiltError (exit 2)."""
     import sys
     from pathlib import Path
 
     from rich.console import Console
 
     from asbuilt.atomic import check_target
+    from asbuilt.cli._models import say_refused
     from asbuilt.cli._progress import stage_progress
     from asbuilt.errors import ExportError
     from asbuilt.report import SUFFIXES, report_format_for, write_reports
@@ -214,8 +214,9 @@ def run(args: argparse.Namespace) -> int:
             options["catalog"] = catalog
         written = write_reports(model, outputs, **options)
 
+    status = 1 if say_refused(err, model, args.scan) else 0  # written, but without them
     if args.quiet:
-        return 0
+        return status
     out = Console(file=sys.stdout, highlight=False, soft_wrap=True, markup=False)
     for path in written:
         name = SUFFIXES[path.suffix.lower()].name
@@ -229,4 +230,4 @@ def run(args: argparse.Namespace) -> int:
         f"{counts['warning']} warning{'s' if counts['warning'] != 1 else ''}, "
         f"{counts['info']} info"
     )
-    return 0
+    return status

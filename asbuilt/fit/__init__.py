@@ -463,10 +463,11 @@ class NothingFittedError(FitError):
             named = ", ".join(others[:NAMED_FAILURES])
             if len(others) > NAMED_FAILURES:
                 named += ", ..."
-            count = f"{len(others)} other object{'s' if len(others) != 1 else ''}"
-            message += (
-                f" No object of the scan could be fitted: the {count} ({named}) were refused too."
-            )
+            if len(others) == 1:
+                others_were = f"the other object ({named}) was"
+            else:
+                others_were = f"the {len(others)} other objects ({named}) were"
+            message += f" No object of the scan could be fitted: {others_were} refused too."
         super().__init__(message, source=first.source, where=first.where)
         self.failures = tuple(failures)
 

@@ -314,3 +314,75 @@ def test_a_model_built_with_a_user_catalog_is_checked_with_it(tmp_path, capsys):
     assert "--catalog FILE" in err
     code, out, err = run([tmp_path / "old.json", "--catalog", catalog], capsys)
     assert code == 0, err
+
+
+def test_plural_of_fix_and_the_others():
+    from asbuilt.cli.check import _plural
+
+    assert [_plural(n, "fix") for n in (0, 1, 2)] == ["0 fixes", "1 fix", "2 fixes"]
+    assert [_plural(n, "error") for n in (0, 1, 2)] == ["0 errors", "1 error", "2 errors"]
+    assert _plural(3, "component") == "3 components"
+
+
+@pytest.fixture(scope="module")
+def refused(tmp_path_factory):
+    """The spool sample with the ray caster's refused NPS 1 scan X1, and its model documents
+    (merged, and unmerged as built with --no-merge)."""
+    from refused_scans import spool_with_refused, write
+
+    folder = tmp_path_factory.mktemp("refused")
+    scan = write(folder / "scan.json", spool_with_refused())
+    assert main(["model", str(scan), "--out", str(folder / "model.json"), "-q"]) == 1
+    assert main(["model", str(scan), "--no-merge", "--out", str(folder / "plain.json"), "-q"]) == 1
+    return scan, folder / "model.json", folder / "plain.json"
+
+
+def test_a_refused_object_is_an_error_finding_that_no_selection_drops(refused, capsys):
+    scan, model, _ = refused
+    capsys.readouterr()
+    for source, extra in ((scan, []), (scan, ["--select", "clash"]), (model, [])):
+        code, out, _ = run([source, *extra], capsys)
+        lines = out.splitlines()
+        assert code == 1 and len(lines) == 2
+        assert lines[0].startswith(
+            f"{source}: X1: error fit-refused: not fitted as a cylinder, so it is not in the "
+            "model: The shots this cylinder fits were nearly all seen edge-on"
+        )
+        assert lines[1] == "1 error, 0 warnings (0 unverifiable), 0 info in 10 components"
+
+
+def test_fix_keeps_the_refused_object_and_says_0_fixes(refused, tmp_path, capsys):
+    scan, _, _ = refused
+    fixed = tmp_path / "fixed.json"
+    code, out, _ = run([scan, "--fix", fixed], capsys)
+    assert code == 1 and out.splitlines()[-1].endswith(f"; 0 fixes written to {fixed}")
+    document = json.loads(fixed.read_text())
+    (finding,) = document["findings"]
+    assert finding["code"] == "AB001" and finding["objects"] == ["X1"]
+    assert len(finding["suggestions"][0]["change"]["points"]) == 30  # the measured points
+
+
+def test_model_document_refuses_no_merge_with_one_line(refused, capsys):
+    _, model, _ = refused
+    code, out, err = run([model, "--no-merge"], capsys)
+    assert (code, out) == (2, "")
+    assert err == (
+        f"asbuilt: error: {model}: --no-merge applies only when building from a scan; this is "
+        "an asbuilt-model document, already built: give the scan instead, or leave it out\n"
+    )
+
+
+def test_model_document_catalog_is_used_or_refused(refused, capsys):
+    _, model, plain = refused
+    # Merged: the pipes' sizes were chosen when it was built; another catalog changes nothing.
+    code, out, err = run([model, "--catalog", "astm-b88"], capsys)
+    assert (code, out) == (2, "") and len(err.splitlines()) == 1
+    assert err.startswith(f"asbuilt: error: {model}: --catalog astm-b88 cannot re-size")
+    code, out, _ = run([model, "--catalog", "asme-b36.10m"], capsys)  # its own: fine
+    assert code == 1 and out.splitlines()[-1].startswith("1 error, 0 warnings")
+    # Unmerged: the size rules snap against it (steel pipe ODs are no copper tube sizes).
+    code, out, _ = run([plain], capsys)
+    assert "nonstandard-diameter" not in out
+    code, out, _ = run([plain, "--catalog", "astm-b88"], capsys)
+    assert code == 1 and out.count("error nonstandard-diameter: ") == 4
+    assert "is no ASTM B88 size" in out

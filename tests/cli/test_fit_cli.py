@@ -180,15 +180,48 @@ def test_too_large_file(scan_file, capsys, tmp_path):
     assert not (tmp_path / "out.json").exists()
 
 
-def test_a_failing_fit_is_located(stand_ins, scan_file, capsys, monkeypatch, tmp_path):
-    monkeypatch.setitem(FITTERS, "sphere", (stand_ins.__name__, "refuse"))
+def test_a_scan_no_object_of_which_fits_is_bad_input(stand_ins, scan_file, capsys, tmp_path):
+    for kind in FITTERS:
+        FITTERS[kind] = (stand_ins.__name__, "refuse")  # restored by the fixture's monkeypatch
     code, out, err = run_cli(capsys, scan_file(make_doc()), "--json", "-o", "out.json")
     assert (code, out) == (2, "")
-    assert err == (
-        "asbuilt: error: scan.json: objects[2] (K3): the points are coplanar; a sphere needs "
-        "points off one plane\n"
+    lines = err.splitlines()
+    reason = "the points are coplanar; a sphere needs points off one plane"
+    assert lines[0] == (
+        f"asbuilt: error: scan.json: objects[0] (K1): {reason} No object of the scan could be "
+        "fitted: the 5 other objects (K2, K3, K4, K5, K6) were refused too."
     )
+    assert lines[1:] == [
+        f"asbuilt: error: scan.json: objects[{k}] (K{k + 1}): {reason}" for k in range(1, 6)
+    ]
     assert not (tmp_path / "out.json").exists()
+
+
+def test_a_refused_object_is_listed_and_the_others_fitted(tmp_path, capsys, monkeypatch):
+    """Real fits: the spool sample's six pipes and the ray caster's refused NPS 1 scan X1."""
+    from refused_scans import spool_with_refused, write
+
+    from asbuilt.fit import fit_points
+    from asbuilt.scan import load_scan
+
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path / "scan.json", spool_with_refused())
+    x1 = load_scan("scan.json").objects[-1]
+    with pytest.raises(FitError) as direct:
+        fit_points("cylinder", x1.points, sigma=0.002, viewpoint=x1.station)
+    reason = direct.value.message
+    code, out, err = run_cli(capsys, "scan.json", "--json", "-o", "fits.json")
+    assert code == 1 and out == "" and err.strip().endswith("wrote fits.json")
+    data = json.loads((tmp_path / "fits.json").read_text())
+    assert [o["id"] for o in data["objects"]] == ["P1", "P2", "P3", "P4", "P5", "P6", "X1"]
+    assert data["objects"][-1] == {"id": "X1", "kind": "cylinder", "error": reason}
+    assert all("error" not in o and o["radius"] > 0.05 for o in data["objects"][:6])
+    code, out, _ = run_cli(capsys, "scan.json")
+    assert code == 1 and "6 fitted, 1 refused" in out
+    refused = out[out.index("refused (not fitted") :]
+    assert "X1 (cylinder)" in refused and " ".join(refused.split()).endswith(
+        " ".join(reason.split())
+    )
 
 
 def test_unknown_units_option(capsys):

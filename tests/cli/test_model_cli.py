@@ -371,3 +371,38 @@ def test_an_output_naming_the_scan_is_refused_and_the_scan_kept(
     assert "is the input file itself" in err and err.count("\n") == 1
     assert scan.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["site.json"]
+
+
+def test_a_refused_object_is_left_out_said_and_exits_1(tmp_path, capsys):
+    """The spool sample's six pipes and the ray caster's refused NPS 1 scan X1: the outputs
+    are written without X1, standard error says why, the model's findings keep it."""
+    from refused_scans import spool_with_refused, write
+
+    scan = write(tmp_path / "scan.json", spool_with_refused())
+    out_json, out_dxf = tmp_path / "m.json", tmp_path / "m.dxf"
+    capsys.readouterr()
+    assert main(["model", str(scan), "--out", str(out_json), "--out", str(out_dxf)]) == 1
+    out, err = capsys.readouterr()
+    assert err.startswith(f"asbuilt: {scan}: X1: not fitted as a cylinder, so it is not in")
+    assert err.count("\n") == 1 and "Rescan" in err
+    assert f"wrote {out_json}" in out and f"wrote {out_dxf}" in out
+    assert "findings: 1 error, 0 warnings" in out
+    document = json.loads(out_json.read_text())
+    assert [c["id"] for c in document["components"] if c["id"].startswith("X")] == []
+    assert [(f["code"], f["slug"], f["objects"]) for f in document["findings"]] == [
+        ("AB001", "fit-refused", ["X1"])
+    ]
+
+
+def test_no_object_fitted_writes_nothing_and_exits_2(tmp_path, capsys):
+    from refused_scans import spool_with_refused, write
+
+    scan = write(tmp_path / "scan.json", spool_with_refused(2, good=False))
+    out_json = tmp_path / "m.json"
+    assert main(["model", str(scan), "--out", str(out_json)]) == 2
+    out, err = capsys.readouterr()
+    lines = err.splitlines()
+    assert out == "" and len(lines) == 2 and not out_json.exists()
+    assert lines[0].startswith(f"asbuilt: error: {scan}: objects[0] (X1): ")
+    assert lines[0].endswith("the other object (X2) was refused too.")
+    assert lines[1].startswith(f"asbuilt: error: {scan}: objects[1] (X2): ")

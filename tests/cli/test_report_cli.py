@@ -182,10 +182,10 @@ def test_user_catalog_in_every_way_to_a_report(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("extra", "named"),
     [
-        (["--schedule", "XS"], "--schedule only apply"),
-        (["--catalog", "en-10220"], "--catalog only apply"),
-        (["--no-merge"], "--no-merge only apply"),
-        (["--schedule", "XS", "--catalog", "en-10220"], "--schedule, --catalog only apply"),
+        (["--schedule", "XS"], "--schedule applies only when building from a scan"),
+        (["--catalog", "en-10220"], "--catalog applies only when"),
+        (["--no-merge"], "--no-merge applies only when"),
+        (["--schedule", "XS", "--catalog", "en-10220"], "--schedule, --catalog apply only when"),
     ],
 )
 def test_build_options_on_a_model_document_are_refused(tmp_path, capsys, extra, named):
@@ -202,6 +202,9 @@ def test_build_options_on_a_model_document_are_refused(tmp_path, capsys, extra, 
     out = tmp_path / "qa.json"
     code, stdout, err = run(["report", document, "--out", out, *extra], capsys)
     assert code == 2 and stdout == "" and named in err
+    assert err.rstrip().endswith(
+        f"leave {'them' if sum(a.startswith('--') for a in extra) > 1 else 'it'} out"
+    )
     assert err.startswith(f"asbuilt: error: {document}: ") and len(err.strip().splitlines()) == 1
     assert not out.exists()
 
@@ -216,3 +219,19 @@ def test_report_from_a_model_document_names_the_scan(tmp_path, capsys):
     )
     assert f"<dt>Scan</dt><dd>{BAY}</dd>" in out.read_text(encoding="utf-8")
     assert json.loads((tmp_path / "qa.json").read_text(encoding="utf-8"))["source"] == str(BAY)
+
+
+def test_a_refused_object_is_reported_and_exits_1(tmp_path, capsys):
+    """The reports are written without the object whose fit was refused; its error finding is
+    in them, standard error says so, and the exit code is 1 (the reports lack it)."""
+    from refused_scans import spool_with_refused, write
+
+    scan = write(tmp_path / "scan.json", spool_with_refused())
+    outs = [tmp_path / "qa.json", tmp_path / "qa.html"]
+    code, out, err = run(["report", scan, "--out", outs[0], "--out", outs[1]], capsys)
+    assert code == 1 and "findings: 1 error" in out
+    assert err.startswith(f"asbuilt: {scan}: X1: not fitted as a cylinder") and err.count("\n") == 1
+    data = json.loads(outs[0].read_text())
+    assert [(f["code"], f["objects"]) for f in data["findings"]] == [("AB001", ["X1"])]
+    assert "X1" not in {c["id"] for c in data["components"]}
+    assert "fit-refused" in outs[1].read_text()
