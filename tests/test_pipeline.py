@@ -167,3 +167,16 @@ def test_a_scan_no_object_of_which_fits_is_refused_whole(tmp_path):
         build_model(scan)
     assert str(err.value).startswith(f"{scan.source}: objects[0] (X1): The shots")
     assert str(err.value).endswith("the 2 other objects (X2, X3) were refused too.")
+
+
+def test_a_refused_objects_id_is_not_given_to_a_spool(tmp_path):
+    """Spool ids never take a scan object's id (merge, audit); a refused object keeps its id
+    reserved although it is no component (ungrouped pipes make a generated spool S<n>)."""
+    document = spool_with_refused(link=True)
+    for obj in document["objects"]:
+        obj.pop("group", None)
+    document["objects"][-1]["id"] = "S1"
+    document["links"][-1] = ["P5", "S1"]
+    model = build_model(load_scan(write(tmp_path / "scan.json", document)))
+    assert [f.objects for f in model.findings] == [("S1",)]
+    assert [s.id for s in model.spools] == ["S2"]
