@@ -42,6 +42,37 @@ __all__ = ["raster_grid", "raster_window", "edge_shots", "solve_bounds"]
 _EDGE_SAMPLES = 9
 #: A line of shots is this much narrower than the raster step (relative) or it is not a raster.
 _LINE_WIDTH = 0.02
+#: Share of the shots that must have an angle on a line shared with another shot, or their angles
+#: are not a raster's lattice and no shot is taken for a bisection's: in a session every shot
+#: keeps its row's tilt or its column's pan (1.0 over 960 simulated sessions), while recorded
+#: angles jittered by 0.01 degree leave 20-73% of a raster's shots sharing no line, and a jittered
+#: shot beside a coincidental line would be taken for a bisection shot and get no edge pad.
+_LATTICE_SHARE = 0.9
+#: Rounded coordinates blur a line by this fraction of the raster step or more: the raster's
+#: lines, and a bisection's offsets from them, can no longer be told from the rounding.
+_ROUNDED_OUT = 0.1
+#: Gaps between sorted angles below this fraction of the widest are within a line (the widest
+#: is a raster step or more).
+_SMALL_GAP = 0.1
+#: A line scattered by jitter spans about this many of its median within-line gaps (a gap is
+#: about half the scatter's sigma on a line of six: 12 gaps make 6 sigma, so that no shot of
+#: a raster line falls off it by chance and is taken for a bisection's).
+_BLUR_GAPS = 12.0
+#: Grids a file's coordinates may be rounded to (metres): 1, 2 or 5 units of a decade of the
+#: metre, the inch or the foot, from 10 mm down to 1 micrometre (finer rounding moves a shot's
+#: angle far less than a line's width).
+_QUANTA = np.array(
+    sorted(
+        {
+            round(m * unit * 10.0**k, 15)
+            for m in (1.0, 2.0, 5.0)
+            for unit in (1.0, 0.0254, 0.3048)
+            for k in range(-7, -1)
+            if 1e-6 <= m * unit * 10.0**k <= 0.01
+        },
+        reverse=True,
+    )
+)
 #: Gaps between raster lines must be whole multiples of the step within this fraction.
 _STEP_MULTIPLE = 0.15
 #: Least distance across the beam (metres) between a bisection shot and the shot that gives
@@ -66,8 +97,60 @@ def _angles(points: np.ndarray, viewpoint: np.ndarray, pan0: float) -> np.ndarra
     return np.column_stack([pan, tilt])
 
 
-def _grid_step(values: np.ndarray) -> float | None:
-    """Raster step (radians) of 1-D angles falling on evenly spaced lines; None if they do not."""
+def coordinate_quantum(points: np.ndarray) -> float:
+    """The grid a file rounded the coordinates to (metres), 0.0 when they are not rounded.
+
+    A file in millimetres with whole numbers holds multiples of 0.001 m: each shot's direction
+    from the station is then off by up to about a quantum over its range, which can be more
+    than the width of a raster line of exact (nominal) angles.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    """
+    values = np.asarray(points, dtype=np.float64).ravel()
+    if values.size == 0 or not np.all(np.isfinite(values)):
+        return 0.0
+    for quantum in _QUANTA:
+        ratio = values / quantum
+        if np.all(np.abs(ratio - np.round(ratio)) <= 1e-6):
+            return float(quantum)
+    return 0.0
+
+
+def _rounding_width(points: np.ndarray, viewpoint: np.ndarray) -> float:
+    """Widest spread (radians) that rounding gives the angles of shots along one line: two
+    shots, each coordinate off by up to half a quantum, at the nearest horizontal reach."""
+    quantum = coordinate_quantum(points)
+    if quantum == 0.0:
+        return 0.0
+    rel = points - viewpoint
+    reach = float(np.hypot(rel[:, 0], rel[:, 1]).min())
+    return float(np.sqrt(2.0) * quantum / max(reach, 1e-3))
+
+
+def _line_blur(points: np.ndarray, viewpoint: np.ndarray, ang: np.ndarray) -> float:
+    """How wide (radians) a raster line of these shots may be: the file's rounding
+    (:func:`_rounding_width`), or recorded angles that scatter about their line (a head's
+    encoder read back, not its commanded angles): then the gaps between neighbouring angles
+    within lines, which are zero for nominal angles, are the scatter's, and a line spans
+    several of them."""
+    blur = _rounding_width(points, viewpoint)
+    for j in range(ang.shape[1]):
+        gaps = np.diff(np.sort(ang[:, j]))
+        if gaps.size == 0 or gaps.max() <= 0.0:
+            continue
+        small = gaps[gaps < _SMALL_GAP * gaps.max()]
+        if small.size >= 3:
+            blur = max(blur, _BLUR_GAPS * float(np.median(small)))
+    return blur
+
+
+def _grid_step(values: np.ndarray, rounding: float = 0.0) -> float | None:
+    """Raster step (radians) of 1-D angles falling on evenly spaced lines; None if they do not.
+
+    ``rounding`` (radians): the spread a line may have from the file's rounding alone.
+    """
     ordered = np.sort(values)
     gaps = np.diff(ordered)
     if gaps.size == 0 or gaps.max() <= 0.0:
@@ -81,7 +164,7 @@ def _grid_step(values: np.ndarray) -> float | None:
     line_id = np.concatenate([[0], np.cumsum(big)])
     width = np.zeros(line_id[-1] + 1)
     np.add.at(width, line_id[1:], np.where(big, 0.0, gaps))
-    if width.max() > _LINE_WIDTH * step:
+    if width.max() > max(_LINE_WIDTH * step, rounding) or rounding > _ROUNDED_OUT * step:
         return None
     return step
 
@@ -94,10 +177,11 @@ def _lines(values: np.ndarray, tol: float) -> np.ndarray:
     return label
 
 
-def _on_lines(values: np.ndarray, step: float, ref: float) -> np.ndarray:
-    """Whether each value (k,) lies on the grid ``ref + i * step`` (within ``_LINE_WIDTH``)."""
+def _on_lines(values: np.ndarray, step: float, ref: float, rounding: float = 0.0) -> np.ndarray:
+    """Whether each value (k,) lies on the grid ``ref + i * step`` (within ``_LINE_WIDTH``
+    steps, or the file's ``rounding`` in radians when wider)."""
     phase = (values - ref) / step
-    return np.abs(phase - np.round(phase)) <= _LINE_WIDTH
+    return np.abs(phase - np.round(phase)) <= max(_LINE_WIDTH, rounding / step)
 
 
 def _shot_alike(ang: np.ndarray, off: np.ndarray, labels: list) -> bool:
@@ -162,8 +246,13 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray, off_grid: np.ndarray 
     mean = rel.mean(axis=0)
     pan0 = float(np.arctan2(mean[1], mean[0]))
     ang = _angles(points, viewpoint, pan0)
+    rounding = _line_blur(points, viewpoint, ang)
     known = np.ones(n, dtype=bool) if off_grid is None else ~np.asarray(off_grid, dtype=bool)
-    steps = [_grid_step(ang[known, j]) for j in range(2)] if known.sum() >= 2 else [None, None]
+    steps = (
+        [_grid_step(ang[known, j], rounding) for j in range(2)]
+        if known.sum() >= 2
+        else [None, None]
+    )
     if steps[0] is not None and steps[1] is not None and known.all():
         on_grid = np.ones(n, dtype=bool)
     else:
@@ -173,16 +262,17 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray, off_grid: np.ndarray 
             labels = []
             for j in range(2):
                 spread = float(np.ptp(ang[:, j]))
-                label = _lines(ang[:, j], _LINE_WIDTH * 1e-2 * max(spread, 1e-12))
+                label = _lines(ang[:, j], max(_LINE_WIDTH * 1e-2 * max(spread, 1e-12), rounding))
                 labels.append(label)
                 keep &= np.bincount(label)[label] >= least
             if np.count_nonzero(keep) < max(7, n // 2):
                 continue
-            steps = [_grid_step(ang[keep, j]) for j in range(2)]
+            steps = [_grid_step(ang[keep, j], rounding) for j in range(2)]
             if steps[0] is None or steps[1] is None:
                 continue
             refs = [float(ang[keep, j].min()) for j in range(2)]
-            grid = _on_lines(ang[:, 0], steps[0], refs[0]) & _on_lines(ang[:, 1], steps[1], refs[1])
+            grid = _on_lines(ang[:, 0], steps[0], refs[0], rounding)
+            grid &= _on_lines(ang[:, 1], steps[1], refs[1], rounding)
             grid &= known
             if np.count_nonzero(grid) >= max(7, n // 2) and _shot_alike(ang, ~grid, labels):
                 on_grid = grid
@@ -204,7 +294,7 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray, off_grid: np.ndarray 
         low, high = inner[:, j].min(), inner[:, j].max()
         # Off-grid shots off the raster's lines along j (a pan bisection keeps its row's tilt:
         # it says nothing about the tilt sides).
-        tight = _LINE_WIDTH * 1e-2 * max(float(np.ptp(ang[:, j])), 1e-12)
+        tight = max(_LINE_WIDTH * 1e-2 * max(float(np.ptp(ang[:, j])), 1e-12), rounding)
         phase = (ang[:, j] - low) / steps[j]
         across = ~on_grid & (np.abs(phase - np.round(phase)) * steps[j] > tight)
         if not across.any():
@@ -300,7 +390,11 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
     counts) count once. Lines are told apart at 0.02 % of the angular spread (the shots'
     angles are the nominal ones, exact to rounding), and a shot is on a raster's lattice within
     that too: a bisection's deepest hits come within a fraction of a percent of a step of the
-    line it started from.
+    line it started from. When the file rounded its coordinates (to 1 mm, say) or recorded
+    scattered angles (encoders read back), a line is as wide as that blur
+    (:func:`_line_blur`); a blur of a tenth of a step or more, or fewer than
+    ``_LATTICE_SHARE`` of the shots sharing a line, leaves no lattice to be off, and no shot is
+    taken for a bisection's.
     """
     n = points.shape[0]
     out = -np.ones(n, dtype=np.int64)
@@ -310,9 +404,10 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
         return out, partner
     mean = rel.mean(axis=0)
     ang = _angles(points, viewpoint, float(np.arctan2(mean[1], mean[0])))
+    rounding = _line_blur(points, viewpoint, ang)
     labels, tols = [], []
     for j in range(2):
-        tol = _LINE_WIDTH * 1e-2 * max(float(np.ptp(ang[:, j])), 1e-12)
+        tol = max(_LINE_WIDTH * 1e-2 * max(float(np.ptp(ang[:, j])), 1e-12), rounding)
         labels.append(_lines(ang[:, j], tol))
         tols.append(tol)
     full = []
@@ -320,6 +415,8 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
         pairs = np.unique(np.column_stack([labels[j], labels[1 - j]]), axis=0)
         positions = np.bincount(pairs[:, 0], minlength=labels[j].max() + 1)
         full.append(positions[labels[j]] >= 2)
+    if np.mean(full[0] | full[1]) < _LATTICE_SHARE:
+        return out, partner
     flagged = np.zeros((2, n), dtype=bool)
     for j in range(2):
         for i in np.flatnonzero(~full[j]):
@@ -341,6 +438,8 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
                 flagged[j, i] = True
                 continue
             step = float(gaps.min())
+            if tols[j] > _ROUNDED_OUT * step:
+                continue  # the file's rounding blurs the lattice: no offset can be told
             offset = (v - lines[0]) % step
             flagged[j, i] = min(offset, step - offset) > tols[j]
     reach = np.linalg.norm(rel, axis=1)
