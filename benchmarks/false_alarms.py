@@ -130,23 +130,26 @@ def scenes() -> dict:
 
 def faulty_scenes() -> dict:
     """Scene name -> (scene, the rule slug that must report an error) for detection power."""
-    lean = _scene(
-        "leaning column",
-        [
-            {
-                "id": "C1",
-                "kind": "cuboid",
-                "points": 36,
-                "label": "steel column",
-                "geometry": {
-                    "type": "member",
-                    "start": [3.0, 5.0, 0.0],
-                    "end": [3.04, 5.0, 4.0],
-                    "section": [0.35, 0.35],
+
+    def lean(offset_m: float) -> dict:
+        return _scene(
+            "leaning column",
+            [
+                {
+                    "id": "C1",
+                    "kind": "cuboid",
+                    "points": 36,
+                    "label": "steel column",
+                    "geometry": {
+                        "type": "member",
+                        "start": [3.0, 5.0, 0.0],
+                        "end": [3.0 + offset_m, 5.0, 4.0],
+                        "section": [0.35, 0.35],
+                    },
                 },
-            },
-        ],
-    )
+            ],
+        )
+
     odd = _scene(
         "nonstandard pipe",
         [
@@ -191,7 +194,9 @@ def faulty_scenes() -> dict:
         ],
     )
     return {
-        "column leaning 1:100 (40 mm over 4 m)": (scene_from_dict(lean), "out-of-plumb"),
+        "column leaning 1:100 (40 mm over 4 m)": (scene_from_dict(lean(0.04)), "out-of-plumb"),
+        # twice AISC 303's 1:500 (8 mm over 4 m): how fine a lean 36 shots on two faces can tell
+        "column leaning 1:250 (16 mm over 4 m)": (scene_from_dict(lean(0.016)), "out-of-plumb"),
         "pipe OD 127.0 mm (no ASME size; NPS 4 is 114.3)": (
             scene_from_dict(odd),
             "nonstandard-diameter",
