@@ -638,9 +638,10 @@ def _links_to_other_objects(report, index_of, cyls, slack, tol):
             kind = other.result.primitive.kind if other is not None else "object"
             if kind == "cylinder":
                 kind = "cylinder, not a pipe"
+            article = "an" if kind[0] in "aeiou" else "a"
             text = (
-                f"the scan links {pipe_id} to {other_id} (a {kind}): merging joins pipes only, so "
-                "no fitting or spool connects them"
+                f"the scan links {pipe_id} to {other_id} ({article} {kind}): merging joins pipes "
+                "only, so no fitting or spool connects them"
             )
             if other is not None and len(other.object.points):
                 c = cyls[m]

@@ -229,3 +229,17 @@ def test_short_radius_45_is_built_as_the_long_radius_45_with_a_note():
     l_elbow = by_id(merge_model(report_of(l_pipes), elbow_radius="short"))["P1-P2"]
     assert l_elbow.geometry.bend_radius == pytest.approx(0.102)
     assert l_elbow.snap["notes"] == []
+
+
+def test_a_link_to_an_object_without_a_fit_is_said_with_its_article():
+    """A link to a scan object that has no fit (refused, so not in the report's fits) is said as
+    'an object', not 'a object'."""
+    from dataclasses import replace
+
+    pipe = Pipe("P1", (0, 0, 1), (2, 0, 1), NPS4)
+    report = report_of([pipe], links=[("P1", "X1")], extra=[_cuboid((2.3, 0, 1), (0.4,) * 3)])
+    unfitted = replace(report.scan.objects[-1], id="X1")
+    scan = replace(report.scan, objects=(*report.scan.objects, unfitted))
+    model = merge_model(replace(report, scan=scan))
+    said = notes(model, "P1")
+    assert len(said) == 1 and "links P1 to X1 (an object)" in said[0]
