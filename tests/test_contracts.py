@@ -29,8 +29,9 @@ def test_tolerances_are_frozen_and_every_field_has_a_reason():
     assert dataclasses.replace(Tolerances(), angle_snap_deg=1.0).angle_snap_deg == 1.0
 
 
-@pytest.mark.parametrize(("unit", "metres"), [("m", 1), ("mm", 1e-3), ("cm", 1e-2),
-                                              ("in", 0.0254), ("ft", 0.3048)])
+@pytest.mark.parametrize(
+    ("unit", "metres"), [("m", 1), ("mm", 1e-3), ("cm", 1e-2), ("in", 0.0254), ("ft", 0.3048)]
+)
 def test_units_round_trip(unit, metres):
     assert unit_factor(unit) == metres
     assert from_metres(to_metres(12.5, unit), unit) == pytest.approx(12.5)
