@@ -171,9 +171,20 @@ def _list_rules(config) -> None:
     from rich.console import Console
     from rich.table import Table
 
+    from asbuilt.findings import FIT_REFUSED_CODE, FIT_REFUSED_SLUG
     from asbuilt.rules import RULES
 
     table = Table("code", "slug", "severity", "runs", "source or reason", show_lines=False)
+    # Not a rule of the registry (no rules-file options): the pipeline's own finding for an
+    # object the fit refused, which no selection drops.
+    table.add_row(
+        FIT_REFUSED_CODE,
+        FIT_REFUSED_SLUG,
+        "error",
+        "always",
+        "The fit: a scan object whose fit was refused is missing from the model; rescan it "
+        "(docs/rules.md). Not configurable.",
+    )
     for r in RULES:
         table.add_row(
             r.code,

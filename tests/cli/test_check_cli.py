@@ -262,6 +262,9 @@ def test_list_rules_shows_the_rules_files_view(tmp_path, capsys):
     from asbuilt.rules import RULES
 
     assert all(r.code in out for r in RULES)
+    # the pipeline's own finding for a refused fit is listed too, always on, not configurable
+    refused = next(line for line in out.splitlines() if "AB001" in line)
+    assert "fit-refused" in refused and "error" in refused and "always" in refused
 
 
 def test_no_scan_is_bad_input(capsys):
