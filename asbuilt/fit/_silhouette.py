@@ -58,20 +58,23 @@ _SMALL_GAP = 0.1
 #: about half the scatter's sigma on a line of six: 12 gaps make 6 sigma, so that no shot of
 #: a raster line falls off it by chance and is taken for a bisection's).
 _BLUR_GAPS = 12.0
-#: Grids a file's coordinates may be rounded to (metres): 1, 2 or 5 units of a decade of the
-#: metre, the inch or the foot, from 10 mm down to 1 micrometre (finer rounding moves a shot's
-#: angle far less than a line's width).
-_QUANTA = np.array(
-    sorted(
-        {
-            round(m * unit * 10.0**k, 15)
-            for m in (1.0, 2.0, 5.0)
-            for unit in (1.0, 0.0254, 0.3048)
-            for k in range(-7, -1)
-            if 1e-6 <= m * unit * 10.0**k <= 0.01
-        },
-        reverse=True,
+#: Grids a file's coordinates may be rounded to (metres), by family (the metre, the inch, the
+#: foot), coarsest first: 1, 2 or 5 units of a decade, from 10 mm down to 1 micrometre (finer
+#: rounding moves a shot's angle far less than a line's width). Each family's last (finest)
+#: grid divides all its others, so data off it is off the whole family.
+_QUANTA = tuple(
+    np.array(
+        sorted(
+            {
+                round(m * unit * 10.0**k, 15)
+                for m in (1.0, 2.0, 5.0)
+                for k in range(-7, -1)
+                if 1e-6 <= m * unit * 10.0**k <= 0.01
+            },
+            reverse=True,
+        )
     )
+    for unit in (1.0, 0.0254, 0.3048)
 )
 #: Gaps between raster lines must be whole multiples of the step within this fraction.
 _STEP_MULTIPLE = 0.15
@@ -111,11 +114,18 @@ def coordinate_quantum(points: np.ndarray) -> float:
     values = np.asarray(points, dtype=np.float64).ravel()
     if values.size == 0 or not np.all(np.isfinite(values)):
         return 0.0
-    for quantum in _QUANTA:
+
+    def on_grid(quantum: float) -> bool:
         ratio = values / quantum
-        if np.all(np.abs(ratio - np.round(ratio)) <= 1e-6):
-            return float(quantum)
-    return 0.0
+        return bool(np.all(np.abs(ratio - np.round(ratio)) <= 1e-6))
+
+    found = 0.0
+    for family in _QUANTA:
+        # off the finest grid, off every grid of the family: one test for unrounded points (a
+        # cuboid fit calls this up to three times)
+        if on_grid(family[-1]):
+            found = max(found, next(float(q) for q in family if on_grid(q)))
+    return found
 
 
 def _rounding_width(points: np.ndarray, viewpoint: np.ndarray) -> float:
@@ -405,6 +415,11 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
     mean = rel.mean(axis=0)
     ang = _angles(points, viewpoint, float(np.arctan2(mean[1], mean[0])))
     rounding = _line_blur(points, viewpoint, ang)
+    for j in range(2):
+        # blurred by more than a tenth of even the widest gap between its angles: no lattice
+        # at all (a dense cloud, where the per-shot search below would also take minutes)
+        if rounding > _ROUNDED_OUT * float(np.max(np.diff(np.sort(ang[:, j])))):
+            return out, partner
     labels, tols = [], []
     for j in range(2):
         tol = max(_LINE_WIDTH * 1e-2 * max(float(np.ptp(ang[:, j])), 1e-12), rounding)
