@@ -22,7 +22,7 @@ import numpy as np
 from asbuilt.findings import FIT_REFUSED_CODE, FIT_REFUSED_SLUG, Finding, Suggestion
 from asbuilt.fit.result import FitFailure, FitReport
 from asbuilt.model import Model, model_from_fits
-from asbuilt.scan.model import Scan
+from asbuilt.scan.model import Scan, kind_phrase
 from asbuilt.tolerances import Tolerances
 
 __all__ = [
@@ -71,8 +71,6 @@ def fit_refused_finding(failure: FitFailure) -> Finding:
 
 
 def _not_fitted(kind: str) -> str:
-    from asbuilt.scan.model import kind_phrase
-
     return "not fitted (kind auto)" if kind == "auto" else f"not fitted as {kind_phrase(kind)}"
 
 

@@ -349,12 +349,9 @@ def _check_document(document, source: str | None) -> None:
             raise ModelDocumentError("must be a list", source=source, where=key)
 
 
-class _BadField(ValueError):
-    """A component field with the wrong type or shape (``key``, and what it must be)."""
-
-    def __init__(self, key: str, message: str):
-        self.key = key
-        super().__init__(message)
+#: A component field with the wrong type or shape (``key``, and what it must be): the same
+#: error a fit summary's field raises, so one handler locates both.
+_BadField = SummaryFieldError
 
 
 def _number(entry: dict, key: str) -> float:
@@ -569,7 +566,7 @@ def _stored_fit(entry: dict, geometry) -> StoredFit | None:
         return None if primitive is None else stored_fit_from_summary(summary, primitive)
     except KeyError as exc:
         raise _BadField(f"fitted.{exc.args[0]}", "missing") from None
-    except (_BadField, SummaryFieldError) as exc:
+    except _BadField as exc:
         raise _BadField(f"fitted.{exc.key}", str(exc)) from None
 
 

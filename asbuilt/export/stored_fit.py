@@ -89,8 +89,9 @@ class StoredFit:
 
 
 class SummaryFieldError(ValueError):
-    """A ``fitted`` summary field with the wrong type (``key``: which one; the message says
-    what it must be)."""
+    """A model document field with the wrong type, here a ``fitted`` summary's (``key``: which
+    one; the message says what it must be); :mod:`asbuilt.export.model_json` raises it for
+    the component's other fields too."""
 
     def __init__(self, key: str, message: str):
         self.key = key

@@ -301,12 +301,13 @@ _DUPLICATE_TYPES = ("pipe", "cylinder")
 def _segment(geometry):
     """``(start (3,), end (3,), radius)`` in metres of a straight or cylinder, else None."""
     if isinstance(geometry, Straight):
-        return np.array(geometry.start), np.array(geometry.end), float(geometry.outer_radius)
-    if isinstance(geometry, Cylinder):
-        half = 0.5 * float(geometry.length) * np.asarray(geometry.axis, float)
-        centre = np.asarray(geometry.center, float)
-        return centre - half, centre + half, float(geometry.radius)
-    return None
+        radius = float(geometry.outer_radius)
+    elif isinstance(geometry, Cylinder):
+        radius = float(geometry.radius)
+    else:
+        return None
+    start, end = ends_of(geometry)
+    return start, end, radius
 
 
 def _od_stderr(component) -> float:
