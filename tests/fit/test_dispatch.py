@@ -579,3 +579,47 @@ def test_a_fit_found_only_at_the_residuals_noise_is_kept_when_that_noise_is_the_
     assert result.n_inliers >= 20
     assert result.sigma <= 1.5 * scan["range_sigma"]
     assert any("found no cylinder holding most points" in note for note in result.notes)
+
+
+# --------------------------------------------------------------------------------------------
+# Exactly repeated points (a scan file merged with itself, copied rows)
+
+
+@pytest.mark.parametrize(
+    ("kind", "make"),
+    [
+        ("cylinder", _cylinder_points),
+        ("sphere", _sphere_points),
+        ("plane", _plane_points),
+        ("cuboid", _cuboid_points),
+        ("hull", _hull_points),
+    ],
+)
+def test_repeated_points_count_once(kind, make):
+    """Every point given twice is the same measurement: the same primitive and the same
+    standard errors as the points given once (counted twice they shrank by sqrt(2)), with
+    residuals and inliers still one per given point and a note saying so."""
+    _real(kind)
+    points, _ = make(np.random.default_rng(3))
+    once = fit_points(kind, points, sigma=2e-4)
+    doubled = np.vstack([points, points[::-1]])
+    twice = fit_points(kind, doubled, sigma=2e-4)
+    assert twice.primitive.distance(points) == pytest.approx(once.primitive.distance(points))
+    for key, value in once.stderr.items():
+        assert np.asarray(twice.stderr[key]) == pytest.approx(np.asarray(value)), key
+    assert twice.residuals.shape == twice.inliers.shape == (len(doubled),)
+    assert twice.residuals == pytest.approx(twice.primitive.distance(doubled))
+    assert twice.inliers[: len(points)].tolist() == twice.inliers[len(points) :][::-1].tolist()
+    assert twice.notes[-1].startswith(f"{len(points)} point(s) repeat other points exactly")
+    assert not any("repeat other points" in note for note in once.notes)
+
+
+def test_too_few_distinct_points_say_so():
+    points, _ = _cylinder_points(np.random.default_rng(3))
+    with pytest.raises(FitError) as info:
+        fit_points("cylinder", np.vstack([points[[0, 7, 14, 21]]] * 3))
+    assert info.value.where == "points"
+    assert info.value.message == (
+        "A cylinder needs at least 6 distinct points, got 4 (8 of the 12 points repeat others "
+        "exactly); measure more points."
+    )
