@@ -26,8 +26,11 @@ those ends); then the other pairs. A pipe end left over whose axis meets an inli
 square-on becomes the branch of a **tee** there; one whose axis meets the inside
 of another pipe square-on (within ``intended_angle_deg`` of 90 degrees) becomes the branch of a
 tee that splits that pipe. ``links`` in the scan are honoured first, with distance limits
-widened by :data:`LINK_MARGIN`; a linked pair whose geometry fits no joint is still reported
-(kind ``contact``) so the pair is estimated jointly, when the two pipes come within
+widened by :data:`LINK_MARGIN`: a linked run with a linked square-on branch is a tee, and so
+is a linked elbow one of whose ends continues straight into an unlinked pipe (inline by the
+unlinked limits) while the other meets that joint square-on (links say which pipes are
+contiguous, not that the others are not); a linked pair whose geometry fits no joint is still
+reported (kind ``contact``) so the pair is estimated jointly, when the two pipes come within
 ``joint_distance`` + :data:`LINK_MARGIN` (+ slack) of each other. A link farther apart than that
 is not modelled: no fitting is invented over a gap nobody measured, and a note says why.
 
@@ -375,6 +378,32 @@ def find_joints(
         used.update((cand.a, cand.b, best[1]))
         joints.append(Joint("tee", (cand.a, cand.b, best[1]), explicit=True))
         teed.update({key, *((min(q, best[1][0]), max(q, best[1][0])) for q in key)})
+    # 1b. a linked elbow whose end continues straight into an unlinked pipe (an inline pair by
+    # the geometry alone, without the link's margin) with the other end square-on at that joint
+    # is a tee: links say which pipes are contiguous, not that the others are not, and an elbow
+    # there would leave the run's other pipe loose where the fitting stands
+    claimed: dict[End, set] = {}
+    for key, c in link_candidates.items():
+        for e in () if c is None else (c.a, c.b):
+            claimed.setdefault(e, set()).add(key)
+    flat = pts.reshape(-1, 3)
+    base = 2 * tol.joint_distance + 1.5 * float(ods.max()) * 2.5 + float(ods.max())
+    radius = base + 2 * float(slack.max())
+    tree = cKDTree(flat)
+    found = []
+    for key, cand in link_candidates.items():
+        if key in teed or cand is None or cand.kind != "elbow" or {cand.a, cand.b} & used:
+            continue
+        tee = _tee_around_elbow(cand, claimed, used, tree, radius, pts, out, axes, ods, tol, slack)
+        if tee is not None:
+            found.append(tee)
+    for _, run_a, run_b, branch in sorted(found):
+        if {run_a, run_b, branch} & used:
+            continue
+        used.update((run_a, run_b, branch))
+        joints.append(Joint("tee", (run_a, run_b, branch), explicit=True))
+        trio = (run_a[0], run_b[0], branch[0])
+        teed.update((min(p, q), max(p, q)) for p in trio for q in trio if p != q)
     for i, j in sorted(linked_pairs - teed):
         cand = link_candidates[i, j]
         if cand is None:
@@ -398,10 +427,6 @@ def find_joints(
         joints.append(Joint(cand.kind, (cand.a, cand.b), explicit=True))
 
     # 2. inferred end-to-end joints, best first
-    flat = pts.reshape(-1, 3)
-    base = 2 * tol.joint_distance + 1.5 * float(ods.max()) * 2.5 + float(ods.max())
-    radius = base + 2 * float(slack.max())
-    tree = cKDTree(flat)
     # each end searches within the base reach plus twice its own slack: a pair is found by
     # whichever of its two ends has the larger slack
     radii = base + 2 * np.repeat(slack, 2)
@@ -489,6 +514,38 @@ def _best_branch(cand, tree, radius, pts, out, axes, ods, tol, slack, skip=(), o
         )
         if cost is not None and (best is None or cost < best[0]):
             best = (cost, b)
+    return best
+
+
+def _tee_around_elbow(cand, claimed, used, tree, radius, pts, out, axes, ods, tol, slack):
+    """A tee hiding behind the linked elbow candidate ``cand``, or None.
+
+    One of the elbow's ends must continue straight into a third pipe's end (an inline pair by
+    :func:`_evaluate_pair`'s own limits: the link vouches for the elbow's pair, not for the
+    run) and the elbow's other end must meet that joint square-on as a branch
+    (:func:`_branch_cost`). A third end already ``used``, or that another link claims for a
+    pipe outside the three, is not taken. Returns ``(cost, run end, run end, branch end)``
+    (ends as :data:`End`, the run ends in pipe order), the cheapest of both ways round.
+    """
+    best = None
+    for run_end, branch in ((cand.a, cand.b), (cand.b, cand.a)):
+        for e in tree.query_ball_point(pts[run_end], radius):
+            other = divmod(int(e), 2)
+            if other[0] in (cand.a[0], cand.b[0]) or other in used:
+                continue
+            trio = {cand.a[0], cand.b[0], other[0]}
+            if any(not set(key) <= trio for key in claimed.get(other, ())):
+                continue  # the scan links that end to some other pipe
+            run = _evaluate_pair(*run_end, *other, pts, out, axes, ods, tol, False, slack)
+            if run is None or run.kind != "inline":
+                continue
+            point = 0.5 * (pts[run_end] + pts[other])
+            cost = _branch_cost(
+                branch, point, axes[run_end[0]], ods[run_end[0]], pts, out, axes, ods, tol, slack
+            )
+            if cost is not None and (best is None or run.cost + cost < best[0]):
+                # run ends in pipe order, as the other tees have them (the tee's id follows)
+                best = (run.cost + cost, *sorted((run_end, other)), branch)
     return best
 
 
