@@ -248,14 +248,17 @@ def _tee_at_inline(joint: Joint, b: End, pts, out, axes, ods, tol, slack) -> flo
 
 
 def _branch_cost(
-    b: End, point, run_axis, run_od, pts, out, axes, ods, tol, slack, oblique=False
+    b: End, point, run_axis, run_od, pts, out, axes, ods, tol, slack, oblique=False, extra=0.0
 ) -> float | None:
     """Cost of end ``b`` as a branch at ``point`` of a run, or None.
 
-    A tee branch meets the run square-on (within ``intended_angle_deg`` of 90 degrees); with
-    ``oblique`` the branch of a lateral instead: between ``intended_angle_deg`` and 90 degrees
-    less it, its end up to the inline gap allowance (divided by the sine of the angle: an oblique
-    branch must clear the run pipe) from the run axis.
+    A tee branch meets the run square-on (within ``intended_angle_deg`` of 90 degrees), its end
+    up to the run's OD + ``joint_distance`` + its slack + ``extra`` (metres; :data:`LINK_MARGIN`
+    for a branch the scan links to the run) from the run axis; with ``oblique`` the branch of a
+    lateral instead: between ``intended_angle_deg`` and 90 degrees less it, its end up to the
+    inline gap allowance (divided by the sine of the angle: an oblique branch must clear the
+    run pipe) from the run axis. Its axis must pass the joint within the skew tolerance either
+    way, however far its end.
     """
     pipe, k = b
     eb, ob = pts[pipe, k], out[pipe, k]
@@ -281,7 +284,7 @@ def _branch_cost(
         limit = 2 * tol.joint_distance + 2 * max(run_od, ods[pipe])
         limit = limit / np.sin(np.radians(angle)) + float(slack[pipe])
     else:
-        limit = run_od + tol.joint_distance + float(slack[pipe])
+        limit = run_od + tol.joint_distance + float(slack[pipe]) + extra
     if not (-tol.joint_distance <= s <= limit):
         return None
     return abs(s) + along + lateral_on_run
@@ -369,7 +372,12 @@ def find_joints(
                 if (other, k) in used:
                     continue
                 cost = _branch_cost(
-                    (other, k), point, axes[key[0]], ods[key[0]], pts, out, axes, ods, tol, slack
+                    (other, k),
+                    point,
+                    axes[key[0]],
+                    ods[key[0]],
+                    *(pts, out, axes, ods, tol, slack),
+                    extra=LINK_MARGIN,  # the branch is linked to the run
                 )
                 if cost is not None and (best is None or cost < best[0]):
                     best = (cost, (other, k))
@@ -541,7 +549,12 @@ def _tee_around_elbow(cand, claimed, used, tree, radius, pts, out, axes, ods, to
                 continue
             point = 0.5 * (pts[run_end] + pts[other])
             cost = _branch_cost(
-                branch, point, axes[run_end[0]], ods[run_end[0]], pts, out, axes, ods, tol, slack
+                branch,
+                point,
+                axes[run_end[0]],
+                ods[run_end[0]],
+                *(pts, out, axes, ods, tol, slack),
+                extra=LINK_MARGIN,  # the branch is linked to the run
             )
             if cost is not None and (best is None or run.cost + cost < best[0]):
                 # run ends in pipe order, as the other tees have them (the tee's id follows)

@@ -64,6 +64,33 @@ def test_a_run_and_a_square_on_branch_are_a_tee_whatever_is_linked(pairs, links)
     assert set(tee.ends[:2]) == {(0, 1), (1, 0)} and tee.through is None
 
 
+# the branch stops 0.4 m from the run axis (shots missed near the tee): beyond the branch
+# allowance of 0.264 m by geometry alone, within it + LINK_MARGIN (0.764 m) when linked
+FAR_TEE = (((0, 0, 0), (1.9, 0, 0)), ((2.1, 0, 0), (4, 0, 0)), ((2, 0.4, 0), (2, 2, 0)))
+
+
+@pytest.mark.parametrize(
+    ("links", "expected"),
+    [
+        pytest.param([(0, 2)], ["tee"], id="branch-linked"),
+        pytest.param([(2, 1)], ["tee"], id="branch-linked-to-second-run-pipe"),
+        pytest.param([(0, 2), (0, 1)], ["tee"], id="branch-and-run-linked"),
+        pytest.param([(0, 2), (1, 2)], ["tee"], id="branch-linked-to-both"),
+        # unlinked, the branch is too far from the run to be a tee: the run alone is joined
+        pytest.param([(0, 1)], ["inline"], id="only-the-run-linked"),
+        pytest.param([], ["inline"], id="nothing-linked"),
+    ],
+)
+def test_a_linked_branch_short_of_the_run_gets_the_link_margin(links, expected):
+    """Links [P1, P2] made an elbow P1-P2 beside the collinear P3, and links [P1, P2], [P1, P3]
+    an inline joint and a contact: no tee, although the link vouches for the branch as it does
+    for every other joint's distances."""
+    joints = joints_of(FAR_TEE, links)
+    assert [j.kind for j in joints] == expected
+    if expected == ["tee"]:
+        assert joints[0].branch == (2, 0) and set(joints[0].ends[:2]) == {(0, 1), (1, 0)}
+
+
 @pytest.mark.parametrize(
     ("pairs", "links", "expected"),
     [
