@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from asbuilt.atomic import atomic_write
-from asbuilt.errors import ExportError
+from asbuilt.errors import ExportError, ScanError
 from asbuilt.export.stored_fit import (
     StoredFit,
     SummaryFieldError,
@@ -27,9 +27,11 @@ from asbuilt.export.stored_fit import (
     summary_float,
 )
 from asbuilt.export.stored_fit import describe_value as _describe
+from asbuilt.export.stored_scan import scan_from_section, scan_section
 from asbuilt.findings import Finding, Suggestion
 from asbuilt.model import Bend, Component, Correction, Model, Reducer, Spool, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+from asbuilt.scan.model import Scan
 
 __all__ = [
     "FORMAT",
@@ -240,7 +242,8 @@ def model_document(model: Model) -> dict:
     ----------
     model : Model
         Lengths metres; the document keeps metres (``"units": "m"``) and records the model's
-        output unit as ``display_units``.
+        output unit as ``display_units``. Its scan, when attached, is stored whole as the
+        ``scan`` section (:func:`asbuilt.export.stored_scan.scan_section`; null without one).
     """
     document = {
         "format": FORMAT,
@@ -257,13 +260,27 @@ def model_document(model: Model) -> dict:
             for s in model.spools
         ],
         "findings": [finding_to_dict(f) for f in model.findings],
+        "scan": scan_section(model.scan),
     }
     return json_ready(document)
 
 
 def dumps_model(model: Model) -> str:
-    """The model document as JSON text (2-space indent, keys in the documented order)."""
-    return json.dumps(model_document(model), indent=2, allow_nan=False) + "\n"
+    """The model document as JSON text (2-space indent, keys in the documented order; a list
+    of numbers, such as a point, on one line)."""
+    return _dumps(model_document(model), "") + "\n"
+
+
+def _dumps(value, indent: str) -> str:
+    """``json.dumps(value, indent=2)``, but a list holding no list or object on one line: the
+    scan section's thousands of points take a line each, not four."""
+    inner = indent + "  "
+    if isinstance(value, dict) and value:
+        items = (f"{inner}{json.dumps(k)}: {_dumps(v, inner)}" for k, v in value.items())
+        return "{\n" + ",\n".join(items) + f"\n{indent}}}"
+    if isinstance(value, list) and any(isinstance(v, (dict, list)) for v in value):
+        return "[\n" + ",\n".join(inner + _dumps(v, inner) for v in value) + f"\n{indent}]"
+    return json.dumps(value, allow_nan=False)
 
 
 def write_model_json(model: Model, path) -> None:
@@ -587,7 +604,10 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
 
     Each component's fit is restored from its ``fitted`` summary as a
     :class:`~asbuilt.export.stored_fit.StoredFit` (components cut from one fit share one), so
-    that :func:`asbuilt.rules.check_model` and the reports see the fits' uncertainty.
+    that :func:`asbuilt.rules.check_model` and the reports see the fits' uncertainty. The
+    ``scan`` section becomes ``model.scan`` (points, sensor, links, size hints: what the rules
+    and the report read of the scan); a document without it (older, or a model made without
+    a scan) has ``model.scan`` None, as before.
 
     Raises
     ------
@@ -692,6 +712,7 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
 
     return Model(
         components=tuple(components),
+        scan=_stored_scan(document, source),
         units=document.get("display_units") or "m",
         name=document.get("name"),
         catalog=document.get("catalog"),
@@ -700,6 +721,24 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
         catalog_file=_document_text(document, "catalog_file", source),
         source=_document_text(document, "source", source),
     )
+
+
+def _stored_scan(document: dict, source: str | None) -> Scan | None:
+    """The scan of the document's ``scan`` section; None when it is absent or null."""
+    section = document.get("scan")
+    if section is None:
+        return None
+    if not isinstance(section, dict):
+        raise ModelDocumentError(
+            f"must be an asbuilt-scan object or null, not {_describe(section)}",
+            source=source,
+            where="scan",
+        )
+    try:
+        return scan_from_section(section, _document_text(document, "source", source))
+    except ScanError as exc:
+        where = f"scan.{exc.where}" if exc.where else "scan"
+        raise ModelDocumentError(exc.message, source=source, where=where) from None
 
 
 def load_model(path) -> Model:
