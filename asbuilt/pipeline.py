@@ -173,8 +173,9 @@ def build_model(
     Returns
     -------
     Model
-        Metres, scan frame; ``findings`` sorted by severity; ``catalog_file`` set when the
-        catalog came from a user's file. An object whose fit was refused is not among the
+        Metres, scan frame; ``findings`` sorted by severity; ``catalog`` names the catalog
+        (unmerged too, when one is given); ``catalog_file`` set when the catalog came from a
+        user's file. An object whose fit was refused is not among the
         components: it is an error finding ``fit-refused`` (also with ``check=False``), and
         ``model.fits.failures`` holds its FitError.
 
@@ -205,6 +206,8 @@ def build_model(
         model = model.replace(catalog_file=catalog_file(catalog), scan=scan, fits=report)
     else:
         model = model_from_fits(report)
+        if catalog is not None:  # the size rules judge against it: the model must say which
+            model = model.replace(catalog=catalog.name, catalog_file=catalog_file(catalog))
     model = model.replace(findings=fit_refused_findings(report))
     if check:
         model = model.replace(findings=recheck(model, config, design, catalog=catalog))

@@ -284,3 +284,24 @@ def test_bad_scan_sections_are_located(section, where):
         model_from_document(document, source="m.json")
     assert str(info.value).startswith(f"m.json: {where}")
     assert "\n" not in str(info.value)
+
+
+def test_an_unmerged_model_names_the_catalog_it_was_checked_with():
+    # `asbuilt model SCAN --no-merge --catalog en-10220`: the document names the catalog, so
+    # `asbuilt check` on it judges sizes as on the scan (before: catalog null, no size rule ran).
+    # standards.md: OD 76.1 mm is EN 10220 DN 65 (ASME NPS 2 1/2 is 73.0); 108.0 mm is no
+    # size in either (nearest DN 100 / NPS 4, 114.3 mm, 6.3 mm off).
+    scan = _scan(
+        [
+            {"id": "P1", "kind": "cylinder", "points": _pipe_points((0, 0, 1), (2, 0, 1), 0.0761)},
+            {"id": "P2", "kind": "cylinder", "points": _pipe_points((0, 2, 1), (2, 2, 1), 0.1080)},
+        ]
+    )
+    model = build_model(scan, merge=False, catalog="en-10220")
+    document = _document(model)
+    assert document["catalog"] == "en-10220"
+    again = model_from_document(document)
+    sizes = [f for f in check_model(again) if f.slug == "nonstandard-diameter"]
+    assert [f.objects for f in sizes] == [("P2",)]
+    assert "EN 10220" in sizes[0].message and "114.3 mm, 6.3 mm off" in sizes[0].message
+    assert _findings(again) == _findings(model, catalog="en-10220")
