@@ -279,8 +279,10 @@ def _fit_with_noise(
     too many outliers is tried once without the sensor's sigma and kept when its noise level is
     within ``WIDER_NOISE_LIMIT`` sensor sigmas.
     """
-    if sigma is None or kind == "hull":
+    if kind == "hull":
         return function(np.array(points), sigma=sigma, tolerances=tolerances, **options)
+    if sigma is None:
+        return _fit_without_sigma(function, points, tolerances, options)
     sigma = float(sigma)
     try:
         result = function(np.array(points), sigma=sigma, tolerances=tolerances, **options)
@@ -299,6 +301,68 @@ def _fit_with_noise(
         return result
     wider = function(np.array(points), sigma=noise, tolerances=tolerances, **options)
     return _noted_wider(wider, noise, sigma)
+
+
+#: Without a sensor sigma, rejected shots whose median distance from the fit made with the
+#: assumed noise is at least this many times the noise of the fit made without it are taken as
+#: background (a wall behind the pipe, 1.4 m from it: 150 times), not as the scatter of a rough
+#: surface (shots beyond three assumed sigmas of a surface scattering by s lie a median 1-2 s
+#: from it).
+BACKGROUND_RATIO = 5.0
+
+
+def _fit_without_sigma(function, points: np.ndarray, tolerances, options) -> FitResult:
+    """The fit of a scan that gives no sensor sigma, with its noise level from its residuals;
+    when that noise is over ``WIDER_NOISE_RATIO`` times ``tolerances.prior_range_sigma`` (or the
+    fit is refused), the fit made with the prior noise as the sensor's is preferred if the shots
+    it rejects are background (``BACKGROUND_RATIO``), then settled with its inliers' own noise.
+
+    Without a sigma every threshold scales with the residuals, so shots of a wall behind a pipe
+    (a window run past the pipe's end: 15 of 36 shots) make the residuals wide enough to hold
+    them, and a cylinder of 0.8 m through pipe and wall shots "fits" all of them at 9 mm (an
+    independent ray caster's plant, 16 of 54 pipe fits). With the prior noise the robust search
+    rejects them, and the 2 mm noise the pipe's shots then show is the residuals' own.
+    """
+    prior = float(tolerances.prior_range_sigma)
+    try:
+        result, refused = (
+            function(np.array(points), sigma=None, tolerances=tolerances, **options),
+            None,
+        )
+    except FitError as exc:
+        result, refused = None, exc
+    if result is not None and not result.sigma > WIDER_NOISE_RATIO * prior:
+        return result
+    try:
+        assumed = function(np.array(points), sigma=prior, tolerances=tolerances, **options)
+    except FitError:
+        assumed = None
+    wide = prior if result is None else float(result.sigma)
+    rejected = None if assumed is None else np.abs(assumed.residuals[~assumed.inliers])
+    if rejected is None or not rejected.size or not np.median(rejected) >= BACKGROUND_RATIO * wide:
+        if result is None:
+            raise refused
+        return result
+    noise = max(_residual_noise(assumed, points, tolerances), float(tolerances.sigma_floor))
+    try:
+        settled = function(np.array(points), sigma=noise, tolerances=tolerances, **options)
+    except FitError:
+        settled = assumed
+    note = (
+        f"{int(np.count_nonzero(~settled.inliers))} shot(s) lie far from the {settled.kind} the "
+        f"others fit to {noise * 1000:.3g} mm (a median {np.median(rejected):.3g} m away) and "
+        "were taken as background"
+        + (
+            f"; without a sensor sigma a {result.kind} through all the shots would have fitted "
+            f"at {wide * 1000:.3g} mm"
+            if result is not None
+            else ""
+        )
+        + ". Give sensor.range_sigma (and the station) so that the fit need not guess."
+    )
+    return dataclasses.replace(
+        settled, sigma=noise, sigma_source="residuals", notes=(*settled.notes, note)
+    )
 
 
 def _residual_noise(result: FitResult, points: np.ndarray, tolerances: Tolerances) -> float:

@@ -14,7 +14,7 @@ import numpy as np
 from asbuilt.fit._circles import INSIDE_CAP, circle_starts
 from asbuilt.fit._common import quick_median
 from asbuilt.fit._cylinder_model import MODEL, angles_about
-from asbuilt.fit._cylinder_starts import POLISH_BELOW, polish_axes
+from asbuilt.fit._cylinder_starts import POLISH_BELOW, line_axis, polish_axes
 from asbuilt.fit._robust import RobustFit, keep_count, settled_fit
 from asbuilt.fit._visibility import (
     cylinder_beam_excess,
@@ -87,6 +87,10 @@ RESCUE_REJECTED = 0.2
 INSIDE_SHOTS = 2
 
 
+#: Point pairs tried for the half-keep robust line of :func:`msac_fits`: with half the shots
+#: background a pair is two pipe shots one time in four.
+HALF_LINE_SAMPLES = 48
+
 #: Candidate axes within this many degrees of plumb or level also get their plumb/level twin.
 SNAP_DEG = 5.0
 
@@ -104,6 +108,20 @@ def msac_fits(points, axes, sigma: float, tolerances, keep, rng, inside: bool) -
     # projection by centimetres; plant pipes are mostly plumb or level, so each candidate
     # within SNAP_DEG of either gets its plumb or level twin (least squares then settles the
     # axis freely).
+    axes = list(axes)
+    # The robust line through the closest half of the shots: a pipe's shots lie within a
+    # radius of its axis even when background shots outnumber what the trimmed cost's starts
+    # allow (a window run past the pipe's end onto the wall: 15 of 36 shots), which spoils every
+    # other axis estimate. Its own generator keeps the other candidates' draws as they were.
+    half = line_axis(
+        points,
+        max(len(points) // 2, MIN_POINTS["cylinder"]),
+        np.random.default_rng(len(points) + 1),
+        samples=HALF_LINE_SAMPLES,
+        steps=2,
+    )
+    if half is not None:
+        axes.append(half)
     snapped = []
     for axis in axes:
         if abs(axis[2]) >= np.cos(np.radians(SNAP_DEG)):
