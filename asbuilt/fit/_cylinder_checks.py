@@ -231,8 +231,21 @@ def edge_on(robust: RobustFit, points: np.ndarray, view: np.ndarray) -> bool:
     angles = angles[np.isfinite(angles)]
     if not angles.size:
         return False
-    quartile, median = np.percentile(angles, [25.0, 50.0])
+    # np.percentile(angles, [25, 50]) (linear interpolation), without its overhead (a tenth
+    # of a clean 40-point fit's time).
+    ordered = np.sort(angles)
+    quartile, median = (_interpolated(ordered, q) for q in (0.25, 0.5))
     return bool(median > EDGE_ON_DEG or quartile > EDGE_ON_QUARTILE_DEG)
+
+
+def _interpolated(ordered: np.ndarray, fraction: float) -> float:
+    """The ``fraction`` quantile of sorted values by linear interpolation between the closest
+    ranks (numpy's default method)."""
+    position = fraction * (ordered.size - 1)
+    low = int(position)
+    if low + 1 >= ordered.size:
+        return float(ordered[low])
+    return float(ordered[low] + (position - low) * (ordered[low + 1] - ordered[low]))
 
 
 #: Median incidence below which a fit's inliers could have been seen from one unknown station
