@@ -350,16 +350,17 @@ def _real(kind: str):
         raise
 
 
-@pytest.mark.parametrize(
-    ("kind", "make"),
-    [
-        ("cylinder", _cylinder_points),
-        ("sphere", _sphere_points),
-        ("plane", _plane_points),
-        ("cuboid", _cuboid_points),
-        ("hull", _hull_points),
-    ],
-)
+#: (kind, maker of exact synthetic points and their truth) for every kind with a fit.
+REAL_SURFACES = [
+    ("cylinder", _cylinder_points),
+    ("sphere", _sphere_points),
+    ("plane", _plane_points),
+    ("cuboid", _cuboid_points),
+    ("hull", _hull_points),
+]
+
+
+@pytest.mark.parametrize(("kind", "make"), REAL_SURFACES)
 def test_real_fits_end_to_end(kind, make):
     _real(kind)
     rng = np.random.default_rng(11)
@@ -639,16 +640,7 @@ def test_a_fit_found_only_at_the_residuals_noise_is_kept_when_that_noise_is_the_
 # Exactly repeated points (a scan file merged with itself, copied rows)
 
 
-@pytest.mark.parametrize(
-    ("kind", "make"),
-    [
-        ("cylinder", _cylinder_points),
-        ("sphere", _sphere_points),
-        ("plane", _plane_points),
-        ("cuboid", _cuboid_points),
-        ("hull", _hull_points),
-    ],
-)
+@pytest.mark.parametrize(("kind", "make"), REAL_SURFACES)
 def test_repeated_points_count_once(kind, make):
     """Every point given twice is the same measurement: the same primitive and the same
     standard errors as the points given once (counted twice they shrank by sqrt(2)), with
