@@ -34,6 +34,109 @@ def _spacing(coords: np.ndarray, noise: float) -> float:
     return median(big) if big.size else 0.0
 
 
+#: Cosine of the largest angle between a line of shots (a bisection's, or a face's single
+#: raster line) and an axis for the line to sample that axis (75 degrees).
+_ALONG = math.cos(math.radians(75.0))
+
+
+def _step(median: float | None, local: float | None, along: np.ndarray) -> float:
+    """The sampling step (metres) in which an extent bound's edge lies.
+
+    The finer of the raster lines' median spacing along the axis and the local spacing that
+    led out to the extreme inlier (:func:`bounds`), whichever are known (None: not measured);
+    with neither, the inliers' extent along the axis (``along`` (m,), metres): nothing
+    bounds the edge more closely, and the standard error says so.
+    """
+    if median is None:
+        return float(np.ptp(along)) if local is None else local
+    return median if local is None else min(local, median)
+
+
+#: A face's shots are one line when their spread across it is under this fraction of their
+#: spread along it (RMS), or under the residual width: a raster line's shots scatter across it
+#: by the pointing noise over the cosine of the incidence (4 mm at 7 m and 74 degrees, more
+#: than the faces' residuals) and run along it over the face, decimetres apart; two lines a
+#: raster step apart spread across by half a step.
+_LINE_RATIO = 0.02
+
+
+def _single_lines(proj, label, index, model, width) -> list:
+    """Per seen face: the direction (3,) of its one line of shots, or None.
+
+    ``proj`` (n, 3): the points in the box frame; ``label`` (n,): their faces; ``index`` (m,):
+    the inliers. A face's shots are one line (a single raster column or row: a face at grazing
+    incidence) when they lie within ``width`` metres (RMS) of it or spread across it less
+    than ``_LINE_RATIO`` times along it; the direction is in the box frame. Faces with fewer than two inliers: None.
+    """
+    out = []
+    for f in range(model.offset.shape[0]):
+        members = index[label[index] == f]
+        direction = None
+        if members.shape[0] >= 2:
+            rel = proj[members] - proj[members].mean(axis=0)
+            _, spread, vt = np.linalg.svd(rel, full_matrices=False)
+            if spread[1] < max(width * math.sqrt(members.shape[0]), _LINE_RATIO * spread[0]):
+                direction = vt[0]
+        out.append(direction)
+    return out
+
+
+def _line_faces(label, index, model, k, single) -> np.ndarray:
+    """The inliers (indices into the points) whose raster lines measure the spacing along ``k``.
+
+    A face normal to axis ``k`` has no extent along it. A face that is one line of shots
+    (``single``: :func:`_single_lines`) within 15 degrees of perpendicular to ``k``
+    (``_ALONG``) is a single raster line across the axis: its shots share one coordinate along
+    ``k`` up to the noise, and their gaps are noise, not a spacing (the next line, where the
+    edge could be, is a whole raster step away). A single line along the axis (a column's
+    shots up its long axis) or diagonal to it samples the axis and counts.
+    """
+    keep = np.zeros(label.shape[0], bool)
+    for f in np.flatnonzero(model.face_axis != k):
+        if single[f] is not None and abs(single[f][k]) < _ALONG:
+            continue
+        keep[index[label[index] == f]] = True
+    return np.flatnonzero(keep)
+
+
+def _corner_step(proj, label, index, model, k, sign, extreme, single, medians) -> float | None:
+    """The raster step (metres) along axis ``k`` on a face that is one line of shots.
+
+    The extreme inlier ``extreme`` (index into the points) along ``sign * axis k`` is on a
+    face normal to another axis ``j`` whose shots are one line along the third axis (a column
+    of a raster across a face at grazing incidence), and a face normal to ``k`` (the
+    neighbour across their common edge) has raster lines spaced ``s = medians[j]`` along
+    ``j``. The raster's lines are evenly spaced across the line of sight (``w`` apart), so
+    with the neighbour at incidence ``t`` its lines are ``s = w / cos t`` apart and the
+    single line's face, at right angles, has lines ``w / sin t`` apart; the step that crossed
+    the edge, from the neighbour's line nearest the edge (``a`` from it) to the single line
+    (``b`` from it), is ``a cos t + b sin t = w``. So ``tan t = (s - a) / b`` and the
+    single-line face's step is ``s b / (s - a)``: longer than ``b``, the more so the nearer
+    ``a`` is to a whole step (the edge crossed late in the step). ``s - a`` is kept at least
+    a tenth of ``s`` (the noise in ``a``). None when the geometry does not apply.
+    """
+    f = int(label[extreme])
+    j = int(model.face_axis[f])
+    direction = single[f]
+    if j == k or direction is None or abs(direction[k]) >= _ALONG or abs(direction[j]) >= _ALONG:
+        return None
+    spacing = medians[j]
+    neighbour = np.flatnonzero(model.face_axis == k)
+    if spacing is None or spacing <= 0.0 or neighbour.size != 1:
+        return None
+    g = int(neighbour[0])
+    if sign * model.face_sign[g] > 0:
+        return None  # the neighbour face is on the extreme's side: no corner between them
+    plane_j = model.face_sign[f] * model.offset[f]
+    plane_k = model.face_sign[g] * model.offset[g]
+    on_neighbour = index[label[index] == g]
+    if on_neighbour.size == 0:
+        return None
+    a = float(np.min(np.abs(proj[on_neighbour, j] - plane_j)))
+    b = abs(float(proj[extreme, k]) - plane_k)
+    return spacing * b / max(spacing - a, 0.1 * spacing)
+
+
 def _outward_spacing(proj: np.ndarray, extreme: int, k: int, sign: float) -> float | None:
     """Spacing (metres) of the shots leading out to an extreme point along axis ``k``.
 
@@ -47,11 +150,6 @@ def _outward_spacing(proj: np.ndarray, extreme: int, k: int, sign: float) -> flo
     lateral = _faces.row_norms((proj - proj[extreme])[:, across])
     behind = (delta > 0.0) & (lateral <= delta)
     return float(delta[behind].min()) if behind.any() else None
-
-
-#: Cosine of the largest angle between a bisection's line and an axis for the bisection to
-#: bound that axis (75 degrees).
-_ALONG = math.cos(math.radians(75.0))
 
 
 def _bisected(x, direction, i, edges) -> bool:
@@ -121,6 +219,13 @@ def bounds(x, label, inliers, model, noise, edge_pad, edges=None):
     pads = np.zeros((2, 3))
     index = inliers.nonzero()[0]
     inner = proj[index]
+    single = _single_lines(proj, label, index, model, noise)
+    # None: no raster lines cross the axis on a face along it (a face seen at grazing
+    # incidence carries one line only): the spacing there is not measured.
+    medians = []
+    for k in range(3):
+        lines = _line_faces(label, index, model, k, single)
+        medians.append(_spacing(proj[lines, k], noise) if lines.size else None)
     for k in range(3):
         for f in np.flatnonzero(model.face_axis == k):
             if model.face_sign[f] > 0:
@@ -128,24 +233,28 @@ def bounds(x, label, inliers, model, noise, edge_pad, edges=None):
             else:
                 lo[k], lo_face[k] = -model.offset[f], True
         along = proj[index, k]
-        lines = index[model.face_axis[label[index]] != k]
-        median = _spacing(proj[lines, k], noise)
-        if not hi_face[k]:
-            top = int(along.argmax())
-            local = _outward_spacing(inner, top, k, 1.0)
-            pads[1, k] = edge_pad * (median if local is None else min(local, median))
-            if _pinned(x, index, along, 1.0, model.axes[k], edges, max(noise, 0.5 * pads[1, k])):
-                pads[1, k] = 0.0
-            hi_pt[k] = index[top]
-            hi[k] = along.max() + pads[1, k]
-        if not lo_face[k]:
-            bottom = int(along.argmin())
-            local = _outward_spacing(inner, bottom, k, -1.0)
-            pads[0, k] = edge_pad * (median if local is None else min(local, median))
-            if _pinned(x, index, along, -1.0, model.axes[k], edges, max(noise, 0.5 * pads[0, k])):
-                pads[0, k] = 0.0
-            lo_pt[k] = index[bottom]
-            lo[k] = along.min() - pads[0, k]
+        for side, sign in ((1, 1.0), (0, -1.0)):
+            if (hi_face if side else lo_face)[k]:
+                continue
+            end = int(along.argmax() if side else along.argmin())
+            local = _outward_spacing(inner, end, k, sign)
+            if medians[k] is None:
+                # The extreme is on a face carrying one line: the step across it follows from
+                # the neighbour face's lines (:func:`_corner_step`), else the step behind it.
+                corner = _corner_step(
+                    proj, label, index, model, k, sign, index[end], single, medians
+                )
+                local = local if corner is None else max(corner, local or 0.0)
+            pads[side, k] = edge_pad * _step(medians[k], local, along)
+            tol = max(noise, 0.5 * pads[side, k])
+            if _pinned(x, index, along, sign, model.axes[k], edges, tol):
+                pads[side, k] = 0.0
+            if side:
+                hi_pt[k] = index[end]
+                hi[k] = along.max() + pads[1, k]
+            else:
+                lo_pt[k] = index[end]
+                lo[k] = along.min() - pads[0, k]
     return lo, hi, lo_face, hi_face, lo_pt, hi_pt, pads
 
 

@@ -38,7 +38,10 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    (0.5) times that spacing, the middle of the gap in which the edge lies: the smaller of the
    median spacing of the raster lines along the axis and the distance along the axis from the
    extreme inlier to the nearest inlier behind it within 45 degrees of the axis (the previous
-   shot of its raster row or bisection line). When the points are a pan-tilt raster seen from the viewpoint
+   shot of its raster row or bisection line). A face whose shots are one raster line across
+   the axis (grazing incidence) measures no line spacing; the step there is derived from the
+   neighbour face's lines across the common edge (:func:`asbuilt.fit._cuboid_sizes._corner_step`),
+   else the local spacing, else the inliers' extent. When the points are a pan-tilt raster seen from the viewpoint
    (given, or the scan frame's origin; checked: the directions must fall on a raster's evenly
    spaced pan columns and tilt rows, extra off-grid edge shots allowed), the unseen edges are
    instead placed where the box's silhouette meets the raster window, the raster's angular
