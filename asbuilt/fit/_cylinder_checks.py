@@ -34,6 +34,7 @@ __all__ = [
     "INSIDE_SHOTS",
     "SNAP_DEG",
     "msac_fits",
+    "half_line_axes",
     "admissible",
     "better_fit",
     "EDGE_ON_DEG",
@@ -95,6 +96,29 @@ HALF_LINE_SAMPLES = 48
 SNAP_DEG = 5.0
 
 
+def half_line_axes(points: np.ndarray) -> list:
+    """The robust line through the closest half of the shots (``[axis]``, or ``[]``), as a
+    candidate axis for :func:`msac_fits`, the last resort when no consistent fit stands (none,
+    or one that leaves shots inside its pipe, or hides a third of them behind it:
+    :func:`better_fit`) and none of the other candidates' MSAC circles gave one.
+
+    A pipe's shots lie within a radius of its axis however many background shots there are,
+    while background beyond what the trimmed cost's starts allow (a window run past the pipe's
+    end onto the wall: 15 of 36 shots) spoils every other axis estimate: none was within 5
+    degrees of the pipe's, and the fit was refused or a 0.8 m cylinder through pipe and wall
+    shots kept. Offered only then: the MSAC cost of a wider cylinder through the pipe's front and
+    a few wall shots 0.2 m behind can be lower than the pipe's (an independent ray caster's
+    rack and narrow-arc scans), so the line does not compete with a consistent fit. Its own generator
+    leaves every other draw of the fit as it was.
+    """
+    minimum = MIN_POINTS["cylinder"]
+    rng = np.random.default_rng(len(points) + 1)
+    axis = line_axis(
+        points, max(len(points) // 2, minimum), rng, samples=HALF_LINE_SAMPLES, steps=2
+    )
+    return [] if axis is None else [axis]
+
+
 def msac_fits(points, axes, sigma: float, tolerances, keep, rng, inside: bool) -> list:
     """Fits from circles chosen by MSAC cost (``circle_starts(cutoff=...)``), for when the
     beams reject the robust choice (it hides a third of the shots behind the pipe, or no start
@@ -108,20 +132,6 @@ def msac_fits(points, axes, sigma: float, tolerances, keep, rng, inside: bool) -
     # projection by centimetres; plant pipes are mostly plumb or level, so each candidate
     # within SNAP_DEG of either gets its plumb or level twin (least squares then settles the
     # axis freely).
-    axes = list(axes)
-    # The robust line through the closest half of the shots: a pipe's shots lie within a
-    # radius of its axis even when background shots outnumber what the trimmed cost's starts
-    # allow (a window run past the pipe's end onto the wall: 15 of 36 shots), which spoils every
-    # other axis estimate. Its own generator keeps the other candidates' draws as they were.
-    half = line_axis(
-        points,
-        max(len(points) // 2, MIN_POINTS["cylinder"]),
-        np.random.default_rng(len(points) + 1),
-        samples=HALF_LINE_SAMPLES,
-        steps=2,
-    )
-    if half is not None:
-        axes.append(half)
     snapped = []
     for axis in axes:
         if abs(axis[2]) >= np.cos(np.radians(SNAP_DEG)):

@@ -66,6 +66,7 @@ from asbuilt.fit._cylinder_checks import (
     doubtful,
     doubtful_blind,
     edge_on,
+    half_line_axes,
     msac_fits,
     one_station_could_see,
     robust_extent,
@@ -247,7 +248,29 @@ def fit_cylinder(
         if blind not in msac:
             msac[blind] = msac_fits(local, axes, sigma, tolerances, keep, rng, inside=blind)
         cutoff = tolerances.outlier_cutoff_sigma * sigma
-        return better_fit(msac[blind], current, local, seen_from, cutoff)
+        chosen = better_fit(msac[blind], current, local, seen_from, cutoff)
+        if chosen is not None or not (
+            current is None
+            or (
+                not admissible(current, local, cutoff)
+                if blind
+                else unseen(current, local, seen_from)
+            )
+        ):
+            return chosen
+        # The last resort, when no consistent fit stands and no MSAC circle gave one: the
+        # half-keep robust line's circles (half_line_axes).
+        if (blind, "half") not in msac:
+            msac[blind, "half"] = msac_fits(
+                local,
+                half_line_axes(local),
+                sigma,
+                tolerances,
+                keep,
+                np.random.default_rng(len(local)),
+                inside=blind,
+            )
+        return better_fit(msac[blind, "half"], current, local, seen_from, cutoff)
 
     if starts and len(local) < POLISH_BELOW:
         starts, costs = polished(starts, costs)

@@ -615,6 +615,17 @@ def test_without_a_sigma_a_rough_pipe_keeps_its_shots(roughness):
         assert not any("background" in note for note in result.notes)
 
 
+def test_a_wide_cylinder_leaving_shots_inside_it_gives_way_to_the_pipe():
+    """An NPS 4 pipe scanned past its free end (9 of 36 shots on the wall, 3 mixed returns;
+    independent ray caster), no station: the fit kept a 0.78 m cylinder through pipe and wall
+    shots that left shots inside it, since no MSAC circle gave a consistent fit. The last
+    resort, the circles across the half-keep robust line, finds the pipe."""
+    scan = json.loads((Path(__file__).parent / "pipe_past_its_end_inadmissible.json").read_text())
+    result = fit_points("cylinder", np.array(scan["points"]), sigma=scan["range_sigma"])
+    assert abs(result.primitive.radius - scan["radius"]) < 3 * result.stderr["radius"]
+    assert result.n_inliers >= 22
+
+
 def refused_with_a_sigma(points, *, sigma=None, tolerances=DEFAULT_TOLERANCES) -> FitResult:
     """A stand-in fit that finds no primitive holding most points at a given sigma, and fits
     at its own noise level without one."""
