@@ -476,6 +476,8 @@ def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap, view_pr
     """A new face along axis k: not on an occupied side, inside the box, contiguous with a face,
     and (with ``view_proj``, the viewpoint's coordinates (3,)) facing the viewpoint."""
     body = proj[explained]
+    if not body.size:
+        return False  # no shot on a seen face yet: no box for the new face to bound or touch
     inside = body[:, k] - offset
     side = -1.0 if 2 * np.count_nonzero(inside > 0) > inside.size else 1.0
     if view_proj is not None and side * (view_proj[k] - offset) <= 0:

@@ -181,3 +181,16 @@ def test_frame_score_counts_points_near_a_face():
     assert dist.shape == (5, 2)
     count, minus_ss = _faces._score(dist, 0.01)
     assert count == 4 and minus_ss == 0.0
+
+
+def test_a_new_face_needs_a_seen_face_to_bound_it():
+    """Faces whose masks hold no shot explain nothing: a candidate face then has no box to lie
+    inside or touch, and is refused (it had raised numpy's "zero-size array" error)."""
+    from asbuilt.fit._faces import _acceptable
+
+    proj = np.random.default_rng(1).uniform(-0.2, 0.2, (12, 3))
+    nothing = np.zeros(12, bool)
+    mask = np.zeros(12, bool)
+    mask[:5] = True
+    faces = [(0, 0.2, nothing)]
+    assert _acceptable(proj, nothing, faces, 1, 0.2, mask, 0.004, 0.05) is False
