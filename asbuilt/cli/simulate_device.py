@@ -62,6 +62,7 @@ def register(subparsers) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Serve until Ctrl-C; return 0."""
     import math
+    import signal
     import sys
     import threading
 
@@ -91,6 +92,11 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise DeviceError(f"simulate-device: {exc}") from None
     rig = SimulatedRig(world, calibration, sim_noise, speed=args.speed)
+    if threading.current_thread() is threading.main_thread():
+        # Ctrl-C (SIGINT) stops the server even when it was started with SIGINT ignored (a
+        # background job of a non-interactive shell inherits that), where Python would keep
+        # ignoring it and the server would never stop.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     server = PtyServer(rig, args.lrf_protocol, args.device_id).start()
     try:
         print(f"ptu {server.ptu_path}", flush=True)
