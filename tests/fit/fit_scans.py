@@ -127,7 +127,9 @@ def _surface_samples(primitive) -> np.ndarray:
     return primitive.corners
 
 
-def _directions(pan, tilt):
+def directions(pan, tilt):
+    """Unit beam directions (n, 3) of pan and tilt angles (n,) in radians (pan about +z from
+    +x, tilt up from the horizontal)."""
     return np.column_stack([np.cos(tilt) * np.cos(pan), np.cos(tilt) * np.sin(pan), np.sin(tilt)])
 
 
@@ -172,10 +174,10 @@ def raster_scan(
     for m in range(3, 400):
         pans, tilts = np.meshgrid(np.linspace(box[0], box[1], m), np.linspace(box[2], box[3], m))
         pans, tilts = pans.ravel(), tilts.ravel()
-        ranges = cast(primitive, sensor, _directions(pans, tilts))
+        ranges = cast(primitive, sensor, directions(pans, tilts))
         hit = np.isfinite(ranges)
         if keep_arc is not None:
-            hit[hit] = keep_arc(sensor + ranges[hit, None] * _directions(pans[hit], tilts[hit]))
+            hit[hit] = keep_arc(sensor + ranges[hit, None] * directions(pans[hit], tilts[hit]))
         if hit.sum() >= n_points:
             break
     index = np.flatnonzero(hit)
@@ -183,13 +185,13 @@ def raster_scan(
         raise ValueError("The sensor cannot see the primitive (does the axis point at it?).")
     index = index[np.round(np.linspace(0, len(index) - 1, n_points)).astype(int)]
     pans, tilts = pans[index], tilts[index]
-    nominal = _directions(pans, tilts)
+    nominal = directions(pans, tilts)
     exact = sensor + ranges[index, None] * nominal
     sa = np.radians(sigma_angle_deg)
     measured = cast(
         primitive,
         sensor,
-        _directions(pans + rng.normal(0, sa, n_points), tilts + rng.normal(0, sa, n_points)),
+        directions(pans + rng.normal(0, sa, n_points), tilts + rng.normal(0, sa, n_points)),
     )
     measured = np.where(np.isfinite(measured), measured, ranges[index])
     measured = measured + rng.normal(0, sigma_range, n_points)

@@ -16,18 +16,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from fit_scans import cast, directions
 
 from asbuilt.fit.cuboid import fit_cuboid
+from asbuilt.primitives import Cuboid
 
 HALF = np.array([0.2, 0.2, 2.0])  # the column's half sizes, metres
 DISTANCE = 7.0  # station to column, metres
 STATION = np.array([3.5, -1.0, 1.5])  # the station in the scan frame, metres
 RANGE_SIGMA = 0.002  # metres
 POINTING_SIGMA = np.radians(0.01)
-
-
-def _directions(pan, tilt) -> np.ndarray:
-    return np.column_stack([np.cos(tilt) * np.cos(pan), np.cos(tilt) * np.sin(pan), np.sin(tilt)])
 
 
 def scan(turn_deg: float, seed: int):
@@ -47,20 +45,14 @@ def scan(turn_deg: float, seed: int):
         0.5 * (pan_edges[1:] + pan_edges[:-1]), 0.5 * (tilt_edges[1:] + tilt_edges[:-1])
     )
     pan, tilt = pan.ravel(), tilt.ravel()
-    true_dirs = _directions(
+    true_dirs = directions(
         pan + rng.normal(0.0, POINTING_SIGMA, pan.size),
         tilt + rng.normal(0.0, POINTING_SIGMA, tilt.size),
     )
-    # Slab method in the column's frame: the entry range of each beam.
-    origin = -centre @ rot
-    local = true_dirs @ rot
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1, t2 = (-HALF - origin) / local, (HALF - origin) / local
-    entry = np.max(np.minimum(t1, t2), axis=1)
-    leave = np.min(np.maximum(t1, t2), axis=1)
-    hit = (entry <= leave) & (entry > 0.0)
+    entry = cast(Cuboid(centre, rot.T, 2.0 * HALF), np.zeros(3), true_dirs)  # NaN: a miss
+    hit = np.isfinite(entry)
     reach = entry + rng.normal(0.0, RANGE_SIGMA, entry.size)
-    points = _directions(pan, tilt) * reach[:, None]  # recorded with the nominal angles
+    points = directions(pan, tilt) * reach[:, None]  # recorded with the nominal angles
     return points[hit] + STATION, rot
 
 

@@ -13,8 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from fit_scans import cast, directions
 
 from asbuilt.fit.cuboid import fit_cuboid
+from asbuilt.primitives import Cuboid
 
 HALF = np.array([0.15, 0.15, 2.0])  # the column's half sizes, metres
 DISTANCE = 6.0  # station to column, metres
@@ -30,10 +32,6 @@ def _rotation(axis, deg: float) -> np.ndarray:
     return np.eye(3) + np.sin(a) * k + (1.0 - np.cos(a)) * k @ k
 
 
-def _directions(pan, tilt) -> np.ndarray:
-    return np.column_stack([np.cos(tilt) * np.cos(pan), np.cos(tilt) * np.sin(pan), np.sin(tilt)])
-
-
 def scan(turn_deg: float, seed: int, record_misses: bool = True):
     """Points (n, 3) from a station at the origin, and the column's rotation (3, 3)."""
     rng = np.random.default_rng(seed)
@@ -44,21 +42,15 @@ def scan(turn_deg: float, seed: int, record_misses: bool = True):
     pans = np.arctan2(corners[:, 1], corners[:, 0])
     pan, tilt = np.meshgrid(np.linspace(pans.min(), pans.max(), 5), np.linspace(-0.25, 0.25, 6))
     pan, tilt = pan.ravel(), tilt.ravel()
-    true_dirs = _directions(
+    true_dirs = directions(
         pan + rng.normal(0.0, POINTING_SIGMA, pan.size),
         tilt + rng.normal(0.0, POINTING_SIGMA, tilt.size),
     )
-    # Slab method in the column's frame: entry and exit ranges of each beam.
-    origin = -centre @ rot
-    local = true_dirs @ rot
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1, t2 = (-HALF - origin) / local, (HALF - origin) / local
-    entry = np.max(np.minimum(t1, t2), axis=1)
-    leave = np.min(np.maximum(t1, t2), axis=1)
-    hit = entry <= leave
+    entry = cast(Cuboid(centre, rot.T, 2.0 * HALF), np.zeros(3), true_dirs)  # NaN: a miss
+    hit = np.isfinite(entry)
     reach = np.where(hit, entry, (DISTANCE + WALL_BEHIND) / true_dirs[:, 1])
     reach = reach + rng.normal(0.0, RANGE_SIGMA, reach.size)
-    points = _directions(pan, tilt) * reach[:, None]  # recorded with the nominal angles
+    points = directions(pan, tilt) * reach[:, None]  # recorded with the nominal angles
     return (points if record_misses else points[hit]), rot
 
 
