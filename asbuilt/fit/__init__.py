@@ -327,11 +327,9 @@ def _fit_without_sigma(function, points: np.ndarray, tolerances, options) -> Fit
     rejects them, and the 2 mm noise the pipe's shots then show is the residuals' own.
     """
     prior = float(tolerances.prior_range_sigma)
+    refused = None
     try:
-        result, refused = (
-            function(np.array(points), sigma=None, tolerances=tolerances, **options),
-            None,
-        )
+        result = function(np.array(points), sigma=None, tolerances=tolerances, **options)
     except FitError as exc:
         result, refused = None, exc
     if result is not None and not result.sigma > WIDER_NOISE_RATIO * prior:
@@ -342,7 +340,8 @@ def _fit_without_sigma(function, points: np.ndarray, tolerances, options) -> Fit
         assumed = None
     wide = prior if result is None else float(result.sigma)
     rejected = None if assumed is None else np.abs(assumed.residuals[~assumed.inliers])
-    if rejected is None or not rejected.size or not np.median(rejected) >= BACKGROUND_RATIO * wide:
+    distance = float(np.median(rejected)) if rejected is not None and rejected.size else 0.0
+    if not distance >= BACKGROUND_RATIO * wide:
         if result is None:
             raise refused
         return result
@@ -353,7 +352,7 @@ def _fit_without_sigma(function, points: np.ndarray, tolerances, options) -> Fit
         settled = assumed
     note = (
         f"{int(np.count_nonzero(~settled.inliers))} shot(s) lie far from the {settled.kind} the "
-        f"others fit to {noise * 1000:.3g} mm (a median {np.median(rejected):.3g} m away) and "
+        f"others fit to {noise * 1000:.3g} mm (a median {distance:.3g} m away) and "
         "were taken as background"
         + (
             f"; without a sensor sigma a {result.kind} through all the shots would have fitted "

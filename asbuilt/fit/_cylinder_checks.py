@@ -37,6 +37,7 @@ __all__ = [
     "half_line_axes",
     "admissible",
     "better_fit",
+    "consistent",
     "EDGE_ON_DEG",
     "EDGE_ON_QUARTILE_DEG",
     "edge_on",
@@ -201,18 +202,22 @@ def better_fit(candidates, robust, points, view, cutoff: float):
     def cost(fit):
         return float(np.minimum(fit.residuals**2, cutoff**2).sum())
 
-    def consistent(fit):
-        if view is None:
-            return admissible(fit, points, cutoff)
-        return not unseen(fit, points, view)
-
     best, best_cost = None, np.inf
     if robust is not None and (view is not None or admissible(robust, points, cutoff)):
         best_cost = cost(robust)
     for fit in candidates:
-        if cost(fit) < best_cost and consistent(fit):
+        if cost(fit) < best_cost and consistent(fit, points, view, cutoff):
             best, best_cost = fit, cost(fit)
     return best
+
+
+def consistent(fit: RobustFit, points: np.ndarray, view, cutoff: float) -> bool:
+    """Whether a fit is consistent with its scan: with ``view`` known, it hides no third of the
+    shots behind its pipe (:func:`unseen`); without, it leaves no shots inside it
+    (:func:`admissible`, ``cutoff`` metres)."""
+    if view is None:
+        return admissible(fit, points, cutoff)
+    return not unseen(fit, points, view)
 
 
 #: Median incidence across the axis (:func:`edge_on_degrees`) of a fit's inliers above which

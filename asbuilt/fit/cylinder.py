@@ -63,6 +63,7 @@ from asbuilt.fit._cylinder_checks import (
     RESCUE_REJECTED,
     admissible,
     better_fit,
+    consistent,
     doubtful,
     doubtful_blind,
     edge_on,
@@ -249,13 +250,8 @@ def fit_cylinder(
             msac[blind] = msac_fits(local, axes, sigma, tolerances, keep, rng, inside=blind)
         cutoff = tolerances.outlier_cutoff_sigma * sigma
         chosen = better_fit(msac[blind], current, local, seen_from, cutoff)
-        if chosen is not None or not (
-            current is None
-            or (
-                not admissible(current, local, cutoff)
-                if blind
-                else unseen(current, local, seen_from)
-            )
+        if chosen is not None or (
+            current is not None and consistent(current, local, seen_from, cutoff)
         ):
             return chosen
         # The last resort, when no consistent fit stands and no MSAC circle gave one: the
