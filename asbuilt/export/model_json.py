@@ -5,8 +5,9 @@ first (:func:`model_document`) and then written atomically. Lengths are metres, 
 degrees, in the scan frame (z up). Reading back (:func:`load_model_document`,
 :func:`model_from_document`) restores ids, types, geometry, sizes, spools, corrections,
 findings and each component's fit as a :class:`~asbuilt.export.stored_fit.StoredFit` (from its
-``fitted`` summary: the fitted primitive, standard errors, counts, RMS; the residual arrays are
-not stored), so the rules judge a document as they judge the scan it came from.
+``fitted`` summary: the fitted primitive, standard errors, counts, RMS, per-point residuals and
+inlier flags), so the rules and the report judge a document as they judge the scan it came
+from.
 """
 
 from __future__ import annotations
@@ -183,6 +184,12 @@ def _fitted(fit) -> dict | None:
     summary["diagnostics"] = dict(fit.diagnostics)
     summary["notes"] = list(fit.notes)
     summary["primitive"] = _geometry_fields(primitive)
+    residuals, inliers = np.asarray(fit.residuals), np.asarray(fit.inliers)
+    # One per given point, or none: a fit read from an older document has no per-point data
+    # (empty arrays) and writes none, rather than lists its reader would refuse.
+    if residuals.shape == (fit.n_points,) and inliers.shape == (fit.n_points,):
+        summary["residuals"] = residuals.astype(np.float64)
+        summary["inlier_mask"] = inliers.astype(bool)
     return summary
 
 

@@ -1,12 +1,15 @@
-"""A fit read back from a model document's ``fitted`` summary (no residual arrays).
+"""A fit read back from a model document's ``fitted`` summary.
 
 The ``asbuilt-model`` document stores what the compliance rules and the QA report read of a
-fit (its primitive, standard errors, noise level, counts, RMS, notes, diagnostics), not the
-per-point residuals. :class:`StoredFit` carries exactly that, with the attribute names of
-:class:`asbuilt.fit.result.FitResult`, so that ``asbuilt check`` and ``asbuilt report`` judge a
-model document as they judge the scan it was made from. It does not pretend to have the
-points: ``residuals`` and ``inliers`` are empty arrays, and ``n_points``, ``n_inliers``,
-``rms`` and ``max_residual`` are the stored numbers.
+fit: its primitive, standard errors, noise level, counts, RMS, notes, diagnostics and the
+per-point signed residuals and inlier flags (``residuals``, ``inlier_mask``, one per given
+point in the object's point order). :class:`StoredFit` carries exactly that, with the
+attribute names of :class:`asbuilt.fit.result.FitResult`, so that ``asbuilt check`` and
+``asbuilt report`` judge a model document as they judge the scan it was made from (the
+report's rejected-shot crosses and residual histograms included). ``n_points``,
+``n_inliers``, ``rms`` and ``max_residual`` are the stored numbers. A document written before
+the per-point data was stored reads back with empty ``residuals`` and ``inliers``: the fit
+does not pretend to have the points.
 """
 
 from __future__ import annotations
@@ -55,6 +58,11 @@ class StoredFit:
         Geometry quality numbers (``arc_deg``, ``faces``...; null reads back as NaN).
     notes : tuple of str
         The fit's remarks.
+    residuals : ndarray, shape (n,) float64, metres, or shape (0,)
+        Signed orthogonal residual of every given point, in the object's point order (NaN
+        where the document has null); empty for a document written before they were stored.
+    inliers : ndarray, shape (n,) bool, or shape (0,)
+        Whether the robust estimator kept each point; empty exactly when ``residuals`` is.
     """
 
     primitive: Primitive
@@ -69,6 +77,8 @@ class StoredFit:
     observed: tuple[bool, bool, bool] | None = None
     diagnostics: Mapping[str, float] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    residuals: np.ndarray = field(default_factory=lambda: _EMPTY_RESIDUALS)
+    inliers: np.ndarray = field(default_factory=lambda: _EMPTY_MASK)
     #: Not stored in the document.
     covariance = None
 
@@ -76,16 +86,6 @@ class StoredFit:
     def kind(self) -> str:
         """The fitted primitive's kind."""
         return self.primitive.kind
-
-    @property
-    def residuals(self) -> np.ndarray:
-        """Empty, shape (0,): a model document does not store per-point residuals."""
-        return _EMPTY_RESIDUALS
-
-    @property
-    def inliers(self) -> np.ndarray:
-        """Empty, shape (0,) bool: a model document does not store the inlier mask."""
-        return _EMPTY_MASK
 
 
 class SummaryFieldError(ValueError):
@@ -165,6 +165,47 @@ def _text(summary: Mapping, key: str, default: str | None = None) -> str:
     return value
 
 
+def _per_point(summary: Mapping, n_points: int, n_inliers: int) -> tuple[np.ndarray, np.ndarray]:
+    """The summary's ``residuals`` (metres, null as NaN) and ``inlier_mask``, checked against
+    its ``points`` and ``inliers`` counts; empty arrays when the document has neither (written
+    before they were stored)."""
+    residuals, mask = summary.get("residuals"), summary.get("inlier_mask")
+    if residuals is None and mask is None:
+        return _EMPTY_RESIDUALS, _EMPTY_MASK
+    if residuals is None or mask is None:
+        given, absent = (
+            ("residuals", "inlier_mask") if mask is None else ("inlier_mask", "residuals")
+        )
+        raise SummaryFieldError(absent, f"missing while {given} is given; give both or neither")
+    if not isinstance(residuals, list) or not all(
+        item is None or (isinstance(item, (int, float)) and not isinstance(item, bool))
+        for item in residuals
+    ):
+        message = f"must be a list of numbers or null (metres), not {describe_value(residuals)}"
+        raise SummaryFieldError("residuals", message)
+    if not isinstance(mask, list) or not all(isinstance(item, bool) for item in mask):
+        raise SummaryFieldError(
+            "inlier_mask", f"must be a list of true/false, not {describe_value(mask)}"
+        )
+    for key, values in (("residuals", residuals), ("inlier_mask", mask)):
+        if len(values) != n_points:
+            raise SummaryFieldError(
+                key,
+                f"has {len(values)} values but points is {n_points}; give one per measured "
+                "point, in the object's point order",
+            )
+    kept = sum(mask)
+    if kept != n_inliers:
+        raise SummaryFieldError(
+            "inlier_mask", f"marks {kept} points as inliers but inliers is {n_inliers}"
+        )
+    values = np.array([math.nan if item is None else item for item in residuals], np.float64)
+    flags = np.array(mask, dtype=bool)
+    values.setflags(write=False)
+    flags.setflags(write=False)
+    return values, flags
+
+
 def stored_fit_from_summary(summary: Mapping, primitive: Primitive) -> StoredFit:
     """The :class:`StoredFit` of a model document's ``fitted`` summary.
 
@@ -178,7 +219,8 @@ def stored_fit_from_summary(summary: Mapping, primitive: Primitive) -> StoredFit
     Raises
     ------
     SummaryFieldError
-        Naming the field with the wrong type.
+        Naming the field with the wrong type, or ``residuals`` / ``inlier_mask`` whose length
+        is not the ``points`` count (or whose flags do not count ``inliers``).
     KeyError
         When ``method``, ``points`` or ``inliers`` is missing.
     """
@@ -191,17 +233,21 @@ def stored_fit_from_summary(summary: Mapping, primitive: Primitive) -> StoredFit
     notes = summary.get("notes") or []
     if not isinstance(notes, list) or not all(isinstance(n, str) for n in notes):
         raise SummaryFieldError("notes", f"must be a list of text, not {describe_value(notes)}")
+    n_points, n_inliers = _count(summary, "points"), _count(summary, "inliers")
+    residuals, inliers = _per_point(summary, n_points, n_inliers)
     return StoredFit(
         primitive=primitive,
         stderr=_stderr(summary),
         sigma=summary_float(summary, "sigma"),
         sigma_source=_text(summary, "sigma_source", "residuals"),
         method=_text(summary, "method"),
-        n_points=_count(summary, "points"),
-        n_inliers=_count(summary, "inliers"),
+        n_points=n_points,
+        n_inliers=n_inliers,
         rms=summary_float(summary, "rms"),
         max_residual=summary_float(summary, "max_residual"),
         observed=None if observed is None else tuple(observed),
         diagnostics=_diagnostics(summary),
         notes=tuple(notes),
+        residuals=residuals,
+        inliers=inliers,
     )

@@ -74,7 +74,10 @@ def test_restored_fit_carries_what_the_fit_had(built):
         # the fit's own primitive, not the (possibly regularised) component geometry
         np.testing.assert_allclose(stored.primitive.center, fit.primitive.center, atol=1e-12)
         np.testing.assert_allclose(stored.primitive.size, fit.primitive.size, atol=1e-12)
-        assert stored.residuals.shape == (0,) and stored.inliers.shape == (0,)
+        # per-point data, one per given point in the object's point order, bit for bit
+        assert stored.residuals.dtype == np.float64 and stored.inliers.dtype == bool
+        np.testing.assert_array_equal(stored.residuals, fit.residuals)
+        np.testing.assert_array_equal(stored.inliers, fit.inliers)
 
 
 def _pipe(object_id: str, start, end, od: float, index: int):
@@ -159,12 +162,20 @@ def test_bad_fit_summaries_are_located(built, change, where):
     assert str(info.value).startswith(f"m.json: components[0] (C1).{where}")
 
 
-def test_report_quality_from_the_document(built):
+def test_report_quality_from_an_old_document(built):
+    """A document written before the per-point data was stored: every column but the
+    histogram from the stored summary, and the cell says the residuals are not stored."""
     from asbuilt.report.data import report_data
     from asbuilt.report.html import html_text
 
     model, document = built["structural-bay"]
-    again = model_from_document(document)
+    old = json.loads(json.dumps(document))
+    for entry in old["components"]:
+        del entry["fitted"]["residuals"], entry["fitted"]["inlier_mask"]
+    again = model_from_document(old)
+    assert all(
+        c.fit.residuals.shape == (0,) and c.fit.inliers.shape == (0,) for c in again.components
+    )
     scan_rows = report_data(model).quality
     doc_rows = report_data(again).quality
     assert [q.id for q in doc_rows] == [q.id for q in scan_rows] and len(doc_rows) == 8
@@ -172,3 +183,82 @@ def test_report_quality_from_the_document(built):
         assert (a.points, a.inliers, a.rms, a.sigma) == (b.points, b.inliers, b.rms, b.sigma)
     page = html_text(report_data(again))
     assert page.count("not stored in the model file") == 8
+
+
+def _fitted_c1(built):
+    document = json.loads(json.dumps(built["structural-bay"][1]))
+    return document, document["components"][0]["fitted"]
+
+
+@pytest.mark.parametrize(
+    ("change", "where"),
+    [
+        (
+            lambda f: f["residuals"].pop(),
+            "fitted.residuals: has {m} values but points is {n}; give one per measured point",
+        ),
+        (
+            lambda f: f["inlier_mask"].append(True),
+            "fitted.inlier_mask: has {p} values but points is {n}; give one per measured point",
+        ),
+        (
+            lambda f: f.update(points=f["points"] + 1),
+            "fitted.residuals: has {n} values but points is {p}",
+        ),
+        (
+            lambda f: f["inlier_mask"].__setitem__(0, False),
+            "fitted.inlier_mask: marks {m} points as inliers but inliers is {n}",
+        ),
+        (lambda f: f.pop("inlier_mask"), "fitted.inlier_mask: missing while residuals is given"),
+        (lambda f: f.pop("residuals"), "fitted.residuals: missing while inlier_mask is given"),
+        (
+            lambda f: f.update(residuals="small"),
+            'fitted.residuals: must be a list of numbers or null (metres), not "small"',
+        ),
+        (
+            lambda f: f["inlier_mask"].__setitem__(2, 1),
+            "fitted.inlier_mask: must be a list of true/false, not [true, true, 1,",
+        ),
+    ],
+)
+def test_bad_per_point_data_is_one_located_line(built, change, where):
+    document, fitted = _fitted_c1(built)
+    # C1's shots, counted in the document's scan section; the fit kept them all
+    n = len(next(o for o in document["scan"]["objects"] if o["id"] == "C1")["points"])
+    assert fitted["points"] == fitted["inliers"] == len(fitted["residuals"]) == n
+    change(fitted)
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    message = str(info.value)
+    assert message.startswith("m.json: components[0] (C1)." + where.format(n=n, m=n - 1, p=n + 1))
+    assert "\n" not in message
+
+
+def test_null_residual_reads_back_as_nan(built):
+    document, fitted = _fitted_c1(built)
+    fitted["residuals"][4] = None  # a non-finite residual is written as null
+    stored = model_from_document(document).components[0].fit
+    assert np.isnan(stored.residuals[4]) and np.isfinite(np.delete(stored.residuals, 4)).all()
+
+
+def test_schema_wants_residuals_and_inlier_mask_together(built):
+    validator = jsonschema.Draft202012Validator(model_schema())
+    for key in ("residuals", "inlier_mask"):
+        document, fitted = _fitted_c1(built)
+        del fitted[key]
+        errors = list(validator.iter_errors(document))
+        assert errors and all(list(e.absolute_path) == ["components", 0, "fitted"] for e in errors)
+        del fitted["residuals" if key == "inlier_mask" else "inlier_mask"]
+        validator.validate(document)  # neither: an older document
+
+
+def test_a_document_read_back_writes_its_per_point_data_again(built):
+    """``asbuilt check MODEL --fix OUT`` writes a model read from a document: the per-point
+    data goes with it, and an older document's (none) stays none rather than empty lists."""
+    model, document = built["spool"]
+    assert json.loads(dumps_model(model_from_document(document))) == document
+    old = json.loads(json.dumps(document))
+    for entry in old["components"]:
+        if entry["fitted"] is not None:
+            del entry["fitted"]["residuals"], entry["fitted"]["inlier_mask"]
+    assert json.loads(dumps_model(model_from_document(old))) == old
