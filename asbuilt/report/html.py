@@ -511,8 +511,8 @@ def _stderr_text(stderr) -> str:
 
 
 def _residual_cell(q) -> str:
-    """The residual histogram, or a note for fits read from a model document (which stores the
-    fit's summary, not its per-point residuals)."""
+    """The residual histogram, or a note for fits read from a model document written before
+    documents stored the per-point residuals (the fit's summary only)."""
     if q.residuals.size == 0 and q.points > 0:
         return '<span class="muted">not stored in the model file</span>'
     return histogram_svg(q.residuals, q.inlier_mask)
