@@ -405,6 +405,21 @@ def test_a_viewpoint_the_shots_cannot_come_from_is_ignored_and_said(rng):
     assert not any("viewpoint" in note for note in right.notes)
 
 
+def test_a_fit_rejecting_a_third_of_the_shots_does_not_overrule_the_station():
+    # Independent ray caster: an NPS 1 pipe at 10 m whose beam footprint is wider than the
+    # pipe, 18 of 30 shots mixed returns strung towards the wall behind. From the right station
+    # every fit hides shots; the fit of the shots alone (r 139 mm, true 16.7) rejected 13 of
+    # them, and used to overrule the station with a 6 mm standard error. Now refused.
+    scan = json.loads((Path(__file__).parent / "thin_pipe_at_10m_mixed.json").read_text())
+    points = np.array(scan["points"])
+    with pytest.raises(FitError, match="too many to overrule the station"):
+        fit_cylinder(points, sigma=scan["range_sigma"], viewpoint=np.array(scan["station"]))
+    # The 12 shots on the pipe alone, from the same station, fit within their standard error.
+    on_pipe = points[np.array(scan["labels"]) == 0]
+    fit = fit_cylinder(on_pipe, sigma=scan["range_sigma"], viewpoint=np.array(scan["station"]))
+    assert abs(fit.primitive.radius - scan["radius"]) <= 3.0 * fit.stderr["radius"]
+
+
 _UNSEEN = json.loads((Path(__file__).parent / "pipe_without_sensor.json").read_text())
 
 
