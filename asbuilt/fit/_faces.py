@@ -405,11 +405,12 @@ def _orient(axis_vec, offset, inside_points):
     return -1.0 if 2 * above > inside_points.shape[0] else 1.0
 
 
-def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
+def extra_faces(points, axes, faces, threshold, gap, viewpoint=None, opposite=True):
     """Add faces along the frame's axes (third face, opposite faces) while they pass the checks.
 
     ``faces`` is a list of (axis, unsigned offset, mask); returns the grown list. With a trusted
-    ``viewpoint`` (3,) a face turned away from it is never added.
+    ``viewpoint`` (3,) a face turned away from it is never added; with ``opposite`` False no
+    face across an axis a seen face is already normal to (a frame one station can have seen).
     """
     view_proj = None if viewpoint is None else axes @ viewpoint
     proj_all = None
@@ -432,6 +433,8 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None):
             peaks = counts.argmax(axis=0).tolist()
             peak_counts = counts[peaks, [0, 1, 2]].tolist()
         for k in range(3):
+            if not opposite and k in seen_axes:
+                continue
             # A face across the one axis no seen face is normal to has only its offset free
             # (the other two fix its direction): two points that agree on it suffice (the top
             # of a pier that a sparse raster crosses once).
@@ -589,6 +592,50 @@ def _already_a_face(tried_frames, normal, mask, cos_face) -> bool:
     return False
 
 
+def has_opposite(face_axis) -> bool:
+    """Whether faces normal to the axes ``face_axis`` (m,) int put two across one axis."""
+    axes = [int(axis) for axis in face_axis]
+    return len(set(axes)) < len(axes)
+
+
+def _one_station(points, axes, base, grown, threshold, gap) -> list:
+    """A frame without opposite faces from a grown one that has them (faces as (axis,
+    unsigned offset, mask)).
+
+    A face opposite a seen one whose points also lie in one plane across the axis no face is
+    normal to (a single raster line: it lies in every plane through it) is put on that plane
+    instead: one line of shots along a side face seen at grazing incidence lies far from the
+    near face's edge, beyond the contiguity that :func:`extra_faces` asks of a new face. The
+    smaller of two opposite faces is moved first. Otherwise the ``base`` faces are grown again
+    without opposite faces.
+    """
+    faces = list(grown)
+    proj = points @ axes.T
+    for k in range(3):
+        across = [f for f, face in enumerate(faces) if face[0] == k]
+        if len(across) < 2:
+            continue
+        across.sort(key=lambda f: int(np.count_nonzero(faces[f][2])))
+        for f in across:
+            free = {0, 1, 2} - {face[0] for face in faces}
+            if not free:
+                break
+            members = points[faces[f][2]]
+            if members.shape[0] < 2:
+                continue
+            # One line: within the threshold of it (RMS). The frame's direction may still be
+            # off by a fraction of a degree, which tilts a long line across the new plane.
+            rel = members - members.sum(axis=0) / members.shape[0]
+            if np.linalg.svd(rel, compute_uv=False)[1] < threshold * math.sqrt(rel.shape[0]):
+                u = free.pop()
+                values = proj[faces[f][2], u]
+                faces[f] = (u, float(values.sum()) / values.size, faces[f][2])
+                break
+    if has_opposite([face[0] for face in faces]):
+        return extra_faces(points, axes, base, threshold, gap, None, opposite=False)
+    return faces
+
+
 def _all_facing(points, frame: Frame, viewpoint) -> bool:
     """Whether every face's outward normal points toward the viewpoint."""
     normals = frame.face_sign[:, None] * frame.axes[frame.face_axis]
@@ -643,9 +690,21 @@ class Segmentation:
             axes = np.vstack([d1, d2, cross3(d1, d2)])
             on2 = points[mask2]
             faces = [(0, o1, mask1), (1, float(d2 @ (on2.sum(axis=0) / len(on2))), mask2)]
+            base = faces
             faces = extra_faces(
-                points, axes, faces, threshold, gap, viewpoint if self.visible_only else None
+                points, axes, base, threshold, gap, viewpoint if self.visible_only else None
             )
+            if not self.visible_only and has_opposite([face[0] for face in faces]):
+                # Without a trusted viewpoint, a line of shots on a side face seen at grazing
+                # incidence lies in the plane opposite a seen face as well as in the third
+                # axis's, and the greedy growth takes the first: the frame one station can
+                # have seen (no opposite faces) is offered too.
+                self._add(axes, _one_station(points, axes, base, faces, threshold, gap))
+        self._add(axes, faces)
+
+    def _add(self, axes, faces) -> None:
+        """Rank and keep the frame of ``faces`` (axis, unsigned offset, mask) on ``axes``."""
+        points, threshold, viewpoint = self.points, self.threshold, self.viewpoint
         frame, distances = _frame_and_distances(points, axes, faces, threshold, viewpoint)
         # A frame that cannot be a box (faces on both sides of the points across one axis, or
         # one turned away from a trusted viewpoint) ranks below every frame that can.
