@@ -22,7 +22,14 @@ from asbuilt.fit._joint import (
     rodrigues,
 )
 
-__all__ = ["bounds", "covariance", "one_face_depth", "propagate", "silhouette_bounds"]
+__all__ = [
+    "bounds",
+    "covariance",
+    "extent_spans",
+    "one_face_depth",
+    "propagate",
+    "silhouette_bounds",
+]
 
 
 def _spacing(coords: np.ndarray, noise: float) -> float:
@@ -97,6 +104,24 @@ def _line_faces(label, index, model, k, single) -> np.ndarray:
             continue
         keep[index[label[index] == f]] = True
     return np.flatnonzero(keep)
+
+
+def _face_spacing(proj, label, index, model, k, extreme, single, noise) -> float | None:
+    """The raster lines' median spacing (metres) along axis ``k`` on the extreme inlier's face.
+
+    The lines' spacing differs from face to face (a face seen obliquely spreads them, a pier's
+    top seen from above too), and the edge beyond the extreme inlier lies within a step of
+    its own face's lines. None when that face is normal to ``k``, is one line of shots across
+    ``k`` (:func:`_single_lines`) or shows fewer than two lines along ``k``.
+    """
+    f = int(label[extreme])
+    if model.face_axis[f] == k:
+        return None
+    if single[f] is not None and abs(single[f][k]) < _ALONG:
+        return None
+    members = index[label[index] == f]
+    value = _spacing(proj[members, k], noise)
+    return value if value > 0.0 else None
 
 
 def _corner_step(proj, label, index, model, k, sign, extreme, single, medians) -> float | None:
@@ -258,6 +283,33 @@ def bounds(x, label, inliers, model, noise, edge_pad, edges=None):
     return lo, hi, lo_face, hi_face, lo_pt, hi_pt, pads
 
 
+def extent_spans(x, label, inliers, model, noise, lo_pt, hi_pt, pad) -> np.ndarray:
+    """How far (metres) beyond each extent bound's extreme inlier its edge may lie, (2, 3).
+
+    Row 0 below lo, row 1 above hi (0 where a face bounds the side). The pad (:func:`bounds`)
+    is half the finer of the steps that reached the edge, the middle of the gap if that step
+    is the one the edge lies in. But the raster's lines are spaced differently on each face
+    (a face seen obliquely spreads them, a pier's top seen from above too), and the edge
+    beyond the extreme inlier lies within a step of its own face's lines
+    (:func:`_face_spacing`): the gap is the larger of twice the pad and that step. Without a
+    viewpoint nothing narrows it (no silhouette, no bisection shots told from the raster).
+    ``noise`` is the residual cut (metres); ``lo_pt``/``hi_pt``/``pad`` as :func:`bounds`
+    returns them.
+    """
+    proj = x @ model.axes.T
+    index = inliers.nonzero()[0]
+    single = _single_lines(proj, label, index, model, noise)
+    spans = 2.0 * np.asarray(pad, dtype=np.float64)
+    for k in range(3):
+        for side, point in ((0, lo_pt[k]), (1, hi_pt[k])):
+            if point < 0:
+                continue
+            own = _face_spacing(proj, label, index, model, k, int(point), single, noise)
+            if own is not None:
+                spans[side, k] = max(spans[side, k], own)
+    return spans
+
+
 def silhouette_bounds(x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, found, edges):
     """Replace extent bounds (in place: lo, hi, pad) by the raster silhouette solution.
 
@@ -347,8 +399,12 @@ def covariance(model, x, label, sigma):
     return sigma**2 * np.linalg.pinv(jac.T @ jac)
 
 
-def propagate(model, x, cov, bounds_info, sigma, one_face):
-    """Standard errors of sizes (3,) and centre (3,) by finite-difference linear propagation."""
+def propagate(model, x, cov, bounds_info, sigma, one_face, spans=None):
+    """Standard errors of sizes (3,) and centre (3,) by finite-difference linear propagation.
+
+    ``spans`` (2, 3) metres, optional: the gap beyond each extent bound's extreme point in
+    which its edge lies (:func:`extent_spans`); by default twice the pad.
+    """
     lo_pt, hi_pt, lo_face, hi_face, pad = bounds_info
     base = _derived(model, x, lo_pt, hi_pt, lo_face, hi_face, pad, one_face)
     q = model.rot_basis.shape[1]
@@ -371,10 +427,20 @@ def propagate(model, x, cov, bounds_info, sigma, one_face):
     # the gap it was padded across: the edge lies anywhere between the extreme point and twice
     # the pad beyond it (uniform: variance pad^2 / 3). Half a raster step for a raster's last
     # line, a few millimetres for an edge-bisection shot.
+    # With a wider gap ``spans`` than twice the pad, the edge is uniform over the gap and the
+    # pad is off its middle: variance (span / 2 - pad)^2 + span^2 / 12 (pad^2 / 3 at span 2 pad).
     extent_var = np.zeros(3)
     for k in range(3):
         extent_var[k] = sigma**2 * ((not lo_face[k]) + (not hi_face[k]))
-        extent_var[k] += (pad[0, k] ** 2 * (not lo_face[k]) + pad[1, k] ** 2 * (not hi_face[k])) / 3
+        if spans is None:
+            extent_var[k] += (
+                pad[0, k] ** 2 * (not lo_face[k]) + pad[1, k] ** 2 * (not hi_face[k])
+            ) / 3
+            continue
+        for side, open_side in ((0, not lo_face[k]), (1, not hi_face[k])):
+            if open_side:
+                span = spans[side, k]
+                extent_var[k] += (0.5 * span - pad[side, k]) ** 2 + span**2 / 12.0
     size_var = np.diag(out)[:3] + extent_var
     centre_cov = out[3:, 3:] + model.axes.T @ np.diag(extent_var / 4.0) @ model.axes
     return np.sqrt(size_var), float(np.sqrt(np.trace(centre_cov)))

@@ -80,6 +80,7 @@ from asbuilt.fit._common import noise_level, random_subset
 from asbuilt.fit._cuboid_sizes import (
     bounds,
     covariance,
+    extent_spans,
     one_face_depth,
     propagate,
     silhouette_bounds,
@@ -541,8 +542,12 @@ def fit_cuboid(
     sig, source = noise_level(residual[inliers], n_par, sigma, tolerances)
     sig = max(sig, floor)
     cov = covariance(model, x[inliers], label[inliers], sig)
+    spans = None
+    if not trusted:
+        # Without a viewpoint the gap beyond an extent bound is its own face's raster step.
+        spans = extent_spans(xb, label_b, inliers_b, model, cutoff * scale, lo_pt, hi_pt, pad)
     size_se, centre_se = propagate(
-        model, xb, cov, (lo_pt, hi_pt, lo_face, hi_face, pad), sig, one_face
+        model, xb, cov, (lo_pt, hi_pt, lo_face, hi_face, pad), sig, one_face, spans
     )
     c_rot = model.rot_basis @ cov[: model.rot_basis.shape[1], : model.rot_basis.shape[1]]
     c_rot = c_rot @ model.rot_basis.T

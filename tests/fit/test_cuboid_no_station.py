@@ -88,3 +88,19 @@ def test_side_face_line_is_not_taken_for_an_opposite_face(turn_deg, columns, row
         # One station sees no two opposite faces: every size is an extent bound.
         assert not observed.any()
         assert np.all(np.abs(size - 2.0 * HALF) <= 3.0 * stderr), (seed, size, stderr)
+
+
+@pytest.mark.parametrize("turn_deg, columns, rows", [(65.0, 7, 4), (70.0, 7, 4), (160.0, 9, 4)])
+@pytest.mark.parametrize("sigma", [RANGE_SIGMA, None])
+def test_extent_bound_covers_its_own_faces_raster_step(turn_deg, columns, rows, sigma):
+    # Four raster rows: the pier's top carries one or two of them, its side faces the rest,
+    # and the lines are spaced differently on each face. An unseen edge lies within a step of
+    # the lines of the face its extreme shot is on; the standard error took the finer step of
+    # all faces (the median over them, or the shots just behind the extreme) and came out
+    # 2-3 times too small (z up to 16).
+    for seed in range(4):
+        points, rot, _ = scan(turn_deg, seed, columns, rows)
+        result = fit_cuboid(points, sigma=sigma)
+        size, stderr, observed = _sizes(result, rot)
+        assert not observed.any()
+        assert np.all(np.abs(size - 2.0 * HALF) <= 3.0 * stderr), (seed, size, stderr)
