@@ -10,14 +10,16 @@ import pytest
 from fit_scans import angle_deg, raster_scan
 
 from asbuilt.errors import FitError
+from asbuilt.fit import cylinder as cylinder_module
 from asbuilt.fit._circles import kasa_batch
-from asbuilt.fit._common import orthonormal_basis
+from asbuilt.fit._common import local_normals, orthonormal_basis
 from asbuilt.fit._cylinder_model import MODEL, incidence_weighted
-from asbuilt.fit._cylinder_starts import trust_order
-from asbuilt.fit._robust import RobustFit
+from asbuilt.fit._cylinder_starts import axis_starts, trust_order
+from asbuilt.fit._robust import RobustFit, keep_count
 from asbuilt.fit._visibility import cylinder_beam_excess
 from asbuilt.fit.cylinder import fit_cylinder
 from asbuilt.primitives import Cylinder
+from asbuilt.tolerances import DEFAULT_TOLERANCES
 
 SENSOR = np.zeros(3)
 
@@ -418,6 +420,60 @@ def test_a_fit_rejecting_a_third_of_the_shots_does_not_overrule_the_station():
     on_pipe = points[np.array(scan["labels"]) == 0]
     fit = fit_cylinder(on_pipe, sigma=scan["range_sigma"], viewpoint=np.array(scan["station"]))
     assert abs(fit.primitive.radius - scan["radius"]) <= 3.0 * fit.stderr["radius"]
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("with_view", [False, True])
+def test_the_quick_fit_of_a_clean_scan_is_the_full_search_fit(seed, with_view, monkeypatch):
+    # Clean 40-shot scans take the quick fit (the first axis starts alone); it must settle on
+    # the full search's minimum, to the convergence tolerance.
+    rng = np.random.default_rng(seed)
+    od = (0.0603, 0.1143, 0.2191, 0.3238, 0.6096, 0.1683)[seed]
+    pipe = _pipe(od, (1, 3, 10)[seed % 3], 3.0 + seed, [1, 0.3 + 0.2 * seed, 0.2])
+    points = raster_scan(pipe, SENSOR, 40, rng).points
+    view = SENSOR if with_view else None
+    taken = []
+    original = cylinder_module._quick_fit
+
+    def recording(*args):
+        taken.append(original(*args))
+        return taken[-1]
+
+    monkeypatch.setattr(cylinder_module, "_quick_fit", recording)
+    quick = fit_cylinder(points, sigma=0.002, viewpoint=view)
+    assert taken and taken[0] is not None
+    monkeypatch.setattr(cylinder_module, "_quick_fit", lambda *args: None)
+    full = fit_cylinder(points, sigma=0.002, viewpoint=view)
+    assert quick.primitive.radius == pytest.approx(full.primitive.radius, abs=1e-6)
+    assert angle_deg(quick.primitive.axis, full.primitive.axis) < 1e-3
+    assert quick.stderr["radius"] == pytest.approx(full.stderr["radius"], rel=1e-3)
+    np.testing.assert_array_equal(quick.inliers, full.inliers)
+
+
+def test_the_quick_fit_leaves_background_and_excess_noise_to_the_full_search(rng):
+    pipe = _pipe(0.1143, 3, 4, [1, 0.4, 0.2])
+    clean = raster_scan(pipe, SENSOR, 40, rng).points
+    local = clean - clean.mean(axis=0)
+    tolerances = DEFAULT_TOLERANCES
+    keep = keep_count(40, tolerances)
+    axes = axis_starts(local, *local_normals(local, tolerances.normal_neighbours))
+
+    def quick(points, sigma=0.002, view=None):
+        return cylinder_module._quick_fit(points, axes, keep, sigma, view, tolerances)
+
+    assert quick(local) is not None
+    assert quick(local, view=SENSOR - clean.mean(axis=0)) is not None
+    # A shot on the wall 2 m behind the pipe.
+    walled = local.copy()
+    walled[7] += 2.0 * walled[7] / np.linalg.norm(walled[7] + clean.mean(axis=0))
+    assert quick(walled) is None
+    # Noise five times the sensor's stated sigma fails the chi-square test.
+    assert quick(local + rng.normal(0.0, 0.01, local.shape), sigma=0.002) is None
+    # A viewpoint on the far side: the fit hides shots behind itself, so it needs a second look.
+    assert (
+        quick(local, view=2 * (pipe.center - clean.mean(axis=0)) - (SENSOR - clean.mean(axis=0)))
+        is None
+    )
 
 
 _UNSEEN = json.loads((Path(__file__).parent / "pipe_without_sensor.json").read_text())
