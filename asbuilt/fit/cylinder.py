@@ -162,12 +162,25 @@ def _quick_fit(local, axes, keep, sigma, view, tolerances):
     starts give the fit, and the two-point and line starts, their circles and the robust
     choice among them all (about a third of a 40-point fit's time) settle on the same
     minimum. No shot may lie farther from the cheapest start than its radius, and the quick
-    fit is kept only when every shot is an inlier, its residuals pass a
-    chi-square test at ``sigma`` (tail ``QUICK_CHI2_TAIL``), and nothing would reconsider it:
-    with a viewpoint, no beam runs through the fitted pipe (:func:`doubtful`); without one, no
-    shot lies inside the pipe (:func:`admissible`) nor on its far side
-    (:func:`drop_far_side`). Anything else takes the full search, exactly as without this
-    shortcut. Returns (RobustFit, starts) or None.
+    fit is kept only when every shot is an inlier, its residuals pass a chi-square test at
+    ``sigma`` (tail ``QUICK_CHI2_TAIL``), and nothing would reconsider it: with a viewpoint,
+    no beam runs through the fitted pipe (:func:`doubtful`); without one, no shot lies inside
+    the pipe (:func:`admissible`) nor on its far side (:func:`drop_far_side`). Anything else
+    takes the full search, exactly as without this shortcut.
+
+    Parameters
+    ----------
+    local : ndarray, shape (n, 3), metres (centred)
+    axes : list of ndarray, shape (3,)
+        :func:`axis_starts`' candidate axes.
+    keep : int
+    sigma : float, metres
+    view : ndarray, shape (3,), metres (in ``local``'s frame), or None
+    tolerances : Tolerances
+
+    Returns
+    -------
+    (RobustFit, list of starts) or None
     """
     starts, costs = circle_starts(local, axes, keep, np.random.default_rng(len(local)))
     if not starts:
