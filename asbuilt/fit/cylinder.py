@@ -40,6 +40,8 @@ least-squares model, the far-side and incidence refits) and
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.special import chdtri
 
@@ -298,9 +300,8 @@ def fit_cylinder(
     if sigma is not None and everything is None and len(local) >= POLISH_BELOW:
         quick = _quick_fit(local, first_axes, keep, sigma, view, tolerances)
         if quick is not None:
-            return _finished(
-                quick[0], local, pts, offset, view, None, sigma, tolerances, False, quick[1], None
-            )
+            scene = _Scene(pts, offset, local, None, view, sigma, tolerances)
+            return _finished(quick[0], scene, False, quick[1], None)
     starts = []
     rng = np.random.default_rng(len(local))
     axes = first_axes + pair_starts(local, normals, keep, 3)
@@ -485,39 +486,37 @@ def fit_cylinder(
                 " the shots are mostly background and mixed returns around a thin pipe: rescan"
                 " with more shots on the pipe."
             )
-    return _finished(
-        robust,
-        local,
-        pts,
-        offset,
-        view,
-        everything,
-        sigma,
-        tolerances,
-        ignored_view,
-        starts,
-        reconsider,
-    )
+    scene = _Scene(pts, offset, local, everything, view, sigma, tolerances)
+    return _finished(robust, scene, ignored_view, starts, reconsider)
 
 
-def _finished(
-    robust,
-    local,
-    pts,
-    offset,
-    view,
-    everything,
-    sigma,
-    tolerances,
-    ignored_view,
-    starts,
-    reconsider,
-) -> FitResult:
+@dataclass(frozen=True)
+class _Scene:
+    """What the last stage of a cylinder fit (:func:`_finished`) needs of the scan.
+
+    ``pts`` (n, 3) metres as given; ``offset`` (3,) metres, their centroid; ``local`` (m, 3)
+    metres, ``pts - offset`` or a subsample of it when ``everything`` (n, 3) holds all of them
+    (dense clouds); ``view`` (3,) metres in ``local``'s frame, or None; ``sigma`` metres or
+    None.
+    """
+
+    pts: np.ndarray
+    offset: np.ndarray
+    local: np.ndarray
+    everything: np.ndarray | None
+    view: np.ndarray | None
+    sigma: float | None
+    tolerances: Tolerances
+
+
+def _finished(robust, scene: _Scene, ignored_view, starts, reconsider) -> FitResult:
     """The chosen robust fit's checks and refinements (edge-on shots, dense clouds settled on
     every point, far-side shots, incidence weights) and its :class:`FitResult` (see
-    :func:`fit_cylinder`; ``local`` and ``pts`` metres, ``local = pts - offset``;
+    :func:`fit_cylinder`; ``scene`` the scan, :class:`_Scene`;
     ``reconsider(robust, None)`` settles a fit again from other starts, or is None when the
     caller guarantees it is not needed)."""
+    pts, offset, local, everything = scene.pts, scene.offset, scene.local, scene.everything
+    view, sigma, tolerances = scene.view, scene.sigma, scene.tolerances
     if view is not None and edge_on(robust, local, view):
         # Shots strung along the viewpoint's own beams also say that the viewpoint is right.
         raise FitError(
