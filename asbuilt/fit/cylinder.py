@@ -150,6 +150,21 @@ def _robust_fit(local, starts, costs, robust_from, polished, tolerances) -> Robu
     return robust
 
 
+def _robust_among(local, starts, costs, sigma, tolerances) -> RobustFit:
+    """The robust geometric fit among the circle starts (:func:`trust_order` first)."""
+    starts, costs, trusted = trust_order(starts, costs)
+    return robust_geometric_fit(
+        local,
+        starts,
+        MODEL,
+        kind="cylinder",
+        sigma=sigma,
+        tolerances=tolerances,
+        start_costs=costs,
+        always_refine=trusted,
+    )
+
+
 #: Upper tail probability of the chi-square test a quick fit's residuals must pass
 #: (:func:`_quick_fit`): a fit in a wrong basin that still keeps every shot within the inlier
 #: threshold fits them worse than the noise allows.
@@ -194,18 +209,8 @@ def _quick_fit(local, axes, keep, sigma, view, tolerances):
         # benchmark's clean 40-point scans the farthest shot is at most 0.7 radii away; with
         # 20% edge outliers, a median 15.
         return None
-    starts, costs, trusted = trust_order(starts, costs)
     try:
-        robust = robust_geometric_fit(
-            local,
-            starts,
-            MODEL,
-            kind="cylinder",
-            sigma=sigma,
-            tolerances=tolerances,
-            start_costs=costs,
-            always_refine=trusted,
-        )
+        robust = _robust_among(local, starts, costs, sigma, tolerances)
     except FitError:
         return None
     if not robust.inliers.all():
@@ -311,17 +316,7 @@ def fit_cylinder(
     starts, costs = circle_starts(local, axes, keep, rng)
 
     def robust_from(starts, costs):
-        starts, costs, trusted = trust_order(starts, costs)
-        return robust_geometric_fit(
-            local,
-            starts,
-            MODEL,
-            kind="cylinder",
-            sigma=sigma,
-            tolerances=tolerances,
-            start_costs=costs,
-            always_refine=trusted,
-        )
+        return _robust_among(local, starts, costs, sigma, tolerances)
 
     def polished(starts, costs):
         order = np.argsort(costs)[:POLISHED_STARTS]
