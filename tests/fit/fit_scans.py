@@ -133,6 +133,53 @@ def directions(pan, tilt):
     return np.column_stack([np.cos(tilt) * np.cos(pan), np.cos(tilt) * np.sin(pan), np.sin(tilt)])
 
 
+#: The benchmark's pointing noise, 0.01 degree, in radians.
+_POINTING_SIGMA = float(np.radians(0.01))
+
+
+def corner_angles(box: Cuboid) -> tuple[np.ndarray, np.ndarray]:
+    """Pan and tilt (8,) radians of a box's corners seen from the origin (its silhouette
+    window is their span)."""
+    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    corners = box.center + (signs * 0.5 * np.asarray(box.size)) @ np.asarray(box.axes)
+    pans = np.arctan2(corners[:, 1], corners[:, 0])
+    return pans, np.arctan2(corners[:, 2], np.hypot(corners[:, 0], corners[:, 1]))
+
+
+def cell_centres(low: float, high: float, count: int) -> np.ndarray:
+    """The centres (count,) of ``count`` equal cells spanning [low, high]."""
+    edges = np.linspace(low, high, count + 1)
+    return 0.5 * (edges[1:] + edges[:-1])
+
+
+def shoot(
+    primitive,
+    pan,
+    tilt,
+    rng,
+    *,
+    range_sigma=0.002,
+    pointing_sigma=_POINTING_SIGMA,
+    miss_range=None,
+):
+    """Shots from the origin at ``primitive`` along nominal ``pan``, ``tilt`` (m,) radians.
+
+    Each beam is off its nominal direction by the pointing noise, ray-cast (:func:`cast`), its
+    range noisy, and recorded at the nominal angles, as a pan-tilt range finder records it.
+    ``miss_range(true_dirs (m, 3)) -> (m,)`` metres gives the range of a beam that misses (a
+    wall behind); without it a miss is NaN. Returns points (m, 3) metres and hit (m,) bool.
+    """
+    true_dirs = directions(
+        pan + rng.normal(0.0, pointing_sigma, pan.size),
+        tilt + rng.normal(0.0, pointing_sigma, tilt.size),
+    )
+    entry = cast(primitive, np.zeros(3), true_dirs)
+    hit = np.isfinite(entry)
+    reach = entry if miss_range is None else np.where(hit, entry, miss_range(true_dirs))
+    reach = reach + rng.normal(0.0, range_sigma, reach.size)
+    return directions(pan, tilt) * reach[:, None], hit
+
+
 def raster_scan(
     primitive,
     sensor,
@@ -217,3 +264,15 @@ def angle_deg(a, b) -> float:
     """Angle between two sign-free directions, degrees."""
     c = abs(float(np.dot(a, b))) / (np.linalg.norm(a) * np.linalg.norm(b))
     return float(np.degrees(np.arccos(min(1.0, c))))
+
+
+def sizes_in_true_order(result, rot):
+    """A cuboid fit's sizes (3,) metres, their standard errors (3,) metres and observed flags
+    (3,) bool, in the order of the true axes (the columns of ``rot`` (3, 3))."""
+    axes = np.array(result.primitive.axes)
+    order = np.abs(axes @ rot).argmax(axis=0)
+    return (
+        np.asarray(result.primitive.size)[order],
+        np.asarray(result.stderr["size"])[order],
+        np.asarray(result.observed)[order],
+    )

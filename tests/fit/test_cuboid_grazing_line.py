@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fit_scans import cast, directions
+from fit_scans import cell_centres, corner_angles, shoot, sizes_in_true_order
 
 from asbuilt.fit.cuboid import fit_cuboid
 from asbuilt.primitives import Cuboid
@@ -25,7 +25,6 @@ HALF = np.array([0.2, 0.2, 2.0])  # the column's half sizes, metres
 DISTANCE = 7.0  # station to column, metres
 STATION = np.array([3.5, -1.0, 1.5])  # the station in the scan frame, metres
 RANGE_SIGMA = 0.002  # metres
-POINTING_SIGMA = np.radians(0.01)
 
 
 def scan(turn_deg: float, seed: int):
@@ -34,37 +33,15 @@ def scan(turn_deg: float, seed: int):
     a = np.radians(turn_deg)
     rot = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
     centre = np.array([0.0, DISTANCE, 0.0])  # from the station
-    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
-    corners = centre + (signs * HALF) @ rot.T
-    pans = np.arctan2(corners[:, 1], corners[:, 0])
-    tilts = np.arctan2(corners[:, 2], np.hypot(corners[:, 0], corners[:, 1]))
+    column = Cuboid(centre, rot.T, 2.0 * HALF)
+    pans, tilts = corner_angles(column)
     margin = 0.15 * np.ptp(pans)
-    pan_edges = np.linspace(pans.min() - margin, pans.max() + margin, 8)
-    tilt_edges = np.linspace(tilts.min(), tilts.max(), 7)
     pan, tilt = np.meshgrid(
-        0.5 * (pan_edges[1:] + pan_edges[:-1]), 0.5 * (tilt_edges[1:] + tilt_edges[:-1])
+        cell_centres(pans.min() - margin, pans.max() + margin, 7),
+        cell_centres(tilts.min(), tilts.max(), 6),
     )
-    pan, tilt = pan.ravel(), tilt.ravel()
-    true_dirs = directions(
-        pan + rng.normal(0.0, POINTING_SIGMA, pan.size),
-        tilt + rng.normal(0.0, POINTING_SIGMA, tilt.size),
-    )
-    entry = cast(Cuboid(centre, rot.T, 2.0 * HALF), np.zeros(3), true_dirs)  # NaN: a miss
-    hit = np.isfinite(entry)
-    reach = entry + rng.normal(0.0, RANGE_SIGMA, entry.size)
-    points = directions(pan, tilt) * reach[:, None]  # recorded with the nominal angles
+    points, hit = shoot(column, pan.ravel(), tilt.ravel(), rng)
     return points[hit] + STATION, rot
-
-
-def _sizes(result, rot):
-    """Fitted sizes (3,), standard errors (3,) and observed flags (3,), in the true axes' order."""
-    axes = np.array(result.primitive.axes)
-    order = np.abs(axes @ rot).argmax(axis=0)
-    return (
-        np.asarray(result.primitive.size)[order],
-        np.asarray(result.stderr["size"])[order],
-        np.asarray(result.observed)[order],
-    )
 
 
 @pytest.mark.parametrize("turn_deg, seed", [(16.0, 2), (18.0, 0), (20.0, 1), (160.0, 3)])
@@ -78,7 +55,7 @@ def test_grazing_single_line_size_is_an_honest_extent_bound(turn_deg, seed, sigm
     assert np.ptp(local[grazing, 1]) < 0.03 and np.count_nonzero(grazing) >= 5
     assert HALF[1] - local[grazing, 1].max() > 0.15
     result = fit_cuboid(points, sigma=sigma)
-    size, stderr, observed = _sizes(result, rot)
+    size, stderr, observed = sizes_in_true_order(result, rot)
     assert not observed[:2].any()
     assert np.all(np.abs(size - 2 * HALF) <= 3.0 * stderr)
     # Not confidently wrong: the grazing size's standard error is a raster step's, not the noise.
@@ -89,8 +66,10 @@ def test_with_the_station_given_the_fit_agrees():
     # The station gives the raster silhouette, which bounds the same edge half a step beyond
     # the line; without it, the step comes from the near face's lines across the corner.
     points, rot = scan(18.0, 0)
-    with_station = _sizes(fit_cuboid(points, sigma=RANGE_SIGMA, viewpoint=STATION), rot)
-    without = _sizes(fit_cuboid(points, sigma=RANGE_SIGMA), rot)
+    with_station = sizes_in_true_order(
+        fit_cuboid(points, sigma=RANGE_SIGMA, viewpoint=STATION), rot
+    )
+    without = sizes_in_true_order(fit_cuboid(points, sigma=RANGE_SIGMA), rot)
     # Sizes across the column (the length's ends are placed differently: silhouette vs extent).
     assert without[0][:2] == pytest.approx(with_station[0][:2], abs=0.03)
     assert without[1][:2] == pytest.approx(with_station[1][:2], rel=0.3)

@@ -1,6 +1,6 @@
 """Cuboids fitted without the station: the sizes' standard errors must cover the errors.
 
-The scans are ray-cast here (``fit_scans.cast``), independently of ``asbuilt.sim``: a pier
+The scans are ray-cast here (``fit_scans.shoot``), independently of ``asbuilt.sim``: a pier
 0.68 x 0.54 x 1.2 m whose top lies 3.6 m below a station 7 m away, so that two side faces and
 the top are seen, turned so that one side face is seen obliquely; a cell-centred raster over
 the pier's silhouette window. The station is not the scan frame's origin, so no viewpoint is
@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fit_scans import cast, directions
+from fit_scans import cell_centres, corner_angles, shoot, sizes_in_true_order
 
 from asbuilt.fit.cuboid import fit_cuboid
 from asbuilt.primitives import Cuboid
@@ -28,7 +28,6 @@ DISTANCE = 7.0  # station to pier, horizontally, metres
 DROP = 3.6  # the pier's top below the station, metres
 STATION = np.array([3.5, -1.0, 1.5])  # the station in the scan frame, metres
 RANGE_SIGMA = 0.002  # metres
-POINTING_SIGMA = np.radians(0.01)
 
 
 def scan(turn_deg: float, seed: int, columns: int, rows: int):
@@ -42,36 +41,13 @@ def scan(turn_deg: float, seed: int, columns: int, rows: int):
     a = np.radians(turn_deg)
     rot = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
     centre = np.array([0.0, DISTANCE, -DROP - HALF[2]])  # from the station
-    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
-    corners = centre + (signs * HALF) @ rot.T
-    pans = np.arctan2(corners[:, 1], corners[:, 0])
-    tilts = np.arctan2(corners[:, 2], np.hypot(corners[:, 0], corners[:, 1]))
-    pan_edges = np.linspace(pans.min(), pans.max(), columns + 1)
-    tilt_edges = np.linspace(tilts.min(), tilts.max(), rows + 1)
+    pier = Cuboid(centre, rot.T, 2.0 * HALF)
+    pans, tilts = corner_angles(pier)
     pan, tilt = np.meshgrid(
-        0.5 * (pan_edges[1:] + pan_edges[:-1]), 0.5 * (tilt_edges[1:] + tilt_edges[:-1])
+        cell_centres(pans.min(), pans.max(), columns), cell_centres(tilts.min(), tilts.max(), rows)
     )
-    pan, tilt = pan.ravel(), tilt.ravel()
-    true_dirs = directions(
-        pan + rng.normal(0.0, POINTING_SIGMA, pan.size),
-        tilt + rng.normal(0.0, POINTING_SIGMA, tilt.size),
-    )
-    entry = cast(Cuboid(centre, rot.T, 2.0 * HALF), np.zeros(3), true_dirs)  # NaN: a miss
-    hit = np.isfinite(entry)
-    reach = entry + rng.normal(0.0, RANGE_SIGMA, entry.size)
-    points = directions(pan, tilt) * reach[:, None]  # recorded with the nominal angles
+    points, hit = shoot(pier, pan.ravel(), tilt.ravel(), rng)
     return points[hit] + STATION, rot, centre
-
-
-def _sizes(result, rot):
-    """Fitted sizes (3,), standard errors (3,) and observed flags (3,), in the true axes' order."""
-    axes = np.array(result.primitive.axes)
-    order = np.abs(axes @ rot).argmax(axis=0)
-    return (
-        np.asarray(result.primitive.size)[order],
-        np.asarray(result.stderr["size"])[order],
-        np.asarray(result.observed)[order],
-    )
 
 
 @pytest.mark.parametrize("turn_deg, columns, rows", [(21.0, 6, 6), (24.0, 6, 8), (160.0, 6, 6)])
@@ -84,7 +60,7 @@ def test_side_face_line_is_not_taken_for_an_opposite_face(turn_deg, columns, row
         on_side = np.abs(np.abs(local[:, :2]) - HALF[:2]).min(axis=1) < 0.01
         assert on_side.any()
         result = fit_cuboid(points, sigma=sigma)
-        size, stderr, observed = _sizes(result, rot)
+        size, stderr, observed = sizes_in_true_order(result, rot)
         # One station sees no two opposite faces: every size is an extent bound.
         assert not observed.any()
         assert np.all(np.abs(size - 2.0 * HALF) <= 3.0 * stderr), (seed, size, stderr)
@@ -101,6 +77,6 @@ def test_extent_bound_covers_its_own_faces_raster_step(turn_deg, columns, rows, 
     for seed in range(4):
         points, rot, _ = scan(turn_deg, seed, columns, rows)
         result = fit_cuboid(points, sigma=sigma)
-        size, stderr, observed = _sizes(result, rot)
+        size, stderr, observed = sizes_in_true_order(result, rot)
         assert not observed.any()
         assert np.all(np.abs(size - 2.0 * HALF) <= 3.0 * stderr), (seed, size, stderr)

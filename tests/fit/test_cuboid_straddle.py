@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fit_scans import cast, directions
+from fit_scans import shoot, sizes_in_true_order
 
 from asbuilt.fit.cuboid import fit_cuboid
 from asbuilt.primitives import Cuboid
@@ -22,7 +22,6 @@ HALF = np.array([0.15, 0.15, 2.0])  # the column's half sizes, metres
 DISTANCE = 6.0  # station to column, metres
 WALL_BEHIND = 1.5  # metres behind the column
 RANGE_SIGMA = 0.002  # metres
-POINTING_SIGMA = np.radians(0.01)
 
 
 def _rotation(axis, deg: float) -> np.ndarray:
@@ -41,24 +40,14 @@ def scan(turn_deg: float, seed: int, record_misses: bool = True):
     corners = centre + (signs * HALF) @ rot.T
     pans = np.arctan2(corners[:, 1], corners[:, 0])
     pan, tilt = np.meshgrid(np.linspace(pans.min(), pans.max(), 5), np.linspace(-0.25, 0.25, 6))
-    pan, tilt = pan.ravel(), tilt.ravel()
-    true_dirs = directions(
-        pan + rng.normal(0.0, POINTING_SIGMA, pan.size),
-        tilt + rng.normal(0.0, POINTING_SIGMA, tilt.size),
+    points, hit = shoot(
+        Cuboid(centre, rot.T, 2.0 * HALF),
+        pan.ravel(),
+        tilt.ravel(),
+        rng,
+        miss_range=lambda beams: (DISTANCE + WALL_BEHIND) / beams[:, 1],
     )
-    entry = cast(Cuboid(centre, rot.T, 2.0 * HALF), np.zeros(3), true_dirs)  # NaN: a miss
-    hit = np.isfinite(entry)
-    reach = np.where(hit, entry, (DISTANCE + WALL_BEHIND) / true_dirs[:, 1])
-    reach = reach + rng.normal(0.0, RANGE_SIGMA, reach.size)
-    points = directions(pan, tilt) * reach[:, None]  # recorded with the nominal angles
     return (points if record_misses else points[hit]), rot
-
-
-def _sizes(result, rot):
-    """Fitted sizes (3,) and their standard errors (3,), in the order of the true axes."""
-    axes = np.array(result.primitive.axes)
-    order = np.abs(axes @ rot).argmax(axis=0)
-    return np.asarray(result.primitive.size)[order], np.asarray(result.stderr["size"])[order]
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -70,7 +59,7 @@ def test_grazing_face_size_error_is_covered_by_its_stderr(seed):
     incidence = np.degrees(np.arccos(abs(rot[:, 0] @ [0.0, 1.0, 0.0])))
     assert incidence == pytest.approx(70.0, abs=0.5)
     result = fit_cuboid(points, sigma=RANGE_SIGMA, viewpoint=np.zeros(3))
-    size, stderr = _sizes(result, rot)
+    size, stderr, _ = sizes_in_true_order(result, rot)
     assert np.all(np.abs(size - 2 * HALF) <= 3.0 * stderr)
 
 
@@ -81,6 +70,6 @@ def test_without_recorded_misses_the_half_step_rule_stays_and_is_honest():
     # error that covers the truth.
     points, rot = scan(20.0, 0, record_misses=False)
     result = fit_cuboid(points, sigma=RANGE_SIGMA, viewpoint=np.zeros(3))
-    size, stderr = _sizes(result, rot)
+    size, stderr, _ = sizes_in_true_order(result, rot)
     assert size[1] > 2 * HALF[1] + 0.05
     assert np.all(np.abs(size - 2 * HALF) <= 3.0 * stderr)
