@@ -147,6 +147,8 @@ def fit_points(
             where="points",
         )
     result = _fit_with_noise(kind, function, distinct, sigma, tolerances, options)
+    if kind != "auto":  # auto weighs each kind's fit itself, an undetermined one included
+        _refuse_unknown_radius(result)
     notes = [_prior_noise(result, tolerances) if sigma is None else None, _undetermined(result)]
     if repeats:
         result = dataclasses.replace(
@@ -416,6 +418,31 @@ def _noted_wider(result: FitResult, noise: float, sigma: float) -> FitResult:
 #: its points (the weak-geometry compliance rule flags far milder cases).
 UNDETERMINED_RELATIVE = 0.5
 UNDETERMINED_AXIS_DEG = 30.0
+
+
+#: A cylinder or sphere whose radius' standard error exceeds this fraction of the radius is
+#: refused, not reported: its points lie on a nearly flat strip or cap, and the least-squares
+#: radius can be anything up to kilometres (a 60 mm pipe 10 m away seen by two shots a raster
+#: row came out r 4.3 km with an infinite standard error), which no CAD model should carry.
+#: Between ``UNDETERMINED_RELATIVE`` and this the fit stands with a note.
+REFUSED_RELATIVE = 1.0
+
+
+def _refuse_unknown_radius(result: FitResult) -> None:
+    """Raise FitError when the fit's radius is not known to within its own size
+    (``REFUSED_RELATIVE``)."""
+    radius = getattr(result.primitive, "radius", None)
+    stderr = (result.stderr or {}).get("radius")
+    if radius is None or stderr is None or stderr <= REFUSED_RELATIVE * radius:
+        return
+    spread = "+-inf" if not np.isfinite(stderr) else f"+-{stderr / radius:.0%}"
+    best = f"{radius * 1000:.0f} mm" if radius < 1.0 else f"{radius:.4g} m"
+    raise FitError(
+        f"These points do not determine the {result.kind}'s radius (best fit r {best}, one "
+        f"standard error {spread}): they lie on a nearly flat "
+        "strip or patch of it. Shoot across more of its surface, or check its kind.",
+        where="points",
+    )
 
 
 def _undetermined(result: FitResult) -> str | None:

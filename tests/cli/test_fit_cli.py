@@ -338,9 +338,9 @@ def test_names_and_ids_are_shown_as_written_not_as_rich_markup(tmp_path, capsys)
     assert "S[red]2" in out
 
 
-def test_the_table_shows_each_fits_notes(tmp_path, capsys):
-    """A flat wall's shots fitted as a cylinder gave "r 179.604 m" in the table, exit 0, and
-    the warning that the points do not determine the cylinder only with --json (audit)."""
+def test_a_wall_fitted_as_a_pipe_is_refused_not_reported_kilometres_wide(tmp_path, capsys):
+    """A flat wall's shots fitted as a cylinder gave "r 179.604 m" in the table, exit 0 (audit);
+    its radius is not known to within its size, so the fit is refused with one located line."""
     rng = np.random.default_rng(4)
     wall = np.column_stack([rng.uniform(0, 1.4, 25), np.full(25, 4.0), rng.uniform(0, 1.4, 25)])
     wall[:, 1] += rng.normal(0, 0.002, 25)
@@ -353,6 +353,28 @@ def test_the_table_shows_each_fits_notes(tmp_path, capsys):
     }
     path = tmp_path / "wall_as_pipe.json"
     path.write_text(json.dumps(doc))
+    assert main(["fit", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "objects[0] (NotAPipe): points: These points do not determine the cylinder's" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_the_table_shows_each_fits_notes(tmp_path, capsys):
+    """A loosely determined fit's warning was shown only with --json (audit)."""
+    # Eight shots along a 1 m helix over 120 degrees of a 0.1 m pipe: radius +-65%.
+    angles = np.radians(np.linspace(-60, 60, 8))
+    helix = np.column_stack(
+        [np.linspace(0, 1, 8), 3.0 - 0.1 * np.cos(angles), 1.0 + 0.1 * np.sin(angles)]
+    )
+    doc = {
+        "format": "asbuilt-scan",
+        "version": 1,
+        "units": "m",
+        "sensor": {"range_sigma": 0.001},
+        "objects": [{"id": "Loose", "kind": "cylinder", "points": helix.tolist()}],
+    }
+    path = tmp_path / "loose.json"
+    path.write_text(json.dumps(doc))
     assert main(["fit", str(path), "--json"]) == 0
     notes = json.loads(capsys.readouterr().out)["objects"][0]["notes"]
     assert any(note.startswith("These points do not determine the cylinder") for note in notes)
@@ -360,4 +382,4 @@ def test_the_table_shows_each_fits_notes(tmp_path, capsys):
     out = capsys.readouterr().out
     table, _, below = out.partition("notes:")
     assert below, out
-    assert "NotAPipe" in below and "These points do not determine the cylinder" in below
+    assert "Loose" in below and "These points do not determine the cylinder" in below

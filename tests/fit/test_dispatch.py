@@ -20,6 +20,7 @@ import asbuilt
 from asbuilt.errors import FitError
 from asbuilt.fit import (
     FITTERS,
+    REFUSED_RELATIVE,
     FitReport,
     FitResult,
     NothingFittedError,
@@ -470,14 +471,26 @@ def test_a_thin_pipe_is_not_taken_for_a_line():
     assert fit_points("cylinder", points, sigma=0.002).kind == "cylinder"
 
 
-def test_an_undetermined_fit_says_so():
-    # Six noise-free shots along a 1 m helix over 66 degrees of a 0.1 m pipe: at 1 mm noise
-    # they do not fix its radius or axis (standard errors larger than the values).
-    angles = np.radians(np.linspace(-33, 33, 6))
-    points = np.column_stack(
-        [np.linspace(0, 1, 6), 3.0 - 0.1 * np.cos(angles), 1.0 + 0.1 * np.sin(angles)]
+def _helix(count: int, half_arc_deg: float) -> np.ndarray:
+    """Noise-free shots (count, 3) metres along a 1 m helix over +-half_arc_deg of a 0.1 m
+    pipe."""
+    angles = np.radians(np.linspace(-half_arc_deg, half_arc_deg, count))
+    return np.column_stack(
+        [np.linspace(0, 1, count), 3.0 - 0.1 * np.cos(angles), 1.0 + 0.1 * np.sin(angles)]
     )
-    result = fit_points("cylinder", points, sigma=0.001)
+
+
+def test_a_radius_not_known_to_within_its_size_is_refused():
+    # Six shots over 66 degrees: at 1 mm noise they fix neither radius nor axis; the fit came
+    # out r 0.80 m +-24 m (true 0.1) and used to stand with a note.
+    with pytest.raises(FitError, match="do not determine the cylinder's radius .best fit r "):
+        fit_points("cylinder", _helix(6, 33), sigma=0.001)
+
+
+def test_an_undetermined_fit_says_so():
+    # Eight shots over 120 degrees: the radius is known to +-65% only, which stands with a note.
+    result = fit_points("cylinder", _helix(8, 60), sigma=0.001)
+    assert 0.5 < result.stderr["radius"] / result.primitive.radius <= REFUSED_RELATIVE
     note = result.notes[-1]
     assert note.startswith("These points do not determine the cylinder (one standard error: ")
     assert note.endswith("); measure more of its surface, or check its kind.")
