@@ -7,6 +7,8 @@ import pytest
 from fit_scans import raster_scan
 
 from asbuilt.errors import FitError
+from asbuilt.fit import sphere as sphere_module
+from asbuilt.fit._robust import RobustFit
 from asbuilt.fit.sphere import algebraic_sphere, fit_sphere
 from asbuilt.primitives import Sphere
 
@@ -110,3 +112,23 @@ def test_a_shot_on_the_far_side_is_rejected(rng):
     fit = fit_sphere(np.vstack([sample.points, behind + 0.001]))
     assert not fit.inliers[-1] and fit.inliers[:-1].sum() >= 28
     assert any("far side" in note for note in fit.notes)
+
+
+@pytest.mark.parametrize("radius, weighted", [(0.1, False), (0.5, True)])
+def test_only_spheres_large_against_the_noise_are_weighted_by_incidence(radius, weighted):
+    # Shots over a cap seen from one side, noisier square-on (3 mm) than grazing (1 mm): a
+    # 0.5 m sphere's fit weights them; a 0.1 m one's (noise 2% of the radius, where the range
+    # noise's sideways part biases the radius and weights make that worse) does not.
+    rng = np.random.default_rng(7)
+    polar = np.radians(rng.uniform(0.0, 70.0, 60))
+    azimuth = rng.uniform(0.0, 2.0 * np.pi, 60)
+    normals = np.column_stack(
+        [np.sin(polar) * np.cos(azimuth), np.sin(polar) * np.sin(azimuth), -np.cos(polar)]
+    )
+    noise = np.sqrt(0.001**2 + (0.003**2 - 0.001**2) * np.cos(polar) ** 2)
+    points = (radius + rng.normal(0.0, 1.0, 60) * noise)[:, None] * normals + [0.0, 0.0, 5.0]
+    state = (np.array([0.0, 0.0, 5.0]), radius)
+    residuals, jacobian = sphere_module._MODEL.jacobian(state, points)
+    robust = RobustFit(state, residuals, np.ones(60, bool), jacobian, float(np.std(residuals)))
+    _, relative = sphere_module._incidence_weighted(robust, points)
+    assert bool(np.ptp(relative) > 0.1) == weighted
