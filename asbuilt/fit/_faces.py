@@ -598,6 +598,13 @@ def has_opposite(face_axis) -> bool:
     return len(set(axes)) < len(axes)
 
 
+def on_one_line(points: np.ndarray, width: float) -> bool:
+    """Whether points (m, 3) metres, m >= 2, lie within ``width`` metres (RMS) of one line: a
+    single raster column or row, which lies in every plane through it."""
+    rel = points - points.sum(axis=0) / points.shape[0]
+    return bool(np.linalg.svd(rel, compute_uv=False)[1] < width * math.sqrt(points.shape[0]))
+
+
 def _one_station(points, axes, base, grown, threshold, gap) -> list:
     """A frame without opposite faces from a grown one that has them (faces as (axis,
     unsigned offset, mask)).
@@ -625,8 +632,7 @@ def _one_station(points, axes, base, grown, threshold, gap) -> list:
                 continue
             # One line: within the threshold of it (RMS). The frame's direction may still be
             # off by a fraction of a degree, which tilts a long line across the new plane.
-            rel = members - members.sum(axis=0) / members.shape[0]
-            if np.linalg.svd(rel, compute_uv=False)[1] < threshold * math.sqrt(rel.shape[0]):
+            if on_one_line(members, threshold):
                 u = free.pop()
                 values = proj[faces[f][2], u]
                 faces[f] = (u, float(values.sum()) / values.size, faces[f][2])

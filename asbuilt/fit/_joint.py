@@ -232,7 +232,7 @@ def plausible(model: FaceModel, view: np.ndarray, trusted: bool) -> bool:
     if not _faces.is_box(model.face_axis, model.face_sign, model.offset):
         return False
     if not trusted:
-        return not _opposite_faces(model)
+        return not _faces.has_opposite(model.face_axis)
     return bool((model.normals() @ view - model.offset > 0.0).all())
 
 
@@ -248,15 +248,9 @@ def _on_a_line(trial, x: np.ndarray, width: float, raster: np.ndarray | None = N
         members = x[counted & (label == f)]
         if members.shape[0] < 2:
             continue
-        spread = np.linalg.svd(members - members.mean(axis=0), compute_uv=False)
-        if spread[1] < width * math.sqrt(members.shape[0]):
+        if _faces.on_one_line(members, width):
             return True
     return False
-
-
-def _opposite_faces(model: FaceModel) -> bool:
-    """Whether a fit has two opposite faces seen (two faces across one axis)."""
-    return bool(np.any(np.bincount(model.face_axis, minlength=3) >= 2))
 
 
 def _one_station_frames(trial, x: np.ndarray, width: float) -> list:
@@ -285,8 +279,7 @@ def _one_station_frames(trial, x: np.ndarray, width: float) -> list:
         others = inliers & (label != f)
         if members.shape[0] < 2 or not others.any():
             continue
-        rel = members - members.mean(axis=0)
-        if np.linalg.svd(rel, compute_uv=False)[1] >= width * math.sqrt(members.shape[0]):
+        if not _faces.on_one_line(members, width):
             continue
         value = float(proj[mine].mean())
         sign = (

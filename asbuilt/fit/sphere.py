@@ -26,6 +26,10 @@ from asbuilt.fit._common import (
     stderr_of,
     validate_points,
 )
+
+# Above this noise level relative to the radius the fit is not weighted by incidence: the
+# cylinder's rule and reason.
+from asbuilt.fit._cylinder_model import WEIGHTED_NOISE_RATIO
 from asbuilt.fit._robust import (
     GeometricModel,
     RobustFit,
@@ -120,10 +124,6 @@ def _quad_start(points: np.ndarray, keep: int, samples: int = 64):
 #: Mean resultant length of the inliers' directions from the centre above which the sphere is
 #: taken as seen from one side (a hemisphere of raster shots gives about 0.6, all round 0).
 ONE_SIDED = 0.3
-
-#: Above this noise level relative to the radius the fit is not weighted by incidence (the
-#: same rule as the cylinder's, :data:`asbuilt.fit._cylinder_model.WEIGHTED_NOISE_RATIO`).
-WEIGHTED_NOISE_RATIO = 0.01
 
 
 #: Angle from the seen side's mean direction beyond which a point faces away from it.
