@@ -9,8 +9,10 @@ orthogonal distances ``|p - c| - r`` by Gauss-Newton on the four parameters (Luk
 Martin 1998), robustly (concentration steps, then least squares on the inliers; see
 :func:`asbuilt.fit._robust.robust_geometric_fit`), and finally weighted by a fitted incidence
 noise model (:func:`_incidence_weighted`; not when the noise is above ``WEIGHTED_NOISE_RATIO``
-of the radius, as for thin pipes). The algebraic fit alone is biased on small caps;
-only the geometric one is reported.
+of the radius, as for thin pipes). With the sensor's position known, the last step measures each
+shot along its beam instead (:func:`_along_beams`), which removes the orthogonal distances' bias
+under along-the-beam noise. The algebraic fit alone is biased on small caps; only the geometric
+one is reported.
 """
 
 from __future__ import annotations
@@ -188,7 +190,86 @@ def _incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFi
     return RobustFit(state, residuals, kept, jacobian[kept], robust.scale), relative
 
 
-def fit_sphere(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES) -> FitResult:
+#: Cosine of the incidence (on the current sphere) below which a shot keeps its orthogonal
+#: distance in :func:`_along_beams`: near the silhouette the range along a beam changes without
+#: bound with the sphere, and a beam may miss a neighbouring candidate sphere altogether.
+GRAZING_COS = 0.3
+
+
+def _along_beams(
+    robust: RobustFit, points: np.ndarray, viewpoint: np.ndarray, relative: np.ndarray
+) -> RobustFit:
+    """Refit the inliers on their range errors along the beams from ``viewpoint``.
+
+    A shot's noise lies along its beam (range) and across it (pointing), not along the surface
+    normal, so it moves both a point's distance from the sphere and the normal that distance is
+    taken along; orthogonal least squares then shrinks a small sphere's radius (errors in
+    variables: 0.2 m spheres scanned by 20-40 shots with 2 mm range noise, -0.12 to -0.14 mm
+    from range noise alone, 4-6 standard errors of the mean of 1,000 simulated trials). Each
+    shot's residual here is ``(t - R) cos(i)``: its measured range ``R`` less the range ``t``
+    at which its beam meets the sphere, times the cosine of the incidence there, which equals
+    the orthogonal distance to first order (same weights, same covariance) but depends on the
+    noise only through ``R``. The cosines are fixed within each solve and updated between
+    (iteratively reweighted); shots within ``GRAZING_COS`` of grazing keep the orthogonal
+    distance. Inliers and weights (``1 / relative``, shape (n,)) are kept; a result whose
+    weighted orthogonal cost exceeds the first's by more than one noise variance is dropped.
+    """
+    kept = robust.inliers
+    rays = points - viewpoint
+    ranges = np.linalg.norm(rays, axis=1)
+    if np.any(ranges <= 0.0):
+        return robust
+    beams = rays / ranges[:, None]
+    weights = np.where(kept, 1.0 / relative, 0.0)
+    state = robust.state
+    for _ in range(3):
+        center, radius = state
+        ahead = beams @ (center - viewpoint)
+        square = ahead * ahead - (center - viewpoint) @ (center - viewpoint) + radius * radius
+        cosine = np.sqrt(np.maximum(square, 0.0)) / radius
+        beam = cosine > GRAZING_COS
+        if np.count_nonzero(beam & kept) == 0:
+            return robust
+        model = GeometricModel(
+            _residuals, _beam_jacobian(beams, ranges, viewpoint, cosine, beam), _update, 4
+        )
+        state, _, _ = gauss_newton(model, state, points, lambda _r, w=weights: w, 6, 1e-9)
+    residuals, jacobian = _jacobian(state, points)
+    # The correction is of second order: it moves the orthogonal cost by a small fraction of
+    # one noise variance. A solve that went further (a wrong branch near grazing) is dropped.
+    before = float(weights @ (robust.residuals * robust.residuals))
+    if not float(weights @ (residuals * residuals)) <= before + robust.scale**2:
+        return robust
+    return RobustFit(state, residuals, kept, jacobian[kept], robust.scale)
+
+
+def _beam_jacobian(beams, ranges, viewpoint, cosine, beam):
+    """The Jacobian function of :func:`_along_beams`' residuals (fixed ``cosine``, shape (n,))."""
+
+    def jacobian(state, points):
+        orthogonal, jac = _jacobian(state, points)
+        center, radius = state
+        rel = center - viewpoint
+        ahead = beams @ rel
+        root = np.sqrt(np.maximum(ahead * ahead - rel @ rel + radius * radius, 1e-300))
+        meet = ahead - root
+        residuals = np.where(beam, (meet - ranges) * cosine, orthogonal)
+        along = np.empty_like(jac)
+        along[:, :3] = beams - (ahead[:, None] * beams - rel) / root[:, None]
+        along[:, 3] = -radius / root
+        jac = np.where(beam[:, None], along * cosine[:, None], jac)
+        return residuals, jac
+
+    return jacobian
+
+
+def fit_sphere(
+    points,
+    *,
+    sigma=None,
+    tolerances: Tolerances = DEFAULT_TOLERANCES,
+    viewpoint=None,
+) -> FitResult:
     """Fit a sphere by robust geometric least squares (orthogonal distances).
 
     Algorithm: algebraic (Kasa/Pratt) and four-point starts, concentration steps, then
@@ -200,6 +281,9 @@ def fit_sphere(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCE
     sigma : float, optional, metres
         The sensor's range sigma; scales the standard errors when given.
     tolerances : Tolerances
+    viewpoint : array_like, shape (3,), metres, optional
+        The sensor's position: the last step then measures the shots along their beams
+        (:func:`_along_beams`).
 
     Returns
     -------
@@ -244,6 +328,8 @@ def fit_sphere(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCE
     robust = _drop_far_side(near, local)
     far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
     robust, relative = _incidence_weighted(robust, local)
+    if viewpoint is not None:
+        robust = _along_beams(robust, local, np.asarray(viewpoint, float) - offset, relative)
     center, radius = robust.state
     # Noise level of a square-on shot; the inliers' weights are 1 / relative variance.
     weights = 1.0 / relative[robust.inliers]
