@@ -13,11 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.special import chdtri
 
 from asbuilt.fit import _faces
 from asbuilt.fit._mixture import mixing_cost
-from asbuilt.fit._robust import DESIGN_CONTAMINATION
 
 #: Tukey biweight tuning constant (95% efficiency at the normal; Beaton and Tukey 1974).
 _TUKEY_C = 4.685
@@ -329,52 +327,7 @@ def _information(trial, sigma: float, cutoff: float) -> float:
 _ONE_STATION_OUTLIERS = 0.4
 
 
-#: Upper tail probability of the chi-square test a first fit's inliers must pass to stand
-#: without the exhaustive search (:func:`settled`).
-SETTLED_CHI2_TAIL = 1e-3
-#: A first fit that rejects shots stands without the exhaustive search only if none of them
-#: lies within this many inlier thresholds of it (:func:`settled`): a shot between 3 and 6
-#: sigmas off is an outlier or not depending on the frame, which the search weighs; an edge
-#: shot that hit the wall behind, or a mixed return between box and wall, is centimetres to
-#: metres off.
-SETTLED_GAP = 2.0
-
-
-def settled(trial, cap: float, noise: float) -> bool:
-    """Whether a plausible first fit that rejects shots needs no exhaustive search.
-
-    The search exists for frames that explain the same shots differently (either corner of
-    two narrow faces), which only the shots a fit leaves out can decide. The first fit
-    ``trial`` (:func:`_fit_frame`'s tuple, after its face growth has taken in any face of its
-    frame among the rejected shots) stands when
-
-    - it rejects no more than the design contamination (``DESIGN_CONTAMINATION`` of the
-      shots, as the cylinder's trimmed cost);
-    - every rejected shot lies farther than ``SETTLED_GAP`` times the inlier threshold
-      ``cap`` (metres) from it;
-    - the inliers' residuals pass a chi-square test at the sensor's ``noise`` (metres; tail
-      ``SETTLED_CHI2_TAIL``).
-
-    Used with a trusted viewpoint only. Measured on 1,296 fits of the benchmark's cuboids
-    (20-40 shots; exact window, operator window and scan session; clean and with 20% edge
-    outliers; with the station, from the scan origin and shifted off it): the same answers as
-    the exhaustive search's (two differ in rounding).
-    """
-    model, _, residual, inliers = trial[:4]
-    n = residual.shape[0]
-    rejected = ~inliers
-    if np.count_nonzero(rejected) > math.floor(DESIGN_CONTAMINATION * n):
-        return False
-    if rejected.any() and float(np.abs(residual[rejected]).min()) < SETTLED_GAP * cap:
-        return False
-    kept = residual[inliers]
-    dof = kept.size - (model.rot_basis.shape[1] + model.offset.shape[0])
-    if dof < 1:
-        return False
-    return float(kept @ kept) <= noise * noise * float(chdtri(dof, SETTLED_CHI2_TAIL))
-
-
-def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, known=False):
+def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
     """The robust joint fit of the segmentation frame that every point supports best.
 
     The best-scoring frame of ``frames`` is fitted first. A plausible fit (:func:`plausible`)
@@ -394,9 +347,8 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
     winner still rejects more than ``max_outlier_fraction`` of the points, the frames are
     taken in turn and the plausible one keeping the most points wins. ``fit_args`` are
     :func:`_fit_frame`'s arguments after the frame; ``raster`` (n,) bool, optional, the points
-    that are not edge-bisection shots (for :func:`_on_a_line`); ``known``: the noise level is
-    the sensor's, so that with a trusted viewpoint a plausible first fit rejecting only shots
-    far off it stands too (:func:`settled`). Returns :func:`_fit_frame`'s tuple.
+    that are not edge-bisection shots (for :func:`_on_a_line`). Returns :func:`_fit_frame`'s
+    tuple.
     """
     x, noise, floor, cutoff, _, view, trusted = fit_args
     n = x.shape[0]
@@ -423,8 +375,7 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
     best = fitted(frames[0])
     best_rank = rank(best, True)
     # (Without a trusted viewpoint a fit with opposite faces is implausible, so doubtful too.)
-    kept = best[3].all() or (known and trusted and settled(best, cap, max(noise, floor)))
-    if not (best_rank[0] and kept) or _on_a_line(best, x, cap, raster):
+    if not (best_rank[0] and best[3].all()) or _on_a_line(best, x, cap, raster):
         first = int(np.count_nonzero(frames[0].labels >= 0))
         frames = exhaustive()
         for frame in frames:

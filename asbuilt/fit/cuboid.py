@@ -452,9 +452,8 @@ def fit_cuboid(
     fourth = hood[:, min(3, hood.shape[1] - 1)]
     reach = median(np.linalg.norm(xs[fourth] - xs, axis=1))
 
-    def attempt(noise: float, known: bool = False):
-        """Segmentation and joint fit with the consensus threshold of ``noise`` (metres), the
-        sensor's when ``known``."""
+    def attempt(noise: float):
+        """Segmentation and joint fit with the consensus threshold of ``noise`` (metres)."""
         threshold = cutoff * max(noise, floor)
         gap = threshold + 1.5 * reach
         search = _faces.Segmentation(
@@ -477,12 +476,11 @@ def fit_cuboid(
             (x, noise, floor, cutoff, gap, viewpoint - origin, trusted),
             tolerances.max_outlier_fraction,
             edges[0] < 0,
-            known,
         )
 
     if sigma is not None:
         noise = float(sigma)
-        fitted = attempt(noise, known=True)
+        fitted = attempt(noise)
     else:
         noise, fitted = _likeliest_noise(
             attempt,

@@ -19,7 +19,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from asbuilt.errors import FitError
-from asbuilt.fit import _faces, _joint
 from asbuilt.fit.cuboid import fit_cuboid
 from asbuilt.primitives import Cuboid
 from asbuilt.tolerances import MIN_POINTS
@@ -705,32 +704,3 @@ def test_a_dense_cloud_is_fitted_in_linear_memory():
     size = sorted(result.primitive.size)
     assert size == pytest.approx([0.3, 0.4, 2.0], abs=0.005)
     assert result.inliers.mean() > 0.99
-
-
-@pytest.mark.parametrize("seed", [41, 42, 43, 44])
-def test_a_first_fit_rejecting_only_far_shots_needs_no_exhaustive_search(seed, monkeypatch):
-    # With the sensor's sigma and a trusted viewpoint, a plausible first fit whose rejected
-    # shots all lie far off it (on the wall behind) stands; the exhaustive search over every
-    # first face, made anyway, finds the same box.
-    rng = np.random.default_rng(seed)
-    truth = column(0.4, 0.35, 3.0, 45.0, rng.uniform(3, 10), rng)
-    points, _ = scan_box(truth, np.zeros(3), 6, 7, rng)
-    beams = points / np.linalg.norm(points, axis=1)[:, None]
-    wall = rng.choice(len(points), len(points) // 5, replace=False)
-    points[wall] += rng.uniform(1.5, 3.0, len(wall))[:, None] * beams[wall]
-    searched = []
-    frames = _faces.Segmentation.frames
-
-    def recording(self, exhaustive=False):
-        searched.append(exhaustive)
-        return frames(self, exhaustive)
-
-    monkeypatch.setattr(_faces.Segmentation, "frames", recording)
-    first = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
-    assert searched == [False]
-    assert sorted(np.flatnonzero(~first.inliers)) == sorted(wall)
-    monkeypatch.setattr(_joint, "settled", lambda *args: False)
-    full = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
-    assert True in searched
-    np.testing.assert_allclose(first.primitive.size, full.primitive.size, atol=1e-9)
-    np.testing.assert_allclose(first.primitive.axes, full.primitive.axes, atol=1e-9)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from asbuilt.fit._joint import FaceModel, _information, plausible, settled
+from asbuilt.fit._joint import FaceModel, _information, plausible
 
 
 def _model(face_axis, face_sign, offsets) -> FaceModel:
@@ -71,32 +71,3 @@ def test_jacobian_matches_its_plain_construction(rot_basis):
     onehot = (label[:, None] == np.arange(3)).astype(np.float64)
     expected = np.hstack([np.cross(normal, x) @ rot_basis, -onehot])
     np.testing.assert_array_equal(model.jacobian(x, label), expected)
-
-
-def _trial(residual, inliers):
-    model = _model([0, 1], [1, 1], np.array([0.2, 0.2]))
-    return model, np.zeros(len(residual), dtype=np.int64), np.asarray(residual), np.asarray(inliers)
-
-
-@pytest.mark.parametrize(
-    "rejected, expected",
-    [
-        ([], True),  # every shot kept
-        ([0.5, -1.2, 2.0], True),  # wall shots centimetres to metres off
-        ([0.5, 0.010], False),  # one 5 sigmas off: within twice the 6 mm threshold
-        ([0.5] * 11, False),  # more than a quarter of 40 rejected
-    ],
-)
-def test_a_first_fit_stands_only_when_its_rejected_shots_are_far_off(rejected, expected):
-    sigma, cap = 0.002, 0.006
-    kept = np.random.default_rng(3).normal(0.0, sigma, 40 - len(rejected))
-    residual = np.concatenate([kept, rejected])
-    inliers = np.arange(40) < kept.size
-    assert settled(_trial(residual, inliers), cap, sigma) is expected
-
-
-def test_a_first_fit_whose_inliers_are_noisier_than_the_sensor_does_not_stand():
-    # Inliers scattered at twice the sensor's sigma fail the chi-square test (37 dof, 1e-3).
-    residual = np.random.default_rng(4).normal(0.0, 0.004, 40)
-    assert not settled(_trial(residual, np.ones(40, bool)), 0.012, 0.002)
-    assert settled(_trial(residual, np.ones(40, bool)), 0.012, 0.004)
