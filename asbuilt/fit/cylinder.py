@@ -194,40 +194,25 @@ def _robust_among(local, starts, costs, sigma, tolerances) -> RobustFit:
     )
 
 
-#: Upper tail probability of the chi-square test a quick fit's inliers must pass
-#: (:func:`_quick_fit`): a fit in a wrong basin that still keeps its shots within the inlier
+#: Upper tail probability of the chi-square test a quick fit's residuals must pass
+#: (:func:`_quick_fit`): a fit in a wrong basin that still keeps every shot within the inlier
 #: threshold fits them worse than the noise allows.
 QUICK_CHI2_TAIL = 1e-3
-
-#: A quick fit that rejects shots stands only if none of them lies within this many inlier
-#: thresholds of it (:func:`_quick_fit`): a shot between 3 and 6 sigmas off is an outlier or not
-#: depending on details of the fit, which the full search weighs; an edge shot that hit the wall
-#: behind is centimetres to metres off (benchmark: 0.7-56 cm, median 23 cm, at 2 mm sigma).
-QUICK_GAP = 2.0
 
 
 def _quick_fit(local, axes, keep, sigma, view, tolerances):
     """The robust fit from the normals' and principal axes' circles alone, when it needs no
     second look; else None.
 
-    Most scans of at least ``POLISH_BELOW`` shots with a known sigma are plain: the first axis
-    starts give the fit, and the two-point and line starts, their circles, the polished axes,
-    the beams' second look and the MSAC circles (nine tenths of a 40-point fit's time when it
-    rejects edge shots) all settle on the same minimum. The quick fit is kept only when
-
-    - it rejects shots only with a viewpoint, and then no more than the trimmed cost is
-      designed for (``len(local) - keep``), none of them within ``QUICK_GAP`` inlier
-      thresholds of it, and each, along its beam, that far beyond every shot it keeps (the
-      background behind the pipe);
-    - its inliers' residuals pass a chi-square test at ``sigma`` (tail ``QUICK_CHI2_TAIL``);
-    - nothing would reconsider it: with a viewpoint, no inlier's beam runs through the fitted
-      pipe by more than the inlier threshold; without one, no shot lies inside the pipe
-      (:func:`admissible`) and no inlier on its far side (:func:`drop_far_side`).
-
-    Anything else takes the full search, exactly as without this shortcut. Of the benchmark's
-    40-point scans with 20% edge outliers seen from the station 53% take it; one of 750 fits
-    differs from the full search's by more than its convergence tolerance (0.13 mm,
-    docs/fitting.md).
+    Most scans of at least ``POLISH_BELOW`` shots with a known sigma are clean: the first axis
+    starts give the fit, and the two-point and line starts, their circles and the robust
+    choice among them all (about a third of a 40-point fit's time) settle on the same
+    minimum. No shot may lie farther from the cheapest start than its radius, and the quick
+    fit is kept only when every shot is an inlier, its residuals pass a chi-square test at
+    ``sigma`` (tail ``QUICK_CHI2_TAIL``), and nothing would reconsider it: with a viewpoint,
+    no beam runs through the fitted pipe (:func:`doubtful`); without one, no shot lies inside
+    the pipe (:func:`admissible`) nor on its far side (:func:`drop_far_side`). Anything else
+    takes the full search, exactly as without this shortcut.
 
     Parameters
     ----------
@@ -246,35 +231,28 @@ def _quick_fit(local, axes, keep, sigma, view, tolerances):
     starts, costs = circle_starts(local, axes, keep, np.random.default_rng(len(local)))
     if not starts:
         return None
+    best = starts[int(np.argmin(costs))]
+    if float(np.abs(MODEL.residuals(best, local)).max()) > best[2]:
+        # A shot farther from the cheapest circle than its radius: background (a wall behind
+        # the pipe), which the quick fit would only find after its robust choice. On the
+        # benchmark's clean 40-point scans the farthest shot is at most 0.7 radii away; with
+        # 20% edge outliers, a median 15.
+        return None
     try:
         robust = _robust_among(local, starts, costs, sigma, tolerances)
     except FitError:
         return None
-    inliers = robust.inliers
-    cutoff = tolerances.outlier_cutoff_sigma * sigma
-    if not inliers.all():
-        # Rejected shots must be background: few, clear of the fit, and, along their beams,
-        # beyond every shot it keeps. Without the last test a thinner pipe sharing the near
-        # side of a long one seen by a few raster columns kept 31 of 40 shots within the noise
-        # and rejected the fourth column, 7-10 cm off it but nearer than the rest.
-        if view is None or np.count_nonzero(~inliers) > len(local) - keep:
-            return None
-        margin = QUICK_GAP * cutoff
-        if float(np.abs(robust.residuals[~inliers]).min()) < margin:
-            return None
-        ranges = np.linalg.norm(local - view, axis=1)
-        if float(ranges[~inliers].min()) < float(ranges[inliers].max()) + margin:
-            return None
-    kept = robust.residuals[inliers]
-    dof = len(kept) - MODEL.n_params
-    if float(kept @ kept) > sigma**2 * chdtri(dof, QUICK_CHI2_TAIL):
+    if not robust.inliers.all():
+        return None
+    dof = len(local) - MODEL.n_params
+    if float(robust.residuals @ robust.residuals) > sigma**2 * chdtri(dof, QUICK_CHI2_TAIL):
         return None
     if view is not None:
-        if np.any(cylinder_beam_excess(*robust.state, local[inliers], view) > cutoff):
+        if doubtful(robust, local, view, len(local), sigma, tolerances):
             return None
-    elif not admissible(robust, local, cutoff):
+    elif not admissible(robust, local, tolerances.outlier_cutoff_sigma * sigma):
         return None
-    elif not np.array_equal(drop_far_side(robust, local, tolerances).inliers, inliers):
+    elif not drop_far_side(robust, local, tolerances).inliers.all():
         return None
     return robust, starts
 
