@@ -1,6 +1,7 @@
 """The sphere fit with the sensor's position: range noise along the beams does not bias it."""
 
 import numpy as np
+import pytest
 
 from asbuilt.fit import fit_points
 
@@ -41,3 +42,20 @@ def test_range_noise_along_the_beams_leaves_the_radius_unbiased():
     assert abs(errors.mean()) < 3 * standard_error
     # Same precision: the correction is of second order.
     assert np.sqrt(np.mean(errors**2)) < 1.05 * np.sqrt(np.mean(orthogonal**2))
+
+
+@pytest.mark.parametrize(
+    "viewpoint",
+    [
+        2.0 * CENTRE,  # behind the sphere: every beam would pass through it first
+        np.array([0.0, 100.0, 0.0]),  # a station in another frame: no beam meets the sphere
+    ],
+)
+def test_a_station_the_shots_cannot_come_from_leaves_the_orthogonal_fit(viewpoint):
+    # The beams from a wrong station meet the sphere nowhere near the shots (or not at all):
+    # the refit along them is dropped and the fit is the one without a station.
+    for points in _scans(20, 5):
+        wrong = fit_points("sphere", points, sigma=SIGMA, viewpoint=viewpoint)
+        none = fit_points("sphere", points, sigma=SIGMA)
+        assert wrong.primitive.radius == none.primitive.radius
+        np.testing.assert_array_equal(wrong.primitive.center, none.primitive.center)
