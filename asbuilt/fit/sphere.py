@@ -211,8 +211,30 @@ def _along_beams(
     the orthogonal distance to first order (same weights, same covariance) but depends on the
     noise only through ``R``. The cosines are fixed within each solve and updated between
     (iteratively reweighted); shots within ``GRAZING_COS`` of grazing keep the orthogonal
-    distance. Inliers and weights (``1 / relative``, shape (n,)) are kept; a result whose
-    weighted orthogonal cost exceeds the first's by more than one noise variance is dropped.
+    distance.
+
+    Not for pipes: on the benchmark's scans the pointing noise pushes silhouette shots outward
+    about as much as the range noise shrinks an orthogonal fit, and refitting thin pipes along
+    their beams biased them (benchmarks/RESULTS.md).
+
+    Parameters
+    ----------
+    robust : RobustFit
+        The settled fit (orthogonal residuals).
+    points : ndarray, shape (n, 3), metres
+    viewpoint : ndarray, shape (3,), metres
+        The station, in ``points``' frame.
+    relative : ndarray, shape (n,)
+        Each shot's variance relative to a square-on shot (weights ``1 / relative``).
+
+    Returns
+    -------
+    RobustFit
+        Same inliers and scale, residuals and Jacobian orthogonal at the refitted state; or
+        ``robust`` itself when no inlier's beam meets the sphere squarely, or when the refit
+        raises the weighted orthogonal cost by more than one noise variance (the correction is
+        of second order: a solve that went further took a wrong branch near grazing, or the
+        shots were not taken from ``viewpoint``).
     """
     kept = robust.inliers
     rays = points - viewpoint
