@@ -245,10 +245,8 @@ def _along_beams(
     weights = np.where(kept, 1.0 / relative, 0.0)
     state = robust.state
     for _ in range(3):
-        center, radius = state
-        ahead = beams @ (center - viewpoint)
-        square = ahead * ahead - (center - viewpoint) @ (center - viewpoint) + radius * radius
-        cosine = np.sqrt(np.maximum(square, 0.0)) / radius
+        _, square = _beam_meets(state, beams, viewpoint)
+        cosine = np.sqrt(np.maximum(square, 0.0)) / state[1]
         beam = cosine > GRAZING_COS
         if np.count_nonzero(beam & kept) == 0:
             return robust
@@ -265,6 +263,18 @@ def _along_beams(
     return RobustFit(state, residuals, kept, jacobian[kept], robust.scale)
 
 
+def _beam_meets(state, beams: np.ndarray, viewpoint: np.ndarray):
+    """Where unit beams (n, 3) from ``viewpoint`` (3,) metres meet the sphere ``state``:
+    each beam's range to the point nearest the centre, ``ahead`` (n,) metres, and the
+    discriminant ``ahead^2 - |c - v|^2 + r^2`` (n,) square metres (negative where the beam
+    misses; the first hit is at ``ahead - sqrt``, and ``sqrt / r`` is the incidence's
+    cosine)."""
+    center, radius = state
+    rel = center - viewpoint
+    ahead = beams @ rel
+    return ahead, ahead * ahead - rel @ rel + radius * radius
+
+
 def _beam_jacobian(beams, ranges, viewpoint, cosine, beam):
     """The Jacobian function of :func:`_along_beams`' residuals (fixed ``cosine``, shape (n,))."""
 
@@ -272,8 +282,8 @@ def _beam_jacobian(beams, ranges, viewpoint, cosine, beam):
         orthogonal, jac = _jacobian(state, points)
         center, radius = state
         rel = center - viewpoint
-        ahead = beams @ rel
-        root = np.sqrt(np.maximum(ahead * ahead - rel @ rel + radius * radius, 1e-300))
+        ahead, square = _beam_meets(state, beams, viewpoint)
+        root = np.sqrt(np.maximum(square, 1e-300))
         meet = ahead - root
         residuals = np.where(beam, (meet - ranges) * cosine, orthogonal)
         along = np.empty_like(jac)
