@@ -136,8 +136,8 @@ def circle_starts(
     u, v = frame[0], frame[1]
     projected = points @ frame.reshape(2 * count, 3).T  # (n, 2a): every u, then every v
     # Contiguous (a, n) coordinates: numpy is several times slower on strided views.
-    x = np.ascontiguousarray(projected[:, :count].T)
-    y = np.ascontiguousarray(projected[:, count:].T)
+    coordinates = np.ascontiguousarray(projected.T).reshape(2, count, n)
+    x, y = coordinates
     design = _kasa_design(x, y)
     rows = np.arange(count)
 
@@ -153,16 +153,21 @@ def circle_starts(
         np.fmin(distance, np.inf, out=distance)
         return distance
 
-    def msac(distance):
-        # Signed distances (negative inside). A shot 1 to INSIDE_CAP cutoffs inside the circle
-        # keeps its full square: background explains a shot outside a pipe, nothing explains
-        # one inside it. NaN (no circle) costs a cutoff, as an outlier.
-        squared = distance * distance
-        capped = np.fmin(squared, cutoff * cutoff)
+    def msac(distance, scratch=None):
+        # Signed distances (negative inside), overwritten. A shot 1 to INSIDE_CAP cutoffs
+        # inside the circle keeps its full square: background explains a shot outside a pipe,
+        # nothing explains one inside it. NaN (no circle) costs a cutoff, as an outlier.
+        # In place (``scratch``, like ``distance``, takes the capped squares): on the (a, t, n)
+        # triples' distances fresh temporaries cost more than the arithmetic.
         if not inside:
-            return capped.sum(axis=-1)
-        shallow = (distance < -cutoff) & (distance >= -INSIDE_CAP * cutoff)
-        return np.where(shallow, squared, capped).sum(axis=-1)
+            squared = np.multiply(distance, distance, out=distance)
+            return np.fmin(squared, cutoff * cutoff, out=squared).sum(axis=-1)
+        shallow = distance < -cutoff
+        shallow &= distance >= -INSIDE_CAP * cutoff
+        squared = np.multiply(distance, distance, out=distance)
+        capped = np.fmin(squared, cutoff * cutoff, out=scratch)
+        np.copyto(capped, squared, where=shallow)
+        return capped.sum(axis=-1)
 
     def cost_of(center, radius):
         if cutoff is not None:
@@ -177,9 +182,9 @@ def circle_starts(
     cost = cost_of(center, radius)
     # Circumcircles of random triples, shared across axes.
     index = rng.integers(0, n, (samples, 3))
-    ax_, ay_ = x[:, index[:, 0]], y[:, index[:, 0]]  # (a, t)
-    bx, by = x[:, index[:, 1]], y[:, index[:, 1]]
-    cx, cy = x[:, index[:, 2]], y[:, index[:, 2]]
+    # Every corner's coordinates in one gather: (2, a, 3, t), each (a, t) block contiguous.
+    corners = coordinates[:, :, index.T]
+    (ax_, bx, cx), (ay_, by, cy) = corners.transpose(0, 2, 1, 3)
     bcy, cay, aby = by - cy, cy - ay_, ay_ - by
     det = 2.0 * (ax_ * bcy + bx * cay + cx * aby)
     sa, sb, sc = ax_ * ax_ + ay_ * ay_, bx * bx + by * by, cx * cx + cy * cy
@@ -187,14 +192,15 @@ def circle_starts(
         ux = (sa * bcy + sb * cay + sc * aby) / det
         uy = (sa * (cx - bx) + sb * (ax_ - cx) + sc * (bx - ax_)) / det
         tr = _norm2(ax_ - ux, ay_ - uy)
-        sq = _norm2(x[:, None, :] - ux[..., None], y[:, None, :] - uy[..., None])
+        dy = y[:, None, :] - uy[..., None]  # squared by _norm2, then the MSAC's scratch
+        sq = _norm2(x[:, None, :] - ux[..., None], dy)
         sq -= tr[..., None]
         if cutoff is None:
             sq *= sq
     # NaN (collinear or repeated triples) costs a cutoff in MSAC, infinity in the trimmed cost;
     # the latter in place on the (a, t, n) squares, the largest arrays of the fit.
     if cutoff is not None:
-        tcost = msac(sq)  # (a, t)
+        tcost = msac(sq, dy)  # (a, t)
     else:
         np.fmin(sq, np.inf, out=sq)
         sq.partition(keep - 1, axis=2)
