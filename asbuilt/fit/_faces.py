@@ -51,6 +51,8 @@ _EYE3.setflags(write=False)
 #: ``ndarray.sum``'s own reduction, called directly: the hot paths sum small arrays thousands of
 #: times a fit, and the method's Python wrapper costs more than the sum.
 _ADD = np.add.reduce
+_MAX = np.maximum.reduce
+_MIN = np.minimum.reduce
 #: A face's points must be spread off a line by this many consensus thresholds (RMS): a raster
 #: line lies in every plane through it and would otherwise pass for a face.
 _MIN_SPREAD = 1.5
@@ -202,8 +204,8 @@ def _unit_rows(vectors: np.ndarray, norms: np.ndarray | None = None):
     if norms is None:
         norms = row_norms(vectors)
     ok = norms > 1e-12
-    out = np.zeros_like(vectors)
-    out[ok] = vectors[ok] / norms[ok, None]
+    # The same division as ``vectors[ok] / norms[ok, None]``, in one call (a hot path).
+    out = np.divide(vectors, norms[:, None], out=np.zeros_like(vectors), where=ok[:, None])
     return out, ok
 
 
@@ -256,13 +258,15 @@ def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
 
 def _perpendicular_basis(direction: np.ndarray) -> np.ndarray:
     """Two unit columns, shape (3, 2), perpendicular to ``direction`` and to each other."""
-    helper = _EYE3[int(np.abs(direction).argmin())]
-    first = cross3(direction, helper)
+    # Python floats: the same IEEE arithmetic as numpy's scalars, without their overhead.
+    d = direction.tolist()
+    helper = [0.0, 0.0, 0.0]
+    helper[min(range(3), key=lambda k: abs(d[k]))] = 1.0  # the first smallest, as argmin
+    first = cross3(d, helper)
     first /= math.sqrt(first @ first)  # np.linalg.norm's own sum for a vector, without its checks
-    out = np.empty((3, 2))
-    out[:, 0] = first
-    out[:, 1] = cross3(direction, first)
-    return out
+    f = first.tolist()
+    second = cross3(d, f)
+    return np.array([[f[0], second[0]], [f[1], second[1]], [f[2], second[2]]])
 
 
 def _distinct(normals, offsets, order, cos_face, threshold, limit):
@@ -272,12 +276,25 @@ def _distinct(normals, offsets, order, cos_face, threshold, limit):
     if order.size == 0:
         return chosen
     sub_n, sub_o = normals[order], offsets[order]
-    other = ~(
-        (np.abs(sub_n @ sub_n.T) > cos_face)
-        & (np.abs(sub_o[:, None] - sub_o[None, :]) < 2 * threshold)
+    same = (np.abs(sub_n @ sub_n.T) > cos_face) & (
+        np.abs(sub_o[:, None] - sub_o[None, :]) < 2 * threshold
     )
-    alive = np.ones(order.size, bool)
+    m = order.size
     order = order.tolist()
+    if m <= 64:
+        # Each row of ``same`` as the bits of one Python int (bit j: column j), so that the
+        # greedy pass below is integer arithmetic, not three numpy calls per plane chosen.
+        padded = np.zeros((m, 64), bool)
+        padded[:, :m] = same
+        rows = np.packbits(padded, axis=1, bitorder="little").view(np.uint64)[:, 0].tolist()
+        alive = (1 << m) - 1
+        while len(chosen) < limit and alive:
+            pos = (alive & -alive).bit_length() - 1  # the first plane still alive
+            chosen.append(order[pos])
+            alive &= ~rows[pos]
+        return chosen
+    other = ~same
+    alive = np.ones(m, bool)
     while len(chosen) < limit:
         pos = int(alive.argmax())
         if not alive[pos]:
@@ -333,10 +350,6 @@ def _second_plane(points, normals, first, threshold, gap, rng):
         i, j = _pairs(r, rng.choice(r * (r - 1) // 2, _MAX_PAIRS, replace=False))
     else:
         i, j = _pairs(r, np.arange(r * (r - 1) // 2))
-    raw = cross_rows(d1, sub[j] - sub[i])
-    length = row_norms(raw)
-    pair_n, ok = _unit_rows(raw, length)
-    ok &= length > 2 * threshold
     # Local normals made perpendicular to d1.
     # (Dense: the local normals of 200 points at random, as for the first planes.)
     if r <= _DENSE_LIMIT:
@@ -344,23 +357,32 @@ def _second_plane(points, normals, first, threshold, gap, rng):
     else:
         seeds = rng.choice(r, 200, replace=False)
         seed_normals, seed_points = normals[rest[seeds]], sub[seeds]
-    loc_n, loc_ok = _unit_rows(seed_normals - (seed_normals @ d1)[:, None] * d1)
-    cand_n = np.concatenate([pair_n[ok], loc_n[loc_ok]])
-    cand_p = np.concatenate([sub[i[ok]], seed_points[loc_ok]])
+    # Both kinds of candidate in one array, pairs first (each row's arithmetic as if apart:
+    # fewer numpy calls on a hot path).
+    pairs = i.shape[0]
+    raw = np.empty((pairs + seed_points.shape[0], 3))
+    raw[:pairs] = cross_rows(d1, sub[j] - sub[i])
+    raw[pairs:] = seed_normals - (seed_normals @ d1)[:, None] * d1
+    length = row_norms(raw)
+    unit, ok = _unit_rows(raw, length)
+    ok[:pairs] &= length[:pairs] > 2 * threshold
+    cand_n = unit[ok]
+    cand_p = np.concatenate([sub[i], seed_points])[ok]
     if cand_n.shape[0] == 0:
         return None
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = _ADD(np.abs(cand_n @ sub.T - offsets[:, None]) < threshold, axis=1)
     order = (-counts).argsort(kind="stable")
-    top = _distinct(cand_n, offsets, order, 0.999, threshold, 8)
-    top = [c for c in top if counts[c] >= _MIN_FACE_POINTS]
-    if not top:
+    top = np.array(_distinct(cand_n, offsets, order, 0.999, threshold, 8), dtype=np.int64)
+    top = top[counts[top] >= _MIN_FACE_POINTS]
+    if not top.size:
         return None
     ref_n, ref_o, masks, _ = _batch_refine(
         sub, cand_n[top], offsets[top], threshold, basis, rounds=1
     )
     sizes = _ADD(masks, axis=1)
-    order = [c for c in (-sizes).argsort(kind="stable") if sizes[c] >= _MIN_FACE_POINTS]
+    order = (-sizes).argsort(kind="stable")
+    order = order[sizes[order] >= _MIN_FACE_POINTS]
     for c in _distinct(ref_n, ref_o, order, 0.999, threshold, 5):
         mask = np.zeros(points.shape[0], bool)
         mask[rest[masks[c]]] = True
@@ -388,11 +410,10 @@ def _contiguous(points, face_a, face_b, threshold, gap) -> bool:
     """
     for (na, oa, _), (_, _, mb) in ((face_a, face_b), (face_b, face_a)):
         dist = points[mb] @ na - oa
-        size = np.abs(dist)
-        far = dist[size > threshold]
-        if far.size and far.max() > 0 and far.min() < 0:
+        # Points beyond the threshold on both sides: the largest and smallest distance tell.
+        if _MAX(dist) > threshold and _MIN(dist) < -threshold:
             return False
-        if size.min() > gap:
+        if _MIN(np.abs(dist)) > gap:
             return False
     return True
 

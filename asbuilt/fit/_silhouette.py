@@ -425,11 +425,15 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
         tol = max(_LINE_WIDTH * 1e-2 * max(float(np.ptp(ang[:, j])), 1e-12), rounding)
         labels.append(_lines(ang[:, j], tol))
         tols.append(tol)
-    full = []
-    for j in range(2):
-        pairs = np.unique(np.column_stack([labels[j], labels[1 - j]]), axis=0)
-        positions = np.bincount(pairs[:, 0], minlength=labels[j].max() + 1)
-        full.append(positions[labels[j]] >= 2)
+    # Each line's positions along the other angle, repeated directions counted once: the
+    # distinct (column, row) label pairs, as one integer each (one 1-D np.unique, not two of
+    # rows, which cost more than the rest of this test).
+    rows = int(labels[1].max()) + 1
+    on_col, on_row = np.divmod(np.unique(labels[0] * rows + labels[1]), rows)
+    full = [
+        np.bincount(on, minlength=int(label.max()) + 1)[label] >= 2
+        for on, label in ((on_col, labels[0]), (on_row, labels[1]))
+    ]
     if np.mean(full[0] | full[1]) < _LATTICE_SHARE:
         return out, partner
     flagged = np.zeros((2, n), dtype=bool)
