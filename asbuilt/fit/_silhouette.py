@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["raster_grid", "raster_window", "edge_shots", "solve_bounds"]
+__all__ = ["raster_grid", "raster_window", "edge_shots", "shot_angles", "solve_bounds"]
 
 #: Samples per box edge when measuring the box's angular extent (the tilt extreme of a convex
 #: box can lie inside an edge).
@@ -209,7 +209,35 @@ def _shot_alike(ang: np.ndarray, off: np.ndarray, labels: list) -> bool:
     return np.count_nonzero(off & ~shared) <= 0.1 * np.count_nonzero(off)
 
 
-def raster_grid(points: np.ndarray, viewpoint: np.ndarray, off_grid: np.ndarray | None = None):
+def shot_angles(points: np.ndarray, viewpoint: np.ndarray):
+    """The shots' directions from ``viewpoint``, as :func:`raster_grid` and :func:`edge_shots`
+    read them (a fit calling both, or one twice, computes them once and passes them on).
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    viewpoint : ndarray, shape (3,), metres
+
+    Returns
+    -------
+    tuple or None
+        ``(pan0, ang, blur)``: the reference pan (radians, that of the points' mean
+        direction), ``ang`` (n, 2) radians, each shot's pan relative to ``pan0`` and tilt, and
+        ``blur`` (radians), how wide a raster line may be (:func:`_line_blur`). None when a
+        point lies at the viewpoint.
+    """
+    rel = points - viewpoint
+    if np.any(np.linalg.norm(rel, axis=1) < 1e-6):
+        return None
+    mean = rel.mean(axis=0)
+    pan0 = float(np.arctan2(mean[1], mean[0]))
+    ang = _angles(points, viewpoint, pan0)
+    return pan0, ang, _line_blur(points, viewpoint, ang)
+
+
+def raster_grid(
+    points: np.ndarray, viewpoint: np.ndarray, off_grid: np.ndarray | None = None, seen=None
+):
     """The raster's angular window and which points are on its grid, edge shots allowed.
 
     Parameters
@@ -222,6 +250,8 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray, off_grid: np.ndarray 
         a bisection's deepest hit can come within the line width of the raster line it started
         from, and counted on that line it would move the window's side by up to half a step
         instead of pinning it.
+    seen : tuple or None, optional
+        :func:`shot_angles` of ``points`` and ``viewpoint``, when already computed.
 
     Returns
     -------
@@ -249,14 +279,12 @@ def raster_grid(points: np.ndarray, viewpoint: np.ndarray, off_grid: np.ndarray 
     when straight; a slanted one may reach past it, so the side keeps the half-step rule's
     weight).
     """
-    rel = points - viewpoint
-    if np.any(np.linalg.norm(rel, axis=1) < 1e-6):
+    if seen is None:
+        seen = shot_angles(points, viewpoint)
+    if seen is None:
         return None
     n = points.shape[0]
-    mean = rel.mean(axis=0)
-    pan0 = float(np.arctan2(mean[1], mean[0]))
-    ang = _angles(points, viewpoint, pan0)
-    rounding = _line_blur(points, viewpoint, ang)
+    pan0, ang, rounding = seen
     known = np.ones(n, dtype=bool) if off_grid is None else ~np.asarray(off_grid, dtype=bool)
     steps = (
         [_grid_step(ang[known, j], rounding) for j in range(2)]
@@ -363,13 +391,15 @@ def _in_progression(v: float, others: np.ndarray, tol: float) -> bool:
     return bool(np.any((np.abs(below - targets) <= tol) | (np.abs(above - targets) <= tol)))
 
 
-def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
+def edge_shots(points: np.ndarray, viewpoint: np.ndarray, seen=None):
     """Which points look like edge-bisection shots of an acquisition session.
 
     Parameters
     ----------
     points : ndarray, shape (n, 3), metres
     viewpoint : ndarray, shape (3,), metres
+    seen : tuple or None, optional
+        :func:`shot_angles` of ``points`` and ``viewpoint``, when already computed.
 
     Returns
     -------
@@ -409,12 +439,14 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray):
     n = points.shape[0]
     out = -np.ones(n, dtype=np.int64)
     partner = -np.ones(n, dtype=np.int64)
-    rel = points - viewpoint
-    if n < 3 or np.any(np.linalg.norm(rel, axis=1) < 1e-6):
+    if n < 3:
         return out, partner
-    mean = rel.mean(axis=0)
-    ang = _angles(points, viewpoint, float(np.arctan2(mean[1], mean[0])))
-    rounding = _line_blur(points, viewpoint, ang)
+    if seen is None:
+        seen = shot_angles(points, viewpoint)
+    if seen is None:
+        return out, partner
+    _, ang, rounding = seen
+    rel = points - viewpoint
     for j in range(2):
         # blurred by more than a tenth of even the widest gap between its angles: no lattice
         # at all (a dense cloud, where the per-shot search below would also take minutes)

@@ -424,18 +424,21 @@ def fit_cuboid(
     # The viewpoint (given, or the scan frame's origin) is trusted when the points' directions
     # from it fall on a pan-tilt raster's rows and columns.
     viewpoint = np.zeros(3) if view is None else view
-    grid = _silhouette.raster_grid(pts, viewpoint)
+    seen = _silhouette.shot_angles(pts, viewpoint)  # once for every raster reading below
+    grid = _silhouette.raster_grid(pts, viewpoint, seen=seen)
     # Without a given viewpoint, the scan frame's origin is trusted on a plain raster only: a
     # raster with off-grid shots could also be two stations' points seen from one of them.
     trusted = view is not None or (grid is not None and grid[2].all())
     if not trusted:
         grid = None
     # Bisection shots are told from the raster by their angles from a trusted viewpoint only.
-    edges = _silhouette.edge_shots(pts, viewpoint) if trusted else (-np.ones(n, np.int64),) * 2
+    edges = (
+        _silhouette.edge_shots(pts, viewpoint, seen) if trusted else (-np.ones(n, np.int64),) * 2
+    )
     if grid is not None and np.any(edges[0] >= 0):
         # Bisection shots are not raster shots, even when one falls within the line width of
         # the raster line it started from; they pin the window's sides.
-        grid = _silhouette.raster_grid(pts, viewpoint, off_grid=edges[0] >= 0)
+        grid = _silhouette.raster_grid(pts, viewpoint, off_grid=edges[0] >= 0, seen=seen)
     # Segmentation works on the raster's shots and the bisection shots that stand apart from
     # them: a bisection's later hits lie millimetres apart on a line next to an edge, so their
     # neighbourhoods give no normal and would shrink the spacing scale, but its first hits
