@@ -281,26 +281,21 @@ def _distinct(normals, offsets, order, cos_face, threshold, limit):
     )
     m = order.size
     order = order.tolist()
+    # Each row of ``same`` as the bits of one Python int (bit j: column j), so that the greedy
+    # pass below is integer arithmetic, not three numpy calls per plane chosen.
     if m <= 64:
-        # Each row of ``same`` as the bits of one Python int (bit j: column j), so that the
-        # greedy pass below is integer arithmetic, not three numpy calls per plane chosen.
         padded = np.zeros((m, 64), bool)
         padded[:, :m] = same
         rows = np.packbits(padded, axis=1, bitorder="little").view(np.uint64)[:, 0].tolist()
-        alive = (1 << m) - 1
-        while len(chosen) < limit and alive:
-            pos = (alive & -alive).bit_length() - 1  # the first plane still alive
-            chosen.append(order[pos])
-            alive &= ~rows[pos]
-        return chosen
-    other = ~same
-    alive = np.ones(m, bool)
-    while len(chosen) < limit:
-        pos = int(alive.argmax())
-        if not alive[pos]:
-            break
+    else:
+        packed = np.packbits(same, axis=1, bitorder="little")
+        rows = None
+    alive = (1 << m) - 1
+    while len(chosen) < limit and alive:
+        pos = (alive & -alive).bit_length() - 1  # the first plane still alive
         chosen.append(order[pos])
-        alive &= other[pos]
+        row = rows[pos] if rows is not None else int.from_bytes(packed[pos].tobytes(), "little")
+        alive &= ~row
     return chosen
 
 
@@ -445,6 +440,8 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None, opposite=Tr
         best = None
         if proj_all is None:
             proj_all = points @ axes.T  # the axes stay: once for every face added
+        body = proj_all[explained]  # the seen faces' shots, once for every candidate below
+        box = (body, _MIN(body, axis=0), _MAX(body, axis=0)) if body.size else (body, None, None)
         seen_axes = {axis for axis, _, _ in faces}
         free_proj = proj_all[free]
         if free.size <= _DENSE_LIMIT:
@@ -474,10 +471,12 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None, opposite=Tr
             if count < least or (best is not None and count <= best[0]):
                 continue
             members = proj[np.abs(proj - proj[c]) < threshold]
-            offset = float(members.sum()) / members.size  # np.mean's sum and division
+            offset = float(_ADD(members)) / members.size  # np.mean's sum and division
             mask = np.zeros(points.shape[0], bool)
             mask[free[np.abs(proj - offset) < threshold]] = True
-            if _acceptable(proj_all, explained, faces, k, offset, mask, threshold, gap, view_proj):
+            if _acceptable(
+                proj_all, explained, faces, k, offset, mask, threshold, gap, view_proj, box
+            ):
                 best = (int(np.count_nonzero(mask)), k, offset, mask)
         if best is None:
             return faces
@@ -496,10 +495,16 @@ def _within(values: np.ndarray, threshold: float) -> np.ndarray:
     )
 
 
-def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap, view_proj=None) -> bool:
+def _acceptable(
+    proj, explained, faces, k, offset, mask, threshold, gap, view_proj=None, box=None
+) -> bool:
     """A new face along axis k: not on an occupied side, inside the box, contiguous with a face,
-    and (with ``view_proj``, the viewpoint's coordinates (3,)) facing the viewpoint."""
-    body = proj[explained]
+    and (with ``view_proj``, the viewpoint's coordinates (3,)) facing the viewpoint. ``box``:
+    ``proj[explained]`` and its least and greatest coordinates (3,), when already computed."""
+    if box is None:
+        body = proj[explained]
+        box = (body, _MIN(body, axis=0), _MAX(body, axis=0)) if body.size else (body, None, None)
+    body, body_lo, body_hi = box
     if not body.size:
         return False  # no shot on a seen face yet: no box for the new face to bound or touch
     inside = body[:, k] - offset
@@ -517,11 +522,14 @@ def _acceptable(proj, explained, faces, k, offset, mask, threshold, gap, view_pr
         if other_side == side or abs(off - offset) < 2 * threshold:
             return False
     new = proj[mask]
+    # Outside the seen faces' extent (widened by the gap) along another axis: the least and
+    # greatest coordinates tell, as a per-point test would.
+    new_lo, new_hi = _MIN(new, axis=0).tolist(), _MAX(new, axis=0).tolist()
+    lo, hi = (body_lo - gap).tolist(), (body_hi + gap).tolist()
     for j in range(3):
         if j == k:
             continue
-        lo, hi = body[:, j].min() - gap, body[:, j].max() + gap
-        if (new[:, j] < lo).any() or (new[:, j] > hi).any():
+        if new_lo[j] < lo[j] or new_hi[j] > hi[j]:
             return False
     for axis, off, fmask in faces:
         if axis == k or not fmask.any():
