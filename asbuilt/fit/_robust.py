@@ -222,6 +222,7 @@ def robust_geometric_fit(
     max_starts: int = 3,
     max_iterations: int = 50,
     start_costs: Sequence[float] | None = None,
+    memo: dict | None = None,
 ) -> RobustFit:
     """Robust start selection, then least squares on the inliers (see the module docstring).
 
@@ -252,6 +253,11 @@ def robust_geometric_fit(
     start_costs : sequence of float, optional
         Each start's least-trimmed-squares cost over ``keep_count(n)`` points, when the caller
         has it already (saves evaluating every start).
+    memo : dict, optional
+        Kept by a caller that calls again on the same points with the same settings and some of
+        the same start objects (the cylinder fit's robust choice, then again with polished
+        starts added): a start already refined, and the least squares from a refined candidate
+        already chosen, are taken from it instead of computed again (the same result).
 
     Returns
     -------
@@ -287,24 +293,37 @@ def robust_geometric_fit(
     ranked.sort(key=lambda item: (item[0], item[1]))
     refined = []
     bound = np.inf
-    for cost, _, start in ranked:
+    for index, (cost, _, start) in enumerate(ranked):
         if len(refined) >= max_starts or (len(refined) >= always_refine and cost >= bound):
             break
-        state, residuals, jacobian = gauss_newton(
-            model, start, points, trimmed, start_iterations, 0.0
-        )
+        if memo is not None and id(start) in memo:
+            # Kept with the start itself, so that its id is not reused while the memo lives.
+            candidate = memo[id(start)][1]
+        else:
+            candidate = gauss_newton(model, start, points, trimmed, start_iterations, 0.0)
+            if memo is not None:
+                memo[id(start)] = (start, candidate)
+        state, residuals, jacobian = candidate
         if not np.all(np.isfinite(residuals)):
             continue
-        bound = min(bound, trimmed_cost(residuals, keep))
-        refined.append((state, residuals, jacobian))
+        refined.append(candidate)
+        # The bound is read only before another start is refined (none after the last one,
+        # as in every one-start settle).
+        if len(refined) < max_starts and index + 1 < len(ranked):
+            bound = min(bound, trimmed_cost(residuals, keep))
     if not refined:
         raise FitError(f"No {kind} fits these points; check that they lie on one {kind}.")
-    reference = min(robust_scale(item[1], floor) for item in refined)
-    if sigma is not None:
-        reference = max(reference, float(sigma))
-    cap = (tolerances.outlier_cutoff_sigma * reference) ** 2
-    scores = [float(np.minimum(item[1] * item[1], cap).sum()) for item in refined]
-    state, residuals, jacobian = refined[int(np.argmin(scores))]
+    chosen = refined[0]
+    if len(refined) > 1:
+        reference = min(robust_scale(item[1], floor) for item in refined)
+        if sigma is not None:
+            reference = max(reference, float(sigma))
+        cap = (tolerances.outlier_cutoff_sigma * reference) ** 2
+        scores = [float(np.minimum(item[1] * item[1], cap).sum()) for item in refined]
+        chosen = refined[int(np.argmin(scores))]
+    if memo is not None and ("chosen", id(chosen)) in memo:
+        return memo["chosen", id(chosen)][1]
+    state, residuals, jacobian = chosen
     # Inliers, then plain least squares on them until the inlier set is stable; without a
     # sensor sigma, a larger inlier set that the data support better is taken once.
     mask = None
@@ -345,7 +364,10 @@ def robust_geometric_fit(
             1e-9,
             (residuals, jacobian),
         )
-    return RobustFit(state, residuals, mask, jacobian[mask], scale)
+    fit = RobustFit(state, residuals, mask, jacobian[mask], scale)
+    if memo is not None:
+        memo["chosen", id(chosen)] = (chosen, fit)
+    return fit
 
 
 def settled_fit(

@@ -179,8 +179,9 @@ def _radius_seeds(state, view, known, extent) -> list:
     return seeds
 
 
-def _robust_among(local, starts, costs, sigma, tolerances) -> RobustFit:
-    """The robust geometric fit among the circle starts (:func:`trust_order` first)."""
+def _robust_among(local, starts, costs, sigma, tolerances, memo=None) -> RobustFit:
+    """The robust geometric fit among the circle starts (:func:`trust_order` first); ``memo``
+    as in :func:`robust_geometric_fit`."""
     starts, costs, trusted = trust_order(starts, costs)
     return robust_geometric_fit(
         local,
@@ -191,6 +192,7 @@ def _robust_among(local, starts, costs, sigma, tolerances) -> RobustFit:
         tolerances=tolerances,
         start_costs=costs,
         always_refine=trusted,
+        memo=memo,
     )
 
 
@@ -344,8 +346,12 @@ def fit_cylinder(
         axes.append(line)
     starts, costs = circle_starts(local, axes, keep, rng)
 
+    # The robust choice runs again with the polished starts added when the first one rejects
+    # shots; what it computed for the same starts is reused (:func:`robust_geometric_fit`).
+    refined: dict = {}
+
     def robust_from(starts, costs):
-        return _robust_among(local, starts, costs, sigma, tolerances)
+        return _robust_among(local, starts, costs, sigma, tolerances, refined)
 
     def polished(starts, costs):
         order = np.argsort(costs)[:POLISHED_STARTS]
