@@ -157,12 +157,14 @@ def msac_fits(points, axes, sigma: float, tolerances, keep, rng, inside: bool) -
         # (on the same cost) before they are settled.
         starts, costs = polish_axes(points, starts, costs, keep, rng, cutoff=cutoff)
     fits = []
+    extent = robust_extent(points)  # doubtful_blind's, once for every fit
     for k in range(len(starts)):
         fit = settled_fit(
             points, starts[k], MODEL, kind="cylinder", sigma=sigma, tolerances=tolerances
         )
-        # A cylinder metres wide is a plane through pipe and wall shots, not a pipe.
-        if fit is not None and not doubtful_blind(fit, points):
+        # A cylinder metres wide is a plane through pipe and wall shots, not a pipe
+        # (:func:`doubtful_blind`).
+        if fit is not None and not fit.state[2] > PLANE_LIKE * extent:
             fits.append(fit)
     return fits
 

@@ -472,11 +472,13 @@ def fit_cylinder(
                 raise
             robust = rescued
         rescued = None
-        if (robust is None or unseen(robust, local, view)) and sigma is not None:
+        # Asked once: when no rescue replaces the fit, the test below is of the same fit.
+        hidden = robust is None or unseen(robust, local, view)
+        if hidden and sigma is not None:
             rescued = rescue(robust, view)
         if rescued is not None:
             robust = rescued
-        elif blind is not None and unseen(robust, local, view):
+        elif blind is not None and hidden:
             # Even the best fit hides a third of the shots behind itself: the shots were not
             # taken from this viewpoint (if one station could have seen the fit of the shots
             # alone; checked below).
