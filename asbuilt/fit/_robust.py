@@ -223,6 +223,7 @@ def robust_geometric_fit(
     max_iterations: int = 50,
     start_costs: Sequence[float] | None = None,
     memo: dict | None = None,
+    first_current: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> RobustFit:
     """Robust start selection, then least squares on the inliers (see the module docstring).
 
@@ -258,6 +259,9 @@ def robust_geometric_fit(
         the same start objects (the cylinder fit's robust choice, then again with polished
         starts added): a start already refined, and the least squares from a refined candidate
         already chosen, are taken from it instead of computed again (the same result).
+    first_current : (ndarray, ndarray), optional
+        ``model.jacobian(starts[0], points)`` when the caller has it already (a start it has
+        just settled itself).
 
     Returns
     -------
@@ -293,14 +297,15 @@ def robust_geometric_fit(
     ranked.sort(key=lambda item: (item[0], item[1]))
     refined = []
     bound = np.inf
-    for index, (cost, _, start) in enumerate(ranked):
+    for index, (cost, order, start) in enumerate(ranked):
         if len(refined) >= max_starts or (len(refined) >= always_refine and cost >= bound):
             break
         if memo is not None and id(start) in memo:
             # Kept with the start itself, so that its id is not reused while the memo lives.
             candidate = memo[id(start)][1]
         else:
-            candidate = gauss_newton(model, start, points, trimmed, start_iterations, 0.0)
+            current = first_current if order == 0 else None
+            candidate = gauss_newton(model, start, points, trimmed, start_iterations, 0.0, current)
             if memo is not None:
                 memo[id(start)] = (start, candidate)
         state, residuals, jacobian = candidate
@@ -378,10 +383,12 @@ def settled_fit(
     kind: str,
     sigma: float | None,
     tolerances: Tolerances,
+    current: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> RobustFit | None:
     """One start settled without concentration steps: least squares on its inliers until they
     are stable (:func:`robust_geometric_fit` with that start alone), or None when it fails (too
-    many outliers, no finite residuals). Used to compare starts from other basins."""
+    many outliers, no finite residuals). Used to compare starts from other basins. ``current``:
+    ``model.jacobian(state, points)`` when the caller has it already."""
     try:
         return robust_geometric_fit(
             points,
@@ -393,6 +400,7 @@ def settled_fit(
             start_iterations=0,
             always_refine=1,
             max_starts=1,
+            first_current=current,
         )
     except FitError:
         return None

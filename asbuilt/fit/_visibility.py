@@ -322,14 +322,16 @@ def reconsidered(
             best, best_score = fit, score
         return beyond
 
-    def refined(state):
-        return settled_fit(points, state, model, kind=kind, sigma=sigma, tolerances=tolerances)
+    def refined(state, current=None):
+        return settled_fit(
+            points, state, model, kind=kind, sigma=sigma, tolerances=tolerances, current=current
+        )
 
     consider(robust)
     for seed in seeds:
         # The plain robust settle first; only a fit that hides inliers behind itself is
         # settled again with the beams in the cost (slower: a differenced Jacobian).
-        state, _, _ = gauss_newton(
+        state, residuals, jacobian = gauss_newton(
             model,
             seed,
             points,
@@ -337,17 +339,17 @@ def reconsidered(
             SETTLE_ITERATIONS,
             1e-6,
         )
-        fit = refined(state)
+        fit = refined(state, (residuals, jacobian))  # the settle's Jacobian at its state
         beyond = consider(fit)
         hides = fit is None or bool(np.any(beyond[fit.inliers] > cutoff * scale))
         if thorough and fit is not None and not fit.inliers.all():
             # A good shot just beyond the 3-sigma test can send the refit into a basin where
             # it stays an outlier (a thinner pipe through the other shots); the fit of every
             # shot is a candidate too.
-            whole, _, _ = gauss_newton(
+            whole, residuals, jacobian = gauss_newton(
                 model, fit.state, points, lambda r: uniform, SETTLE_ITERATIONS, 1e-6
             )
-            consider(refined(whole))
+            consider(refined(whole, (residuals, jacobian)))
         if thorough and hides and excess is not None:
             consider(refined(_settle(model, seed, points, excess, scale)))
     if best is None:
