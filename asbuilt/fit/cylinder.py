@@ -454,15 +454,26 @@ def fit_cylinder(
             )
         return chosen
 
+    # One fit's beam excess is asked several times (its score in reconsidered, then by
+    # unhidden_starts, then its score again against the unhidden starts): kept per fit.
+    excesses: dict = {}
+
+    def beam_excess(states, x):
+        key = (id(states[0]), id(x)) if len(states) == 1 else None
+        if key in excesses:
+            return excesses[key][1]
+        found = cylinder_beam_excess(*stacked(states), x, view)
+        if key is not None:
+            excesses[key] = ((states[0], x), found)  # kept alive: their ids stay theirs
+        return found
+
     if (
         view is not None
         and starts
         and (robust is None or doubtful(robust, local, view, len(local), sigma, tolerances))
     ):
         try:
-            robust = reconsider(
-                robust, lambda states, x: cylinder_beam_excess(*stacked(states), x, view)
-            )
+            robust = reconsider(robust, beam_excess)
         except FitError:
             # No seed settled on the pipe: the MSAC rescue below is the last chance.
             if sigma is None or robust is not None:
