@@ -26,8 +26,8 @@ __all__ = [
     "knn",
     "local_normals",
     "noise_scale",
-    "min_area_rectangle",
     "segment",
+    "unit_rows",
 ]
 
 _RNG_SEED = 20040601
@@ -198,7 +198,7 @@ def row_norms(vectors: np.ndarray) -> np.ndarray:
     return np.sqrt(_ADD(vectors * vectors, axis=1))
 
 
-def _unit_rows(vectors: np.ndarray, norms: np.ndarray | None = None):
+def unit_rows(vectors: np.ndarray, norms: np.ndarray | None = None):
     """Unit rows of ``vectors`` (k, 3) and which rows had a length (k,) bool; ``norms`` (k,),
     their lengths, may be passed when already computed."""
     if norms is None:
@@ -308,7 +308,7 @@ def _first_planes(points, normals, threshold, cos_face, rng, limit=_MAX_FIRST_HA
     cross = cross_rows(b - a, c - a)
     scale = row_norms(b - a) * row_norms(c - a)
     good = row_norms(cross) > 0.05 * np.maximum(scale, 1e-300)
-    tri_normals, ok = _unit_rows(cross[good])
+    tri_normals, ok = unit_rows(cross[good])
     cand_n = np.concatenate([normals[seeds], tri_normals[ok]])
     cand_p = np.concatenate([points[seeds], a[good][ok]])
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
@@ -359,7 +359,7 @@ def _second_plane(points, normals, first, threshold, gap, rng):
     raw[:pairs] = cross_rows(d1, sub[j] - sub[i])
     raw[pairs:] = seed_normals - (seed_normals @ d1)[:, None] * d1
     length = row_norms(raw)
-    unit, ok = _unit_rows(raw, length)
+    unit, ok = unit_rows(raw, length)
     ok[:pairs] &= length[:pairs] > 2 * threshold
     cand_n = unit[ok]
     cand_p = np.concatenate([sub[i], seed_points])[ok]
@@ -803,51 +803,3 @@ def segment(
         points, normals, threshold, gap, face_angle_deg, viewpoint, visible_only
     ).frames()
     return frames[0] if frames else None
-
-
-def _hull_2d(xy: np.ndarray) -> np.ndarray:
-    """Convex hull (Andrew's monotone chain) of points (n, 2); vertices (h, 2) counter-clockwise."""
-    pts = np.unique(xy, axis=0)
-    if pts.shape[0] < 3:
-        return pts
-
-    def half(seq):
-        out: list[np.ndarray] = []
-        for p in seq:
-            while len(out) >= 2:
-                a, b = out[-2], out[-1]
-                if (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) > 0:
-                    break
-                out.pop()
-            out.append(p)
-        return out
-
-    lower, upper = half(pts), half(pts[::-1])
-    return np.array(lower[:-1] + upper[:-1])
-
-
-def min_area_rectangle(xy: np.ndarray) -> np.ndarray:
-    """Direction of the minimum-area bounding rectangle of points (n, 2) (rotating calipers).
-
-    One rectangle side is collinear with a hull edge (Freeman and Shapira 1975), so every hull
-    edge direction is tried.
-
-    Returns
-    -------
-    ndarray, shape (2, 2)
-        Rows: the rectangle's two unit side directions (right-handed).
-    """
-    hull = _hull_2d(xy)
-    if hull.shape[0] < 3:
-        spread = xy - xy.mean(axis=0)
-        _, _, vt = np.linalg.svd(spread, full_matrices=True)
-        first = vt[0]
-    else:
-        edges, ok = _unit_rows(np.roll(hull, -1, axis=0) - hull)
-        edges = edges[ok]
-        perp = np.stack([-edges[:, 1], edges[:, 0]], axis=1)
-        u = hull @ edges.T
-        v = hull @ perp.T
-        area = (u.max(axis=0) - u.min(axis=0)) * (v.max(axis=0) - v.min(axis=0))
-        first = edges[int(np.argmin(area))]
-    return np.array([first, [-first[1], first[0]]])

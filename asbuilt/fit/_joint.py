@@ -16,6 +16,7 @@ import numpy as np
 
 from asbuilt.fit import _faces
 from asbuilt.fit._mixture import mixing_cost
+from asbuilt.fit._rectangle import min_area_rectangle
 
 #: Tukey biweight tuning constant (95% efficiency at the normal; Beaton and Tukey 1974).
 _TUKEY_C = 4.685
@@ -186,7 +187,7 @@ def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted):
     if one_face:
         normal = frame.axes[int(frame.face_axis[0])]
         basis = _faces._perpendicular_basis(normal)
-        rect = _faces.min_area_rectangle(x[frame.labels == 0] @ basis)
+        rect = min_area_rectangle(x[frame.labels == 0] @ basis)
         in_plane = rect @ basis.T
         axes = np.vstack([normal, in_plane[0], _faces.cross3(normal, in_plane[0])])
         model = FaceModel(

@@ -47,20 +47,6 @@ def test_noise_scale_is_recovered_on_two_faces(noise):
     assert est == pytest.approx(noise, rel=0.35)
 
 
-@pytest.mark.parametrize("angle", [0.0, 17.0, 45.0, 71.0])
-def test_min_area_rectangle_finds_a_rotated_rectangle(angle):
-    rng = np.random.default_rng(4)
-    local = rng.uniform([-0.6, -0.2], [0.6, 0.2], size=(200, 2))
-    local[:4] = [[-0.6, -0.2], [0.6, -0.2], [0.6, 0.2], [-0.6, 0.2]]
-    c, s = math.cos(math.radians(angle)), math.sin(math.radians(angle))
-    rot = np.array([[c, -s], [s, c]])
-    sides = _faces.min_area_rectangle(local @ rot.T)
-    assert np.allclose(sides @ sides.T, np.eye(2), atol=1e-12)
-    assert (
-        abs(abs(sides[0] @ rot[:, 0]) - 1.0) < 1e-9 or abs(abs(sides[0] @ rot[:, 1]) - 1.0) < 1e-9
-    )
-
-
 def test_segment_finds_two_perpendicular_faces_of_a_corner():
     rng = np.random.default_rng(5)
     # Two faces of a box corner: x = 0 (y in [0, 0.4]) and y = 0 (x in [0, 0.3]), z in [0, 1].
