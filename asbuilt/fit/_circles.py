@@ -182,9 +182,10 @@ def circle_starts(
     cost = cost_of(center, radius)
     # Circumcircles of random triples, shared across axes.
     index = rng.integers(0, n, (samples, 3))
-    # Every corner's coordinates in one gather: (2, a, 3, t), each (a, t) block contiguous.
-    corners = coordinates[:, :, index.T]
-    (ax_, bx, cx), (ay_, by, cy) = corners.transpose(0, 2, 1, 3)
+    # Every corner's coordinates in one gather, as contiguous (a, t) blocks (numpy is slower
+    # on the strided ones the gather itself gives).
+    corners = np.ascontiguousarray(coordinates[:, :, index.T].transpose(0, 2, 1, 3))
+    (ax_, bx, cx), (ay_, by, cy) = corners
     bcy, cay, aby = by - cy, cy - ay_, ay_ - by
     det = 2.0 * (ax_ * bcy + bx * cay + cx * aby)
     sa, sb, sc = ax_ * ax_ + ay_ * ay_, bx * bx + by * by, cx * cx + cy * cy
