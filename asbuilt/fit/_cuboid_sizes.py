@@ -15,7 +15,8 @@ import math
 
 import numpy as np
 
-from asbuilt.fit import _faces, _silhouette
+from asbuilt.fit import _silhouette
+from asbuilt.fit._common import row_norms
 from asbuilt.fit._joint import (
     FaceModel,
     median,
@@ -172,7 +173,7 @@ def _outward_spacing(proj: np.ndarray, extreme: int, k: int, sign: float) -> flo
     """
     delta = sign * (proj[extreme, k] - proj[:, k])
     across = [j for j in range(3) if j != k]  # the other two axes (np.delete is slow)
-    lateral = _faces.row_norms((proj - proj[extreme])[:, across])
+    lateral = row_norms((proj - proj[extreme])[:, across])
     behind = (delta > 0.0) & (lateral <= delta)
     return float(delta[behind].min()) if behind.any() else None
 

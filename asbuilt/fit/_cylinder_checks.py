@@ -157,14 +157,13 @@ def msac_fits(points, axes, sigma: float, tolerances, keep, rng, inside: bool) -
         # (on the same cost) before they are settled.
         starts, costs = polish_axes(points, starts, costs, keep, rng, cutoff=cutoff)
     fits = []
-    extent = robust_extent(points)  # doubtful_blind's, once for every fit
+    extent = robust_extent(points)  # once for every fit's doubtful_blind
     for k in range(len(starts)):
         fit = settled_fit(
             points, starts[k], MODEL, kind="cylinder", sigma=sigma, tolerances=tolerances
         )
-        # A cylinder metres wide is a plane through pipe and wall shots, not a pipe
-        # (:func:`doubtful_blind`).
-        if fit is not None and not fit.state[2] > PLANE_LIKE * extent:
+        # A cylinder metres wide is a plane through pipe and wall shots, not a pipe.
+        if fit is not None and not doubtful_blind(fit, points, extent):
             fits.append(fit)
     return fits
 
@@ -305,13 +304,16 @@ def doubtful(robust: RobustFit, points, view, count: int, sigma, tolerances: Tol
     return bool(np.any(cylinder_beam_excess(*robust.state, points, view) > threshold))
 
 
-def doubtful_blind(robust: RobustFit, points: np.ndarray) -> bool:
+def doubtful_blind(robust: RobustFit, points: np.ndarray, extent: float | None = None) -> bool:
     """Without a viewpoint: whether a fit is nearly a plane over the points (radius above
     ``PLANE_LIKE`` times their extent): a long thin pipe's silhouette shots and the wall shots
     beyond them lie in one plane through the station, which a cylinder of kilometres fits to a
     centimetre. (Reconsidering every doubtful fit by likelihood turned stubs' axes by 90
-    degrees: a likelihood with each fit's own noise rewards fitting fewer shots closely.)"""
-    return robust.state[2] > PLANE_LIKE * robust_extent(points)
+    degrees: a likelihood with each fit's own noise rewards fitting fewer shots closely.)
+    ``extent``: :func:`robust_extent` of ``points`` when the caller has it already."""
+    if extent is None:
+        extent = robust_extent(points)
+    return robust.state[2] > PLANE_LIKE * extent
 
 
 def robust_extent(points: np.ndarray) -> float:

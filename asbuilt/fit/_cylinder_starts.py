@@ -16,6 +16,7 @@ from asbuilt.fit._common import (
     principal_axes,
     quick_median,
     robust_scale,
+    row_norms,
     tukey_weights,
 )
 
@@ -149,13 +150,12 @@ def polish_axes(
     states, costs = list(states), list(costs)
     for step in steps:
         tilt = np.tan(np.radians(step))
-        # Every state's ring at once (s, 8, 3), the same arithmetic as one state at a time;
-        # normalised as np.linalg.norm does, without its overhead.
+        # Every state's ring at once (s, 8, 3), the same arithmetic as one state at a time.
         axes = np.array([state[0] for state in states])
         u, v = orthonormal_bases(axes)
         trials = axes[:, None, :] + tilt * (cos_ring * u[:, None, :] + sin_ring * v[:, None, :])
         trials = trials.reshape(-1, 3)
-        trials /= np.sqrt((trials * trials).sum(axis=1))[:, None]
+        trials /= row_norms(trials)[:, None]
         found, found_costs = circle_starts(
             points, list(trials), keep, rng, keep_invalid=True, cutoff=cutoff
         )

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from asbuilt.fit._common import row_norms
+
 __all__ = [
     "Frame",
     "extra_faces",
@@ -189,13 +191,6 @@ def cross3(a, b) -> np.ndarray:
     return np.array(
         [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
     )
-
-
-def row_norms(vectors: np.ndarray) -> np.ndarray:
-    """Lengths (k,) of the rows of ``vectors`` (k, d): ``np.linalg.norm(vectors, axis=1)``'s
-    own arithmetic (the sum of squares along the row, then its root), without its Python
-    overhead (the cuboid fit calls this thousands of times a fit)."""
-    return np.sqrt(_ADD(vectors * vectors, axis=1))
 
 
 def unit_rows(vectors: np.ndarray, norms: np.ndarray | None = None):

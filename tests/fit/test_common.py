@@ -238,3 +238,10 @@ def test_too_few_points_name_the_kind(kind, message):
     with pytest.raises(FitError) as err:
         common.validate_points(np.eye(5, 3), kind)
     assert str(err.value) == message
+
+
+@pytest.mark.parametrize("columns", [2, 3])
+def test_row_norms_are_numpys_norms_exactly(columns):
+    v = np.random.default_rng(columns).normal(0.0, 3.0, (200, columns))
+    v[0] = 0.0
+    np.testing.assert_array_equal(common.row_norms(v), np.linalg.norm(v, axis=1))

@@ -112,13 +112,6 @@ def test_pairs_by_position_are_triu_indices(r):
     np.testing.assert_array_equal(got_j, j[some])
 
 
-@pytest.mark.parametrize("columns", [2, 3])
-def test_row_norms_are_numpys_norms_exactly(columns):
-    v = np.random.default_rng(columns).normal(0.0, 3.0, (200, columns))
-    v[0] = 0.0
-    np.testing.assert_array_equal(_faces.row_norms(v), np.linalg.norm(v, axis=1))
-
-
 def test_perpendicular_basis_is_the_normalised_cross_products():
     rng = np.random.default_rng(8)
     for direction in rng.normal(size=(50, 3)):
