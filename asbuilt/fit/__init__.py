@@ -148,7 +148,7 @@ def fit_points(
         )
     result = _fit_with_noise(kind, function, distinct, sigma, tolerances, options)
     if kind != "auto":  # auto weighs each kind's fit itself, an undetermined one included
-        _refuse_unknown_radius(result)
+        _refuse_unknown_radius(result, distinct)
     notes = [_prior_noise(result, tolerances) if sigma is None else None, _undetermined(result)]
     if repeats:
         result = dataclasses.replace(
@@ -428,19 +428,39 @@ UNDETERMINED_AXIS_DEG = 30.0
 REFUSED_RELATIVE = 1.0
 
 
-def _refuse_unknown_radius(result: FitResult) -> None:
+def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
     """Raise FitError when the fit's radius is not known to within its own size
-    (``REFUSED_RELATIVE``)."""
+    (``REFUSED_RELATIVE``), or when a plane explains its inliers (``points`` (n, 3) metres,
+    the rows of ``result``) about as closely as the fit does.
+
+    The second test is the first without its linearisation: a curvature ``k`` known to
+    ``s_k`` lowers the sum of squares below the plane's by about ``(k / s_k)^2 sigma^2``, and
+    ``s_k / k`` is the radius's relative standard error. On a flat patch the Gauss-Newton
+    search can stop at a radius of kilometres whose local standard error looks small (a 3 m
+    wall fitted r 11.5 km +-19%, with a larger sum of squares than its plane).
+    """
     radius = getattr(result.primitive, "radius", None)
     stderr = (result.stderr or {}).get("radius")
-    if radius is None or stderr is None or stderr <= REFUSED_RELATIVE * radius:
+    if radius is None or stderr is None:
         return
-    spread = "+-inf" if not np.isfinite(stderr) else f"+-{stderr / radius:.0%}"
     best = f"{radius * 1000:.0f} mm" if radius < 1.0 else f"{radius:.4g} m"
+    if stderr > REFUSED_RELATIVE * radius:
+        spread = "+-inf" if not np.isfinite(stderr) else f"+-{stderr / radius:.0%}"
+        why = f"one standard error {spread}"
+    else:
+        kept = points[result.inliers]
+        if len(kept) < 4 or not result.sigma > 0:
+            return
+        centred = kept - kept.mean(axis=0)
+        plane_sse = float(np.linalg.svd(centred, compute_uv=False)[-1] ** 2)
+        fit_sse = float(np.sum(result.residuals[result.inliers] ** 2))
+        if plane_sse - fit_sse >= result.sigma**2 / REFUSED_RELATIVE**2:
+            return
+        why = "a plane fits the points as closely"
     raise FitError(
-        f"These points do not determine the {result.kind}'s radius (best fit r {best}, one "
-        f"standard error {spread}): they lie on a nearly flat "
-        "strip or patch of it. Shoot across more of its surface, or check its kind.",
+        f"These points do not determine the {result.kind}'s radius (best fit r {best}, {why}): "
+        "they lie on a nearly flat strip or patch of it. Shoot across more of its surface, or "
+        "check its kind.",
         where="points",
     )
 

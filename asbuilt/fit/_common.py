@@ -383,8 +383,25 @@ def stderr_of(variance: float) -> float:
     return float(np.sqrt(variance))
 
 
+#: Least ratio of J's smallest singular value to its largest for ``(J^T J)^-1`` to be taken
+#: directly: the normal matrix's condition number is the square of J's, and inverting it loses
+#: that many digits (1e-7: condition 1e14, a few correct digits left of 16). A well-posed fit is
+#: at 1e-1 to 1e-2; a sphere or cylinder fitted to a nearly flat patch (its radius and the
+#: centre's depth move together) at 1e-8 to 1e-15, where the inverse is rounding noise.
+_WELL_POSED = 1e-7
+#: Singular values of J below this fraction of the largest are rounding, not information: the
+#: direction they belong to gets the variance of this floor (undetermined, not zero).
+_SINGULAR_FLOOR = 1e-15
+
+
 def covariance_from_jacobian(jacobian: np.ndarray, sigma: float) -> np.ndarray:
-    """Gauss-Newton covariance ``sigma^2 (J^T J)^-1`` (pseudo-inverse when rank deficient).
+    """Gauss-Newton covariance ``sigma^2 (J^T J)^-1``.
+
+    When ``J^T J`` is singular or too ill-conditioned to invert (its condition number is the
+    square of J's), the covariance comes from the SVD of J itself, ``V diag(s^-2) V^T``
+    (Golub and Van Loan, Matrix Computations, 5.3), so a direction the points barely determine
+    keeps its large variance. A pseudo-inverse would give such a direction zero variance: a
+    13 km sphere fitted to a flat wall reported its radius to +-0.2 mm.
 
     Parameters
     ----------
@@ -395,15 +412,19 @@ def covariance_from_jacobian(jacobian: np.ndarray, sigma: float) -> np.ndarray:
     Returns
     -------
     ndarray, shape (p, p)
+        Finite; a direction J does not determine at all gets the variance of a singular value
+        ``_SINGULAR_FLOOR`` times J's largest (far beyond any size a fit reports).
     """
-    normal = jacobian.T @ jacobian
-    try:
-        inverse = np.linalg.inv(normal)
-        if not np.all(np.isfinite(inverse)):
-            raise np.linalg.LinAlgError
-    except np.linalg.LinAlgError:
-        inverse = np.linalg.pinv(normal)
-    return sigma * sigma * inverse
+    p = jacobian.shape[1]
+    values = np.linalg.svd(jacobian, compute_uv=False)
+    if values.size == p and values[-1] > _WELL_POSED * values[0]:
+        return sigma * sigma * np.linalg.inv(jacobian.T @ jacobian)
+    _, values, rows = np.linalg.svd(jacobian, full_matrices=True)
+    largest = values[0] if values.size and values[0] > 0 else 1.0
+    # Rows of V beyond the singular values (fewer residuals than parameters) are undetermined.
+    values = np.concatenate([values, np.zeros(p - values.size)])
+    values = np.maximum(values, _SINGULAR_FLOOR * largest)
+    return sigma * sigma * ((rows.T / values**2) @ rows)
 
 
 def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:

@@ -144,9 +144,31 @@ def test_covariance_from_jacobian_matches_the_straight_line_textbook_formula():
     assert covariance[0, 0] == pytest.approx(0.25 * (1 / 5 + x.mean() ** 2 / sxx))
 
 
-def test_covariance_from_a_rank_deficient_jacobian_is_finite():
+def test_covariance_from_a_rank_deficient_jacobian_is_finite_and_undetermined():
+    # Two equal columns: a + b is determined, a - b not at all. A pseudo-inverse gave a - b
+    # zero variance, as if it were known exactly.
     jacobian = np.column_stack([np.ones(4), np.ones(4)])
-    assert np.all(np.isfinite(common.covariance_from_jacobian(jacobian, 1.0)))
+    covariance = common.covariance_from_jacobian(jacobian, 1.0)
+    assert np.all(np.isfinite(covariance))
+    assert covariance[0, 0] > 1e20 and covariance[1, 1] > 1e20
+
+
+def test_covariance_of_a_nearly_singular_jacobian_keeps_its_large_variance():
+    # Columns 1 and 1 + eps x: J^T J has condition ~1e20 (its inverse is rounding noise), J
+    # itself 1e10. The exact covariance is that of the line y = a + b x with b scaled by eps.
+    eps = 1e-10
+    x = np.arange(5.0)
+    jacobian = np.column_stack([np.ones(5), 1.0 + eps * x])
+    covariance = common.covariance_from_jacobian(jacobian, 0.5)
+    sxx = np.sum((x - x.mean()) ** 2)
+    # a' = a + b, b' = eps b: Var(b) = Var(b') / eps^2.
+    assert covariance[1, 1] == pytest.approx(0.25 / sxx / eps**2, rel=1e-4)
+
+
+def test_covariance_with_fewer_residuals_than_parameters_is_undetermined_beyond_them():
+    covariance = common.covariance_from_jacobian(np.array([[1.0, 0.0, 0.0]]), 1.0)
+    assert covariance[0, 0] == pytest.approx(1.0)
+    assert covariance[1, 1] > 1e20 and covariance[2, 2] > 1e20
 
 
 @pytest.mark.parametrize("value, expected", [(4.0, 2.0), (-1e-30, np.inf), (np.nan, np.inf)])

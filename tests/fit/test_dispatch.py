@@ -487,6 +487,30 @@ def test_a_radius_not_known_to_within_its_size_is_refused():
         fit_points("cylinder", _helix(6, 33), sigma=0.001)
 
 
+def _flat_wall(seed: int, noise: float) -> np.ndarray:
+    """30 shots (30, 3) metres on a 3 x 2 m wall 6 m away with ``noise`` metres across it."""
+    rng = np.random.default_rng(seed)
+    u, v = rng.uniform(-1.5, 1.5, 30), rng.uniform(-1.0, 1.0, 30)
+    return np.column_stack([u, 6.0 + rng.normal(0, noise, 30), 1.5 + v])
+
+
+@pytest.mark.parametrize("seed", [2, 3])
+def test_a_flat_wall_fitted_as_a_sphere_is_refused(seed):
+    # The best sphere is tens of kilometres wide and its radius is not known at all. J^T J was
+    # singular to rounding; its inverse or pseudo-inverse reported the radius to a fraction of
+    # its size (r 155 km +-84 m for seed 3), so the refusal never fired.
+    with pytest.raises(FitError, match="do not determine the sphere's radius .* one standard"):
+        fit_points("sphere", _flat_wall(seed, 0.0001), sigma=0.0001)
+
+
+@pytest.mark.parametrize("seed", [2, 3])
+def test_a_flat_wall_fitted_as_a_cylinder_no_closer_than_its_plane_is_refused(seed):
+    # The search stops at r 8-12 km with a local standard error of 19-27% and a larger sum of
+    # squares than the wall's plane: the radius is refused for the plane, not the error.
+    with pytest.raises(FitError, match="do not determine the cylinder's radius .* a plane fits"):
+        fit_points("cylinder", _flat_wall(seed, 0.00001), sigma=0.00001)
+
+
 def test_an_undetermined_fit_says_so():
     # Eight shots over 120 degrees: the radius is known to +-65% only, which stands with a note.
     result = fit_points("cylinder", _helix(8, 60), sigma=0.001)
