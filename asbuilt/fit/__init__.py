@@ -428,10 +428,16 @@ UNDETERMINED_AXIS_DEG = 30.0
 REFUSED_RELATIVE = 1.0
 
 
+#: A radius over this many times the extent of the fit's inliers makes them a nearly flat
+#: patch of it, where their plane is the rival :func:`_refuse_unknown_radius` compares.
+_PLANE_LIKE_RADIUS = 3.0
+
+
 def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
     """Raise FitError when the fit's radius is not known to within its own size
-    (``REFUSED_RELATIVE``), or when a plane explains its inliers (``points`` (n, 3) metres,
-    the rows of ``result``) about as closely as the fit does.
+    (``REFUSED_RELATIVE``), or when, wider than ``_PLANE_LIKE_RADIUS`` times its inliers'
+    extent, it explains them (``points`` (n, 3) metres, the rows of ``result``) about as
+    closely as their plane does.
 
     The second test is the first without its linearisation: a curvature ``k`` known to
     ``s_k`` lowers the sum of squares below the plane's by about ``(k / s_k)^2 sigma^2``, and
@@ -452,6 +458,8 @@ def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
         if len(kept) < 4 or not result.sigma > 0:
             return
         centred = kept - kept.mean(axis=0)
+        if radius <= _PLANE_LIKE_RADIUS * 2.0 * float(np.sqrt(np.max(np.sum(centred**2, 1)))):
+            return  # curved over the points: their plane is no rival
         plane_sse = float(np.linalg.svd(centred, compute_uv=False)[-1] ** 2)
         fit_sse = float(np.sum(result.residuals[result.inliers] ** 2))
         if plane_sse - fit_sse >= result.sigma**2 / REFUSED_RELATIVE**2:
