@@ -75,6 +75,7 @@ from asbuilt.fit._cylinder_checks import (
     one_station_could_see,
     robust_extent,
     same_basin,
+    seen_through,
     unhidden_starts,
     unseen,
 )
@@ -96,14 +97,20 @@ from asbuilt.fit._cylinder_starts import (
     polish_axes,
     trust_order,
 )
-from asbuilt.fit._robust import RobustFit, keep_count, likelier, robust_geometric_fit
+from asbuilt.fit._robust import (
+    RobustFit,
+    keep_count,
+    likelier,
+    refit_on,
+    robust_geometric_fit,
+)
 from asbuilt.fit._visibility import (
     cylinder_beam_excess,
     reconsidered,
 )
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cylinder
-from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
+from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 
 __all__ = ["fit_cylinder", "METHOD"]
 
@@ -536,6 +543,48 @@ def fit_cylinder(
     return _finished(robust, scene, ignored_view, starts, reconsider)
 
 
+#: Refits after dropping inliers seen through the pipe (:func:`_not_seen_through`) before the
+#: fit is refused: each refit can move the pipe onto other shots' beams.
+_THROUGH_ROUNDS = 3
+
+
+def _not_seen_through(robust, local, view, sigma, tolerances: Tolerances):
+    """The fit without the inliers its own pipe would have hidden from the viewpoint
+    (:func:`seen_through`), refitted by least squares, and how many were dropped; FitError when
+    too few shots are left, more than ``tolerances.max_outlier_fraction`` are rejected, or the
+    refits keep hiding shots.
+
+    The robust choice scores hidden shots but can still settle on a fit that hides a few (a
+    wide circle through a thin pipe's front shots and the wall rows behind it, when fewer than
+    ``UNSEEN_FRACTION`` of its inliers are hidden); those shots are outliers.
+    """
+    n = len(local)
+    dropped = 0
+    for round_ in range(_THROUGH_ROUNDS + 1):
+        cutoff = tolerances.outlier_cutoff_sigma * (sigma if sigma is not None else robust.scale)
+        through = seen_through(robust, local, view, cutoff)
+        count = int(np.count_nonzero(through))
+        if not count:
+            return robust, dropped
+        keep = robust.inliers & ~through
+        left = int(np.count_nonzero(keep))
+        if (
+            round_ == _THROUGH_ROUNDS
+            or left < MIN_POINTS["cylinder"]
+            or n - left > tolerances.max_outlier_fraction * n
+        ):
+            break
+        robust = refit_on(MODEL, robust, local, keep)
+        dropped += count
+    raise FitError(
+        f"The cylinder these shots fit best (r {robust.state[2] * 1000:.0f} mm) would hide"
+        f" {count} of its own shots behind itself as seen from the viewpoint, and without them"
+        f" {left} of the {n} shots are left: they are mostly background and mixed returns"
+        " around a thin pipe, or the station is wrong. Rescan with more shots across the pipe,"
+        " or check the scan's sensor position or the object's station."
+    )
+
+
 @dataclass(frozen=True)
 class _Scene:
     """What the last stage of a cylinder fit (:func:`_finished`) needs of the scan.
@@ -586,6 +635,9 @@ def _finished(robust, scene: _Scene, ignored_view, starts, reconsider) -> FitRes
         settled = reconsider(robust, None)
         if rms(settled.residuals[settled.inliers]) < rms(robust.residuals[robust.inliers]):
             robust, far_side = settled, 0
+    through = 0
+    if view is not None and not ignored_view:
+        robust, through = _not_seen_through(robust, local, view, sigma, tolerances)
     robust, relative = incidence_weighted(robust, local)
     axis, center, radius = robust.state
     kept = local[robust.inliers]
@@ -633,6 +685,7 @@ def _finished(robust, scene: _Scene, ignored_view, starts, reconsider) -> FitRes
             f"{outliers} outlier point(s) rejected (beyond {tolerances.outlier_cutoff_sigma:g}"
             f" x {robust.scale * 1000:.3g} mm"
             + (f", or {far_side} on the far side of the pipe" if far_side else "")
+            + (f", or {through} seen through it from the viewpoint" if through else "")
             + ")."
         )
     diagnostics = {

@@ -11,8 +11,10 @@ from fit_scans import angle_deg, raster_scan
 
 from asbuilt.errors import FitError
 from asbuilt.fit import cylinder as cylinder_module
+from asbuilt.fit import fit_points
 from asbuilt.fit._circles import kasa_batch
 from asbuilt.fit._common import local_normals, orthonormal_basis
+from asbuilt.fit._cylinder_checks import seen_through
 from asbuilt.fit._cylinder_model import MODEL, incidence_weighted
 from asbuilt.fit._cylinder_starts import axis_starts, trust_order
 from asbuilt.fit._robust import RobustFit, keep_count
@@ -640,3 +642,30 @@ def test_wall_rows_behind_a_pipe_are_rejected_with_the_viewpoint(scan):
     assert angle_deg(fit.primitive.axis, truth["axis"]) < 1.0
     labels = np.array(scan["labels"])
     assert not np.any(fit.inliers & (labels == 1))  # no wall shot kept
+
+
+def test_a_fit_hiding_its_own_shots_drops_them_and_is_refused_when_nothing_is_left():
+    # Independent ray caster: 9 shots of an NPS 2 line 8 m away, six along it in one raster row
+    # and three on what lies behind. The robust choice settled on r 612 mm with three inliers
+    # behind its front (a third: below the wrong-viewpoint test's "more than a third"), and
+    # it stood with a 1.2 mm standard error. Without those shots the row alone leaves the
+    # radius open, so the fit is refused.
+    scan = json.loads((Path(__file__).parent / "thin_pipe_hiding_its_shots.json").read_text())
+    points = np.array(scan["points"])
+    with pytest.raises(FitError, match="nearly flat strip|would hide"):
+        fit_points("cylinder", points, sigma=scan["range_sigma"], viewpoint=scan["station"])
+
+
+def test_seen_through_flags_inliers_behind_the_pipes_middle_only():
+    # A 0.1 m pipe along x at y = 5 seen from the origin: a shot on its front, a grazing shot
+    # 1 mm inside its silhouette and 5 mm long (noise), and one on the wall behind its middle.
+    axis, center, radius = np.array([1.0, 0, 0]), np.array([0, 5.0, 0]), 0.1
+    front = [0.3, 4.9, 0.0]
+    grazing = [0.0, 5.0 + 0.005, radius - 0.001]
+    behind = [0.0, 5.0 + radius - 0.001, 0.0]  # within a mm of the far side: an "inlier"
+    points = np.array([front, grazing, behind])
+    robust = RobustFit(
+        (axis, center, radius), np.zeros(3), np.ones(3, bool), np.zeros((3, 5)), 0.002
+    )
+    through = seen_through(robust, points, np.zeros(3), 0.006)
+    assert through.tolist() == [False, False, True]
