@@ -247,6 +247,12 @@ NOISE_LADDER_CEILING = 0.03
 #: Levels in a row that score nothing (fail, implausible, too many outliers) after which the
 #: search stops going that way while nothing has scored yet.
 NOISE_LADDER_MISSES = 2
+#: Relative score difference within which two levels tie: two levels that settle on the same
+#: fit score the same up to rounding. A tie walks on to the next level without counting as a
+#: gain or a loss: a rounding "gain" ended the search before the other direction was tried,
+#: and a rounding "loss" ended it on a plateau (a clean box's fit changed when its points were
+#: translated, and rejected up to a quarter of its shots).
+_TIE = 1e-9
 
 
 def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolerances, plausible):
@@ -323,10 +329,13 @@ def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolera
             level = max(level, floor)  # the floor itself is a level
         while len(tried) < NOISE_LADDER_LEVELS and floor <= level <= NOISE_LADDER_CEILING:
             score = scored(level)
-            if score < best_score:
+            margin = _TIE * max(1.0, abs(best_score)) if math.isfinite(best_score) else 0.0
+            if score < best_score - margin:
                 best, best_score, moved, misses = level, score, True, 0
-            elif math.isfinite(best_score):
+            elif math.isfinite(best_score) and score > best_score + margin:
                 break  # the likelihood fell: farther levels are worse still
+            elif math.isfinite(best_score):
+                pass  # a tie (the same fit): walk on, without calling it a gain
             else:
                 misses += 1
                 if misses == NOISE_LADDER_MISSES:
