@@ -348,12 +348,28 @@ class PanTiltUnit:
         return self.limits
 
     def to_counts(self, pan: float, tilt: float) -> tuple[int, int]:
-        """Unit angles (rad) to the nearest counts."""
+        """Unit angles (rad) to the nearest counts.
+
+        Raises
+        ------
+        PTULimitError
+            An angle is not a finite number (``inf``, ``nan``) or too large to count.
+        """
         lim = self._need_limits()
-        return (
-            int(round(pan / (lim.pan_resolution * _ARCSEC))),
-            int(round(tilt / (lim.tilt_resolution * _ARCSEC))),
-        )
+        counts = []
+        for axis, angle, resolution, (lo, hi) in (
+            ("pan", pan, lim.pan_resolution, lim.pan_range()),
+            ("tilt", tilt, lim.tilt_resolution, lim.tilt_range()),
+        ):
+            value = angle / (resolution * _ARCSEC)
+            if not math.isfinite(value):  # int() of it would be an OverflowError/ValueError
+                raise PTULimitError(
+                    f"{self.channel.name}: {axis} {math.degrees(angle):g} deg is not an angle "
+                    f"inside the unit's limits [{math.degrees(lo):.3f}, {math.degrees(hi):.3f}] "
+                    "deg; aim inside them"
+                )
+            counts.append(int(round(value)))
+        return counts[0], counts[1]
 
     def to_angles(self, pan_counts: int, tilt_counts: int) -> tuple[float, float]:
         """Counts to unit angles (rad)."""
@@ -381,8 +397,8 @@ class PanTiltUnit:
         Raises
         ------
         PTULimitError
-            The target is outside the limits read from the unit (nothing is sent), or the unit
-            reported a limit hit.
+            The target is outside the limits read from the unit or not a finite angle (nothing
+            is sent), or the unit reported a limit hit.
         """
         lim = self._need_limits()
         pc, tc = self.to_counts(pan, tilt)

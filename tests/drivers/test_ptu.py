@@ -83,6 +83,26 @@ def test_targets_outside_the_limits_are_refused_before_sending(scripted, pan_cou
     assert len(port.written) == sent
 
 
+@pytest.mark.parametrize(
+    "pan, tilt, axis",
+    [
+        (math.inf, 0.0, "pan"),
+        (0.0, -math.inf, "tilt"),
+        (math.nan, 0.0, "pan"),
+        (0.0, 1e308, "tilt"),
+    ],
+)
+def test_non_finite_targets_are_limit_errors_before_sending(scripted, pan, tilt, axis):
+    """``inf``/``nan`` (or an angle too large to count) is refused like any target outside the
+    limits, not an OverflowError from the conversion to counts."""
+    ptu, port = _unit(scripted, INIT_VERBOSE_ECHO)
+    ptu.initialize()
+    sent = len(port.written)
+    with pytest.raises(PTULimitError, match=f"{axis} .* deg is not an angle inside the unit's"):
+        ptu.move_to(pan, tilt)
+    assert len(port.written) == sent
+
+
 def test_error_reply_becomes_a_command_error(scripted):
     script = INIT_VERBOSE_ECHO + [("PP10", b"! Maximum allowable Pan position is 5\r\n")]
     ptu, _ = _unit(scripted, script)
