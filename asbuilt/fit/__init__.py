@@ -212,9 +212,12 @@ def _prior_noise(result: FitResult, tolerances: Tolerances) -> str | None:
     n_params = int(result.covariance.shape[0])
     if not few_residual_dof(result.n_inliers, n_params, tolerances):
         return None
+    # Said only when true: a fit that took shots as background before its noise level was
+    # known (auto's far-side test, a cylinder's hidden shots) has rejected some.
+    rejected = "no point was rejected as an outlier, and " if result.inliers.all() else ""
     return (
         f"{result.n_inliers} points for {n_params} parameters leave too few to estimate the "
-        f"noise: no point was rejected as an outlier, and the standard errors assume a "
+        f"noise: {rejected}the standard errors assume a "
         f"{tolerances.prior_range_sigma * 1000:g} mm range noise for the missing degrees of "
         "freedom; give the scan's sensor.range_sigma, or take more shots."
     )

@@ -516,6 +516,12 @@ def fit_cuboid(
             "Check the object's points or fit it as a hull."
         )
 
+    if n_out:
+        notes.append(
+            f"{n_out} outlier point(s) rejected (beyond {cutoff:g} x "
+            f"{max(scale, noise) * 1000:.3g} mm of their face)."
+        )
+
     # Bisection shots rejected as mixed returns still carry their direction: put back on their
     # face along the beam, they bound the edge as a clean hit would (extra rows of xb).
     xb, label_b, inliers_b, edges_b, mended = x, label, inliers, edges, 0

@@ -445,6 +445,20 @@ def test_few_points_without_a_sigma_keep_every_shot_and_say_so():
     assert any("too few to estimate the noise" in note for note in result.notes)
 
 
+def test_few_points_without_a_sigma_do_not_deny_a_rejection():
+    """Six wall shots and one 0.2 m off, no sigma: the fit takes the far one as background and
+    says so; the few-points note said in the same breath that no point was rejected (audit)."""
+    rng = np.random.default_rng(4)
+    points = np.column_stack(
+        [rng.uniform(0, 2, 7), 4.0 + rng.normal(0, 0.002, 7), rng.uniform(0, 2, 7)]
+    )
+    points[3, 1] += 0.2
+    result = fit_points("plane", points)
+    assert not result.inliers[3]
+    few = [note for note in result.notes if "too few to estimate the noise" in note]
+    assert few and "no point was rejected" not in few[0]
+
+
 def test_few_points_with_a_sigma_say_nothing_of_a_missing_sigma():
     """Seven wall shots with a 2 mm sensor sigma, one of them 3 cm off: the fit rejects it and
     may refit with the residuals' wider noise, but the note asking for the scan's sigma (which
