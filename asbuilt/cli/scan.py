@@ -216,6 +216,19 @@ def _say(err, text: str) -> None:
         pass
 
 
+def _numbers(text: str, count: int) -> list[float] | None:
+    """Exactly ``count`` finite numbers typed on one line, or None when the line is not that."""
+    import math
+
+    try:
+        values = [float(v) for v in text.split()]
+    except ValueError:
+        return None
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        return None  # 'inf'/'nan' parse as floats but are no angle to aim at
+    return values
+
+
 def _aim_corner(ptu, label: str, ask):
     """Jog the head with 'pan tilt' (degrees) lines until 'ok'; return the unit angles (rad)."""
     import math
@@ -232,13 +245,12 @@ def _aim_corner(ptu, label: str, ask):
             return None
         if answer.lower() in ("ok", "y", ""):
             return pan, tilt
-        try:
-            p, t = (math.radians(float(v)) for v in answer.split())
-        except ValueError:
-            sys.stderr.write("  give two numbers (degrees) or 'ok'\n")
+        values = _numbers(answer, 2)
+        if values is None:
+            sys.stderr.write("  give two numbers PAN TILT (degrees), or 'ok' to take this corner\n")
             continue
         try:
-            ptu.move_to(p, t)
+            ptu.move_to(math.radians(values[0]), math.radians(values[1]))
         except PTUError as exc:
             sys.stderr.write(f"  {exc}\n")
 
@@ -289,11 +301,15 @@ def _interactive_targets(ptu, lrf, session, answers: _Input):
                     return
                 window = Window.from_corners(c1[0], c1[1], c2[0], c2[1])
             else:
-                window = Window.from_degrees([float(v) for v in text.split()][:4])
-                if len(text.split()) != 4:
-                    raise ValueError("give four numbers")
-        except (ValueError, TypeError) as exc:
-            sys.stderr.write(f"  bad window ({exc})\n")
+                corners = _numbers(text, 4)
+                if corners is None:
+                    sys.stderr.write(
+                        "  give four numbers PAN1 TILT1 PAN2 TILT2 (degrees), or 'aim'\n"
+                    )
+                    continue
+                window = Window.from_degrees(corners)
+        except ValueError as exc:  # the two corners share a pan or a tilt angle
+            sys.stderr.write(f"  bad window: {exc}\n")
             continue
         nominal = ask("  nominal size (optional): ")
         yield Target(oid, kind, window, nominal=nominal or None)

@@ -347,6 +347,29 @@ def test_a_bad_edge_tolerance_is_one_clear_error(value):
 
 
 P1_ANSWERS = ["P1", "cylinder", "72 -6.5 108 -1.5", '12"']
+
+
+def test_bad_typed_angles_are_re_prompted_in_the_operators_terms(site, monkeypatch, capsys):
+    """Three numbers for a window, 'inf'/'nan' or one number while aiming: a plain line saying
+    what to type and the prompt again, no Python exception text; the object is then scanned."""
+    answers = [
+        *("C1", "cuboid", "63.5 -8 73"),  # three numbers: asked again from the id
+        *("C1", "cuboid", "63.5 -8 inf 10"),
+        *("C1", "cuboid", "aim", "inf 0", "nan 0", "63.5", "63.5 -8", "ok", "73 10", "ok", ""),
+        "",
+    ]
+    monkeypatch.setattr(sys, "stdin", io.StringIO("\n".join(answers) + "\n"))
+    assert main(_args(site, "badangles")) == 0
+    err = capsys.readouterr().err
+    assert err.count("give four numbers PAN1 TILT1 PAN2 TILT2 (degrees), or 'aim'") == 2
+    assert err.count("give two numbers PAN TILT (degrees), or 'ok' to take this corner") == 3
+    for python in ("from_corners", "positional argument", "convert float", "Traceback"):
+        assert python not in err
+    doc = json.loads((site / "scan.json").read_text())
+    window = doc["objects"][0]["acquisition"]["window_deg"]
+    assert window == pytest.approx([63.5, -8, 73, 10], abs=0.06)  # whole counts of 0.0514 deg
+
+
 C1_ANSWERS = ["C1", "cuboid", "63.5 -8 73 10", ""]
 
 
