@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 from collections.abc import Mapping
 from types import MappingProxyType
 
@@ -35,6 +36,7 @@ __all__ = [
     "PLAUSIBLE_RANGE_SIGMA",
     "IDENTICAL_RTOL",
     "COLLINEAR_RTOL",
+    "MAX_INTEGER_DIGITS",
     "TOP_LEVEL_KEYS",
     "OBJECT_KEYS",
     "load_scan",
@@ -55,6 +57,11 @@ MAX_POINTS = 1_000_000
 IDENTICAL_RTOL = 1e-9
 #: Points whose second singular value is below this fraction of the first lie on a line.
 COLLINEAR_RTOL = 1e-6
+#: Most digits a JSON integer may have: 640 is the lowest limit Python's int parsing can be set
+#: to (``sys.int_info.str_digits_check_threshold``), so a longer number is refused here with a
+#: located message before Python's own ``ValueError`` can fire; any integer past 309 digits is
+#: too large to be a length anyway.
+MAX_INTEGER_DIGITS = 640
 
 #: Range sigmas (metres) a range finder can have: a laser tracker's 10 micrometres to a cheap
 #: distance meter's few centimetres at long range, with margin. Outside, the value is almost
@@ -225,12 +232,22 @@ def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
         text = _decode(bytes(text), source)
     repeated: list[bool] = []
     try:
-        document = json.loads(text, object_pairs_hook=lambda pairs: _object_from(pairs, repeated))
+        document = json.loads(
+            text,
+            object_pairs_hook=lambda pairs: _object_from(pairs, repeated),
+            parse_int=_parse_int,
+        )
     except json.JSONDecodeError as exc:
         raise ScanError(
             f"invalid JSON ({exc.msg}); fix the syntax there",
             source=source,
             where=f"line {exc.lineno} column {exc.colno}",
+        ) from None
+    except _LongInteger as exc:
+        raise ScanError(
+            f"a number of {exc.digits:,} digits is too long to be a coordinate; fix the number there",
+            source=source,
+            where=_line_column_of_integer(text, exc.digits),
         ) from None
     except RecursionError:
         raise ScanError("invalid JSON (nested too deeply)", source=source) from None
@@ -242,6 +259,33 @@ def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
             "given twice in one JSON object; keep one (JSON readers differ on which one counts)",
         )
     return _scan_from_document(document, context)
+
+
+class _LongInteger(ValueError):
+    """A JSON integer longer than :data:`MAX_INTEGER_DIGITS` (``digits``: how many it has)."""
+
+    def __init__(self, digits: int):
+        super().__init__(digits)
+        self.digits = digits
+
+
+def _parse_int(literal: str) -> int:
+    """``json.loads`` integer hook: ``int``, refusing literals too long to convert."""
+    digits = len(literal) - literal.startswith("-")
+    if digits > MAX_INTEGER_DIGITS:
+        raise _LongInteger(digits)
+    return int(literal)
+
+
+def _line_column_of_integer(text: str, digits: int) -> str | None:
+    """``line L column C`` of the first JSON number of exactly ``digits`` integer digits (as
+    :class:`json.JSONDecodeError` counts them), or None when it cannot be found."""
+    found = re.search(rf"(?<![\w.\"])-?\d{{{digits}}}(?![\d.eE])", text)
+    if found is None:
+        return None
+    start = found.start()
+    line = text.count("\n", 0, start) + 1
+    return f"line {line} column {start - text.rfind(chr(10), 0, start)}"
 
 
 class _Repeated(dict):
@@ -563,7 +607,9 @@ def _check_spread(points: np.ndarray, kind: str, where: str, ctx: _Context) -> N
         # One point far from all the others (a survey-frame point pasted in, a unit slip) makes
         # any set look collinear: name it rather than blame the aim.
         middle = np.median(points, axis=0)
-        distance = np.linalg.norm(points - middle, axis=1)
+        offset = points - middle
+        # hypot scales as it goes: squaring a coordinate of 1e200 would overflow to inf.
+        distance = np.hypot(np.hypot(offset[:, 0], offset[:, 1]), offset[:, 2])
         far = int(np.argmax(distance))
         rest = np.delete(points, far, axis=0)
         rest_singular = np.linalg.svd(rest - rest.mean(axis=0), compute_uv=False)

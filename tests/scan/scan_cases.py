@@ -330,6 +330,23 @@ BAD = (
         schema_catches=False,
     ),
     Bad(
+        "a coordinate far beyond any squared length (1e200 m)",
+        _far_point(1e200),
+        "objects[0] (K1).points[7]: this point lies 1e+200 m from the others' median, which "
+        "makes them look collinear; check its coordinates (units, a point from another frame)",
+        schema_catches=False,
+    ),
+    Bad(
+        "an integer too long for Python to parse",
+        _text(
+            '{"format": "asbuilt-scan", "version": 1, "units": "mm",\n'
+            ' "objects": [{"id": "K1", "kind": "cylinder",\n'
+            f'   "points": [[12, 0, 0], [{"1" * 5000}, 0, 0]]}}]}}'
+        ),
+        "line 3 column 28: a number of 5,000 digits is too long to be a coordinate; fix the "
+        "number there",
+    ),
+    Bad(
         "unknown kind",
         _set("objects.4.kind", "cone"),
         'objects[4] (K5).kind: unknown kind "cone"; use one of cylinder, cuboid, sphere, plane, '

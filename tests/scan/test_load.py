@@ -337,3 +337,31 @@ def test_an_empty_file_name_is_named():
     with pytest.raises(ScanReadError) as err:
         load_scan("")
     assert str(err.value) == "'': the scan file name is empty; give the scan's JSON file"
+
+
+def test_a_far_point_is_measured_without_overflow_warnings(recwarn):
+    doc = make_doc("mm", kinds=("plane",))
+    doc["objects"][0]["points"][7][0] = 1e200  # its square overflows a float
+    with pytest.raises(ScanError) as err:
+        loads_scan(json.dumps(doc))
+    assert "this point lies 1e+197 m from the others' median" in str(err.value)
+    assert not recwarn.list, [str(w.message) for w in recwarn.list]
+
+
+@pytest.mark.parametrize(
+    ("digits", "message"),
+    [
+        (640, "objects[0] (K1).points[7]: coordinate is too large to be a length"),
+        (641, "line 1 column {column}: a number of 641 digits is too long to be a coordinate"),
+        (9000, "line 1 column {column}: a number of 9,000 digits is too long to be a coordinate"),
+    ],
+)
+def test_overlong_integers_are_located(digits, message):
+    doc = make_doc("m", kinds=("plane",))
+    doc["objects"][0]["points"][7][0] = 123456.0
+    text = json.dumps(doc).replace("123456.0", "-" + "9" * digits)
+    with pytest.raises(ScanError) as err:
+        loads_scan(text)
+    column = text.index("-999") + 1  # JSON columns count from 1
+    assert str(err.value).startswith(message.format(column=column)), str(err.value)
+    assert "\n" not in str(err.value)
