@@ -77,6 +77,32 @@ class PTULimits:
         k = self.tilt_resolution * _ARCSEC
         return self.tilt_min * k, self.tilt_max * k
 
+    def ranges_missed(self, angles) -> str:
+        """The unit's ranges that some of ``angles`` fall outside, worded for a message.
+
+        Parameters
+        ----------
+        angles : iterable of (float, float)
+            Pan and tilt, radians (unit angles).
+
+        Returns
+        -------
+        str
+            E.g. ``"tilt range [-46.646, 31.063] deg"`` (pan and tilt joined with "and"); empty
+            when every angle rounds to a count inside the limits (as :meth:`PanTiltUnit.move_to`
+            checks them).
+        """
+        angles = list(angles)
+        missed = []
+        for axis, i, (lo, hi), resolution, first, last in (
+            ("pan", 0, self.pan_range(), self.pan_resolution, self.pan_min, self.pan_max),
+            ("tilt", 1, self.tilt_range(), self.tilt_resolution, self.tilt_min, self.tilt_max),
+        ):
+            counts = [a[i] / (resolution * _ARCSEC) for a in angles]  # as the unit checks them
+            if not all(math.isfinite(c) and first <= round(c) <= last for c in counts):
+                missed.append(f"{axis} range [{math.degrees(lo):.3f}, {math.degrees(hi):.3f}] deg")
+        return " and ".join(missed)
+
 
 class PanTiltUnit:
     """A FLIR/DP pan-tilt unit on a serial port.

@@ -701,7 +701,7 @@ class ScanSession:
         n = int(result.on_object.sum())
         minimum = MIN_POINTS.get(target.kind, 7)
         if n < minimum:
-            reason = f"{n} shots on the object, {minimum} needed at least; re-aim the window"
+            reason = self._too_few(result.shots, n, minimum)
             self.journal.append({"type": "failed", "id": target.id, "reason": reason})
             self.failed[target.id] = reason
             return None
@@ -710,6 +710,19 @@ class ScanSession:
         self.failed.pop(target.id, None)
         self.write_scan()
         return result
+
+    def _too_few(self, shots: list[Shot], n: int, minimum: int) -> str:
+        """Why an object with ``n`` shots on it is not in the scan: aim, or the unit's reach."""
+        short = f"{n} shots on the object, {minimum} needed at least"
+        beyond = [(s.pan_req, s.tilt_req) for s in shots if s.error == "limit"]
+        if not beyond or 2 * len(beyond) < len(shots):  # mostly shot: the aim was off
+            return f"{short}; re-aim the window"
+        limits = getattr(getattr(self.shooter, "ptu", None), "limits", None)  # DeviceShooter's
+        ranges = limits.ranges_missed(beyond) if limits is not None else ""
+        return (
+            f"{len(beyond)} of {len(shots)} shots were beyond the pan-tilt unit's "
+            f"{ranges or 'limits'} ({short}); put the window within reach or move the station"
+        )
 
     def close(self) -> None:
         """Close the journal."""

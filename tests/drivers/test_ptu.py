@@ -179,3 +179,12 @@ def test_await_waits_for_a_finite_speed_move():
         ptu.command("PP2000")
         ptu.await_completion()
         assert ptu.position_counts()[0] == 2000
+
+
+def test_ranges_missed_names_the_axes_some_angles_fall_outside():
+    limits = PTULimits(-7000, 7000, -3000, 1500, 46.2857, 11.5714)
+    pan_hi, tilt_hi = 7000 * 46.2857 * ARCSEC, 1500 * 11.5714 * ARCSEC
+    assert limits.ranges_missed([(0.0, 0.0), (pan_hi, tilt_hi)]) == ""
+    assert limits.ranges_missed([(0.0, tilt_hi + 0.01)]) == "tilt range [-9.643, 4.821] deg"
+    both = limits.ranges_missed([(math.nan, 0.0), (0.0, -1.0)])
+    assert both == "pan range [-90.000, 90.000] deg and tilt range [-9.643, 4.821] deg"

@@ -255,12 +255,29 @@ def test_resume_without_journal(tmp_path):
 
 
 def test_object_that_misses_everything_is_reported_not_added(scene_file, tmp_path):
-    nothing = Target("X", "cylinder", Window.from_degrees([-100, 40, -90, 44]))  # the open sky
+    nothing = Target("X", "cylinder", Window.from_degrees([-100, 10, -90, 20]))  # the open sky
     out = tmp_path / "sky.json"
     session = _run(scene_file, out, "sky", [nothing, PIPE])
     assert "X" in session.failed and "re-aim" in session.failed["X"]
     assert list(session.objects) == ["P1"]
     assert json.loads(out.read_text())["acquisition"]["failed"] == {"X": session.failed["X"]}
+
+
+def test_a_window_beyond_the_units_reach_is_reported_as_such_not_as_aim(scene_file, tmp_path):
+    """Tilt 35-45 deg is above the simulated unit's +31.063 deg: every shot is refused before the
+    head moves, and the reason names the tilt range (read from the unit), not the aim."""
+    high = Target("H", "plane", Window.from_degrees([80, 35, 100, 45]))
+    session = _run(scene_file, tmp_path / "high.json", "high", [high])
+    reason = session.failed["H"]
+    assert "re-aim" not in reason and "pan range" not in reason
+    assert "shots were beyond the pan-tilt unit's tilt range [-46.646, 31.063] deg" in reason
+    assert reason.endswith("put the window within reach or move the station")
+    journal = [
+        json.loads(line) for line in (tmp_path / "high.json.journal").read_text().splitlines()
+    ]
+    shots = [r for r in journal if r["type"] == "shot"]
+    assert shots and all(r["error"] == "limit" for r in shots)
+    assert reason.startswith(f"{len(shots)} of {len(shots)} shots")
 
 
 def test_duplicate_object_ids_are_refused(scene_file, tmp_path):
