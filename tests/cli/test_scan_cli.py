@@ -370,6 +370,19 @@ def test_bad_typed_angles_are_re_prompted_in_the_operators_terms(site, monkeypat
     assert window == pytest.approx([63.5, -8, 73, 10], abs=0.06)  # whole counts of 0.0514 deg
 
 
+def test_a_plan_window_beyond_the_tilt_limit_is_reported_with_the_range(site, capsys):
+    """The simulated unit tilts up to +31.063 deg: a window at 35-45 deg is out of reach, and the
+    operator is told so (with the range), not to re-aim; the object in reach is scanned."""
+    plan = {**PLAN, "targets": [PLAN["targets"][0], {"id": "high", "kind": "plane"}]}
+    plan["targets"][1]["window_deg"] = [80, 35, 100, 45]
+    (site / "high.plan.json").write_text(json.dumps(plan))
+    assert main(_args(site, "high", more=["--plan", str(site / "high.plan.json")])) == 1
+    err = " ".join(capsys.readouterr().err.split())  # rich wraps the line on a narrow terminal
+    assert "high: not in the scan: " in err and "re-aim" not in err
+    assert "beyond the pan-tilt unit's tilt range [-46.646, 31.063] deg" in err
+    assert [o["id"] for o in json.loads((site / "scan.json").read_text())["objects"]] == ["P1"]
+
+
 C1_ANSWERS = ["C1", "cuboid", "63.5 -8 73 10", ""]
 
 
