@@ -33,11 +33,16 @@ def default_file_mode() -> int:
     return 0o666 & ~mask
 
 
-def _target(path) -> tuple[Path, bool]:
+#: The file name a directory-target message suggests adding when the caller names none: the
+#: model is the output most commands write.
+DEFAULT_EXAMPLE = "model.step"
+
+
+def _target(path, example: str = DEFAULT_EXAMPLE) -> tuple[Path, bool]:
     """The file to publish to for an output ``path``, and whether it is a special file.
 
     Symbolic links are followed (the file they point to is the output). Raises ExportError for
-    a directory, before anything is written.
+    a directory, before anything is written; its message suggests adding ``/`` and ``example``.
     """
     given = Path(path)
     text = os.fspath(path)
@@ -49,7 +54,7 @@ def _target(path) -> tuple[Path, bool]:
         info = None  # a new file (or one the rename will report on)
     if info is not None and stat.S_ISDIR(info.st_mode):
         raise ExportError(
-            "is a directory; give a file name to write (e.g. add /model.step)", source=text
+            f"is a directory; give a file name to write (e.g. add /{example})", source=text
         )
     if text.endswith(("/", os.sep)):
         raise ExportError(
@@ -63,7 +68,7 @@ def _target(path) -> tuple[Path, bool]:
     return (Path(os.path.realpath(given)) if given.is_symlink() else given), False
 
 
-def check_target(path, option: str = "--out", inputs=()) -> Path:
+def check_target(path, option: str = "--out", inputs=(), example: str = DEFAULT_EXAMPLE) -> Path:
     """Check, before any work, that an output can be written to ``path``; return the file it
     will be published to (symbolic links followed).
 
@@ -75,13 +80,16 @@ def check_target(path, option: str = "--out", inputs=()) -> Path:
     inputs : iterable of str or Path
         The command's input files: an output that is one of them would replace it (a scan's
         measured points lost under the model written from them).
+    example : str
+        A file name of the kind the option writes (``fit.json``, ``report.html``), suggested
+        when ``path`` is a directory.
 
     Raises
     ------
     ExportError
         An empty name, a directory, a directory that does not exist, or one of ``inputs``.
     """
-    final, special = _target(path)
+    final, special = _target(path, example)
     directory = final.parent if str(final.parent) else Path(".")
     if not special and not directory.is_dir():
         raise ExportError(

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from asbuilt.atomic import AtomicBatch, atomic_write
+from asbuilt.atomic import AtomicBatch, atomic_write, check_target
 from asbuilt.errors import ExportError
 
 
@@ -64,6 +64,16 @@ def test_a_directory_target_fails_before_anything_is_written(tmp_path):
         with atomic_write(tmp_path / "taken.glb") as f:
             f.write(b"x")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["taken.glb"]
+
+
+def test_a_directory_target_is_told_what_kind_of_file_to_add(tmp_path):
+    with pytest.raises(ExportError) as info:
+        check_target(tmp_path, "--output", example="fit.json")
+    assert str(info.value) == (
+        f"{tmp_path}: is a directory; give a file name to write (e.g. add /fit.json)"
+    )
+    with pytest.raises(ExportError, match=r"\(e\.g\. add /model\.step\)$"):
+        check_target(tmp_path)  # a model is the default
 
 
 @pytest.mark.parametrize(

@@ -85,7 +85,8 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.scan import load_scan
 
     if args.output is not None:
-        check_target(args.output, "--output", inputs=[args.scan])  # before any work
+        # before any work; a directory is refused with a JSON file name to add
+        check_target(args.output, "--output", inputs=[args.scan], example="fit.json")
     scan = load_scan(args.scan)
     err = Console(file=sys.stderr, markup=False)
     with stage_progress(err) as bar:

@@ -140,7 +140,9 @@ def run(args: argparse.Namespace) -> int:
                 source=str(report_path),
             )
         seen.add(report_path.resolve())
-        check_target(report_path, "--report", inputs=[args.scan])
+        check_target(
+            report_path, "--report", inputs=[args.scan], example=f"report{report_path.suffix}"
+        )
 
     scan = load_scan(args.scan)
     err = Console(file=sys.stderr, markup=False)

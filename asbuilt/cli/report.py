@@ -183,7 +183,7 @@ def run(args: argparse.Namespace) -> int:
     outputs = [Path(p) for p in args.out]
     for path in outputs:
         report_format_for(path)  # an unknown suffix fails before any work
-        check_target(path, "--out", inputs=[args.scan])
+        check_target(path, "--out", inputs=[args.scan], example=f"report{path.suffix}")
     if args.gltf is not None:
         if Path(args.gltf).suffix.lower() not in (".glb", ".gltf"):
             raise ExportError("--gltf must name a .glb or .gltf file", source=str(args.gltf))

@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     if args.points is not None and args.points < 1:
         raise SceneError(f"--points must be a positive integer, not {args.points}")
     if args.out != "-":
-        check_target(args.out, "--out", inputs=[args.scene])  # before any work
+        check_target(args.out, "--out", inputs=[args.scene], example="scan.json")  # before any work
     scene = load_scene(args.scene)
     doc = simulate_scan(scene, seed=args.seed, points=args.points, exact=args.exact)
     text = dumps_scan(doc)

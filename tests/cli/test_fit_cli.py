@@ -383,3 +383,15 @@ def test_the_table_shows_each_fits_notes(tmp_path, capsys):
     table, _, below = out.partition("notes:")
     assert below, out
     assert "Loose" in below and "These points do not determine the cylinder" in below
+
+
+def test_an_output_directory_is_refused_with_a_json_file_name_to_add(tmp_path, capsys):
+    """``fit --output`` writes JSON: the hint names a JSON file, not a model (audit 25)."""
+    scan = ROOT / "samples" / "spool.json"
+    assert main(["fit", str(scan), "--output", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err == (
+        f"asbuilt: error: {tmp_path}: is a directory; give a file name to write "
+        "(e.g. add /fit.json)\n"
+    )
+    assert list(tmp_path.iterdir()) == []

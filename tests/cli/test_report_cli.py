@@ -235,3 +235,23 @@ def test_a_refused_object_is_reported_and_exits_1(tmp_path, capsys):
     assert [(f["code"], f["objects"]) for f in data["findings"]] == [("AB001", ["X1"])]
     assert "X1" not in {c["id"] for c in data["components"]}
     assert "fit-refused" in outs[1].read_text()
+
+
+@pytest.mark.parametrize(
+    ("command", "name"), [("report", "out.html"), ("report", "qa.csv"), ("model", "qa.json")]
+)
+def test_a_report_path_that_is_a_directory_suggests_a_report_file(
+    tmp_path, capsys, monkeypatch, command, name
+):
+    """The hint names a report of the suffix asked for, not a model (audit 25)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / name).mkdir()
+    option = ["--out", name] if command == "report" else ["--out", "m.step", "--report", name]
+    code, _, err = run([command, BAY, *option], capsys)
+    assert code == 2
+    suffix = name.rsplit(".", 1)[1]
+    assert err == (
+        f"asbuilt: error: {name}: is a directory; give a file name to write "
+        f"(e.g. add /report.{suffix})\n"
+    )
+    assert [p.name for p in tmp_path.iterdir()] == [name]
