@@ -310,9 +310,11 @@ def fit_cylinder(
         else the weighted residuals' RMS with the degrees of freedom corrected). ``stderr``:
         ``radius``; ``axis_deg`` (RMS axis angle error, the root of the two tilt variances);
         ``center`` (across-axis position, root of the two offset variances); ``length``
-        (end-point uncertainty: each end lies somewhere between the last shot and the next
-        one, so ``s / sqrt(6)`` with ``s`` the median nearest-neighbour spacing of the
-        points, plus the noise and the axis-tilt effect, in quadrature). Measured against the
+        (the length is the inliers' extent, short of the pipe's by the part of the step after
+        each end's last shot that the pipe still fills: uniform over a step ``s`` that is a
+        root-mean-square shortfall of ``s / sqrt(3)``, so ``sqrt((s1^2 + s2^2) / 3)`` with
+        ``s1, s2`` the shots' step along the axis at each end (:func:`_end_gaps`), plus the
+        noise and the axis-tilt effect, in quadrature). Measured against the
         scatter of repeated simulated scans (range 2 mm, angle 0.01 degree): the radius error
         is overstated by up to 1.4x at 3 m and understated by up to 1.25x at 10 m on the
         benchmark's raster, overstated up to 3.4x on rasters reaching the silhouette (oblique
@@ -585,6 +587,27 @@ def _not_seen_through(robust, local, view, sigma, tolerances: Tolerances):
     )
 
 
+def _end_gaps(along: np.ndarray, spacing: float, noise: float) -> tuple[float, float]:
+    """The step of the shots along the axis beyond each end, metres: from the outermost shot to
+    the nearest one farther in by more than a row's own spread (a quarter of the median
+    nearest-neighbour ``spacing``, at least three ``noise``), else ``spacing``.
+
+    Each end lies somewhere in the step after the last shot that hit. The nearest-neighbour
+    spacing alone is the step across the raster where that is the smaller: the sample plant's
+    chimney, shot by rows metres apart of shots 0.3 m apart, had its length known to
+    +-0.12 m, and came out 2.7 m short (17.3 m of 20).
+    ``along``: the inliers' coordinates along the axis, shape (m,) metres.
+    """
+    ordered = np.sort(along)
+    same_row = max(0.25 * spacing, 3.0 * noise)
+    low = ordered[ordered > ordered[0] + same_row]
+    high = ordered[ordered < ordered[-1] - same_row]
+    return (
+        float(low[0] - ordered[0]) if low.size else spacing,
+        float(ordered[-1] - high[-1]) if high.size else spacing,
+    )
+
+
 @dataclass(frozen=True)
 class _Scene:
     """What the last stage of a cylinder fit (:func:`_finished`) needs of the scan.
@@ -660,8 +683,10 @@ def _finished(robust, scene: _Scene, ignored_view, starts, reconsider) -> FitRes
     jac[:, 1] -= shift * jac[:, 3]
     covariance = covariance_from_jacobian(jac * np.sqrt(weights)[:, None], noise)
     tilt_var = covariance[0, 0] + covariance[1, 1]
-    spacing = median_spacing(kept)
-    length_se = stderr_of(spacing**2 / 6.0 + 2.0 * noise**2 + (radius**2) * tilt_var)
+    gaps = _end_gaps(along, median_spacing(kept), noise)
+    length_se = stderr_of(
+        (gaps[0] ** 2 + gaps[1] ** 2) / 3.0 + 2.0 * noise**2 + (radius**2) * tilt_var
+    )
     oriented = orient(axis)
     cylinder = Cylinder(mid + offset, oriented, radius, length)
     angles = angles_about(axis, center, kept)

@@ -669,3 +669,30 @@ def test_seen_through_flags_inliers_behind_the_pipes_middle_only():
     )
     through = seen_through(robust, points, np.zeros(3), 0.006)
     assert through.tolist() == [False, False, True]
+
+
+def test_the_length_error_covers_the_raster_step_along_the_axis():
+    # A 20 m chimney (r 0.75 m) shot by 7 raster rows 3 m apart, 6 shots 0.15 m apart in each:
+    # the extent (18 m) falls short by the parts of the steps beyond its end rows that the
+    # chimney still fills. The error came from the nearest-neighbour spacing (0.15 m): +-0.12
+    # m for a length 2 m short (the sample plant's chimney: 17.3 m of 20).
+    rng = np.random.default_rng(5)
+    heights = np.repeat(np.arange(1.0, 20.0, 3.0), 6)
+    angles = np.tile(np.radians(np.linspace(-10, 10, 6)), 7)
+    points = np.column_stack(
+        [0.75 * np.sin(angles), 8.0 - 0.75 * np.cos(angles), heights]
+    ) + rng.normal(0, 0.002, (42, 3))
+    fit = fit_cylinder(points, sigma=0.002, viewpoint=[0.0, 0.0, 1.5])
+    shortfall = 20.0 - fit.primitive.length
+    assert shortfall == pytest.approx(2.0, abs=0.05)
+    assert fit.stderr["length"] == pytest.approx(np.sqrt(2 * 3.0**2 / 3.0), rel=0.05)
+    assert shortfall < fit.stderr["length"]
+
+
+def test_end_gaps_are_the_step_to_the_next_row_in():
+    rows = np.repeat([0.0, 3.0, 6.0, 9.5], 4) + np.tile([0.0, 0.001, -0.001, 0.002], 4)
+    gaps = cylinder_module._end_gaps(rows, 0.2, 0.002)
+    assert gaps[0] == pytest.approx(3.001, abs=0.003)
+    assert gaps[1] == pytest.approx(3.5, abs=0.003)
+    # One row only: the nearest-neighbour spacing stands for the step.
+    assert cylinder_module._end_gaps(np.zeros(5), 0.2, 0.002) == (0.2, 0.2)
