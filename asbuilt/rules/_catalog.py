@@ -3,6 +3,10 @@
 :class:`SizeTable` holds a pipe catalog's sizes (nominal, DN, outside diameter in metres) and,
 when known, the 90 degree long-radius elbow centre-to-end of each size. :func:`size_table` builds
 one from a :class:`SizeTable`, a catalog object of :mod:`asbuilt.catalog`, or a catalog name.
+:meth:`SizeTable.find` reads a size written any way :func:`asbuilt.catalog.parse_nominal`
+understands (``6"``, ``NPS 6``, ``DN150``...) as one of the table's sizes, and
+:meth:`SizeTable.nps_of` gives a size's NPS (from the catalog's ``nps`` column when it has one),
+so that NPS-based tolerances apply to DN catalogs too.
 """
 
 from __future__ import annotations
@@ -13,6 +17,8 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 
 import numpy as np
+
+from asbuilt.catalog import parse_nominal
 
 __all__ = ["SizeTable", "size_table", "nps_value"]
 
@@ -40,12 +46,16 @@ class SizeTable:
         ``(nominal, dn, od)``, the OD in metres, sorted by OD.
     elbow_lr : dict
         Nominal to the 90 degree long-radius elbow centre-to-end, metres (may be empty).
+    nps : dict
+        Nominal to the nominal pipe size in inches, from the catalog's ``nps`` column (may be
+        empty: an NPS table's nominals are then read as NPS, see :meth:`nps_of`).
     """
 
     standard: str
     designation: str
     sizes: tuple[tuple[str, int | None, float], ...]
     elbow_lr: dict = field(default_factory=dict)
+    nps: dict = field(default_factory=dict)
 
     def __post_init__(self):
         object.__setattr__(self, "sizes", tuple(sorted(self.sizes, key=lambda s: s[2])))
@@ -53,6 +63,54 @@ class SizeTable:
     def label(self, nominal: str) -> str:
         """``"NPS 4"`` for nominal ``"4"``."""
         return f"{self.designation} {nominal}".strip()
+
+    def nps_of(self, nominal: str) -> float | None:
+        """The NPS (inches) of the table's size ``nominal``: its catalog ``nps`` value, else the
+        nominal itself read as a number in an NPS table; None when unknown (a DN size of a
+        catalog without an ``nps`` column)."""
+        if nominal in self.nps:
+            return float(self.nps[nominal])
+        return nps_value(nominal) if self.designation.upper() == "NPS" else None
+
+    def find(self, text) -> str | None:
+        """The table's nominal of a size written ``text``, or None when it names no size here.
+
+        ``text`` is the table's own nominal (``"150"``), or any form
+        :func:`asbuilt.catalog.parse_nominal` reads: ``6"`` and ``NPS 6`` by NPS, ``DN150`` by
+        DN, a bare number in the table's designation first (DN for a DN table, else NPS), then
+        the other. A schedule or rating after the size is ignored.
+        """
+        if text is None:
+            return None
+        text = str(text).strip()
+        for nominal, _, _ in self.sizes:
+            if nominal == text:
+                return nominal
+        hint = parse_nominal(text)
+        if hint is None:
+            return None
+
+        def by_dn(value):
+            return next(
+                (n for n, dn, _ in self.sizes if dn is not None and abs(dn - value) < 1e-6), None
+            )
+
+        def by_nps(value):
+            return next(
+                (
+                    n
+                    for n, _, _ in self.sizes
+                    if (nps := self.nps_of(n)) is not None and abs(nps - value) < 1e-6
+                ),
+                None,
+            )
+
+        if hint.system == "nps":
+            return by_nps(hint.value)
+        if hint.system == "dn":
+            return by_dn(hint.value)
+        first, second = (by_dn, by_nps) if self.designation.upper() == "DN" else (by_nps, by_dn)
+        return first(hint.value) or second(hint.value)
 
     def od(self, nominal: str) -> float | None:
         """The OD (metres) of a nominal size or an operator's hint (``4"``, ``NPS 4``, ``DN100``)."""
@@ -96,7 +154,7 @@ def _from_catalog(catalog) -> SizeTable | None:
     rows = getattr(catalog, "sizes", None)
     if not rows:
         return None
-    sizes, elbows = [], {}
+    sizes, elbows, nps = [], {}, {}
     fitting = getattr(catalog, "fitting", None)
     for row in rows:
         nominal, od = getattr(row, "nominal", None), getattr(row, "od", None)
@@ -104,6 +162,8 @@ def _from_catalog(catalog) -> SizeTable | None:
             continue
         dn = getattr(row, "dn", None)
         sizes.append((str(nominal), None if dn is None else int(dn), float(od)))
+        if getattr(row, "nps", None) is not None:
+            nps[str(nominal)] = float(row.nps)
         fit_row = fitting(row) if callable(fitting) else None
         elbow = (getattr(fit_row, "dims", None) or {}).get("elbow90_lr") if fit_row else None
         if elbow is not None and np.isfinite(elbow):
@@ -112,7 +172,7 @@ def _from_catalog(catalog) -> SizeTable | None:
         return None
     standard = getattr(catalog, "standard", None) or getattr(catalog, "name", "the catalog")
     designation = getattr(catalog, "designation", None) or "NPS"
-    return SizeTable(str(standard), str(designation), tuple(sizes), elbows)
+    return SizeTable(str(standard), str(designation), tuple(sizes), elbows, nps)
 
 
 def size_table(catalog) -> SizeTable | None:
