@@ -8,7 +8,10 @@ A design is a JSON document (docs/design-format.md)::
                   "material": "steel"}],
      "boxes":   [{"id": "T1", "center": [4000, 0, 500], "size": [1000, 800, 1000]}]}
 
-Lengths are converted to metres on loading. :func:`match_design` pairs as-built components with
+Lengths are converted to metres on loading. A pipe's ``nominal`` must be a size
+:func:`asbuilt.catalog.parse_nominal` reads (``"6"``, ``6"``, ``NPS 6``, ``DN150``...); which
+catalog size it names is settled when the design is checked against a model
+(:mod:`asbuilt.rules.design`), where the catalog is known. :func:`match_design` pairs as-built components with
 designed ones: compatible kinds only, the nearest first (an optimal assignment, Hungarian
 method via scipy.optimize.linear_sum_assignment) within a matching radius; what is left on either
 side is missing or extra.
@@ -23,6 +26,7 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from .catalog import parse_nominal
 from .errors import DesignError
 from .model import Component, Model, Straight
 from .primitives import Cuboid, Cylinder
@@ -65,6 +69,10 @@ class DesignedComponent:
     axes : ndarray, shape (3, 3), or None
         Box edge directions (rows); None means axis-aligned.
     nominal, material : str or None
+        ``nominal`` as written in the file (any form :func:`asbuilt.catalog.parse_nominal`
+        reads).
+    where : str or None
+        The entry in the design file (``"pipes[0] (D-P1)"``), for messages.
     """
 
     id: str
@@ -76,6 +84,7 @@ class DesignedComponent:
     axes: np.ndarray | None = None
     nominal: str | None = None
     material: str | None = None
+    where: str | None = None
 
     @property
     def axis(self) -> np.ndarray | None:
@@ -123,6 +132,22 @@ def _vector(value, where: str, source, factor: float, size: int = 3) -> np.ndarr
     return array
 
 
+def _nominal(value, where: str, source) -> str | None:
+    """A pipe's ``nominal`` as text, refused when no catalog could read it as a size."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+        raise DesignError('must be a size like "6", 6", NPS 6 or DN150', source=source, where=where)
+    text = str(value).strip()
+    if parse_nominal(text) is None:
+        raise DesignError(
+            f'{text!r} is not a pipe size; write it like "6", 6", NPS 6 or DN150',
+            source=source,
+            where=where,
+        )
+    return text
+
+
 def _item(kind: str, raw, where: str, source, factor: float) -> DesignedComponent:
     if not isinstance(raw, dict):
         raise DesignError("must be an object", source=source, where=where)
@@ -148,9 +173,7 @@ def _item(kind: str, raw, where: str, source, factor: float) -> DesignedComponen
             raise DesignError(f'needs "{name}"', source=source, where=where)
         return raw[name]
 
-    nominal = raw.get("nominal")
-    if nominal is not None and not isinstance(nominal, (str, int, float)):
-        raise DesignError('must be a size like "4"', source=source, where=f"{where}.nominal")
+    nominal = _nominal(raw.get("nominal"), f"{where}.nominal", source)
     if kind in ("pipe", "column"):
         a_name, b_name = ("start", "end") if kind == "pipe" else ("base", "top")
         start = _vector(need(a_name), f"{where}.{a_name}", source, factor)
@@ -177,8 +200,9 @@ def _item(kind: str, raw, where: str, source, factor: float) -> DesignedComponen
             end,
             size,
             None,
-            None if nominal is None else str(nominal),
+            nominal,
             material,
+            where,
         )
     center = _vector(need("center"), f"{where}.center", source, factor)
     size = _vector(need("size"), f"{where}.size", source, factor)
@@ -192,7 +216,7 @@ def _item(kind: str, raw, where: str, source, factor: float) -> DesignedComponen
         axes = np.array([_vector(r, f"{where}.axes", source, 1.0) for r in rows])
         if np.abs(axes @ axes.T - np.eye(3)).max() > 1e-6:
             raise DesignError("must be orthonormal", source=source, where=f"{where}.axes")
-    return DesignedComponent(ident, kind, center, size=size, axes=axes)
+    return DesignedComponent(ident, kind, center, size=size, axes=axes, where=where)
 
 
 def loads_design(text: str, *, source: str | None = None) -> Design:

@@ -70,6 +70,21 @@ def test_round_trip_in_millimetres(tmp_path):
             "duplicate id",
         ),
         ({"tanks": []}, "tanks", "unknown key"),
+        (
+            {"pipes": [{"id": "D1", "nominal": "banana", "start": [0, 0, 0], "end": [1, 0, 0]}]},
+            "pipes[0] (D1).nominal",
+            "not a pipe size",
+        ),
+        (
+            {"pipes": [{"id": "D1", "nominal": "100 mm", "start": [0, 0, 0], "end": [1, 0, 0]}]},
+            "pipes[0] (D1).nominal",
+            "not a pipe size",
+        ),
+        (
+            {"pipes": [{"id": "D1", "nominal": True, "start": [0, 0, 0], "end": [1, 0, 0]}]},
+            "pipes[0] (D1).nominal",
+            "size like",
+        ),
     ],
 )
 def test_bad_design_is_one_located_line(change, where, hint):
@@ -79,6 +94,13 @@ def test_bad_design_is_one_located_line(change, where, hint):
     message = str(err.value)
     assert message.startswith("design.json: ") and "\n" not in message
     assert where in message and hint in message
+
+
+@pytest.mark.parametrize("nominal", ["6", '6"', "NPS 6", "DN150", "DN 150 PN16", '1-1/2"', 6, 1.5])
+def test_readable_nominal_is_kept_as_written(nominal):
+    doc = {"pipes": [{"id": "D1", "nominal": nominal, "start": [0, 0, 0], "end": [1, 0, 0]}]}
+    (pipe,) = loads_design(json.dumps(doc), source="design.json").components
+    assert pipe.nominal == str(nominal) and pipe.where == "pipes[0] (D1)"
 
 
 def test_not_json():
