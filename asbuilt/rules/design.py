@@ -1,37 +1,99 @@
 """Design comparison rules: design-deviation, missing-component, extra-component.
 
-Matching is :func:`asbuilt.design.match_design`. For each matched pair: pipes are checked for
-size (the as-built nominal against the designed one), length (PFI ES-3 spool length tolerance by
-NPS; a pipe with a free end, where the scan stopped short, only for being too long), position (largest distance of the as-built ends from the designed axis line) and direction;
+Matching is :func:`asbuilt.design.match_design`. Each designed pipe's ``nominal`` (``"6"``,
+``6"``, ``NPS 6``, ``DN150``...) is first read as a size of the model's catalog
+(:meth:`SizeTable.find`; the default catalog when the model names none): one that names no size
+of it is a :class:`~asbuilt.errors.DesignError` naming the file and the entry. For each matched
+pair: pipes are checked for size (the as-built catalog size against the designed one), length
+(PFI ES-3 spool length tolerance by NPS, a DN size mapped to NPS through the catalog's ``nps``
+column; a pipe with a free end, where the scan stopped short, only for being too long), position (largest distance of the as-built ends from the designed axis line) and direction;
 columns for position (the axis's plan offset at the designed base height) and section (ACI 117,
 +10 / -6 mm); boxes for centre position and edge sizes. Standard errors come from the fit.
 """
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 
+from asbuilt.catalog import DEFAULT_CATALOG, parse_nominal
 from asbuilt.design import built_axis, match_design
+from asbuilt.errors import DesignError
 from asbuilt.findings import Suggestion
 from asbuilt.model import Straight
 from asbuilt.primitives import Cuboid, Cylinder
 
-from ._catalog import nps_value
+from ._catalog import SizeTable, size_table
 from ._context import Context, centre_of, deg, ends_of, mm, stderr_value, verdict
 from .alignment import axis_stderr_deg
 
 __all__ = ["CHECKS"]
 
 
-def _length_tolerance(ctx: Context, nominal: str | None) -> tuple[float, str]:
+def _table(ctx: Context) -> SizeTable:
+    """The model's catalog sizes; the default catalog's when the model names none."""
+    return ctx.catalog if ctx.catalog is not None else size_table(DEFAULT_CATALOG)
+
+
+def _designed_sizes(ctx: Context, table: SizeTable) -> dict[str, str]:
+    """Designed pipe id to the catalog nominal its ``nominal`` names (pipes with one).
+
+    Raises
+    ------
+    DesignError
+        A designed size names no size of the catalog (file, entry, and what to write instead).
+    """
+    sizes = {}
+    for designed in ctx.design.components:
+        if designed.kind != "pipe" or not designed.nominal:
+            continue
+        found = table.find(designed.nominal)
+        if found is None:
+            first, last = table.sizes[0][0], table.sizes[-1][0]
+            raise DesignError(
+                f"{designed.nominal!r} is no size of the catalog ({table.standard}, "
+                f"{table.label(first)} to {table.label(last)}); write one of its sizes, or "
+                "give the catalog the pipes come from with --catalog",
+                source=getattr(ctx.design, "source", None),
+                where=f"{designed.where or designed.id}.nominal",
+            )
+        sizes[designed.id] = found
+    return sizes
+
+
+def _size_text(table: SizeTable, nominal: str, written: str | None = None) -> str:
+    """``DN 150`` for a catalog nominal, plus the designed text when written in the other
+    system (``DN 150 (6")``), so the reader sees both."""
+    label = table.label(nominal)
+    hint = parse_nominal(written) if written else None
+    dn_table = table.designation.upper() == "DN"
+    if hint is not None and (hint.system == "dn") != dn_table and hint.system != "number":
+        return f"{label} ({written})"
+    return label
+
+
+def _length_tolerance(ctx: Context, table: SizeTable, nominal: str | None) -> tuple[float, str]:
+    """PFI ES-3 spool length tolerance (metres) of catalog size ``nominal``, and its wording."""
     rows = ctx.opt("design-deviation", "length_tolerance")
-    nps = nps_value(nominal) if nominal else None
+    nps = table.nps_of(nominal) if nominal else None
     if nps is None:
         return float(rows[0][1]), "PFI ES-3, size unknown"
+    label = table.label(nominal)
+    if table.designation.upper() != "NPS":
+        label += f" = NPS {_inches(nps)}"
     for limit, tol in rows:
         if nps <= limit:
-            return float(tol), f"PFI ES-3, NPS {nominal}"
-    return float(ctx.opt("design-deviation", "length_tolerance_above")), f"PFI ES-3, NPS {nominal}"
+            return float(tol), f"PFI ES-3, {label}"
+    return float(ctx.opt("design-deviation", "length_tolerance_above")), f"PFI ES-3, {label}"
+
+
+def _inches(nps: float) -> str:
+    """An NPS value written as a mixed fraction (``1 1/2``, ``6``)."""
+    whole, frac = divmod(Fraction(nps).limit_denominator(16), 1)
+    if not frac:
+        return str(whole)
+    return f"{whole} {frac}" if whole else str(frac)
 
 
 def _ends(geometry):
@@ -112,23 +174,24 @@ def _emit(
     )
 
 
-def _check_pipe(ctx, designed, comp):
+def _check_pipe(ctx, designed, comp, table: SizeTable, wanted: str | None):
     fit = comp.fit
     ends = _ends(comp.geometry)
     if ends is None:
         return
-    if designed.nominal and comp.nominal and nps_value(designed.nominal) != nps_value(comp.nominal):
+    built = (table.find(comp.nominal) or comp.nominal) if comp.nominal else None
+    if wanted and built and built != wanted:
         ctx.emit(
             "design-deviation",
             [comp.id],
-            f"size deviates from design {designed.id}: NPS {comp.nominal} built, NPS "
-            f"{designed.nominal} designed",
+            f"size deviates from design {designed.id}: {table.label(built)} built, "
+            f"{_size_text(table, wanted, designed.nominal)} designed",
             location=centre_of(comp.geometry),
             unit="",
             suggestions=(Suggestion(f"check which size {comp.id} really is (rescan with a hint)"),),
         )
     length = float(np.linalg.norm(ends[1] - ends[0]))
-    tol, standard = _length_tolerance(ctx, designed.nominal or comp.nominal)
+    tol, standard = _length_tolerance(ctx, table, wanted or built)
     off = length - designed.length
     se = _length_stderr(comp)
     if off >= 0 or _both_ends_joined(ctx, comp):
@@ -273,17 +336,26 @@ def _check_box(ctx, designed, comp):
 
 
 def check_design(ctx: Context) -> None:
-    """All three design rules in one pass (one matching)."""
+    """All three design rules in one pass (one matching).
+
+    Raises
+    ------
+    DesignError
+        A designed pipe's ``nominal`` names no size of the model's catalog.
+    """
     design = ctx.design
     if design is None:
         return
+    table = _table(ctx)
+    sizes = _designed_sizes(ctx, table)
     radius = float(ctx.opt("missing-component", "match_radius"))
     match = match_design(ctx.model, design, radius)
     if ctx.config.is_active("design-deviation"):
         for designed, comp in match.pairs:
-            {"pipe": _check_pipe, "column": _check_column, "box": _check_box}[designed.kind](
-                ctx, designed, comp
-            )
+            if designed.kind == "pipe":
+                _check_pipe(ctx, designed, comp, table, sizes.get(designed.id))
+            else:
+                {"column": _check_column, "box": _check_box}[designed.kind](ctx, designed, comp)
     if ctx.config.is_active("missing-component"):
         for designed in match.missing:
             ctx.emit(

@@ -7,6 +7,7 @@ import pytest
 from rules_builders import column, model, pipe
 
 from asbuilt.design import loads_design
+from asbuilt.errors import DesignError
 from asbuilt.rules import check_model
 
 
@@ -14,8 +15,8 @@ def design(**lists):
     return loads_design(json.dumps({"units": "mm", **lists}))
 
 
-def findings(built, the_design, slug=None):
-    out = check_model(built, None, the_design)
+def findings(built, the_design, slug=None, catalog=None):
+    out = check_model(built, None, the_design, catalog=catalog)
     return [f for f in out if slug is None or f.slug == slug]
 
 
@@ -138,3 +139,86 @@ def test_joined_pipe_that_is_short_is_flagged():
         if "length" in f.message
     ]
     assert "10.0 mm short" in f.message and f.severity == "error"
+
+
+def one_pipe(nominal, end_mm=2000):
+    return design(
+        pipes=[{"id": "D1", "nominal": nominal, "start": [0, 0, 1000], "end": [end_mm, 0, 1000]}]
+    )
+
+
+def size_messages(built, the_design, catalog=None):
+    return [
+        f.message
+        for f in findings(built, the_design, "design-deviation", catalog)
+        if f.message.startswith("size")
+    ]
+
+
+# NPS 6 = DN 150, OD 168.3 mm (standards reference table): every way of writing it is that size
+SIX = ["6", '6"', "NPS 6", "6 in", "DN150", "DN 150", "150A", '6" sch 40', 6]
+
+
+@pytest.mark.parametrize("nominal", SIX)
+@pytest.mark.parametrize("catalog", [None, "asme-b36.10m"])
+def test_design_size_written_any_way_is_that_size(nominal, catalog):
+    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1683, nominal="6"))
+    assert size_messages(built, one_pipe(nominal), catalog) == []
+
+
+@pytest.mark.parametrize("nominal", ["150", "DN150", '6"', "NPS 6", 150])
+def test_design_size_in_a_dn_catalog(nominal):
+    # EN 10220 sizes are DN: a bare 150 is DN 150, and 6" is DN 150 through the catalog's nps
+    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1683, nominal="150"))
+    assert size_messages(built, one_pipe(nominal), "en-10220") == []
+
+
+@pytest.mark.parametrize(
+    "catalog, built_nominal, nominal, expected",
+    [
+        (None, "6", '8"', "NPS 6 built, NPS 8 designed"),
+        (None, "6", "DN 200", "NPS 6 built, NPS 8 (DN 200) designed"),
+        ("en-10220", "150", "200", "DN 150 built, DN 200 designed"),
+        ("en-10220", "150", '8"', 'DN 150 built, DN 200 (8") designed'),
+        # a bare 6 in a DN catalog is DN 6 (NPS 1/8), the catalog's own designation first
+        ("en-10220", "150", "6", "DN 150 built, DN 6 designed"),
+    ],
+)
+def test_design_size_deviation_is_worded_in_the_catalog_designation(
+    catalog, built_nominal, nominal, expected
+):
+    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1683, nominal=built_nominal))
+    (message,) = size_messages(built, one_pipe(nominal), catalog)
+    assert message == f"size deviates from design D1: {expected}"
+
+
+@pytest.mark.parametrize("nominal, catalog", [("NPS 7", None), ("DN 151", "en-10220")])
+def test_design_size_not_in_the_catalog_is_a_located_error(tmp_path, nominal, catalog):
+    path = tmp_path / "d.json"
+    doc = {"pipes": [{"id": "D1", "nominal": nominal, "start": [0, 0, 1], "end": [2, 0, 1]}]}
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1683, nominal="6"))
+    with pytest.raises(DesignError) as err:
+        check_model(built, design=str(path), catalog=catalog)
+    message = str(err.value)
+    assert message.startswith(f"{path}: pipes[0] (D1).nominal: {nominal!r} is no size")
+    assert "\n" not in message
+
+
+@pytest.mark.parametrize(
+    "dn, nps, od, tolerance",
+    [
+        # PFI ES-3: +-3 mm up to NPS 10, +-5 mm NPS 12-24; DN to NPS from the standards table
+        ("150", "6", 0.1683, 0.003),
+        ("250", "10", 0.2730, 0.003),
+        ("300", "12", 0.3239, 0.005),
+        ("600", "24", 0.610, 0.005),
+    ],
+)
+def test_length_tolerance_of_a_dn_size_is_that_of_its_nps(dn, nps, od, tolerance):
+    # 8 mm long with a 1 mm standard error: a violation whatever the tolerance
+    built = model(pipe("P1", [0, 0, 1], [2.008, 0, 1], od, nominal=dn, length_se=0.001))
+    found = findings(built, one_pipe(dn), "design-deviation", "en-10220")
+    (f,) = [f for f in found if f.message.startswith("length")]
+    assert f.allowed == pytest.approx(tolerance)
+    assert f"(PFI ES-3, DN {dn} = NPS {nps})" in f.message
