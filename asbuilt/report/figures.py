@@ -17,9 +17,12 @@ The residual histograms are tiny hand-written SVGs (no matplotlib: one per objec
 from __future__ import annotations
 
 import base64
+import contextlib
+import functools
 import html
 import io
 import re
+import warnings
 
 import numpy as np
 
@@ -37,6 +40,8 @@ __all__ = [
     "render_view",
     "histogram_svg",
     "anchor",
+    "label_fonts",
+    "drawable_label",
 ]
 
 #: View name -> (title, the two scan axes it shows, their labels).
@@ -242,6 +247,103 @@ def _points(model: Model, axes) -> tuple[np.ndarray, np.ndarray]:
     return stack(keep), stack(drop)
 
 
+#: Installed font families never used for labels: the placeholder font (a box for every
+#: character, not the character) and matplotlib's TeX and STIX math fonts, whose character maps
+#: give ordinary code points to math symbols.
+_NOT_LABEL_FONTS = re.compile(r"Last Resort|cm[a-z]+10$|STIXSize|STIXNonUnicode")
+
+#: matplotlib's warning for a character no font of a text has (the label box is measured with
+#: a placeholder; an SVG viewer still draws the character with its own fonts).
+_MISSING_GLYPH = r"Glyph \d+ .* missing from font"
+
+
+@functools.cache
+def _charmap(path) -> frozenset[int]:
+    """The code points a font file (a path, or matplotlib's path and face index) maps to glyphs
+    (empty when it cannot be read)."""
+    from matplotlib.ft2font import FT2Font
+
+    try:
+        return frozenset(FT2Font(path).get_charmap())
+    except (OSError, RuntimeError, ValueError):
+        return frozenset()
+
+
+@functools.cache
+def _regular_faces() -> tuple[tuple[str, str], ...]:
+    """(family, file matplotlib draws it from) of every installed family with an upright
+    regular face a label may fall back to, sans serif families first, then by name."""
+    from matplotlib import font_manager
+
+    names = {
+        entry.name
+        for entry in font_manager.fontManager.ttflist
+        if (entry.style, entry.variant, entry.weight, entry.stretch)
+        == ("normal", "normal", 400, "normal")
+        and not _NOT_LABEL_FONTS.search(entry.name)
+    }
+    faces = []
+    for name in sorted(names, key=lambda name: ("Sans" not in name, name)):
+        # The file a family name resolves to (two installed copies of one family may differ).
+        properties = font_manager.FontProperties(family=[name])
+        with contextlib.suppress(ValueError):
+            faces.append((name, font_manager.findfont(properties, fallback_to_default=False)))
+    return tuple(faces)
+
+
+def label_fonts(labels) -> tuple[list[str], frozenset[int]]:
+    """The font families to draw ``labels`` with, and the code points they can draw.
+
+    The current default sans-serif font comes first; installed fonts (e.g. Noto Sans CJK) are
+    added, in a fixed order, while some label character is still missing, each only when it
+    has a character the families before it lack.
+
+    Parameters
+    ----------
+    labels : iterable of str
+
+    Returns
+    -------
+    families : list of str
+        Empty when the default font draws every character (the labels keep the default).
+    drawable : frozenset of int
+        Code points some family in the list (or the default font) maps to a glyph.
+    """
+    from matplotlib import font_manager
+
+    default = font_manager.findfont(font_manager.FontProperties(family=["sans-serif"]))
+    drawable = set(_charmap(default))
+    missing = {ord(c) for label in labels for c in label} - drawable
+    families: list[str] = []
+    if missing:
+        families.append(font_manager.FontProperties(fname=default).get_name())
+        for family, path in _regular_faces():
+            gained = missing & _charmap(path)
+            if gained and family not in families:
+                families.append(family)
+                drawable |= gained
+                missing -= gained
+            if not missing:
+                break
+        if len(families) == 1:
+            families = []  # no installed font helps: the default alone, as for plain ids
+    return families, frozenset(drawable)
+
+
+def drawable_label(component_id: str, drawable=None) -> str:
+    """A component id as a picture can draw it: each character that is not printable, or (when
+    ``drawable`` is given) that no label font has, written as a Python escape (``\\u7ba1``,
+    ``\\U0001f600``, ``\\x07``); ``"管道2"`` with no CJK font installed -> ``"\\u7ba1\\u90532"``.
+    """
+
+    def shown(c: str) -> str:
+        if c.isprintable() and (drawable is None or ord(c) in drawable):
+            return c
+        return ascii(c)[1:-1]
+
+    return "".join(shown(c) for c in component_id)
+
+
 _ID_REF = re.compile(r'(id="|href="#|url\(#)([^"\)]+)')
 
 
@@ -364,11 +466,16 @@ def render_view(
             flagged = [c for c in centres if c[2] is not None]
             flagged.sort(key=lambda c: severity_rank(c[2]))
             labelled = flagged[:label_limit]
+        families, drawable = label_fonts(oid for oid, _, _ in labelled)
+        font = {"fontfamily": families} if families else {}
         for oid, centre, _severity in labelled:
             text = ax.annotate(
-                oid,
+                # An SVG keeps the characters for the viewer's fonts to draw; a PNG is drawn
+                # here, where a character no installed font has would be an empty box.
+                drawable_label(oid, None if fmt == "svg" else drawable),
                 centre,
                 fontsize=7,
+                **font,
                 ha="center",
                 va="center",
                 zorder=6,
@@ -389,11 +496,16 @@ def render_view(
                 loc="outside lower center", ncols=6, fontsize=7, markerscale=2, frameon=False
             )
         buffer = io.BytesIO()
+        with warnings.catch_warnings():
+            # Only an SVG label can still miss a glyph here (see above): not the user's concern.
+            warnings.filterwarnings("ignore", _MISSING_GLYPH, UserWarning)
+            if fmt == "svg":
+                fig.savefig(buffer, format="svg", metadata={"Date": None})
+            else:
+                fig.savefig(buffer, format="png", metadata={"Software": None})
         if fmt == "svg":
-            fig.savefig(buffer, format="svg", metadata={"Date": None})
             text = buffer.getvalue().decode("utf-8")
             return _prefix_ids(text[text.index("<svg") :], view)
-        fig.savefig(buffer, format="png", metadata={"Software": None})
         return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")
 
 

@@ -20,8 +20,10 @@ from asbuilt.report.figures import (
     _RING,
     _monotone_chain,
     anchor,
+    drawable_label,
     histogram_svg,
     hull_2d,
+    label_fonts,
     projected_outlines,
     render_view,
 )
@@ -143,6 +145,40 @@ def test_mathtext_ids_are_drawn_literally():
     )
     svg = render_view(model.replace(components=comps), "plan")
     assert ">C$^$1</text>" in svg and ">$\\frac{1}{2}$</text>" in svg
+
+
+def _with_ids(*ids: str) -> Model:
+    model = known_model()
+    renamed = tuple(dataclasses.replace(c, id=new) for c, new in zip(model.components, ids))
+    return model.replace(components=renamed + model.components[len(ids) :])
+
+
+@pytest.mark.parametrize("fmt", ["svg", "png"])
+def test_ids_in_other_scripts_draw_without_warnings(fmt, recwarn):
+    """A CJK id printed 'Glyph ... missing from font(s) DejaVu Sans' four times (audit 25)."""
+    picture = render_view(_with_ids("管道2", "Rohr-Ä1"), "plan", fmt=fmt)
+    assert not recwarn.list, [str(w.message) for w in recwarn.list]
+    if fmt == "svg":  # the characters are kept: the viewer's fonts draw them
+        assert ">管道2</text>" in picture and ">Rohr-Ä1</text>" in picture
+
+
+def test_a_label_the_default_font_lacks_is_drawn_with_an_installed_font():
+    """U+2312 (arc) is in DejaVu Sans Mono, which matplotlib ships, and not in DejaVu Sans."""
+    families, drawable = label_fonts(["P\u23121", "P2"])
+    assert families[0] == "DejaVu Sans" and len(families) == 2
+    assert 0x2312 in drawable
+    svg = render_view(_with_ids("P\u23121"), "plan")
+    label = re.search(r'<text style="([^"]*)"[^>]*>P\u23121</text>', svg)
+    assert label and f"font-family: 'DejaVu Sans', '{families[1]}'" in label.group(1)
+    assert label_fonts(["P1", "Rohr-Ä1"])[0] == []  # the default font draws these
+
+
+def test_a_label_no_installed_font_draws_is_escaped():
+    families, drawable = label_fonts(["管道2"])
+    assert (0x7BA1 in drawable) == bool(families)  # a CJK font is used when installed
+    assert drawable_label("管道2", frozenset(map(ord, "2"))) == "\\u7ba1\\u90532"
+    assert drawable_label("管道2", frozenset(map(ord, "管道2"))) == "管道2"
+    assert drawable_label("P\x07\U0001f600") == "P\\x07\U0001f600"  # unprintable only
 
 
 def test_png_view_is_a_png():
