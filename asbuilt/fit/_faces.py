@@ -19,14 +19,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from asbuilt.fit._common import row_norms
+from asbuilt.fit._common import median_spacing, quick_median, row_norms
 
 __all__ = [
     "Frame",
     "extra_faces",
     "frame_from",
-    "knn",
-    "local_normals",
     "noise_scale",
     "segment",
     "unit_rows",
@@ -58,6 +56,12 @@ _MIN = np.minimum.reduce
 #: A face's points must be spread off a line by this many consensus thresholds (RMS): a raster
 #: line lies in every plane through it and would otherwise pass for a face.
 _MIN_SPREAD = 1.5
+#: Raster steps (along a face seen near grazing) its first shot may lie from the common edge,
+#: as ``gap`` allows 1.5 times the points' spacing (:func:`_grazing_gap`).
+_EDGE_STEPS = 1.5
+#: Below this cosine of incidence (80 degrees) a face's shots get no stretched gap: a plane
+#: through the station holds every shot along one raster line's beams, face or not.
+_MIN_STRETCHED_COS = math.cos(math.radians(80.0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,61 +93,6 @@ class Frame:
         return int(self.face_axis.shape[0])
 
 
-def knn(points: np.ndarray, k: int) -> np.ndarray:
-    """Indices of each point's ``k`` nearest neighbours (itself excluded).
-
-    Parameters
-    ----------
-    points : ndarray, shape (n, 3), metres
-    k : int
-        Clipped to ``n - 1``.
-
-    Returns
-    -------
-    ndarray, shape (n, k), int
-    """
-    n = points.shape[0]
-    k = max(1, min(k, n - 1))
-    if n > 256:
-        from scipy.spatial import cKDTree
-
-        _, index = cKDTree(points).query(points, k=k + 1)
-        return index[:, 1:]
-    d2 = ((points[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
-    np.fill_diagonal(d2, np.inf)
-    index = np.argpartition(d2, k - 1, axis=1)[:, :k]
-    order = np.take_along_axis(d2, index, axis=1).argsort(axis=1)
-    return np.take_along_axis(index, order, axis=1)
-
-
-def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Unoriented unit normals and plane RMS of each point's k-neighbourhood (PCA).
-
-    Parameters
-    ----------
-    points : ndarray, shape (n, 3), metres
-    k : int
-        Neighbours per point (the point itself is added).
-
-    Returns
-    -------
-    normals : ndarray, shape (n, 3)
-        Eigenvector of the smallest eigenvalue of the neighbourhood covariance.
-    rms : ndarray, shape (n,), metres
-        Root of that eigenvalue, corrected for the 3 fitted parameters.
-    index : ndarray, shape (n, k), int
-        The neighbours (:func:`knn`).
-    """
-    index = knn(points, k)
-    hood = np.concatenate([points[:, None, :], points[index]], axis=1)
-    centred = hood - hood.mean(axis=1, keepdims=True)
-    cov = np.einsum("nki,nkj->nij", centred, centred) / hood.shape[1]
-    values, vectors = np.linalg.eigh(cov)
-    dof = max(hood.shape[1] - 3, 1)
-    rms = np.sqrt(np.clip(values[:, 0], 0.0, None) * hood.shape[1] / dof)
-    return vectors[:, :, 0], rms, index
-
-
 def noise_scale(points: np.ndarray, normals: np.ndarray, rms: np.ndarray, floor: float) -> float:
     """Noise level (metres) of points on planar faces, without knowing the sensor's sigma.
 
@@ -156,7 +105,7 @@ def noise_scale(points: np.ndarray, normals: np.ndarray, rms: np.ndarray, floor:
     ----------
     points : ndarray, shape (n, 3), metres
     normals : ndarray, shape (n, 3)
-        Local normals (:func:`local_normals`).
+        Local normals (:func:`asbuilt.fit._neighbours.local_normals`).
     rms : ndarray, shape (n,), metres
         Local plane RMS values.
     floor : float, metres
@@ -321,8 +270,10 @@ def _first_planes(points, normals, threshold, cos_face, rng, limit=_MAX_FIRST_HA
     return [(ref_n[i], float(ref_o[i]), masks[i]) for i in keep]
 
 
-def _second_plane(points, normals, first, threshold, gap, rng):
-    """The best plane perpendicular to ``first`` among the points off it, contiguous with it."""
+def _second_plane(points, normals, first, threshold, gap, rng, viewpoint=None):
+    """The best plane perpendicular to ``first`` among the points off it, contiguous with it
+    (its shots allowed farther from the edge when seen at grazing incidence from a trusted
+    ``viewpoint`` (3,) metres: :func:`_grazing_gap`)."""
     d1, o1, mask1 = first
     rest = (~mask1).nonzero()[0]  # np.flatnonzero without its wrapper
     if rest.size < _MIN_FACE_POINTS:
@@ -377,7 +328,12 @@ def _second_plane(points, normals, first, threshold, gap, rng):
         mask = np.zeros(points.shape[0], bool)
         mask[rest[masks[c]]] = True
         face = (ref_n[c], float(ref_o[c]), mask)
-        if _contiguous(points, (d1, o1, mask1), face, threshold, gap):
+        gap_b = (
+            None
+            if viewpoint is None
+            else _grazing_gap(points, first, face, threshold, gap, viewpoint)
+        )
+        if _contiguous(points, (d1, o1, mask1), face, threshold, gap, gap_b):
             return face
     return None
 
@@ -392,20 +348,46 @@ def _pairs(r: int, index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return row, index - starts[row] + row + 1
 
 
-def _contiguous(points, face_a, face_b, threshold, gap) -> bool:
+def _contiguous(points, face_a, face_b, threshold, gap, gap_b=None) -> bool:
     """Whether two perpendicular faces' points meet at their common edge like a convex corner.
 
     Each face's points must lie on one side of the other face's plane (within the threshold) and
-    come within ``gap`` of it.
+    come within ``gap`` of it (``gap_b`` for face b's points, when given: :func:`_grazing_gap`).
     """
-    for (na, oa, _), (_, _, mb) in ((face_a, face_b), (face_b, face_a)):
+    pairs = ((face_a, face_b, gap if gap_b is None else gap_b), (face_b, face_a, gap))
+    for (na, oa, _), (_, _, mb), allowed in pairs:
         dist = points[mb] @ na - oa
         # Points beyond the threshold on both sides: the largest and smallest distance tell.
         if _MAX(dist) > threshold and _MIN(dist) < -threshold:
             return False
-        if _MIN(np.abs(dist)) > gap:
+        if _MIN(np.abs(dist)) > allowed:
             return False
     return True
+
+
+def _grazing_gap(points, face_a, face_b, threshold, gap, viewpoint) -> float:
+    """The gap face b's shots may leave to face a's plane, seen from a trusted ``viewpoint``
+    (3,) metres: ``gap``, or more when face b is seen near grazing incidence,
+    ``threshold + _EDGE_STEPS * r * step / cos(b)`` with ``step`` the raster's angular step
+    (the median angle between face a's shots and their nearest neighbours, radians), ``r`` and
+    ``cos(b)`` the median range and cosine of incidence of face b's shots.
+
+    A pan-tilt raster's shots on a face seen at incidence theta lie ``r * step / cos(theta)``
+    apart, so the first of them beyond the common edge can be that far from it, while ``gap``
+    comes from the points' own spacing, mostly the better-seen face's: the one raster column on
+    a box's side seen at 76 degrees lay 0.39 m behind the front face (a 0.27 m gap), and the box
+    was fitted as its front alone. A line of background shots a metre behind a column is still
+    too far: a step there spans decimetres. Face b seen beyond ``_MIN_STRETCHED_COS`` gets
+    ``gap``: a plane through the station holds every shot along one raster line's beams.
+    """
+    beams_b = points[face_b[2]] - viewpoint
+    ranges = row_norms(beams_b)
+    cos_b = quick_median(np.abs(beams_b @ face_b[0]) / ranges)
+    seen_a = points[face_a[2]] - viewpoint
+    if cos_b < _MIN_STRETCHED_COS or seen_a.shape[0] < 2:
+        return gap
+    step = median_spacing(seen_a / row_norms(seen_a)[:, None])  # chords of unit vectors
+    return max(gap, threshold + _EDGE_STEPS * quick_median(ranges) * step / cos_b)
 
 
 def _orient(axis_vec, offset, inside_points):
@@ -709,7 +691,8 @@ class Segmentation:
         d1, o1, mask1 = first
         if _already_a_face(self.built, d1, mask1, self.cos_face):
             return  # it would grow into a frame already built
-        second = _second_plane(points, self.normals, first, threshold, gap, self.rng)
+        trusted = viewpoint if self.visible_only else None
+        second = _second_plane(points, self.normals, first, threshold, gap, self.rng, trusted)
         if second is None:
             axes = np.vstack([d1, _perpendicular_basis(d1).T])
             faces = [(0, o1, mask1)]
@@ -773,7 +756,7 @@ def segment(
     ----------
     points : ndarray, shape (n, 3), metres
     normals : ndarray, shape (n, 3)
-        Unoriented local normals (:func:`local_normals`).
+        Unoriented local normals (:func:`asbuilt.fit._neighbours.local_normals`).
     threshold : float, metres
         Consensus distance of a point to its face plane.
     gap : float, metres

@@ -93,6 +93,7 @@ from asbuilt.fit._joint import (
     plausible,
 )
 from asbuilt.fit._mixture import mixture_score
+from asbuilt.fit._neighbours import local_normals
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cuboid, as_points, as_vector
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
@@ -460,7 +461,7 @@ def fit_cuboid(
         # A dense cloud: faces are found on a random subsample; the fit still uses every point.
         seg = random_subset(seg, _SEGMENTED_POINTS, np.random.default_rng(seg.size))
     xs = x[seg]
-    normals, local_rms, hood = _faces.local_normals(xs, tolerances.normal_neighbours)
+    normals, local_rms, hood = local_normals(xs, tolerances.normal_neighbours)
     fourth = hood[:, min(3, hood.shape[1] - 1)]
     reach = median(np.linalg.norm(xs[fourth] - xs, axis=1))
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from asbuilt.fit import _faces
+from asbuilt.fit._neighbours import local_normals
 
 
 def _plane_points(rng, normal, n=60, noise=0.0):
@@ -17,32 +18,13 @@ def _plane_points(rng, normal, n=60, noise=0.0):
     return uv @ basis.T + rng.normal(0.0, noise, n)[:, None] * normal, normal
 
 
-def test_knn_matches_brute_force_for_small_and_large_sets():
-    rng = np.random.default_rng(1)
-    for n in (30, 300):
-        pts = rng.normal(size=(n, 3))
-        got = _faces.knn(pts, 5)
-        d = np.linalg.norm(pts[:, None] - pts[None], axis=2)
-        np.fill_diagonal(d, np.inf)
-        want = np.argsort(d, axis=1)[:, :5]
-        assert np.array_equal(np.sort(got, axis=1), np.sort(want, axis=1))
-
-
-def test_local_normals_of_a_plane_are_its_normal():
-    pts, normal = _plane_points(np.random.default_rng(2), [1.0, 2.0, 0.5])
-    normals, rms, index = _faces.local_normals(pts, 6)
-    assert index.shape == (len(pts), 6)
-    assert np.allclose(np.abs(normals @ normal), 1.0, atol=1e-9)
-    assert rms.max() < 1e-7
-
-
 @pytest.mark.parametrize("noise", [0.001, 0.003])
 def test_noise_scale_is_recovered_on_two_faces(noise):
     rng = np.random.default_rng(3)
     a, na = _plane_points(rng, [1.0, 0.0, 0.0], noise=noise)
     b, nb = _plane_points(rng, [0.0, 1.0, 0.0], noise=noise)
     pts = np.vstack([a, b + [0.0, 0.5, 0.0]])
-    normals, rms, _ = _faces.local_normals(pts, 6)
+    normals, rms, _ = local_normals(pts, 6)
     est = _faces.noise_scale(pts, normals, rms, 1e-4)
     assert est == pytest.approx(noise, rel=0.35)
 
@@ -56,7 +38,7 @@ def test_segment_finds_two_perpendicular_faces_of_a_corner():
     face_b = np.column_stack([xs.ravel(), np.zeros(xs.size), zs2.ravel()])
     pts = np.vstack([face_a, face_b]) + rng.normal(0.0, 0.0005, (ys.size + xs.size, 3))
     pts = pts - pts.mean(axis=0)
-    normals, _, _ = _faces.local_normals(pts, 6)
+    normals, _, _ = local_normals(pts, 6)
     frame = _faces.segment(pts, normals, 0.002, 0.3, 20.0)
     assert frame.n_faces == 2
     normals_seen = frame.face_sign[:, None] * frame.axes[frame.face_axis]
@@ -70,7 +52,7 @@ def test_segment_returns_none_when_no_face_spans_two_dimensions():
     """Points on one line lie in every plane through it: no face."""
     pts = np.outer(np.linspace(-1.0, 1.0, 8), [1.0, 2.0, 3.0])
     pts[:, 0] += np.random.default_rng(6).normal(0.0, 1e-6, 8)
-    normals, _, _ = _faces.local_normals(pts, 4)
+    normals, _, _ = local_normals(pts, 4)
     assert _faces.segment(pts, normals, 0.001, 0.1, 20.0) is None
 
 

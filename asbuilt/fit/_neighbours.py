@@ -1,0 +1,66 @@
+"""Neighbourhoods of sparse points: k nearest neighbours and the local plane normals of the
+cuboid segmentation (:mod:`asbuilt.fit._faces`).
+
+Everything is numpy (metres, unit vectors); a k-d tree (scipy) above 256 points.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["knn", "local_normals"]
+
+
+def knn(points: np.ndarray, k: int) -> np.ndarray:
+    """Indices of each point's ``k`` nearest neighbours (itself excluded).
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    k : int
+        Clipped to ``n - 1``.
+
+    Returns
+    -------
+    ndarray, shape (n, k), int
+    """
+    n = points.shape[0]
+    k = max(1, min(k, n - 1))
+    if n > 256:
+        from scipy.spatial import cKDTree
+
+        _, index = cKDTree(points).query(points, k=k + 1)
+        return index[:, 1:]
+    d2 = ((points[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
+    np.fill_diagonal(d2, np.inf)
+    index = np.argpartition(d2, k - 1, axis=1)[:, :k]
+    order = np.take_along_axis(d2, index, axis=1).argsort(axis=1)
+    return np.take_along_axis(index, order, axis=1)
+
+
+def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unoriented unit normals and plane RMS of each point's k-neighbourhood (PCA).
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    k : int
+        Neighbours per point (the point itself is added).
+
+    Returns
+    -------
+    normals : ndarray, shape (n, 3)
+        Eigenvector of the smallest eigenvalue of the neighbourhood covariance.
+    rms : ndarray, shape (n,), metres
+        Root of that eigenvalue, corrected for the 3 fitted parameters.
+    index : ndarray, shape (n, k), int
+        The neighbours (:func:`knn`).
+    """
+    index = knn(points, k)
+    hood = np.concatenate([points[:, None, :], points[index]], axis=1)
+    centred = hood - hood.mean(axis=1, keepdims=True)
+    cov = np.einsum("nki,nkj->nij", centred, centred) / hood.shape[1]
+    values, vectors = np.linalg.eigh(cov)
+    dof = max(hood.shape[1] - 3, 1)
+    rms = np.sqrt(np.clip(values[:, 0], 0.0, None) * hood.shape[1] / dof)
+    return vectors[:, :, 0], rms, index
