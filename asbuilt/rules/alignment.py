@@ -318,7 +318,9 @@ def check_plumb(ctx: Context) -> None:
 def _required_slope(ctx: Context, comp: Component) -> float:
     required = float(ctx.opt("slope", "required"))
     if ctx.opt("slope", "use_ipc_704") and comp.nominal:
-        nps = nps_value(comp.nominal)
+        # By the catalog's NPS: a DN catalog's "150" is NPS 6, not 150.
+        table = ctx.catalog
+        nps = table.nps_of(comp.nominal) if table is not None else nps_value(comp.nominal)
         if nps is not None:
             return 0.02 if nps <= 2.5 else 0.01 if nps <= 6 else 0.005
     return required

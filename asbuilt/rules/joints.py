@@ -88,7 +88,8 @@ def _elbow_centre_to_end(
         if nominal is not None and nominal in table.elbow_lr:
             radius = table.elbow_lr[nominal]
     if radius is None and nominal is not None:
-        nps = nps_value(nominal)
+        # By the catalog's NPS: a DN catalog's "150" is NPS 6, not 150.
+        nps = table.nps_of(nominal) if table is not None else nps_value(nominal)
         if nps is not None and nps >= 1:
             radius = 1.5 * nps * 0.0254
     if radius is None:

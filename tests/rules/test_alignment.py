@@ -317,3 +317,15 @@ def test_plumb_accepts_a_scalar_and_a_list_of_axes_deg_alike():
     (b,) = only(run(listed), "out-of-plumb")
     assert a.stderr == pytest.approx(b.stderr) == pytest.approx(H * np.radians(0.02))
     assert a.unverifiable and b.unverifiable
+
+
+@pytest.mark.parametrize(
+    "nominal, slope, flagged", [("50", 0.015, True), ("150", 0.008, True), ("200", 0.006, False)]
+)
+def test_ipc_704_by_the_nps_of_a_dn_size(nominal, slope, flagged):
+    # EN 10220's DN 50 / 150 / 200 are NPS 2 / 6 / 8: 2%, 1% and 0.5% (IPC 704.1). The bare DN
+    # number was read as an NPS, so DN 150 asked only 0.5% and DN 50 1%.
+    config = loads_rules("[slope]\nuse_ipc_704 = true")
+    pipe_ = sloped("P1", slope, nominal=nominal)
+    found = check_model(model(pipe_), config, catalog="en-10220")
+    assert bool(only(found, "slope")) == flagged

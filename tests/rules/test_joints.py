@@ -88,3 +88,14 @@ def test_merge_notes_are_findings_once_per_note():
         (("P1", "P2"), link),
     ]
     assert all(f.code == "AB302" and f.severity == "warning" for f in found)
+
+
+def test_elbow_fallback_reads_a_dn_size_by_its_nps():
+    # EN 10220 has no fittings table: a long-radius elbow's centre-to-end falls back to 1.5 NPS
+    # (ASME B16.9 long radius). DN 150 is NPS 6: 1.5 x 6 in = 228.6 mm at 90 degrees; the bare
+    # "150" was read as NPS 150 (5.7 m).
+    from asbuilt.rules._catalog import size_table
+    from asbuilt.rules.joints import _elbow_centre_to_end
+
+    table = size_table("en-10220")
+    assert _elbow_centre_to_end(table, "150", 0.1683, 90.0) == pytest.approx(0.2286)
