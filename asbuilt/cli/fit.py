@@ -122,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
     if not out.is_terminal and "COLUMNS" not in os.environ:
         out.width = 160  # piped to a file or pager: room for one line per object
     out.print(table)
-    notes = fit_table_notes(report)
+    notes = fit_table_notes(report, units)
     if notes:
         # A grid, so that a long note wraps under itself, not under the ids.
         grid = Table.grid(padding=(0, 2))

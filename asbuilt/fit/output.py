@@ -18,6 +18,7 @@ strict JSON.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable
 
 import numpy as np
@@ -34,6 +35,7 @@ __all__ = [
     "display_units",
     "fit_table_rows",
     "fit_table_notes",
+    "note_in_units",
 ]
 
 #: Column headings of :func:`fit_table_rows`.
@@ -133,7 +135,7 @@ def _result_fields(result: FitResult, units: str) -> dict:
             "method": result.method,
             "sigma": _number(result.sigma, f),
             "sigma_source": result.sigma_source,
-            "notes": list(result.notes),
+            "notes": [note_in_units(note, units) for note in result.notes],
         }
     )
     return fields
@@ -280,8 +282,33 @@ def fit_table_rows(report: FitReport, units: str | None = None) -> list[tuple[st
     return rows
 
 
-def fit_table_notes(report: FitReport) -> list[tuple[str, str]]:
+def fit_table_notes(report: FitReport, units: str | None = None) -> list[tuple[str, str]]:
     """Every fit's notes as ``(object id, note)`` pairs in the scan's order, to show under the
     table: a fit's warnings (undetermined, viewpoint ignored, wider noise, an assumed size),
-    auto's reason for its choice and the outliers it rejected are part of what it says."""
-    return [(item.object.id, note) for item in report.fits for note in item.result.notes]
+    auto's reason for its choice and the outliers it rejected are part of what it says. Their
+    lengths are in inches and feet when ``units`` (default: the scan's) is imperial
+    (:func:`note_in_units`)."""
+    units = report.scan.units if units is None else units
+    return [
+        (item.object.id, note_in_units(note, units))
+        for item in report.fits
+        for note in item.result.notes
+    ]
+
+
+#: A length in a fit's note: a number, a space, then mm or m as a word of its own.
+_NOTE_LENGTH = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?(?:e[+-]?\d+)?) (mm|m)\b(?![\^²])")
+
+
+def note_in_units(note: str, units: str) -> str:
+    """A fit's note with its lengths (written in mm and m by the fits) in inches and feet when
+    ``units`` is imperial (the table's own choice, :func:`display_units`); unchanged else."""
+    if units not in _IMPERIAL:
+        return note
+
+    def imperial(match: re.Match) -> str:
+        metres = float(match.group(1)) * (0.001 if match.group(2) == "mm" else 1.0)
+        unit = "in" if abs(metres) < _SMALL_SIZE_LIMIT else "ft"
+        return f"{metres / unit_factor(unit):.3g} {unit}"  # as many digits as the note had
+
+    return _NOTE_LENGTH.sub(imperial, note)

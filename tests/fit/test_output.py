@@ -13,6 +13,7 @@ from asbuilt.fit.output import (
     display_units,
     fit_report_to_dict,
     fit_table_rows,
+    note_in_units,
     object_fit_to_dict,
     primitive_to_dict,
 )
@@ -221,3 +222,19 @@ def test_table_rows_imperial():
     assert row[6] == "radius ±0.01 in"
     (row,) = fit_table_rows(report, "mm")
     assert row[2] == "r 304.8 mm"
+
+
+@pytest.mark.parametrize(
+    "note, units, expected",
+    [
+        ("2 outlier point(s) rejected (beyond 3 x 2 mm).", "in", "beyond 3 x 0.0787 in)"),
+        ("best fit r 1.339e+04 m, a median 0.2 m away", "ft", "r 4.39e+04 ft, a median 7.87 in"),
+        ("beyond 3 x 2 mm", "mm", "beyond 3 x 2 mm"),
+        ("beyond 3 x 2 mm", "m", "beyond 3 x 2 mm"),
+        ("3 of 9 shots, 5 mm2", "in", "3 of 9 shots, 5 mm2"),
+    ],
+)
+def test_notes_give_lengths_in_inches_and_feet_for_imperial_output(note, units, expected):
+    # The fits write their notes in mm and m; a scan in inches or feet shows its table, and
+    # its notes, in inches and feet (2 mm = 0.0787 in; 13.39 km = 43,930 ft).
+    assert expected in note_in_units(note, units)
