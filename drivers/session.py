@@ -61,7 +61,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -89,6 +89,7 @@ from .edges import (
 from .journal import Journal, journal_path_for, read_journal
 from .kinematics import Calibration, forward
 from .plan import DEFAULT_SETTINGS, SessionSettings, Target, Window
+from .raster import _cell_index, foreground_threshold, grid
 
 __all__ = [
     "Shot",
@@ -269,65 +270,6 @@ class DeviceShooter:
             except DeviceTimeout:
                 if attempts > self.settings.retries:
                     raise
-
-
-def grid(
-    window: Window, n: int, min_cells: int | tuple[int, int] = 3
-) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
-    """A cell-centred raster of at least ``n`` shots over ``window``, serpentine row order.
-
-    Parameters
-    ----------
-    window : Window
-    n : int
-        Minimum number of shots.
-    min_cells : int or (int, int)
-        Fewest rows and fewest columns (one number for both, or ``(rows, cols)``).
-
-    Returns
-    -------
-    pan, tilt : ndarray, shape (rows * cols,), radians
-        Shot directions (unit angles), in shooting order.
-    shape : (int, int)
-        ``(rows, cols)``; shot ``k`` is cell ``(k // cols, k % cols)`` with odd rows reversed.
-    """
-    min_rows, min_cols = (min_cells, min_cells) if isinstance(min_cells, int) else min_cells
-    aspect = window.width / window.height
-    cols = max(min_cols, int(round(math.sqrt(n * aspect))))
-    rows = max(min_rows, math.ceil(n / cols))
-    pans = window.pan_min + (np.arange(cols) + 0.5) * window.width / cols
-    tilts = window.tilt_min + (np.arange(rows) + 0.5) * window.height / rows
-    pan = np.empty(rows * cols)
-    tilt = np.empty(rows * cols)
-    for r in range(rows):
-        order = pans if r % 2 == 0 else pans[::-1]
-        pan[r * cols : (r + 1) * cols] = order
-        tilt[r * cols : (r + 1) * cols] = tilts[r]
-    return pan, tilt, (rows, cols)
-
-
-def _cell_index(rows: int, cols: int) -> np.ndarray:
-    """Shot index of each grid cell, shape (rows, cols) (undoes the serpentine order)."""
-    idx = np.arange(rows * cols).reshape(rows, cols)
-    idx[1::2] = idx[1::2, ::-1]
-    return idx
-
-
-def foreground_threshold(ranges: Iterable[float | None]) -> float:
-    """Range separating the aimed-at object from the background behind it, metres.
-
-    The valid ranges are sorted and split at their largest gap when that gap exceeds
-    ``max(0.1 m, 5 % of the range before it)``; ``inf`` when there is no such gap (everything
-    valid is on the object).
-    """
-    valid = np.sort([r for r in ranges if r is not None])
-    if len(valid) < 2:
-        return math.inf
-    gaps = np.diff(valid)
-    i = int(np.argmax(gaps))
-    if gaps[i] > max(0.1, 0.05 * valid[i]):
-        return float(0.5 * (valid[i] + valid[i + 1]))
-    return math.inf
 
 
 def scan_target(
