@@ -24,6 +24,7 @@ from importlib import import_module
 import numpy as np
 
 from asbuilt.errors import FitError, located
+from asbuilt.fit._window import beyond_window, open_ends
 from asbuilt.fit.result import FitFailure, FitReport, FitResult, ObjectFit
 from asbuilt.primitives import as_points, as_vector
 from asbuilt.scan.load import PLAUSIBLE_RANGE_SIGMA
@@ -541,6 +542,11 @@ def fit_object(
         result = fit_points(
             obj.kind, obj.points, sigma=sigma, tolerances=tolerances, viewpoint=viewpoint
         )
+        beyond = beyond_window(obj)
+        if beyond is not None:
+            # A size an acquisition session saw run on past the window is a lower bound.
+            view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64)
+            result = open_ends(result, obj.points, beyond, view)
     except FitError as exc:
         raise FitError(
             exc.message, source=exc.source, where=located(None, obj.where, exc.where)
