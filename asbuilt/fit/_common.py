@@ -416,9 +416,11 @@ def covariance_from_jacobian(jacobian: np.ndarray, sigma: float) -> np.ndarray:
         ``_SINGULAR_FLOOR`` times J's largest (far beyond any size a fit reports).
     """
     p = jacobian.shape[1]
-    values = np.linalg.svd(jacobian, compute_uv=False)
-    if values.size == p and values[-1] > _WELL_POSED * values[0]:
-        return sigma * sigma * np.linalg.inv(jacobian.T @ jacobian)
+    normal = jacobian.T @ jacobian
+    # J's singular values squared, to the rounding of the largest (ample for the 1e-14 test).
+    squares = np.linalg.eigvalsh(normal)
+    if jacobian.shape[0] >= p and squares[0] > _WELL_POSED**2 * squares[-1]:
+        return sigma * sigma * np.linalg.inv(normal)
     _, values, rows = np.linalg.svd(jacobian, full_matrices=True)
     largest = values[0] if values.size and values[0] > 0 else 1.0
     # Rows of V beyond the singular values (fewer residuals than parameters) are undetermined.

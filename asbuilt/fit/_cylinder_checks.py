@@ -309,17 +309,24 @@ def seen_through(robust: RobustFit, points: np.ndarray, view, cutoff: float) -> 
     (an NPS 2 line 8 m away fitted r 612 mm with 3 of its 9 inliers behind its front).
     """
     axis, center, radius = robust.state
-    beams = points - np.asarray(view, dtype=np.float64)
-    directions = beams / np.maximum(np.linalg.norm(beams, axis=1), 1e-300)[:, None]
-    start = np.asarray(view, dtype=np.float64) - center
+    view = np.asarray(view, dtype=np.float64)
+    beams = points - view
+    start = view - center
     start_across = start - (start @ axis) * axis
-    across = directions - np.outer(directions @ axis, axis)
+    across = beams - np.outer(beams @ axis, axis)  # each beam's part across the axis
     square = np.einsum("ij,ij->i", across, across)
     crossing = across @ start_across
-    closest = start_across @ start_across - crossing**2 / np.maximum(square, 1e-300)
-    deep = (square > 1e-24) & (closest < (THROUGH_FRACTION * radius) ** 2)
-    beyond = cylinder_beam_excess(axis, center, radius, points, view) > 2.0 * cutoff
-    return robust.inliers & deep & beyond
+    safe = np.maximum(square, 1e-300)
+    # Nearest the axis at fraction -crossing / square of the way to the shot: before the shot
+    # (below 1) for a beam that ran past the axis, beyond it for a shot on the near side, so
+    # most fits' shots are settled without the chord.
+    closest = start_across @ start_across - crossing * crossing / safe
+    deep = robust.inliers & (square > 1e-24) & (-crossing < safe)
+    deep &= closest < (THROUGH_FRACTION * radius) ** 2
+    if deep.any():
+        chord = cylinder_beam_excess(axis, center, radius, points[deep], view)
+        deep[deep] = chord > 2.0 * cutoff
+    return deep
 
 
 def doubtful(robust: RobustFit, points, view, count: int, sigma, tolerances: Tolerances) -> bool:
