@@ -486,6 +486,12 @@ def _acceptable(
         return False  # no shot on a seen face yet: no box for the new face to bound or touch
     inside = body[:, k] - offset
     side = -1.0 if 2 * np.count_nonzero(inside > 0) > inside.size else 1.0
+    if _MAX(side * inside) > gap:
+        # A seen face's shot beyond the new face by more than the shots' spacing, outside the
+        # box it would close: one raster row across a column without a sigma had passed for
+        # its top, 1.7 m below the highest shots. (Within the spacing: a corner's shots, whose
+        # noise along their beams moves them across the edge.)
+        return False
     if view_proj is not None and side * (view_proj[k] - offset) <= 0:
         return False
     if sum(1 for axis, _, _ in faces if axis == k) >= 2:

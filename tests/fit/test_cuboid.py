@@ -777,3 +777,18 @@ def test_one_raster_column_on_a_grazing_side_face_is_that_face(seed):
     assert result.inliers.all()
     fitted, stderr, _ = sizes_in_true_order(result, rot)
     assert np.all(np.abs(fitted - size) <= 3.0 * np.asarray(stderr))
+
+
+def test_a_face_with_seen_shots_beyond_it_is_not_added():
+    # Independent ray caster, no sensor block: the noise-level search settled on a frame whose
+    # third face (the "top") was one raster row across the column, 1.7 m below its highest
+    # shots; those shots, inliers of the side faces, lay outside the box. A face may not close
+    # a box on its own seen shots.
+    scan = json.loads((Path(__file__).parent / "column_row_as_top.json").read_text())
+    points = np.array(scan["points"]) * 0.001  # as the scan loader converts mm
+    result = fit_cuboid(points)
+    box = result.primitive
+    local = (points[result.inliers] - box.center) @ np.asarray(box.axes).T
+    beyond = np.abs(local) - 0.5 * np.asarray(box.size)
+    assert beyond.max() < 3.0 * result.diagnostics["scale"] + 0.01
+    assert max(box.size) > 3.2  # the shots span 3.2 m up the column
