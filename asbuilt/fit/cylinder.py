@@ -545,6 +545,28 @@ def fit_cylinder(
     return _finished(robust, scene, ignored_view, starts, reconsider)
 
 
+def _readmitted(robust, local, cutoff: float):
+    """The least-squares fit of every shot, from ``robust``'s state, when it explains each
+    within ``cutoff`` metres and at an MSAC cost (cut at ``cutoff``) no higher than the robust
+    fit's; else ``robust``.
+
+    The robust choice can settle in a basin that rejects a few good shots: 30 shots over 120
+    degrees of a 0.1 m pipe, all within 2.6 sigma of the least-squares cylinder (r 96.5 mm),
+    came out r 90.7 mm with 3 rejected (the sensor's sigma given, no viewpoint). The later
+    checks (far side, hidden shots) still judge the re-admitted shots.
+    """
+    if robust.inliers.all() or np.max(np.abs(robust.residuals[~robust.inliers])) > 2 * cutoff:
+        return robust  # (a shot twice the cutoff off is no good shot a nearby fit could take)
+    every = refit_on(MODEL, robust, local, np.ones(len(local), bool))
+    if not np.all(np.abs(every.residuals) <= cutoff):
+        return robust
+    kept = robust.residuals[robust.inliers]
+    robust_cost = float(kept @ kept) + cutoff * cutoff * int(np.count_nonzero(~robust.inliers))
+    if float(every.residuals @ every.residuals) > robust_cost:
+        return robust
+    return every
+
+
 #: Refits after dropping inliers seen through the pipe (:func:`_not_seen_through`) before the
 #: fit is refused: each refit can move the pipe onto other shots' beams.
 _THROUGH_ROUNDS = 3
@@ -649,6 +671,8 @@ def _finished(robust, scene: _Scene, ignored_view, starts, reconsider) -> FitRes
         robust = robust_geometric_fit(
             local, [robust.state], MODEL, kind="cylinder", sigma=sigma, tolerances=tolerances
         )
+    if sigma is not None and not ignored_view:
+        robust = _readmitted(robust, local, tolerances.outlier_cutoff_sigma * sigma)
     near = robust
     robust = drop_far_side(near, local, tolerances)
     far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
