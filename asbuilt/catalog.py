@@ -41,6 +41,7 @@ __all__ = [
     "load_catalog",
     "model_catalog",
     "parse_nominal",
+    "size_by_system",
     "fitting_dims",
 ]
 
@@ -244,12 +245,7 @@ class Catalog:
                 (s for s in self.sizes if s.dn is not None and abs(s.dn - value) < 1e-6), None
             )
 
-        if hint.system == "nps":
-            return by_nps(hint.value)
-        if hint.system == "dn":
-            return by_dn(hint.value)
-        first, second = (by_dn, by_nps) if self.designation.upper() == "DN" else (by_nps, by_dn)
-        return first(hint.value) or second(hint.value)
+        return size_by_system(hint, self.designation, by_nps, by_dn)
 
     def wall(self, nominal: str, schedule: str) -> float | None:
         """Wall thickness in metres of size ``nominal`` in ``schedule``; None when not listed."""
@@ -305,6 +301,19 @@ _TRAILING_RATING = re.compile(
     r"\s*(?:,\s*)?(?:sch(?:edule)?\.?\s*\w+|std|xs|xxs|pn\s*\d+|class\s*\d+|\d+\s*#|"
     r"\d+\s*lbs?)$"
 )
+
+
+def size_by_system(hint: NominalHint, designation: str | None, by_nps, by_dn):
+    """The size ``hint`` names, looked up by ``by_nps(value)`` or ``by_dn(value)`` (each the
+    size or None): by its own system when it says one (``6"``, ``DN150``), else (a bare
+    number) in the catalog's ``designation`` first, then the other."""
+    if hint.system == "nps":
+        return by_nps(hint.value)
+    if hint.system == "dn":
+        return by_dn(hint.value)
+    dn_first = (designation or "").upper() == "DN"
+    first, second = (by_dn, by_nps) if dn_first else (by_nps, by_dn)
+    return first(hint.value) or second(hint.value)
 
 
 def parse_nominal(text: str | None) -> NominalHint | None:

@@ -18,7 +18,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from asbuilt.catalog import parse_nominal
+from asbuilt.catalog import parse_nominal, size_by_system
 
 __all__ = ["SizeTable", "size_table", "nps_value"]
 
@@ -105,12 +105,7 @@ class SizeTable:
                 None,
             )
 
-        if hint.system == "nps":
-            return by_nps(hint.value)
-        if hint.system == "dn":
-            return by_dn(hint.value)
-        first, second = (by_dn, by_nps) if self.designation.upper() == "DN" else (by_nps, by_dn)
-        return first(hint.value) or second(hint.value)
+        return size_by_system(hint, self.designation, by_nps, by_dn)
 
     def od(self, nominal: str) -> float | None:
         """The OD (metres) of a nominal size or an operator's hint (``4"``, ``NPS 4``, ``DN100``)."""
