@@ -657,6 +657,11 @@ def _finished(robust, scene: _Scene, ignored_view, starts, reconsider) -> FitRes
     caller guarantees it is not needed)."""
     pts, offset, local, everything = scene.pts, scene.offset, scene.local, scene.everything
     view, sigma, tolerances = scene.view, scene.sigma, scene.tolerances
+    if not ignored_view:
+        # Without the sensor's sigma, at the prior noise level: a fit whose own scale came from
+        # its grazing shots (small errors across the surface) had rejected the square-on ones.
+        noise = sigma if sigma is not None else max(robust.scale, tolerances.prior_range_sigma)
+        robust = _readmitted(robust, local, tolerances.outlier_cutoff_sigma * noise)
     if view is not None and edge_on(robust, local, view):
         # Shots strung along the viewpoint's own beams also say that the viewpoint is right.
         raise FitError(
@@ -671,8 +676,6 @@ def _finished(robust, scene: _Scene, ignored_view, starts, reconsider) -> FitRes
         robust = robust_geometric_fit(
             local, [robust.state], MODEL, kind="cylinder", sigma=sigma, tolerances=tolerances
         )
-    if sigma is not None and not ignored_view:
-        robust = _readmitted(robust, local, tolerances.outlier_cutoff_sigma * sigma)
     near = robust
     robust = drop_far_side(near, local, tolerances)
     far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))

@@ -722,3 +722,13 @@ def test_good_shots_a_robust_basin_rejected_are_taken_back(seed):
 
     best = least_squares(distances, [3.0, 0.0, 0.0, 0.0, 0.1]).x
     assert fit.primitive.radius == pytest.approx(best[4], abs=1e-5)
+
+
+def test_without_a_sigma_square_on_shots_are_not_rejected_into_an_edge_on_refusal():
+    # An audit's NPS 2 pipe, 20 clean shots from a station, no sigma: the fit's own noise scale
+    # came from its grazing shots, 5 square-on shots were rejected, and the rest was refused as
+    # edge-on mixed returns. At the prior 2 mm every shot is explained.
+    scan = json.loads((Path(__file__).parent / "thin_pipe_no_sigma.json").read_text())
+    fit = fit_cylinder(np.array(scan["points"]), viewpoint=np.array(scan["station"]))
+    assert fit.inliers.all()
+    assert abs(fit.primitive.radius - scan["radius"]) < 3 * fit.stderr["radius"]
