@@ -59,8 +59,8 @@ def beyond_window(obj: ScanObject) -> np.ndarray | None:
 
 def open_ends(result: FitResult, points: np.ndarray, beyond: np.ndarray, viewpoint) -> FitResult:
     """``result`` with the sizes whose outermost inlier is a shot beyond the window made lower
-    bounds (standard error infinite, a cuboid's centre's too, a note), or ``result`` itself
-    when none is.
+    bounds (standard error infinite, a cuboid's centre's too, a note, and
+    ``diagnostics["open_sizes"]`` their count), or ``result`` itself when none is.
 
     Parameters
     ----------
@@ -113,7 +113,7 @@ def open_ends(result: FitResult, points: np.ndarray, beyond: np.ndarray, viewpoi
     sizes = ", ".join(f"{primitive.size[k]:.3f} m" for k, _ in opened)
     what = f"its size{'s' if len(opened) > 1 else ''} {sizes}"
     either = (any(e[0] for _, e in opened), any(e[1] for _, e in opened))
-    return _with_note(result, stderr, what, either)
+    return _with_note(result, stderr, what, either, len(opened))
 
 
 def _open_sides(coordinate: np.ndarray, beyond: np.ndarray, free) -> tuple[bool, bool]:
@@ -123,11 +123,15 @@ def _open_sides(coordinate: np.ndarray, beyond: np.ndarray, free) -> tuple[bool,
     return bool(free[0] and beyond[low]), bool(free[1] and beyond[high])
 
 
-def _with_note(result: FitResult, stderr, what: str, ends) -> FitResult:
+def _with_note(result: FitResult, stderr, what: str, ends, sizes: int = 1) -> FitResult:
     where = "both ends" if all(ends) else "one end"
     note = (
         f"The object runs on beyond the operator's window at {where} (shots the session took "
         f"past the window hit it): {what} is a lower bound, not a measurement (standard error "
         "infinite). Widen the window over the object's ends to measure it."
     )
-    return dataclasses.replace(result, stderr=stderr, notes=(*result.notes, note))
+    # As data too: the weak-geometry rule reports a size the scan did not measure.
+    diagnostics = {**result.diagnostics, "open_sizes": float(sizes)}
+    return dataclasses.replace(
+        result, stderr=stderr, notes=(*result.notes, note), diagnostics=diagnostics
+    )

@@ -91,6 +91,11 @@ def check_weak(ctx: Context) -> None:
             r_se = stderr_value(fit.stderr, "radius")
             if r_se is not None:
                 worst = r_se / prim.radius
+        if diag.get("open_sizes"):
+            # A size the scan saw run on past its window (asbuilt.fit._window): a lower bound.
+            what = "its length" if fit.kind == "cylinder" else "a size"
+            reasons.append(f"{what} runs on past the scan window (a lower bound, not measured)")
+            advice.append("a window over its ends")
         if worst is not None and np.isfinite(worst) and worst > max_rel:
             reasons.append(f"size known to +-{worst * 100:.1f}% > {max_rel * 100:.0f}%")
             advice.append("more points")

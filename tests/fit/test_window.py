@@ -88,6 +88,7 @@ def test_a_column_running_on_past_its_window_has_a_lower_bound_height(site_scan)
     assert math.isinf(column.stderr["size"][height])
     assert math.isinf(column.stderr["center"])
     assert any("beyond the operator's window at both ends" in note for note in column.notes)
+    assert column.diagnostics["open_sizes"] == 1.0
     # The other sizes and the pipe (whose window holds its ends) keep their errors.
     assert all(math.isfinite(se) for k, se in enumerate(column.stderr["size"]) if k != height)
     pipe = report.get("P1").result

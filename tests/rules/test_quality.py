@@ -114,3 +114,15 @@ def test_auto_reports_its_rival_as_data_for_the_rule():
     assert bool(rivals) == ("cannot tell them apart" in note)
     for value in rivals.values():
         assert abs(value) <= 6.0
+
+
+@pytest.mark.parametrize("kind", ["cylinder", "cuboid"])
+def test_a_size_run_past_the_scan_window_is_weak(kind):
+    # asbuilt.fit._window marks a size an acquisition session saw run on past its window.
+    comp = (
+        pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143) if kind == "cylinder" else column("C1", [0, 0, 0])
+    )
+    fit = dataclasses.replace(comp.fit, diagnostics={**comp.fit.diagnostics, "open_sizes": 1.0})
+    (f,) = only(dataclasses.replace(comp, fit=fit), "weak-geometry")
+    assert "runs on past the scan window" in f.message
+    assert "a window over its ends" in f.suggestions[0].description
