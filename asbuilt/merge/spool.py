@@ -71,6 +71,12 @@ MAX_BEND_DEG = 100.0
 #: outermost shot, so the fitting then covers pipe the scan measured; 10 mm allows for shots
 #: on the weld bead and bevel and for range noise along the axis.
 TRIM_NOTE = 0.010
+#: A trimmed pipe end's shots within this (metres) of the fitting's own surface could be shots
+#: of the fitting: three times the 2 mm prior range noise, the fits' outlier cutoff. A trim no
+#: longer than the stretch over which the fitting's surface stays this close to the pipe's
+#: cylinder (:func:`_fitting_allowance`) gets no note: an operator's window that takes in a
+#: tee's or an elbow's first centimetres puts those shots on the pipe.
+TRIM_SURFACE_TOLERANCE = 0.006
 #: A pipe extended by more than this (metres) plus its mean shot spacing along the axis (the
 #: last shot is typically within a spacing of the end) gets a note: that much pipe was never
 #: measured. It is Tolerances.joint_distance's default: sparse
@@ -151,11 +157,15 @@ class _Builder:
         self.ends = self.base.copy()
         self.splits: dict[int, list[tuple[float, float]]] = {}
         self.fitting_at: dict[tuple[int, int], str] = {}
+        # How far a pipe end may be cut back into its fitting with its shots still on the
+        # fitting's surface (metres, :func:`_fitting_allowance`).
+        self.allowance: dict[tuple[int, int], float] = {}
 
     def reset(self):
         self.ends = self.base.copy()
         self.splits = {}
         self.fitting_at = {}
+        self.allowance = {}
 
     def param(self, i: int, point) -> float:
         """Position of ``point`` along pipe i's axis from its start end, metres."""
@@ -199,6 +209,9 @@ def _elbow(b: _Builder, joint: Joint):
     b.ends[i, ki] = ti
     b.ends[j, kj] = tj
     b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"elbow {pi.id}-{pj.id}"
+    # The bend leaves the pipe's cylinder by about s^2 / (2 R) at s along it.
+    bent = float(np.sqrt(2.0 * radius * TRIM_SURFACE_TOLERANCE))
+    b.allowance[i, ki] = b.allowance[j, kj] = min(bent, float(reach))
     if not _same_size(pi, pj):
         notes.append("pipes of different sizes meet at this elbow: built at the larger size")
     snap = {
@@ -246,6 +259,11 @@ def _inline(b: _Builder, joint: Joint):
     b.ends[i, ki] = start
     b.ends[j, kj] = end
     b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"reducer {pi.id}-{pj.id}"
+    # The cone leaves either pipe's cylinder at its slope, half the step in OD over its length.
+    slope = abs(pi.od - pj.od) / (2.0 * max(float(length), 1e-9))
+    b.allowance[i, ki] = b.allowance[j, kj] = min(
+        TRIM_SURFACE_TOLERANCE / max(slope, 1e-9), float(length)
+    )
     wall = min(pi.wall, pj.wall) if pi.wall and pj.wall else 0.0
     geometry = Reducer(
         start=start,
@@ -321,6 +339,8 @@ def _tee(b: _Builder, joint: Joint):
     geometry = _tee_geometry(center, run_dir, -ob, pi, pb)
     b.ends[branch_i, branch_k] = geometry.branch_end
     b.fitting_at[branch_i, branch_k] = "a tee"
+    # A tee's run and outlet are the pipes' own cylinders up to its centre-to-end dimensions.
+    b.allowance[branch_i, branch_k] = float(pi.dims.tee_outlet)
 
     notes = list(pi.dims.notes)
     if not _same_size(pi, pb):
@@ -331,6 +351,7 @@ def _tee(b: _Builder, joint: Joint):
         name = f"{pi.id}-{pj.id}-{pb.id}"
         b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"tee {name}"
         b.fitting_at[branch_i, branch_k] = f"tee {name}"
+        b.allowance[i, ki] = b.allowance[j, kj] = float(pi.dims.tee_run)
         connects = [pi.id, pj.id, pb.id]
     else:
         at = b.param(i, center)
@@ -517,7 +538,7 @@ def build_spools(
         for k, label in ((0, "start"), (1, "end")):
             moved = float((b.ends[i, k] - b.base[i, k]) @ b.out[i, k])
             at = b.fitting_at.get((i, k), "the joint")
-            if -moved > TRIM_NOTE:
+            if -moved > max(TRIM_NOTE, b.allowance.get((i, k), 0.0)):
                 end_notes.append(
                     f"cut back {-moved * 1000:.0f} mm at its {label} for {at}: the fitting covers "
                     "pipe the scan measured there"

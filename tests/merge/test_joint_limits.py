@@ -208,6 +208,41 @@ def test_small_end_moves_are_corrections_without_notes():
     assert [c.size for c in p1.corrections if c.what == "extended at end"] == [pytest.approx(70)]
 
 
+@pytest.mark.parametrize(("into", "said"), [(0.018, False), (0.040, False), (0.080, True)])
+def test_a_pipe_reaching_into_an_elbow_is_said_only_beyond_the_bend(into, said):
+    # The scan's window took in the elbow's first centimetres: the pipe's fitted end lies `into`
+    # past the NPS 4 LR elbow's tangent point (its centre-to-end 152 mm from the corner). The
+    # bend leaves the pipe's cylinder by s^2 / (2 x 152 mm) at s along it: under the 6 mm
+    # cutoff up to 43 mm, so a cut-back of 18 mm (an audit's realistic spools: a warning on
+    # every one) or 40 mm is the fitting's own surface; 80 mm (21 mm off) is not.
+    gap = LR90_NPS4 - into
+    pipes = [
+        Pipe("P1", (0, 0, 0), (2 - gap, 0, 0), NPS4),
+        Pipe("P2", (2, LR90_NPS4 + 0.070, 0), (2, 2, 0), NPS4),
+    ]
+    model = merge_model(report_of(pipes))
+    assert types(model) == ["pipe", "elbow", "pipe"]
+    told = notes(model, "P1")
+    assert bool(told) is said
+    if said:
+        assert told[0].startswith(f"cut back {into * 1000:.0f} mm at its end for elbow P1-P2")
+
+
+def test_a_run_reaching_into_its_tee_is_not_said():
+    # Two NPS 4 runs whose shots reach 20 mm into the tee's run (coaxial, the same OD, 105 mm
+    # from its centre to each run end) and a branch: the tee covers the cut-back stretch with
+    # the same cylinder, so no note.
+    c_run = 0.105  # B16.9 NPS 4 tee, centre to end of run
+    pipes = [
+        Pipe("P1", (-2.0, 0, 1.0), (-(c_run - 0.020), 0, 1.0), NPS4),
+        Pipe("P2", (c_run - 0.020, 0, 1.0), (2.0, 0, 1.0), NPS4),
+        Pipe("P3", (0, c_run + 0.05, 1.0), (0, 1.8, 1.0), NPS4),
+    ]
+    model = merge_model(report_of(pipes))
+    assert "tee" in types(model)
+    assert notes(model, "P1") == [] and notes(model, "P2") == []
+
+
 # --- 5. no short-radius 45 degree elbow in B16.9 ---------------------------------------------
 
 
