@@ -12,7 +12,6 @@ so that NPS-based tolerances apply to DN catalogs too.
 from __future__ import annotations
 
 import os
-import re
 from dataclasses import dataclass, field
 from fractions import Fraction
 
@@ -108,24 +107,10 @@ class SizeTable:
         return size_by_system(hint, self.designation, by_nps, by_dn)
 
     def od(self, nominal: str) -> float | None:
-        """The OD (metres) of a nominal size or an operator's hint (``4"``, ``NPS 4``, ``DN100``)."""
-        text = str(nominal).strip().lower().replace('"', "").replace("''", "")
-        text = re.sub(r"\s*(in|inch|inches)$", "", text).strip()
-        dn = re.fullmatch(r"dn\s*(\d+)", text)
-        if dn:
-            for _, size_dn, od in self.sizes:
-                if size_dn is not None and int(size_dn) == int(dn.group(1)):
-                    return od
-            return None
-        text = re.sub(rf"^{re.escape(self.designation.lower())}\s*", "", text)
-        text = re.sub(r"^nps\s*", "", text)
-        value = nps_value(text)
-        for size_nominal, _, od in self.sizes:
-            if size_nominal.strip().lower() == text or (
-                value is not None and nps_value(size_nominal) == value
-            ):
-                return od
-        return None
+        """The OD (metres) of a nominal size or an operator's hint (``4"``, ``NPS 4``, ``DN100``),
+        read as :meth:`find` reads it; None when it names no size of the table."""
+        found = self.find(nominal)
+        return None if found is None else next(od for n, _, od in self.sizes if n == found)
 
     def nominal_for(self, od: float) -> str | None:
         """The nominal size whose OD equals ``od`` within 0.05 mm."""
