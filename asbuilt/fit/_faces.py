@@ -328,13 +328,13 @@ def _second_plane(points, normals, first, threshold, gap, rng, viewpoint=None):
         mask = np.zeros(points.shape[0], bool)
         mask[rest[masks[c]]] = True
         face = (ref_n[c], float(ref_o[c]), mask)
-        gap_b = (
-            None
-            if viewpoint is None
-            else _grazing_gap(points, first, face, threshold, gap, viewpoint)
-        )
-        if _contiguous(points, (d1, o1, mask1), face, threshold, gap, gap_b):
+        if _contiguous(points, first, face, threshold, gap):
             return face
+        if viewpoint is not None:
+            # Asked only of a face the plain gap refuses: the grazing allowance is never less.
+            wider = _grazing_gap(points, first, face, threshold, gap, viewpoint)
+            if wider > gap and _contiguous(points, first, face, threshold, gap, wider):
+                return face
     return None
 
 

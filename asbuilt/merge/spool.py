@@ -74,8 +74,9 @@ TRIM_NOTE = 0.010
 #: A trimmed pipe end's shots within this (metres) of the fitting's own surface could be shots
 #: of the fitting: three times the 2 mm prior range noise, the fits' outlier cutoff. A trim no
 #: longer than the stretch over which the fitting's surface stays this close to the pipe's
-#: cylinder (:func:`_fitting_allowance`) gets no note: an operator's window that takes in a
-#: tee's or an elbow's first centimetres puts those shots on the pipe.
+#: cylinder (``_Builder.allowance``, set where each fitting is built) gets no note: an
+#: operator's window that takes in a tee's or an elbow's first centimetres puts those shots on
+#: the pipe.
 TRIM_SURFACE_TOLERANCE = 0.006
 #: A pipe extended by more than this (metres) plus its mean shot spacing along the axis (the
 #: last shot is typically within a spacing of the end) gets a note: that much pipe was never
@@ -158,7 +159,7 @@ class _Builder:
         self.splits: dict[int, list[tuple[float, float]]] = {}
         self.fitting_at: dict[tuple[int, int], str] = {}
         # How far a pipe end may be cut back into its fitting with its shots still on the
-        # fitting's surface (metres, :func:`_fitting_allowance`).
+        # fitting's surface (metres; set by _elbow, _inline and _tee).
         self.allowance: dict[tuple[int, int], float] = {}
 
     def reset(self):
