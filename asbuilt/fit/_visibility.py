@@ -25,6 +25,7 @@ from asbuilt.fit._robust import GeometricModel, RobustFit, gauss_newton, settled
 from asbuilt.tolerances import Tolerances
 
 __all__ = [
+    "beyond_first_surface",
     "cylinder_beam_excess",
     "edge_on_degrees",
     "one_side_could_see",
@@ -88,6 +89,44 @@ def cylinder_beam_excess(axis, center, radius, points: np.ndarray, viewpoint) ->
         reach = np.broadcast_to(lengths, a.shape)[hit]
         excess[hit] = np.clip(2.0 * (reach - middle), 0.0, chord)
     return excess[0] if np.ndim(axis) == 1 else excess
+
+
+def beyond_first_surface(axis, center, radius, points: np.ndarray, viewpoint) -> np.ndarray:
+    """How far each shot lies beyond the first point of an infinite cylinder its beam met,
+    along the beam, metres, shape (n,); negative in front of it.
+
+    A beam that enters the cylinder meets it at its entry point; one that misses it passes
+    closest to its surface where it passes closest to its axis, the silhouette. A shot that
+    grazed the cylinder and came back from what lies behind it, or a mixed return between the
+    two, lies beyond that point (up to the range noise); a shot well in front of it, and off
+    the cylinder, hit something else first.
+
+    Parameters
+    ----------
+    axis : ndarray, shape (3,)
+        Unit axis.
+    center : ndarray, shape (3,), metres
+        A point on the axis.
+    radius : float, metres
+    points : ndarray, shape (n, 3), metres
+    viewpoint : array_like, shape (3,), metres
+        Where the shots were taken from.
+    """
+    view = np.asarray(viewpoint, dtype=np.float64)
+    beams = points - view
+    ranges = np.sqrt(np.einsum("ij,ij->i", beams, beams))
+    directions = beams / np.maximum(ranges, 1e-300)[:, None]
+    start = view - center
+    start_across = start - (start @ axis) * axis
+    along = directions @ axis
+    across_square = np.maximum(1.0 - along * along, 1e-24)  # |direction across the axis|^2
+    crossing = directions @ start_across
+    # Along each beam, nearest the axis at ``closest``, at ``miss`` from it; a beam passing
+    # within the radius enters the cylinder half a chord earlier.
+    closest = -crossing / across_square
+    miss_square = start_across @ start_across - crossing * crossing / across_square
+    half_chord = np.sqrt(np.maximum(radius * radius - miss_square, 0.0) / across_square)
+    return ranges - (closest - half_chord)
 
 
 def edge_on_degrees(axis, center, points: np.ndarray, viewpoint) -> np.ndarray:

@@ -32,6 +32,10 @@ Method
 
 The geometric estimate is the final one: algebraic circle fits alone are biased on partial arcs.
 
+Scans of 35 points or more with a known sigma first try the quick path
+(:mod:`asbuilt.fit._cylinder_quick`): the fit from step 1's first axes alone stands when the
+scan says it needs no second look (clean, or every rejected shot where only background can be).
+
 This module holds the sequence; the steps live in :mod:`asbuilt.fit._cylinder_starts` (1, and
 the order in which starts are trusted), :mod:`asbuilt.fit._cylinder_model` (3 and 5: the
 least-squares model, the far-side and incidence refits) and
@@ -43,7 +47,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import chdtri
 
 from asbuilt.errors import FitError
 from asbuilt.fit._circles import circle_starts
@@ -88,6 +91,8 @@ from asbuilt.fit._cylinder_model import (
     rms,
     stacked,
 )
+from asbuilt.fit._cylinder_quick import quick_fit as _quick_fit
+from asbuilt.fit._cylinder_quick import robust_among
 from asbuilt.fit._cylinder_starts import (
     POLISH_BELOW,
     POLISHED_STARTS,
@@ -95,7 +100,6 @@ from asbuilt.fit._cylinder_starts import (
     line_axis,
     pair_starts,
     polish_axes,
-    trust_order,
 )
 from asbuilt.fit._robust import (
     RobustFit,
@@ -186,86 +190,6 @@ def _radius_seeds(state, view, known, extent) -> list:
     return seeds
 
 
-def _robust_among(local, starts, costs, sigma, tolerances, memo=None) -> RobustFit:
-    """The robust geometric fit among the circle starts (:func:`trust_order` first); ``memo``
-    as in :func:`robust_geometric_fit`."""
-    starts, costs, trusted = trust_order(starts, costs)
-    return robust_geometric_fit(
-        local,
-        starts,
-        MODEL,
-        kind="cylinder",
-        sigma=sigma,
-        tolerances=tolerances,
-        start_costs=costs,
-        always_refine=trusted,
-        memo=memo,
-    )
-
-
-#: Upper tail probability of the chi-square test a quick fit's residuals must pass
-#: (:func:`_quick_fit`): a fit in a wrong basin that still keeps every shot within the inlier
-#: threshold fits them worse than the noise allows.
-QUICK_CHI2_TAIL = 1e-3
-
-
-def _quick_fit(local, axes, keep, sigma, view, tolerances):
-    """The robust fit from the normals' and principal axes' circles alone, when it needs no
-    second look; else None.
-
-    Most scans of at least ``POLISH_BELOW`` shots with a known sigma are clean: the first axis
-    starts give the fit, and the two-point and line starts, their circles and the robust
-    choice among them all (about a third of a 40-point fit's time) settle on the same
-    minimum. No shot may lie farther from the cheapest start than its radius, and the quick
-    fit is kept only when every shot is an inlier, its residuals pass a chi-square test at
-    ``sigma`` (tail ``QUICK_CHI2_TAIL``), and nothing would reconsider it: with a viewpoint,
-    no beam runs through the fitted pipe (:func:`doubtful`); without one, no shot lies inside
-    the pipe (:func:`admissible`) nor on its far side (:func:`drop_far_side`). Anything else
-    takes the full search, exactly as without this shortcut.
-
-    Parameters
-    ----------
-    local : ndarray, shape (n, 3), metres (centred)
-    axes : list of ndarray, shape (3,)
-        :func:`axis_starts`' candidate axes.
-    keep : int
-    sigma : float, metres
-    view : ndarray, shape (3,), metres (in ``local``'s frame), or None
-    tolerances : Tolerances
-
-    Returns
-    -------
-    (RobustFit, list of starts) or None
-    """
-    starts, costs = circle_starts(local, axes, keep, np.random.default_rng(len(local)))
-    if not starts:
-        return None
-    best = starts[int(np.argmin(costs))]
-    if float(np.abs(MODEL.residuals(best, local)).max()) > best[2]:
-        # A shot farther from the cheapest circle than its radius: background (a wall behind
-        # the pipe), which the quick fit would only find after its robust choice. On the
-        # benchmark's clean 40-point scans the farthest shot is at most 0.7 radii away; with
-        # 20% edge outliers, a median 15.
-        return None
-    try:
-        robust = _robust_among(local, starts, costs, sigma, tolerances)
-    except FitError:
-        return None
-    if not robust.inliers.all():
-        return None
-    dof = len(local) - MODEL.n_params
-    if float(robust.residuals @ robust.residuals) > sigma**2 * chdtri(dof, QUICK_CHI2_TAIL):
-        return None
-    if view is not None:
-        if doubtful(robust, local, view, len(local), sigma, tolerances):
-            return None
-    elif not admissible(robust, local, tolerances.outlier_cutoff_sigma * sigma):
-        return None
-    elif not drop_far_side(robust, local, tolerances).inliers.all():
-        return None
-    return robust, starts
-
-
 def fit_cylinder(
     points,
     *,
@@ -345,8 +269,17 @@ def fit_cylinder(
     if sigma is not None and everything is None and len(local) >= POLISH_BELOW:
         quick = _quick_fit(local, first_axes, keep, sigma, view, tolerances)
         if quick is not None:
+            robust, quick_starts, rejected = quick
             scene = _Scene(pts, offset, local, None, view, sigma, tolerances)
-            return _finished(quick[0], scene, False, quick[1], None)
+            try:
+                return _finished(robust, scene, False, quick_starts, None)
+            except _NeedsFullSearch:
+                pass
+            except FitError:
+                # A quick fit that rejected shots and that its last checks (edge-on shots, shots
+                # seen through the pipe) refuse: the full search decides.
+                if not rejected:
+                    raise
     starts = []
     rng = np.random.default_rng(len(local))
     axes = first_axes + pair_starts(local, normals, keep, 3)
@@ -360,7 +293,7 @@ def fit_cylinder(
     refined: dict = {}
 
     def robust_from(starts, costs):
-        return _robust_among(local, starts, costs, sigma, tolerances, refined)
+        return robust_among(local, starts, costs, sigma, tolerances, refined)
 
     def polished(starts, costs):
         order = np.argsort(costs)[:POLISHED_STARTS]
@@ -630,6 +563,10 @@ def _end_gaps(along: np.ndarray, spacing: float, noise: float) -> tuple[float, f
     )
 
 
+class _NeedsFullSearch(Exception):
+    """Raised by :func:`_finished` when a quick fit needs the other starts it never made."""
+
+
 @dataclass(frozen=True)
 class _Scene:
     """What the last stage of a cylinder fit (:func:`_finished`) needs of the scan.
@@ -682,6 +619,8 @@ def _finished(robust, scene: _Scene, ignored_view, starts, reconsider) -> FitRes
     if view is None and starts and far_side and doubtful_blind(robust, local):
         # The far-side refit slid onto a plane: the likeliest other basin replaces it if closer
         # (a plate with shots behind it is nearly a plane; a looser cylinder is no better).
+        if reconsider is None:
+            raise _NeedsFullSearch
         settled = reconsider(robust, None)
         if rms(settled.residuals[settled.inliers]) < rms(robust.residuals[robust.inliers]):
             robust, far_side = settled, 0

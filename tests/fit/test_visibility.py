@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.optimize import brentq, minimize_scalar
 
 from asbuilt.fit._visibility import (
+    beyond_first_surface,
     cylinder_beam_excess,
     edge_on_degrees,
     one_side_could_see,
@@ -130,3 +132,58 @@ def test_one_station_sees_an_arc_but_not_two_opposite_clusters():
     clusters += np.linspace(-0.02, 0.02, 22)
     assert not one_side_could_see(clusters, 2.0 / 3.0, 60.0)
     assert not one_side_could_see(np.array([]), 2.0 / 3.0, 60.0)
+
+
+def _first_surface_range(axis, center, radius, direction, viewpoint):
+    """Independent truth: where a beam (unit ``direction`` from ``viewpoint``) first meets an
+    infinite cylinder, by root finding on the distance from the axis, or where it passes
+    closest to the axis (numerical minimisation) when it misses."""
+
+    def from_axis(t):
+        rel = viewpoint + t * direction - center
+        return float(np.linalg.norm(rel - (rel @ axis) * axis))
+
+    closest = minimize_scalar(
+        from_axis, bounds=(0.0, 100.0), method="bounded", options={"xatol": 1e-12}
+    ).x
+    if from_axis(closest) >= radius:
+        return closest
+    return brentq(lambda t: from_axis(t) - radius, 0.0, closest, xtol=1e-13)
+
+
+@pytest.mark.parametrize(
+    "point, viewpoint, expected",
+    [
+        ([1.0, 0.0, 0.0], [10.0, 0.0, 0.0], 0.0),  # on the front, square on
+        ([1.5, 0.0, 0.0], [10.0, 0.0, 0.0], -0.5),  # in front of it
+        ([-1.0, 0.0, 0.0], [10.0, 0.0, 0.0], 2.0),  # the back: through the whole pipe
+        ([-3.0, 0.0, 0.0], [10.0, 0.0, 0.0], 4.0),  # the wall behind it
+        ([0.0, 1.0, 0.0], [10.0, 1.0, 0.0], 0.0),  # the silhouette, grazing
+        ([-2.0, 1.5, 0.0], [10.0, 1.5, 0.0], 2.0),  # a beam that missed: from its closest
+        ([1.0, 1.5, 0.0], [10.0, 1.5, 0.0], -1.0),  # approach to the axis
+    ],
+)
+def test_beyond_the_first_surface_of_a_unit_pipe(point, viewpoint, expected):
+    got = beyond_first_surface(AXIS, CENTER, 1.0, np.array([point]), np.array(viewpoint))
+    assert got[0] == pytest.approx(expected, abs=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.floats(-3.0, 3.0),
+    st.floats(-3.0, 3.0),
+    st.floats(-2.0, 2.0),
+    st.floats(-0.9, 0.9),
+    st.floats(-8.0, 8.0),
+)
+def test_beyond_the_first_surface_matches_root_finding_on_oblique_beams(x, y, z, lift, along):
+    axis = np.array([0.3, -0.2, 1.0]) / np.linalg.norm([0.3, -0.2, 1.0])
+    center = np.array([0.2, 0.1, -0.3])
+    viewpoint = np.array([9.0, 2.0, 1.0 + along])
+    point = np.array([x, y, z + lift * along])
+    direction = (point - viewpoint) / np.linalg.norm(point - viewpoint)
+    truth = np.linalg.norm(point - viewpoint) - _first_surface_range(
+        axis, center, 0.7, direction, viewpoint
+    )
+    got = beyond_first_surface(axis, center, 0.7, point[None, :], viewpoint)[0]
+    assert got == pytest.approx(truth, abs=1e-6)

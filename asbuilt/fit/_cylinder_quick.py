@@ -1,0 +1,203 @@
+"""The cylinder fit's quick path: the first axis starts alone, when what they give needs no
+second look.
+
+Scans of at least ``POLISH_BELOW`` shots with a known sigma are mostly either clean or carry a
+few edge outliers: shots that grazed the pipe and came back from the wall behind it, or mixed
+returns between the two. The normals' and principal axes' circles then settle on the pipe, and
+the full search (two-point and line starts, the robust choice among all of them, the beams'
+second look and the MSAC rescue; :func:`asbuilt.fit.cylinder.fit_cylinder`) settles on the same
+minimum at several times the cost. The quick fit stands only when the scan itself says so
+(:func:`quick_fit`); anything else takes the full search, exactly as without this shortcut.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.special import chdtri
+
+from asbuilt.errors import FitError
+from asbuilt.fit._circles import circle_starts
+from asbuilt.fit._common import orthonormal_basis
+from asbuilt.fit._cylinder_checks import (
+    UNSEEN_FRACTION,
+    admissible,
+    doubtful,
+    doubtful_blind,
+)
+from asbuilt.fit._cylinder_model import (
+    MODEL,
+    ONE_SIDED,
+    angles_about,
+    drop_far_side,
+    mean_direction,
+)
+from asbuilt.fit._cylinder_starts import line_axis, trust_order
+from asbuilt.fit._robust import RobustFit, keep_count, robust_geometric_fit
+from asbuilt.fit._visibility import beyond_first_surface, cylinder_beam_excess
+from asbuilt.tolerances import Tolerances
+
+__all__ = ["QUICK_CHI2_TAIL", "robust_among", "quick_fit"]
+
+
+#: Upper tail probability of the chi-square test a quick fit's inliers must pass: a fit in a
+#: wrong basin that still keeps its shots within the inlier threshold fits them worse than the
+#: noise allows.
+QUICK_CHI2_TAIL = 1e-3
+
+#: A quick fit that rejected shots stands only if each lies more than this many inlier cutoffs
+#: off it. A shot nearer than that may be a good one a nearby basin keeps: letting them through
+#: changed 4 of 600 benchmark fits by up to 4.7 mm against the full search, none at twice the
+#: cutoff (and :func:`asbuilt.fit.cylinder._readmitted` leaves such fits alone).
+CLEAR_OF_CUTOFFS = 2.0
+
+
+def robust_among(local, starts, costs, sigma, tolerances, memo=None) -> RobustFit:
+    """The robust geometric fit among circle starts (:func:`trust_order` first); ``memo`` as
+    in :func:`~asbuilt.fit._robust.robust_geometric_fit`."""
+    starts, costs, trusted = trust_order(starts, costs)
+    return robust_geometric_fit(
+        local,
+        starts,
+        MODEL,
+        kind="cylinder",
+        sigma=sigma,
+        tolerances=tolerances,
+        start_costs=costs,
+        always_refine=trusted,
+        memo=memo,
+    )
+
+
+def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
+    """The robust fit from the normals' and principal axes' circles alone, when it needs no
+    second look; else None.
+
+    A fit that keeps every shot stands when no shot lay farther from the cheapest start than
+    its radius, its residuals pass a chi-square test at ``sigma`` (tail ``QUICK_CHI2_TAIL``),
+    and nothing would reconsider it: with a viewpoint, no beam runs through the fitted pipe
+    (:func:`~asbuilt.fit._cylinder_checks.doubtful`); without one, no shot lies inside the pipe
+    (:func:`~asbuilt.fit._cylinder_checks.admissible`) nor on its far side
+    (:func:`~asbuilt.fit._cylinder_model.drop_far_side`).
+
+    A fit that rejected shots stands when they can only be background
+    (:func:`_rejected_are_background`).
+
+    Parameters
+    ----------
+    local : ndarray, shape (n, 3), metres (centred)
+    axes : list of ndarray, shape (3,)
+        :func:`~asbuilt.fit._cylinder_starts.axis_starts`' candidate axes.
+    keep : int
+    sigma : float, metres
+    view : ndarray, shape (3,), metres (in ``local``'s frame), or None
+    tolerances : Tolerances
+
+    Returns
+    -------
+    (RobustFit, list of starts, bool) or None
+        The fit, the starts it came from, and whether it rejected shots (the caller then still
+        falls back on the full search if the fit's last checks refuse it).
+    """
+    starts, costs = circle_starts(local, axes, keep, np.random.default_rng(len(local)))
+    if not starts:
+        return None
+    best = starts[int(np.argmin(costs))]
+    # A shot farther from the cheapest circle than its radius is background (a wall behind the
+    # pipe). On the benchmark's clean 40-point scans the farthest shot is at most 0.7 radii
+    # away; with 20% edge outliers, a median 15.
+    background = float(np.abs(MODEL.residuals(best, local)).max()) > best[2]
+    try:
+        robust = robust_among(local, starts, costs, sigma, tolerances)
+    except FitError:
+        if not background:
+            return None
+        # Background shots spoiled the normals and principal axes (no start settled on the
+        # pipe; a sixth of the benchmark's scans with 20% edge outliers): the robust line
+        # through the shots (the full search's, from the same random draws) finds the axis of
+        # 48 of those 50.
+        line = line_axis(local, keep, np.random.default_rng(len(local)))
+        if line is None:
+            return None
+        more, more_costs = circle_starts(local, [line], keep, np.random.default_rng(len(local)))
+        starts, costs = starts + more, costs + more_costs
+        try:
+            robust = robust_among(local, starts, costs, sigma, tolerances)
+        except FitError:
+            return None
+    if not robust.inliers.all():
+        if _rejected_are_background(robust, local, sigma, view, tolerances):
+            return robust, starts, True
+        return None
+    if background:
+        return None  # kept by a basin other than the cheapest circle's: the full search decides
+    if not _passes_chi_square(robust.residuals, sigma):
+        return None
+    if view is not None:
+        if doubtful(robust, local, view, len(local), sigma, tolerances):
+            return None
+    elif not admissible(robust, local, tolerances.outlier_cutoff_sigma * sigma):
+        return None
+    elif not drop_far_side(robust, local, tolerances).inliers.all():
+        return None
+    return robust, starts, False
+
+
+def _passes_chi_square(residuals: np.ndarray, sigma: float) -> bool:
+    """Whether residuals (m,) metres pass the chi-square test at ``sigma`` with the model's
+    degrees of freedom (tail ``QUICK_CHI2_TAIL``)."""
+    dof = residuals.size - MODEL.n_params
+    return dof > 0 and float(residuals @ residuals) <= sigma**2 * chdtri(dof, QUICK_CHI2_TAIL)
+
+
+def _rejected_are_background(
+    robust: RobustFit, local: np.ndarray, sigma: float, view, tolerances: Tolerances
+) -> bool:
+    """Whether a quick fit that rejected shots may stand: its inliers are a pipe seen as the
+    noise allows and every rejected shot lies where only background can.
+
+    - The rejected are within the trimmed cost's design contamination (``n - keep_count``),
+      and each lies over ``CLEAR_OF_CUTOFFS`` inlier cutoffs off the fit.
+    - The inliers pass the chi-square test at ``sigma``, and the pipe is no plane of
+      kilometres' radius (:func:`~asbuilt.fit._cylinder_checks.doubtful_blind`).
+    - With the viewpoint: no inlier's beam ran through the pipe by more than the cutoff, the
+      viewpoint is not one the inliers were mostly hidden from (as
+      :func:`~asbuilt.fit._cylinder_checks.unseen`), and every rejected shot lies beyond the
+      first surface of the pipe its beam met (:func:`~asbuilt.fit._visibility.beyond_first_surface`):
+      a shot that grazed the pipe and came back from the wall, or a mixed return between them,
+      lies beyond it; a shot in front of the pipe, off it, is another surface's (a wider pipe
+      sharing this one's near side showed its fourth raster column 3-7 cm in front of the
+      thinner fit's silhouette).
+    - Without it: no shot lies inside the pipe
+      (:func:`~asbuilt.fit._cylinder_checks.admissible`), the inliers face one side (mean
+      resultant over :data:`~asbuilt.fit._cylinder_model.ONE_SIDED`), and no rejected shot lies on that side of the
+      axis by more than the cutoff (beams from a station some metres off run nearly parallel
+      across a pipe, so what lies in front of the axis along them was met before the pipe's
+      silhouette).
+    """
+    rejected = ~robust.inliers
+    n = rejected.size
+    if np.count_nonzero(rejected) > n - keep_count(n, tolerances):
+        return False
+    cutoff = tolerances.outlier_cutoff_sigma * sigma
+    if np.any(np.abs(robust.residuals[rejected]) <= CLEAR_OF_CUTOFFS * cutoff):
+        return False
+    if not _passes_chi_square(robust.residuals[robust.inliers], sigma):
+        return False
+    if doubtful_blind(robust, local):
+        return False
+    axis, center, radius = robust.state
+    if view is not None:
+        excess = cylinder_beam_excess(axis, center, radius, local, view)[robust.inliers]
+        if np.any(excess > cutoff) or np.mean(excess > 0.1 * radius) > UNSEEN_FRACTION:
+            return False
+        beyond = beyond_first_surface(axis, center, radius, local[rejected], view)
+        return bool(np.all(beyond >= -cutoff))
+    if not admissible(robust, local, cutoff):
+        return False
+    mean = mean_direction(angles_about(axis, center, local[robust.inliers]))
+    resultant = float(np.hypot(*mean))
+    if resultant <= ONE_SIDED:
+        return False
+    u, v = orthonormal_basis(axis)
+    facing = (mean[0] * u + mean[1] * v) / resultant
+    return bool(np.all((local[rejected] - center) @ facing <= cutoff))
