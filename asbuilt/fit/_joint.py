@@ -17,6 +17,7 @@ import numpy as np
 from asbuilt.fit import _faces
 from asbuilt.fit._mixture import mixing_cost
 from asbuilt.fit._rectangle import min_area_rectangle
+from asbuilt.fit._robust import DESIGN_CONTAMINATION
 
 #: Tukey biweight tuning constant (95% efficiency at the normal; Beaton and Tukey 1974).
 _TUKEY_C = 4.685
@@ -254,6 +255,40 @@ def _on_a_line(trial, x: np.ndarray, width: float, raster: np.ndarray | None = N
     return False
 
 
+#: A first frame's fit that rejected shots stands without the other frames only if it rejected
+#: at most this share of them (the cylinder fit's trimmed-cost design contamination).
+_BACKGROUND_SHARE = DESIGN_CONTAMINATION
+#: ... and no this many of its rejected shots lie within twice the inlier cutoff of one plane
+#: across a box axis: every face of a box is such a plane, so they may be a face the frame left
+#: out (a random scatter of mixed returns rarely lines up so).
+_FACE_SHOTS = 3
+
+
+def _rejected_are_background(trial, x: np.ndarray, cap: float) -> bool:
+    """Whether the shots a plausible fit with a trusted viewpoint rejected can only be
+    background, so that no other frame could explain them: at most ``_BACKGROUND_SHARE`` of
+    the shots, each over twice ``cap`` (the inlier cutoff, metres) from every seen face's
+    plane and behind every one of them (a plausible fit's faces face the station: a shot that
+    grazed the box and came back from the wall, or a mixed return between them, lies behind
+    them all; one in front of a face plane, off the box, hit something else first), and no
+    ``_FACE_SHOTS`` of them within twice ``cap`` of one plane across a box axis (a face the
+    frame left out: a column's top, or its side seen at grazing incidence, lies behind the
+    other faces' planes too). ``x`` (n, 3) metres, centred."""
+    model, _, _, inliers = trial[:4]
+    rejected = x[~inliers]
+    if rejected.shape[0] > _BACKGROUND_SHARE * x.shape[0]:
+        return False
+    signed = model.all_residuals(rejected)  # (r, faces), positive on the station's side
+    if np.any(signed > cap) or np.any(np.abs(signed) <= 2.0 * cap):
+        return False
+    if rejected.shape[0] >= _FACE_SHOTS:
+        across = np.sort(rejected @ model.axes.T, axis=0)  # (r, 3): along each box axis
+        spread = across[_FACE_SHOTS - 1 :] - across[: 1 - _FACE_SHOTS]
+        if np.any(spread <= 2.0 * cap):
+            return False
+    return True
+
+
 def _one_station_frames(trial, x: np.ndarray, width: float) -> list:
     """Frames (:class:`asbuilt.fit._faces.Frame`) that one station can have seen, from a fit
     with two opposite faces: a face of such a pair whose inliers lie within ``width`` metres
@@ -376,7 +411,8 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
     best = fitted(frames[0])
     best_rank = rank(best, True)
     # (Without a trusted viewpoint a fit with opposite faces is implausible, so doubtful too.)
-    if not (best_rank[0] and best[3].all()) or _on_a_line(best, x, cap, raster):
+    settled = best[3].all() or (trusted and _rejected_are_background(best, x, cap))
+    if not (best_rank[0] and settled) or _on_a_line(best, x, cap, raster):
         first = int(np.count_nonzero(frames[0].labels >= 0))
         frames = exhaustive()
         for frame in frames:

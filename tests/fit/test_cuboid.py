@@ -20,6 +20,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from asbuilt.errors import FitError
+from asbuilt.fit import _joint
 from asbuilt.fit.cuboid import fit_cuboid
 from asbuilt.primitives import Cuboid
 from asbuilt.tolerances import MIN_POINTS
@@ -792,3 +793,30 @@ def test_a_face_with_seen_shots_beyond_it_is_not_added():
     beyond = np.abs(local) - 0.5 * np.asarray(box.size)
     assert beyond.max() < 3.0 * result.diagnostics["scale"] + 0.01
     assert max(box.size) > 3.2  # the shots span 3.2 m up the column
+
+
+def test_a_first_frame_rejecting_only_background_is_the_exhaustive_choice(monkeypatch):
+    # With the station known, a first frame whose rejected shots can only be background stands
+    # without every other frame being fitted; it must be the frame the full comparison picks.
+    original = _joint._rejected_are_background
+    stood = 0
+    for seed in range(6):
+        rng = np.random.default_rng(300 + seed)
+        section = (0.2, 0.4, 0.6)[seed % 3]
+        truth = column(section, 0.35, 3.0, (30.0, 45.0, 60.0)[seed % 3], 4 + seed, rng)
+        points, _ = scan_box(truth, np.zeros(3), 6, 7, rng, outlier_fraction=0.2)
+        taken = []
+
+        def recording(*args, taken=taken):
+            taken.append(original(*args))
+            return taken[-1]
+
+        monkeypatch.setattr(_joint, "_rejected_are_background", recording)
+        quick = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+        monkeypatch.setattr(_joint, "_rejected_are_background", lambda *args: False)
+        full = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+        np.testing.assert_array_equal(quick.inliers, full.inliers)
+        np.testing.assert_allclose(quick.primitive.size, full.primitive.size, atol=1e-9)
+        np.testing.assert_allclose(quick.primitive.axes, full.primitive.axes, atol=1e-9)
+        stood += any(taken)
+    assert stood >= 4  # (5 of these 6 scans' rejected shots are all clear of the faces)

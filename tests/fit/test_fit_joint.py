@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from asbuilt.fit._joint import FaceModel, _information, plausible
+from asbuilt.fit._joint import FaceModel, _information, _rejected_are_background, plausible
 
 
 def _model(face_axis, face_sign, offsets) -> FaceModel:
@@ -71,3 +71,63 @@ def test_jacobian_matches_its_plain_construction(rot_basis):
     onehot = (label[:, None] == np.arange(3)).astype(np.float64)
     expected = np.hstack([np.cross(normal, x) @ rot_basis, -onehot])
     np.testing.assert_array_equal(model.jacobian(x, label), expected)
+
+
+# A column's two seen faces, x = 0.2 (outward +x) and y = 0.2 (outward +y), seen from (5, 5, 0).
+_CAP = 0.006
+
+
+def _column_fit(rejected: np.ndarray):
+    """A fit of 32 shots on the column's faces that rejected ``rejected`` (r, 3) metres."""
+    rng = np.random.default_rng(3)
+    on_x = np.column_stack([np.full(16, 0.2), rng.uniform(-0.2, 0.2, 16), rng.uniform(-1, 1, 16)])
+    on_y = np.column_stack([rng.uniform(-0.2, 0.2, 16), np.full(16, 0.2), rng.uniform(-1, 1, 16)])
+    x = np.vstack([on_x, on_y, rejected])
+    inliers = np.arange(len(x)) < 32
+    label = np.repeat([0, 1, 0], [16, 16, len(rejected)])
+    return (_model([0, 1], [1, 1], [0.2, 0.2]), label, np.zeros(len(x)), inliers), x
+
+
+# Shots behind both faces, scattered over metres as mixed returns and the wall behind are.
+_BEHIND = np.array(
+    [
+        [-1.7, -0.9, 0.3],
+        [-2.4, 0.05, -0.6],
+        [-0.8, -2.2, 0.8],
+        [-1.1, -1.5, -0.2],
+        [-3.0, -0.3, 0.55],
+        [-0.35, -2.9, -0.9],
+        [-2.0, -2.6, 0.1],
+        [-0.6, -1.2, -0.45],
+    ]
+)
+
+
+def test_rejected_shots_behind_every_seen_face_are_background():
+    assert _rejected_are_background(*_column_fit(_BEHIND), _CAP)
+
+
+@pytest.mark.parametrize(
+    "shot, why",
+    [
+        ([0.5, -0.4, 0.0], "in front of the face x = 0.2, off the column"),
+        ([0.19, -1.0, 0.0], "within twice the cutoff of a face plane: maybe a good shot"),
+        ([-1.0, 0.21, 0.0], "just in front of the face y = 0.2"),
+    ],
+)
+def test_a_rejected_shot_that_may_not_be_background(shot, why):
+    rejected = np.vstack([_BEHIND[:7], shot])
+    assert not _rejected_are_background(*_column_fit(rejected), _CAP), why
+
+
+def test_rejected_shots_on_one_plane_across_a_box_axis_may_be_a_face_left_out():
+    # Three shots on the column's top (z = 1.05), behind both side faces' planes.
+    top = np.array([[-0.1, -0.1, 1.05], [0.1, -0.15, 1.052], [-0.05, 0.1, 1.049]])
+    assert not _rejected_are_background(*_column_fit(np.vstack([_BEHIND[:5], top])), _CAP)
+    assert _rejected_are_background(*_column_fit(np.vstack([_BEHIND[:5], top[:2]])), _CAP)
+
+
+def test_more_background_than_a_quarter_of_the_shots_is_left_to_the_other_frames():
+    many = np.vstack([_BEHIND, _BEHIND[:3] + [-0.5, -0.7, 0.2]])  # 11 of 43
+    assert _rejected_are_background(*_column_fit(many[:10]), _CAP)  # 10 of 42
+    assert not _rejected_are_background(*_column_fit(many), _CAP)
