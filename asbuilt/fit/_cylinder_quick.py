@@ -36,7 +36,7 @@ from asbuilt.fit._robust import RobustFit, keep_count, robust_geometric_fit
 from asbuilt.fit._visibility import beyond_first_surface, cylinder_beam_excess
 from asbuilt.tolerances import Tolerances
 
-__all__ = ["QUICK_CHI2_TAIL", "robust_among", "quick_fit"]
+__all__ = ["QUICK_CHI2_TAIL", "quick_fit", "rejected_are_background", "robust_among"]
 
 
 #: Upper tail probability of the chi-square test a quick fit's inliers must pass: a fit in a
@@ -80,7 +80,7 @@ def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
     (:func:`~asbuilt.fit._cylinder_model.drop_far_side`).
 
     A fit that rejected shots stands when they can only be background
-    (:func:`_rejected_are_background`).
+    (:func:`rejected_are_background`).
 
     Parameters
     ----------
@@ -125,7 +125,7 @@ def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
         except FitError:
             return None
     if not robust.inliers.all():
-        if _rejected_are_background(robust, local, sigma, view, tolerances):
+        if rejected_are_background(robust, local, sigma, view, tolerances):
             return robust, starts, True
         return None
     if background:
@@ -149,7 +149,7 @@ def _passes_chi_square(residuals: np.ndarray, sigma: float) -> bool:
     return dof > 0 and float(residuals @ residuals) <= sigma**2 * chdtri(dof, QUICK_CHI2_TAIL)
 
 
-def _rejected_are_background(
+def rejected_are_background(
     robust: RobustFit, local: np.ndarray, sigma: float, view, tolerances: Tolerances
 ) -> bool:
     """Whether a quick fit that rejected shots may stand: its inliers are a pipe seen as the

@@ -367,8 +367,9 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
     """The robust joint fit of the segmentation frame that every point supports best.
 
     The best-scoring frame of ``frames`` is fitted first. A plausible fit (:func:`plausible`)
-    that keeps every point cannot be beaten unless one of its faces is a single line of shots
-    (:func:`_on_a_line`). Otherwise the frames of an exhaustive segmentation (``exhaustive()``:
+    that keeps every point, or (with a trusted viewpoint) rejects only shots that can only be
+    background (:func:`_rejected_are_background`), cannot be beaten unless one of its faces is
+    a single line of shots (:func:`_on_a_line`). Otherwise the frames of an exhaustive segmentation (``exhaustive()``:
     every first-face hypothesis is tried, not only until a frame explains every segmented
     point, or most of them) that explain at least as many points as the first are fitted and
     compared: three raster columns on two narrow faces fit either corner, and only the shots

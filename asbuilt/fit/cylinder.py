@@ -92,7 +92,7 @@ from asbuilt.fit._cylinder_model import (
     stacked,
 )
 from asbuilt.fit._cylinder_quick import quick_fit as _quick_fit
-from asbuilt.fit._cylinder_quick import robust_among
+from asbuilt.fit._cylinder_quick import rejected_are_background, robust_among
 from asbuilt.fit._cylinder_starts import (
     POLISH_BELOW,
     POLISHED_STARTS,
@@ -409,6 +409,26 @@ def fit_cylinder(
             excesses[key] = ((states[0], x), found)  # kept alive: their ids stay theirs
         return found
 
+    if (
+        sigma is not None
+        and everything is None
+        and len(local) >= POLISH_BELOW
+        and robust is not None
+        and not robust.inliers.all()
+        and rejected_are_background(robust, local, sigma, view, tolerances)
+    ):
+        # The robust choice among every start rejected only background (as the quick path
+        # judges it): the beams' second look and the MSAC rescue would settle on it again.
+        try:
+            return _finished(
+                robust,
+                _Scene(pts, offset, local, None, view, sigma, tolerances),
+                False,
+                starts,
+                reconsider,
+            )
+        except FitError:
+            pass  # its last checks refuse it: the full search decides
     if (
         view is not None
         and starts
