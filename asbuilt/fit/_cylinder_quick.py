@@ -190,8 +190,12 @@ def rejected_are_background(
         excess = cylinder_beam_excess(axis, center, radius, local, view)[robust.inliers]
         if np.any(excess > cutoff) or np.mean(excess > 0.1 * radius) > UNSEEN_FRACTION:
             return False
-        beyond = beyond_first_surface(axis, center, radius, local[rejected], view)
-        return bool(np.all(beyond >= -cutoff))
+        beyond = beyond_first_surface(axis, center, radius, local, view)
+        # Rejected shots lie beyond the pipe's first surface; kept ones on it, up to the range
+        # noise along their beams.
+        if np.any(beyond[rejected] < -cutoff):
+            return False
+        return not _mixed_return_kept(beyond[~rejected], robust.residuals[~rejected], sigma, cutoff)
     if not admissible(robust, local, cutoff):
         return False
     mean = mean_direction(angles_about(axis, center, local[robust.inliers]))
@@ -200,4 +204,25 @@ def rejected_are_background(
         return False
     u, v = orthonormal_basis(axis)
     facing = (mean[0] * u + mean[1] * v) / resultant
-    return bool(np.all((local[rejected] - center) @ facing <= cutoff))
+    lateral = np.cross(axis, facing)
+    toward = (local - center) @ facing  # (n,) metres towards the station, across the axis
+    if np.any(toward[rejected] > cutoff):
+        return False
+    # Kept shots lie on the pipe's first surface along beams taken parallel to ``facing``, up
+    # to the noise: a mixed return kept within the threshold inside the pipe near its
+    # silhouette lies centimetres beyond it. Beams from a station some metres off are not
+    # parallel, though: at the very silhouette a mixed return 6 cm along its beam can lie only
+    # 5 mm beyond the parallel beam's surface, and passes (a tighter limit refuses nearly every
+    # scan: good shots round the parallel silhouette lie beyond it too). The viewpoint's own
+    # beams catch it.
+    across = (local[~rejected] - center) @ lateral
+    surface = np.sqrt(np.maximum(radius * radius - across * across, 0.0))
+    beyond = surface - toward[~rejected]
+    return not _mixed_return_kept(beyond, robust.residuals[~rejected], sigma, cutoff)
+
+
+def _mixed_return_kept(beyond: np.ndarray, residuals: np.ndarray, sigma: float, limit: float):
+    """Whether a kept shot looks like a mixed return: more than ``limit`` metres beyond the
+    pipe's first surface along its beam (``beyond``, (m,) metres) and inside the pipe by more
+    than ``sigma`` (``residuals`` (m,) metres, negative inside)."""
+    return bool(np.any((beyond > limit) & (residuals < -sigma)))

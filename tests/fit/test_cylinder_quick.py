@@ -165,3 +165,37 @@ def test_a_thinner_pipe_sharing_a_wider_ones_near_side_is_left_to_the_full_searc
     assert _quick(points, station, scan["range_sigma"]) is None
     fit = fit_cylinder(points, sigma=scan["range_sigma"], viewpoint=station)
     assert abs(fit.primitive.radius - scan["radius"]) <= 3.0 * fit.stderr["radius"]
+
+
+def test_a_mixed_return_kept_inside_the_pipe_is_left_to_the_full_search(clean):
+    # A shot near the silhouette whose return came from along its beam beyond the pipe's
+    # surface: inside the pipe by 1.5 sigma, within the inlier cutoff, so a fit keeps it (and
+    # comes out thin); the full search rejects it. One wall shot makes the fit reject a shot.
+    # (Without the viewpoint, beams taken parallel catch such returns off the silhouette, 15 of
+    # the 16 on the benchmark, but not this one at it: docs/fitting.md.)
+    view = SENSOR
+    walled = _pushed(clean, 7, 2.0)
+    assert _quick(walled, view) is not None
+    rel = clean - PIPE.center
+    across = rel - np.outer(rel @ PIPE.axis, PIPE.axis)
+    beams = (clean - SENSOR) / np.linalg.norm(clean - SENSOR, axis=1)[:, None]
+    incidence = np.abs(
+        np.einsum("ij,ij->i", beams, across / np.linalg.norm(across, axis=1)[:, None])
+    )
+    # The most grazing shot (other than the wall shot) that a push along its beam puts 1.5-2.5
+    # sigma inside the pipe, pushed more than the cutoff.
+    for silhouette in np.argsort(incidence):
+        if silhouette == 7:
+            continue
+        for push in np.linspace(1.5 * CUTOFF, 0.06, 60):
+            mixed = _pushed(walled, silhouette, push)
+            inside = -float(PIPE.distance(mixed[silhouette : silhouette + 1])[0])
+            if 1.5 * SIGMA <= inside <= 2.5 * SIGMA:
+                break
+        else:
+            continue
+        break
+    else:
+        pytest.fail("no push along a shot's beam lands 1.5-2.5 sigma inside the pipe")
+    found = _quick(mixed, view)
+    assert found is None or not found[0].inliers[silhouette]
