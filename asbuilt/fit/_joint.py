@@ -376,13 +376,15 @@ def _information(trial, sigma: float, cutoff: float) -> float:
 _ONE_STATION_OUTLIERS = 0.4
 
 
-def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
+def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, known_noise=False):
     """The robust joint fit of the segmentation frame that every point supports best.
 
     The best-scoring frame of ``frames`` is fitted first. A plausible fit (:func:`plausible`)
-    that keeps every point, or (with a trusted viewpoint) rejects only shots that can only be
-    background (:func:`_rejected_are_background`), cannot be beaten unless one of its faces is
-    a single line of shots (:func:`_on_a_line`). Otherwise the frames of an exhaustive segmentation (``exhaustive()``:
+    that keeps every point, or (with a trusted viewpoint and ``known_noise``) rejects only
+    shots that can only be background (:func:`_rejected_are_background`), cannot be beaten unless one of its faces is
+    a single line of shots (:func:`_on_a_line`); ``known_noise``: the noise level is the
+    sensor's, not one the caller is trying (a wrong level leaves good shots rejected, and
+    their fit looks settled). Otherwise the frames of an exhaustive segmentation (``exhaustive()``:
     every first-face hypothesis is tried, not only until a frame explains every segmented
     point, or most of them) that explain at least as many points as the first are fitted and
     compared: three raster columns on two narrow faces fit either corner, and only the shots
@@ -425,7 +427,9 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None):
     best = fitted(frames[0])
     best_rank = rank(best, True)
     # (Without a trusted viewpoint a fit with opposite faces is implausible, so doubtful too.)
-    settled = best[3].all() or (trusted and _rejected_are_background(best, x, cap / cutoff, cutoff))
+    settled = best[3].all() or (
+        trusted and known_noise and _rejected_are_background(best, x, cap / cutoff, cutoff)
+    )
     if not (best_rank[0] and settled) or _on_a_line(best, x, cap, raster):
         first = int(np.count_nonzero(frames[0].labels >= 0))
         frames = exhaustive()

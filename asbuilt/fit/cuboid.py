@@ -489,6 +489,7 @@ def fit_cuboid(
             (x, noise, floor, cutoff, gap, viewpoint - origin, trusted),
             tolerances.max_outlier_fraction,
             edges[0] < 0,
+            known_noise=sigma is not None,
         )
 
     if sigma is not None:
