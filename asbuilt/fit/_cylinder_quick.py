@@ -166,13 +166,16 @@ def rejected_are_background(
       a shot that grazed the pipe and came back from the wall, or a mixed return between them,
       lies beyond it; a shot in front of the pipe, off it, is another surface's (a wider pipe
       sharing this one's near side showed its fourth raster column 3-7 cm in front of the
-      thinner fit's silhouette).
+      thinner fit's silhouette). No kept shot is a mixed return (:func:`_mixed_return_kept`):
+      one kept within the cutoff inside the pipe thins the fit by millimetres, where the full
+      search's polished starts reject it.
     - Without it: no shot lies inside the pipe
       (:func:`~asbuilt.fit._cylinder_checks.admissible`), the inliers face one side (mean
-      resultant over :data:`~asbuilt.fit._cylinder_model.ONE_SIDED`), and no rejected shot lies on that side of the
-      axis by more than the cutoff (beams from a station some metres off run nearly parallel
-      across a pipe, so what lies in front of the axis along them was met before the pipe's
-      silhouette).
+      resultant over :data:`~asbuilt.fit._cylinder_model.ONE_SIDED`), no rejected shot lies on
+      that side of the axis by more than the cutoff (beams from a station some metres off run
+      nearly parallel across a pipe, so what lies in front of the axis along them was met
+      before the pipe's silhouette), and no kept shot is a mixed return along beams taken
+      parallel to that side (which misses one at the very silhouette: docs/fitting.md).
     """
     rejected = ~robust.inliers
     n = rejected.size
