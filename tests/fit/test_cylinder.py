@@ -424,34 +424,6 @@ def test_a_fit_rejecting_a_third_of_the_shots_does_not_overrule_the_station():
     assert abs(fit.primitive.radius - scan["radius"]) <= 3.0 * fit.stderr["radius"]
 
 
-@pytest.mark.parametrize("seed", range(6))
-@pytest.mark.parametrize("with_view", [False, True])
-def test_the_quick_fit_of_a_clean_scan_is_the_full_search_fit(seed, with_view, monkeypatch):
-    # Clean 40-shot scans take the quick fit (the first axis starts alone); it must settle on
-    # the full search's minimum, to the convergence tolerance.
-    rng = np.random.default_rng(seed)
-    od = (0.0603, 0.1143, 0.2191, 0.3238, 0.6096, 0.1683)[seed]
-    pipe = _pipe(od, (1, 3, 10)[seed % 3], 3.0 + seed, [1, 0.3 + 0.2 * seed, 0.2])
-    points = raster_scan(pipe, SENSOR, 40, rng).points
-    view = SENSOR if with_view else None
-    taken = []
-    original = cylinder_module._quick_fit
-
-    def recording(*args):
-        taken.append(original(*args))
-        return taken[-1]
-
-    monkeypatch.setattr(cylinder_module, "_quick_fit", recording)
-    quick = fit_cylinder(points, sigma=0.002, viewpoint=view)
-    assert taken and taken[0] is not None
-    monkeypatch.setattr(cylinder_module, "_quick_fit", lambda *args: None)
-    full = fit_cylinder(points, sigma=0.002, viewpoint=view)
-    assert quick.primitive.radius == pytest.approx(full.primitive.radius, abs=1e-6)
-    assert angle_deg(quick.primitive.axis, full.primitive.axis) < 1e-3
-    assert quick.stderr["radius"] == pytest.approx(full.stderr["radius"], rel=1e-3)
-    np.testing.assert_array_equal(quick.inliers, full.inliers)
-
-
 @pytest.mark.parametrize(
     "fixture",
     [
