@@ -381,10 +381,11 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
 
     The best-scoring frame of ``frames`` is fitted first. A plausible fit (:func:`plausible`)
     that keeps every point, or (with a trusted viewpoint and ``known_noise``) rejects only
-    shots that can only be background (:func:`_rejected_are_background`), cannot be beaten unless one of its faces is
-    a single line of shots (:func:`_on_a_line`); ``known_noise``: the noise level is the
-    sensor's, not one the caller is trying (a wrong level leaves good shots rejected, and
-    their fit looks settled). Otherwise the frames of an exhaustive segmentation (``exhaustive()``:
+    shots that can only be background (:func:`_rejected_are_background`), cannot be beaten
+    unless one of its faces is a single line of shots (:func:`_on_a_line`); ``known_noise``:
+    the noise level is the sensor's, not one the caller is trying (a wrong level leaves good
+    shots rejected, and their fit looks settled). Otherwise the frames of an exhaustive
+    segmentation (``exhaustive()``:
     every first-face hypothesis is tried, not only until a frame explains every segmented
     point, or most of them) that explain at least as many points as the first are fitted and
     compared: three raster columns on two narrow faces fit either corner, and only the shots
