@@ -40,6 +40,30 @@ SETTLE_ITERATIONS = 10
 _DIFFERENCE_STEP = 1e-6
 
 
+def _beam_crossings(axis, center, radius, points: np.ndarray, viewpoint):
+    """Where the beams from ``viewpoint`` to ``points`` cross infinite cylinders: ``(lengths,
+    a, b, discriminant)``, each beam at range ``t`` along its unit direction lying
+    ``a t^2 + b t + c`` (squared distance from the axis less the radius squared) from the
+    surface; ``lengths`` (n,) the shots' ranges, metres, the rest (s, n) (shapes and units as
+    in :func:`cylinder_beam_excess`)."""
+    view = np.asarray(viewpoint, dtype=np.float64)
+    axes = np.atleast_2d(axis)
+    centers = np.atleast_2d(center)
+    radii = np.atleast_1d(np.asarray(radius, dtype=np.float64))
+    beams = points - view
+    lengths = np.sqrt(np.einsum("ij,ij->i", beams, beams))
+    directions = beams / np.maximum(lengths, 1e-300)[:, None]
+    start = view - centers
+    start_across = start - np.einsum("ij,ij->i", start, axes)[:, None] * axes
+    # With across = d - (d.a) a and start_across perpendicular to a: |across|^2 = 1 - (d.a)^2
+    # and across.start_across = d.start_across.
+    along = axes @ directions.T  # (s, n)
+    a = 1.0 - along * along
+    b = 2.0 * (start_across @ directions.T)
+    c = np.einsum("ij,ij->i", start_across, start_across) - radii * radii
+    return lengths, a, b, b * b - 4.0 * a * c[:, None]
+
+
 def cylinder_beam_excess(axis, center, radius, points: np.ndarray, viewpoint) -> np.ndarray:
     """How far each shot's beam ran inside an infinite cylinder before reaching the shot.
 
@@ -65,22 +89,7 @@ def cylinder_beam_excess(axis, center, radius, points: np.ndarray, viewpoint) ->
     ndarray, shape (n,) or (s, n), metres
         Non-negative; 0 where the beam misses the cylinder or the point is on the near half.
     """
-    view = np.asarray(viewpoint, dtype=np.float64)
-    axes = np.atleast_2d(axis)
-    centers = np.atleast_2d(center)
-    radii = np.atleast_1d(np.asarray(radius, dtype=np.float64))
-    beams = points - view
-    lengths = np.sqrt(np.einsum("ij,ij->i", beams, beams))
-    directions = beams / np.maximum(lengths, 1e-300)[:, None]
-    start = view - centers
-    start_across = start - np.einsum("ij,ij->i", start, axes)[:, None] * axes
-    # With across = d - (d.a) a and start_across perpendicular to a: |across|^2 = 1 - (d.a)^2
-    # and across.start_across = d.start_across.
-    along = axes @ directions.T  # (s, n)
-    a = 1.0 - along * along
-    b = 2.0 * (start_across @ directions.T)
-    c = np.einsum("ij,ij->i", start_across, start_across) - radii * radii
-    discriminant = b * b - 4.0 * a * c[:, None]
+    lengths, a, b, discriminant = _beam_crossings(axis, center, radius, points, viewpoint)
     excess = np.zeros(a.shape)
     hit = (discriminant > 0.0) & (a > 1e-24)
     if np.any(hit):
@@ -112,21 +121,11 @@ def beyond_first_surface(axis, center, radius, points: np.ndarray, viewpoint) ->
     viewpoint : array_like, shape (3,), metres
         Where the shots were taken from.
     """
-    view = np.asarray(viewpoint, dtype=np.float64)
-    beams = points - view
-    ranges = np.sqrt(np.einsum("ij,ij->i", beams, beams))
-    directions = beams / np.maximum(ranges, 1e-300)[:, None]
-    start = view - center
-    start_across = start - (start @ axis) * axis
-    along = directions @ axis
-    across_square = np.maximum(1.0 - along * along, 1e-24)  # |direction across the axis|^2
-    crossing = directions @ start_across
-    # Along each beam, nearest the axis at ``closest``, at ``miss`` from it; a beam passing
-    # within the radius enters the cylinder half a chord earlier.
-    closest = -crossing / across_square
-    miss_square = start_across @ start_across - crossing * crossing / across_square
-    half_chord = np.sqrt(np.maximum(radius * radius - miss_square, 0.0) / across_square)
-    return ranges - (closest - half_chord)
+    lengths, a, b, discriminant = _beam_crossings(axis, center, radius, points, viewpoint)
+    a = np.maximum(a[0], 1e-24)  # beams along the axis: never nearer it, nor through it
+    # Nearest the axis at -b / 2a; a beam passing within the radius enters half a chord earlier.
+    half_chord = np.sqrt(np.maximum(discriminant[0], 0.0)) / (2.0 * a)
+    return lengths - (-b[0] / (2.0 * a) - half_chord)
 
 
 def edge_on_degrees(axis, center, points: np.ndarray, viewpoint) -> np.ndarray:
