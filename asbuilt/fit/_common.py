@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.special import chdtri
 
 from asbuilt.errors import FitError
 from asbuilt.fit._mixture import mixture_score
@@ -38,6 +39,7 @@ __all__ = [
     "EVIDENCE",
     "local_normals",
     "row_norms",
+    "within_noise",
     "arc_coverage_deg",
     "TUKEY_C",
 ]
@@ -356,6 +358,15 @@ def noise_level(
     squares += missing * float(tolerances.prior_range_sigma) ** 2
     estimate = float(np.sqrt(squares / (dof + missing))) if dof + missing > 0 else 0.0
     return max(estimate, float(tolerances.sigma_floor)), "residuals"
+
+
+def within_noise(residuals: np.ndarray, sigma: float, n_params: int, tail: float) -> bool:
+    """Whether residuals (m,) metres pass the chi-square test at noise ``sigma`` (metres) with
+    ``m - n_params`` degrees of freedom and upper tail probability ``tail``: a fit in a wrong
+    basin that still keeps its shots within the inlier threshold fits them worse than the
+    noise allows. False without a degree of freedom."""
+    dof = residuals.size - n_params
+    return dof > 0 and float(residuals @ residuals) <= sigma * sigma * chdtri(dof, tail)
 
 
 def few_residual_dof(n_inliers: int, n_params: int, tolerances: Tolerances) -> bool:

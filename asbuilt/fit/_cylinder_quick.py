@@ -13,11 +13,10 @@ minimum at several times the cost. The quick fit stands only when the scan itsel
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import chdtri
 
 from asbuilt.errors import FitError
 from asbuilt.fit._circles import circle_starts
-from asbuilt.fit._common import orthonormal_basis
+from asbuilt.fit._common import orthonormal_basis, within_noise
 from asbuilt.fit._cylinder_checks import (
     UNSEEN_FRACTION,
     admissible,
@@ -130,7 +129,7 @@ def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
         return None
     if background:
         return None  # kept by a basin other than the cheapest circle's: the full search decides
-    if not _passes_chi_square(robust.residuals, sigma):
+    if not within_noise(robust.residuals, sigma, MODEL.n_params, QUICK_CHI2_TAIL):
         return None
     if view is not None:
         if doubtful(robust, local, view, len(local), sigma, tolerances):
@@ -140,13 +139,6 @@ def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
     elif not drop_far_side(robust, local, tolerances).inliers.all():
         return None
     return robust, starts, False
-
-
-def _passes_chi_square(residuals: np.ndarray, sigma: float) -> bool:
-    """Whether residuals (m,) metres pass the chi-square test at ``sigma`` with the model's
-    degrees of freedom (tail ``QUICK_CHI2_TAIL``)."""
-    dof = residuals.size - MODEL.n_params
-    return dof > 0 and float(residuals @ residuals) <= sigma**2 * chdtri(dof, QUICK_CHI2_TAIL)
 
 
 def rejected_are_background(
@@ -184,7 +176,7 @@ def rejected_are_background(
     cutoff = tolerances.outlier_cutoff_sigma * sigma
     if np.any(np.abs(robust.residuals[rejected]) <= CLEAR_OF_CUTOFFS * cutoff):
         return False
-    if not _passes_chi_square(robust.residuals[robust.inliers], sigma):
+    if not within_noise(robust.residuals[robust.inliers], sigma, MODEL.n_params, QUICK_CHI2_TAIL):
         return False
     if doubtful_blind(robust, local):
         return False

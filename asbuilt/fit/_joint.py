@@ -13,9 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.special import chdtri
 
 from asbuilt.fit import _faces
+from asbuilt.fit._common import within_noise
 from asbuilt.fit._mixture import mixing_cost
 from asbuilt.fit._rectangle import min_area_rectangle
 from asbuilt.fit._robust import DESIGN_CONTAMINATION
@@ -286,9 +286,8 @@ def _rejected_are_background(trial, x: np.ndarray, noise: float, cutoff: float) 
     rejected = x[~inliers]
     if rejected.shape[0] > _BACKGROUND_SHARE * x.shape[0]:
         return False
-    kept = residual[inliers]
-    dof = kept.size - model.rot_basis.shape[1] - model.offset.shape[0]
-    if dof <= 0 or float(kept @ kept) > noise * noise * chdtri(dof, _CHI2_TAIL):
+    n_params = model.rot_basis.shape[1] + model.offset.shape[0]
+    if not within_noise(residual[inliers], noise, n_params, _CHI2_TAIL):
         return False
     cap = cutoff * noise
     signed = model.all_residuals(rejected)  # (r, faces), positive on the station's side
