@@ -16,9 +16,9 @@ import numpy as np
 
 from asbuilt.fit import _faces
 from asbuilt.fit._common import within_noise
+from asbuilt.fit._cuboid_background import only_background
 from asbuilt.fit._mixture import mixing_cost
 from asbuilt.fit._rectangle import min_area_rectangle
-from asbuilt.fit._robust import DESIGN_CONTAMINATION
 
 #: Tukey biweight tuning constant (95% efficiency at the normal; Beaton and Tukey 1974).
 _TUKEY_C = 4.685
@@ -256,15 +256,9 @@ def _on_a_line(trial, x: np.ndarray, width: float, raster: np.ndarray | None = N
     return False
 
 
-#: A first frame's fit that rejected shots stands without the other frames only if it rejected
-#: at most this share of them (the cylinder fit's trimmed-cost design contamination).
-_BACKGROUND_SHARE = DESIGN_CONTAMINATION
-#: ... and no this many of its rejected shots lie within twice the inlier cutoff of one plane
-#: across a box axis: every face of a box is such a plane, so they may be a face the frame left
-#: out (a random scatter of mixed returns rarely lines up so).
-_FACE_SHOTS = 3
-#: ... and its inliers pass the chi-square test at the noise level with this upper tail
-#: probability: with the same inliers, another frame can still label them better (a 0.2 m
+#: A first frame's fit that rejected shots stands without the other frames only if they can
+#: only be background (:func:`_rejected_are_background`) and its inliers pass the chi-square
+#: test at the noise level with this upper tail probability: with the same inliers, another frame can still label them better (a 0.2 m
 #: column's two narrow faces fitted 2.2 degrees off, chi-square 59 for a limit of 55.5, where
 #: the exhaustive search's frame gave 12.9 and 0.13 degree).
 _CHI2_TAIL = 1e-3
@@ -272,33 +266,24 @@ _CHI2_TAIL = 1e-3
 
 def _rejected_are_background(trial, x: np.ndarray, noise: float, cutoff: float) -> bool:
     """Whether the shots a plausible fit with a trusted viewpoint rejected can only be
-    background, and its inliers fit as the noise allows, so that no other frame need be tried:
-    at most ``_BACKGROUND_SHARE`` of the shots rejected, the inliers' residuals pass the
-    chi-square test at ``noise`` (metres; tail ``_CHI2_TAIL``), each rejected shot is over
-    twice the inlier cutoff (``cutoff`` times ``noise``) from every seen face's plane and
-    behind every one of them (a plausible fit's faces face the station: a shot that grazed
-    the box and came back from the wall, or a mixed return between them, lies behind them
-    all; one in front of a face plane, off the box, hit something else first), and no
-    ``_FACE_SHOTS`` of them lie within twice the cutoff of one plane across a box axis (a face
-    the frame left out: a column's top, or its side seen at grazing incidence, lies behind the
-    other faces' planes too). ``x`` (n, 3) metres, centred."""
+    background (:func:`asbuilt.fit._cuboid_background.only_background`, at the inlier cutoff
+    ``cutoff`` times ``noise``), and its inliers' residuals pass the chi-square test at
+    ``noise`` (metres; tail ``_CHI2_TAIL``), so that no other frame need be tried. ``x`` (n,
+    3) metres, centred."""
     model, _, residual, inliers = trial[:4]
     rejected = x[~inliers]
-    if rejected.shape[0] > _BACKGROUND_SHARE * x.shape[0]:
-        return False
     n_params = model.rot_basis.shape[1] + model.offset.shape[0]
     if not within_noise(residual[inliers], noise, n_params, _CHI2_TAIL):
         return False
-    cap = cutoff * noise
-    signed = model.all_residuals(rejected)  # (r, faces), positive on the station's side
-    if np.any(signed > cap) or np.any(np.abs(signed) <= 2.0 * cap):
-        return False
-    if rejected.shape[0] >= _FACE_SHOTS:
-        across = np.sort(rejected @ model.axes.T, axis=0)  # (r, 3): along each box axis
-        spread = across[_FACE_SHOTS - 1 :] - across[: 1 - _FACE_SHOTS]
-        if np.any(spread <= 2.0 * cap):
-            return False
-    return True
+    return only_background(
+        model.axes,
+        model.face_axis,
+        model.all_residuals(rejected),
+        x[inliers],
+        rejected,
+        x.shape[0],
+        cutoff * noise,
+    )
 
 
 def _one_station_frames(trial, x: np.ndarray, width: float) -> list:

@@ -820,3 +820,38 @@ def test_a_first_frame_rejecting_only_background_is_the_exhaustive_choice(monkey
         np.testing.assert_allclose(quick.primitive.axes, full.primitive.axes, atol=1e-9)
         stood += any(taken)
     assert stood >= 4  # (5 of these 6 scans' rejected shots are all clear of the faces)
+
+
+def test_a_raster_row_on_the_wall_behind_a_column_is_background(monkeypatch):
+    # A raster row just above a column's top hits the wall behind it, every shot at about one
+    # height: they lie in one plane across the column's axis, as a face left out (its top)
+    # would, but metres off the box. The first frame still stands (the rule before took them
+    # for a face and fitted every other frame), and it is the frame the full comparison picks.
+    original = _joint._rejected_are_background
+    for seed in range(4):
+        rng = np.random.default_rng(400 + seed)
+        truth = column(0.4, 0.3, 3.0, (30.0, 50.0)[seed % 2], 5 + seed, rng)
+        points, _ = scan_box(truth, np.zeros(3), 6, 7, rng)
+        los = truth.center / np.linalg.norm(truth.center)
+        wall = truth.center + 1.5 * los  # a wall 1.5 m behind the column, square to the view
+        pan0, p_lo, p_hi, t_lo, t_hi = _window(truth, np.zeros(3))
+        pan = pan0 + p_lo + (np.arange(6) + 0.5) / 6 * (p_hi - p_lo)  # the raster's pans
+        beams = _directions(pan, np.full(6, t_hi + 0.3 * (t_hi - t_lo) / 7))
+        on_wall = beams * ((wall @ los) / (beams @ los))[:, None]
+        assert np.all(np.isnan(_ray_box(truth, np.zeros(3), beams)))  # they miss the column
+        points = np.vstack([points, on_wall + rng.normal(0.0, SIGMA, on_wall.shape)])
+        taken = []
+
+        def recording(*args, taken=taken):
+            taken.append(original(*args))
+            return taken[-1]
+
+        monkeypatch.setattr(_joint, "_rejected_are_background", recording)
+        quick = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+        monkeypatch.setattr(_joint, "_rejected_are_background", lambda *args: False)
+        full = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+        assert taken == [True]
+        assert np.count_nonzero(~quick.inliers) == len(on_wall)
+        np.testing.assert_array_equal(quick.inliers, full.inliers)
+        np.testing.assert_allclose(quick.primitive.size, full.primitive.size, atol=1e-9)
+        np.testing.assert_allclose(quick.primitive.axes, full.primitive.axes, atol=1e-9)
