@@ -55,7 +55,7 @@ def only_background(axes, face_axis, signed, kept, left_out, n: int, width: floa
     n : int
         All the shots.
     width : float, metres
-        The inlier cutoff (the segmentation's consensus threshold, or the fit's).
+        The fit's inlier cutoff.
     """
     if left_out.shape[0] > BACKGROUND_SHARE * n:
         return False

@@ -155,8 +155,8 @@ def rejected_are_background(
       viewpoint is not one the inliers were mostly hidden from (as
       :func:`~asbuilt.fit._cylinder_checks.unseen`), and every rejected shot lies beyond the
       first surface of the pipe its beam met
-      (:func:`~asbuilt.fit._visibility.beyond_first_surface`): a shot that grazed the pipe and came back from the wall, or a mixed return between them,
-      lies beyond it; a shot in front of the pipe, off it, is another surface's (a wider pipe
+      (:func:`~asbuilt.fit._visibility.beyond_first_surface`): a shot that grazed the pipe
+      and came back from the wall, or a mixed return between them, lies beyond it; a shot in front of the pipe, off it, is another surface's (a wider pipe
       sharing this one's near side showed its fourth raster column 3-7 cm in front of the
       thinner fit's silhouette). No kept shot is a mixed return (:func:`_mixed_return_kept`):
       one kept within the cutoff inside the pipe thins the fit by millimetres, where the full

@@ -258,9 +258,10 @@ def _on_a_line(trial, x: np.ndarray, width: float, raster: np.ndarray | None = N
 
 #: A first frame's fit that rejected shots stands without the other frames only if they can
 #: only be background (:func:`_rejected_are_background`) and its inliers pass the chi-square
-#: test at the noise level with this upper tail probability: with the same inliers, another frame can still label them better (a 0.2 m
-#: column's two narrow faces fitted 2.2 degrees off, chi-square 59 for a limit of 55.5, where
-#: the exhaustive search's frame gave 12.9 and 0.13 degree).
+#: test at the noise level with this upper tail probability: with the same inliers, another
+#: frame can still label them better (a 0.2 m column's two narrow faces fitted 2.2 degrees
+#: off, chi-square 59 for a limit of 55.5, where the exhaustive search's frame gave 12.9 and
+#: 0.13 degree).
 _CHI2_TAIL = 1e-3
 
 
