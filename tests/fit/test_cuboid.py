@@ -798,26 +798,13 @@ def test_a_face_with_seen_shots_beyond_it_is_not_added():
 def test_a_first_frame_rejecting_only_background_is_the_exhaustive_choice(monkeypatch):
     # With the station known, a first frame whose rejected shots can only be background stands
     # without every other frame being fitted; it must be the frame the full comparison picks.
-    original = _joint._rejected_are_background
     stood = 0
     for seed in range(6):
         rng = np.random.default_rng(300 + seed)
         section = (0.2, 0.4, 0.6)[seed % 3]
         truth = column(section, 0.35, 3.0, (30.0, 45.0, 60.0)[seed % 3], 4 + seed, rng)
         points, _ = scan_box(truth, np.zeros(3), 6, 7, rng, outlier_fraction=0.2)
-        taken = []
-
-        def recording(*args, taken=taken):
-            taken.append(original(*args))
-            return taken[-1]
-
-        monkeypatch.setattr(_joint, "_rejected_are_background", recording)
-        quick = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
-        monkeypatch.setattr(_joint, "_rejected_are_background", lambda *args: False)
-        full = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
-        np.testing.assert_array_equal(quick.inliers, full.inliers)
-        np.testing.assert_allclose(quick.primitive.size, full.primitive.size, atol=1e-9)
-        np.testing.assert_allclose(quick.primitive.axes, full.primitive.axes, atol=1e-9)
+        taken, quick = _with_and_without_the_shortcut(points, monkeypatch)
         stood += any(taken)
     assert stood >= 4  # (5 of these 6 scans' rejected shots are all clear of the faces)
 
@@ -827,7 +814,6 @@ def test_a_raster_row_on_the_wall_behind_a_column_is_background(monkeypatch):
     # height: they lie in one plane across the column's axis, as a face left out (its top)
     # would, but metres off the box. The first frame still stands (the rule before took them
     # for a face and fitted every other frame), and it is the frame the full comparison picks.
-    original = _joint._rejected_are_background
     for seed in range(4):
         rng = np.random.default_rng(400 + seed)
         truth = column(0.4, 0.3, 3.0, (30.0, 50.0)[seed % 2], 5 + seed, rng)
@@ -840,18 +826,28 @@ def test_a_raster_row_on_the_wall_behind_a_column_is_background(monkeypatch):
         on_wall = beams * ((wall @ los) / (beams @ los))[:, None]
         assert np.all(np.isnan(_ray_box(truth, np.zeros(3), beams)))  # they miss the column
         points = np.vstack([points, on_wall + rng.normal(0.0, SIGMA, on_wall.shape)])
-        taken = []
-
-        def recording(*args, taken=taken):
-            taken.append(original(*args))
-            return taken[-1]
-
-        monkeypatch.setattr(_joint, "_rejected_are_background", recording)
-        quick = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
-        monkeypatch.setattr(_joint, "_rejected_are_background", lambda *args: False)
-        full = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+        taken, quick = _with_and_without_the_shortcut(points, monkeypatch)
         assert taken == [True]
         assert np.count_nonzero(~quick.inliers) == len(on_wall)
-        np.testing.assert_array_equal(quick.inliers, full.inliers)
-        np.testing.assert_allclose(quick.primitive.size, full.primitive.size, atol=1e-9)
-        np.testing.assert_allclose(quick.primitive.axes, full.primitive.axes, atol=1e-9)
+
+
+def _with_and_without_the_shortcut(points, monkeypatch):
+    """Fit ``points`` (n, 3) metres from the origin with the sensor's sigma, once as is and once
+    with every first frame sent on to the exhaustive search; assert both fits are the same box
+    and return what the background test said each time it was asked, and the fit."""
+    original = _joint._rejected_are_background
+    taken = []
+
+    def recording(*args):
+        taken.append(original(*args))
+        return taken[-1]
+
+    monkeypatch.setattr(_joint, "_rejected_are_background", recording)
+    quick = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+    monkeypatch.setattr(_joint, "_rejected_are_background", lambda *args: False)
+    full = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+    monkeypatch.setattr(_joint, "_rejected_are_background", original)
+    np.testing.assert_array_equal(quick.inliers, full.inliers)
+    np.testing.assert_allclose(quick.primitive.size, full.primitive.size, atol=1e-9)
+    np.testing.assert_allclose(quick.primitive.axes, full.primitive.axes, atol=1e-9)
+    return taken, quick

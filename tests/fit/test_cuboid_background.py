@@ -56,6 +56,7 @@ _TOP = np.array([[-0.1, -0.1, 1.05], [0.1, -0.15, 1.052], [-0.05, 0.1, 1.049]])
         ([0, 1], np.vstack([_SCATTER[:4], _TOP[:2]]), True, "two shots make no face"),
         ([0, 1], np.vstack([_SCATTER[:5], [[0.5, -0.4, 0.0]]]), False, "one in front of x = 0.2"),
         ([0, 1], np.vstack([_SCATTER[:5], [[0.19, -1.0, 0.0]]]), False, "within twice the cutoff"),
+        ([0, 1], np.vstack([_SCATTER[:5], [[-1.0, 0.21, 0.0]]]), False, "just in front of y = 0.2"),
         # One face spans nothing along its normal: a side at grazing incidence may lie any
         # depth behind it, so the wall row may be a face there.
         ([0], _SCATTER, True, "one face, scattered"),
