@@ -3,7 +3,8 @@ second look.
 
 Scans of at least ``POLISH_BELOW`` shots with a known sigma are mostly either clean or carry a
 few edge outliers: shots that grazed the pipe and came back from the wall behind it, or mixed
-returns between the two. The normals' and principal axes' circles then settle on the pipe, and
+returns between the two. The circles across the normals' axis and the points' longest principal
+axis (:func:`~asbuilt.fit._cylinder_starts.quick_axes`) then settle on the pipe, and
 the full search (two-point and line starts, the robust choice among all of them, the beams'
 second look and the MSAC rescue; :func:`asbuilt.fit.cylinder.fit_cylinder`) settles on the same
 minimum at several times the cost. The quick fit stands only when the scan itself says so
@@ -68,8 +69,9 @@ def robust_among(local, starts, costs, sigma, tolerances, memo=None) -> RobustFi
 
 
 def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
-    """The robust fit from the normals' and principal axes' circles alone, when it needs no
-    second look; else None.
+    """The robust fit from the circles across ``axes`` alone
+    (:func:`~asbuilt.fit._cylinder_starts.quick_axes`), when it needs no second look; else
+    None.
 
     A fit that keeps every shot stands when no shot lay farther from the cheapest start than
     its radius, its residuals pass a chi-square test at ``sigma`` (tail ``QUICK_CHI2_TAIL``),
@@ -85,7 +87,7 @@ def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
     ----------
     local : ndarray, shape (n, 3), metres (centred)
     axes : list of ndarray, shape (3,)
-        :func:`~asbuilt.fit._cylinder_starts.axis_starts`' candidate axes.
+        The candidate axes (:func:`~asbuilt.fit._cylinder_starts.quick_axes`).
     keep : int
     sigma : float, metres
     view : ndarray, shape (3,), metres (in ``local``'s frame), or None

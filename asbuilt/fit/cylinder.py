@@ -100,6 +100,7 @@ from asbuilt.fit._cylinder_starts import (
     line_axis,
     pair_starts,
     polish_axes,
+    quick_axes,
 )
 from asbuilt.fit._robust import (
     RobustFit,
@@ -267,7 +268,7 @@ def fit_cylinder(
     first_axes = axis_starts(local, normals, flatness, directions)
     view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64) - offset
     if sigma is not None and everything is None and len(local) >= POLISH_BELOW:
-        quick = _quick_fit(local, first_axes, keep, sigma, view, tolerances)
+        quick = _quick_fit(local, quick_axes(first_axes, directions), keep, sigma, view, tolerances)
         if quick is not None:
             robust, quick_starts, rejected = quick
             scene = _Scene(pts, offset, local, None, view, sigma, tolerances)
