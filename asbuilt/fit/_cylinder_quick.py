@@ -33,7 +33,7 @@ from asbuilt.fit._cylinder_model import (
 )
 from asbuilt.fit._cylinder_starts import line_axis, trust_order
 from asbuilt.fit._robust import RobustFit, keep_count, robust_geometric_fit
-from asbuilt.fit._visibility import beyond_first_surface, cylinder_beam_excess
+from asbuilt.fit._visibility import excess_and_beyond
 from asbuilt.tolerances import Tolerances
 
 __all__ = ["QUICK_CHI2_TAIL", "quick_fit", "rejected_are_background", "robust_among"]
@@ -158,9 +158,9 @@ def rejected_are_background(
       :func:`~asbuilt.fit._cylinder_checks.unseen`), and every rejected shot lies beyond the
       first surface of the pipe its beam met
       (:func:`~asbuilt.fit._visibility.beyond_first_surface`): a shot that grazed the pipe
-      and came back from the wall, or a mixed return between them, lies beyond it; a shot in front of the pipe, off it, is another surface's (a wider pipe
-      sharing this one's near side showed its fourth raster column 3-7 cm in front of the
-      thinner fit's silhouette). No kept shot is a mixed return (:func:`_mixed_return_kept`):
+      and came back from the wall, or a mixed return between them, lies beyond it; a shot in
+      front of the pipe, off it, is another surface's (a wider pipe sharing this one's near
+      side showed its fourth raster column 3-7 cm in front of the thinner fit's silhouette). No kept shot is a mixed return (:func:`_mixed_return_kept`):
       one kept within the cutoff inside the pipe thins the fit by millimetres, where the full
       search's polished starts reject it.
     - Without it: no shot lies inside the pipe
@@ -184,10 +184,10 @@ def rejected_are_background(
         return False
     axis, center, radius = robust.state
     if view is not None:
-        excess = cylinder_beam_excess(axis, center, radius, local, view)[robust.inliers]
+        excess, beyond = excess_and_beyond(axis, center, radius, local, view)
+        excess = excess[robust.inliers]
         if np.any(excess > cutoff) or np.mean(excess > 0.1 * radius) > UNSEEN_FRACTION:
             return False
-        beyond = beyond_first_surface(axis, center, radius, local, view)
         # Rejected shots lie beyond the pipe's first surface; kept ones on it, up to the range
         # noise along their beams.
         if np.any(beyond[rejected] < -cutoff):

@@ -28,6 +28,7 @@ __all__ = [
     "beyond_first_surface",
     "cylinder_beam_excess",
     "edge_on_degrees",
+    "excess_and_beyond",
     "one_side_could_see",
     "reconsidered",
     "visible_score",
@@ -89,7 +90,12 @@ def cylinder_beam_excess(axis, center, radius, points: np.ndarray, viewpoint) ->
     ndarray, shape (n,) or (s, n), metres
         Non-negative; 0 where the beam misses the cylinder or the point is on the near half.
     """
-    lengths, a, b, discriminant = _beam_crossings(axis, center, radius, points, viewpoint)
+    excess = _excess(*_beam_crossings(axis, center, radius, points, viewpoint))
+    return excess[0] if np.ndim(axis) == 1 else excess
+
+
+def _excess(lengths, a, b, discriminant) -> np.ndarray:
+    """:func:`cylinder_beam_excess`, shape (s, n) metres, from :func:`_beam_crossings`."""
     excess = np.zeros(a.shape)
     hit = (discriminant > 0.0) & (a > 1e-24)
     if np.any(hit):
@@ -97,7 +103,7 @@ def cylinder_beam_excess(axis, center, radius, points: np.ndarray, viewpoint) ->
         chord = np.sqrt(discriminant[hit]) / a[hit]
         reach = np.broadcast_to(lengths, a.shape)[hit]
         excess[hit] = np.clip(2.0 * (reach - middle), 0.0, chord)
-    return excess[0] if np.ndim(axis) == 1 else excess
+    return excess
 
 
 def beyond_first_surface(axis, center, radius, points: np.ndarray, viewpoint) -> np.ndarray:
@@ -121,7 +127,20 @@ def beyond_first_surface(axis, center, radius, points: np.ndarray, viewpoint) ->
     viewpoint : array_like, shape (3,), metres
         Where the shots were taken from.
     """
-    lengths, a, b, discriminant = _beam_crossings(axis, center, radius, points, viewpoint)
+    return _beyond(*_beam_crossings(axis, center, radius, points, viewpoint))
+
+
+def excess_and_beyond(axis, center, radius, points: np.ndarray, viewpoint):
+    """:func:`cylinder_beam_excess` and :func:`beyond_first_surface` of one cylinder (``axis``
+    (3,), ``center`` (3,) metres, ``radius`` metres), each shape (n,) metres, from one
+    computation of where the beams cross it."""
+    crossings = _beam_crossings(axis, center, radius, points, viewpoint)
+    return _excess(*crossings)[0], _beyond(*crossings)
+
+
+def _beyond(lengths, a, b, discriminant) -> np.ndarray:
+    """:func:`beyond_first_surface`, shape (n,) metres, from :func:`_beam_crossings` of one
+    cylinder."""
     a = np.maximum(a[0], 1e-24)  # beams along the axis: never nearer it, nor through it
     # Nearest the axis at -b / 2a; a beam passing within the radius enters half a chord earlier.
     half_chord = np.sqrt(np.maximum(discriminant[0], 0.0)) / (2.0 * a)

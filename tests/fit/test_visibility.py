@@ -12,6 +12,7 @@ from asbuilt.fit._visibility import (
     beyond_first_surface,
     cylinder_beam_excess,
     edge_on_degrees,
+    excess_and_beyond,
     one_side_could_see,
     visible_score,
 )
@@ -187,3 +188,17 @@ def test_beyond_the_first_surface_matches_root_finding_on_oblique_beams(x, y, z,
     )
     got = beyond_first_surface(axis, center, 0.7, point[None, :], viewpoint)[0]
     assert got == pytest.approx(truth, abs=1e-6)
+
+
+def test_excess_and_beyond_are_the_two_functions_from_one_computation():
+    rng = np.random.default_rng(21)
+    axis = np.array([0.3, -0.2, 1.0]) / np.linalg.norm([0.3, -0.2, 1.0])
+    center, viewpoint = np.array([0.2, 0.1, -0.3]), np.array([9.0, 2.0, 1.0])
+    points = rng.uniform(-2.0, 2.0, (50, 3))
+    excess, beyond = excess_and_beyond(axis, center, 0.7, points, viewpoint)
+    np.testing.assert_array_equal(
+        excess, cylinder_beam_excess(axis, center, 0.7, points, viewpoint)
+    )
+    np.testing.assert_array_equal(
+        beyond, beyond_first_surface(axis, center, 0.7, points, viewpoint)
+    )
