@@ -107,8 +107,10 @@ def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
     # pipe). On the benchmark's clean 40-point scans the farthest shot is at most 0.7 radii
     # away; with 20% edge outliers, a median 15.
     background = float(np.abs(MODEL.residuals(best, local)).max()) > best[2]
+    # The first starts' refinements, kept for the second try below (the same candidates).
+    refined: dict = {}
     try:
-        robust = robust_among(local, starts, costs, sigma, tolerances)
+        robust = robust_among(local, starts, costs, sigma, tolerances, refined)
     except FitError:
         if not background:
             return None
@@ -122,7 +124,7 @@ def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
         more, more_costs = circle_starts(local, [line], keep, np.random.default_rng(len(local)))
         starts, costs = starts + more, costs + more_costs
         try:
-            robust = robust_among(local, starts, costs, sigma, tolerances)
+            robust = robust_among(local, starts, costs, sigma, tolerances, refined)
         except FitError:
             return None
     if not robust.inliers.all():
