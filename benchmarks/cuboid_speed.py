@@ -6,7 +6,8 @@ three seen faces) and then times only the fit calls (through :func:`asbuilt.fit.
 as the pipeline calls them, with the range sigma), with and without the viewpoint, clean and
 with 20% edge outliers, repeated, so the figure can be checked on its own.
 
-Run: ``python benchmarks/cuboid_speed.py [--points 40] [--trials 50] [--repeat 2]``.
+Run: ``python benchmarks/cuboid_speed.py [--points 40] [--trials 50] [--repeat 3]``; the
+medians printed are those of ``cylinder_speed.py``.
 """
 
 from __future__ import annotations
