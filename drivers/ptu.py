@@ -32,7 +32,7 @@ __all__ = [
 ]
 
 _ARCSEC = math.pi / (180.0 * 3600.0)  # radians per second of arc
-_NUMBER = re.compile(r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
+_NUMBER = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?")
 _LIMIT_NOTICE = re.compile(r"^(?:!\s*[PT])+$", re.IGNORECASE)
 
 
@@ -463,7 +463,9 @@ class PanTiltUnit:
         deadline = time.monotonic() + self.move_timeout
         while True:
             at = self.position_counts()
-            if at == (pan_counts, tilt_counts):
+            # Within a count: the manual does not promise that the position reported equals
+            # the one commanded to the count (a stepper may settle a microstep off).
+            if abs(at[0] - pan_counts) <= 1 and abs(at[1] - tilt_counts) <= 1:
                 self._verify = False
                 return
             if time.monotonic() > deadline:

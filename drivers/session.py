@@ -50,8 +50,9 @@ scan file is rewritten atomically with every finished object. ``--resume`` repla
 finished objects come back as they were and the interrupted object's algorithm is re-run with
 its recorded shots served from the journal until it needs new ones.
 
-Shots with device errors are retried ``retries`` times, then skipped and counted; a range finder
-that times out or answers unreadably (wrong line settings) on ``lost_after`` consecutive shots,
+Shots with device errors are retried ``retries`` times, then skipped and counted; a move the
+pan-tilt unit refuses (``! <message>``) skips its shot. A range finder that times out or answers
+unreadably (wrong line settings), or a unit that refuses, on ``lost_after`` consecutive shots,
 or a port that fails, ends the session with a :class:`~asbuilt.errors.DeviceError` (the journal
 keeps everything up to that shot).
 """
@@ -121,7 +122,7 @@ class Shot:
     range : float or None
         Raw range, metres; None when no valid return (see ``error``).
     error : str or None
-        Last device error code (``"E255"``, ``"timeout"``, ``"limit"``...) when ``range`` is None.
+        Last device error code (``"E255"``, ``"timeout"``, ``"limit"``, ``"refused"``...) when ``range`` is None.
     attempts : int
         Measurements tried.
     phase : str
@@ -221,13 +222,19 @@ class DeviceShooter:
         self.lost_in_a_row = 0  # shots whose every attempt timed out or was unreadable
 
     def __call__(self, pan: float, tilt: float, phase: str) -> Shot:
-        from .ptu import PTULimitError
+        from .ptu import PTUCommandError, PTULimitError
         from .rangefinder import RangeFinderError
 
         try:
             pan_at, tilt_at = self._move(pan, tilt)
         except PTULimitError:
             return Shot(pan, tilt, pan, tilt, None, "limit", 0, phase)
+        except PTUCommandError as exc:
+            # The unit refused the move ('! <message>', which the manual allows for any
+            # command, e.g. a limit it holds exclusive): this shot is skipped, the session goes
+            # on; a unit refusing ``lost_after`` moves in a row ends it.
+            self._lost(exc)
+            return Shot(pan, tilt, pan, tilt, None, "refused", 0, phase)
         error = failure = None
         attempts = 0
         for _ in range(1 + self.settings.retries):
@@ -252,13 +259,17 @@ class DeviceShooter:
         if failure is None:
             self.lost_in_a_row = 0
         else:
-            self.lost_in_a_row += 1
-            if self.lost_in_a_row >= self.settings.lost_after:
-                raise type(failure)(
-                    f"{failure} ({self.lost_in_a_row} shots in a row); then continue with "
-                    "asbuilt scan --resume"
-                )
+            self._lost(failure)
         return Shot(pan, tilt, pan_at, tilt_at, None, error, attempts, phase)
+
+    def _lost(self, failure: Exception) -> None:
+        """Count a shot lost to ``failure``; raise its kind once ``lost_after`` are in a row."""
+        self.lost_in_a_row += 1
+        if self.lost_in_a_row >= self.settings.lost_after:
+            raise type(failure)(
+                f"{failure} ({self.lost_in_a_row} shots in a row); then continue with "
+                "asbuilt scan --resume"
+            )
 
     def _move(self, pan: float, tilt: float) -> tuple[float, float]:
         """Move with retries on timeouts; the last timeout propagates (the unit is lost)."""

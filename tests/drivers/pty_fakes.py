@@ -130,15 +130,16 @@ def wait_until_readable(port, timeout: float = 2.0) -> None:
 class Head:
     """Where a fake pan-tilt unit points: the target counts reached at ``arrive`` (monotonic)."""
 
-    def __init__(self):
+    def __init__(self, settle: int = 0):
         self.pan = self.tilt = 0  # counts reached
         self.target = (0, 0)
         self.arrive = 0.0
         self.moves = 0
+        self.settle = settle  # counts off the target the pan axis comes to rest at
 
     def position(self) -> tuple[int, int]:
         if time.monotonic() >= self.arrive:
-            self.pan, self.tilt = self.target
+            self.pan, self.tilt = self.target[0] + self.settle, self.target[1]
         return self.pan, self.tilt
 
 
@@ -147,13 +148,14 @@ class FakeFlirPTU:
     CR; replies ``*``, ``* <value>``, ``! <message>`` with CR LF; ``A`` answers ``*`` when the
     move has ended. ``durations`` gives each move's duration in seconds (then ``default``).
     ``after_star`` maps a move number (1-based) to bytes sent right after its ``A``'s ``*``;
-    ``instead_of_star`` to bytes sent instead of it (a notice "on its own").
+    ``instead_of_star`` to bytes sent instead of it (a notice "on its own"); ``settle`` the
+    counts off its target the pan axis comes to rest at (the manual promises no exact match).
     """
 
     LIMITS = {"PN": -3090, "PX": 3090, "TN": -907, "TX": 604, "PR": 185.1428, "TR": 185.1428}
 
-    def __init__(self, durations=(), default=0.0, after_star=None, instead_of_star=None):
-        self.head = Head()
+    def __init__(self, durations=(), default=0.0, after_star=None, instead_of_star=None, settle=0):
+        self.head = Head(settle)
         self.durations = list(durations)
         self.default = default
         self.after_star = after_star or {}

@@ -137,6 +137,20 @@ def test_garbage_reply_is_a_protocol_error(scripted, reply):
         ptu.command("V")
 
 
+@pytest.mark.parametrize(
+    "reply, value",
+    [
+        (b"* 46.2857\r\n", 46.2857),
+        (b"* .5\r\n", 0.5),
+        (b"* -.25 seconds\r\n", -0.25),
+        (b"*12\r\n", 12),
+    ],
+)
+def test_query_numbers_in_every_decimal_spelling(scripted, reply, value):
+    ptu, _ = _unit(scripted, [("PR", reply)])
+    assert ptu.query_number("PR") == pytest.approx(value)
+
+
 def test_query_without_number_is_a_protocol_error(scripted):
     ptu, _ = _unit(scripted, [("PR", b"* lots\r\n")])
     with pytest.raises(DeviceProtocolError, match="holds no number"):

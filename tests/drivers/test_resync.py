@@ -120,6 +120,18 @@ def test_an_ldm_autostart_line_is_not_taken_for_the_first_shot():
         assert lrf.measure() == pytest.approx(2.4)
 
 
+class _HeadRange:
+    """A range finder fake measuring where the fake unit's head really points."""
+
+    def __init__(self, ptu_dev):
+        self.ptu_dev = ptu_dev
+        self.calls = 0
+
+    def measure(self):
+        self.calls += 1
+        return 2.0 + self.ptu_dev.head.position()[0] / 1000
+
+
 def test_a_slow_move_does_not_let_later_shots_fire_mid_move():
     # the first move outlasts --move-timeout; its late '*' must not end later moves early
     ptu_dev = FakeFlirPTU(durations=[LATE], default=0.15)
@@ -135,6 +147,20 @@ def test_a_slow_move_does_not_let_later_shots_fire_mid_move():
             shots = _shoot(shooter, [100, 1100, 2100, 1100, 100])
             assert ptu.position_counts() == (100, 0)
     assert [s.range for s in shots] == pytest.approx([2.1, 3.1, 4.1, 3.1, 2.1])
+
+
+def test_a_head_that_settles_a_count_off_its_target_ends_the_check_after_a_late_move():
+    # After a late '*' the driver checks the position; a count off is at the target.
+    ptu_dev = FakeFlirPTU(durations=[LATE], default=0.0, settle=1)
+    with ptu_dev.fake:
+        ptu = PanTiltUnit.open(ptu_dev.fake.path, timeout=TIMEOUT, move_timeout=TIMEOUT)
+        with ptu:
+            lrf = _HeadRange(ptu_dev)
+            shooter = DeviceShooter(ptu, lrf, SessionSettings())
+            shots = _shoot(shooter, [100, 1100])
+    assert [s.error for s in shots] == [None, None]
+    assert [s.range for s in shots] == pytest.approx([2.101, 3.101])
+    assert lrf.calls == 2
 
 
 def test_a_limit_notice_after_the_moves_star_is_not_blamed_on_the_next_shot():

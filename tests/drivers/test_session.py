@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from asbuilt.drivers.kinematics import Calibration
 from asbuilt.drivers.plan import SessionSettings, Target, Window
-from asbuilt.drivers.ptu import PanTiltUnit, PTULimitError
+from asbuilt.drivers.ptu import PanTiltUnit, PTUCommandError, PTULimitError
 from asbuilt.drivers.rangefinder import SignalTooWeak, open_range_finder
 from asbuilt.drivers.session import (
     DeviceShooter,
@@ -116,13 +116,16 @@ def test_keep_background_keeps_every_return():
 
 
 class FakePTU:
-    def __init__(self, limit=10.0):
+    def __init__(self, limit=10.0, refuse_beyond=None):
         self.limit = limit
+        self.refuse_beyond = refuse_beyond
         self.moves = []
 
     def move_to(self, pan, tilt):
         if abs(pan) > self.limit:
             raise PTULimitError("outside")
+        if self.refuse_beyond is not None and abs(pan) >= self.refuse_beyond:
+            raise PTUCommandError(f"'PP{pan}' refused: position out of range")
         self.moves.append((pan, tilt))
         return round(pan, 3), round(tilt, 3)
 
@@ -154,6 +157,23 @@ def test_device_shooter_skips_after_the_retries():
 def test_device_shooter_skips_targets_beyond_the_limits():
     shot = DeviceShooter(FakePTU(limit=1.0), FakeLRF([]))(2.0, 0.0, "edge")
     assert shot.range is None and shot.error == "limit"
+
+
+def test_a_refused_move_skips_its_shot_and_the_session_goes_on():
+    # The manual allows '! <message>' for any command: a unit holding its limits exclusive
+    # refuses a move to the limit itself.
+    shooter = DeviceShooter(FakePTU(refuse_beyond=1.0), FakeLRF([4.2]))
+    shot = shooter(1.0, 0.0, "edge")
+    assert shot.range is None and shot.error == "refused" and shot.attempts == 0
+    assert shooter(0.5, 0.0, "raster").range == 4.2
+
+
+def test_a_unit_refusing_every_move_is_declared_lost():
+    shooter = DeviceShooter(FakePTU(refuse_beyond=0.0), FakeLRF([]), SessionSettings(lost_after=3))
+    assert shooter(0.1, 0, "raster").error == "refused"
+    assert shooter(0.2, 0, "raster").error == "refused"
+    with pytest.raises(PTUCommandError, match="refused.*3 shots in a row.*--resume"):
+        shooter(0.3, 0, "raster")
 
 
 def test_a_silent_range_finder_is_declared_lost():
