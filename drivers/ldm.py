@@ -1,12 +1,19 @@
 """Driver for Jenoptik / ASTECH LDM41 and LDM42 laser distance meters (ASCII protocol).
 
-Protocol (LDM41 / LDM42 operating manuals): 8N1, default 9600 baud; ``DM`` CR LF measures once.
-A distance comes back in the selected output format: d ``004.996`` (metres at scale 1) or s
-``004.996 000985`` (with the signal quality 0-1024); an error as ``Exx`` CR LF, e.g. ``E15``
-(poor reflectance or too short a measuring time). The driver expects the decimal formats d or
-s at scale factor 1 (``SF``), the factory setting; any other reply is a protocol error that
-says so. Only E15's meaning is documented in the reference used here; other codes are reported
-as the device sent them.
+Protocol (LDM41 / LDM42 operating manuals): 8N1, default 9600 baud; ``DM`` measures once.
+A distance comes back in the selected output format: d ``004.996`` (metres at scale 1), s
+``004.996 000985`` (with the signal quality 0-1024) or h (hexadecimal millimetres, e.g.
+``001388``); an error as ``Exx`` CR LF, e.g. ``E15`` (poor reflectance or too short a
+measuring time). The driver reads all three formats, at scale factor 1 (``SF``), the factory
+setting; it changes no setting. A reply matching ``E`` and one to three digits is an error
+code, never a hexadecimal distance (the manual's own error spelling; a zero-padded hex reply,
+as the formats' examples are, never has that shape). Only E15's meaning is documented in the
+reference used here; other codes are reported as the device sent them.
+
+Command line ending: the reference shows the replies' (CR LF) but not the commands'. The
+driver sends CR LF; a meter that ends a command at CR and again at LF answers the empty
+second one too (an ``Exx``, before or after the distance). :meth:`LDM4x.probe` listens for
+that second reply and then sends CR alone.
 
 Keeping replies with their shots: the input is cleared before every ``DM`` (a power-up
 autostart line, a stale answer); the protocol has no stop command, so after a timeout the next
@@ -35,7 +42,12 @@ LDM_ERRORS = {
 }
 
 _DISTANCE = re.compile(r"^([+-]?\d+\.\d+)(?:\s+(\d+))?$")
+_HEX_MM = re.compile(r"^[0-9A-Fa-f]+$")
 _ERROR = re.compile(r"^E(\d{1,3})$")
+
+#: Seconds :meth:`LDM4x.probe` listens, after a distance, for a second reply to its one ``DM``
+#: (the empty command after CR answered at once).
+SECOND_REPLY_WAIT = 0.3
 
 
 class LDM4x:
@@ -51,6 +63,9 @@ class LDM4x:
         self.channel = channel
         self.last_quality: int | None = None
         self._late = False  # a DM timed out: its answer may still come
+        #: Command line ending: CR LF, or CR alone once :meth:`probe` found that the meter
+        #: ends a command at each.
+        self.eol = "\r\n"
 
     @classmethod
     def open(cls, url: str, *, baudrate: int = 9600, timeout: float = 3.0) -> LDM4x:
@@ -101,12 +116,16 @@ class LDM4x:
             except DeviceTimeout:
                 pass  # the device dropped it
         self.channel.discard_input()
-        self.channel.write("DM\r\n")
+        self.channel.write("DM" + self.eol)
         try:
             line = self._line("distance reply", timeout)
         except DeviceTimeout:
             self._late = True
             raise
+        return self._distance(line)
+
+    def _distance(self, line: str) -> float:
+        """The distance in metres a reply line holds; raises as :meth:`measure` does."""
         m = _ERROR.match(line)
         if m:
             code = int(m.group(1))
@@ -115,23 +134,45 @@ class LDM4x:
             )
             raise cls(f"{self.channel.name}: E{code:02d} {meaning}; {action}", code=f"E{code:02d}")
         m = _DISTANCE.match(line)
-        if m is None:
-            raise DeviceProtocolError(
-                f"{self.channel.name}: unexpected reply {line!r} to DM (expected e.g. 004.996); "
-                "set output format d or s and scale 1, check the baud rate"
-            )
-        self.last_quality = int(m.group(2)) if m.group(2) else None
-        return float(m.group(1))
+        if m is not None:
+            self.last_quality = int(m.group(2)) if m.group(2) else None
+            return float(m.group(1))
+        if _HEX_MM.match(line):
+            self.last_quality = None
+            return int(line, 16) / 1000.0
+        raise DeviceProtocolError(
+            f"{self.channel.name}: unexpected reply {line!r} to DM (expected a distance such as "
+            "004.996, 004.996 000985 or hexadecimal millimetres, or Exx); check the baud rate"
+        )
 
     def probe(self) -> None:
-        """Check that the meter answers on these line settings: one ``DM`` (an error code is an
-        answer too; the reference lists no query without a measurement).
+        """Check that the meter answers on these line settings, and how it ends commands: one
+        ``DM`` (an error code is an answer too; the reference lists no query without a
+        measurement).
+
+        A second reply to that one ``DM`` means the meter ended the command at CR and again at
+        LF: an error first (the empty command's, answered at once) is followed by the distance
+        within the reply timeout; a distance first by the error within
+        ``SECOND_REPLY_WAIT``. Commands then end with CR alone (:attr:`eol`), checked by one more
+        ``DM``.
 
         Raises
         ------
         DeviceTimeout, DeviceProtocolError
             Silence, or a reply that is neither a distance nor ``Exx`` (wrong baud rate).
         """
+        try:
+            self.measure()
+            wait = SECOND_REPLY_WAIT
+        except RangeFinderError:
+            wait = None  # the channel's timeout: the distance may follow the empty command's error
+        try:
+            second = self._line("second reply", wait)
+        except DeviceTimeout:
+            return
+        if _ERROR.match(second) is None:
+            self._distance(second)  # anything else is the baud rate's problem, said as such
+        self.eol = "\r"
         try:
             self.measure()
         except RangeFinderError:

@@ -128,8 +128,10 @@ class LDMSimulator(_LineDevice):
                 return [b"E15"]
             if self.format == "s":
                 return [f"{value:07.3f} {1000:06d}".encode()]
+            if self.format == "h":  # hexadecimal millimetres
+                return [f"{max(round(value * 1000), 0):06X}".encode()]
             return [f"{value:07.3f}".encode()]
-        if cmd == "SD" and arg.lower() in ("d", "s"):
+        if cmd == "SD" and arg.lower() in ("d", "s", "h"):
             self.format = arg.lower()
             return [f"SD{self.format}".encode()]
         if cmd == "OF":

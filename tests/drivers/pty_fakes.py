@@ -31,9 +31,14 @@ class PtyFake:
         Send every received byte straight back (a device or bus adapter echo).
     transform : callable ``bytes -> bytes``, optional
         Applied to everything sent (e.g. 7E1 framing seen by an 8N1 host).
+    empty_commands : bool
+        Pass a delimiter with nothing before it on as the command ``""`` (a device that ends a
+        command at CR and again at LF sees an empty one between).
     """
 
-    def __init__(self, respond, *, delimiters=b"\r\n", echo=False, transform=None):
+    def __init__(
+        self, respond, *, delimiters=b"\r\n", echo=False, transform=None, empty_commands=False
+    ):
         self.master, self.slave = os.openpty()
         tty.setraw(self.slave)
         self.path = os.ttyname(self.slave)
@@ -41,6 +46,7 @@ class PtyFake:
         self.delimiters = delimiters
         self.echo = echo
         self.transform = transform or (lambda data: data)
+        self.empty_commands = empty_commands
         self.commands: list[str] = []
         self.token = bytearray()
         self._due: list[tuple[float, int, object, bytes]] = []
@@ -85,7 +91,7 @@ class PtyFake:
                     if self.echo:
                         os.write(self.master, self.transform(bytes([byte])))
                     if byte in self.delimiters:
-                        if self.token:
+                        if self.token or self.empty_commands:
                             command = self.token.decode("ascii", "replace")
                             self.token.clear()
                             self.commands.append(command)

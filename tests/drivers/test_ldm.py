@@ -58,8 +58,18 @@ def test_ldm_codes_without_a_documented_meaning_get_no_invented_one(scripted, co
     assert f"{code} device error; see the LDM manual" in str(info.value)
 
 
-@pytest.mark.parametrize("reply", [b"1388\r\n", b"??\r\n"])
-def test_ldm_other_formats_are_protocol_errors(scripted, reply):
+@pytest.mark.parametrize(
+    "reply, metres", [(b"001388\r\n", 5.0), (b"1388\r\n", 5.0), (b"000c8a\r\n", 3.21)]
+)
+def test_ldm_hexadecimal_millimetres(scripted, reply, metres):
+    # format h: hexadecimal millimetres (protocols.md)
     lrf, _ = _ldm(scripted, [("DM", reply)])
-    with pytest.raises(DeviceProtocolError, match="format d or s"):
+    assert lrf.measure() == pytest.approx(metres)
+    assert lrf.last_quality is None
+
+
+@pytest.mark.parametrize("reply", [b"??\r\n", b"4.99.6\r\n", b"12G4\r\n"])
+def test_ldm_other_replies_are_protocol_errors(scripted, reply):
+    lrf, _ = _ldm(scripted, [("DM", reply)])
+    with pytest.raises(DeviceProtocolError, match="check the baud rate"):
         lrf.measure()

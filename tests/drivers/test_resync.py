@@ -66,21 +66,30 @@ class FakeDimetix:
 
 
 class FakeLDM:
-    """LDM41/42 (protocols.md): ``DM`` -> ``004.996`` (format d), one measurement at a time;
-    no stop command."""
+    """LDM41/42 (protocols.md): ``DM`` -> ``004.996`` (format d) or hexadecimal millimetres
+    (``hex``), one measurement at a time; no stop command. ``split_ends``: CR and LF each end a
+    command, and the empty one between is answered at once with ``E61`` (the manual gives the
+    replies' line ending, not the commands'); ``in_turn``: that error only once the measurement
+    before it has been answered (a meter that works through its commands in turn)."""
 
-    def __init__(self, head, durations=()):
+    def __init__(self, head, durations=(), hex=False, split_ends=False, in_turn=False):
         self.head = head
         self.durations = list(durations)
         self.busy_until = 0.0
-        self.fake = PtyFake(self.respond)
+        self.hex = hex
+        self.in_turn = in_turn
+        self.fake = PtyFake(self.respond, empty_commands=split_ends)
 
     def respond(self, fake, command):
         if command.upper() == "DM":
             value = _range_at(self.head.pan)
             start = max(time.monotonic(), self.busy_until)
             self.busy_until = start + (self.durations.pop(0) if self.durations else 0.01)
-            fake.reply(f"{value:07.3f}\r\n".encode(), self.busy_until - time.monotonic())
+            text = f"{round(value * 1000):06X}" if self.hex else f"{value:07.3f}"
+            fake.reply(f"{text}\r\n".encode(), self.busy_until - time.monotonic())
+        elif not command:
+            wait = self.busy_until - time.monotonic() + 0.001 if self.in_turn else 0.0
+            fake.reply(b"E61\r\n", max(wait, 0.0))
 
 
 def _shoot(shooter, counts):
@@ -108,6 +117,35 @@ def test_a_late_ldm_reply_is_not_taken_for_a_later_shot(retries):
     for shot, counts in zip(shots, [100, 200, 300]):
         assert shot.range is None or shot.range == pytest.approx(2.0 + counts / 1000)
     assert [s.range for s in shots[1:]] == pytest.approx([2.2, 2.3])
+
+
+@pytest.mark.parametrize("hex_format", [False, True])
+@pytest.mark.parametrize("duration, in_turn", [(0.01, False), (0.2, False), (0.2, True)])
+def test_an_ldm_that_ends_commands_at_cr_and_at_lf_is_found_by_the_probe(
+    hex_format, duration, in_turn
+):
+    # Each DM + CR LF draws two replies, the distance and the empty command's error, in either
+    # order: without the probe's check a shot could take the error or the last shot's distance.
+    head = AimPTU()
+    dev = FakeLDM(head, [duration] * 10, hex=hex_format, split_ends=True, in_turn=in_turn)
+    with dev.fake, LDM4x.open(dev.fake.path, timeout=TIMEOUT) as lrf:
+        lrf.probe()
+        assert lrf.eol == "\r"
+        shots = _shoot(DeviceShooter(head, lrf, SessionSettings(retries=0)), [100, 200, 300])
+    assert [s.range for s in shots] == pytest.approx([2.1, 2.2, 2.3])
+    assert [s.error for s in shots] == [None, None, None]
+
+
+@pytest.mark.parametrize("hex_format", [False, True])
+def test_an_ldm_that_ends_commands_at_cr_lf_keeps_cr_lf(hex_format):
+    head = AimPTU()
+    dev = FakeLDM(head, hex=hex_format)
+    with dev.fake, LDM4x.open(dev.fake.path, timeout=TIMEOUT) as lrf:
+        lrf.probe()
+        assert lrf.eol == "\r\n"
+        shots = _shoot(DeviceShooter(head, lrf, SessionSettings(retries=0)), [100, 200])
+    assert [s.range for s in shots] == pytest.approx([2.1, 2.2])
+    assert dev.fake.commands == ["DM"] * 3
 
 
 def test_an_ldm_autostart_line_is_not_taken_for_the_first_shot():

@@ -28,6 +28,8 @@ def test_ldm_formats():
     assert _out(sim.feed(b"DM\r\n")) == b"004.996\r\n"
     sim.feed(b"SDs\r\n")
     assert _out(sim.feed(b"DM\r\n")) == b"004.996 001000\r\n"
+    sim.feed(b"SDh\r\n")
+    assert _out(sim.feed(b"DM\r\n")) == b"001384\r\n"  # 4996 mm
     assert _out(sim.feed(b"QQ\r\n")) == b""
 
 
