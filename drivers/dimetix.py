@@ -48,6 +48,9 @@ _DISTANCE = re.compile(r"^g(\d)g([+-]\d{1,9})$")
 _ERROR = re.compile(r"^g(\d)@E(\d{3})$")
 _IDLE = re.compile(r"^g(\d)\?$")
 _FROM = re.compile(r"^g(\d)")  # any reply names the id of the device that sent it
+
+#: Seconds :meth:`DimetixDLS.laser` waits for a reply the reference does not promise.
+LASER_REPLY_WAIT = 0.3
 _COMMAND = re.compile(r"^s\d", re.IGNORECASE)  # a command on the bus: an echo or another host's
 
 
@@ -181,10 +184,18 @@ class DimetixDLS:
         self.stop()
 
     def laser(self, on: bool) -> None:
-        """``sNo`` / ``sNp``: laser pointer on or off (acknowledged ``gN?``)."""
+        """``sNo`` / ``sNp``: laser pointer on or off.
+
+        The reference gives the reply of ``sNc`` (``gN?``) but none for these: an
+        acknowledgement ``gN?`` or silence for ``LASER_REPLY_WAIT`` seconds are both taken as
+        done; an error reply raises as a measurement's does.
+        """
         self.channel.discard_input()
         self.channel.write(f"s{self.device_id}{'o' if on else 'p'}\r\n")
-        line = self._line("acknowledgement")
+        try:
+            line = self._line("acknowledgement", LASER_REPLY_WAIT)
+        except DeviceTimeout:
+            return
         m = _ERROR.match(line)
         if m:
             self._raise_code(int(m.group(2)))

@@ -83,7 +83,7 @@ def open_port(
         The port cannot be opened (missing device, busy, unknown URL scheme).
     """
     register_url_handlers()
-    pty = is_pseudo_terminal(url)
+    pty = is_pseudo_terminal(_wrapped_path(url))
     if pty:  # a pty passes bytes unchanged and cannot do 7 bits or parity (Linux refuses them)
         bytesize, parity = 8, "N"
     try:
@@ -111,6 +111,14 @@ def open_port(
 #: Linux's device numbers (major) of Unix98 pseudo-terminal slaves (/dev/pts/N): 136-143
 #: (Documentation/admin-guide/devices.txt, "Unix98 PTY slaves").
 _PTY_SLAVE_MAJORS = range(136, 144)
+
+
+def _wrapped_path(url: str) -> str:
+    """The device path under pyserial's ``spy://`` wrapper (``spy://PATH?options``, which logs
+    the traffic of the port at PATH), else ``url`` itself."""
+    if url.startswith("spy://"):
+        return url[len("spy://") :].split("?", 1)[0]
+    return url
 
 
 def is_pseudo_terminal(url: str) -> bool:

@@ -85,3 +85,19 @@ def test_dimetix_rejects_bad_device_id(scripted):
     channel, _ = scripted([])
     with pytest.raises(ValueError):
         DimetixDLS(channel, 12)
+
+
+@pytest.mark.parametrize("on, command", [(True, "s0o"), (False, "s0p")])
+@pytest.mark.parametrize("reply", [b"g0?\r\n", None])
+def test_laser_on_and_off_take_an_acknowledgement_or_silence(scripted, on, command, reply):
+    # The reference gives no reply for sNo / sNp: a silent sensor is not an error.
+    script = [(command, reply)] if reply is not None else []
+    lrf, port = _dimetix(scripted, script, timeout=3.0)
+    lrf.laser(on)
+    assert port.written == [command]
+
+
+def test_laser_error_reply_raises(scripted):
+    lrf, _ = _dimetix(scripted, [("s0o", b"g0@E203\r\n")])
+    with pytest.raises(RangeFinderCommandError):
+        lrf.laser(True)

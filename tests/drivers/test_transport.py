@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import os
+import sys
 import time
+import tty
 
 import pytest
 import serial
@@ -113,3 +116,23 @@ def test_a_deadline_that_could_never_expire_is_refused(timeout):
     channel = LineChannel(Feed(b""), "dev", timeout=0.1)
     with pytest.raises(ValueError, match="finite number of seconds"):
         channel.read_line(timeout)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux pseudo-terminals")
+def test_a_7e1_driver_reopens_a_plain_pty_also_through_the_spy_wrapper(tmp_path):
+    # A pty that no server re-marks between opens (socat's, an independent simulator's): Linux
+    # refuses a 7E1 tcsetattr that can change nothing, so the second 7E1 open failed (EINVAL).
+    from asbuilt.drivers.dimetix import DimetixDLS
+    from asbuilt.drivers.transport import is_pseudo_terminal
+
+    master, slave = os.openpty()
+    try:
+        tty.setraw(slave)
+        path = os.ttyname(slave)
+        spied = f"spy://{path}?file={tmp_path / 'traffic.txt'}"
+        assert is_pseudo_terminal(path) and not is_pseudo_terminal(spied)
+        for url in (spied, spied, path, path, spied):
+            DimetixDLS.open(url, timeout=0.5).close()  # 7E1 by default
+    finally:
+        os.close(master)
+        os.close(slave)
