@@ -27,7 +27,7 @@ def as_vector(value, name: str, size: int = 3) -> np.ndarray:
     array = np.asarray(value, dtype=np.float64)
     if array.shape != (size,):
         raise ValueError(f"The {name} must have shape ({size},), not {array.shape}.")
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise ValueError(f"The {name} must be finite.")
     return _frozen(array)
 
@@ -37,7 +37,7 @@ def as_points(value, name: str = "points") -> np.ndarray:
     array = np.asarray(value, dtype=np.float64)
     if array.ndim != 2 or array.shape[1] != 3:
         raise ValueError(f"The {name} must have shape (n, 3), not {array.shape}.")
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise ValueError(f"The {name} must be finite.")
     return _frozen(array)
 
@@ -180,7 +180,7 @@ class Cuboid:
     def __post_init__(self):
         object.__setattr__(self, "center", as_vector(self.center, "center"))
         axes = np.asarray(self.axes, dtype=np.float64)
-        if axes.shape != (3, 3) or not np.all(np.isfinite(axes)):
+        if axes.shape != (3, 3) or not np.isfinite(axes).all():
             raise ValueError("The axes must be a finite (3, 3) array.")
         if np.abs(axes @ axes.T - np.eye(3)).max() > 1e-6:
             raise ValueError("The axes must be orthonormal.")
@@ -189,7 +189,7 @@ class Cuboid:
             axes[2] = -axes[2]
         object.__setattr__(self, "axes", _frozen(axes))
         size = as_vector(self.size, "size")
-        if np.any(size <= 0):
+        if (size <= 0).any():
             raise ValueError("The size must be positive along every axis.")
         object.__setattr__(self, "size", size)
 

@@ -217,7 +217,7 @@ def circle_starts(
         if cutoff is not None:
             weights[:] = distances(center, radius) <= cutoff
         else:
-            closest = np.argpartition(distances(center, radius), keep - 1, axis=1)[:, :keep]
+            closest = distances(center, radius).argpartition(keep - 1, axis=1)[:, :keep]
             weights.fill(0.0)
             weights[rows[:, None], closest] = 1.0
         new_center, new_radius = kasa_batch(None, weights, design)

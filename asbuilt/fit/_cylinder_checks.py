@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.fit._circles import INSIDE_CAP, circle_starts
-from asbuilt.fit._common import quick_median
+from asbuilt.fit._common import column_medians, quick_median
 from asbuilt.fit._cylinder_model import MODEL, angles_about
 from asbuilt.fit._cylinder_starts import POLISH_BELOW, line_axis, polish_axes
 from asbuilt.fit._robust import RobustFit, keep_count, settled_fit
@@ -289,7 +289,7 @@ def unseen(robust: RobustFit, points, view) -> bool:
     behind itself is not mistaken for a wrong viewpoint."""
     axis, center, radius = robust.state
     excess = cylinder_beam_excess(axis, center, radius, points[robust.inliers], view)
-    return bool(np.mean(excess > 0.1 * radius) > UNSEEN_FRACTION)
+    return bool(np.count_nonzero(excess > 0.1 * radius) / max(excess.size, 1) > UNSEEN_FRACTION)
 
 
 #: A shot whose beam passed within this fraction of the radius of a fitted pipe's axis and which
@@ -339,7 +339,7 @@ def doubtful(robust: RobustFit, points, view, count: int, sigma, tolerances: Tol
     if count < POLISH_BELOW or not robust.inliers.all():
         return True
     threshold = tolerances.outlier_cutoff_sigma * (sigma if sigma is not None else robust.scale)
-    return bool(np.any(cylinder_beam_excess(*robust.state, points, view) > threshold))
+    return bool((cylinder_beam_excess(*robust.state, points, view) > threshold).any())
 
 
 def doubtful_blind(robust: RobustFit, points: np.ndarray, extent: float | None = None) -> bool:
@@ -358,7 +358,7 @@ def robust_extent(points: np.ndarray) -> float:
     """The extent of ``points`` (n, 3) metres, robustly: four times their median distance from
     their median (about the full length of a pipe seen over its length; background shots
     ignored), metres."""
-    middle = np.median(points, axis=0)
+    middle = column_medians(points)
     return 4.0 * quick_median(np.sqrt(np.einsum("ij,ij->i", points - middle, points - middle)))
 
 

@@ -178,7 +178,7 @@ def rejected_are_background(
     if np.count_nonzero(rejected) > n - keep_count(n, tolerances):
         return False
     cutoff = tolerances.outlier_cutoff_sigma * sigma
-    if np.any(np.abs(robust.residuals[rejected]) <= CLEAR_OF_CUTOFFS * cutoff):
+    if (np.abs(robust.residuals[rejected]) <= CLEAR_OF_CUTOFFS * cutoff).any():
         return False
     if not within_noise(robust.residuals[robust.inliers], sigma, MODEL.n_params, QUICK_CHI2_TAIL):
         return False
@@ -188,11 +188,12 @@ def rejected_are_background(
     if view is not None:
         excess, beyond = excess_and_beyond(axis, center, radius, local, view)
         excess = excess[robust.inliers]
-        if np.any(excess > cutoff) or np.mean(excess > 0.1 * radius) > UNSEEN_FRACTION:
+        unseen = np.count_nonzero(excess > 0.1 * radius) / max(excess.size, 1)
+        if (excess > cutoff).any() or unseen > UNSEEN_FRACTION:
             return False
         # Rejected shots lie beyond the pipe's first surface; kept ones on it, up to the range
         # noise along their beams.
-        if np.any(beyond[rejected] < -cutoff):
+        if (beyond[rejected] < -cutoff).any():
             return False
         return not _mixed_return_kept(beyond[~rejected], robust.residuals[~rejected], sigma, cutoff)
     if not admissible(robust, local, cutoff):
@@ -205,7 +206,7 @@ def rejected_are_background(
     facing = (mean[0] * u + mean[1] * v) / resultant
     lateral = np.cross(axis, facing)
     toward = (local - center) @ facing  # (n,) metres towards the station, across the axis
-    if np.any(toward[rejected] > cutoff):
+    if (toward[rejected] > cutoff).any():
         return False
     # Kept shots lie on the pipe's first surface along beams taken parallel to ``facing``, up
     # to the noise: a mixed return kept within the threshold inside the pipe near its
@@ -224,4 +225,4 @@ def _mixed_return_kept(beyond: np.ndarray, residuals: np.ndarray, sigma: float, 
     """Whether a kept shot looks like a mixed return: more than ``limit`` metres beyond the
     pipe's first surface along its beam (``beyond``, (m,) metres) and inside the pipe by more
     than ``sigma`` (``residuals`` (m,) metres, negative inside)."""
-    return bool(np.any((beyond > limit) & (residuals < -sigma)))
+    return bool(((beyond > limit) & (residuals < -sigma)).any())

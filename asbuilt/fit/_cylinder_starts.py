@@ -30,6 +30,8 @@ __all__ = [
     "same_start",
     "trust_order",
     "axis_starts",
+    "normal_axes",
+    "starts_of",
     "polish_axes",
     "quick_axes",
     "line_axis",
@@ -132,18 +134,30 @@ def axis_starts(points: np.ndarray, normals, flatness, directions=None) -> list[
     (``directions``, rows, when the caller has them already)."""
     if directions is None:
         _, _, directions = principal_axes(points)
-    return _unique(list(_normal_axis(normals, flatness)) + list(directions))
+    return starts_of(normal_axes(normals, flatness), directions)
 
 
-def quick_axes(first_axes: list, directions: np.ndarray) -> list[np.ndarray]:
+def normal_axes(normals: np.ndarray, flatness: np.ndarray) -> np.ndarray:
+    """The normals' eigenvectors, rows, most perpendicular to the normals first (the first of
+    :func:`axis_starts`)."""
+    return _normal_axis(normals, flatness)
+
+
+def starts_of(normal: np.ndarray, directions: np.ndarray) -> list[np.ndarray]:
+    """:func:`axis_starts` from the normals' eigenvectors (:func:`normal_axes`) and the principal
+    axes, rows."""
+    return _unique(list(normal) + list(directions))
+
+
+def quick_axes(first_axis: np.ndarray, directions: np.ndarray) -> list[np.ndarray]:
     """The axes the quick path (:func:`asbuilt.fit._cylinder_quick.quick_fit`) starts from:
-    the normals' most perpendicular eigenvector (``first_axes[0]``, of :func:`axis_starts`) and
-    the points' longest principal axis (``directions[0]``, rows), once when within about 6
-    degrees of each other. On the benchmark's 40-shot scans the quick fit stands as often from
+    the normals' most perpendicular eigenvector (``first_axis``, the first of
+    :func:`normal_axes` and so of :func:`axis_starts`) and the points' longest principal axis
+    (``directions[0]``, rows), once when within about 6 degrees of each other. On the benchmark's 40-shot scans the quick fit stands as often from
     these two as from all of :func:`axis_starts`' (292 of 300 clean, 177 against 178 of 300
     with 20% edge outliers), at 11-15% fewer instructions per fit: the other eigenvectors and
     principal axes lie across the pipe, and their circles only cost."""
-    return _unique([first_axes[0], directions[0]])
+    return _unique([first_axis, directions[0]])
 
 
 def polish_axes(

@@ -281,7 +281,7 @@ def robust_geometric_fit(
         # A concentration step (Rousseeuw & Van Driessen 2006): least squares on the ``keep``
         # points closest to the current surface.
         weights = np.zeros(residuals.size)
-        weights[np.argpartition(np.abs(residuals), keep - 1)[:keep]] = 1.0
+        weights[np.abs(residuals).argpartition(keep - 1)[:keep]] = 1.0
         return weights
 
     ranked = []
@@ -309,7 +309,7 @@ def robust_geometric_fit(
             if memo is not None:
                 memo[id(start)] = (start, candidate)
         state, residuals, jacobian = candidate
-        if not np.all(np.isfinite(residuals)):
+        if not np.isfinite(residuals).all():
             continue
         refined.append(candidate)
         # The bound is read only before another start is refined (none after the last one,

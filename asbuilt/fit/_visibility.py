@@ -98,11 +98,11 @@ def _excess(lengths, a, b, discriminant) -> np.ndarray:
     """:func:`cylinder_beam_excess`, shape (s, n) metres, from :func:`_beam_crossings`."""
     excess = np.zeros(a.shape)
     hit = (discriminant > 0.0) & (a > 1e-24)
-    if np.any(hit):
+    if hit.any():
         middle = -b[hit] / (2.0 * a[hit])
         chord = np.sqrt(discriminant[hit]) / a[hit]
-        reach = np.broadcast_to(lengths, a.shape)[hit]
-        excess[hit] = np.clip(2.0 * (reach - middle), 0.0, chord)
+        reach = lengths[np.nonzero(hit)[1]]  # each hit's own range (rows are cylinders)
+        excess[hit] = (2.0 * (reach - middle)).clip(0.0, chord)
     return excess
 
 
@@ -180,7 +180,7 @@ def edge_on_degrees(axis, center, points: np.ndarray, viewpoint) -> np.ndarray:
     beam_length = np.sqrt(np.einsum("ij,ij->i", beams, beams))
     with np.errstate(divide="ignore", invalid="ignore"):
         cosine = np.abs(np.einsum("ij,ij->i", radial, across)) / (radial_length * across_length)
-        angle = np.degrees(np.arccos(np.clip(cosine, 0.0, 1.0)))
+        angle = np.degrees(np.arccos(cosine.clip(0.0, 1.0)))
     angle[(across_length <= 0.1 * beam_length) | (radial_length <= 0.0)] = np.nan
     return angle
 
@@ -398,7 +398,7 @@ def reconsidered(
         )
         fit = refined(state, (residuals, jacobian))  # the settle's Jacobian at its state
         beyond = consider(fit)
-        hides = fit is None or bool(np.any(beyond[fit.inliers] > cutoff * scale))
+        hides = fit is None or bool((beyond[fit.inliers] > cutoff * scale).any())
         if thorough and fit is not None and not fit.inliers.all():
             # A good shot just beyond the 3-sigma test can send the refit into a basin where
             # it stays an outlier (a thinner pipe through the other shots); the fit of every

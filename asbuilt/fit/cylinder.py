@@ -96,11 +96,12 @@ from asbuilt.fit._cylinder_quick import rejected_are_background, robust_among
 from asbuilt.fit._cylinder_starts import (
     POLISH_BELOW,
     POLISHED_STARTS,
-    axis_starts,
     line_axis,
+    normal_axes,
     pair_starts,
     polish_axes,
     quick_axes,
+    starts_of,
 )
 from asbuilt.fit._robust import (
     RobustFit,
@@ -265,10 +266,11 @@ def fit_cylinder(
     check_spread(spread, "cylinder", 3)
     normals, flatness = local_normals(local, tolerances.normal_neighbours)
     keep = keep_count(len(local), tolerances)
-    first_axes = axis_starts(local, normals, flatness, directions)
+    # The quick path needs only the first normal axis; the full search, every distinct axis.
+    normal = normal_axes(normals, flatness)
     view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64) - offset
     if sigma is not None and everything is None and len(local) >= POLISH_BELOW:
-        quick = _quick_fit(local, quick_axes(first_axes, directions), keep, sigma, view, tolerances)
+        quick = _quick_fit(local, quick_axes(normal[0], directions), keep, sigma, view, tolerances)
         if quick is not None:
             robust, quick_starts, rejected = quick
             scene = _Scene(pts, offset, local, None, view, sigma, tolerances)
@@ -283,7 +285,7 @@ def fit_cylinder(
                     raise
     starts = []
     rng = np.random.default_rng(len(local))
-    axes = first_axes + pair_starts(local, normals, keep, 3)
+    axes = starts_of(normal, directions) + pair_starts(local, normals, keep, 3)
     line = line_axis(local, keep, rng)
     if line is not None:
         axes.append(line)
@@ -512,7 +514,7 @@ def _readmitted(robust, local, cutoff: float):
     if robust.inliers.all() or np.max(np.abs(robust.residuals[~robust.inliers])) > 2 * cutoff:
         return robust  # (a shot twice the cutoff off is no good shot a nearby fit could take)
     every = refit_on(MODEL, robust, local, np.ones(len(local), bool))
-    if not np.all(np.abs(every.residuals) <= cutoff):
+    if not (np.abs(every.residuals) <= cutoff).all():
         return robust
     kept = robust.residuals[robust.inliers]
     robust_cost = float(kept @ kept) + cutoff * cutoff * int(np.count_nonzero(~robust.inliers))
