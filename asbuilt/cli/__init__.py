@@ -10,10 +10,13 @@ object); anything else is a bug and keeps its traceback.
 from __future__ import annotations
 
 import argparse
+import errno
 import signal
 import sys
 import threading
 from importlib import import_module
+
+import numpy as np
 
 from .. import __version__
 from ..errors import AsbuiltError
@@ -58,8 +61,29 @@ class Terminated(KeyboardInterrupt):
     ``finally`` runs: staged outputs are removed, journals are closed, devices released."""
 
 
+#: Set by the SIGTERM handler: a signal that arrives while an extension module initialises
+#: (CadQuery's kernel takes seconds to import) surfaces as that module's ImportError instead.
+_termination = threading.Event()
+
+#: ``errno`` values of a standard output that cannot take the result: a full disk, a quota, a
+#: failed device.
+_OUTPUT_FULL = {errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EFBIG}
+
+
 def _terminate(signum, frame):
+    _termination.set()
     raise Terminated()
+
+
+def _drop_stdout() -> None:
+    """Point stdout at /dev/null, so that the interpreter's last flush of the bytes the full
+    device refused does not print its own error after ours."""
+    import os
+
+    try:
+        sys.stdout = open(os.devnull, "w")  # kept open until exit
+    except OSError:
+        pass
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -75,7 +99,12 @@ def main(argv: list[str] | None = None) -> int:
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, _terminate)
     try:
-        return int(handler(args) or 0)
+        # Numerical warnings are the library's to handle (its fits drop overflowing starts):
+        # on the command line they would only print noise around one clean result or error.
+        with np.errstate(all="ignore"):
+            code = int(handler(args) or 0)
+        sys.stdout.flush()  # a full disk under stdout is reported here, not at exit
+        return code
     except AsbuiltError as exc:
         print(f"asbuilt: error: {exc}", file=sys.stderr)
         from ..fit import NothingFittedError
@@ -92,6 +121,17 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except ImportError:
+        if _termination.is_set():  # SIGTERM while CadQuery's kernel was initialising
+            print("asbuilt: terminated", file=sys.stderr)
+            return 143
+        raise
+    except OSError as exc:
+        if exc.filename is None and exc.errno in _OUTPUT_FULL:
+            _drop_stdout()
+            print(f"asbuilt: error: cannot write the output ({exc.strerror})", file=sys.stderr)
+            return 2
+        raise
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)

@@ -111,8 +111,24 @@ def fit_points(
     ------
     FitError
         Unknown kind, a ``sigma`` outside 1e-5 to 0.1 m or not a number, a viewpoint that is
-        not 3 finite numbers, or the points cannot define the primitive.
+        not 3 finite numbers, or the points cannot define the primitive (a numerical failure of
+        linear algebra included).
     """
+    # The fits handle infinities and NaNs themselves (a start whose residuals overflow is
+    # dropped): numpy's floating-point warnings would only print noise around one result.
+    try:
+        with np.errstate(all="ignore"):
+            return _fit_points(kind, points, sigma, tolerances, viewpoint)
+    except np.linalg.LinAlgError as exc:
+        raise FitError(
+            f"Fitting {kind_phrase(kind)} failed numerically ({exc}); check the points' "
+            "coordinates and units.",
+            where="points",
+        ) from None
+
+
+def _fit_points(kind: str, points, sigma, tolerances, viewpoint) -> FitResult:
+    """:func:`fit_points`, within its floating-point error state."""
     function = fitter_for(kind)
     try:
         array = as_points(points)

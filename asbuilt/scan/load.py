@@ -68,6 +68,14 @@ MAX_INTEGER_DIGITS = 640
 #: surely in the wrong unit (a metre value in a millimetre file is 1000 times too small).
 PLAUSIBLE_RANGE_SIGMA = (1e-5, 0.1)
 
+#: Largest coordinate magnitude, metres, after the unit conversion: beyond any survey frame
+#: (UTM northings reach 1e7 m, Earth-centred coordinates 6.4e6 m). A larger one is a unit slip
+#: or a corrupted number, and its squares would overflow the fits' arithmetic.
+MAX_COORDINATE_M = 1e8
+
+#: Longest id accepted, in characters: DXF names (layers, blocks) hold at most 255.
+MAX_ID_CHARACTERS = 255
+
 #: Top-level keys the format defines; any other key is kept in ``Scan.extra`` and ignored.
 TOP_LEVEL_KEYS = ("format", "version", "units", "name", "sensor", "objects", "links")
 #: Object keys the format defines; any other key is kept in ``ScanObject.extra``.
@@ -399,9 +407,31 @@ def _check_units(document: dict, ctx: _Context) -> float:
 
 def _optional_string(mapping: Mapping, key: str, where: str, ctx: _Context) -> str | None:
     value = mapping.get(key)
-    if value is None or isinstance(value, str):
+    if value is None:
         return value
+    if isinstance(value, str):
+        return _checked_text(value, where, ctx)
     raise ctx.error(where, f"must be text (a JSON string), not {_describe(value)}")
+
+
+def _checked_text(value: str, where: str, ctx: _Context) -> str:
+    """``value`` unless it holds a character no output can carry: an unpaired UTF-16 surrogate
+    (JSON's ``\\ud800`` escape is legal syntax, but no UTF-8 file, terminal or CAD string can
+    encode it) or a control character (a line break would split the one-line messages and the
+    OBJ / DXF records; STEP truncates at NUL)."""
+    for position, character in enumerate(value):
+        code = ord(character)
+        if 0xD800 <= code <= 0xDFFF:
+            what = f"an unpaired surrogate (\\u{code:04x})"
+        elif code < 0x20 or 0x7F <= code < 0xA0:
+            what = f"a control character (\\u{code:04x})"
+        else:
+            continue
+        raise ctx.error(
+            where,
+            f"holds {what} at character {position + 1}; use printable text",
+        )
+    return value
 
 
 def _position(raw, factor: float, where: str, ctx: _Context) -> np.ndarray | None:
@@ -411,6 +441,8 @@ def _position(raw, factor: float, where: str, ctx: _Context) -> np.ndarray | Non
     if not isinstance(raw, list) or len(raw) != 3 or not all(_is_finite_number(c) for c in raw):
         raise ctx.error(where, "must be 3 finite numbers [x, y, z] in the file's units")
     position = np.array(raw, dtype=np.float64) * factor
+    if np.abs(position).max() > MAX_COORDINATE_M:
+        raise ctx.error(where, _beyond_reach(float(np.abs(position).max())))
     position.setflags(write=False)
     return position
 
@@ -491,6 +523,13 @@ def _object(index: int, raw, factor: float, ctx: _Context) -> ScanObject:
             "missing" if "id" not in raw else f"must be non-empty text, not {_describe(object_id)}"
         )
         raise ctx.error(f"{where}.id", f'{what}; give the object an id such as "P1"')
+    _checked_text(object_id, f"{where}.id", ctx)
+    if len(object_id) > MAX_ID_CHARACTERS:
+        raise ctx.error(
+            f"{where}.id",
+            f"is {len(object_id):,} characters long; use at most {MAX_ID_CHARACTERS} (CAD names "
+            "hold no more)",
+        )
     if object_id != object_id.strip():
         # CAD files drop or keep the spaces differently (STEP trims them), so the object could
         # not be matched across formats by its id.
@@ -508,6 +547,7 @@ def _object(index: int, raw, factor: float, ctx: _Context) -> ScanObject:
     if "points" not in raw:
         raise ctx.error(f"{where}.points", "missing; add the measured points [[x, y, z], ...]")
     points = _triples(raw["points"], f"{where}.points", "point", "[x, y, z]", ctx) * factor
+    _check_magnitude(points, f"{where}.points", ctx)
     _check_spread(points, kind, f"{where}.points", ctx)
     points.setflags(write=False)
     measurements = None
@@ -582,6 +622,20 @@ def _locate_bad_triple(raw: list, where: str, item: str, form: str, ctx: _Contex
                 raise ctx.error(here, "coordinate is NaN")
             if math.isinf(number):
                 raise ctx.error(here, "coordinate is infinite")
+
+
+def _check_magnitude(points: np.ndarray, where: str, ctx: _Context) -> None:
+    """A located error for the first point with a coordinate beyond ``MAX_COORDINATE_M``."""
+    if len(points) and np.abs(points).max() > MAX_COORDINATE_M:
+        row = int(np.argmax(np.abs(points).max(axis=1) > MAX_COORDINATE_M))
+        raise ctx.error(f"{where}[{row}]", _beyond_reach(float(np.abs(points[row]).max())))
+
+
+def _beyond_reach(metres: float) -> str:
+    return (
+        f"a coordinate of {metres:.3g} m is beyond any site (at most {MAX_COORDINATE_M:.0e} m, "
+        "after the file's units); check the units and the number"
+    )
 
 
 def _check_spread(points: np.ndarray, kind: str, where: str, ctx: _Context) -> None:

@@ -21,7 +21,7 @@ import sys
 from pathlib import Path
 
 from asbuilt.atomic import atomic_write
-from asbuilt.scan.load import FORMAT, MAX_POINTS, VERSION
+from asbuilt.scan.load import FORMAT, MAX_ID_CHARACTERS, MAX_POINTS, VERSION
 from asbuilt.scan.model import KINDS
 from asbuilt.tolerances import MIN_POINTS
 from asbuilt.units import UNITS
@@ -45,8 +45,17 @@ def _triple(description: str, third: dict | None = None) -> dict:
     }
 
 
+#: Text without control characters (C0, DEL, C1): the loader's rule (unpaired surrogates, which
+#: it also refuses, are beyond a pattern).
+_PRINTABLE = "^[^\\u0000-\\u001f\\u007f-\\u009f]*$"
+
+
 def _optional_text(description: str) -> dict:
-    return {"type": ["string", "null"], "description": description}
+    return {
+        "type": ["string", "null"],
+        "pattern": _PRINTABLE,
+        "description": description + " No control characters.",
+    }
 
 
 def _object_schema() -> dict:
@@ -65,9 +74,11 @@ def _object_schema() -> dict:
             "id": {
                 "type": "string",
                 "minLength": 1,
-                "pattern": "^\\S([\\s\\S]*\\S)?$",
+                "maxLength": MAX_ID_CHARACTERS,
+                "pattern": "^(?![\\s\\S]*[\\u0000-\\u001f\\u007f-\\u009f])\\S([\\s\\S]*\\S)?$",
                 "description": "Unique within the scan (uniqueness is checked by the loader); no "
-                "white space at either end.",
+                "white space at either end, no control characters, at most "
+                f"{MAX_ID_CHARACTERS} characters.",
             },
             "kind": {
                 "enum": list(KINDS),

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 import subprocess
 import sys
 import types
@@ -395,3 +396,22 @@ def test_an_output_directory_is_refused_with_a_json_file_name_to_add(tmp_path, c
         "(e.g. add /fit.json)\n"
     )
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+@pytest.mark.parametrize("json_out", [True, False])
+def test_a_full_disk_under_stdout_is_one_line_exit_2(tmp_path, json_out):
+    doc = make_doc("mm", kinds=("plane",))
+    (tmp_path / "scan.json").write_text(json.dumps(doc), encoding="utf-8")
+    with open("/dev/full", "w") as full:
+        done = subprocess.run(
+            [sys.executable, "-m", "asbuilt", "fit", "scan.json", *(["--json"] * json_out)],
+            cwd=tmp_path,
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+            timeout=120,
+            env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+        )
+    assert done.returncode == 2
+    assert done.stderr == "asbuilt: error: cannot write the output (No space left on device)\n"

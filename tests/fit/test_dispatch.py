@@ -731,3 +731,17 @@ def test_too_few_distinct_points_say_so():
         "A cylinder needs at least 6 distinct points, got 4 (8 of the 12 points repeat others "
         "exactly); measure more points."
     )
+
+
+@pytest.mark.parametrize("kind", ["cylinder", "sphere", "plane", "cuboid", "auto"])
+def test_points_beyond_floating_point_squares_are_a_fit_error_without_warnings(kind, recwarn):
+    # 1e155 m: squares overflow to infinity and LAPACK's eigensolver gives up. The library's
+    # caller gets one FitError and no RuntimeWarning noise (the scan loader refuses such
+    # coordinates before any fit).
+    rng = np.random.default_rng(1)
+    directions = rng.normal(size=(30, 3))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    directions[:, 2] = np.abs(directions[:, 2])
+    with pytest.raises(FitError, match="failed numerically.*check the points' coordinates"):
+        fit_points(kind, directions * 1e155)
+    assert not recwarn.list, [str(w.message) for w in recwarn.list]

@@ -325,15 +325,62 @@ BAD = (
     Bad(
         "an integer coordinate beyond 64 bits",
         _far_point(10**20),
-        "objects[0] (K1).points[7]: this point lies 1e+20 m from the others' median, which "
+        "objects[0] (K1).points[7]: a coordinate of 1e+20 m is beyond any site (at most 1e+08 "
+        "m, after the file's units); check the units and the number",
+        schema_catches=False,
+    ),
+    Bad(
+        "a point from another frame (50,000 km off)",
+        _far_point(5e7),
+        "objects[0] (K1).points[7]: this point lies 5e+07 m from the others' median, which "
         "makes them look collinear; check its coordinates (units, a point from another frame)",
         schema_catches=False,
     ),
     Bad(
-        "a coordinate far beyond any squared length (1e200 m)",
+        "a coordinate beyond any site (1e200 m, whose square overflows)",
         _far_point(1e200),
-        "objects[0] (K1).points[7]: this point lies 1e+200 m from the others' median, which "
-        "makes them look collinear; check its coordinates (units, a point from another frame)",
+        "objects[0] (K1).points[7]: a coordinate of 1e+200 m is beyond any site (at most 1e+08 "
+        "m, after the file's units); check the units and the number",
+        schema_catches=False,
+    ),
+    Bad(
+        "a station beyond any site",
+        _set("objects.1.station", [0, 0, 2e8]),
+        "objects[1] (K2).station: a coordinate of 2e+08 m is beyond any site (at most 1e+08 m, "
+        "after the file's units); check the units and the number",
+        schema_catches=False,
+    ),
+    Bad(
+        "a line break in an id",
+        _set("objects.2.id", "K3\nasbuilt: ok"),
+        "objects[2].id: holds a control character (\\u000a) at character 3; use printable text",
+    ),
+    Bad(
+        "an escape sequence in an id",
+        _set("objects.2.id", "K3\u001b[31m"),
+        "objects[2].id: holds a control character (\\u001b) at character 3; use printable text",
+    ),
+    Bad(
+        "an unpaired surrogate in an id (legal JSON, no UTF-8)",
+        _set("objects.2.id", "K3\ud800"),
+        "objects[2].id: holds an unpaired surrogate (\\ud800) at character 3; use printable text",
+        schema_catches=False,  # a JSON Schema pattern cannot name unpaired surrogates
+    ),
+    Bad(
+        "an id too long for CAD names",
+        _set("objects.2.id", "K" * 300),
+        "objects[2].id: is 300 characters long; use at most 255 (CAD names hold no more)",
+    ),
+    Bad(
+        "a NUL in a label",
+        _set("objects.0.label", "pipe\x00rack"),
+        "objects[0] (K1).label: holds a control character (\\u0000) at character 5; use "
+        "printable text",
+    ),
+    Bad(
+        "an unpaired surrogate in the scan name",
+        _set("name", "site\udc00"),
+        "name: holds an unpaired surrogate (\\udc00) at character 5; use printable text",
         schema_catches=False,
     ),
     Bad(

@@ -339,12 +339,19 @@ def test_an_empty_file_name_is_named():
     assert str(err.value) == "'': the scan file name is empty; give the scan's JSON file"
 
 
-def test_a_far_point_is_measured_without_overflow_warnings(recwarn):
+@pytest.mark.parametrize(
+    "value, message",
+    [
+        (1e200, "a coordinate of 1e+197 m is beyond any site"),  # its square overflows a float
+        (9e10, "this point lies 9e+07 m from the others' median"),  # in mm
+    ],
+)
+def test_a_far_point_is_measured_without_overflow_warnings(recwarn, value, message):
     doc = make_doc("mm", kinds=("plane",))
-    doc["objects"][0]["points"][7][0] = 1e200  # its square overflows a float
+    doc["objects"][0]["points"][7][0] = value
     with pytest.raises(ScanError) as err:
         loads_scan(json.dumps(doc))
-    assert "this point lies 1e+197 m from the others' median" in str(err.value)
+    assert message in str(err.value)
     assert not recwarn.list, [str(w.message) for w in recwarn.list]
 
 
