@@ -22,6 +22,7 @@ from collections.abc import Callable
 from importlib import import_module
 
 import numpy as np
+from scipy.special import chdtri
 
 from asbuilt.errors import FitError, located
 from asbuilt.fit._window import beyond_window, open_ends
@@ -452,18 +453,28 @@ REFUSED_RELATIVE = 1.0
 #: patch of it, where their plane is the rival :func:`_refuse_unknown_radius` compares.
 _PLANE_LIKE_RADIUS = 3.0
 
+#: Upper tail probability of the chi-square test that a plane-like fit's curvature must pass
+#: (:func:`_refuse_unknown_radius`): on a flat wall the curvature's extra parameters (one for a
+#: sphere, two for a cylinder) lower the sum of squares below the plane's by chi-square
+#: sigma^2 by chance alone, more than one sigma^2 in 32% (sphere) and 61% (cylinder) of walls,
+#: which let kilometre-wide solids through; at 1e-3 one wall in a thousand. A real wide curve
+#: clears it by far: a 10 m tank seen over 1 m lies 12 mm off its chord's plane.
+CURVATURE_TAIL = 1e-3
+
 
 def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
     """Raise FitError when the fit's radius is not known to within its own size
     (``REFUSED_RELATIVE``), or when, wider than ``_PLANE_LIKE_RADIUS`` times its inliers'
-    extent, it explains them (``points`` (n, 3) metres, the rows of ``result``) about as
-    closely as their plane does.
+    extent, it does not explain them (``points`` (n, 3) metres, the rows of ``result``)
+    significantly more closely than their plane does.
 
     The second test is the first without its linearisation: a curvature ``k`` known to
     ``s_k`` lowers the sum of squares below the plane's by about ``(k / s_k)^2 sigma^2``, and
     ``s_k / k`` is the radius's relative standard error. On a flat patch the Gauss-Newton
     search can stop at a radius of kilometres whose local standard error looks small (a 3 m
-    wall fitted r 11.5 km +-19%, with a larger sum of squares than its plane).
+    wall fitted r 11.5 km +-19%, with a larger sum of squares than its plane). The decrease
+    must pass a chi-square test with the curvature's extra parameters as degrees of freedom at
+    tail ``CURVATURE_TAIL`` (a likelihood-ratio test of the plane against the curved surface).
     """
     radius = getattr(result.primitive, "radius", None)
     stderr = (result.stderr or {}).get("radius")
@@ -482,9 +493,10 @@ def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
             return  # curved over the points: their plane is no rival
         plane_sse = float(np.linalg.svd(centred, compute_uv=False)[-1] ** 2)
         fit_sse = float(np.sum(result.residuals[result.inliers] ** 2))
-        if plane_sse - fit_sse >= result.sigma**2 / REFUSED_RELATIVE**2:
+        extra = (len(result.covariance) if result.covariance is not None else 4) - 3
+        if plane_sse - fit_sse >= result.sigma**2 * chdtri(max(extra, 1), CURVATURE_TAIL):
             return
-        why = "a plane fits the points as closely"
+        why = "a plane fits the points about as closely"
     raise FitError(
         f"These points do not determine the {result.kind}'s radius (best fit r {best}, {why}): "
         "they lie on a nearly flat strip or patch of it. Shoot across more of its surface, or "
