@@ -64,6 +64,12 @@ def _target(path, example: str = DEFAULT_EXAMPLE) -> tuple[Path, bool]:
         # A pipe or device, possibly behind links (/dev/stdout -> /proc/self/fd/1 -> pipe:[..],
         # which has no path of its own): opened as given.
         return given, True
+    if info is not None and not os.access(given, os.W_OK):
+        # A rename would replace it all the same (the directory's permission decides): a file
+        # made read-only to keep it is kept, as a plain open() would.
+        raise ExportError(
+            "is read-only; make it writable (chmod u+w) or choose another output", source=text
+        )
     # A link to a file (or a dangling one) is written through: its target is replaced.
     return (Path(os.path.realpath(given)) if given.is_symlink() else given), False
 
@@ -195,6 +201,14 @@ class AtomicBatch:
         os.close(fd)
         self._staged.append((Path(temp), final, special))
         return Path(temp)
+
+    def staged_for(self, path) -> Path | None:
+        """The temporary file staged for the output ``path`` (links followed), or None."""
+        final, _ = _target(path)
+        for temp, target, _ in self._staged:
+            if target == final:
+                return temp
+        return None
 
     def commit(self) -> list[Path]:
         """Publish every staged file to its target; return the targets.

@@ -203,3 +203,24 @@ def test_an_output_that_is_the_input_is_refused(tmp_path, monkeypatch, how):
         check_target(target, "--fix", inputs=[str(scan)])
     assert "choose another --fix" in str(err.value)
     assert check_target(tmp_path / "other.json", "--fix", inputs=[str(scan)]).name == "other.json"
+
+
+def test_a_read_only_output_is_kept_not_replaced(tmp_path, monkeypatch):
+    # A rename replaces a file the directory lets us replace, whatever its own mode: a file
+    # made read-only to keep it would be lost silently.
+    import os
+
+    kept = tmp_path / "kept.step"
+    kept.write_text("measured")
+    kept.chmod(0o444)
+    if os.geteuid() == 0:  # root may write any file: be a user for os.access
+        real_access = os.access
+        monkeypatch.setattr(
+            os, "access", lambda path, mode: mode != os.W_OK and real_access(path, mode)
+        )
+    with pytest.raises(ExportError, match="kept.step: is read-only; make it writable"):
+        check_target(kept)
+    with pytest.raises(ExportError, match="is read-only"):
+        with AtomicBatch() as batch:
+            batch.stage(kept).write_text("new")
+    assert kept.read_text() == "measured"

@@ -92,8 +92,8 @@ def register(subparsers) -> argparse.ArgumentParser:
         metavar="FILE",
         action="append",
         default=None,
-        help="also write a QA report (.html, .csv or .json by suffix), after the --out files; "
-        "give --report several times for several reports",
+        help="also write a QA report (.html, .csv or .json by suffix), published with the --out "
+        "files (all or nothing); give --report several times for several reports",
     )
     parser.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
     parser.set_defaults(handler=run)
@@ -116,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rich.console import Console
 
-    from asbuilt.atomic import check_target
+    from asbuilt.atomic import AtomicBatch, check_target
     from asbuilt.cli._models import say_refused
     from asbuilt.cli._progress import stage_progress
     from asbuilt.errors import ExportError
@@ -172,19 +172,27 @@ def run(args: argparse.Namespace) -> int:
             bar.update(task, completed=done, total=total, stage=label, description="")
 
         thickness = None if args.plate_thickness is None else args.plate_thickness / 1000.0
-        results = export_models(
-            model,
-            outputs,
-            plate_thickness=thickness,
-            step_schema=args.step_schema,
-            progress=progress,
-        )
-        if reports:
-            from asbuilt.report import write_reports
+        # The model files and the reports are published together, or none of them: a report
+        # that fails (a full disk) or a SIGTERM before the end leaves no new file.
+        with AtomicBatch() as batch:
+            results = export_models(
+                model,
+                outputs,
+                plate_thickness=thickness,
+                step_schema=args.step_schema,
+                progress=progress,
+                batch=batch,
+            )
+            if reports:
+                from asbuilt.report import write_reports
+                from asbuilt.report.html import StagedGltf
 
-            # An HTML report can embed a 3-D view from a glTF written in this run.
-            views = [r.path for r in results if r.path.suffix.lower() in (".glb", ".gltf")]
-            write_reports(model, reports, **({"gltf": views[0]} if views else {}))
+                # An HTML report can embed a 3-D view from a glTF written in this run.
+                views = [r.path for r in results if r.path.suffix.lower() in (".glb", ".gltf")]
+                view = {}
+                if views:
+                    view["gltf"] = StagedGltf(batch.staged_for(views[0]), views[0])
+                write_reports(model, reports, batch=batch, **view)
 
     status = 1 if say_refused(err, model, args.scan) else 0  # written, but without them
     if args.quiet:

@@ -10,6 +10,7 @@ the format modules are imported when used.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
@@ -174,6 +175,7 @@ def export_models(
     step_schema: str = "AP214",
     mesh_units: str | None = None,
     progress: Callable[[str, int, int], None] | None = None,
+    batch: AtomicBatch | None = None,
 ) -> list[ExportResult]:
     """Write ``model`` to every path, all or nothing.
 
@@ -192,6 +194,9 @@ def export_models(
         Unit for STL/OBJ coordinates (default the model's ``units``).
     progress : callable(task, done, total), optional
         Told about solids built (``"solids"``) and files written (``"files"``).
+    batch : asbuilt.atomic.AtomicBatch, optional
+        Stage the files in this batch and leave publishing them to its owner (with other
+        outputs of the same run, such as reports: all or nothing together).
 
     Returns
     -------
@@ -222,7 +227,8 @@ def export_models(
                     source=str(target),
                 )
     mode = default_file_mode()
-    with AtomicBatch() as batch:
+    sizes = []
+    with contextlib.nullcontext(batch) if batch is not None else AtomicBatch() as batch:
         temps = [batch.stage(target) for target in targets]
         if cad is None and any(exporter.needs_cad for exporter in exporters):
             from asbuilt.cad import prepare
@@ -247,12 +253,13 @@ def export_models(
                     f"cannot write the file ({exc.strerror or exc})", source=str(target)
                 ) from None
             os.chmod(temp, mode)
+            sizes.append(temp.stat().st_size)
             if progress is not None:
                 progress("files", done, len(targets))
     count = len(model.components)
     return [
-        ExportResult(target, exporter.name, target.stat().st_size, count)
-        for exporter, target in zip(exporters, targets)
+        ExportResult(target, exporter.name, size, count)
+        for exporter, target, size in zip(exporters, targets, sizes)
     ]
 
 

@@ -8,6 +8,7 @@ Importing this package is light: matplotlib is imported only to draw the HTML pi
 
 from __future__ import annotations
 
+import contextlib
 import os
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -122,7 +123,7 @@ def _check_options(options: dict) -> None:
         raise TypeError(f"unknown report option(s): {', '.join(sorted(unknown))}")
 
 
-def write_reports(model, paths: Iterable, **options) -> list[Path]:
+def write_reports(model, paths: Iterable, *, batch: AtomicBatch | None = None, **options):
     """Write one report per path (format by suffix), all or nothing.
 
     Parameters
@@ -131,10 +132,14 @@ def write_reports(model, paths: Iterable, **options) -> list[Path]:
         Metres; its findings as the rules left them.
     paths : iterable of str or Path
         ``.html``/``.htm``, ``.csv`` or ``.json``.
+    batch : asbuilt.atomic.AtomicBatch, optional
+        Stage the reports in this batch and leave publishing them to its owner (with the model
+        files of the same run: all or nothing together).
     **options
         ``density`` (kg/m3, pipe weights; default from the catalog's material),
         ``figure_format`` (``"svg"`` or ``"png"``, HTML), ``label_limit`` (HTML pictures),
-        ``gltf`` (a glTF/GLB file of the model for the HTML's optional 3-D view),
+        ``gltf`` (a glTF/GLB file of the model for the HTML's optional 3-D view, or a
+        :class:`~asbuilt.report.html.StagedGltf` for one staged in the same batch),
         ``generated`` (datetime stamp, default now), ``catalog`` (the Catalog the model was
         built with; default the model's ``catalog_file``, else the shipped catalog it names).
 
@@ -164,7 +169,7 @@ def write_reports(model, paths: Iterable, **options) -> list[Path]:
         generated=options.get("generated"),
         catalog=options.get("catalog"),
     )
-    with AtomicBatch() as batch:
+    with contextlib.nullcontext(batch) if batch is not None else AtomicBatch() as batch:
         for fmt, target in zip(formats, targets):
             temp = batch.stage(target)
             try:

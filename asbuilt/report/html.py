@@ -22,6 +22,7 @@ import html as _html
 import json
 import os
 from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -33,7 +34,14 @@ from .data import ReportData
 from .figures import VIEWS, anchor, histogram_svg, render_view
 from .takeoff import FOOT
 
-__all__ = ["html_text", "write_html", "gltf_source", "MODEL_VIEWER_URL", "GLTF_EMBED_LIMIT"]
+__all__ = [
+    "html_text",
+    "write_html",
+    "gltf_source",
+    "StagedGltf",
+    "MODEL_VIEWER_URL",
+    "GLTF_EMBED_LIMIT",
+]
 
 #: Where the optional 3-D viewer's script comes from (only fetched on the reader's request).
 MODEL_VIEWER_URL = "https://ajax.googleapis.com/ajax/libs/model-viewer/3.5.0/model-viewer.min.js"
@@ -709,6 +717,15 @@ def _self_contained_gltf(content: bytes) -> bool:
     return True
 
 
+@dataclass(frozen=True)
+class StagedGltf:
+    """A glTF/GLB written in the same run as the report but not published yet: its content is
+    read from ``content`` (the staged temporary file) and a link points at ``published``."""
+
+    content: Path
+    published: Path
+
+
 def gltf_source(gltf, report_path) -> str:
     """What the HTML's 3-D view loads: the glTF file embedded as a ``data:`` URI when it is at
     most :data:`GLTF_EMBED_LIMIT` bytes (a ``.glb``, or a ``.gltf`` that refers to no other
@@ -719,6 +736,9 @@ def gltf_source(gltf, report_path) -> str:
     ExportError
         The file does not exist or cannot be read.
     """
+    published = None
+    if isinstance(gltf, StagedGltf):
+        gltf, published = gltf.content, gltf.published
     text = str(gltf)
     if text.startswith(("http://", "https://", "data:")):
         return text
@@ -738,13 +758,13 @@ def gltf_source(gltf, report_path) -> str:
             content = target.read_bytes()
         except OSError as exc:
             raise ExportError(f"cannot read the glTF file ({exc.strerror})", source=text) from None
-        suffix = target.suffix.lower()
+        suffix = Path(published or target).suffix.lower()
         if suffix == ".glb":
             return "data:model/gltf-binary;base64," + base64.b64encode(content).decode("ascii")
         if suffix == ".gltf" and _self_contained_gltf(content):
             return "data:model/gltf+json;base64," + base64.b64encode(content).decode("ascii")
     base = Path(report_path).resolve().parent
-    return Path(os.path.relpath(target.resolve(), base)).as_posix()
+    return Path(os.path.relpath(Path(published or target).resolve(), base)).as_posix()
 
 
 def write_html(

@@ -234,6 +234,30 @@ def test_report_is_written_after_the_outputs(tmp_path, capsys):
     assert html.read_text(encoding="utf-8").lstrip().lower().startswith("<!doctype html")
 
 
+def test_a_report_that_fails_leaves_no_model_file_either(tmp_path, capsys, monkeypatch):
+    # "Either every file is written or none is": the model files wait for the reports (a full
+    # disk under the report once left the STEP published with exit 2).
+    import asbuilt.report.table_csv as table_csv
+
+    def full_disk(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(table_csv, "write_csv", full_disk)
+    step, csv = tmp_path / "m.step", tmp_path / "qa.csv"
+    argv = ["model", str(ROOT / "samples" / "spool.json"), "--out", str(step), "--report", str(csv)]
+    assert main(argv) == 2
+    assert "cannot write the report (No space left on device)" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_html_reports_view_embeds_the_glb_of_the_same_run(tmp_path, capsys):
+    glb, html = tmp_path / "m.glb", tmp_path / "qa.html"
+    argv = ["model", str(ROOT / "samples" / "spool.json"), "--out", str(glb), "--report", str(html)]
+    assert main(argv) == 0
+    page = html.read_text(encoding="utf-8")
+    assert "data:model/gltf-binary;base64," in page and ".part" not in page
+
+
 def test_every_report_given_is_written(tmp_path, capsys):
     """--report twice wrote only the last one (audit D12)."""
     reports = [tmp_path / "qa.csv", tmp_path / "qa.html", tmp_path / "qa.json"]

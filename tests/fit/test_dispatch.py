@@ -521,7 +521,9 @@ def test_a_flat_wall_fitted_as_a_sphere_is_refused(seed):
 def test_a_flat_wall_fitted_as_a_cylinder_no_closer_than_its_plane_is_refused(seed):
     # The search stops at r 8-12 km with a local standard error of 19-27% and a larger sum of
     # squares than the wall's plane: the radius is refused for the plane, not the error.
-    with pytest.raises(FitError, match="do not determine the cylinder's radius .* a plane fits the points about"):
+    with pytest.raises(
+        FitError, match="do not determine the cylinder's radius .* a plane fits the points about"
+    ):
         fit_points("cylinder", _flat_wall(seed, 0.00001), sigma=0.00001)
 
 
