@@ -494,7 +494,9 @@ def build_spools(
     # spools: pipes joined by any joint (including contacts and failed ones)
     roots = {group[0]: group for group in connected_groups(len(pipes), joints)}
     spool_of: dict[int, str] = {}
-    used_names: set[str] = {p.id for p in pipes} | set(taken_ids)
+    pipe_ids = {p.id for p in pipes}
+    reserved = pipe_ids | set(taken_ids)  # every object's id
+    used_names: set[str] = set(reserved)
     groups_count: dict[str, int] = {}
     for members in roots.values():
         names = {group_of[m] for m in members}
@@ -519,13 +521,17 @@ def build_spools(
         for m in members:
             spool_of[m] = name
 
+    # An object keeps its own id; a generated name (a fitting "P2-P3", a piece "P1.2") gives
+    # way to every object's, whichever comes first: a user matching CAD back to the scan by id
+    # must find the object, not an elbow.
     seen_ids: set[str] = set()
 
-    def unique(name: str) -> str:
+    def unique(name: str, own: bool = False) -> str:
         out, k = name, 2
-        while out in seen_ids:
+        while out in seen_ids or (not own and out in reserved):
             out = f"{name}~{k}"
             k += 1
+            own = False
         seen_ids.add(out)
         return out
 
@@ -566,7 +572,7 @@ def build_spools(
         for pid, start, end in by_pipe[i]:
             geometry = Straight(start=start, end=end, outer_radius=0.5 * p.od, wall=p.wall)
             comp = Component(
-                id=unique(pid),
+                id=unique(pid, own=pid == p.id),
                 type="pipe",
                 geometry=geometry,
                 sources=base.sources,

@@ -76,6 +76,28 @@ def test_build_spools_places_an_elbow_and_trims():
     assert connection_mismatches(comps) == (2, [])
 
 
+@pytest.mark.parametrize("order", ["object last", "object first"])
+def test_a_generated_name_gives_way_to_an_object_of_that_id(order):
+    # An object the user named "A-B": the elbow between A and B takes "A-B~2", never the
+    # object's own id, whichever comes first.
+    pipes = [spec("A", (0, 0, 0), (1.8, 0, 0)), spec("B", (2, 0.2, 0), (2, 2, 0))]
+    named = spec("A-B", (5, 0, 0), (7, 0, 0))
+    pipes = pipes + [named] if order == "object last" else [named] + pipes
+    elbow = (0, 1) if order == "object last" else (1, 2)
+    joints = [Joint("elbow", ((elbow[0], 1), (elbow[1], 0)))]
+    comps, _ = build_spools(pipes, joints, [None] * 3)
+    kinds = {c.id: c.type for c in comps}
+    assert kinds["A-B"] == "pipe" and kinds["A-B~2"] == "elbow"
+    # a column "A-B" elsewhere in the scan (not a pipe) is kept clear of too
+    comps, _ = build_spools(
+        pipes[:2] if order == "object last" else pipes[1:],
+        [Joint("elbow", ((0, 1), (1, 0)))],
+        [None] * 2,
+        taken_ids=["A-B"],
+    )
+    assert [c.id for c in comps] == ["A", "A-B~2", "B"]
+
+
 def test_a_fitting_too_big_for_its_pipe_is_dropped_with_a_note():
     big = FittingDims(bend_radius=2.0, tee_run=1, tee_outlet=1, reducer_length=1, source="x")
     pipes = [spec("A", (0, 0, 0), (0.5, 0, 0), dims=big), spec("B", (0.6, 0.1, 0), (0.6, 3, 0))]
