@@ -248,6 +248,11 @@ def _prior_noise(result: FitResult, tolerances: Tolerances) -> str | None:
 LINE_SPREAD_SIGMAS = 2.0
 
 
+#: An object whose points span less than this (metres) and lie on a line within the noise is
+#: most likely a scan in metres declared in millimetres: the refusal says so.
+UNIT_SLIP_EXTENT = 0.05
+
+
 def _require_spread_beyond_noise(
     points: np.ndarray, kind: str, limit: float, assumed: bool = False
 ) -> None:
@@ -267,6 +272,13 @@ def _require_spread_beyond_noise(
             if assumed
             else f"the range noise ({limit / LINE_SPREAD_SIGMAS * 1000:.3g} mm)"
         )
+        extent = float((points.max(axis=0) - points.min(axis=0)).max())
+        units = (
+            f" The whole object spans {extent * 1000:.3g} mm: if the file's numbers are metres"
+            ' (or feet), its "units" say otherwise.'
+            if extent < UNIT_SLIP_EXTENT
+            else ""
+        )
         raise FitError(
             f"The points lie within {noise} of one line (RMS {spread[1] * 1000:.3g} mm across "
             f"it); {what} needs points spread over its surface"
@@ -274,7 +286,8 @@ def _require_spread_beyond_noise(
                 " (give sensor.range_sigma if the range finder is more precise)."
                 if assumed
                 else "."
-            ),
+            )
+            + units,
             where="points",
         )
 

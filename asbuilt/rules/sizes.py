@@ -12,6 +12,7 @@ import numpy as np
 from asbuilt.catalog import parse_nominal
 from asbuilt.findings import Suggestion
 from asbuilt.model import Component
+from asbuilt.units import UNITS
 
 from ._catalog import SizeTable
 from ._context import Context, centre_of, mm, stderr_value, verdict
@@ -69,8 +70,62 @@ def _label(table: SizeTable | None, nominal: str) -> str:
     return table.label(nominal) if table is not None else f"NPS {nominal}"
 
 
+#: A measured OD farther than this factor outside the catalog's range of ODs is no pipe of
+#: this catalog as measured (a 115 m "pipe"): with every pipe of the scan so, a unit slip is
+#: looked for (:func:`unit_slip`).
+IMPLAUSIBLE_OD_FACTOR = 1.5
+
+
+def unit_slip(ctx: Context, table: SizeTable | None) -> tuple[str, float] | None:
+    """``(unit, factor)`` when the scan's coordinates look written in ``unit`` although the
+    file declares another: every measured cylinder's OD (pipes, tanks, chimneys) lies outside
+    the catalog's range of ODs by more than ``IMPLAUSIBLE_OD_FACTOR`` as declared, and every
+    pipe (a component merging took for one, else every cylinder) is a catalog size, within the
+    snapping window, once scaled by ``factor`` (the true unit's metres over the declared
+    one's). None otherwise, and without a catalog or a scan."""
+    scan = ctx.model.scan
+    if table is None or scan is None or not table.sizes or scan.units not in UNITS:
+        return None
+    cylinders = [c for c in ctx.pipes if measured_od(c)[0] is not None]
+    if not cylinders:
+        return None
+    smallest = min(size for _, _, size in table.sizes) / IMPLAUSIBLE_OD_FACTOR
+    largest = max(size for _, _, size in table.sizes) * IMPLAUSIBLE_OD_FACTOR
+    if any(smallest <= measured_od(c)[0] <= largest for c in cylinders):
+        return None
+    pipes = [c for c in cylinders if c.type == "pipe"] or cylinders
+    best = None
+    for unit, metres in UNITS.items():
+        if unit == scan.units:
+            continue
+        factor = metres / UNITS[scan.units]
+        # Each pipe's distance to its nearest size, in snapping windows: the unit that makes
+        # every pipe a size, the most closely, wins (a wide window can let two units match).
+        score = 0.0
+        for component in pipes:
+            sizes = _sizes_at(ctx, table, component, factor)
+            if not sizes:
+                break
+            od, se = measured_od(component)
+            window = _window(ctx, None if se is None else se * factor)
+            score += abs(sizes[0][1] - od * factor) / window
+        else:
+            if best is None or score < best[0]:
+                best = (score, unit, factor)
+    return None if best is None else (best[1], best[2])
+
+
+def _sizes_at(ctx: Context, table: SizeTable, component: Component, factor: float):
+    """The catalog sizes ``(nominal, od)`` within the snapping window of a pipe's measured OD
+    scaled by ``factor``, nearest first."""
+    od, se = measured_od(component)
+    od, se = od * factor, None if se is None else se * factor
+    return sorted(table.within(od, _window(ctx, se)), key=lambda size: abs(size[1] - od))
+
+
 def check_nonstandard(ctx: Context, table: SizeTable | None) -> None:
     slug = "nonstandard-diameter"
+    slip = unit_slip(ctx, table)
     for comp in ctx.pipes:
         if size_status(ctx, comp, table) != "no-size":
             continue
@@ -99,7 +154,20 @@ def check_nonstandard(ctx: Context, table: SizeTable | None) -> None:
         name, size_od, off = nearest[0]
         tol = float(ctx.general("diameter_tolerance"))
         outcome = verdict(abs(off), tol, se, ctx.k)
-        suggestions = tuple(
+        suggestions = ()
+        if slip is not None:
+            unit, factor = slip
+            sizes = _sizes_at(ctx, table, comp, factor) or table.nearest(od * factor, 1)
+            true_name, true_od = sizes[0][0], sizes[0][1]
+            suggestions = (
+                Suggestion(
+                    f'check the scan\'s "units": its numbers look like {unit}, not '
+                    f"{ctx.model.scan.units}; read so, every pipe of the scan is a catalog size "
+                    f"(this one {_label(table, true_name)} = {mm(true_od)})",
+                    {"field": "units", "value": unit},
+                ),
+            )
+        suggestions += tuple(
             Suggestion(
                 f"use {_label(table, n)} ({mm(s)}, {mm(abs(d))} {'smaller' if d > 0 else 'larger'} "
                 "than measured) if the catalog and material are right",

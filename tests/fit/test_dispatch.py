@@ -768,3 +768,25 @@ def test_a_wide_tank_seen_over_a_short_arc_stands():
     points = np.column_stack([r * np.sin(phi), 10.0 - r * np.cos(phi), z])
     result = fit_points("cylinder", points, sigma=0.002, viewpoint=[0.0, 0.0, 1.0])
     assert result.primitive.radius == pytest.approx(5.0, abs=3 * result.stderr["radius"])
+
+
+def test_a_pipe_in_metres_declared_in_millimetres_is_told_to_check_the_units():
+    # A 114 mm pipe 5 m away whose numbers (metres) were read as millimetres: 4 mm across,
+    # within the 2 mm noise of a line. The refusal says what the user most likely did.
+    angles = np.linspace(-1.2, 1.2, 6)
+    along = np.linspace(0.0, 2.0, 5)
+    a, z = np.meshgrid(angles, along)
+    metres = np.column_stack(
+        [0.05715 * np.sin(a.ravel()), 5 - 0.05715 * np.cos(a.ravel()), z.ravel()]
+    )
+    with pytest.raises(FitError) as info:
+        fit_points("cylinder", metres * 0.001, sigma=0.002)
+    assert "The whole object spans 2 mm: if the file's numbers are metres" in str(info.value)
+    with pytest.raises(FitError) as info:  # a real needle-thin line of shots 2 m long: no hint
+        fit_points(
+            "cylinder",
+            np.column_stack([z.ravel() * 0, 5 + 0 * z.ravel(), z.ravel()])
+            + np.random.default_rng(0).normal(0, 1e-4, (30, 3)),
+            sigma=0.002,
+        )
+    assert "spans" not in str(info.value)

@@ -70,6 +70,47 @@ def test_nonstandard_at_the_tolerance_edge_without_merge_status(od, od_se, expec
     assert found[0].unverifiable == (expected == "warning")
 
 
+@pytest.mark.parametrize(
+    "units, scale, slip",
+    [
+        ("m", 1000.0, "mm"),  # millimetre numbers in a file that says metres: 114.3 m "pipes"
+        ("mm", 0.001 / 0.0254, "in"),  # inch numbers said to be millimetres: 4.5 mm "pipes"
+        ("m", 1.0, None),  # right units, a nonstandard pipe: no units suggestion
+    ],
+)
+def test_a_scan_in_the_wrong_units_is_told_so(units, scale, slip):
+    # the fit's uncertainty is in the file's numbers too
+    se = 0.0005 * scale
+    pipes = [
+        pipe("P1", [0, 0, 1], [2, 0, 1], 0.1150 * scale, status="no-size", od_stderr=se),
+        pipe("P2", [0, 2, 1], [2, 2, 1], 0.0603 * scale, status="no-size", od_stderr=se),
+    ]
+    if slip is None:
+        pipes = [pipe("P1", [0, 0, 1], [2, 0, 1], 0.1182, status="no-size")]
+    scan = Scan(units=units, objects=())
+    found = only(run(*pipes, scan=scan), "nonstandard-diameter")
+    assert len(found) == len(pipes)
+    first = found[0].suggestions[0]
+    if slip is None:
+        assert "units" not in first.description
+        return
+    assert first.description.startswith(
+        f'check the scan\'s "units": its numbers look like {slip}, not {units}; read so, every '
+        "pipe of the scan is a catalog size (this one NPS 4 = 114.3 mm)"
+    )
+    assert first.change == {"field": "units", "value": slip} and not first.unambiguous
+
+
+def test_one_plausible_cylinder_means_the_units_are_right():
+    # a 118 mm nonstandard pipe beside a 114 m one: the scan's units stand, no suggestion
+    pipes = [
+        pipe("P1", [0, 0, 1], [2, 0, 1], 114.3, status="no-size"),
+        pipe("P2", [0, 2, 1], [2, 2, 1], 0.1182, status="no-size"),
+    ]
+    for finding in only(run(*pipes, scan=Scan(units="m", objects=())), "nonstandard-diameter"):
+        assert not any("units" in s.description for s in finding.suggestions)
+
+
 # -- ambiguous-size ------------------------------------------------------------------------------
 
 
