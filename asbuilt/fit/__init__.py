@@ -249,7 +249,8 @@ LINE_SPREAD_SIGMAS = 2.0
 
 
 #: An object whose points span less than this (metres) and lie on a line within the noise is
-#: most likely a scan in metres declared in millimetres: the refusal says so.
+#: a stuck head's shots at one spot or a scan in metres declared in millimetres: the refusal
+#: names both.
 UNIT_SLIP_EXTENT = 0.05
 
 
@@ -274,8 +275,8 @@ def _require_spread_beyond_noise(
         )
         extent = float((points.max(axis=0) - points.min(axis=0)).max())
         units = (
-            f" The whole object spans {extent * 1000:.3g} mm: if the file's numbers are metres"
-            ' (or feet), its "units" say otherwise.'
+            f" The whole object spans {extent * 1000:.3g} mm: a pan-tilt head stuck on one"
+            ' spot, or a file whose numbers are metres (or feet) under other "units".'
             if extent < UNIT_SLIP_EXTENT
             else ""
         )

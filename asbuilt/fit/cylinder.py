@@ -493,9 +493,10 @@ def fit_cylinder(
             raise FitError(
                 "No cylinder fits these shots as seen from the viewpoint (each would hide more"
                 f" than a third of them behind itself), and the best fit of the shots alone {why}."
-                " Check the scan's sensor position or the object's station; if they are right,"
-                " the shots are mostly background and mixed returns around a thin pipe: rescan"
-                " with more shots on the pipe."
+                " Check the scan's sensor position or the object's station (shots taken from"
+                ' two stations belong in one object per station, each with its "station");'
+                " if they are right, the shots are mostly background and mixed returns around a"
+                " thin pipe: rescan with more shots on the pipe."
             )
     scene = _Scene(pts, offset, local, everything, view, sigma, tolerances)
     return _finished(robust, scene, ignored_view, starts, reconsider)

@@ -425,7 +425,9 @@ def test_a_stuck_head_without_a_sensor_sigma_is_refused(kind):
         fit_points(kind, points)
     assert "the 2 mm noise assumed without a sensor sigma" in info.value.message
     assert info.value.message.endswith(
-        "(give sensor.range_sigma if the range finder is more precise)."
+        "(give sensor.range_sigma if the range finder is more precise). The whole object spans"
+        " 6.06 mm: a pan-tilt head stuck on one spot, or a file whose numbers are metres (or"
+        ' feet) under other "units".'
     )
 
 
@@ -781,7 +783,9 @@ def test_a_pipe_in_metres_declared_in_millimetres_is_told_to_check_the_units():
     )
     with pytest.raises(FitError) as info:
         fit_points("cylinder", metres * 0.001, sigma=0.002)
-    assert "The whole object spans 2 mm: if the file's numbers are metres" in str(info.value)
+    assert "The whole object spans 2 mm: a pan-tilt head stuck on one spot, or a file whose" in str(
+        info.value
+    )
     with pytest.raises(FitError) as info:  # a real needle-thin line of shots 2 m long: no hint
         fit_points(
             "cylinder",
