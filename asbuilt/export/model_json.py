@@ -624,9 +624,21 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
     _check_document(document, source)
     components = []
     fits: dict = {}
+    first_of: dict = {}
     for index, entry in enumerate(document.get("components", [])):
         _require_object(entry, f"components[{index}]", "a component", source)
         where = f"components[{index}] ({entry.get('id')})"
+        if isinstance(entry.get("id"), str) and entry["id"] in first_of:
+            # Findings, spools and CAD names refer to components by id: two of one id would
+            # pass for one (and only writing CAD caught it).
+            raise ModelDocumentError(
+                f"duplicate id {entry['id']!r} (also components[{first_of[entry['id']]}]); give "
+                "every component its own id",
+                source=source,
+                where=f"{where}.id",
+            )
+        if isinstance(entry.get("id"), str):
+            first_of.setdefault(entry["id"], index)
         try:
             _check_component_fields(entry)
             sources = tuple(

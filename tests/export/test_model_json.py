@@ -199,6 +199,20 @@ def test_bad_components_are_located(component, field, message):
     assert message in str(info.value)
 
 
+def test_two_components_of_one_id_are_refused_when_read():
+    # findings, spools and CAD names refer to components by id (only writing CAD caught it)
+    pipe = {"type": "pipe", "shape": "straight", "start": [0, 0, 0], "end": [1, 0, 0]}
+    pipe["od"] = 0.1
+    components = [{"id": "P1", **pipe}, {"id": "P2", **pipe}, {"id": "P1", **pipe}]
+    document = {"format": FORMAT, "version": 1, "components": components}
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value) == (
+        "m.json: components[2] (P1).id: duplicate id 'P1' (also components[0]); give every "
+        "component its own id"
+    )
+
+
 @pytest.mark.parametrize(
     ("document", "message"),
     [
