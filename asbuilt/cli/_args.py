@@ -17,7 +17,9 @@ def positive_number(what: str, upper: float = 1e5):
         except ValueError:
             raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
         if not 0 < value < upper:
-            raise argparse.ArgumentTypeError(f"must be a positive {what}, not {text}")
+            raise argparse.ArgumentTypeError(
+                f"must be a positive {what} below {upper:g}, not {text}"
+            )
         return value
 
     return parse

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import argparse
 
+from asbuilt.export import SUFFIXES
+
 __all__ = ["register", "run"]
 
 
@@ -84,8 +86,9 @@ def register(subparsers) -> argparse.ArgumentParser:
         "--fix",
         metavar="OUT",
         default=None,
-        help="accept every unambiguous suggestion and write the corrected model to OUT "
-        "(.step, .glb, .gltf, .dxf, .stl, .obj or .json)",
+        help="accept every unambiguous suggestion and write the corrected model to OUT ("
+        + ", ".join(SUFFIXES)
+        + ")",
     )
     parser.add_argument(
         "--catalog",

@@ -166,8 +166,8 @@ def resolve_catalog(catalog) -> Catalog:
 def resolve_schedule(catalog: Catalog, schedule: str | None) -> str | None:
     """The schedule to build with: the given one (checked), else the catalog's default, else
     ``STD`` when the catalog lists it; None when the catalog has no walls."""
-    if schedule:
-        wanted = schedule.upper()
+    if schedule is not None:
+        wanted = schedule.strip().upper()  # "" is refused below, not taken for the default
         if wanted not in catalog.schedules:
             raise CatalogError(
                 f"schedule {schedule!r} is not in catalog {catalog.name}; use one of "

@@ -379,9 +379,16 @@ def _check_format(document: dict, ctx: _Context) -> None:
             f'"version": {VERSION})',
         )
     if document["format"] != FORMAT:
+        model_hint = (
+            " (a model document: re-export it with 'asbuilt check MODEL.json --fix OUT', or "
+            "report on it with 'asbuilt report')"
+            if document["format"] == "asbuilt-model"
+            else ""
+        )
         raise ctx.error(
             "format",
-            f'is {_shown(document["format"])}, not "{FORMAT}"; this is not an asbuilt scan file',
+            f'is {_shown(document["format"])}, not "{FORMAT}"; this is not an asbuilt scan '
+            f"file{model_hint}",
         )
     if "version" not in document:
         raise ctx.error("version", f'missing; add "version": {VERSION}')

@@ -177,7 +177,9 @@ BAD = (
     Bad(
         "wrong format",
         _set("format", "asbuilt-model"),
-        'format: is "asbuilt-model", not "asbuilt-scan"; this is not an asbuilt scan file',
+        'format: is "asbuilt-model", not "asbuilt-scan"; this is not an asbuilt scan file (a '
+        "model document: re-export it with 'asbuilt check MODEL.json --fix OUT', or report on it "
+        "with 'asbuilt report')",
     ),
     Bad(
         "missing format",
