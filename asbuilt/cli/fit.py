@@ -4,7 +4,8 @@ A table by default (id, kind, main dimensions, centre, RMS, inliers, standard er
 fit's notes under it; ``--json``
 prints the shape documented in :mod:`asbuilt.fit.output`, lengths in the scan's units unless
 ``--units`` says otherwise; ``--output FILE`` writes that JSON atomically to FILE instead of
-standard output. Progress goes to standard error.
+standard output (``--output -``: standard output). ``SCAN`` may be ``-``: the scan is read from
+standard input (``cat scan.json | asbuilt fit - --json``). Progress goes to standard error.
 
 An object whose fit is refused does not stop the others: the table is followed by one line per
 refused object (its id, kind and the fit's reason), ``--json`` lists it among the objects, in
@@ -31,7 +32,9 @@ def register(subparsers) -> argparse.ArgumentParser:
         "asbuilt-scan file (docs/scan-format.md) and show the result.",
         epilog="Example: asbuilt fit samples/spool.json --json --units mm",
     )
-    parser.add_argument("scan", metavar="SCAN", help="the asbuilt-scan JSON file")
+    parser.add_argument(
+        "scan", metavar="SCAN", help="the asbuilt-scan JSON file ('-': standard input)"
+    )
     parser.add_argument(
         "--json", action="store_true", help="print the results as JSON instead of a table"
     )
@@ -46,7 +49,8 @@ def register(subparsers) -> argparse.ArgumentParser:
         "-o",
         metavar="FILE",
         default=None,
-        help="write the JSON to FILE (atomically) instead of standard output",
+        help="write the JSON to FILE (atomically) instead of standard output ('-': standard "
+        "output)",
     )
     parser.set_defaults(handler=run)
     return parser
@@ -68,6 +72,23 @@ def _report_dict(report, units: str) -> dict:
     return data
 
 
+def _standard_input() -> bytes:
+    """The scan's bytes from standard input, refused past the loader's size limit (read one
+    byte beyond it, not to the end of an endless stream)."""
+    import sys
+
+    from asbuilt.errors import ScanReadError
+    from asbuilt.scan.load import MAX_FILE_BYTES
+
+    data = sys.stdin.buffer.read(MAX_FILE_BYTES + 1)
+    if len(data) > MAX_FILE_BYTES:
+        raise ScanReadError(
+            f"-: standard input holds more than {MAX_FILE_BYTES // (1024 * 1024)} MiB, too "
+            "large for a sparse scan; split it into several scans"
+        )
+    return data
+
+
 def run(args: argparse.Namespace) -> int:
     """Load, fit, print; return the exit code: 0, or 1 when an object's fit was refused. Bad
     input (and a scan of which no object can be fitted) raises an AsbuiltError (exit 2)."""
@@ -82,12 +103,17 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.cli._progress import stage_progress
     from asbuilt.fit import fit
     from asbuilt.fit.output import TABLE_COLUMNS, fit_table_notes, fit_table_rows
-    from asbuilt.scan import load_scan
+    from asbuilt.scan import load_scan, loads_scan
 
+    if args.output == "-":  # as elsewhere: '-' is standard output, not a file named '-'
+        args.output, args.json = None, True
     if args.output is not None:
         # before any work; a directory is refused with a JSON file name to add
         check_target(args.output, "--output", inputs=[args.scan], example="fit.json")
-    scan = load_scan(args.scan)
+    if args.scan == "-":
+        scan = loads_scan(_standard_input(), source="-")
+    else:
+        scan = load_scan(args.scan)
     err = Console(file=sys.stderr, markup=False)
     with stage_progress(err) as bar:
         task = bar.add_task("", total=len(scan.objects), stage="fitting")

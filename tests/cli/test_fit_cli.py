@@ -415,3 +415,33 @@ def test_a_full_disk_under_stdout_is_one_line_exit_2(tmp_path, json_out):
         )
     assert done.returncode == 2
     assert done.stderr == "asbuilt: error: cannot write the output (No space left on device)\n"
+
+
+def test_the_scan_may_come_on_standard_input_and_the_json_go_to_standard_output(tmp_path):
+    doc = make_doc("mm", kinds=("plane",))
+    text = json.dumps(doc)
+    done = subprocess.run(
+        [sys.executable, "-m", "asbuilt", "fit", "-", "--output", "-"],
+        input=text,
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+    )
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["objects"][0]["id"] == "K1"
+    assert list(tmp_path.iterdir()) == []  # no file named '-'
+    bad = subprocess.run(
+        [sys.executable, "-m", "asbuilt", "fit", "-"],
+        input='{"format": 1',
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+    )
+    assert bad.returncode == 2
+    assert bad.stderr == (
+        "asbuilt: error: -: line 1 column 13: invalid JSON (Expecting ',' delimiter); fix the "
+        "syntax there\n"
+    )
