@@ -350,7 +350,8 @@ def _component_from_fit(item) -> Component:
         id=obj.id,
         type=result.primitive.kind,
         geometry=result.primitive,
-        sources=(obj.id,),
+        # an object fused with a second station's view of it (asbuilt.fit._stations) has both
+        sources=(obj.id, *((obj.extra["fused_with"],) if "fused_with" in obj.extra else ())),
         group=obj.group,
         label=obj.label,
         fit=result,

@@ -25,6 +25,7 @@ import numpy as np
 from scipy.special import chdtri
 
 from asbuilt.errors import FitError, located
+from asbuilt.fit._stations import fuse_station_views
 from asbuilt.fit._window import beyond_window, open_ends
 from asbuilt.fit.result import FitFailure, FitReport, FitResult, ObjectFit
 from asbuilt.primitives import as_points, as_vector
@@ -660,7 +661,9 @@ def fit(
             progress(done, total, obj.id)
     if failures and not fits:
         raise NothingFittedError(failures)
-    return FitReport(scan=scan, fits=tuple(fits), failures=tuple(failures))
+    report = FitReport(scan=scan, fits=tuple(fits), failures=tuple(failures))
+    # Linked objects that are one pipe seen from two stations are fitted as one.
+    return fuse_station_views(report, tolerances)
 
 
 class NothingFittedError(FitError):

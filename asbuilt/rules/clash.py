@@ -405,6 +405,11 @@ def _check_duplicate(ctx: Context, a, b, touch: float) -> bool:
                 "relabel it if it is another one; two runs: cut one back to where the other "
                 "begins"
             ),
+            Suggestion(
+                f"if {first} and {second} are one pipe seen from two stations, link them "
+                '("links": [["' + first + '", "' + second + '"]]), each with its "station": '
+                "they are then fitted as one from all their shots"
+            ),
         ),
     )
     return True
