@@ -130,8 +130,17 @@ class FitReport:
     def __len__(self) -> int:
         return len(self.fits)
 
-    def get(self, object_id: str) -> ObjectFit:
+    def get(self, object_id: str, *default):
+        """The fit of the object ``object_id``: its own, or the one it was fused into (a second
+        station's view of a pipe, ``extra["fused_with"]``). Without one, ``default`` when
+        given (as :meth:`dict.get`), else KeyError, saying whether the object's fit was
+        refused (see :attr:`failures`) or there is no such object."""
         for item in self.fits:
-            if item.object.id == object_id:
+            if item.object.id == object_id or item.object.extra.get("fused_with") == object_id:
                 return item
-        raise KeyError(object_id)
+        if default:
+            return default[0]
+        for failure in self.failures:
+            if failure.object.id == object_id:
+                raise KeyError(f"{object_id}: its fit was refused: {failure.message}")
+        raise KeyError(f"{object_id}: no object of the scan has this id")

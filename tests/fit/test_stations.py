@@ -106,3 +106,15 @@ def test_a_second_view_without_its_station_is_not_fused():
     assert [item.object.id for item in report.fits] == ["P1", "P9"]
     assert [failure.object.id for failure in report.failures] == ["P1b"]
     assert len(report.get("P1").object.points) == 15
+
+
+def test_the_report_finds_a_fused_view_by_its_own_id_and_says_why_another_is_missing():
+    report = fit(_scan(second_station=None))  # P1b refused (behind its own pipe from FRONT)
+    assert report.get("P9").object.id == "P9"
+    assert report.get("P1b", None) is None and report.get("nope", "x") == "x"
+    with pytest.raises(KeyError, match="P1b: its fit was refused: "):
+        report.get("P1b")
+    with pytest.raises(KeyError, match="nope: no object of the scan has this id"):
+        report.get("nope")
+    fused = fit(_scan())
+    assert fused.get("P1b") is fused.get("P1")
