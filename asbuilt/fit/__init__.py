@@ -538,6 +538,10 @@ def _undetermined(result: FitResult) -> str | None:
     axis_deg = stderr.get("axis_deg")
     if axis_deg is not None and not axis_deg <= UNDETERMINED_AXIS_DEG:
         reasons.append(f"axis +-{axis_deg:.0f} deg")
+    # A cuboid's three rotations: seven shots on one face can leave it turned anyhow in-plane.
+    turns = [float(v) for v in stderr.get("axes_deg") or () if v is not None]
+    if turns and not max(turns) <= UNDETERMINED_AXIS_DEG:
+        reasons.append(f"orientation +-{max(turns):.0f} deg")
     if not reasons:
         return None
     return (

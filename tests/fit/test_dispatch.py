@@ -794,3 +794,27 @@ def test_a_pipe_in_metres_declared_in_millimetres_is_told_to_check_the_units():
             sigma=0.002,
         )
     assert "spans" not in str(info.value)
+
+
+def test_a_cuboid_turned_anyhow_in_its_plane_says_so():
+    # Seven shots on one face of a box: its in-plane orientation is known to +-31 degrees
+    # (a new user's object C5, which flipped between two fits on sub-micrometre changes).
+    from asbuilt.fit import _undetermined
+    from asbuilt.fit.result import FitResult
+    from asbuilt.primitives import Cuboid
+
+    box = Cuboid(center=[0.0, 0.0, 1.0], axes=np.eye(3), size=[0.36, 0.36, 4.9])
+    result = FitResult(
+        primitive=box,
+        residuals=np.zeros(7),
+        inliers=np.ones(7, bool),
+        stderr={"size": [None, 0.03, 0.79], "axes_deg": [0.57, 30.96, 30.95], "center": 0.39},
+        observed=(False, False, False),
+        sigma=0.002,
+        sigma_source="sensor",
+        method="test",
+    )
+    assert _undetermined(result) == (
+        "These points do not determine the cuboid (one standard error: orientation +-31 deg); "
+        "measure more of its surface, or check its kind."
+    )
