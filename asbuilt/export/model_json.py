@@ -386,6 +386,14 @@ def _number(entry: dict, key: str) -> float:
     return float(value)
 
 
+def _positive(entry: dict, key: str) -> float:
+    """A finite number field > 0 (a diameter, metres), named in its own terms when it is not."""
+    value = _number(entry, key)
+    if value <= 0:
+        raise _BadField(key, f"must be a positive length in metres, not {value:g}")
+    return value
+
+
 def _point(entry: dict, key: str, value=None) -> list:
     """A field of 3 finite numbers [x, y, z]."""
     value = entry[key] if value is None else value
@@ -477,11 +485,11 @@ def _geometry(entry: dict):
     shape = entry.get("shape")
     if shape == "straight":
         return Straight(
-            _point(entry, "start"), _point(entry, "end"), _number(entry, "od") / 2, _wall(entry)
+            _point(entry, "start"), _point(entry, "end"), _positive(entry, "od") / 2, _wall(entry)
         )
     if shape == "bend":
         start, end = _points(entry, "ends", 2)
-        return Bend(start, end, _point(entry, "center"), _number(entry, "od") / 2, _wall(entry))
+        return Bend(start, end, _point(entry, "center"), _positive(entry, "od") / 2, _wall(entry))
     if shape == "reducer":
         return Reducer(
             _point(entry, "start"),
@@ -498,7 +506,7 @@ def _geometry(entry: dict):
             run_start,
             run_end,
             _point(entry, "branch_end"),
-            _number(entry, "od") / 2,
+            _positive(entry, "od") / 2,
             _number(entry, "branch_od") / 2,
             _wall(entry),
         )

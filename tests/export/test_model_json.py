@@ -199,6 +199,17 @@ def test_bad_components_are_located(component, field, message):
     assert message in str(info.value)
 
 
+@pytest.mark.parametrize("od", [-0.1, 0])
+def test_a_diameter_that_is_no_length_is_named_as_such(od):
+    pipe = {"id": "P1", "type": "pipe", "shape": "straight", "start": [0, 0, 0], "end": [1, 0, 0]}
+    document = {"format": FORMAT, "version": 1, "components": [{**pipe, "od": od}]}
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value) == (
+        f"m.json: components[0] (P1).od: must be a positive length in metres, not {od:g}"
+    )
+
+
 def test_two_components_of_one_id_are_refused_when_read():
     # findings, spools and CAD names refer to components by id (only writing CAD caught it)
     pipe = {"type": "pipe", "shape": "straight", "start": [0, 0, 0], "end": [1, 0, 0]}
