@@ -58,16 +58,26 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 def _report_dict(report, units: str) -> dict:
     """``fit_report_to_dict`` with the refused objects among the fitted ones, in the scan's
-    order, each as ``{"id", "kind", "error"}`` (``error``: the fit's one-line reason)."""
+    order, each as ``{"id", "kind", "error"}`` (``error``: the fit's one-line reason), and each
+    view fused into another object (:mod:`asbuilt.fit._stations`) as ``{"id", "kind",
+    "fused_into"}``."""
     from asbuilt.fit.output import fit_report_to_dict
 
     data = fit_report_to_dict(report, units)
-    if not report.failures:
+    fused = {
+        item.object.extra["fused_with"]: item.object.id
+        for item in report.fits
+        if "fused_with" in item.object.extra
+    }
+    if not report.failures and not fused:
         return data
     entries = {item.object.id: entry for item, entry in zip(report.fits, data["objects"])}
     for failure in report.failures:
         obj = failure.object
         entries[obj.id] = {"id": obj.id, "kind": obj.kind, "error": failure.message}
+    for obj in report.scan.objects:
+        if obj.id in fused:  # a second station's view, fitted as part of another object
+            entries[obj.id] = {"id": obj.id, "kind": obj.kind, "fused_into": fused[obj.id]}
     data["objects"] = [entries[obj.id] for obj in report.scan.objects if obj.id in entries]
     return data
 

@@ -118,3 +118,28 @@ def test_the_report_finds_a_fused_view_by_its_own_id_and_says_why_another_is_mis
         report.get("nope")
     fused = fit(_scan())
     assert fused.get("P1b") is fused.get("P1")
+
+
+def test_asbuilt_fit_json_lists_the_fused_view_in_its_place(tmp_path, capsys):
+    from asbuilt.cli import main
+
+    scan = _scan()
+    doc = {
+        "format": "asbuilt-scan",
+        "version": 1,
+        "units": "m",
+        "sensor": {"position": FRONT.tolist(), "range_sigma": 0.002},
+        "objects": [
+            {"id": o.id, "kind": o.kind, "points": o.points.tolist()}
+            | ({"station": o.station.tolist()} if o.station is not None else {})
+            for o in scan.objects
+        ],
+        "links": [list(link) for link in scan.links],
+    }
+    path = tmp_path / "two.json"
+    path.write_text(json.dumps(doc))
+    assert main(["fit", str(path), "--json"]) == 0
+    objects = json.loads(capsys.readouterr().out)["objects"]
+    assert [o["id"] for o in objects] == ["P1", "P1b", "P9"]
+    assert objects[1] == {"id": "P1b", "kind": "cylinder", "fused_into": "P1"}
+    assert objects[0]["n_points"] == 30
