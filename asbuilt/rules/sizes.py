@@ -357,8 +357,16 @@ def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
             mean_se = float(1.0 / np.sqrt(weights.sum()))
             shared = table.within(mean, _window(ctx, mean_se))
             undecided = any(size_status(ctx, comps[c], table) == "ambiguous" for c in (a, b))
-            if len(shared) == 1:
-                n, s = shared[0]
+            # The shared size must be one each fit allows (within its own snapping window): two
+            # fits of clearly different sizes (an NPS 4 and an NPS 3 pipe) average to a third
+            # size neither pipe is, which no fix may impose.
+            agreed = [
+                (n, s)
+                for n, s in shared
+                if all(abs(s - od) <= _window(ctx, se) for od, se in measures)
+            ]
+            if len(agreed) == 1:
+                n, s = agreed[0]
                 targets = [c for c in (a, *path, b) if _size_of(comps[c], table)[1] != s]
                 suggestions.append(
                     Suggestion(

@@ -195,15 +195,28 @@ def test_contiguous_mismatch_suggests_shared_size():
         [4, 0, 1],
         0.0889,
         nominal="3",
-        od_fit=0.0905,
+        od_fit=0.1010,  # a poor fit snapped to NPS 3; its window (15 mm) also holds NPS 4
         status="snapped",
-        od_stderr=0.004,
+        od_stderr=0.005,
     )
     (f,) = only(run(a, b), "contiguous-diameter-mismatch")
     assert f.severity == "error" and f.objects == ("P1", "P2")
     assert "NPS 4" in f.message and "NPS 3" in f.message
     fix = f.suggestions[0]
     assert fix.unambiguous and fix.change["value"] == "4" and fix.change["objects"] == ["P2"]
+
+
+def test_two_clearly_different_sizes_get_no_shared_size_neither_is():
+    # An NPS 4 pipe (fit 114.5 mm) and an NPS 3 one (88.8 mm) through an elbow: their
+    # inverse-variance mean snaps to NPS 3 1/2 (101.6 mm), 36 and 40 standard errors from the
+    # fits; --fix applied it once. Only the reducer is suggested now.
+    a = pipe("E1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", od_fit=0.1145, status="snapped")
+    b = pipe("E2", [2.05, 0, 1], [4, 0, 1], 0.0889, nominal="3", od_fit=0.0888, status="snapped")
+    (f,) = only(run(a, b), "contiguous-diameter-mismatch")
+    assert [s.description for s in f.suggestions] == [
+        "if the size really changes, add a reducer between E1 and E2"
+    ]
+    assert not any(s.unambiguous for s in f.suggestions)
 
 
 def test_same_size_contiguous_pipes_are_fine():
