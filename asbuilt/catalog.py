@@ -48,6 +48,12 @@ __all__ = [
 #: The catalog used when none is given.
 DEFAULT_CATALOG = "asme-b36.10m"
 
+#: Outside diameters (metres) a pipe catalog's rows may have: the smallest standard tube (NPS
+#: 1/8, 10.3 mm; 6 mm instrument tubing) to beyond the largest (NPS 96 and EN 10220's 2.54 m),
+#: with margin. Outside, the numbers are almost surely in another unit than the header says (a
+#: millimetre table under "units: m" is 60,300 mm pipes, and nothing would ever snap to it).
+PLAUSIBLE_PIPE_OD = (0.003, 6.0)
+
 #: Dimension columns of a fittings table (lengths in the file's units), ASME B16.9 letters:
 #: 90 degree long-radius elbow centre-to-end A (= its bend radius), 45 degree long-radius elbow
 #: centre-to-end B, 90 degree short-radius elbow centre-to-end, equal tee run C and outlet M,
@@ -485,6 +491,13 @@ def _fields(catalog: Catalog) -> dict:
     return {name: getattr(catalog, name) for name in catalog.__dataclass_fields__}
 
 
+def _nominal_key(nominal: str):
+    """What makes two nominal sizes the same: their number when they are one (``4`` and
+    ``4.0``, ``1 1/2`` and ``1.5``), else their text in upper case (``DN100``)."""
+    value = _parse_number(nominal)
+    return round(value, 9) if value is not None else nominal.strip().upper()
+
+
 def _number(cell: str, *, source: str, line: int, column: str, scale: float) -> float | None:
     cell = cell.strip()
     if not cell:
@@ -588,13 +601,15 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
             raise CatalogError(
                 "empty nominal size", source=source, where=f"line {line_no}, column 'nominal'"
             )
-        if nominal in seen:
+        # "4" and "4.0", "1 1/2" and "1.5" name one size: a hint would match either row
+        key = _nominal_key(nominal)
+        if key in seen:
             raise CatalogError(
-                f"nominal size {nominal!r} repeats line {seen[nominal]}",
+                f"nominal size {nominal!r} repeats line {seen[key]}",
                 source=source,
                 where=f"line {line_no}, column 'nominal'",
             )
-        seen[nominal] = line_no
+        seen[key] = line_no
         if not row["source"]:
             raise CatalogError(
                 "every row needs its source (standard and table it comes from)",
@@ -621,6 +636,15 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
             if od is None:
                 raise CatalogError(
                     "empty outside diameter", source=source, where=f"line {line_no}, column 'od'"
+                )
+            low, high = PLAUSIBLE_PIPE_OD
+            if not low <= od <= high:
+                raise CatalogError(
+                    f"an outside diameter of {od * 1000:.4g} mm is no pipe's (expected "
+                    f"{low * 1000:g} mm to {high:g} m once in metres); check the header's "
+                    f"'units: {units}' against the numbers",
+                    source=source,
+                    where=f"line {line_no}, column 'od'",
                 )
             walls = {}
             for column in columns:

@@ -318,6 +318,10 @@ def test_user_catalog_with_fittings_beside_it(tmp_path):
         (GOOD.replace("# name: mine\n", ""), "header", "name"),
         (GOOD.replace("# title", "# colour"), "line 2", "unknown header key"),
         (GOOD.replace("114.3", "60.3"), "line 8, column 'od'", "same OD"),
+        # the same size spelled twice: a hint "4" would match either row
+        (GOOD.replace("2,60.3", "4.0,60.3"), "line 8, column 'nominal'", "repeats line 7"),
+        # millimetre numbers under "units: m": 60,300 mm pipes, to which nothing would snap
+        (GOOD.replace("# units: mm", "# units: m"), "line 7, column 'od'", "is no pipe's"),
     ],
 )
 def test_malformed_catalog_names_file_line_and_column(tmp_path, text, where, message):
