@@ -157,7 +157,7 @@ def _refuse_resizing(args, model) -> None:
     if not any((c.snap or {}).get("status") for c in model.components):
         return
     given = load_catalog(args.catalog)
-    if given is own or (given.name == own.name and given.path == own.path):
+    if given is own or (given.name == own.name and _same_path(given.path, own.path)):
         return
     raise ModelDocumentError(
         f"--catalog {args.catalog} cannot re-size this model's pipes: their sizes were chosen "
@@ -165,6 +165,19 @@ def _refuse_resizing(args, model) -> None:
         "another catalog, or leave --catalog out",
         source=args.scan,
     )
+
+
+def _same_path(one, two) -> bool:
+    """Whether two catalog paths (None for a shipped catalog) name one file: a model stores
+    the absolute path, the command line may give it relative."""
+    import os
+
+    if one is None or two is None:
+        return one == two
+    try:
+        return os.path.samefile(one, two)
+    except OSError:
+        return os.path.abspath(one) == os.path.abspath(two)
 
 
 def _list_rules(config) -> None:

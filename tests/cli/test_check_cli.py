@@ -319,6 +319,22 @@ def test_a_model_built_with_a_user_catalog_is_checked_with_it(tmp_path, capsys):
     assert code == 0, err
 
 
+def test_the_same_user_catalog_by_a_relative_path_is_its_own(tmp_path, capsys, monkeypatch):
+    # The document stores the catalog's absolute path; '--catalog site.csv' from its directory
+    # named the same file and was refused as another catalog.
+    from pathlib import Path
+
+    _site_catalog(tmp_path / "site.csv")
+    spool = Path(__file__).resolve().parents[2] / "samples" / "spool.json"
+    monkeypatch.chdir(tmp_path)
+    assert main(["model", str(spool), "--catalog", "site.csv", "--out", "model.json"]) == 0
+    capsys.readouterr()
+    code, out, err = run(["model.json", "--catalog", "site.csv"], capsys)
+    assert code == 0, err
+    code, out, err = run(["model.json", "--catalog", "./site.csv"], capsys)
+    assert code == 0, err
+
+
 def test_plural_of_fix_and_the_others():
     from asbuilt.cli.check import _plural
 
