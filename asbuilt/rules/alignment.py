@@ -291,10 +291,16 @@ def check_plumb(ctx: Context) -> None:
         if material == "pipe" and outcome == "unverifiable":
             continue  # no plumb standard for pipes: only clear leans are reported
         shown = f"1:{height / lean:.0f}" if lean > 0 else "plumb"
+        # Enough decimals that a lean over the limit never reads as equal to it.
+        leans, limit = mm(lean), mm(allowed)
+        places = 1
+        while leans == limit and lean != allowed and places < 4:
+            places += 1
+            leans, limit = f"{lean * 1000:.{places}f} mm", f"{allowed * 1000:.{places}f} mm"
         ctx.emit(
             slug,
             ids,
-            f"leans {mm(lean)} over {height:.2f} m ({shown}), allowed {mm(allowed)} "
+            f"leans {leans} over {height:.2f} m ({shown}), allowed {limit} "
             f"(1:{ratio:.0f}, {standard})"
             + (
                 f"; the lean is known to +- {mm(se)} only"
@@ -315,15 +321,24 @@ def check_plumb(ctx: Context) -> None:
         )
 
 
-def _required_slope(ctx: Context, comp: Component) -> float:
+def _required_slope(ctx: Context, comp: Component) -> tuple[float, str]:
+    """The slope a drain must have and where the requirement comes from."""
     required = float(ctx.opt("slope", "required"))
     if ctx.opt("slope", "use_ipc_704") and comp.nominal:
         # By the catalog's NPS: a DN catalog's "150" is NPS 6, not 150.
         table = ctx.catalog
         nps = table.nps_of(comp.nominal) if table is not None else nps_value(comp.nominal)
         if nps is not None:
-            return 0.02 if nps <= 2.5 else 0.01 if nps <= 6 else 0.005
-    return required
+            return (0.02 if nps <= 2.5 else 0.01 if nps <= 6 else 0.005), "IPC 2021 table 704.1"
+    return required, "the rules file's slope.required"
+
+
+def _has_keyword(text: str, keywords: list[str]) -> bool:
+    """Whether a keyword is a whole word (or words) of ``text``: "drain" names "roof drain",
+    not "raindrain" nor "drainage"."""
+    return any(
+        re.search(rf"(?<![a-z0-9]){re.escape(keyword)}(?![a-z0-9])", text) for keyword in keywords
+    )
 
 
 def check_slope(ctx: Context) -> None:
@@ -333,9 +348,9 @@ def check_slope(ctx: Context) -> None:
     for comp, ids in _one_per_fit(ctx.pipes):
         if keywords:
             text = " ".join(filter(None, (comp.label, comp.group))).lower()
-            if not any(k in text for k in keywords):
+            if not _has_keyword(text, keywords):
                 continue
-        required = _required_slope(ctx, comp)
+        required, source = _required_slope(ctx, comp)
         if required <= 0:
             continue
         found = measured_axis(comp)
@@ -349,10 +364,17 @@ def check_slope(ctx: Context) -> None:
         se_deg = axis_stderr_deg(comp)
         se = None if se_deg is None else float(np.radians(se_deg))
         outcome = verdict_min(slope, required, se, ctx.k)
+        known = f" (known to +- {se * 100:.2f}%)" if se else ""
+        if slope < required:
+            text = f"slope {slope * 100:.2f}%{known} is below the required drainage slope"
+        else:  # at least the required slope, but not known well enough to say so
+            text = (
+                f"slope {slope * 100:.2f}%{known} cannot be told from the required drainage slope"
+            )
         ctx.emit(
             slug,
             ids,
-            f"slope {slope * 100:.2f}% is below the required drainage slope {required * 100:.2f}%",
+            f"{text} {required * 100:.2f}% ({source})",
             location=centre,
             measured=slope,
             allowed=required,

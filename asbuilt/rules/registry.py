@@ -102,7 +102,7 @@ RULES: tuple[Rule, ...] = (
         "AB203",
         "slope",
         "error",
-        "slope {slope} is below the required drainage slope {required}",
+        "slope {slope} is below the required drainage slope {required} ({source})",
         "IPC 2021 table 704.1 (drainage: 2% up to 2 1/2 in, 1% for 3-6 in, 0.5% from 8 in) or the "
         "project's piping spec, when the rules file sets one.",
         "alignment",

@@ -220,10 +220,30 @@ def test_ipc_704_by_size(nominal, slope, flagged):
 
 def test_slope_keywords_limit_the_rule_to_drains():
     config = loads_rules('[slope]\nrequired = 0.01\nkeywords = ["drain"]')
-    found = only(
-        run(sloped("P1", 0.0), sloped("P2", 0.0, label="drain line"), config=config), "slope"
-    )
-    assert [f.objects for f in found] == [("P2",)]
+    pipes = [
+        sloped("P1", 0.0),
+        sloped("P2", 0.0, label="drain line"),
+        sloped("P3", 0.0, label="raindrain"),  # a word of its own, not "drain"
+        sloped("P4", 0.0, label="vent header (no drainage slope)"),
+        sloped("P5", 0.0, label="roof-drain 2"),
+    ]
+    found = only(run(*pipes, config=config), "slope")
+    assert [f.objects for f in found] == [("P2",), ("P5",)]
+
+
+@pytest.mark.parametrize(
+    "slope, axis_deg, message",
+    [
+        (0.005, 0.02, "slope 0.50% (known to +- 0.03%) is below the required drainage slope 1.00%"),
+        # at least the required slope, but known too loosely to say so: not "below"
+        (0.012, 0.3, "slope 1.20% (known to +- 0.52%) cannot be told from the required drainage"),
+    ],
+)
+def test_slope_messages_say_what_the_numbers_say(slope, axis_deg, message):
+    config = loads_rules("[slope]\nrequired = 0.01")
+    (f,) = only(run(sloped("P1", slope, axis_deg=axis_deg), config=config), "slope")
+    assert message in f.message  # an unverifiable one is prefixed "cannot verify slope: "
+    assert f.message.endswith("(the rules file's slope.required)")
 
 
 def test_tilted_helper_is_a_unit_vector():
@@ -329,3 +349,11 @@ def test_ipc_704_by_the_nps_of_a_dn_size(nominal, slope, flagged):
     pipe_ = sloped("P1", slope, nominal=nominal)
     found = check_model(model(pipe_), config, catalog="en-10220")
     assert bool(only(found, "slope")) == flagged
+
+
+def test_a_lean_just_over_the_limit_never_reads_as_equal_to_it():
+    # 6.01 mm over 3 m (allowed 6.0 mm) read "leans 6.0 mm ..., allowed 6.0 mm"
+    comp = column("C1", [0, 0, 0], lean_deg(STEEL + 0.00001), H, axes_deg=0.00001)
+    (f,) = only(run(comp), "out-of-plumb")
+    assert f.severity == "error"
+    assert f.message.startswith("leans 6.01 mm over 3.00 m (1:499), allowed 6.00 mm (1:500")
