@@ -151,7 +151,21 @@ def check_nonstandard(ctx: Context, table: SizeTable | None) -> None:
                 stderr=se,
             )
             continue
+        snap = comp.snap or {}
+        joint = snap.get("od_joint")
+        if joint is not None and len(snap.get("run") or ()) > 1:
+            # Merging sized the whole run from its pipes' fits together: judge, and say, that.
+            od, se = float(joint), snap.get("od_joint_stderr")
+            se = None if se is None else float(se)
+            nearest = table.nearest(od, count) if table is not None else nearest
         name, size_od, off = nearest[0]
+        run = snap.get("run") if joint is not None else None
+        together = (
+            f" (the run {', '.join(run)} measured together; this pipe alone "
+            f"{mm(measured_od(comp)[0])})"
+            if run and len(run) > 1
+            else ""
+        )
         tol = float(ctx.general("diameter_tolerance"))
         outcome = verdict(abs(off), tol, se, ctx.k)
         suggestions = ()
@@ -180,7 +194,7 @@ def check_nonstandard(ctx: Context, table: SizeTable | None) -> None:
             slug,
             [comp.id],
             f"OD {mm(od)} is no {catalog} size (nearest {_label(table, name)} = {mm(size_od)}, "
-            f"{mm(abs(off))} off)",
+            f"{mm(abs(off))} off){together}",
             location=where,
             measured=abs(off),
             allowed=tol,

@@ -346,3 +346,19 @@ def test_a_tanks_hint_is_not_a_pipe_size():
 
     tank = replace(pipe("TK1", [0, 0, 0], [0, 0, 4], 3.0), type="cylinder")
     assert not only(run(tank, scan=scan_with_hint("TK1", "3000 ID")), "hint-mismatch")
+
+
+def test_a_pipe_sized_with_its_run_is_judged_and_described_by_the_run():
+    # Merging sized P1-P3 together (116.5 +- 0.29 mm): P2 alone fits 116.1 mm, 1.8 mm from NPS
+    # 4, and its error read "OD 116.1 mm ... 1.8 mm off", within the 2 mm it was judged against.
+    import dataclasses
+
+    comp = pipe("P2", [0, 0, 1], [2, 0, 1], 0.1161, status="no-size", od_fit=0.1161)
+    snap = {**comp.snap, "run": ["P1", "P2", "P3"], "od_joint": 0.1165, "od_joint_stderr": 0.00029}
+    (f,) = only(run(dataclasses.replace(comp, snap=snap)), "nonstandard-diameter")
+    assert (
+        "OD 116.5 mm is no ASME B36.10M size (nearest NPS 4 = 114.3 mm, 2.2 mm off) (the run "
+        in f.message
+    )
+    assert f.message.endswith("(the run P1, P2, P3 measured together; this pipe alone 116.1 mm)")
+    assert f.measured == pytest.approx(0.0022)
