@@ -231,7 +231,8 @@ def loads_design(text: str, *, source: str | None = None) -> Design:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise DesignError(
-            f"not valid JSON ({exc.msg} at line {exc.lineno})", source=source
+            f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",
+            source=source,
         ) from None
     if not isinstance(doc, dict):
         raise DesignError("must be a JSON object", source=source)

@@ -104,7 +104,7 @@ def test_readable_nominal_is_kept_as_written(nominal):
 
 
 def test_not_json():
-    with pytest.raises(DesignError, match="not valid JSON"):
+    with pytest.raises(DesignError, match="invalid JSON.*fix the syntax there"):
         loads_design("{", source="d.json")
 
 

@@ -335,7 +335,8 @@ def load_model_document(path) -> dict:
         document = json.loads(text)
     except json.JSONDecodeError as exc:
         raise ModelDocumentError(
-            f"not valid JSON (line {exc.lineno}: {exc.msg})", source=source
+            f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",
+            source=source,
         ) from None
     _check_document(document, source)
     return document

@@ -242,7 +242,8 @@ def loads_scene(text: str, *, source: str | None = None, base_dir=None) -> Scene
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise SceneError(
-            f"not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})", source=source
+            f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",
+            source=source,
         ) from None
     return scene_from_dict(doc, source=source, base_dir=base_dir)
 

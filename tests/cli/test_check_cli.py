@@ -168,7 +168,7 @@ def test_rules_file_changes_severity(tmp_path, capsys):
     [
         (["--rules", "{tmp}/missing.toml"], "no such file"),
         (["--rules", "{tmp}/bad.toml"], "[no-such-rule]: unknown rule"),
-        (["--design", "{tmp}/bad.json"], "not valid JSON"),
+        (["--design", "{tmp}/bad.json"], "invalid JSON"),
         (["--select", "AB999"], "unknown rule 'AB999'"),
         (["--fix", "{tmp}/out.xyz"], "unknown output format"),
     ],

@@ -64,7 +64,7 @@ def test_points_and_exact_and_stdout(scene_file, capsys):
 @pytest.mark.parametrize(
     "content, message",
     [
-        ("{not json", "not valid JSON"),
+        ("{not json", "invalid JSON"),
         (json.dumps({**SCENE, "units": "yard"}), "units: unknown unit 'yard'"),
         (
             json.dumps(

@@ -124,7 +124,7 @@ def test_real_pipeline_model_round_trips(tmp_path):
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ("{", "not valid JSON (line 1"),
+        ("{", "line 1 column 2: invalid JSON"),
         ("[]", "the document must be a JSON object"),
         ('{"format": "asbuilt-scan", "version": 1}', "format: format is 'asbuilt-scan'"),
         ('{"format": "asbuilt-model", "version": 9}', "version: version 9 is not supported"),

@@ -144,7 +144,7 @@ def test_bad_scene_one_located_line(scene_doc, mutate, message):
 
 
 def test_bad_json_and_missing_file(tmp_path):
-    with pytest.raises(SceneError, match=r"x.json: not valid JSON \(line 1"):
+    with pytest.raises(SceneError, match=r"x.json: line 1 column \d+: invalid JSON"):
         loads_scene("{nope", source="x.json")
     with pytest.raises(SceneError, match="file not found"):
         load_scene(tmp_path / "missing.json")
