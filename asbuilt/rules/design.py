@@ -275,7 +275,13 @@ def _check_section(ctx, designed, comp, built, wanted, se_value):
             allowed,
             se_value,
             "m",
-            f"+{mm(plus)} / -{mm(minus)} (ACI 117)",
+            f"+{mm(plus)} / -{mm(minus)} ("
+            + (
+                "ACI 117"  # concrete members' cross-section tolerance
+                if getattr(designed, "material", None) != "steel"
+                else "the rules file's section tolerance; ACI 117 is for concrete"
+            )
+            + ")",
             verdict(abs(diff), allowed, se_value, ctx.k),
         )
 

@@ -98,6 +98,19 @@ def test_column_position_and_section():
     assert any("section" in m and "+20.0 mm" in m for m in messages)
 
 
+@pytest.mark.parametrize(
+    "material, named", [(None, "(ACI 117)"), ("concrete", "(ACI 117)"), ("steel", "for concrete")]
+)
+def test_a_steel_columns_section_is_not_judged_by_a_concrete_standards_name(material, named):
+    built = model(column("C1", [0, 0, 0], 0.0, 3.0, section=(0.32, 0.3), size_se=0.001))
+    column_design = {"id": "DC1", "base": [0, 0, 0], "top": [0, 0, 3000], "size": [300, 300]}
+    if material:
+        column_design["material"] = material
+    messages = [f.message for f in findings(built, design(columns=[column_design]))]
+    (section,) = [m for m in messages if m.startswith("section deviates")]
+    assert section.endswith(named + ")") or named in section
+
+
 def test_design_rules_need_a_design():
     built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4"))
     assert not [f for f in check_model(built) if f.code.startswith("AB6")]
