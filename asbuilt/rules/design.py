@@ -159,10 +159,15 @@ def _emit(
     outcome,
     suggestion=None,
 ):
+    # An unverifiable one may be within the tolerance: it is not known to deviate.
+    verb = "cannot be told from" if outcome == "unverifiable" else "deviates from"
+    known = f" (known to +- {se * 1000:.1f} mm)" if outcome == "unverifiable" and se else ""
+    if unit != "m":
+        known = ""
     ctx.emit(
         "design-deviation",
         [comp.id],
-        f"{aspect} deviates from design {designed.id}: {measured_text}, allowed {standard}",
+        f"{aspect} {verb} design {designed.id}: {measured_text}{known}, allowed {standard}",
         location=centre_of(comp.geometry),
         measured=measured,
         allowed=allowed,

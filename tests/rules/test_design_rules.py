@@ -44,6 +44,16 @@ def test_spool_length_pfi_es3(nominal, built_length, expected):
         assert "PFI ES-3" in f.message and f"NPS {nominal}" in f.message
 
 
+def test_a_length_the_uncertainty_cannot_settle_is_not_said_to_deviate():
+    # 4 mm long, known to +-2 mm: 4 - 2 x 2 < 3 mm, so it may be within PFI's +-3 mm
+    built = model(pipe("P1", [0, 0, 1], [2.004, 0, 1], 0.1143, nominal="4", length_se=0.002))
+    d = design(pipes=[{"id": "D1", "nominal": "4", "start": [0, 0, 1000], "end": [2000, 0, 1000]}])
+    (f,) = [f for f in findings(built, d, "design-deviation") if "length" in f.message]
+    assert f.unverifiable and "deviates" not in f.message
+    assert "length cannot be told from design D1: " in f.message
+    assert "(known to +- 2.0 mm)" in f.message
+
+
 def test_perfect_spool_matches_design_without_findings():
     built = model(
         pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.001),
