@@ -16,8 +16,6 @@ import sys
 import threading
 from importlib import import_module
 
-import numpy as np
-
 from .. import __version__
 from ..errors import AsbuiltError
 
@@ -101,6 +99,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         # Numerical warnings are the library's to handle (its fits drop overflowing starts):
         # on the command line they would only print noise around one clean result or error.
+        # numpy is imported here, not with the module: --help and --version do without it.
+        import numpy as np
+
         with np.errstate(all="ignore"):
             code = int(handler(args) or 0)
         sys.stdout.flush()  # a full disk under stdout is reported here, not at exit

@@ -96,7 +96,9 @@ def fuse_station_views(report: FitReport, tolerances: Tolerances) -> FitReport:
             continue
         points = np.vstack([first.object.points, second.object.points])
         try:
-            joint = fit_points("cylinder", points, sigma=scan.sensor.range_sigma)
+            joint = fit_points(
+                "cylinder", points, sigma=scan.sensor.range_sigma, tolerances=tolerances
+            )
         except FitError:
             continue
         if not same_pipe(joint, first.result, tolerances) or not same_pipe(

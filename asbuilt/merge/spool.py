@@ -494,8 +494,7 @@ def build_spools(
     # spools: pipes joined by any joint (including contacts and failed ones)
     roots = {group[0]: group for group in connected_groups(len(pipes), joints)}
     spool_of: dict[int, str] = {}
-    pipe_ids = {p.id for p in pipes}
-    reserved = pipe_ids | set(taken_ids)  # every object's id
+    reserved = {p.id for p in pipes} | set(taken_ids)  # every object's id
     used_names: set[str] = set(reserved)
     groups_count: dict[str, int] = {}
     for members in roots.values():

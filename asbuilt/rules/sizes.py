@@ -86,12 +86,13 @@ def unit_slip(ctx: Context, table: SizeTable | None) -> tuple[str, float] | None
     scan = ctx.model.scan
     if table is None or scan is None or not table.sizes or scan.units not in UNITS:
         return None
-    cylinders = [c for c in ctx.pipes if measured_od(c)[0] is not None]
+    measured = [(c, measured_od(c)[0]) for c in ctx.pipes]
+    cylinders = [c for c, od in measured if od is not None]
     if not cylinders:
         return None
     smallest = min(size for _, _, size in table.sizes) / IMPLAUSIBLE_OD_FACTOR
     largest = max(size for _, _, size in table.sizes) * IMPLAUSIBLE_OD_FACTOR
-    if any(smallest <= measured_od(c)[0] <= largest for c in cylinders):
+    if any(od is not None and smallest <= od <= largest for _, od in measured):
         return None
     pipes = [c for c in cylinders if c.type == "pipe"] or cylinders
     best = None
@@ -103,24 +104,26 @@ def unit_slip(ctx: Context, table: SizeTable | None) -> tuple[str, float] | None
         # every pipe a size, the most closely, wins (a wide window can let two units match).
         score = 0.0
         for component in pipes:
-            sizes = _sizes_at(ctx, table, component, factor)
+            od, window = _scaled(ctx, component, factor)
+            sizes = _sizes_at(table, od, window)
             if not sizes:
                 break
-            od, se = measured_od(component)
-            window = _window(ctx, None if se is None else se * factor)
-            score += abs(sizes[0][1] - od * factor) / window
+            score += abs(sizes[0][1] - od) / window
         else:
             if best is None or score < best[0]:
                 best = (score, unit, factor)
     return None if best is None else (best[1], best[2])
 
 
-def _sizes_at(ctx: Context, table: SizeTable, component: Component, factor: float):
-    """The catalog sizes ``(nominal, od)`` within the snapping window of a pipe's measured OD
-    scaled by ``factor``, nearest first."""
+def _scaled(ctx: Context, component: Component, factor: float) -> tuple[float, float]:
+    """A pipe's measured OD scaled by ``factor`` and its snapping window at that scale, metres."""
     od, se = measured_od(component)
-    od, se = od * factor, None if se is None else se * factor
-    return sorted(table.within(od, _window(ctx, se)), key=lambda size: abs(size[1] - od))
+    return od * factor, _window(ctx, None if se is None else se * factor)
+
+
+def _sizes_at(table: SizeTable, od: float, window: float):
+    """The catalog sizes ``(nominal, od)`` within ``window`` of ``od`` (metres), nearest first."""
+    return sorted(table.within(od, window), key=lambda size: abs(size[1] - od))
 
 
 def check_nonstandard(ctx: Context, table: SizeTable | None) -> None:
@@ -171,7 +174,7 @@ def check_nonstandard(ctx: Context, table: SizeTable | None) -> None:
         suggestions = ()
         if slip is not None:
             unit, factor = slip
-            sizes = _sizes_at(ctx, table, comp, factor) or table.nearest(od * factor, 1)
+            sizes = _sizes_at(table, *_scaled(ctx, comp, factor)) or table.nearest(od * factor, 1)
             true_name, true_od = sizes[0][0], sizes[0][1]
             suggestions = (
                 Suggestion(
