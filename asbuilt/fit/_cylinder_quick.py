@@ -112,12 +112,12 @@ def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
     try:
         robust = robust_among(local, starts, costs, sigma, tolerances, refined)
     except FitError:
-        if not background:
-            return None
-        # Background shots spoiled the normals and principal axes (no start settled on the
-        # pipe; a sixth of the benchmark's scans with 20% edge outliers): the robust line
-        # through the shots (the full search's, from the same random draws) finds the axis of
-        # 48 of those 50.
+        # Edge outliers spoiled the normals and principal axes, so no start settled on the
+        # pipe (142 of the benchmark's 750 40-point scans with 20% edge outliers, 83 of them
+        # with no shot a radius off the cheapest circle): the robust line through the shots
+        # (the full search's, from the same random draws) finds the axis of 138 of the 142.
+        # Of the 120 fits this makes quick (with and without the viewpoint), 119 are the full
+        # search's to a micrometre; one keeps a shot the full search rejects, 0.2 mm apart.
         line = line_axis(local, keep, np.random.default_rng(len(local)))
         if line is None:
             return None
