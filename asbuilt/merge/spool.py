@@ -424,7 +424,7 @@ def build_spools(
     b = _Builder(pipes, reducer_notes)
     active = []
     for jt in joints:
-        if jt.kind == "contact":
+        if jt.kind in ("contact", "link"):
             continue
         if jt.kind == "elbow":
             (i, ki), (j, kj) = jt.ends

@@ -14,6 +14,7 @@ from asbuilt.merge import merge_model
 from asbuilt.merge.contiguity import find_joints
 from asbuilt.merge.spool import connection_mismatches
 from asbuilt.primitives import Cuboid
+from asbuilt.rules import check_model
 from asbuilt.scan.model import ScanObject
 
 NPS4 = 0.1143
@@ -112,7 +113,7 @@ def test_a_link_between_parallel_pipes_2_m_apart_is_not_one_spool():
     assert any("not joined" in n for n in notes(model, "P2"))
 
 
-def test_a_plausible_link_still_joins_and_a_near_contact_stays_a_contact():
+def test_a_plausible_link_still_joins():
     # ends 0.6 m from the corner: beyond the inferred reach, within the link margin
     elbow = merge_model(
         report_of(
@@ -121,13 +122,93 @@ def test_a_plausible_link_still_joins_and_a_near_contact_stays_a_contact():
         )
     )
     assert types(elbow) == ["pipe", "elbow", "pipe"]
-    side_by_side = merge_model(
-        report_of(
-            [Pipe("P1", (0, 0, 0), (2, 0, 0), NPS4), Pipe("P2", (0, 0.3, 0), (2, 0.3, 0), NPS4)],
-            links=[("P1", "P2")],
-        )
-    )
-    assert len(side_by_side.spools) == 1 and "merge_notes" not in by_id(side_by_side)["P1"].snap
+
+
+# --- 2b. a link merging cannot realise is said, and joins no spool ----------------------------
+# NPS 6 (OD 168.3 mm) pipes 1.2 m long; B16.9 NPS 6 tee C = M = 143 mm, 90 LR elbow 229 mm.
+_C6 = 0.143
+
+
+def _bend(angle_deg, reach):
+    """P1 along +x ending ``reach`` before a corner at x = 0; P2 leaving it at ``angle_deg``."""
+    d = np.array([math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg)), 0.0])
+    return [
+        Pipe("P1", (-1.2 - reach, 0, 1), (-reach, 0, 1), NPS6),
+        Pipe("P2", tuple(reach * d + [0, 0, 1]), tuple((reach + 1.2) * d + [0, 0, 1]), NPS6),
+    ]
+
+
+def _junction(branch_deg, fourth=False):
+    """Run P1-P3 along x with a tee's gap at x = 0, branch P2 at ``branch_deg`` to the run (end
+    M from the junction), and with ``fourth`` a P4 opposite the branch (a cross)."""
+    d = np.array([math.cos(math.radians(branch_deg)), math.sin(math.radians(branch_deg)), 0.0])
+    pipes = [
+        Pipe("P1", (-_C6 - 1.2, 0, 1), (-_C6, 0, 1), NPS6),
+        Pipe("P3", (_C6, 0, 1), (_C6 + 1.2, 0, 1), NPS6),
+        Pipe("P2", tuple(_C6 * d + [0, 0, 1]), tuple((_C6 + 1.2) * d + [0, 0, 1]), NPS6),
+    ]
+    if fourth:
+        pipes.append(Pipe("P4", (0, -_C6, 1), (0, -_C6 - 1.2, 1), NPS6))
+    return pipes
+
+
+UNREALISED_LINKS = [
+    # a cross: the tee P1-P3-P2 takes P1's end; the link to P4 cannot be made at that end
+    pytest.param(
+        _junction(90, fourth=True),
+        [("P1", "P3"), ("P1", "P2"), ("P1", "P4")],
+        ("P1", "P4"),
+        "already joined to P3, P2 by a tee",
+        id="fourth-pipe-at-a-tee",
+    ),
+    # a 120 degree bend: no B16.9 elbow turns it, linked or not (the unlinked note's words)
+    pytest.param(
+        _bend(120, 0.10),
+        [("P1", "P2")],
+        ("P1", "P2"),
+        "meet at a 120 degree bend, beyond an elbow's 100",
+        id="linked-120-degree-bend",
+    ),
+    # parallel pipes 0.4 m apart (0.4 - 0.1683 = 232 mm outside to outside): no axis meets
+    pytest.param(
+        [Pipe("P1", (-1.5, 0, 1), (0, 0, 1), NPS6), Pipe("P2", (-1.5, 0.4, 1), (0, 0.4, 1), NPS6)],
+        [("P1", "P2")],
+        ("P1", "P2"),
+        "their axes do not meet (they pass 232 mm apart",
+        id="linked-parallel-pipes",
+    ),
+]
+
+
+@pytest.mark.parametrize(("pipes", "links", "pair", "why"), UNREALISED_LINKS)
+def test_a_link_merging_cannot_make_is_noted_and_joins_no_spool(pipes, links, pair, why):
+    """The audit's linked cases gave no note and one spool of two unjoined pieces (its fused
+    solid two solids); unlinked, the same bend was noted."""
+    model = merge_model(report_of(pipes, links=links))
+    for pid in pair:
+        said = [n for n in notes(model, pid) if why in n]
+        assert len(said) == 1 and "not joined" in said[0], notes(model, pid)
+    spool_of = {c.id: c.spool for c in model.components}
+    assert spool_of[pair[0]] != spool_of[pair[1]]
+    # every spool is one connected piece: its n components meet at n - 1 shared ports
+    for spool in model.spools:
+        members = [c for c in model.components if c.spool == spool.id]
+        found, bad = connection_mismatches(members, tolerance=1e-4)
+        assert bad == [] and found == len(members) - 1
+    # the note is a merge-note finding naming both pipes
+    assert any(f.code == "AB302" and set(pair) <= set(f.objects) for f in check_model(model))
+
+
+@pytest.mark.parametrize("links", [[], [("P1", "P3"), ("P1", "P2")]], ids=["unlinked", "linked"])
+def test_a_linked_lateral_is_a_lateral_not_a_coupling(links):
+    """Linked, the 45 degree lateral's run became a 286 mm "coupling" across the wye's gap and
+    the link to the branch a silent contact; it must be the lateral the unlinked scan gives."""
+    model = merge_model(report_of(_junction(45), links=links))
+    assert types(model) == ["pipe", "pipe", "pipe"]
+    assert [s.components for s in model.spools] == [("P1", "P3", "P2")]
+    for pid in ("P1", "P2", "P3"):
+        assert [n for n in notes(model, pid) if "45 degrees: a lateral" in n], notes(model, pid)
+    assert not [n for n in notes(model, "P2") if "not joined" in n]
 
 
 def _cuboid(center, size):
