@@ -84,14 +84,19 @@ def linked_pairs(model: Model) -> set[frozenset]:
     return pairs
 
 
-def adjacency(model: Model, touch: float, infer: float | None = None) -> dict[str, set[str]]:
+def adjacency(
+    model: Model, touch: float, infer: float | None = None, *, links: bool = True
+) -> dict[str, set[str]]:
     """Component id to the ids it is joined to.
 
-    Joined: ends within ``touch`` metres, linked in the scan, or (pipes only, when ``infer`` is
+    Joined: ends within ``touch`` metres, linked in the scan (unless ``links`` is False: what
+    is physically joined, not what the scan says should be), or (pipes only, when ``infer`` is
     given) ends within ``infer`` metres of each other.
     """
     graph: dict[str, set[str]] = defaultdict(set)
-    pairs = set(end_pairs(model.components, touch)) | linked_pairs(model)
+    pairs = set(end_pairs(model.components, touch))
+    if links:
+        pairs |= linked_pairs(model)
     if infer:
         pairs |= inferred_pairs(model, touch, infer)
     for pair in pairs:

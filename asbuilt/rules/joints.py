@@ -112,7 +112,9 @@ def check_joint_gap(ctx: Context, table: SizeTable | None) -> None:
     pipes = {c.id: c for c in ctx.pipes}
     near = inferred_pairs(ctx.model, touch, float(ctx.general("joint_distance")))
     near |= {p for p in linked_pairs(ctx.model) if p <= set(pipes)}
-    joined = adjacency(ctx.model, touch)
+    # touching ends only: a scan link says the pipes should be joined, not that they are (every
+    # linked pair was skipped, so a linked 50 mm gap went unreported)
+    joined = adjacency(ctx.model, touch, links=False)
     for pair in sorted(near, key=sorted):
         a, b = sorted(pair)
         if b in joined.get(a, ()) or any(b in joined.get(f, ()) for f in joined.get(a, ())):

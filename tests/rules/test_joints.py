@@ -7,6 +7,7 @@ from rules_builders import B36, model, pipe
 from asbuilt.model import Bend, Component
 from asbuilt.rules import check_model
 from asbuilt.rules.joints import joint_geometry
+from asbuilt.scan.model import Scan, ScanObject
 
 
 def gaps(*components):
@@ -28,6 +29,30 @@ def test_collinear_gap(gap, expected):
     assert f.message.startswith(f"{expected} of {abs(gap) * 1000:.1f} mm")
     assert f.measured == pytest.approx(abs(gap))
     assert f.objects == ("P1", "P2")
+
+
+@pytest.mark.parametrize("linked", [False, True], ids=["unlinked", "linked"])
+@pytest.mark.parametrize("merged", [False, True], ids=["unmerged", "merged"])
+def test_a_linked_gap_is_checked_like_an_unlinked_one(linked, merged):
+    """A scan link says the pipes should be joined, not that they are: every linked pair was
+    skipped as joined, so a 50 mm gap between linked collinear pipes went unreported (as with
+    ``asbuilt check --no-merge``) while the same pipes unlinked were reported."""
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    b = pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    scan = Scan(
+        units="m",
+        objects=tuple(
+            ScanObject(id=c.id, kind="cylinder", points=np.zeros((6, 3)), index=k)
+            for k, c in enumerate((a, b))
+        ),
+        links=(("P1", "P2"),) if linked else (),
+    )
+    found = [
+        f
+        for f in check_model(model(a, b, scan=scan, merged=merged), catalog=B36)
+        if f.slug == "joint-gap"
+    ]
+    assert [(f.objects, f.measured) for f in found] == [(("P1", "P2"), pytest.approx(0.05))]
 
 
 def test_uncertain_ends_make_a_small_gap_unverifiable():
