@@ -587,6 +587,7 @@ def merge_model(
         max_bend_deg=elbow_bend_limit(tol),
         reducer_notes=reducer_notes,
         taken_ids=[obj.id for obj in scan.objects],
+        joint_distance=tol.joint_distance,
     )
 
     # assemble in scan order: each pipe's components where the pipe was

@@ -14,7 +14,9 @@ axes):
   vector perpendicular to ``o_1`` towards ``-o_2``. Both pipes are trimmed (or extended) to
   ``T_k``.
 * **inline**, one size: ends within 5 mm (or overlapping) meet at their midpoint (a butt weld);
-  a larger gap is filled by a **coupling** (a straight of the pipe size).
+  a larger gap is filled by a **coupling** (a straight of the pipe size) up to
+  :func:`coupling_limit`; a longer gap by pipe (both pipes extended to meet in its middle,
+  with a note: pipe the scan did not measure).
 * **inline**, two sizes: a **reducer** of the catalog length (by its large end) centred on the
   gap; both pipes end at its ends. It is concentric when the aligned axes coincide, eccentric
   (``Reducer.offset`` the sideways step between them) when merging placed them apart
@@ -144,9 +146,20 @@ def _unit(v):
     return v / np.linalg.norm(v)
 
 
+def coupling_limit(joint_distance: float, od: float) -> float:
+    """Longest gap (metres) between collinear pipes of one size a coupling may fill.
+
+    ``2 joint_distance + 2 od``: the gap an inline joint takes without a link or shot slack
+    (:mod:`.contiguity`: room for a reducer or a tee's run), so what a fitting may plausibly
+    fill. A longer gap was bridged only by a link's margin or sparse shots: it is pipe.
+    """
+    return 2.0 * joint_distance + 2.0 * od
+
+
 class _Builder:
-    def __init__(self, pipes: Sequence[PipeSpec], reducer_notes=None):
+    def __init__(self, pipes: Sequence[PipeSpec], reducer_notes=None, joint_distance=0.15):
         self.pipes = pipes
+        self.joint_distance = joint_distance
         self.reducer_notes = dict(reducer_notes or {})
         n = len(pipes)
         self.base = np.zeros((n, 2, 3))
@@ -161,12 +174,15 @@ class _Builder:
         # How far a pipe end may be cut back into its fitting with its shots still on the
         # fitting's surface (metres; set by _elbow, _inline and _tee).
         self.allowance: dict[tuple[int, int], float] = {}
+        # Pipe ends extended to fill a gap longer than a coupling: the note for them.
+        self.filled: dict[tuple[int, int], str] = {}
 
     def reset(self):
         self.ends = self.base.copy()
         self.splits = {}
         self.fitting_at = {}
         self.allowance = {}
+        self.filled = {}
 
     def param(self, i: int, point) -> float:
         """Position of ``point`` along pipe i's axis from its start end, metres."""
@@ -239,6 +255,23 @@ def _inline(b: _Builder, joint: Joint):
             b.ends[j, kj] = mid
             b.fitting_at[i, ki] = f"butt weld with {pj.id}"
             b.fitting_at[j, kj] = f"butt weld with {pi.id}"
+            return []
+        longest = coupling_limit(b.joint_distance, max(pi.od, pj.od))
+        if gap > longest:
+            # more than a fitting fills: the gap is pipe nobody measured (a link or sparse
+            # shots made the joint), counted as pipe in the take-off and said, not hidden in a
+            # "coupling" counted as one fitting without length or weight
+            mid = 0.5 * (ei + ej)
+            b.ends[i, ki] = b.ends[j, kj] = mid
+            b.fitting_at[i, ki] = f"butt weld with {pj.id}"
+            b.fitting_at[j, kj] = f"butt weld with {pi.id}"
+            size = f"NPS {pi.nominal}" if pi.nominal else f"OD {pi.od * 1000:.1f} mm"
+            b.filled[i, ki] = b.filled[j, kj] = (
+                f"{pi.id} and {pj.id} are {gap * 1000:.0f} mm apart in line, longer than a "
+                f"fitting fills ({longest * 1000:.0f} mm): the gap is modelled as {size} pipe "
+                "the scan did not measure (both pipes extended to meet in its middle); scan "
+                "the hidden section or check the link"
+            )
             return []
         geometry = Straight(start=ei, end=ej, outer_radius=0.5 * pi.od, wall=pi.wall)
         snap = {
@@ -395,6 +428,7 @@ def build_spools(
     max_bend_deg: float = MAX_BEND_DEG,
     reducer_notes=None,
     taken_ids: Iterable[str] = (),
+    joint_distance: float = 0.15,
 ) -> tuple[list[Component], list[Spool]]:
     """Place fittings at the joints, trim pipes and group everything into spools.
 
@@ -413,6 +447,10 @@ def build_spools(
         Ids a spool must not take besides the pipes' (every scan object's id): a generated
         ``S<n>`` or a group's name already used by an object is skipped, so that a spool is
         never mistaken for an object (a column "S1" and spool "S1").
+    joint_distance : float
+        ``Tolerances.joint_distance`` (metres): a gap between collinear pipes of one size
+        longer than :func:`coupling_limit` is filled with pipe (both pipes extended, with a
+        note), not a coupling.
 
     Returns
     -------
@@ -421,7 +459,7 @@ def build_spools(
         pipe it joins.
     spools : list of Spool
     """
-    b = _Builder(pipes, reducer_notes)
+    b = _Builder(pipes, reducer_notes, joint_distance)
     active = []
     for jt in joints:
         if jt.kind in ("contact", "link"):
@@ -544,7 +582,10 @@ def build_spools(
         for k, label in ((0, "start"), (1, "end")):
             moved = float((b.ends[i, k] - b.base[i, k]) @ b.out[i, k])
             at = b.fitting_at.get((i, k), "the joint")
-            if -moved > max(TRIM_NOTE, b.allowance.get((i, k), 0.0)):
+            if (i, k) in b.filled:
+                if b.filled[i, k] not in end_notes:
+                    end_notes.append(b.filled[i, k])
+            elif -moved > max(TRIM_NOTE, b.allowance.get((i, k), 0.0)):
                 end_notes.append(
                     f"cut back {-moved * 1000:.0f} mm at its {label} for {at}: the fitting covers "
                     "pipe the scan measured there"

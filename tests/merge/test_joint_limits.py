@@ -14,6 +14,7 @@ from asbuilt.merge import merge_model
 from asbuilt.merge.contiguity import find_joints
 from asbuilt.merge.spool import connection_mismatches
 from asbuilt.primitives import Cuboid
+from asbuilt.report.takeoff import take_off
 from asbuilt.rules import check_model
 from asbuilt.scan.model import ScanObject
 
@@ -359,3 +360,50 @@ def test_a_link_to_an_object_without_a_fit_is_said_with_its_article():
     model = merge_model(replace(report, scan=scan))
     said = notes(model, "P1")
     assert len(said) == 1 and "links P1 to X1 (an object)" in said[0]
+
+
+# --- 3. a long unmeasured gap is pipe, not a "coupling" ----------------------------------------
+# NPS 6: OD 168.3 mm, STD wall 7.11 mm (ASME B36.10M); a coupling fills at most the gap an
+# unlinked inline joint takes, 2 x 0.15 m (joint_distance) + 2 x 168.3 mm = 636.6 mm.
+WALL6 = 0.00711
+STEEL = 7850.0  # kg/m3, the density behind the B36.10M weight formula
+
+
+@pytest.mark.parametrize(
+    ("gap", "coupling"),
+    [
+        pytest.param(0.3, True, id="300-mm-coupling"),
+        pytest.param(0.6, True, id="600-mm-coupling"),
+        pytest.param(0.7, False, id="700-mm-pipe"),
+        pytest.param(0.9, False, id="900-mm-pipe"),
+    ],
+)
+def test_a_linked_gap_longer_than_a_fitting_is_pipe_in_the_take_off(gap, coupling):
+    """A linked 0.9 m gap became a 0.9 m "coupling" counted "1 ea" without length or weight:
+    ~1 m of pipe missing from the take-off, and nothing said."""
+    pipes = [
+        Pipe("P1", (-1.5, 0, 1), (0, 0, 1), NPS6),
+        Pipe("P2", (gap, 0, 1), (gap + 1.5, 0, 1), NPS6),
+    ]
+    model = merge_model(report_of(pipes, links=[("P1", "P2")]))
+    assert len(model.spools) == 1
+    said = [n for n in notes(model, "P1") if "the scan did not measure" in n]
+    if coupling:
+        assert types(model) == ["pipe", "coupling", "pipe"]
+        assert by_id(model)["P1-P2"].geometry.length == pytest.approx(gap)
+        assert model.spools[0].pipe_length == pytest.approx(3.0)
+        assert not said
+        return
+    assert types(model) == ["pipe", "pipe"]
+    # the gap is pipe: 3 m measured + the gap, with its weight
+    assert model.spools[0].pipe_length == pytest.approx(3.0 + gap)
+    found, bad = connection_mismatches(model.components, tolerance=1e-4)
+    assert found == 1 and bad == []
+    weight = STEEL * math.pi * (NPS6 - WALL6) * WALL6 * (3.0 + gap)
+    assert take_off(model).pipe_weight == pytest.approx(weight, rel=1e-3)
+    # one note on both pipes (one AB302 warning naming both), no per-end extension notes
+    assert len(said) == 1 and f"{gap * 1000:.0f} mm apart" in said[0]
+    assert said == [n for n in notes(model, "P2") if "the scan did not measure" in n]
+    assert not [n for n in notes(model, "P1") if n.startswith("extended")]
+    (finding,) = [f for f in check_model(model) if f.code == "AB302"]
+    assert finding.severity == "warning" and finding.objects == ("P1", "P2")
