@@ -124,3 +124,20 @@ def test_elbow_fallback_reads_a_dn_size_by_its_nps():
 
     table = size_table("en-10220")
     assert _elbow_centre_to_end(table, "150", 0.1683, 90.0) == pytest.approx(0.2286)
+
+
+def test_fit_up_is_one_finding_per_pair_with_the_miss_and_its_standard_error():
+    # merging records the miss on both pipes (and on every piece of a split pipe): one finding
+    entry = {"miss": 0.030, "stderr": 0.004, "allowed": 0.012, "at": [2.0, 0.0, 1.0]}
+    a1 = pipe("P1.1", [0, 0, 1], [1, 0, 1], 0.1683, nominal="6")
+    a2 = pipe("P1.2", [1.3, 0, 1], [1.8, 0, 1], 0.1683, nominal="6")
+    b = pipe("P2", [2, 0.2, 1.03], [2, 2, 1.03], 0.1683, nominal="6")
+    for piece in (a1, a2):
+        object.__setattr__(piece, "sources", ("P1",))
+        piece.snap["fit_up"] = [{**entry, "with": "P2"}]
+    b.snap["fit_up"] = [{**entry, "with": "P1"}]
+    (f,) = [f for f in check_model(model(a1, a2, b), catalog=B36) if f.slug == "fit-up"]
+    assert f.code == "AB303" and f.severity == "warning"
+    assert f.objects == ("P1.1", "P1.2", "P2")
+    assert (f.measured, f.stderr, f.allowed) == (0.030, 0.004, 0.012)
+    assert "30.0 mm (+- 4.0 mm)" in f.message
