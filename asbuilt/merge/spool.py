@@ -62,7 +62,10 @@ __all__ = [
 
 #: Inline ends closer than this (metres) meet at their midpoint rather than get a coupling.
 BUTT_GAP = 0.005
-#: Bends within this many degrees of 45 use the catalog's 45 degree elbow centre-to-end.
+#: Bends within this many degrees of 45 use the catalog's 45 degree elbow centre-to-end; an
+#: elbow within it of 45 or 90 degrees, or a tee's branch within it of square, is a B16.9
+#: fitting (regularisation makes angles within ``angle_snap_deg``, 2, exact). Any other angle
+#: is built (a 90 degree elbow cut to angle is real practice) but said to be non-standard.
 ELBOW45_WINDOW_DEG = 2.0
 #: Shortest pipe piece left after trimming, metres.
 MIN_PIPE_LENGTH = 0.001
@@ -176,6 +179,8 @@ class _Builder:
         self.allowance: dict[tuple[int, int], float] = {}
         # Pipe ends extended to fill a gap longer than a coupling: the note for them.
         self.filled: dict[tuple[int, int], str] = {}
+        # Notes for pipes' merge_notes from the fittings built at them (non-standard ones).
+        self.pipe_notes: dict[int, list[str]] = {}
 
     def reset(self):
         self.ends = self.base.copy()
@@ -183,6 +188,14 @@ class _Builder:
         self.fitting_at = {}
         self.allowance = {}
         self.filled = {}
+        self.pipe_notes = {}
+
+    def note(self, pipes: Iterable[int], text: str) -> None:
+        """Put ``text`` in the merge notes of ``pipes`` (indices), once each."""
+        for i in pipes:
+            said = self.pipe_notes.setdefault(i, [])
+            if text not in said:
+                said.append(text)
 
     def param(self, i: int, point) -> float:
         """Position of ``point`` along pipe i's axis from its start end, metres."""
@@ -231,9 +244,27 @@ def _elbow(b: _Builder, joint: Joint):
     b.allowance[i, ki] = b.allowance[j, kj] = min(bent, float(reach))
     if not _same_size(pi, pj):
         notes.append("pipes of different sizes meet at this elbow: built at the larger size")
+    degrees = float(np.degrees(theta))
+    source = big.dims.source
+    standard = min(abs(degrees - 45.0), abs(degrees - 90.0)) <= ELBOW45_WINDOW_DEG
+    if not standard:
+        # B16.9 makes 45 and 90 degree elbows only: say what was built instead of labelling it
+        if degrees < 90.0:
+            made = f"a 90 degree elbow of that radius cut to {degrees:.0f} degrees"
+            source = f"{source}, cut from a 90 degree elbow (non-standard)"
+        else:
+            made = f"a {degrees:.0f} degree bend of the 90 degree elbow's radius"
+            source = f"{source} radius, {degrees:.0f} degree bend (non-standard)"
+        text = (
+            f"the elbow {pi.id}-{pj.id} turns {degrees:.0f} degrees, which no ASME B16.9 elbow "
+            f"does (45 or 90): built as {made}"
+        )
+        notes.append(text)
+        b.note((i, j), text)
     snap = {
         "status": "fitting",
-        "dimensions": big.dims.source,
+        "dimensions": source,
+        "standard": standard,
         "bend_radius": radius,
         "angle_deg": float(np.degrees(theta)),
         "connects": [pi.id, pj.id],
@@ -379,6 +410,19 @@ def _tee(b: _Builder, joint: Joint):
     notes = list(pi.dims.notes)
     if not _same_size(pi, pb):
         notes.append("reducing outlet: built with the equal tee's dimensions of the run size")
+    source = pi.dims.source
+    square = float(np.degrees(np.arccos(min(1.0, abs(float(ob @ run_dir))))))
+    standard = abs(square - 90.0) <= ELBOW45_WINDOW_DEG
+    if not standard:
+        # B16.9 tees are square; an oblique branch is a non-standard fitting (or a lateral)
+        source = f"{source}, outlet at {square:.0f} degrees (non-standard)"
+        text = (
+            f"{pb.id} meets the run of {pi.id} at {square:.0f} degrees: ASME B16.9 tees are "
+            "square (90 degrees); built as a tee of its dimensions with the outlet at that "
+            "angle, which is not a B16.9 fitting"
+        )
+        notes.append(text)
+        b.note({i, branch_i} | ({j} if joint.through is None else set()), text)
     if joint.through is None:
         b.ends[i, ki] = geometry.run_start
         b.ends[j, kj] = geometry.run_end
@@ -392,7 +436,13 @@ def _tee(b: _Builder, joint: Joint):
         b.splits.setdefault(i, []).append((at, pi.dims.tee_run))
         name = None  # named after the pieces are known
         connects = [pi.id, pb.id]
-    snap = {"status": "fitting", "dimensions": pi.dims.source, "connects": connects, "notes": notes}
+    snap = {
+        "status": "fitting",
+        "dimensions": source,
+        "standard": standard,
+        "connects": connects,
+        "notes": notes,
+    }
     at_param = b.param(i, center) if joint.through is not None else None
     return [("tee", name, geometry, pi, snap, joint.through, at_param)]
 
@@ -607,8 +657,9 @@ def build_spools(
                     )
                 )
         snap = dict(base.snap)
-        if p.notes or end_notes:
-            snap["merge_notes"] = list(p.notes) + end_notes
+        said = list(p.notes) + b.pipe_notes.get(i, []) + end_notes
+        if said:
+            snap["merge_notes"] = said
         for pid, start, end in by_pipe[i]:
             geometry = Straight(start=start, end=end, outer_radius=0.5 * p.od, wall=p.wall)
             comp = Component(

@@ -407,3 +407,41 @@ def test_a_linked_gap_longer_than_a_fitting_is_pipe_in_the_take_off(gap, couplin
     assert not [n for n in notes(model, "P1") if n.startswith("extended")]
     (finding,) = [f for f in check_model(model) if f.code == "AB302"]
     assert finding.severity == "warning" and finding.objects == ("P1", "P2")
+
+
+# --- 5. angles ASME B16.9 does not make are built but said to be non-standard ------------------
+# B16.9 elbows turn 45 (long radius) or 90 degrees; its tees are square.
+
+
+@pytest.mark.parametrize(
+    ("angle", "standard"),
+    [(30, False), (45, True), (60, False), (80, False), (90, True), (95, False)],
+)
+def test_an_elbow_of_an_angle_b16_9_does_not_make_is_said_so(angle, standard):
+    """A 60 or 30 degree bend was recorded as a B16.9 elbow ("dimensions": "asme-b16.9") and
+    exported to PCF as the 90 degree elbow's item code, with nothing said."""
+    reach = 0.229 * math.tan(math.radians(angle) / 2)  # NPS 6 long radius R tan(theta / 2)
+    model = merge_model(report_of(_bend(angle, reach), links=[("P1", "P2")]))
+    elbow = by_id(model)["P1-P2"]
+    assert elbow.type == "elbow"
+    assert elbow.snap["angle_deg"] == pytest.approx(angle, abs=0.01)
+    assert elbow.snap["standard"] is standard
+    said = [n for n in notes(model, "P1") if "no ASME B16.9 elbow does" in n]
+    if standard:
+        assert elbow.snap["dimensions"] == "asme-b16.9" and not said
+        return
+    assert "non-standard" in elbow.snap["dimensions"]
+    assert len(said) == 1 and f"turns {angle} degrees" in said[0]
+    assert said == [n for n in notes(model, "P2") if "no ASME B16.9 elbow does" in n]
+
+
+@pytest.mark.parametrize(("angle", "standard"), [(80, False), (90, True)])
+def test_a_tee_whose_branch_is_not_square_is_said_so(angle, standard):
+    """An 80 degree branch became a B16.9 "tee" with an 80 degree outlet, nothing said."""
+    model = merge_model(report_of(_junction(angle), links=[("P1", "P3"), ("P1", "P2")]))
+    tee = by_id(model)["P1-P3-P2"]
+    assert tee.snap["standard"] is standard
+    said = [n for n in notes(model, "P2") if "tees are square" in n]
+    assert bool(said) is not standard
+    if not standard:
+        assert f"at {angle} degrees" in said[0] and "non-standard" in tee.snap["dimensions"]
