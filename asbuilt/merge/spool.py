@@ -50,6 +50,7 @@ from asbuilt.model import (
 )
 
 from .contiguity import Joint, connected_groups, line_closest_points
+from .reducers import reducer_made, small_ends
 
 __all__ = [
     "PipeSpec",
@@ -342,9 +343,12 @@ def _inline(b: _Builder, joint: Joint):
     note = b.reducer_notes.get((min(i, j), max(i, j)))
     if geometry.eccentric and note:
         notes.insert(0, note)
+    small = pj if large is pi else pi
+    source, standard = _reducer_source(b, large, small, (i, j))
     snap = {
         "status": "fitting",
-        "dimensions": large.dims.source,
+        "dimensions": source,
+        "standard": standard,
         "length": length,
         "sizes": [pi.nominal, pj.nominal],
         "connects": [pi.id, pj.id],
@@ -356,6 +360,33 @@ def _inline(b: _Builder, joint: Joint):
             "offset": float(np.linalg.norm(offset)),
         }
     return [("reducer", f"{pi.id}-{pj.id}", geometry, large, snap)]
+
+
+def _reducer_source(b: _Builder, large: PipeSpec, small: PipeSpec, pipes) -> tuple[str, bool]:
+    """(``dimensions`` record, standard?) of a reducer from ``large`` to ``small``: a pair the
+    fittings table does not make (:func:`.reducers.reducer_made`) keeps the large end's H but
+    is said to be non-standard, with a note on ``pipes``."""
+    source = large.dims.source
+    if reducer_made(source, large.nominal, small.nominal) is not False:
+        return source, True
+    ends = sorted(small_ends(source).get(large.nominal, ()), key=_nps_order, reverse=True)
+    text = (
+        f"no NPS {large.nominal} x {small.nominal} reducer in {source} ("
+        + (f"NPS {large.nominal} reduces to {', '.join(ends)} only" if ends else "none from it")
+        + f"): built with the NPS {large.nominal} reducer's length, a fitting the standard "
+        "does not make; two reducers in series, or check the sizes"
+    )
+    b.note(pipes, text)
+    return f"{source} H of the large end; no such reducer (non-standard)", False
+
+
+def _nps_order(nominal: str) -> float:
+    """NPS ``"1 1/2"`` as 1.5, for ordering nominal names."""
+    total = 0.0
+    for part in nominal.split():
+        top, _, bottom = part.partition("/")
+        total += float(top) / float(bottom or 1)
+    return total
 
 
 def _flat_word(flat) -> str:
