@@ -416,36 +416,55 @@ def _tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
     return geometry
 
 
+def _size(p: PipeSpec) -> str:
+    return f"NPS {p.nominal}" if p.nominal else f"OD {p.od * 1000:.1f} mm"
+
+
 def _tee(b: _Builder, joint: Joint):
     branch_i, branch_k = joint.ends[-1]
     pb = b.pipes[branch_i]
     ob = b.out[branch_i, branch_k]
+    small = None
     if joint.through is None:
         (i, ki), (j, kj) = joint.ends[:2]
         pi, pj = b.pipes[i], b.pipes[j]
         run_dir = b.out[i, ki]
         anchor = b.base[i, ki]
+        if not _same_size(pi, pj):
+            # B16.9 tees reduce on the outlet only: a run that changes size at the tee is a
+            # tee of the larger run and a reducer on the smaller side
+            small = pj if pi.od > pj.od else pi
     else:
         i = joint.through
         pi = pj = b.pipes[i]
         run_dir = pi.axis
         anchor = b.base[i, 0]
+    run = pj if small is pi else pi
     _, t, _, center = line_closest_points(b.base[branch_i, branch_k], ob, anchor, run_dir)
     center = anchor + t * run_dir
-    geometry = _tee_geometry(center, run_dir, -ob, pi, pb)
+    geometry = _tee_geometry(center, run_dir, -ob, run, pb)
     b.ends[branch_i, branch_k] = geometry.branch_end
     b.fitting_at[branch_i, branch_k] = "a tee"
     # A tee's run and outlet are the pipes' own cylinders up to its centre-to-end dimensions.
-    b.allowance[branch_i, branch_k] = float(pi.dims.tee_outlet)
+    b.allowance[branch_i, branch_k] = float(run.dims.tee_outlet)
 
-    notes = list(pi.dims.notes)
-    if not _same_size(pi, pb):
+    notes = list(run.dims.notes)
+    source = run.dims.source
+    standard = True
+    if pb.od > run.od + 1e-9:
+        # no "reducing outlet": the rules report the size mismatch (contiguous-diameter)
+        standard = False
+        source = f"{source}, outlet larger than the run (non-standard)"
+        notes.append(
+            f"the outlet ({_size(pb)}) is larger than the run ({_size(run)}): no ASME B16.9 "
+            "tee has one (tees reduce on the outlet only); built with the run's dimensions"
+        )
+    elif not _same_size(run, pb):
         notes.append("reducing outlet: built with the equal tee's dimensions of the run size")
-    source = pi.dims.source
     square = float(np.degrees(np.arccos(min(1.0, abs(float(ob @ run_dir))))))
-    standard = abs(square - 90.0) <= ELBOW45_WINDOW_DEG
-    if not standard:
+    if abs(square - 90.0) > ELBOW45_WINDOW_DEG:
         # B16.9 tees are square; an oblique branch is a non-standard fitting (or a lateral)
+        standard = False
         source = f"{source}, outlet at {square:.0f} degrees (non-standard)"
         text = (
             f"{pb.id} meets the run of {pi.id} at {square:.0f} degrees: ASME B16.9 tees are "
@@ -454,17 +473,26 @@ def _tee(b: _Builder, joint: Joint):
         )
         notes.append(text)
         b.note({i, branch_i} | ({j} if joint.through is None else set()), text)
+    items = []
     if joint.through is None:
         b.ends[i, ki] = geometry.run_start
         b.ends[j, kj] = geometry.run_end
         name = f"{pi.id}-{pj.id}-{pb.id}"
         b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"tee {name}"
         b.fitting_at[branch_i, branch_k] = f"tee {name}"
-        b.allowance[i, ki] = b.allowance[j, kj] = float(pi.dims.tee_run)
+        b.allowance[i, ki] = b.allowance[j, kj] = float(run.dims.tee_run)
         connects = [pi.id, pj.id, pb.id]
+        if small is not None:
+            end = (j, kj) if small is pj else (i, ki)
+            port = geometry.run_end if small is pj else geometry.run_start
+            items = _run_reducer(b, name, run, small, end, port, (i, j, branch_i))
+            notes.append(
+                f"the run changes from {_size(run)} to {_size(small)} here: tee of the larger "
+                + ("run, followed by a reducer" if items else "run, and no reducer can follow")
+            )
     else:
         at = b.param(i, center)
-        b.splits.setdefault(i, []).append((at, pi.dims.tee_run))
+        b.splits.setdefault(i, []).append((at, run.dims.tee_run))
         name = None  # named after the pieces are known
         connects = [pi.id, pb.id]
     snap = {
@@ -475,7 +503,50 @@ def _tee(b: _Builder, joint: Joint):
         "notes": notes,
     }
     at_param = b.param(i, center) if joint.through is not None else None
-    return [("tee", name, geometry, pi, snap, joint.through, at_param)]
+    return [("tee", name, geometry, run, snap, joint.through, at_param), *items]
+
+
+def _run_reducer(b: _Builder, tee: str, run: PipeSpec, small: PipeSpec, end, port, pipes):
+    """The reducer after the tee ``tee`` on the smaller run pipe's side: from the tee's run
+    ``port`` ((3,) m) outwards by the large end's H, the smaller pipe's ``end`` moved to its
+    small end. None is built when the fittings table does not make that pair (the pipe then
+    meets the tee's port, and the rules report the size change); returns the fitting items."""
+    if reducer_made(run.dims.source, run.nominal, small.nominal) is False:
+        b.note(
+            pipes,
+            f"the run changes from {_size(run)} to {_size(small)} at the tee {tee}, but ASME "
+            f"B16.9 tees reduce on the outlet only and {run.dims.source} has no "
+            f"{run.nominal} x {small.nominal} reducer to follow it: {small.id} meets the tee's "
+            f"{_size(run)} run end with nothing between",
+        )
+        return []
+    length = float(run.dims.reducer_length)
+    direction = -b.out[end]  # out of the tee along the run, into the smaller pipe
+    start = np.asarray(port, float)
+    stop = start + length * direction
+    b.ends[end] = stop
+    name = f"reducer after tee {tee}"
+    b.fitting_at[end] = name
+    slope = abs(run.od - small.od) / (2.0 * max(length, 1e-9))
+    b.allowance[end] = min(TRIM_SURFACE_TOLERANCE / max(slope, 1e-9), length)
+    wall = min(run.wall, small.wall) if run.wall and small.wall else 0.0
+    geometry = Reducer(
+        start=start,
+        end=stop,
+        outer_radius_start=0.5 * run.od,
+        outer_radius_end=0.5 * small.od,
+        wall=wall,
+    )
+    snap = {
+        "status": "fitting",
+        "dimensions": run.dims.source,
+        "standard": True,
+        "length": length,
+        "sizes": [run.nominal, small.nominal],
+        "connects": [tee, small.id],
+        "notes": [*run.dims.notes, "the run reduces after the tee (tees reduce on the outlet)"],
+    }
+    return [("reducer", f"{tee}-{small.id}", geometry, run, snap)]
 
 
 def _pieces(b: _Builder, i: int):

@@ -16,7 +16,7 @@ from asbuilt.findings import Suggestion
 
 from ._catalog import SizeTable, nps_value
 from ._context import Context, centre_of, mm, stderr_value, verdict
-from ._graph import adjacency, inferred_pairs, linked_pairs
+from ._graph import adjacency, fittings_between, inferred_pairs, linked_pairs
 
 __all__ = ["CHECKS", "joint_geometry"]
 
@@ -117,8 +117,8 @@ def check_joint_gap(ctx: Context, table: SizeTable | None) -> None:
     joined = adjacency(ctx.model, touch, links=False)
     for pair in sorted(near, key=sorted):
         a, b = sorted(pair)
-        if b in joined.get(a, ()) or any(b in joined.get(f, ()) for f in joined.get(a, ())):
-            continue  # joined directly or through one fitting
+        if fittings_between(ctx.model, joined, a, b) is not None:
+            continue  # joined directly or through fittings (a tee and the reducer after it)
         ca, cb = pipes[a], pipes[b]
         geo = joint_geometry(ca.geometry, cb.geometry)
         se = float(np.hypot(_length_se(ca), _length_se(cb)))

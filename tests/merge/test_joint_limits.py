@@ -445,3 +445,73 @@ def test_a_tee_whose_branch_is_not_square_is_said_so(angle, standard):
     assert bool(said) is not standard
     if not standard:
         assert f"at {angle} degrees" in said[0] and "non-standard" in tee.snap["dimensions"]
+
+
+# --- 4. tees reduce on the outlet only ---------------------------------------------------------
+# ASME B16.9 (standards reference): NPS 6 tee C = M = 143 mm, concentric reducer H 140 mm;
+# NPS 4 tee C = M = 105 mm; NPS 12 C = M = 254 mm, H 203 mm; NPS 12 reduces to 10, 8, 6, 5.
+NPS12 = 0.3238
+
+
+def _tee_pipes(run_a, run_b, branch, c, gap_b=0.0):
+    """Run P1 (OD ``run_a``) ending ``c`` before the junction at the origin, P3 (``run_b``)
+    starting ``c + gap_b`` after it, branch P2 (``branch``) along +y from ``c``."""
+    return [
+        Pipe("P1", (-c - 1.2, 0, 1), (-c, 0, 1), run_a),
+        Pipe("P3", (c + gap_b, 0, 1), (c + gap_b + 1.2, 0, 1), run_b),
+        Pipe("P2", (0, c, 1), (0, c + 1.2, 1), branch),
+    ]
+
+
+TEE_LINKS = [("P1", "P3"), ("P1", "P2")]
+
+
+def test_a_run_that_changes_size_at_a_tee_gets_a_reducer_after_the_tee():
+    """Run NPS 6 / NPS 4 with an NPS 6 branch was an equal 6 inch tee whose run port (168.3 mm)
+    butted on the 114.3 mm pipe: its fused solid two solids, and no finding."""
+    model = merge_model(report_of(_tee_pipes(NPS6, NPS4, NPS6, 0.143, 0.140), links=TEE_LINKS))
+    comps = by_id(model)
+    tee = comps["P1-P3-P2"]
+    (reducer,) = [c for c in model.components if c.type == "reducer"]
+    assert tee.geometry.outer_radius == pytest.approx(NPS6 / 2)
+    assert reducer.snap["sizes"] == ["6", "4"] and reducer.snap["standard"] is True
+    assert reducer.geometry.start == pytest.approx(tee.geometry.run_end, abs=1e-9)
+    assert reducer.geometry.length == pytest.approx(0.140)
+    assert (reducer.geometry.outer_radius_start, reducer.geometry.outer_radius_end) == (
+        pytest.approx(NPS6 / 2),
+        pytest.approx(NPS4 / 2),
+    )
+    assert comps["P3"].geometry.start == pytest.approx(reducer.geometry.end, abs=1e-9)
+    found, bad = connection_mismatches(model.components, tolerance=1e-4)
+    assert bad == [] and found == len(model.components) - 1  # one piece
+    assert [f.code for f in check_model(model)] == []
+
+
+def test_a_run_change_no_reducer_makes_is_reported():
+    """NPS 12 to NPS 4 at a tee: B16.9 has no 12 x 4 reducer, so none is built after the tee;
+    the pipes' note says so and the rules report the size change (AB104, error)."""
+    model = merge_model(report_of(_tee_pipes(NPS12, NPS4, NPS12, 0.254), links=TEE_LINKS))
+    assert not [c for c in model.components if c.type == "reducer"]
+    assert any("no 12 x 4 reducer" in n for n in notes(model, "P3"))
+    (error,) = [f for f in check_model(model) if f.code == "AB104"]
+    assert error.severity == "error" and set(error.objects) == {"P1", "P3"}
+    assert "tees reduce on the outlet only" in error.message
+
+
+def test_an_outlet_larger_than_the_run_is_an_error_not_a_reducing_outlet():
+    """A 4 inch run with a 6 inch branch was called a "reducing outlet" and reported nothing."""
+    model = merge_model(report_of(_tee_pipes(NPS4, NPS4, NPS6, 0.105), links=TEE_LINKS))
+    tee = by_id(model)["P1-P3-P2"]
+    assert tee.snap["standard"] is False
+    assert not [n for n in tee.snap["notes"] if "reducing outlet" in n]
+    assert any("larger than the run" in n for n in tee.snap["notes"])
+    errors = [f for f in check_model(model) if f.code == "AB104"]
+    assert errors and all(f.severity == "error" and "P2" in f.objects for f in errors)
+
+
+def test_a_smaller_outlet_is_still_a_reducing_tee_without_findings():
+    model = merge_model(report_of(_tee_pipes(NPS6, NPS6, NPS4, 0.143), links=TEE_LINKS))
+    tee = by_id(model)["P1-P3-P2"]
+    assert tee.snap["standard"] is True
+    assert any("reducing outlet" in n for n in tee.snap["notes"])
+    assert [f.code for f in check_model(model)] == []
