@@ -17,7 +17,7 @@ try:  # Python 3.11+
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["reducer_made", "small_ends"]
+__all__ = ["nps_order", "reducer_made", "small_ends"]
 
 
 @cache
@@ -40,3 +40,12 @@ def reducer_made(fittings: str | None, large: str | None, small: str | None) -> 
     if table is None or large is None or small is None:
         return None
     return small in table.get(large, frozenset())
+
+
+def nps_order(nominal: str) -> float:
+    """NPS ``"1 1/2"`` as 1.5, for ordering nominal names."""
+    total = 0.0
+    for part in nominal.split():
+        top, _, bottom = part.partition("/")
+        total += float(top) / float(bottom or 1)
+    return total
