@@ -16,7 +16,10 @@ Written here:
   ``FLAT-DIRECTION``: ``UP``, ``DOWN``, ``EAST``, ``WEST``, ``NORTH`` or ``SOUTH``, taking the
   scan frame's x, y, z as east, north, up);
 * ``ITEM-CODE`` per component (type, bores, schedule) and a ``MATERIALS`` section describing
-  each item code; the asbuilt component id as ``COMPONENT-ATTRIBUTE1``.
+  each item code; the asbuilt component id as ``COMPONENT-ATTRIBUTE1``. A fitting merging
+  built in a form its standard does not make (``snap["standard"]`` false: an elbow cut to 60
+  degrees, a tee with an oblique outlet) gets its own item code (``ELBOW-6IN-STD-60DEG-NONSTD``)
+  and a description saying so, never the catalog fitting's.
 
 Objects that are not piping (columns, tanks, walls) are not written: PCF has no records for
 them. Coordinates are millimetres with 0.1 mm resolution; text is ASCII (other characters are
@@ -136,10 +139,21 @@ def _flat_direction(reducer: Reducer) -> str:
     return max(_DIRECTIONS, key=lambda name: float(np.dot(side, _DIRECTIONS[name])))
 
 
+def _nonstandard(component: Component) -> bool:
+    """Whether merging built the fitting in a form its standard does not make (an elbow cut
+    to 60 degrees, a tee with an oblique outlet: ``snap["standard"]`` False)."""
+    return (component.snap or {}).get("standard") is False
+
+
 def _item_code(component: Component, identifier: str, bores: list[str], unit: str) -> str:
     size = "X".join(bores) + ("IN" if unit == "INCH" else "MM")
     schedule = f"-{component.schedule}" if component.schedule else ""
-    return _ascii(f"{identifier}-{size}{schedule}").replace(" ", "")
+    extra = ""
+    if _nonstandard(component):
+        # its own item code: a material take-off must not count it as the catalog fitting
+        angle = (component.snap or {}).get("angle_deg")
+        extra = (f"-{round(float(angle)):d}DEG" if angle is not None else "") + "-NONSTD"
+    return _ascii(f"{identifier}-{size}{schedule}{extra}").replace(" ", "")
 
 
 def _records(component: Component, bores: _Bores) -> tuple[str, list[str], list[str]] | None:
@@ -196,7 +210,13 @@ def _description(component: Component, identifier: str, bores: list[str], unit: 
     words = identifier.replace("-", " ")
     size = " x ".join(bores) + (" in" if unit == "INCH" else " mm")
     schedule = f", SCH {component.schedule}" if component.schedule else ""
-    return _ascii(f"{words}, {size}{schedule}")
+    made = ""
+    if _nonstandard(component):
+        angle = (component.snap or {}).get("angle_deg")
+        made = (f", {float(angle):.0f} deg" if angle is not None else "") + (
+            f", {(component.snap or {}).get('dimensions')}"
+        )
+    return _ascii(f"{words}, {size}{schedule}{made}")
 
 
 def pcf_text(model: Model) -> str:

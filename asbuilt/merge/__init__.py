@@ -47,7 +47,7 @@ from .contiguity import (
 )
 from .eccentric import eccentric_joints
 from .joint import find_runs, joint_estimate
-from .regularize import align_lines, regularize_directions
+from .regularize import align_lines, fit_up, regularize_directions
 from .snap import SnapResult, snap_diameter
 from .spool import PipeSpec, build_spools
 
@@ -412,6 +412,30 @@ def merge_model(
         od_se=build_od_se,
     )
     meets, coaxial, offsets = _constraints(joints, eccentric)
+    # how far the joined axes miss each other before alignment removes it: beyond the fits'
+    # uncertainty it is a fit-up deviation the model must not absorb silently
+    fit_up_of: dict[int, list[dict]] = {}
+    for found in fit_up(
+        centers,
+        new_axes,
+        meets,
+        coaxial,
+        center_se,
+        axis_se,
+        skip=[e.pipes for e in eccentric.values()],
+    ):
+        if not found.deviates:
+            continue
+        for m, other in (found.pipes, found.pipes[::-1]):
+            fit_up_of.setdefault(m, []).append(
+                {
+                    "with": ids[other],
+                    "miss": found.miss,
+                    "stderr": found.stderr,
+                    "allowed": found.allowed,
+                    "at": _vec(found.point),
+                }
+            )
     new_centers = centers.copy()
     groups = connected_groups(len(ids), joints)
     group_of_pipe = np.zeros(len(ids), int)
@@ -547,6 +571,8 @@ def merge_model(
             del snap_map["hint"]
         if notes:
             snap_map["notes"] = notes
+        if m in fit_up_of:
+            snap_map["fit_up"] = fit_up_of[m]
         dims = fitting_dims(catalog, size, od, elbow_radius)
         pipe_comp = Component(
             id=comp.id,
@@ -587,6 +613,7 @@ def merge_model(
         max_bend_deg=elbow_bend_limit(tol),
         reducer_notes=reducer_notes,
         taken_ids=[obj.id for obj in scan.objects],
+        joint_distance=tol.joint_distance,
     )
 
     # assemble in scan order: each pipe's components where the pipe was

@@ -29,10 +29,12 @@ tee that splits that pipe. ``links`` in the scan are honoured first, with distan
 widened by :data:`LINK_MARGIN`: a linked run with a linked square-on branch is a tee, and so
 is a linked elbow one of whose ends continues straight into an unlinked pipe (inline by the
 unlinked limits) while the other meets that joint square-on (links say which pipes are
-contiguous, not that the others are not); a linked pair whose geometry fits no joint is still
-reported (kind ``contact``) so the pair is estimated jointly, when the two pipes come within
-``joint_distance`` + :data:`LINK_MARGIN` (+ slack) of each other. A link farther apart than that
-is not modelled: no fitting is invented over a gap nobody measured, and a note says why.
+contiguous, not that the others are not); a linked run with an oblique third end is a lateral
+as unlinked. A linked pair no fitting or butt joint realises (axes that do not meet, a bend
+beyond an elbow, an end another joint took) gets a note saying why and is kept as kind
+``link``: one size estimate, but no fitting and no spool together. A link farther apart than
+``joint_distance`` + :data:`LINK_MARGIN` (+ slack) is not modelled at all: no fitting is
+invented over a gap nobody measured, and a note says why.
 
 ASME B16.9 elbows turn 45 or 90 degrees: two ends whose bend would exceed 90 degrees plus
 ``intended_angle_deg`` are never an elbow. An inline pair with a third end meeting it at an
@@ -78,6 +80,14 @@ LINK_MARGIN = 0.5
 #: or 90 degrees (180 degree returns join parallel pipes, whose axes do not meet).
 ELBOW_MAX_DEG = 90.0
 
+#: How a note names the joint that took a pipe end.
+_JOINED_BY = {
+    "elbow": "an elbow",
+    "tee": "a tee",
+    "inline": "an inline joint",
+    "contact": "a lateral",
+}
+
 #: A pipe end: (pipe index, 0 for the start end / 1 for the end end).
 End = tuple[int, int]
 
@@ -89,8 +99,9 @@ class Joint:
     Attributes
     ----------
     kind : str
-        ``"elbow"``, ``"inline"``, ``"tee"`` or ``"contact"`` (contiguous, no fitting: a link
-        whose axes do not meet, or the oblique branch of a lateral).
+        ``"elbow"``, ``"inline"``, ``"tee"``, ``"contact"`` (joined without a fitting of the
+        catalog: the pipes of a lateral) or ``"link"`` (the scan links the pair but nothing
+        joins them: no fitting and no spool together, only one size estimate; a note says why).
     ends : tuple of End
         elbow/inline/contact: the two joined ends; tee: the run ends (two for a tee at an inline
         joint, none for a tee in the middle of a pipe) followed by the branch end.
@@ -229,16 +240,37 @@ def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: 
 
 
 def _best_for_link(i, j, pts, out, axes, ods, tol, slack):
-    best = None
+    """The linked pair's best joint candidate, else its best ``"oblique"`` one (a bend beyond
+    an elbow, returned so that the link's note can say so), else None."""
+    best = oblique = None
     for ki in (0, 1):
         for kj in (0, 1):
             cand = _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol, relaxed=True, slack=slack)
-            if cand is not None and cand.kind != "oblique":
-                # prefer the ends nearest each other among valid configurations
-                cost = cand.cost + float(np.linalg.norm(pts[i, ki] - pts[j, kj]))
-                if best is None or cost < best[0]:
-                    best = (cost, cand)
+            if cand is None:
+                continue
+            # prefer the ends nearest each other among valid configurations
+            cost = cand.cost + float(np.linalg.norm(pts[i, ki] - pts[j, kj]))
+            if cand.kind == "oblique":
+                if oblique is None or cost < oblique[0]:
+                    oblique = (cost, cand)
+            elif best is None or cost < best[0]:
+                best = (cost, cand)
+    best = best or oblique
     return None if best is None else best[1]
+
+
+def _bend_deg(cand: _Candidate, out) -> float:
+    """The bend (degrees) between the two ends of an elbow or oblique candidate."""
+    oi, oj = out[cand.a], out[cand.b]
+    return float(np.degrees(np.arccos(np.clip(-(oi @ oj), -1.0, 1.0))))
+
+
+def _bend_note(names, i, j, bend, tol) -> str:
+    return (
+        f"the ends of {names[i]} and {names[j]} meet at a {bend:.0f} degree bend, beyond "
+        f"an elbow's {elbow_bend_limit(tol):.0f} (ASME B16.9 elbows turn 45 or 90 degrees): "
+        "not joined"
+    )
 
 
 def _tee_at_inline(joint: Joint, b: End, pts, out, axes, ods, tol, slack) -> float | None:
@@ -354,7 +386,6 @@ def find_joints(
         linked_pairs.add(key)
 
     # 1. explicit links first (distance limits widened by LINK_MARGIN)
-    contacts = []
     link_candidates = {
         key: _best_for_link(*key, pts, out, axes, ods, tol, slack) for key in sorted(linked_pairs)
     }
@@ -412,6 +443,21 @@ def find_joints(
         joints.append(Joint("tee", (run_a, run_b, branch), explicit=True))
         trio = (run_a[0], run_b[0], branch[0])
         teed.update((min(p, q), max(p, q)) for p in trio for q in trio if p != q)
+    # 1c. a linked run with a third end meeting its joint obliquely is a lateral, as unlinked:
+    # a straight coupling across the wye's gap would be a fitting nobody built
+    linked_inline = [
+        c for key, c in link_candidates.items() if key not in teed and c and c.kind == "inline"
+    ]
+    lateral = _laterals(
+        linked_inline, used, tree, radius, pts, out, axes, ods, tol, slack, notes, names
+    )
+    joints.extend(lateral)
+    for run, branch in zip(lateral[::2], lateral[1::2]):  # the lateral's two contacts
+        trio = {*run.pipes, *branch.pipes}
+        teed.update(key for key in linked_pairs if set(key) <= trio)
+    # 1d. the other links, one by one; a link no fitting or butt joint realises gets a note
+    # (decided after every joint is found: a tee through a pipe may still join the pair)
+    unrealised: list[tuple[int, int, str]] = []
     for i, j in sorted(linked_pairs - teed):
         cand = link_candidates[i, j]
         if cand is None:
@@ -428,11 +474,27 @@ def find_joints(
                     )
                 )
                 continue
-        if cand is None or cand.a in used or cand.b in used:
-            contacts.append((i, j))
+            why = (
+                f"the scan links {names[i]} and {names[j]}, but their axes do not meet (they "
+                f"pass {apart * 1000:.0f} mm apart, outside to outside) and no fitting joins "
+                "them: not joined; check the link or scan what lies between"
+            )
+        elif cand.kind == "oblique":
+            why = _bend_note(names, i, j, _bend_deg(cand, out), tol)
+        elif cand.a in used or cand.b in used:
+            taken = next(jt for jt in joints if {cand.a, cand.b} & set(jt.ends))
+            end = cand.a if cand.a in taken.ends else cand.b
+            partners = ", ".join(names[p] for p in taken.pipes if p != end[0])
+            why = (
+                f"the scan links {names[i]} and {names[j]}, but that end of {names[end[0]]} is "
+                f"already joined to {partners} by {_JOINED_BY[taken.kind]} (no fitting joins "
+                "more pipes at one end; no cross is built): not joined"
+            )
+        else:
+            used.update((cand.a, cand.b))
+            joints.append(Joint(cand.kind, (cand.a, cand.b), explicit=True))
             continue
-        used.update((cand.a, cand.b))
-        joints.append(Joint(cand.kind, (cand.a, cand.b), explicit=True))
+        unrealised.append((i, j, why))
 
     # 2. inferred end-to-end joints, best first
     # each end searches within the base reach plus twice its own slack: a pair is found by
@@ -487,23 +549,20 @@ def find_joints(
     free = [(i, k) for i in range(n) for k in (0, 1) if (i, k) not in used]
     if free:
         joints = _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, slack)
-    for i, j in contacts:
-        joints.append(Joint("contact", ((i, 0), (j, 0)), explicit=True))
+    for i, j, why in unrealised:
+        if any(i in jt.pipes and j in jt.pipes for jt in joints):
+            continue  # joined after all (a tee through one of them)
+        notes.append(((i, j), why))
+        # kept for the joint size estimate (the scan says they are contiguous), but not
+        # joined: no fitting, no spool together
+        joints.append(Joint("link", ((i, 0), (j, 0)), explicit=True))
     noted = set()
     for cand in sorted(obliques, key=lambda c: c.cost):
         (i, ki), (j, kj) = cand.a, cand.b
         if cand.a in used or cand.b in used or (i, j) in noted:
             continue
         noted.add((i, j))
-        bend = float(np.degrees(np.arccos(np.clip(-(out[i, ki] @ out[j, kj]), -1.0, 1.0))))
-        notes.append(
-            (
-                (i, j),
-                f"the ends of {names[i]} and {names[j]} meet at a {bend:.0f} degree bend, beyond "
-                f"an elbow's {elbow_bend_limit(tol):.0f} (ASME B16.9 elbows turn 45 or 90 "
-                "degrees): not joined",
-            )
-        )
+        notes.append(((i, j), _bend_note(names, i, j, _bend_deg(cand, out), tol)))
     return tuple(joints)
 
 
@@ -685,13 +744,16 @@ def connected_groups(n: int, joints) -> list[list[int]]:
     """Pipes ``0 .. n-1`` grouped by the joints that connect them (the spools).
 
     Each group is in ascending order and the groups are ordered by their first pipe; a pipe no
-    joint touches is a group of its own. Connected components by scipy's csgraph.
+    joint touches is a group of its own. ``"link"`` joints (a scan link nothing realises) join
+    nothing. Connected components by scipy's csgraph.
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
     rows, cols = [], []
     for joint in joints:
+        if getattr(joint, "kind", None) == "link":
+            continue  # a link nothing realises joins no spool: it would be two pieces
         first, *others = joint.pipes
         rows += [first] * len(others)
         cols += list(others)

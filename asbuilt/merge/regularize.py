@@ -34,7 +34,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DirectionResult", "regularize_directions", "align_lines", "perpendicular_basis"]
+from .contiguity import line_closest_points
+
+__all__ = [
+    "DirectionResult",
+    "FitUp",
+    "align_lines",
+    "fit_up",
+    "perpendicular_basis",
+    "regularize_directions",
+]
 
 _Z = np.array([0.0, 0.0, 1.0])
 
@@ -399,3 +408,80 @@ def align_lines(
         u, v = bases[i]
         new[i] = centers[i] + solution[col[i]] * u + solution[col[i] + 1] * v
     return new
+
+
+#: A joint's axes may miss each other by this many combined standard errors before the shift
+#: that makes them meet is reported (as merging's diameter windows and regularisation).
+FIT_UP_SIGMA = 3.0
+#: ... and by at least this much (metres): three times the 2 mm prior range noise, the fits'
+#: outlier cutoff; fitted axes carry a few millimetres of bias no standard error describes.
+FIT_UP_FLOOR = 0.006
+
+
+@dataclass(frozen=True)
+class FitUp:
+    """How far the axes of two joined pipes missed each other before :func:`align_lines`.
+
+    Attributes
+    ----------
+    pipes : (int, int)
+    miss : float
+        Closest distance between the two lines near the joint (metres): lines that must meet
+        (elbows, tees) at their closest points, coaxial ones across the run at the joint.
+    stderr : float
+        Its standard error (metres): the two axis positions' errors there in quadrature.
+    allowed : float
+        ``max(FIT_UP_SIGMA x stderr, FIT_UP_FLOOR)``.
+    point : ndarray, shape (3,)
+        Where (metres).
+    """
+
+    pipes: tuple[int, int]
+    miss: float
+    stderr: float
+    allowed: float
+    point: np.ndarray
+
+    @property
+    def deviates(self) -> bool:
+        """Whether the miss is beyond what the fits' uncertainty explains."""
+        return self.miss > self.allowed
+
+
+def fit_up(centers, axes, meets, coaxial, center_se, axis_se_deg, skip=()) -> list[FitUp]:
+    """The miss of every joined pair's lines before alignment (see :class:`FitUp`).
+
+    ``centers`` (n, 3) m and ``axes`` (n, 3) are the lines :func:`align_lines` is given;
+    ``meets`` and ``coaxial`` its pairs; ``center_se`` (n,) m and ``axis_se_deg`` (n,) each
+    fit's ``center`` and ``axis_deg`` standard errors. Each line's position error at the joint
+    is ``sqrt(se_center^2 + (s se_axis)^2)``, ``s`` the distance along it from its centre. A
+    pair in ``skip`` (an eccentric reducer: offset on purpose), or with a standard error
+    unknown, is left out: errors only when certain.
+    """
+    c = np.asarray(centers, float)
+    a = np.asarray(axes, float)
+    found = []
+    for pairs, meet in ((meets, True), (coaxial, False)):
+        for i, j in pairs:
+            if (i, j) in skip or (j, i) in skip:
+                continue
+            if meet and abs(float(a[i] @ a[j])) < 1.0 - 1e-9:
+                _, _, qi, qj = line_closest_points(c[i], a[i], c[j], a[j])
+                point = 0.5 * (qi + qj)
+                miss = float(np.linalg.norm(qi - qj))
+            else:
+                # coaxial (or parallel): the step across the run halfway between the centres
+                point = 0.5 * (c[i] + c[j])
+                d = a[i]
+                step = (c[j] - c[i]) - float((c[j] - c[i]) @ d) * d
+                miss = float(np.linalg.norm(step))
+            sig = []
+            for k in (i, j):
+                s = float((point - c[k]) @ a[k])
+                sig.append(np.hypot(center_se[k], s * np.radians(axis_se_deg[k])))
+            se = float(np.hypot(*sig))
+            if not np.isfinite(se):
+                continue
+            allowed = max(FIT_UP_SIGMA * se, FIT_UP_FLOOR)
+            found.append(FitUp((int(i), int(j)), miss, se, allowed, point))
+    return found

@@ -14,7 +14,9 @@ axes):
   vector perpendicular to ``o_1`` towards ``-o_2``. Both pipes are trimmed (or extended) to
   ``T_k``.
 * **inline**, one size: ends within 5 mm (or overlapping) meet at their midpoint (a butt weld);
-  a larger gap is filled by a **coupling** (a straight of the pipe size).
+  a larger gap is filled by a **coupling** (a straight of the pipe size) up to
+  :func:`coupling_limit`; a longer gap by pipe (both pipes extended to meet in its middle,
+  with a note: pipe the scan did not measure).
 * **inline**, two sizes: a **reducer** of the catalog length (by its large end) centred on the
   gap; both pipes end at its ends. It is concentric when the aligned axes coincide, eccentric
   (``Reducer.offset`` the sideways step between them) when merging placed them apart
@@ -33,7 +35,6 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from asbuilt.catalog import FittingDims
 from asbuilt.model import (
@@ -48,6 +49,8 @@ from asbuilt.model import (
 )
 
 from .contiguity import Joint, connected_groups, line_closest_points
+from .ports import connection_mismatches, ports
+from .reducers import nps_order, reducer_made, small_ends
 
 __all__ = [
     "PipeSpec",
@@ -60,7 +63,10 @@ __all__ = [
 
 #: Inline ends closer than this (metres) meet at their midpoint rather than get a coupling.
 BUTT_GAP = 0.005
-#: Bends within this many degrees of 45 use the catalog's 45 degree elbow centre-to-end.
+#: Bends within this many degrees of 45 use the catalog's 45 degree elbow centre-to-end; an
+#: elbow within it of 45 or 90 degrees, or a tee's branch within it of square, is a B16.9
+#: fitting (regularisation makes angles within ``angle_snap_deg``, 2, exact). Any other angle
+#: is built (a 90 degree elbow cut to angle is real practice) but said to be non-standard.
 ELBOW45_WINDOW_DEG = 2.0
 #: Shortest pipe piece left after trimming, metres.
 MIN_PIPE_LENGTH = 0.001
@@ -144,9 +150,20 @@ def _unit(v):
     return v / np.linalg.norm(v)
 
 
+def coupling_limit(joint_distance: float, od: float) -> float:
+    """Longest gap (metres) between collinear pipes of one size a coupling may fill.
+
+    ``2 joint_distance + 2 od``: the gap an inline joint takes without a link or shot slack
+    (:mod:`.contiguity`: room for a reducer or a tee's run), so what a fitting may plausibly
+    fill. A longer gap was bridged only by a link's margin or sparse shots: it is pipe.
+    """
+    return 2.0 * joint_distance + 2.0 * od
+
+
 class _Builder:
-    def __init__(self, pipes: Sequence[PipeSpec], reducer_notes=None):
+    def __init__(self, pipes: Sequence[PipeSpec], reducer_notes=None, joint_distance=0.15):
         self.pipes = pipes
+        self.joint_distance = joint_distance
         self.reducer_notes = dict(reducer_notes or {})
         n = len(pipes)
         self.base = np.zeros((n, 2, 3))
@@ -161,12 +178,25 @@ class _Builder:
         # How far a pipe end may be cut back into its fitting with its shots still on the
         # fitting's surface (metres; set by _elbow, _inline and _tee).
         self.allowance: dict[tuple[int, int], float] = {}
+        # Pipe ends extended to fill a gap longer than a coupling: the note for them.
+        self.filled: dict[tuple[int, int], str] = {}
+        # Notes for pipes' merge_notes from the fittings built at them (non-standard ones).
+        self.pipe_notes: dict[int, list[str]] = {}
 
     def reset(self):
         self.ends = self.base.copy()
         self.splits = {}
         self.fitting_at = {}
         self.allowance = {}
+        self.filled = {}
+        self.pipe_notes = {}
+
+    def note(self, pipes: Iterable[int], text: str) -> None:
+        """Put ``text`` in the merge notes of ``pipes`` (indices), once each."""
+        for i in pipes:
+            said = self.pipe_notes.setdefault(i, [])
+            if text not in said:
+                said.append(text)
 
     def param(self, i: int, point) -> float:
         """Position of ``point`` along pipe i's axis from its start end, metres."""
@@ -215,9 +245,27 @@ def _elbow(b: _Builder, joint: Joint):
     b.allowance[i, ki] = b.allowance[j, kj] = min(bent, float(reach))
     if not _same_size(pi, pj):
         notes.append("pipes of different sizes meet at this elbow: built at the larger size")
+    degrees = float(np.degrees(theta))
+    source = big.dims.source
+    standard = min(abs(degrees - 45.0), abs(degrees - 90.0)) <= ELBOW45_WINDOW_DEG
+    if not standard:
+        # B16.9 makes 45 and 90 degree elbows only: say what was built instead of labelling it
+        if degrees < 90.0:
+            made = f"a 90 degree elbow of that radius cut to {degrees:.0f} degrees"
+            source = f"{source}, cut from a 90 degree elbow (non-standard)"
+        else:
+            made = f"a {degrees:.0f} degree bend of the 90 degree elbow's radius"
+            source = f"{source} radius, {degrees:.0f} degree bend (non-standard)"
+        text = (
+            f"the elbow {pi.id}-{pj.id} turns {degrees:.0f} degrees, which no ASME B16.9 elbow "
+            f"does (45 or 90): built as {made}"
+        )
+        notes.append(text)
+        b.note((i, j), text)
     snap = {
         "status": "fitting",
-        "dimensions": big.dims.source,
+        "dimensions": source,
+        "standard": standard,
         "bend_radius": radius,
         "angle_deg": float(np.degrees(theta)),
         "connects": [pi.id, pj.id],
@@ -239,6 +287,23 @@ def _inline(b: _Builder, joint: Joint):
             b.ends[j, kj] = mid
             b.fitting_at[i, ki] = f"butt weld with {pj.id}"
             b.fitting_at[j, kj] = f"butt weld with {pi.id}"
+            return []
+        longest = coupling_limit(b.joint_distance, max(pi.od, pj.od))
+        if gap > longest:
+            # more than a fitting fills: the gap is pipe nobody measured (a link or sparse
+            # shots made the joint), counted as pipe in the take-off and said, not hidden in a
+            # "coupling" counted as one fitting without length or weight
+            mid = 0.5 * (ei + ej)
+            b.ends[i, ki] = b.ends[j, kj] = mid
+            b.fitting_at[i, ki] = f"butt weld with {pj.id}"
+            b.fitting_at[j, kj] = f"butt weld with {pi.id}"
+            size = f"NPS {pi.nominal}" if pi.nominal else f"OD {pi.od * 1000:.1f} mm"
+            b.filled[i, ki] = b.filled[j, kj] = (
+                f"{pi.id} and {pj.id} are {gap * 1000:.0f} mm apart in line, longer than a "
+                f"fitting fills ({longest * 1000:.0f} mm): the gap is modelled as {size} pipe "
+                "the scan did not measure (both pipes extended to meet in its middle); scan "
+                "the hidden section or check the link"
+            )
             return []
         geometry = Straight(start=ei, end=ej, outer_radius=0.5 * pi.od, wall=pi.wall)
         snap = {
@@ -278,9 +343,12 @@ def _inline(b: _Builder, joint: Joint):
     note = b.reducer_notes.get((min(i, j), max(i, j)))
     if geometry.eccentric and note:
         notes.insert(0, note)
+    small = pj if large is pi else pi
+    source, standard = _reducer_source(b, large, small, (i, j))
     snap = {
         "status": "fitting",
-        "dimensions": large.dims.source,
+        "dimensions": source,
+        "standard": standard,
         "length": length,
         "sizes": [pi.nominal, pj.nominal],
         "connects": [pi.id, pj.id],
@@ -292,6 +360,24 @@ def _inline(b: _Builder, joint: Joint):
             "offset": float(np.linalg.norm(offset)),
         }
     return [("reducer", f"{pi.id}-{pj.id}", geometry, large, snap)]
+
+
+def _reducer_source(b: _Builder, large: PipeSpec, small: PipeSpec, pipes) -> tuple[str, bool]:
+    """(``dimensions`` record, standard?) of a reducer from ``large`` to ``small``: a pair the
+    fittings table does not make (:func:`.reducers.reducer_made`) keeps the large end's H but
+    is said to be non-standard, with a note on ``pipes``."""
+    source = large.dims.source
+    if reducer_made(source, large.nominal, small.nominal) is not False:
+        return source, True
+    ends = sorted(small_ends(source).get(large.nominal, ()), key=nps_order, reverse=True)
+    text = (
+        f"no NPS {large.nominal} x {small.nominal} reducer in {source} ("
+        + (f"NPS {large.nominal} reduces to {', '.join(ends)} only" if ends else "none from it")
+        + f"): built with the NPS {large.nominal} reducer's length, a fitting the standard "
+        "does not make; two reducers in series, or check the sizes"
+    )
+    b.note(pipes, text)
+    return f"{source} H of the large end; no such reducer (non-standard)", False
 
 
 def _flat_word(flat) -> str:
@@ -321,47 +407,137 @@ def _tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
     return geometry
 
 
+def _size(p: PipeSpec) -> str:
+    return f"NPS {p.nominal}" if p.nominal else f"OD {p.od * 1000:.1f} mm"
+
+
 def _tee(b: _Builder, joint: Joint):
     branch_i, branch_k = joint.ends[-1]
     pb = b.pipes[branch_i]
     ob = b.out[branch_i, branch_k]
+    small = None
     if joint.through is None:
         (i, ki), (j, kj) = joint.ends[:2]
         pi, pj = b.pipes[i], b.pipes[j]
         run_dir = b.out[i, ki]
         anchor = b.base[i, ki]
+        if not _same_size(pi, pj):
+            # B16.9 tees reduce on the outlet only: a run that changes size at the tee is a
+            # tee of the larger run and a reducer on the smaller side
+            small = pj if pi.od > pj.od else pi
     else:
         i = joint.through
         pi = pj = b.pipes[i]
         run_dir = pi.axis
         anchor = b.base[i, 0]
+    run = pj if small is pi else pi
     _, t, _, center = line_closest_points(b.base[branch_i, branch_k], ob, anchor, run_dir)
     center = anchor + t * run_dir
-    geometry = _tee_geometry(center, run_dir, -ob, pi, pb)
+    geometry = _tee_geometry(center, run_dir, -ob, run, pb)
     b.ends[branch_i, branch_k] = geometry.branch_end
     b.fitting_at[branch_i, branch_k] = "a tee"
     # A tee's run and outlet are the pipes' own cylinders up to its centre-to-end dimensions.
-    b.allowance[branch_i, branch_k] = float(pi.dims.tee_outlet)
+    b.allowance[branch_i, branch_k] = float(run.dims.tee_outlet)
 
-    notes = list(pi.dims.notes)
-    if not _same_size(pi, pb):
+    notes = list(run.dims.notes)
+    source = run.dims.source
+    standard = True
+    if pb.od > run.od + 1e-9:
+        # no "reducing outlet": the rules report the size mismatch (contiguous-diameter)
+        standard = False
+        source = f"{source}, outlet larger than the run (non-standard)"
+        notes.append(
+            f"the outlet ({_size(pb)}) is larger than the run ({_size(run)}): no ASME B16.9 "
+            "tee has one (tees reduce on the outlet only); built with the run's dimensions"
+        )
+    elif not _same_size(run, pb):
         notes.append("reducing outlet: built with the equal tee's dimensions of the run size")
+    square = float(np.degrees(np.arccos(min(1.0, abs(float(ob @ run_dir))))))
+    if abs(square - 90.0) > ELBOW45_WINDOW_DEG:
+        # B16.9 tees are square; an oblique branch is a non-standard fitting (or a lateral)
+        standard = False
+        source = f"{source}, outlet at {square:.0f} degrees (non-standard)"
+        text = (
+            f"{pb.id} meets the run of {pi.id} at {square:.0f} degrees: ASME B16.9 tees are "
+            "square (90 degrees); built as a tee of its dimensions with the outlet at that "
+            "angle, which is not a B16.9 fitting"
+        )
+        notes.append(text)
+        b.note({i, branch_i} | ({j} if joint.through is None else set()), text)
+    items = []
     if joint.through is None:
         b.ends[i, ki] = geometry.run_start
         b.ends[j, kj] = geometry.run_end
         name = f"{pi.id}-{pj.id}-{pb.id}"
         b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"tee {name}"
         b.fitting_at[branch_i, branch_k] = f"tee {name}"
-        b.allowance[i, ki] = b.allowance[j, kj] = float(pi.dims.tee_run)
+        b.allowance[i, ki] = b.allowance[j, kj] = float(run.dims.tee_run)
         connects = [pi.id, pj.id, pb.id]
+        if small is not None:
+            end = (j, kj) if small is pj else (i, ki)
+            port = geometry.run_end if small is pj else geometry.run_start
+            items = _run_reducer(b, name, run, small, end, port, (i, j, branch_i))
+            notes.append(
+                f"the run changes from {_size(run)} to {_size(small)} here: tee of the larger "
+                + ("run, followed by a reducer" if items else "run, and no reducer can follow")
+            )
     else:
         at = b.param(i, center)
-        b.splits.setdefault(i, []).append((at, pi.dims.tee_run))
+        b.splits.setdefault(i, []).append((at, run.dims.tee_run))
         name = None  # named after the pieces are known
         connects = [pi.id, pb.id]
-    snap = {"status": "fitting", "dimensions": pi.dims.source, "connects": connects, "notes": notes}
+    snap = {
+        "status": "fitting",
+        "dimensions": source,
+        "standard": standard,
+        "connects": connects,
+        "notes": notes,
+    }
     at_param = b.param(i, center) if joint.through is not None else None
-    return [("tee", name, geometry, pi, snap, joint.through, at_param)]
+    return [("tee", name, geometry, run, snap, joint.through, at_param), *items]
+
+
+def _run_reducer(b: _Builder, tee: str, run: PipeSpec, small: PipeSpec, end, port, pipes):
+    """The reducer after the tee ``tee`` on the smaller run pipe's side: from the tee's run
+    ``port`` ((3,) m) outwards by the large end's H, the smaller pipe's ``end`` moved to its
+    small end. None is built when the fittings table does not make that pair (the pipe then
+    meets the tee's port, and the rules report the size change); returns the fitting items."""
+    if reducer_made(run.dims.source, run.nominal, small.nominal) is False:
+        b.note(
+            pipes,
+            f"the run changes from {_size(run)} to {_size(small)} at the tee {tee}, but ASME "
+            f"B16.9 tees reduce on the outlet only and {run.dims.source} has no "
+            f"{run.nominal} x {small.nominal} reducer to follow it: {small.id} meets the tee's "
+            f"{_size(run)} run end with nothing between",
+        )
+        return []
+    length = float(run.dims.reducer_length)
+    direction = -b.out[end]  # out of the tee along the run, into the smaller pipe
+    start = np.asarray(port, float)
+    stop = start + length * direction
+    b.ends[end] = stop
+    name = f"reducer after tee {tee}"
+    b.fitting_at[end] = name
+    slope = abs(run.od - small.od) / (2.0 * max(length, 1e-9))
+    b.allowance[end] = min(TRIM_SURFACE_TOLERANCE / max(slope, 1e-9), length)
+    wall = min(run.wall, small.wall) if run.wall and small.wall else 0.0
+    geometry = Reducer(
+        start=start,
+        end=stop,
+        outer_radius_start=0.5 * run.od,
+        outer_radius_end=0.5 * small.od,
+        wall=wall,
+    )
+    snap = {
+        "status": "fitting",
+        "dimensions": run.dims.source,
+        "standard": True,
+        "length": length,
+        "sizes": [run.nominal, small.nominal],
+        "connects": [tee, small.id],
+        "notes": [*run.dims.notes, "the run reduces after the tee (tees reduce on the outlet)"],
+    }
+    return [("reducer", f"{tee}-{small.id}", geometry, run, snap)]
 
 
 def _pieces(b: _Builder, i: int):
@@ -395,6 +571,7 @@ def build_spools(
     max_bend_deg: float = MAX_BEND_DEG,
     reducer_notes=None,
     taken_ids: Iterable[str] = (),
+    joint_distance: float = 0.15,
 ) -> tuple[list[Component], list[Spool]]:
     """Place fittings at the joints, trim pipes and group everything into spools.
 
@@ -413,6 +590,10 @@ def build_spools(
         Ids a spool must not take besides the pipes' (every scan object's id): a generated
         ``S<n>`` or a group's name already used by an object is skipped, so that a spool is
         never mistaken for an object (a column "S1" and spool "S1").
+    joint_distance : float
+        ``Tolerances.joint_distance`` (metres): a gap between collinear pipes of one size
+        longer than :func:`coupling_limit` is filled with pipe (both pipes extended, with a
+        note), not a coupling.
 
     Returns
     -------
@@ -421,10 +602,10 @@ def build_spools(
         pipe it joins.
     spools : list of Spool
     """
-    b = _Builder(pipes, reducer_notes)
+    b = _Builder(pipes, reducer_notes, joint_distance)
     active = []
     for jt in joints:
-        if jt.kind == "contact":
+        if jt.kind in ("contact", "link"):
             continue
         if jt.kind == "elbow":
             (i, ki), (j, kj) = jt.ends
@@ -544,7 +725,10 @@ def build_spools(
         for k, label in ((0, "start"), (1, "end")):
             moved = float((b.ends[i, k] - b.base[i, k]) @ b.out[i, k])
             at = b.fitting_at.get((i, k), "the joint")
-            if -moved > max(TRIM_NOTE, b.allowance.get((i, k), 0.0)):
+            if (i, k) in b.filled:
+                if b.filled[i, k] not in end_notes:
+                    end_notes.append(b.filled[i, k])
+            elif -moved > max(TRIM_NOTE, b.allowance.get((i, k), 0.0)):
                 end_notes.append(
                     f"cut back {-moved * 1000:.0f} mm at its {label} for {at}: the fitting covers "
                     "pipe the scan measured there"
@@ -566,8 +750,9 @@ def build_spools(
                     )
                 )
         snap = dict(base.snap)
-        if p.notes or end_notes:
-            snap["merge_notes"] = list(p.notes) + end_notes
+        said = list(p.notes) + b.pipe_notes.get(i, []) + end_notes
+        if said:
+            snap["merge_notes"] = said
         for pid, start, end in by_pipe[i]:
             geometry = Straight(start=start, end=end, outer_radius=0.5 * p.od, wall=p.wall)
             comp = Component(
@@ -606,79 +791,3 @@ def build_spools(
         for name in spool_names.values()
     ]
     return components, spools
-
-
-def ports(component: Component) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The connection ports of a piping component.
-
-    Returns
-    -------
-    list of (point, direction)
-        Each ``point`` (3,) metres is an open end; ``direction`` (3,) the unit vector pointing
-        out of the component there. Pipes and couplings (``Straight``), reducers: start and end;
-        elbows (``Bend``): the two ends with their tangents; tees: run start, run end and branch
-        end. Other components have no ports (empty list).
-    """
-    g = component.geometry
-    if isinstance(g, Reducer):
-        return [(g.start, -g.direction), (g.end, g.direction)]
-    if isinstance(g, Straight):
-        d = _unit(g.end - g.start)
-        return [(g.start, -d), (g.end, d)]
-    if isinstance(g, Bend):
-        s = g.start - g.center
-        e = g.end - g.center
-        us, ue = _unit(s), _unit(e)
-        travel_start = _unit(e - (e @ us) * us)
-        travel_end = _unit(-(s - (s @ ue) * ue))
-        return [(g.start, -travel_start), (g.end, travel_end)]
-    if isinstance(g, Tee):
-        return [
-            (g.run_start, _unit(g.run_start - g.center)),
-            (g.run_end, _unit(g.run_end - g.center)),
-            (g.branch_end, _unit(g.branch_end - g.center)),
-        ]
-    return []
-
-
-def connection_mismatches(components: Sequence[Component], tolerance: float = 1e-4):
-    """Check that neighbouring components share end points and directions.
-
-    Every port of every piping component is paired with the nearest port of another component
-    of the same spool; a pair closer than 10 x ``tolerance`` is a connection. A connection is a
-    mismatch when the points differ by more than ``tolerance`` (metres) or the directions are not
-    opposite within ``tolerance`` (radians, as the length of their sum).
-
-    Returns
-    -------
-    connections : int
-        Number of port pairs found.
-    mismatches : list of (str, str, float, float)
-        Component ids, point gap (metres) and direction error, for each bad pair.
-    """
-    entries = []
-    for comp in components:
-        for point, direction in ports(comp):
-            entries.append((comp.id, comp.spool, np.asarray(point), np.asarray(direction)))
-    if not entries:
-        return 0, []
-    tree = cKDTree(np.array([e[2] for e in entries]))
-    connections = 0
-    bad = []
-    for id_a, spool_a, pa, da in entries:
-        best = None
-        for b in tree.query_ball_point(pa, 10 * tolerance):
-            id_b, spool_b, pb, db = entries[b]
-            if id_b == id_a or spool_b != spool_a:
-                continue
-            gap = float(np.linalg.norm(pa - pb))
-            if best is None or gap < best[0]:
-                best = (gap, id_b, db)
-        if best is None:
-            continue
-        connections += 1
-        gap, id_b, db = best
-        turn = float(np.linalg.norm(da + db))
-        if gap > tolerance or turn > tolerance:
-            bad.append((id_a, id_b, gap, turn))
-    return connections // 2, bad

@@ -24,6 +24,7 @@ __all__ = [
     "inferred_pairs",
     "contiguous_pipes",
     "could_join",
+    "fittings_between",
     "FITTING_PASS",
 ]
 
@@ -84,14 +85,19 @@ def linked_pairs(model: Model) -> set[frozenset]:
     return pairs
 
 
-def adjacency(model: Model, touch: float, infer: float | None = None) -> dict[str, set[str]]:
+def adjacency(
+    model: Model, touch: float, infer: float | None = None, *, links: bool = True
+) -> dict[str, set[str]]:
     """Component id to the ids it is joined to.
 
-    Joined: ends within ``touch`` metres, linked in the scan, or (pipes only, when ``infer`` is
+    Joined: ends within ``touch`` metres, linked in the scan (unless ``links`` is False: what
+    is physically joined, not what the scan says should be), or (pipes only, when ``infer`` is
     given) ends within ``infer`` metres of each other.
     """
     graph: dict[str, set[str]] = defaultdict(set)
-    pairs = set(end_pairs(model.components, touch)) | linked_pairs(model)
+    pairs = set(end_pairs(model.components, touch))
+    if links:
+        pairs |= linked_pairs(model)
     if infer:
         pairs |= inferred_pairs(model, touch, infer)
     for pair in pairs:
@@ -169,8 +175,11 @@ def could_join(ga, ea: np.ndarray, gb, eb: np.ndarray, reach: float) -> bool:
     return float(np.linalg.norm(qa - qb)) <= radius and s >= -reach and t >= -reach
 
 
-def contiguous_pipes(model: Model, graph: dict[str, set[str]], pipe_ids) -> list[tuple]:
-    """Pairs of pipes joined directly or through elbows and couplings only.
+def contiguous_pipes(
+    model: Model, graph: dict[str, set[str]], pipe_ids, through=FITTING_PASS
+) -> list[tuple]:
+    """Pairs of pipes joined directly or through fittings of the types ``through`` only
+    (elbows and couplings by default).
 
     Returns ``(first id, second id, intermediate fitting ids)`` once per pair.
     """
@@ -189,10 +198,35 @@ def contiguous_pipes(model: Model, graph: dict[str, set[str]], pipe_ids) -> list
                 if nxt in pipe_ids:
                     key = tuple(sorted((start, nxt)))
                     result.setdefault(key, path)
-                elif types.get(nxt) in FITTING_PASS:
+                elif types.get(nxt) in through:
                     stack.append((nxt, (*path, nxt)))
     return [(a, b, path) for (a, b), path in sorted(result.items())]
 
 
 def component_map(model: Model) -> dict[str, Component]:
     return {c.id: c for c in model.components}
+
+
+def fittings_between(model: Model, graph: dict[str, set[str]], a: str, b: str) -> list[str] | None:
+    """The fittings (ids, in order) on a shortest path from component ``a`` to ``b`` through
+    fittings only (no other pipe) in ``graph``; ``[]`` when they touch, None when no such
+    path exists."""
+    kinds = {c.id: c.type for c in model.components}
+    previous: dict[str, str | None] = {a: None}
+    queue = [a]
+    while queue:
+        node = queue.pop(0)
+        for nxt in sorted(graph.get(node, ())):
+            if nxt in previous:
+                continue
+            previous[nxt] = node
+            if nxt == b:
+                path = []
+                step = previous[b]
+                while step is not None and step != a:
+                    path.append(step)
+                    step = previous[step]
+                return path[::-1]
+            if kinds.get(nxt) in ("elbow", "tee", "reducer", "coupling"):
+                queue.append(nxt)
+    return None

@@ -1,4 +1,4 @@
-"""Joint rules: joint-gap and merge-note.
+"""Joint rules: joint-gap, merge-note and fit-up.
 
 Two pipes are *contiguous* when the scan links them or their ends lie within
 ``Tolerances.joint_distance``; merged spools join such pipes end to end or through a fitting.
@@ -16,7 +16,7 @@ from asbuilt.findings import Suggestion
 
 from ._catalog import SizeTable, nps_value
 from ._context import Context, centre_of, mm, stderr_value, verdict
-from ._graph import adjacency, inferred_pairs, linked_pairs
+from ._graph import adjacency, fittings_between, inferred_pairs, linked_pairs
 
 __all__ = ["CHECKS", "joint_geometry"]
 
@@ -112,11 +112,13 @@ def check_joint_gap(ctx: Context, table: SizeTable | None) -> None:
     pipes = {c.id: c for c in ctx.pipes}
     near = inferred_pairs(ctx.model, touch, float(ctx.general("joint_distance")))
     near |= {p for p in linked_pairs(ctx.model) if p <= set(pipes)}
-    joined = adjacency(ctx.model, touch)
+    # touching ends only: a scan link says the pipes should be joined, not that they are (every
+    # linked pair was skipped, so a linked 50 mm gap went unreported)
+    joined = adjacency(ctx.model, touch, links=False)
     for pair in sorted(near, key=sorted):
         a, b = sorted(pair)
-        if b in joined.get(a, ()) or any(b in joined.get(f, ()) for f in joined.get(a, ())):
-            continue  # joined directly or through one fitting
+        if fittings_between(ctx.model, joined, a, b) is not None:
+            continue  # joined directly or through fittings (a tee and the reducer after it)
         ca, cb = pipes[a], pipes[b]
         geo = joint_geometry(ca.geometry, cb.geometry)
         se = float(np.hypot(_length_se(ca), _length_se(cb)))
@@ -191,4 +193,45 @@ def check_merge_notes(ctx: Context, table: SizeTable | None = None) -> None:
         )
 
 
-CHECKS = {"joint-gap": check_joint_gap, "merge-note": check_merge_notes}
+def check_fit_up(ctx: Context, table: SizeTable | None = None) -> None:
+    """One finding per joined pair whose axes merging found missing each other beyond the fits'
+    uncertainty before it shifted them to meet (``snap["fit_up"]``, see
+    :func:`asbuilt.merge.regularize.fit_up`): the shift and its standard error."""
+    slug = "fit-up"
+    by_source: dict[str, list[str]] = {}
+    for comp in ctx.pipes:
+        for source in comp.sources or (comp.id,):
+            by_source.setdefault(source, []).append(comp.id)
+    seen = set()
+    for comp in ctx.pipes:
+        own = comp.sources[0] if comp.sources else comp.id
+        for entry in (comp.snap or {}).get("fit_up") or ():
+            key = frozenset((own, entry["with"]))
+            if key in seen:
+                continue
+            seen.add(key)
+            first, second = sorted((own, str(entry["with"])))
+            ids = [*by_source.get(first, [first]), *by_source.get(second, [second])]
+            miss, se = float(entry["miss"]), float(entry["stderr"])
+            ctx.emit(
+                slug,
+                ids,
+                f"the axes of {first} and {second} miss each other by {mm(miss)} (+- {mm(se)}) "
+                f"at their joint, more than the fits explain ({mm(float(entry['allowed']))}); "
+                "merging shifted them to meet",
+                location=np.asarray(entry["at"], float),
+                measured=miss,
+                allowed=float(entry["allowed"]),
+                stderr=se,
+                unit="m",
+                suggestions=(
+                    Suggestion(
+                        f"check the fit-up of {first} and {second} on site (an offset at the "
+                        "joint) and that they are joined there"
+                    ),
+                    Suggestion(f"scan {first} and {second} near the joint"),
+                ),
+            )
+
+
+CHECKS = {"joint-gap": check_joint_gap, "merge-note": check_merge_notes, "fit-up": check_fit_up}

@@ -127,6 +127,17 @@ RULES: tuple[Rule, ...] = (
         "joints",
     ),
     Rule(
+        "AB303",
+        "fit-up",
+        "warning",
+        "the axes of {first} and {second} miss each other by {miss} (+- {stderr}) at their "
+        "joint; merging shifted them to meet",
+        "Joined pipes' axes meet at their fitting (ASME B16.9 fittings are symmetric about "
+        "their axes); a miss beyond 3 standard errors of the fits (and 6 mm) is a real offset "
+        "at the joint (fit-up) or a wrong joint, not noise for merging to absorb.",
+        "joints",
+    ),
+    Rule(
         "AB401",
         "too-few-points",
         "warning",

@@ -15,8 +15,8 @@ from asbuilt.model import Component
 from asbuilt.units import UNITS
 
 from ._catalog import SizeTable
-from ._context import Context, centre_of, mm, stderr_value, verdict
-from ._graph import adjacency, component_map, contiguous_pipes
+from ._context import Context, centre_of, ends_of, mm, stderr_value, verdict
+from ._graph import FITTING_PASS, adjacency, component_map, contiguous_pipes, fittings_between
 
 __all__ = ["CHECKS", "measured_od", "size_status"]
 
@@ -329,6 +329,25 @@ def _size_of(comp: Component, table: SizeTable | None) -> tuple[str | None, floa
     return nominal, od
 
 
+def _size_change_explained(comps, between, ca, cb) -> bool:
+    """Whether the fittings ``between`` two pipes explain a change of size: a reducer, or a tee
+    one of whose pipes is its outlet no larger than the run (ASME B16.9 tees reduce on the
+    outlet only: a run changing size at a tee, or an outlet larger than the run, needs a
+    reducer)."""
+    if any(f.type == "reducer" for f in between):
+        return True
+    for tee in (f for f in between if f.type == "tee"):
+        g = tee.geometry
+        for branch in (ca, cb):
+            at_outlet = any(
+                float(np.linalg.norm(np.asarray(end) - g.branch_end)) < 1e-3
+                for end in ends_of(branch.geometry)
+            )
+            if at_outlet and g.branch_outer_radius <= g.outer_radius + 1e-9:
+                return True
+    return False
+
+
 def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
     slug = "contiguous-diameter-mismatch"
     if not is_merged(ctx.model):
@@ -339,13 +358,12 @@ def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
         ctx.model, float(ctx.opt("clash", "touch_distance")), float(ctx.general("joint_distance"))
     )
     tol = float(ctx.general("diameter_tolerance"))
-    touching = adjacency(ctx.model, float(ctx.opt("clash", "touch_distance")))
-    for a, b, path in contiguous_pipes(ctx.model, graph, pipes):
-        if any(
-            comps[x].type in ("reducer", "tee")
-            for x in touching.get(a, set()) & touching.get(b, set())
-        ):
-            continue  # a reducer or a (reducing) tee joins them: sizes may differ
+    touching = adjacency(ctx.model, float(ctx.opt("clash", "touch_distance")), links=False)
+    # through tees too: a tee passes its run's size on (B16.9 tees reduce on the outlet only)
+    for a, b, path in contiguous_pipes(ctx.model, graph, pipes, (*FITTING_PASS, "tee")):
+        between = fittings_between(ctx.model, touching, a, b) or []
+        if _size_change_explained(comps, [comps[x] for x in between], comps[a], comps[b]):
+            continue  # a reducer, or a tee's smaller outlet, joins them: sizes may differ
         ca, cb = comps[a], comps[b]
         (na, oda), (nb, odb) = _size_of(ca, table), _size_of(cb, table)
         if oda is None or odb is None:
@@ -397,7 +415,17 @@ def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
         suggestions.append(
             Suggestion(f"if the size really changes, add a reducer between {a} and {b}")
         )
-        if same_model:  # one modelled size: the fits are what disagree
+        tees = [
+            x for x in (fittings_between(ctx.model, touching, a, b) or []) if "tee" == comps[x].type
+        ]
+        if tees and not same_model:
+            la = _label(table, na) if na else mm(oda)
+            lb = _label(table, nb) if nb else mm(odb)
+            text = (
+                f"{a} is {la} but {b} is {lb} at the tee {tees[0]}, which ASME B16.9 does not "
+                "make: tees reduce on the outlet only (a smaller outlet, or a reducer after the tee)"
+            )
+        elif same_model:  # one modelled size: the fits are what disagree
             text = (
                 f"the fits of {a} ({mm(fa)}) and the contiguous {b} ({mm(fb)}) disagree by "
                 f"{mm(diff)} with no reducer"

@@ -10,7 +10,7 @@ from asbuilt.cli import main
 from asbuilt.errors import ExportError
 from asbuilt.export import export_model
 from asbuilt.export.pcf import pcf_text, write_pcf
-from asbuilt.model import Component, Model, Reducer, Spool, Straight
+from asbuilt.model import Bend, Component, Model, Reducer, Spool, Straight
 from asbuilt.pipeline import build_model
 from asbuilt.scan import load_scan
 
@@ -220,3 +220,25 @@ def test_a_user_catalog_file_gives_the_bores(tmp_path):
     header, blocks = parse(pcf_text(model))
     assert header["UNITS-BORE"] == ["MM"]
     assert _by_id(blocks)["P1"]["END-POINT"][0][3] == 100.0
+
+
+@pytest.mark.parametrize(("standard", "code"), [(True, "ELBOW-6IN-STD"), (False, None)])
+def test_a_non_standard_elbow_gets_its_own_item_code(standard, code):
+    """A 60 degree elbow cut from a 90 was written as ELBOW-6IN-STD, the 90 degree elbow's
+    item code: a take-off from the isometric counted it as a catalog elbow."""
+    # R 229 mm about (0, 0.229, 0) from the origin, turning 60 degrees
+    end = [0.229 * np.sin(np.radians(60)), 0.229 * (1 - np.cos(np.radians(60))), 0]
+    bend = Bend([0, 0, 0], end, [0, 0.229, 0], R6, W6)
+    snap = {"status": "fitting", "angle_deg": 60.0, "standard": standard}
+    snap["dimensions"] = "asme-b16.9" + ("" if standard else ", cut from a 90 degree elbow")
+    elbow = Component("E1", "elbow", bend, nominal="6", schedule="STD", snap=snap)
+    _, blocks = parse(pcf_text(Model(components=(elbow,), catalog="asme-b36.10m")))
+    (written,) = _by_id(blocks)["E1"]["ITEM-CODE"]
+    described = {b["values"][0]: b for b in blocks if b["type"] == "ITEM-CODE"}
+    if standard:
+        assert written == [code]
+        return
+    assert written == ["ELBOW-6IN-STD-60DEG-NONSTD"]
+    assert "cut from a" in " ".join(
+        " ".join(map(str, v)) for v in described[written[0]]["DESCRIPTION"]
+    )

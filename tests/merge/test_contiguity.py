@@ -79,11 +79,14 @@ def test_a_link_joins_pipes_beyond_the_distance_limits():
     assert len(joints) == 1 and joints[0].kind == "elbow" and joints[0].explicit
 
 
-def test_a_link_without_meeting_geometry_is_still_a_contact():
+def test_a_link_without_meeting_geometry_is_an_unrealised_link():
+    # parallel pipes 0.3 m apart: the link still pools their size estimate (joint_pairs) but
+    # joins them in no spool (connected_groups)
     pairs = (((0, 0, 0), (2, 0, 0)), ((0, 0.3, 0), (2, 0.3, 0)))
     joints = joints_of(*pairs, links=[(1, 0)])
-    assert [j.kind for j in joints] == ["contact"]
+    assert [j.kind for j in joints] == ["link"]
     assert joint_pairs(joints) == [(0, 1)]
+    assert connected_groups(2, joints) == [[0], [1]]
 
 
 def test_tee_at_an_inline_joint():

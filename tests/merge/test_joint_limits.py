@@ -14,6 +14,8 @@ from asbuilt.merge import merge_model
 from asbuilt.merge.contiguity import find_joints
 from asbuilt.merge.spool import connection_mismatches
 from asbuilt.primitives import Cuboid
+from asbuilt.report.takeoff import take_off
+from asbuilt.rules import check_model
 from asbuilt.scan.model import ScanObject
 
 NPS4 = 0.1143
@@ -112,7 +114,7 @@ def test_a_link_between_parallel_pipes_2_m_apart_is_not_one_spool():
     assert any("not joined" in n for n in notes(model, "P2"))
 
 
-def test_a_plausible_link_still_joins_and_a_near_contact_stays_a_contact():
+def test_a_plausible_link_still_joins():
     # ends 0.6 m from the corner: beyond the inferred reach, within the link margin
     elbow = merge_model(
         report_of(
@@ -121,13 +123,93 @@ def test_a_plausible_link_still_joins_and_a_near_contact_stays_a_contact():
         )
     )
     assert types(elbow) == ["pipe", "elbow", "pipe"]
-    side_by_side = merge_model(
-        report_of(
-            [Pipe("P1", (0, 0, 0), (2, 0, 0), NPS4), Pipe("P2", (0, 0.3, 0), (2, 0.3, 0), NPS4)],
-            links=[("P1", "P2")],
-        )
-    )
-    assert len(side_by_side.spools) == 1 and "merge_notes" not in by_id(side_by_side)["P1"].snap
+
+
+# --- 2b. a link merging cannot realise is said, and joins no spool ----------------------------
+# NPS 6 (OD 168.3 mm) pipes 1.2 m long; B16.9 NPS 6 tee C = M = 143 mm, 90 LR elbow 229 mm.
+_C6 = 0.143
+
+
+def _bend(angle_deg, reach):
+    """P1 along +x ending ``reach`` before a corner at x = 0; P2 leaving it at ``angle_deg``."""
+    d = np.array([math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg)), 0.0])
+    return [
+        Pipe("P1", (-1.2 - reach, 0, 1), (-reach, 0, 1), NPS6),
+        Pipe("P2", tuple(reach * d + [0, 0, 1]), tuple((reach + 1.2) * d + [0, 0, 1]), NPS6),
+    ]
+
+
+def _junction(branch_deg, fourth=False):
+    """Run P1-P3 along x with a tee's gap at x = 0, branch P2 at ``branch_deg`` to the run (end
+    M from the junction), and with ``fourth`` a P4 opposite the branch (a cross)."""
+    d = np.array([math.cos(math.radians(branch_deg)), math.sin(math.radians(branch_deg)), 0.0])
+    pipes = [
+        Pipe("P1", (-_C6 - 1.2, 0, 1), (-_C6, 0, 1), NPS6),
+        Pipe("P3", (_C6, 0, 1), (_C6 + 1.2, 0, 1), NPS6),
+        Pipe("P2", tuple(_C6 * d + [0, 0, 1]), tuple((_C6 + 1.2) * d + [0, 0, 1]), NPS6),
+    ]
+    if fourth:
+        pipes.append(Pipe("P4", (0, -_C6, 1), (0, -_C6 - 1.2, 1), NPS6))
+    return pipes
+
+
+UNREALISED_LINKS = [
+    # a cross: the tee P1-P3-P2 takes P1's end; the link to P4 cannot be made at that end
+    pytest.param(
+        _junction(90, fourth=True),
+        [("P1", "P3"), ("P1", "P2"), ("P1", "P4")],
+        ("P1", "P4"),
+        "already joined to P3, P2 by a tee",
+        id="fourth-pipe-at-a-tee",
+    ),
+    # a 120 degree bend: no B16.9 elbow turns it, linked or not (the unlinked note's words)
+    pytest.param(
+        _bend(120, 0.10),
+        [("P1", "P2")],
+        ("P1", "P2"),
+        "meet at a 120 degree bend, beyond an elbow's 100",
+        id="linked-120-degree-bend",
+    ),
+    # parallel pipes 0.4 m apart (0.4 - 0.1683 = 232 mm outside to outside): no axis meets
+    pytest.param(
+        [Pipe("P1", (-1.5, 0, 1), (0, 0, 1), NPS6), Pipe("P2", (-1.5, 0.4, 1), (0, 0.4, 1), NPS6)],
+        [("P1", "P2")],
+        ("P1", "P2"),
+        "their axes do not meet (they pass 232 mm apart",
+        id="linked-parallel-pipes",
+    ),
+]
+
+
+@pytest.mark.parametrize(("pipes", "links", "pair", "why"), UNREALISED_LINKS)
+def test_a_link_merging_cannot_make_is_noted_and_joins_no_spool(pipes, links, pair, why):
+    """The audit's linked cases gave no note and one spool of two unjoined pieces (its fused
+    solid two solids); unlinked, the same bend was noted."""
+    model = merge_model(report_of(pipes, links=links))
+    for pid in pair:
+        said = [n for n in notes(model, pid) if why in n]
+        assert len(said) == 1 and "not joined" in said[0], notes(model, pid)
+    spool_of = {c.id: c.spool for c in model.components}
+    assert spool_of[pair[0]] != spool_of[pair[1]]
+    # every spool is one connected piece: its n components meet at n - 1 shared ports
+    for spool in model.spools:
+        members = [c for c in model.components if c.spool == spool.id]
+        found, bad = connection_mismatches(members, tolerance=1e-4)
+        assert bad == [] and found == len(members) - 1
+    # the note is a merge-note finding naming both pipes
+    assert any(f.code == "AB302" and set(pair) <= set(f.objects) for f in check_model(model))
+
+
+@pytest.mark.parametrize("links", [[], [("P1", "P3"), ("P1", "P2")]], ids=["unlinked", "linked"])
+def test_a_linked_lateral_is_a_lateral_not_a_coupling(links):
+    """Linked, the 45 degree lateral's run became a 286 mm "coupling" across the wye's gap and
+    the link to the branch a silent contact; it must be the lateral the unlinked scan gives."""
+    model = merge_model(report_of(_junction(45), links=links))
+    assert types(model) == ["pipe", "pipe", "pipe"]
+    assert [s.components for s in model.spools] == [("P1", "P3", "P2")]
+    for pid in ("P1", "P2", "P3"):
+        assert [n for n in notes(model, pid) if "45 degrees: a lateral" in n], notes(model, pid)
+    assert not [n for n in notes(model, "P2") if "not joined" in n]
 
 
 def _cuboid(center, size):
@@ -278,3 +360,158 @@ def test_a_link_to_an_object_without_a_fit_is_said_with_its_article():
     model = merge_model(replace(report, scan=scan))
     said = notes(model, "P1")
     assert len(said) == 1 and "links P1 to X1 (an object)" in said[0]
+
+
+# --- 3. a long unmeasured gap is pipe, not a "coupling" ----------------------------------------
+# NPS 6: OD 168.3 mm, STD wall 7.11 mm (ASME B36.10M); a coupling fills at most the gap an
+# unlinked inline joint takes, 2 x 0.15 m (joint_distance) + 2 x 168.3 mm = 636.6 mm.
+WALL6 = 0.00711
+STEEL = 7850.0  # kg/m3, the density behind the B36.10M weight formula
+
+
+@pytest.mark.parametrize(
+    ("gap", "coupling"),
+    [
+        pytest.param(0.3, True, id="300-mm-coupling"),
+        pytest.param(0.6, True, id="600-mm-coupling"),
+        pytest.param(0.7, False, id="700-mm-pipe"),
+        pytest.param(0.9, False, id="900-mm-pipe"),
+    ],
+)
+def test_a_linked_gap_longer_than_a_fitting_is_pipe_in_the_take_off(gap, coupling):
+    """A linked 0.9 m gap became a 0.9 m "coupling" counted "1 ea" without length or weight:
+    ~1 m of pipe missing from the take-off, and nothing said."""
+    pipes = [
+        Pipe("P1", (-1.5, 0, 1), (0, 0, 1), NPS6),
+        Pipe("P2", (gap, 0, 1), (gap + 1.5, 0, 1), NPS6),
+    ]
+    model = merge_model(report_of(pipes, links=[("P1", "P2")]))
+    assert len(model.spools) == 1
+    said = [n for n in notes(model, "P1") if "the scan did not measure" in n]
+    if coupling:
+        assert types(model) == ["pipe", "coupling", "pipe"]
+        assert by_id(model)["P1-P2"].geometry.length == pytest.approx(gap)
+        assert model.spools[0].pipe_length == pytest.approx(3.0)
+        assert not said
+        return
+    assert types(model) == ["pipe", "pipe"]
+    # the gap is pipe: 3 m measured + the gap, with its weight
+    assert model.spools[0].pipe_length == pytest.approx(3.0 + gap)
+    found, bad = connection_mismatches(model.components, tolerance=1e-4)
+    assert found == 1 and bad == []
+    weight = STEEL * math.pi * (NPS6 - WALL6) * WALL6 * (3.0 + gap)
+    assert take_off(model).pipe_weight == pytest.approx(weight, rel=1e-3)
+    # one note on both pipes (one AB302 warning naming both), no per-end extension notes
+    assert len(said) == 1 and f"{gap * 1000:.0f} mm apart" in said[0]
+    assert said == [n for n in notes(model, "P2") if "the scan did not measure" in n]
+    assert not [n for n in notes(model, "P1") if n.startswith("extended")]
+    (finding,) = [f for f in check_model(model) if f.code == "AB302"]
+    assert finding.severity == "warning" and finding.objects == ("P1", "P2")
+
+
+# --- 5. angles ASME B16.9 does not make are built but said to be non-standard ------------------
+# B16.9 elbows turn 45 (long radius) or 90 degrees; its tees are square.
+
+
+@pytest.mark.parametrize(
+    ("angle", "standard"),
+    [(30, False), (45, True), (60, False), (80, False), (90, True), (95, False)],
+)
+def test_an_elbow_of_an_angle_b16_9_does_not_make_is_said_so(angle, standard):
+    """A 60 or 30 degree bend was recorded as a B16.9 elbow ("dimensions": "asme-b16.9") and
+    exported to PCF as the 90 degree elbow's item code, with nothing said."""
+    reach = 0.229 * math.tan(math.radians(angle) / 2)  # NPS 6 long radius R tan(theta / 2)
+    model = merge_model(report_of(_bend(angle, reach), links=[("P1", "P2")]))
+    elbow = by_id(model)["P1-P2"]
+    assert elbow.type == "elbow"
+    assert elbow.snap["angle_deg"] == pytest.approx(angle, abs=0.01)
+    assert elbow.snap["standard"] is standard
+    said = [n for n in notes(model, "P1") if "no ASME B16.9 elbow does" in n]
+    if standard:
+        assert elbow.snap["dimensions"] == "asme-b16.9" and not said
+        return
+    assert "non-standard" in elbow.snap["dimensions"]
+    assert len(said) == 1 and f"turns {angle} degrees" in said[0]
+    assert said == [n for n in notes(model, "P2") if "no ASME B16.9 elbow does" in n]
+
+
+@pytest.mark.parametrize(("angle", "standard"), [(80, False), (90, True)])
+def test_a_tee_whose_branch_is_not_square_is_said_so(angle, standard):
+    """An 80 degree branch became a B16.9 "tee" with an 80 degree outlet, nothing said."""
+    model = merge_model(report_of(_junction(angle), links=[("P1", "P3"), ("P1", "P2")]))
+    tee = by_id(model)["P1-P3-P2"]
+    assert tee.snap["standard"] is standard
+    said = [n for n in notes(model, "P2") if "tees are square" in n]
+    assert bool(said) is not standard
+    if not standard:
+        assert f"at {angle} degrees" in said[0] and "non-standard" in tee.snap["dimensions"]
+
+
+# --- 4. tees reduce on the outlet only ---------------------------------------------------------
+# ASME B16.9 (standards reference): NPS 6 tee C = M = 143 mm, concentric reducer H 140 mm;
+# NPS 4 tee C = M = 105 mm; NPS 12 C = M = 254 mm, H 203 mm; NPS 12 reduces to 10, 8, 6, 5.
+NPS12 = 0.3238
+
+
+def _tee_pipes(run_a, run_b, branch, c, gap_b=0.0):
+    """Run P1 (OD ``run_a``) ending ``c`` before the junction at the origin, P3 (``run_b``)
+    starting ``c + gap_b`` after it, branch P2 (``branch``) along +y from ``c``."""
+    return [
+        Pipe("P1", (-c - 1.2, 0, 1), (-c, 0, 1), run_a),
+        Pipe("P3", (c + gap_b, 0, 1), (c + gap_b + 1.2, 0, 1), run_b),
+        Pipe("P2", (0, c, 1), (0, c + 1.2, 1), branch),
+    ]
+
+
+TEE_LINKS = [("P1", "P3"), ("P1", "P2")]
+
+
+def test_a_run_that_changes_size_at_a_tee_gets_a_reducer_after_the_tee():
+    """Run NPS 6 / NPS 4 with an NPS 6 branch was an equal 6 inch tee whose run port (168.3 mm)
+    butted on the 114.3 mm pipe: its fused solid two solids, and no finding."""
+    model = merge_model(report_of(_tee_pipes(NPS6, NPS4, NPS6, 0.143, 0.140), links=TEE_LINKS))
+    comps = by_id(model)
+    tee = comps["P1-P3-P2"]
+    (reducer,) = [c for c in model.components if c.type == "reducer"]
+    assert tee.geometry.outer_radius == pytest.approx(NPS6 / 2)
+    assert reducer.snap["sizes"] == ["6", "4"] and reducer.snap["standard"] is True
+    assert reducer.geometry.start == pytest.approx(tee.geometry.run_end, abs=1e-9)
+    assert reducer.geometry.length == pytest.approx(0.140)
+    assert (reducer.geometry.outer_radius_start, reducer.geometry.outer_radius_end) == (
+        pytest.approx(NPS6 / 2),
+        pytest.approx(NPS4 / 2),
+    )
+    assert comps["P3"].geometry.start == pytest.approx(reducer.geometry.end, abs=1e-9)
+    found, bad = connection_mismatches(model.components, tolerance=1e-4)
+    assert bad == [] and found == len(model.components) - 1  # one piece
+    assert [f.code for f in check_model(model)] == []
+
+
+def test_a_run_change_no_reducer_makes_is_reported():
+    """NPS 12 to NPS 4 at a tee: B16.9 has no 12 x 4 reducer, so none is built after the tee;
+    the pipes' note says so and the rules report the size change (AB104, error)."""
+    model = merge_model(report_of(_tee_pipes(NPS12, NPS4, NPS12, 0.254), links=TEE_LINKS))
+    assert not [c for c in model.components if c.type == "reducer"]
+    assert any("no 12 x 4 reducer" in n for n in notes(model, "P3"))
+    (error,) = [f for f in check_model(model) if f.code == "AB104"]
+    assert error.severity == "error" and set(error.objects) == {"P1", "P3"}
+    assert "tees reduce on the outlet only" in error.message
+
+
+def test_an_outlet_larger_than_the_run_is_an_error_not_a_reducing_outlet():
+    """A 4 inch run with a 6 inch branch was called a "reducing outlet" and reported nothing."""
+    model = merge_model(report_of(_tee_pipes(NPS4, NPS4, NPS6, 0.105), links=TEE_LINKS))
+    tee = by_id(model)["P1-P3-P2"]
+    assert tee.snap["standard"] is False
+    assert not [n for n in tee.snap["notes"] if "reducing outlet" in n]
+    assert any("larger than the run" in n for n in tee.snap["notes"])
+    errors = [f for f in check_model(model) if f.code == "AB104"]
+    assert errors and all(f.severity == "error" and "P2" in f.objects for f in errors)
+
+
+def test_a_smaller_outlet_is_still_a_reducing_tee_without_findings():
+    model = merge_model(report_of(_tee_pipes(NPS6, NPS6, NPS4, 0.143), links=TEE_LINKS))
+    tee = by_id(model)["P1-P3-P2"]
+    assert tee.snap["standard"] is True
+    assert any("reducing outlet" in n for n in tee.snap["notes"])
+    assert [f.code for f in check_model(model)] == []

@@ -138,10 +138,10 @@ def test_a_linked_branch_short_of_the_run_gets_the_link_margin(links, expected):
         pytest.param(
             # the branch crosses 0.2 m above the run's joint without touching it (its axis misses
             # the run axis by 0.2 m, beyond the 28.6 mm skew tolerance): the run is inline and
-            # the link is a contact, never a tee
+            # the link is not realised (kind "link", with a note), never a tee
             (((0, 0, 0), (1.9, 0, 0)), ((2.1, 0, 0), (4, 0, 0)), ((2, -2, 0.2), (2, 2, 0.2))),
             [(0, 2)],
-            [("inline", ((0, 1), (1, 0))), ("contact", ((0, 0), (2, 0)))],
+            [("inline", ((0, 1), (1, 0))), ("link", ((0, 0), (2, 0)))],
             id="branch-crossing-above-the-joint-linked",
         ),
         pytest.param(

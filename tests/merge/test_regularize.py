@@ -6,9 +6,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from synthetic_pipes import Pipe, report_of
 
+from asbuilt.merge import merge_model
 from asbuilt.merge.contiguity import line_closest_points
 from asbuilt.merge.regularize import align_lines, perpendicular_basis, regularize_directions
+from asbuilt.rules import check_model
 
 
 def tilted(base, towards, degrees):
@@ -158,3 +161,37 @@ def test_align_lines_keeps_an_eccentric_pair_at_its_offset():
     assert new[0, 2] - centers[0, 2] == pytest.approx(-0.002, abs=1e-9)
     coaxial = align_lines(centers, axes, [], [(0, 1)], offsets=[None])
     assert coaxial[1, 1:] == pytest.approx(coaxial[0, 1:], abs=1e-9)
+
+
+# --- fit-up: joined axes that miss each other beyond the fits' uncertainty ---------------------
+# An NPS 6 (OD 168.3 mm) 90 degree elbow, B16.9 long radius 229 mm, its second leg lifted out of
+# plane by ``lift``. The synthetic fits' centre standard error is 1 mm and axis 0.2 degrees; each
+# 1.5 m leg's centre is 0.229 + 0.75 = 0.979 m from the corner, so each axis is placed there to
+# hypot(1 mm, 0.979 m x 0.2 deg) = 3.561 mm, the two together to 5.036 mm: the allowance is
+# max(3 x 5.036, 6) = 15.11 mm.
+FIT_UP_ALLOWED = 3 * np.hypot(*[np.hypot(0.001, 0.979 * np.radians(0.2))] * 2)
+
+
+@pytest.mark.parametrize(
+    ("lift", "reported"),
+    [(0.0, False), (0.010, False), (0.014, False), (0.017, True), (0.030, True)],
+)
+def test_an_elbow_offset_beyond_the_fits_is_a_fit_up_finding(lift, reported):
+    """A 30 mm offset at an elbow was absorbed silently ("axis shifted to meet P2 15.3 mm",
+    no finding) although the fits place the axes to a few millimetres."""
+    od, c2e = 0.1683, 0.229
+    pipes = [
+        Pipe("P1", (-c2e - 1.5, 0, 1), (-c2e, 0, 1), od),
+        Pipe("P2", (0, c2e, 1 + lift), (0, c2e + 1.5, 1 + lift), od),
+    ]
+    model = merge_model(report_of(pipes, links=[("P1", "P2")]))
+    assert [c.type for c in model.components] == ["pipe", "elbow", "pipe"]
+    found = [f for f in check_model(model) if f.slug == "fit-up"]
+    if not reported:
+        assert found == []
+        return
+    (f,) = found
+    assert f.code == "AB303" and f.severity == "warning" and f.objects == ("P1", "P2")
+    assert f.measured == pytest.approx(lift, abs=1e-6)
+    assert f.allowed == pytest.approx(FIT_UP_ALLOWED, rel=1e-3)
+    assert f.stderr == pytest.approx(FIT_UP_ALLOWED / 3, rel=1e-3)

@@ -7,6 +7,7 @@ from rules_builders import B36, model, pipe
 from asbuilt.model import Bend, Component
 from asbuilt.rules import check_model
 from asbuilt.rules.joints import joint_geometry
+from asbuilt.scan.model import Scan, ScanObject
 
 
 def gaps(*components):
@@ -28,6 +29,30 @@ def test_collinear_gap(gap, expected):
     assert f.message.startswith(f"{expected} of {abs(gap) * 1000:.1f} mm")
     assert f.measured == pytest.approx(abs(gap))
     assert f.objects == ("P1", "P2")
+
+
+@pytest.mark.parametrize("linked", [False, True], ids=["unlinked", "linked"])
+@pytest.mark.parametrize("merged", [False, True], ids=["unmerged", "merged"])
+def test_a_linked_gap_is_checked_like_an_unlinked_one(linked, merged):
+    """A scan link says the pipes should be joined, not that they are: every linked pair was
+    skipped as joined, so a 50 mm gap between linked collinear pipes went unreported (as with
+    ``asbuilt check --no-merge``) while the same pipes unlinked were reported."""
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    b = pipe("P2", [2.05, 0, 1], [4, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    scan = Scan(
+        units="m",
+        objects=tuple(
+            ScanObject(id=c.id, kind="cylinder", points=np.zeros((6, 3)), index=k)
+            for k, c in enumerate((a, b))
+        ),
+        links=(("P1", "P2"),) if linked else (),
+    )
+    found = [
+        f
+        for f in check_model(model(a, b, scan=scan, merged=merged), catalog=B36)
+        if f.slug == "joint-gap"
+    ]
+    assert [(f.objects, f.measured) for f in found] == [(("P1", "P2"), pytest.approx(0.05))]
 
 
 def test_uncertain_ends_make_a_small_gap_unverifiable():
@@ -99,3 +124,20 @@ def test_elbow_fallback_reads_a_dn_size_by_its_nps():
 
     table = size_table("en-10220")
     assert _elbow_centre_to_end(table, "150", 0.1683, 90.0) == pytest.approx(0.2286)
+
+
+def test_fit_up_is_one_finding_per_pair_with_the_miss_and_its_standard_error():
+    # merging records the miss on both pipes (and on every piece of a split pipe): one finding
+    entry = {"miss": 0.030, "stderr": 0.004, "allowed": 0.012, "at": [2.0, 0.0, 1.0]}
+    a1 = pipe("P1.1", [0, 0, 1], [1, 0, 1], 0.1683, nominal="6")
+    a2 = pipe("P1.2", [1.3, 0, 1], [1.8, 0, 1], 0.1683, nominal="6")
+    b = pipe("P2", [2, 0.2, 1.03], [2, 2, 1.03], 0.1683, nominal="6")
+    for piece in (a1, a2):
+        object.__setattr__(piece, "sources", ("P1",))
+        piece.snap["fit_up"] = [{**entry, "with": "P2"}]
+    b.snap["fit_up"] = [{**entry, "with": "P1"}]
+    (f,) = [f for f in check_model(model(a1, a2, b), catalog=B36) if f.slug == "fit-up"]
+    assert f.code == "AB303" and f.severity == "warning"
+    assert f.objects == ("P1.1", "P1.2", "P2")
+    assert (f.measured, f.stderr, f.allowed) == (0.030, 0.004, 0.012)
+    assert "30.0 mm (+- 4.0 mm)" in f.message

@@ -362,3 +362,40 @@ def test_a_pipe_sized_with_its_run_is_judged_and_described_by_the_run():
     )
     assert f.message.endswith("(the run P1, P2, P3 measured together; this pipe alone 116.1 mm)")
     assert f.measured == pytest.approx(0.0022)
+
+
+# A tee at x = 2 with run ends 0.143 m either side (NPS 6 C, ASME B16.9) and its outlet 0.143 m
+# along +y; pipes of the sizes given meet its ports (NPS 6 OD 168.3 mm, NPS 4 114.3 mm).
+@pytest.mark.parametrize(
+    ("run_od", "left", "right", "branch", "reported"),
+    [
+        pytest.param(0.1683, 0.1683, 0.1683, 0.1683, set(), id="equal-tee"),
+        pytest.param(0.1683, 0.1683, 0.1683, 0.1143, set(), id="smaller-outlet"),
+        pytest.param(
+            0.1143, 0.1143, 0.1143, 0.1683, {("P1", "P2"), ("P2", "P3")}, id="outlet-larger"
+        ),
+        pytest.param(0.1683, 0.1683, 0.1143, 0.1683, {("P1", "P3")}, id="run-reduces"),
+    ],
+)
+def test_a_tee_explains_a_smaller_outlet_only(run_od, left, right, branch, reported):
+    """Any pair touching a tee was exempt from contiguous-diameter-mismatch: ASME B16.9 tees
+    reduce on the outlet only, so a run changing size at the tee, or an outlet larger than
+    the run, is a mismatch."""
+    from asbuilt.model import Component, Tee
+
+    sizes = {0.1683: "6", 0.1143: "4"}
+    tee = Component(
+        id="T1",
+        type="tee",
+        geometry=Tee(
+            [2, 0, 1], [1.857, 0, 1], [2.143, 0, 1], [2, 0.143, 1], run_od / 2, branch / 2
+        ),
+    )
+    p1 = pipe("P1", [0, 0, 1], [1.857, 0, 1], left, nominal=sizes[left])
+    p3 = pipe("P3", [2.143, 0, 1], [4, 0, 1], right, nominal=sizes[right])
+    p2 = pipe("P2", [2, 0.143, 1], [2, 2, 1], branch, nominal=sizes[branch])
+    found = only(run(p1, tee, p3, p2), "contiguous-diameter-mismatch")
+    assert {tuple(sorted(set(f.objects) - {"T1"})) for f in found} == reported
+    assert all(
+        f.severity == "error" and "tees reduce on the outlet only" in f.message for f in found
+    )
