@@ -45,6 +45,10 @@ class SizeTable:
         ``(nominal, dn, od)``, the OD in metres, sorted by OD.
     elbow_lr : dict
         Nominal to the 90 degree long-radius elbow centre-to-end, metres (may be empty).
+    tee_run : dict
+        Nominal to the equal tee's centre-to-end of run C, metres (may be empty).
+    reducer : dict
+        Nominal of the large end to the concentric reducer's length H, metres (may be empty).
     nps : dict
         Nominal to the nominal pipe size in inches, from the catalog's ``nps`` column (may be
         empty: an NPS table's nominals are then read as NPS, see :meth:`nps_of`).
@@ -55,6 +59,8 @@ class SizeTable:
     sizes: tuple[tuple[str, int | None, float], ...]
     elbow_lr: dict = field(default_factory=dict)
     nps: dict = field(default_factory=dict)
+    tee_run: dict = field(default_factory=dict)
+    reducer: dict = field(default_factory=dict)
 
     def __post_init__(self):
         object.__setattr__(self, "sizes", tuple(sorted(self.sizes, key=lambda s: s[2])))
@@ -134,7 +140,7 @@ def _from_catalog(catalog) -> SizeTable | None:
     rows = getattr(catalog, "sizes", None)
     if not rows:
         return None
-    sizes, elbows, nps = [], {}, {}
+    sizes, elbows, nps, tees, reducers = [], {}, {}, {}, {}
     fitting = getattr(catalog, "fitting", None)
     for row in rows:
         nominal, od = getattr(row, "nominal", None), getattr(row, "od", None)
@@ -145,14 +151,18 @@ def _from_catalog(catalog) -> SizeTable | None:
         if getattr(row, "nps", None) is not None:
             nps[str(nominal)] = float(row.nps)
         fit_row = fitting(row) if callable(fitting) else None
-        elbow = (getattr(fit_row, "dims", None) or {}).get("elbow90_lr") if fit_row else None
-        if elbow is not None and np.isfinite(elbow):
-            elbows[str(nominal)] = float(elbow)
+        dims = (getattr(fit_row, "dims", None) or {}) if fit_row else {}
+        for column, into in (("elbow90_lr", elbows), ("tee_run", tees), ("reducer", reducers)):
+            value = dims.get(column)
+            if value is not None and np.isfinite(value):
+                into[str(nominal)] = float(value)
     if not sizes:
         return None
     standard = getattr(catalog, "standard", None) or getattr(catalog, "name", "the catalog")
     designation = getattr(catalog, "designation", None) or "NPS"
-    return SizeTable(str(standard), str(designation), tuple(sizes), elbows, nps)
+    return SizeTable(
+        str(standard), str(designation), tuple(sizes), elbows, nps, tee_run=tees, reducer=reducers
+    )
 
 
 def size_table(catalog) -> SizeTable | None:

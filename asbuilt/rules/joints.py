@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from asbuilt.catalog import DEFAULT_CATALOG
 from asbuilt.findings import Suggestion
 
-from ._catalog import SizeTable, nps_value
+from ._catalog import SizeTable, nps_value, size_table
 from ._context import Context, centre_of, mm, stderr_value, verdict
 from ._graph import adjacency, fittings_between, inferred_pairs, linked_pairs
 
@@ -97,6 +98,59 @@ def _elbow_centre_to_end(
     return radius * float(np.tan(np.radians(angle_deg) / 2.0))
 
 
+#: An unsnapped pipe (``--no-merge``) is taken for the catalog size nearest its fitted OD when
+#: within this fraction of it (catalog sizes are 10-25% apart; a fit's OD is within 1-2 mm).
+_SIZE_MATCH = 0.03
+
+
+def _catalog_size(table: SizeTable, comp) -> str | None:
+    """The catalog nominal of a pipe: its snapped size, else the size nearest its OD."""
+    if comp.nominal and comp.nominal in table.tee_run | table.reducer:
+        return comp.nominal
+    od = 2 * _ends(comp.geometry)[3]
+    exact = table.nominal_for(od)
+    if exact is not None:
+        return exact
+    nearest = table.nearest(od, 1)
+    if nearest and abs(nearest[0][2]) <= _SIZE_MATCH * od:
+        return nearest[0][0]
+    return None
+
+
+def _inline_fitting(table: SizeTable | None, ca, cb, others, geo) -> tuple[str, float] | None:
+    """The B16.9 fitting whose length would fill the gap between two collinear pipes' facing
+    ends, as ``(what, length in metres)``, or None: a concentric reducer's ``H`` when their
+    sizes differ, an equal tee's run ``2 C`` when another pipe's axis crosses the gap (a
+    branch, left unmerged: ``--no-merge`` or a tee merging did not build). Needs the
+    catalog's fittings table."""
+    if table is None:
+        return None
+    na, nb = _catalog_size(table, ca), _catalog_size(table, cb)
+    if na is None or nb is None:
+        return None
+    if na != nb:
+        large = na if _ends(ca.geometry)[3] >= _ends(cb.geometry)[3] else nb
+        length = table.reducer.get(large)
+        return None if length is None else (f"{table.label(large)} reducer's H", length)
+    run = table.tee_run.get(na)
+    if run is None:
+        return None
+    middle = 0.5 * (geo["ea"] + geo["eb"])
+    along = geo["eb"] - geo["ea"]
+    along = along / max(float(np.linalg.norm(along)), 1e-12)
+    for other in others:
+        start, end, axis, radius = _ends(other.geometry)
+        if abs(float(axis @ along)) > np.cos(np.radians(45.0)):
+            continue  # in line with the run, not a branch
+        miss = (middle - start) - ((middle - start) @ axis) * axis
+        near_end = min(np.linalg.norm(start - middle), np.linalg.norm(end - middle))
+        # The branch's axis crosses the run at the gap, its end short of the run's far side
+        # by no more than a pipe length the scan may have missed (a tee's outlet M ~ C).
+        if np.linalg.norm(miss) <= geo["radius"] and near_end <= 4 * run + geo["radius"]:
+            return (f"{table.label(na)} tee's run (2 x C)", 2 * run)
+    return None
+
+
 def _length_se(comp) -> float:
     if comp.fit is None:
         return 0.0
@@ -122,12 +176,21 @@ def check_joint_gap(ctx: Context, table: SizeTable | None) -> None:
         ca, cb = pipes[a], pipes[b]
         geo = joint_geometry(ca.geometry, cb.geometry)
         se = float(np.hypot(_length_se(ca), _length_se(cb)))
+        fitting = None
         if geo["angle_deg"] <= snap:
             if geo["offset"] > geo["radius"]:
                 kind, size = "offset", geo["offset"]
             else:
                 kind = "gap" if geo["gap"] >= 0 else "overlap"
                 size = abs(geo["gap"])
+            if kind == "gap" and size > tol:
+                others = [c for c in ctx.pipes if c.id not in pair]
+                # An unmerged model names no catalog: the default one's fittings explain.
+                fittings = table if table is not None else size_table(DEFAULT_CATALOG)
+                fitting = _inline_fitting(fittings, ca, cb, others, geo)
+                if fitting is not None:
+                    kind = "gap" if geo["gap"] >= fitting[1] else "overlap"
+                    size = abs(geo["gap"] - fitting[1])
             explained = kind != "offset" and size <= tol
         else:
             if "corner" not in geo or geo["offset"] > geo["radius"]:
@@ -151,8 +214,12 @@ def check_joint_gap(ctx: Context, table: SizeTable | None) -> None:
         ctx.emit(
             slug,
             [a, b],
-            f"{kind} of {mm(size)} between the ends of {a} and {b}, which no catalog fitting "
-            "explains",
+            f"{kind} of {mm(size)} between the ends of {a} and {b}, "
+            + (
+                f"besides the {fitting[0]} of {mm(fitting[1])} that fits there"
+                if fitting is not None
+                else "which no catalog fitting explains"
+            ),
             location=0.5 * (geo["ea"] + geo["eb"]),
             measured=size,
             allowed=tol,

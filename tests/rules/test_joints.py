@@ -1,5 +1,7 @@
 """joint-gap: gaps measured by hand; elbow centre-to-end from ASME B16.9 (NPS 4 LR: 152 mm)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from rules_builders import B36, model, pipe
@@ -11,7 +13,8 @@ from asbuilt.scan.model import Scan, ScanObject
 
 
 def gaps(*components):
-    return [f for f in check_model(model(*components), catalog=B36) if f.slug == "joint-gap"]
+    found = check_model(model(*components), catalog=B36_FITTINGS)
+    return [f for f in found if f.slug == "joint-gap"]
 
 
 @pytest.mark.parametrize(
@@ -53,6 +56,74 @@ def test_a_linked_gap_is_checked_like_an_unlinked_one(linked, merged):
         if f.slug == "joint-gap"
     ]
     assert [(f.objects, f.measured) for f in found] == [(("P1", "P2"), pytest.approx(0.05))]
+
+
+#: ASME B16.9 (the standards reference): NPS 4 equal tee run C 105 mm, 4 x 3 reducer H 102 mm.
+B36_FITTINGS = dataclasses.replace(
+    B36, tee_run={"4": 0.105, "6": 0.143}, reducer={"4": 0.102, "6": 0.140}
+)
+
+
+@pytest.mark.parametrize("branch", [True, False], ids=["branch", "no-branch"])
+@pytest.mark.parametrize("gap, found", [(0.210, False), (0.212, False), (0.26, True)])
+def test_a_tee_run_explains_a_collinear_gap_where_a_branch_crosses(branch, gap, found):
+    """An unmerged tee (``--no-merge``): the run's gap is the tee's 2 x C where a third pipe's
+    axis crosses it; without a branch nothing explains it."""
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    b = pipe("P2", [2 + gap, 0, 1], [4, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    middle = 2 + gap / 2
+    c = pipe("P3", [middle, 0.105, 1], [middle, 1.5, 1], 0.1143, nominal="4", length_se=0.0005)
+    found_gaps = linked_gaps(a, b, *((c,) if branch else ()))
+    if branch and not found:
+        assert not found_gaps
+        return
+    (f,) = found_gaps
+    if branch:
+        assert f.measured == pytest.approx(gap - 0.210)
+        assert "tee's run (2 x C) of 210.0 mm" in f.message
+    else:
+        assert f.measured == pytest.approx(gap)
+        assert "which no catalog fitting explains" in f.message
+
+
+def linked_gaps(*components, catalog=B36_FITTINGS):
+    """joint-gap findings on P1-P2 of an unmerged model whose scan links P1 and P2."""
+    scan = Scan(
+        units="m",
+        objects=tuple(
+            ScanObject(id=c.id, kind="cylinder", points=np.zeros((6, 3)), index=k)
+            for k, c in enumerate(components)
+        ),
+        links=(("P1", "P2"),),
+    )
+    found = check_model(model(*components, scan=scan, merged=False), catalog=catalog)
+    return [f for f in found if f.slug == "joint-gap" and f.objects == ("P1", "P2")]
+
+
+def test_a_tee_run_explains_a_gap_only_with_the_fittings_table():
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    b = pipe("P2", [2.21, 0, 1], [4, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    c = pipe("P3", [2.105, 0.105, 1], [2.105, 1.5, 1], 0.1143, nominal="4", length_se=0.0005)
+    assert not linked_gaps(a, b, c)
+    assert [f.objects for f in linked_gaps(a, b, c, catalog=B36)] == [("P1", "P2")]
+
+
+@pytest.mark.parametrize("gap, found", [(0.102, False), (0.15, True)])
+def test_a_reducer_explains_the_gap_between_two_sizes(gap, found):
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    b = pipe("P2", [2 + gap, 0, 1], [4, 0, 1], 0.0889, nominal="3", length_se=0.0005)
+    result = linked_gaps(a, b)
+    assert bool(result) == found
+    if found:
+        assert result[0].measured == pytest.approx(gap - 0.102)
+        assert "NPS 4 reducer's H of 102.0 mm" in result[0].message
+
+
+def test_an_unsnapped_pipe_takes_the_nearest_size_for_the_fitting():
+    """``--no-merge``: fitted ODs 1 mm off the catalog's still name the reducer."""
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1153, length_se=0.0005)
+    b = pipe("P2", [2.102, 0, 1], [4, 0, 1], 0.0880, length_se=0.0005)
+    assert not linked_gaps(a, b)
 
 
 def test_uncertain_ends_make_a_small_gap_unverifiable():
