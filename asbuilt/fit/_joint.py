@@ -293,28 +293,71 @@ def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted, raster=N
                 lambda kept: FaceModel(*start, np.eye(3))
             )
     if fans:
-        model.grazing = _grazing_face(model, x, label, inliers, viewpoint)
+        model.grazing = bool(_grazing_faces(model, x, label, inliers, viewpoint))
     return model, label, residual, inliers, scale, steps, one_face
 
 
-def _grazing_face(model, x, label, inliers, viewpoint) -> bool:
-    """Whether some face of a fit with more than one face sees every one of its inliers (n,)
-    bool from ``viewpoint`` (3,) metres at more than ``MAX_INCIDENCE_DEG``: a plane through
-    (nearly) the station, which holds one raster line's shots along their beams whatever they
-    hit (range noise and all), so the fit turns a face onto one line of shots that way. Such a
-    face measures nothing (its own direction is free about the line: the frame is the other
-    faces'), and a box seen from the station shows no face only edge-on."""
-    if model.offset.shape[0] < 2:
-        return False
+def _grazing_faces(model, x, label, inliers, viewpoint) -> list:
+    """The faces of a fit that every one of their inliers (n,) bool sees from ``viewpoint``
+    (3,) metres at more than ``MAX_INCIDENCE_DEG`` while the other faces leave the frame's
+    rotation free about some axis (they are normal to fewer than two axes).
+
+    A plane through (nearly) the station holds one raster line's shots along their beams,
+    whatever they hit and range noise and all, so a frame free to turn turns a face onto one
+    line of shots that way: such a face measures nothing, it only takes up the rotation the
+    other faces leave free. A face the other two fix (a box's top seen from just below its
+    level) is measured by its shots' offsets all the same.
+    """
+    m = model.offset.shape[0]
+    if m < 2:
+        return []
     normals = model.normals()
-    for f in range(model.offset.shape[0]):
+    counts = np.bincount(label[inliers], minlength=m)
+    out = []
+    for f in range(m):
         beams = x[inliers & (label == f)] - viewpoint
         if beams.shape[0] == 0:
             continue
+        others = {int(model.face_axis[g]) for g in range(m) if g != f and counts[g] >= 3}
+        if len(others) >= 2:
+            continue
         cosine = np.abs(beams @ normals[f]) / np.linalg.norm(beams, axis=1)
         if np.all(cosine < _GRAZING_COS):
-            return True
-    return False
+            out.append(f)
+    return out
+
+
+def _without_unseen_faces(trial, x: np.ndarray, view: np.ndarray):
+    """The frame (:class:`asbuilt.fit._faces.Frame`) of a fit with a trusted viewpoint ``view``
+    (3,) metres (centred frame) without its faces that the station cannot have seen: turned
+    away from it, or seen edge-on from every shot (:func:`_grazing_faces`); their shots are
+    left unlabelled. None when every face is seen, or none is.
+
+    The floor a column stands on, reached by beams past its foot, is a plane across its axis
+    turned away from a station above it; the frame explaining the most shots takes it for the
+    bottom face, and no frame of the segmentation offers the column's front face alone.
+    """
+    model, label, _, inliers = trial[:4]
+    m = model.offset.shape[0]
+    facing = model.normals() @ view - model.offset > 0.0
+    unseen = set(np.flatnonzero(~facing).tolist()) | set(
+        _grazing_faces(model, x, label, inliers, view)
+    )
+    kept = [f for f in range(m) if f not in unseen]
+    if not unseen or not kept:
+        return None
+    remap = np.full(m, -1, dtype=np.int64)
+    remap[kept] = np.arange(len(kept))
+    labels = np.where(inliers, remap[label], -1)
+    if not all(np.count_nonzero(labels == k) >= 3 for k in range(len(kept))):
+        return None
+    return _faces.Frame(
+        model.axes.copy(),
+        model.face_axis[kept].copy(),
+        model.face_sign[kept].copy(),
+        model.offset[kept].copy(),
+        labels,
+    )
 
 
 def _msac(residual: np.ndarray, cap: float) -> float:
@@ -567,6 +610,16 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
             trial_rank = rank(trial, True)
             if trial_rank > best_rank:
                 best, best_rank = trial, trial_rank
+    if trusted and not (best_rank[0] and best_rank[1]):
+        # No fit that a station can have seen: the fits without their unseen faces.
+        for _, trial in list(done):
+            frame = _without_unseen_faces(trial, x, view)
+            if frame is None:
+                continue
+            sub = fitted(frame)
+            sub_rank = rank(sub, True)
+            if sub_rank > best_rank:
+                best, best_rank = sub, sub_rank
     if not trusted and not best_rank[0]:
         # Without a viewpoint opposite faces are doubtful; a face of an opposite pair that is
         # one line of shots may be the side face seen at grazing incidence instead.
