@@ -131,11 +131,23 @@ def beam_fan_shots(points, viewpoint, noise: float, pairs) -> np.ndarray:
     kept = np.abs(ranges[i] - ranges[j]) <= (
         _RANGE_PER_SPACING * mean_range * angle + _NOISE_CUTOFFS * noise
     )
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    graph = coo_matrix((np.ones(int(kept.sum())), (i[kept], j[kept])), shape=(m, m))
-    count, group = connected_components(graph, directed=False)
-    if count == 1:
+    group = _components(m, i[kept], j[kept])
+    if np.all(group == group[0]):
         return out
     return group != group[int(np.argmin(ranges))]
+
+
+def _components(m: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Connected-component label (m,) int (the least member's index) of m nodes joined by the
+    edges i-j; min-label propagation with pointer jumping (a face has tens of shots: cheaper
+    than importing and calling scipy's graph routines)."""
+    group = np.arange(m)
+    while True:
+        low = np.minimum(group[i], group[j])
+        fresh = group.copy()
+        np.minimum.at(fresh, i, low)
+        np.minimum.at(fresh, j, low)
+        fresh = fresh[fresh]
+        if np.array_equal(fresh, group):
+            return group
+        group = fresh
