@@ -442,14 +442,26 @@ def counted_outliers(trial, x: np.ndarray, view: np.ndarray, trusted: bool, widt
     but with a ``trusted`` viewpoint ``view`` (3,) metres (centred frame) those seen past the
     box (:func:`asbuilt.fit._cuboid_background.seen_past`; ``width`` metres, the inlier
     cutoff). ``x`` (n, 3) metres, centred."""
-    model, _, _, inliers = trial[:4]
-    rejected = ~inliers
-    count = int(np.count_nonzero(rejected))
+    count = int(np.count_nonzero(~trial[3]))
     if not trusted or count == 0:
         return count
+    return count - int(np.count_nonzero(seen_past_shots(trial, x, view, width)))
+
+
+def seen_past_shots(trial, x: np.ndarray, view: np.ndarray, width: float) -> np.ndarray:
+    """Which of the n shots a frame's fit rejects are background seen past the box, shape (n,)
+    bool (:func:`asbuilt.fit._cuboid_background.seen_past`; ``view`` (3,) metres, the trusted
+    viewpoint, and ``x`` (n, 3) metres, centred; ``width`` metres, the inlier cutoff)."""
+    model, _, _, inliers = trial[:4]
+    rejected = ~inliers
+    out = np.zeros(x.shape[0], dtype=bool)
+    if not rejected.any() or not inliers.any():
+        return out
     ranges = np.linalg.norm(x - view, axis=1)
-    past = seen_past(model.all_residuals(x[rejected]), ranges[rejected], ranges[inliers], width)
-    return count - int(np.count_nonzero(past))
+    out[rejected] = seen_past(
+        model.all_residuals(x[rejected]), ranges[rejected], ranges[inliers], width
+    )
+    return out
 
 
 def _one_station_frames(trial, x: np.ndarray, width: float) -> list:

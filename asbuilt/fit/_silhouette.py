@@ -35,7 +35,14 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["raster_grid", "raster_window", "edge_shots", "shot_angles", "solve_bounds"]
+__all__ = [
+    "raster_grid",
+    "raster_window",
+    "edge_shots",
+    "shot_angles",
+    "solve_bounds",
+    "without_misses",
+]
 
 #: Samples per box edge when measuring the box's angular extent (the tilt extreme of a convex
 #: box can lie inside an edge).
@@ -609,3 +616,38 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
         if np.abs(delta).max() < 1e-7:
             break
     return lo, hi
+
+
+def without_misses(grid: tuple, angles: np.ndarray, misses: np.ndarray) -> tuple:
+    """:func:`raster_grid`'s result with the window drawn in to the shots that hit the box.
+
+    Shots that missed the box and came back from behind it (the wall an operator's window
+    takes in beside a column: ``misses`` (n,) bool) are raster shots, so the window spans them,
+    but the silhouette lies between the last line of hits and the first of misses: a side the
+    misses set is placed half a step beyond the outermost hit instead (the same rule as a
+    side without misses; never farther out than it was, and a side an edge shot pinned stays).
+    ``angles`` (n, 2) radians: :func:`shot_angles`' pan (relative to the grid's reference pan)
+    and tilt.
+    """
+    pan0, window, on_grid, pinned, steps = grid
+    hits = ~np.asarray(misses, dtype=bool)
+    if not hits.any() or hits.all():
+        return grid
+    seen = angles[hits]
+    half = 0.5 * np.asarray(steps, dtype=np.float64)
+    inner = np.array(
+        [
+            seen[:, 0].min() - half[0],
+            seen[:, 0].max() + half[0],
+            seen[:, 1].min() - half[1],
+            seen[:, 1].max() + half[1],
+        ]
+    )
+    drawn = np.array(window, dtype=np.float64)
+    for side in range(4):
+        if pinned[side]:
+            continue
+        drawn[side] = (
+            max(drawn[side], inner[side]) if side % 2 == 0 else min(drawn[side], inner[side])
+        )
+    return pan0, drawn, on_grid, pinned, steps

@@ -93,6 +93,7 @@ from asbuilt.fit._joint import (
     expand_frame,
     median,
     plausible,
+    seen_past_shots,
 )
 from asbuilt.fit._mixture import mixture_score
 from asbuilt.fit._neighbours import local_normals
@@ -561,6 +562,9 @@ def fit_cuboid(
     )
     used_window = False
     if silhouette and grid is not None and not one_face:
+        if n_out:
+            past = seen_past_shots(fitted, x, viewpoint - origin, width)
+            grid = _silhouette.without_misses(grid, seen[1], past)
         used_window = silhouette_bounds(
             xb, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid, edges_b
         )
