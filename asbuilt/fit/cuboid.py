@@ -29,6 +29,13 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    ``outlier_cutoff_sigma`` robust sigmas are rejected and a plain least-squares refit on the
    inliers gives the final estimate and its covariance (Gauss-Newton normal matrix). Faces the
    refined frame reveals among the rejected points are then added and the fit repeated.
+   With the shots a raster from the viewpoint, a face's shots spread along the beams (a
+   raster column on a column and the next on the wall behind, in one plane nearly through
+   the station: :mod:`asbuilt.fit._beam_fans`) are left out but for the group nearest the
+   station and the frame is fitted again; a fit with a face seen edge-on from every shot,
+   which the other faces leave free to turn, ranks after the other plausible fits; shots
+   seen past the box (behind every seen face, farther than every kept shot) are background,
+   not counted against ``max_outlier_fraction``.
 3. Sizes: between two opposite seen faces (``observed`` True); otherwise from a seen face (the
    fitted corner edge) to the farthest inlier along that axis, or between the extreme inliers
    when no face bounds the axis (``observed`` False: the paper's point-projection step). Those
@@ -48,7 +55,8 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    extent widened by half a step (:mod:`asbuilt.fit._silhouette`; the project's raster shoots at
    cell centres), each side that edge-bisection shots reach beyond the last raster line being
    placed at the outermost of them, and a side with a bisection hit just inside its last line
-   on that line. Where the solution would cut off an inlier, the bound stays at the inlier.
+   on that line; a side that shots seen past the box set is drawn in to half a step beyond
+   the outermost hit. Where the solution would cut off an inlier, the bound stays at the inlier.
    Over an operator's window (a little wider than the object) the half-step rule is right only
    within half a step either way; the bisection shots are what make those sizes accurate. Edge-bisection shots (an acquisition session's, told from the
    raster by their angles from a given viewpoint: :func:`asbuilt.fit._silhouette.edge_shots`)
