@@ -201,7 +201,9 @@ def _beam_fans(model, x, label, inliers, width, viewpoint, raster) -> np.ndarray
 
     Neighbours on a face's raster lines are counted among the shots not behind its plane: a
     shot between two of its shots that hit another face, or something in front, parts them;
-    a mixed return or the background seen past an edge, behind it, does not.
+    a mixed return or the background seen past an edge, behind it, does not. Of the shots so
+    parted from their face's nearest group, only those farther from the station than every
+    other inlier (by twice ``width``) are returned: background seen past the box.
     """
     out = np.zeros(x.shape[0], dtype=bool)
     angles, lines = raster
@@ -218,6 +220,14 @@ def _beam_fans(model, x, label, inliers, width, viewpoint, raster) -> np.ndarray
         out[mine] = beam_fan_shots(
             x[mine], viewpoint, width, (local[first[both]], local[second[both]])
         )
+    if out.any():
+        # Only what lies past the rest of the box is background seen past it: a beam seen
+        # along its length has its side's shots spread along the beams too, but its other
+        # faces reach as far.
+        ranges = np.linalg.norm(x - viewpoint, axis=1)
+        rest = inliers & ~out
+        if rest.any():
+            out &= ranges > ranges[rest].max() + 2.0 * width
     return out
 
 
@@ -293,20 +303,23 @@ def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted, raster=N
                 lambda kept: FaceModel(*start, np.eye(3))
             )
     if fans:
-        model.grazing = bool(_grazing_faces(model, x, label, inliers, viewpoint))
+        width = cutoff * max(scale, noise)
+        model.grazing = bool(_grazing_faces(model, x, label, inliers, viewpoint, width))
     return model, label, residual, inliers, scale, steps, one_face
 
 
-def _grazing_faces(model, x, label, inliers, viewpoint) -> list:
-    """The faces of a fit that every one of their inliers (n,) bool sees from ``viewpoint``
-    (3,) metres at more than ``MAX_INCIDENCE_DEG`` while the other faces leave the frame's
-    rotation free about some axis (they are normal to fewer than two axes).
+def _grazing_faces(model, x, label, inliers, viewpoint, width: float) -> list:
+    """The faces of a fit whose inliers (n,) bool are a fan of beams: three or more, all seen
+    from ``viewpoint`` (3,) metres at more than ``MAX_INCIDENCE_DEG``, within ``width``
+    metres (RMS, the inlier cutoff) of one plane through the station, while the other faces
+    leave the frame's rotation free about some axis (they are normal to fewer than two axes).
 
-    A plane through (nearly) the station holds one raster line's shots along their beams,
-    whatever they hit and range noise and all, so a frame free to turn turns a face onto one
-    line of shots that way: such a face measures nothing, it only takes up the rotation the
-    other faces leave free. A face the other two fix (a box's top seen from just below its
-    level) is measured by its shots' offsets all the same.
+    One raster column's shots lie in a plane through the station, whatever they hit and
+    range noise and all, so a frame free to turn turns a face onto that plane: such a face
+    measures nothing, it only takes up the rotation the other faces leave free. A real face
+    seen edge-on is not in a plane through the station (a beam's side seen from below by one
+    raster row: a row of shots at a tilt lies on a cone, not a plane), and a face the other
+    two fix (a box's top seen from just below its level) is measured by its offset anyway.
     """
     m = model.offset.shape[0]
     if m < 2:
@@ -321,13 +334,19 @@ def _grazing_faces(model, x, label, inliers, viewpoint) -> list:
         others = {int(model.face_axis[g]) for g in range(m) if g != f and counts[g] >= 3}
         if len(others) >= 2:
             continue
+        if beams.shape[0] < 3:
+            continue
         cosine = np.abs(beams @ normals[f]) / np.linalg.norm(beams, axis=1)
-        if np.all(cosine < _GRAZING_COS):
+        if not np.all(cosine < _GRAZING_COS):
+            continue
+        # RMS distance of the shots from the plane through the station that fits them best.
+        fan = np.linalg.svd(beams, compute_uv=False)[-1] / math.sqrt(beams.shape[0])
+        if fan <= width:
             out.append(f)
     return out
 
 
-def _without_unseen_faces(trial, x: np.ndarray, view: np.ndarray):
+def _without_unseen_faces(trial, x: np.ndarray, view: np.ndarray, width: float):
     """The frame (:class:`asbuilt.fit._faces.Frame`) of a fit with a trusted viewpoint ``view``
     (3,) metres (centred frame) without its faces that the station cannot have seen: turned
     away from it, or seen edge-on from every shot (:func:`_grazing_faces`); their shots are
@@ -341,7 +360,7 @@ def _without_unseen_faces(trial, x: np.ndarray, view: np.ndarray):
     m = model.offset.shape[0]
     facing = model.normals() @ view - model.offset > 0.0
     unseen = set(np.flatnonzero(~facing).tolist()) | set(
-        _grazing_faces(model, x, label, inliers, view)
+        _grazing_faces(model, x, label, inliers, view, width)
     )
     kept = [f for f in range(m) if f not in unseen]
     if not unseen or not kept:
@@ -625,7 +644,7 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
     if trusted and not (best_rank[0] and best_rank[1]):
         # No fit that a station can have seen: the fits without their unseen faces.
         for _, trial in list(done):
-            frame = _without_unseen_faces(trial, x, view)
+            frame = _without_unseen_faces(trial, x, view, cutoff * max(trial[4], noise))
             if frame is None:
                 continue
             sub = fitted(frame)
