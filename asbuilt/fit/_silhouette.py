@@ -35,14 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = [
-    "raster_grid",
-    "raster_window",
-    "edge_shots",
-    "shot_angles",
-    "solve_bounds",
-    "without_misses",
-]
+__all__ = ["raster_grid", "raster_window", "edge_shots", "shot_angles", "solve_bounds"]
 
 #: Samples per box edge when measuring the box's angular extent (the tilt extreme of a convex
 #: box can lie inside an edge).
@@ -616,37 +609,3 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
         if np.abs(delta).max() < 1e-7:
             break
     return lo, hi
-
-
-def without_misses(grid: tuple, angles: np.ndarray, misses: np.ndarray) -> tuple:
-    """:func:`raster_grid`'s result with the window drawn in past whole raster lines of misses.
-
-    Shots that missed the box and came back from behind it (the wall an operator's window
-    takes in beside a column: ``misses`` (n,) bool) are raster shots, so the window spans them,
-    but the silhouette lies between the last line of hits and the first of misses. A side whose
-    outermost raster lines (columns for the pan sides, rows for the tilt sides) hold misses
-    only is placed half a step beyond the outermost line left, the same rule as a side without
-    misses; a line with a hit stops it (a mixed return at an edge, pushed behind the box along
-    its beam, is a rejected shot like a miss, but its line also has hits), and a side an edge
-    shot pinned stays. ``angles`` (n, 2) radians: :func:`shot_angles`' pan (relative to the
-    grid's reference pan) and tilt.
-    """
-    pan0, window, on_grid, pinned, steps = grid
-    misses = np.asarray(misses, dtype=bool)
-    if not misses.any() or misses.all():
-        return grid
-    drawn = np.array(window, dtype=np.float64)
-    # A raster shot that hit (an edge shot if none): the lines lie whole steps from it.
-    hits = ~misses & np.asarray(on_grid, dtype=bool)
-    reference = angles[int(np.flatnonzero(hits if hits.any() else ~misses)[0])]
-    for k in range(2):  # pan, then tilt
-        step = float(steps[k])
-        line = np.round((angles[:, k] - reference[k]) / step).astype(np.int64)
-        held = np.unique(line[~misses])  # the lines with a hit
-        for side, outer in ((2 * k, held.min()), (2 * k + 1, held.max())):
-            beyond = line < outer if side % 2 == 0 else line > outer
-            if pinned[side] or not beyond.any():
-                continue
-            edge = reference[k] + outer * step + (0.5 * step if side % 2 else -0.5 * step)
-            drawn[side] = max(drawn[side], edge) if side % 2 == 0 else min(drawn[side], edge)
-    return pan0, drawn, on_grid, pinned, steps

@@ -55,8 +55,7 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    extent widened by half a step (:mod:`asbuilt.fit._silhouette`; the project's raster shoots at
    cell centres), each side that edge-bisection shots reach beyond the last raster line being
    placed at the outermost of them, and a side with a bisection hit just inside its last line
-   on that line; a side that shots seen past the box set is drawn in to half a step beyond
-   the outermost hit. Where the solution would cut off an inlier, the bound stays at the inlier.
+   on that line. Where the solution would cut off an inlier, the bound stays at the inlier.
    Over an operator's window (a little wider than the object) the half-step rule is right only
    within half a step either way; the bisection shots are what make those sizes accurate. Edge-bisection shots (an acquisition session's, told from the
    raster by their angles from a given viewpoint: :func:`asbuilt.fit._silhouette.edge_shots`)
@@ -101,7 +100,6 @@ from asbuilt.fit._joint import (
     expand_frame,
     median,
     plausible,
-    seen_past_shots,
 )
 from asbuilt.fit._mixture import mixture_score
 from asbuilt.fit._neighbours import local_normals
@@ -570,9 +568,6 @@ def fit_cuboid(
     )
     used_window = False
     if silhouette and grid is not None and not one_face:
-        if n_out:
-            past = seen_past_shots(fitted, x, viewpoint - origin, width)
-            grid = _silhouette.without_misses(grid, seen[1], past)
         used_window = silhouette_bounds(
             xb, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid, edges_b
         )

@@ -71,7 +71,11 @@ def test_column_with_a_wall_behind_keeps_its_size(behind, yaw_deg, seed):
     assert np.count_nonzero(~hit) >= 10
     result = fit_cuboid(points, sigma=SIGMA)
     fitted, _, _ = sizes_in_true_order(result, rot)
-    assert np.all(np.abs(fitted - size) < 0.03), fitted - size
+    # Across the column the wall shots widen the raster window a step each side, which the
+    # unseen edges are placed on (the operator-window rule): up to two steps (here 0.1 m
+    # each) over, never the metres of a face reaching the wall.
+    assert np.all(np.abs(fitted[:2] - size[:2]) < 2 * 0.11 + 0.03), fitted - size
+    assert abs(fitted[2] - size[2]) < 0.03
     assert np.all(_axis_errors_deg(result, rot) < 1.0)
     # The wall is background: every shot on it is rejected, and none counts against the box.
     assert not result.inliers[~hit].any()
