@@ -13,7 +13,7 @@ import numpy as np
 
 from asbuilt.fit._robust import DESIGN_CONTAMINATION
 
-__all__ = ["BACKGROUND_SHARE", "FACE_REACH", "FACE_SHOTS", "only_background"]
+__all__ = ["BACKGROUND_SHARE", "FACE_REACH", "FACE_SHOTS", "only_background", "seen_past"]
 
 #: At most this share of the shots may be left out (the cylinder fit's trimmed-cost design
 #: contamination).
@@ -96,3 +96,31 @@ def _near_the_box(face_axis, kept: np.ndarray, along: np.ndarray) -> np.ndarray:
     for k in range(3):
         near[:, k] = np.all(np.delete(inside, k, axis=1), axis=1)
     return near
+
+
+def seen_past(signed, ranges, kept_ranges, width: float) -> np.ndarray:
+    """Which left-out shots are background seen past the box, shape (r,) bool.
+
+    Such a shot lies more than twice ``width`` behind every seen face's plane and farther from
+    the station than every kept shot by as much: its beam went past the box (beside it, or
+    through the plane of a face seen at grazing incidence) and returned from behind it, from
+    the wall or floor an operator's window takes in around a column. It does not contradict
+    the box, so it does not count against the fit's outlier limit (a window a raster step
+    wider than a 0.3 m column puts half its shots on the wall).
+
+    Parameters
+    ----------
+    signed : ndarray, shape (r, m), metres
+        Each left-out shot's signed distance to each seen face's plane, positive on the
+        station's side (outward).
+    ranges : ndarray, shape (r,), metres
+        The left-out shots' distances from the station.
+    kept_ranges : ndarray, shape (k,), metres
+        The kept shots' distances from the station.
+    width : float, metres
+        The fit's inlier cutoff.
+    """
+    if kept_ranges.size == 0 or signed.shape[0] == 0:
+        return np.zeros(signed.shape[0], dtype=bool)
+    behind = np.all(signed < -2.0 * width, axis=1)
+    return behind & (ranges > kept_ranges.max() + 2.0 * width)

@@ -15,8 +15,9 @@ import math
 import numpy as np
 
 from asbuilt.fit import _faces
+from asbuilt.fit._beam_fans import MAX_INCIDENCE_DEG, beam_fan_shots, neighbours
 from asbuilt.fit._common import within_noise
-from asbuilt.fit._cuboid_background import only_background
+from asbuilt.fit._cuboid_background import only_background, seen_past
 from asbuilt.fit._mixture import mixing_cost
 from asbuilt.fit._rectangle import min_area_rectangle
 
@@ -49,6 +50,9 @@ class FaceModel:
         self.face_sign = face_sign
         self.offset = np.array(face_offset, dtype=np.float64)
         self.rot_basis = rot_basis  # (3, q): free rotation directions, world frame
+        # A face every inlier of which sees at grazing incidence from the trusted viewpoint
+        # (set by the fit: :func:`_grazing_face`); such a frame ranks below the others.
+        self.grazing = False
 
     def normals(self) -> np.ndarray:
         return self.face_sign[:, None] * self.axes[self.face_axis]
@@ -111,12 +115,14 @@ def _robust_scale(residual: np.ndarray, floor: float) -> float:
     return max(_MAD_TO_SIGMA * median(np.abs(residual)), floor)
 
 
-def _robust_fit(model, x, noise, floor, cutoff):
+def _robust_fit(model, x, noise, floor, cutoff, keep=None):
     """IRLS with Tukey's biweight, then a plain least-squares refit on the inliers.
 
     The scale starts at the noise level and is re-estimated (median absolute residual) on the
     biweight's support each iteration; inliers are within ``cutoff`` times the larger of that
-    scale and the noise level (the sensor's sigma when given). Updates
+    scale and the noise level (the sensor's sigma when given). ``keep`` (n,) bool, optional:
+    only these points may support the fit (the others are outliers whatever their residual:
+    shots a face's plane holds only as a fan of beams, :mod:`asbuilt.fit._beam_fans`). Updates
     ``model`` in place; returns label (n,), residual (n,) metres, inliers (n,) bool, scale
     (metres) and the number of Gauss-Newton steps.
     """
@@ -126,15 +132,21 @@ def _robust_fit(model, x, noise, floor, cutoff):
     for _ in range(_IRLS_ITERATIONS):
         iterations += 1
         support = np.abs(residual) < _TUKEY_C * scale
+        if keep is not None:
+            support &= keep
         if np.count_nonzero(support) < 3:
             break
         scale = _robust_scale(residual[support], floor)
         weights = _tukey(residual / (_TUKEY_C * scale))
+        if keep is not None:
+            weights = np.where(keep, weights, 0.0)
         moved = model.step(x, label, weights)
         label, residual = model.assign(x)
         if moved < 1e-5:
             break
     inliers = np.abs(residual) <= cutoff * max(scale, noise)
+    if keep is not None:
+        inliers &= keep
     for _ in range(_REFIT_ITERATIONS):
         if np.count_nonzero(inliers) < 3:
             break
@@ -149,6 +161,8 @@ def _robust_fit(model, x, noise, floor, cutoff):
     # are smaller than the range noise, and a few points' median underestimates it, so a cut at
     # the residuals' own scale alone would drop good shots seen head-on.
     inliers = np.abs(residual) <= cutoff * max(scale, noise)
+    if keep is not None:
+        inliers &= keep
     return label, residual, inliers, scale, iterations
 
 
@@ -179,35 +193,190 @@ def expand_frame(frame, subset: np.ndarray, n: int):
     return _faces.Frame(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, labels)
 
 
-def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted):
+def _beam_fans(model, x, label, inliers, width, viewpoint, raster) -> np.ndarray:
+    """Inliers (n,) bool that a fitted face holds only as shots along the beams behind its
+    nearest group (:func:`asbuilt.fit._beam_fans.beam_fan_shots`; ``width`` metres, the inlier
+    cutoff; ``raster``, the shots' angles (n, 2) and raster lines (n, 2):
+    :func:`asbuilt.fit._beam_fans.raster_lines`).
+
+    Neighbours on a face's raster lines are counted among the shots not behind its plane: a
+    shot between two of its shots that hit another face, or something in front, parts them;
+    a mixed return or the background seen past an edge, behind it, does not. Of the shots so
+    parted from their face's nearest group, only those farther from the station than every
+    other inlier (by twice ``width``) are returned: background seen past the box.
+    """
+    out = np.zeros(x.shape[0], dtype=bool)
+    angles, lines = raster
+    signed = model.all_residuals(x)
+    for f in range(model.offset.shape[0]):
+        mine = inliers & (label == f)
+        count = int(np.count_nonzero(mine))
+        if count < 2:
+            continue
+        first, second = neighbours(angles, lines, mine | (signed[:, f] > width))
+        local = np.full(x.shape[0], -1, dtype=np.int64)
+        local[mine] = np.arange(count)
+        both = mine[first] & mine[second]
+        out[mine] = beam_fan_shots(
+            x[mine], viewpoint, width, (local[first[both]], local[second[both]])
+        )
+    if out.any():
+        # Only what lies past the rest of the box is background seen past it: a beam seen
+        # along its length has its side's shots spread along the beams too, but its other
+        # faces reach as far.
+        ranges = np.linalg.norm(x - viewpoint, axis=1)
+        rest = inliers & ~out
+        if rest.any():
+            out &= ranges > ranges[rest].max() + 2.0 * width
+    return out
+
+
+#: Cosine of the incidence beyond which a face's shots see it edge-on (:func:`_grazing_face`).
+_GRAZING_COS = math.cos(math.radians(MAX_INCIDENCE_DEG))
+#: Rounds of leaving out a face's beam-fan shots and refitting (each can move the faces and
+#: hand a face new shots).
+_FAN_ROUNDS = 3
+
+
+def _start(frame, x: np.ndarray, keep=None) -> FaceModel:
+    """The joint fit's starting model from a segmentation frame; ``keep`` (n,) bool, optional,
+    the points a lone face's in-plane axes may come from."""
+    if frame.n_faces != 1:
+        return FaceModel(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
+    normal = frame.axes[int(frame.face_axis[0])]
+    basis = _faces._perpendicular_basis(normal)
+    members = frame.labels == 0
+    if keep is not None and np.count_nonzero(members & keep) >= 3:
+        members = members & keep
+    rect = min_area_rectangle(x[members] @ basis)
+    in_plane = rect @ basis.T
+    axes = np.vstack([normal, in_plane[0], _faces.cross3(normal, in_plane[0])])
+    model = FaceModel(axes, np.array([0]), frame.face_sign.copy(), frame.face_offset.copy(), None)
+    model.rot_basis = axes[1:].T.copy()
+    return model
+
+
+def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted, raster=None):
     """Robust joint fit starting from one segmentation frame (plus faces it then reveals).
+
+    With a ``trusted`` viewpoint and ``raster``, the shots' angles and raster lines
+    (:func:`asbuilt.fit._beam_fans.raster_lines`), shots a face holds only as
+    a fan of beams behind its nearest group (the wall behind a column, in the plane of a
+    raster column grazing the column's side) are left out and the frame is fitted again from
+    its start without them: they become outliers.
 
     Returns model, label (n,), residual (n,) metres, inliers (n,) bool, scale (metres),
     Gauss-Newton steps and whether only one face is seen.
     """
     one_face = frame.n_faces == 1
-    if one_face:
-        normal = frame.axes[int(frame.face_axis[0])]
-        basis = _faces._perpendicular_basis(normal)
-        rect = min_area_rectangle(x[frame.labels == 0] @ basis)
-        in_plane = rect @ basis.T
-        axes = np.vstack([normal, in_plane[0], _faces.cross3(normal, in_plane[0])])
-        model = FaceModel(
-            axes, np.array([0]), frame.face_sign.copy(), frame.face_offset.copy(), None
-        )
-        model.rot_basis = axes[1:].T.copy()
-    else:
-        model = FaceModel(
-            frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3)
-        )
-    label, residual, inliers, scale, iterations = _robust_fit(model, x, noise, floor, cutoff)
+    fans = trusted and raster is not None
+    steps = 0
+    keep = None
+
+    def settle(make):
+        """Fit ``make(keep)``'s model, leaving out beam-fan shots round by round."""
+        nonlocal steps, keep
+        model = make(keep)
+        fit = _robust_fit(model, x, noise, floor, cutoff, keep)
+        steps += fit[4]
+        for _ in range(_FAN_ROUNDS if fans else 0):
+            label, _, inliers, scale = fit[:4]
+            fan = _beam_fans(
+                model, x, label, inliers, cutoff * max(scale, noise), viewpoint, raster
+            )
+            if not fan.any():
+                break
+            keep = ~fan if keep is None else keep & ~fan
+            # From the start again: the fit that held the fan's shots has turned the faces
+            # toward them, and a face left with one line of shots would not turn back.
+            model = make(keep)
+            fit = _robust_fit(model, x, noise, floor, cutoff, keep)
+            steps += fit[4]
+        return model, fit
+
+    model, (label, residual, inliers, scale, _) = settle(lambda kept: _start(frame, x, kept))
     if not one_face:
         grown = _grow(model, x, label, inliers, cutoff * scale, gap, viewpoint, trusted)
         if grown is not None:
-            model = grown
-            label, residual, inliers, scale, more = _robust_fit(model, x, noise, floor, cutoff)
-            iterations += more
-    return model, label, residual, inliers, scale, iterations, one_face
+            start = (grown.axes.copy(), grown.face_axis, grown.face_sign, grown.offset.copy())
+            model, (label, residual, inliers, scale, _) = settle(
+                lambda kept: FaceModel(*start, np.eye(3))
+            )
+    if fans:
+        width = cutoff * max(scale, noise)
+        model.grazing = bool(_grazing_faces(model, x, label, inliers, viewpoint, width))
+    return model, label, residual, inliers, scale, steps, one_face
+
+
+def _grazing_faces(model, x, label, inliers, viewpoint, width: float) -> list:
+    """The faces of a fit whose inliers (n,) bool are a fan of beams: three or more, all seen
+    from ``viewpoint`` (3,) metres at more than ``MAX_INCIDENCE_DEG``, within ``width``
+    metres (RMS, the inlier cutoff) of one plane through the station, while the other faces
+    leave the frame's rotation free about some axis (they are normal to fewer than two axes).
+
+    One raster column's shots lie in a plane through the station, whatever they hit and
+    range noise and all, so a frame free to turn turns a face onto that plane: such a face
+    measures nothing, it only takes up the rotation the other faces leave free. A real face
+    seen edge-on is not in a plane through the station (a beam's side seen from below by one
+    raster row: a row of shots at a tilt lies on a cone, not a plane), and a face the other
+    two fix (a box's top seen from just below its level) is measured by its offset anyway.
+    """
+    m = model.offset.shape[0]
+    if m < 2:
+        return []
+    normals = model.normals()
+    counts = np.bincount(label[inliers], minlength=m)
+    out = []
+    for f in range(m):
+        beams = x[inliers & (label == f)] - viewpoint
+        if beams.shape[0] == 0:
+            continue
+        others = {int(model.face_axis[g]) for g in range(m) if g != f and counts[g] >= 3}
+        if len(others) >= 2:
+            continue
+        if beams.shape[0] < 3:
+            continue
+        cosine = np.abs(beams @ normals[f]) / np.linalg.norm(beams, axis=1)
+        if not np.all(cosine < _GRAZING_COS):
+            continue
+        # RMS distance of the shots from the plane through the station that fits them best.
+        fan = np.linalg.svd(beams, compute_uv=False)[-1] / math.sqrt(beams.shape[0])
+        if fan <= width:
+            out.append(f)
+    return out
+
+
+def _without_unseen_faces(trial, x: np.ndarray, view: np.ndarray, width: float):
+    """The frame (:class:`asbuilt.fit._faces.Frame`) of a fit with a trusted viewpoint ``view``
+    (3,) metres (centred frame) without its faces that the station cannot have seen: turned
+    away from it, or seen edge-on from every shot (:func:`_grazing_faces`); their shots are
+    left unlabelled. None when every face is seen, or none is.
+
+    The floor a column stands on, reached by beams past its foot, is a plane across its axis
+    turned away from a station above it; the frame explaining the most shots takes it for the
+    bottom face, and no frame of the segmentation offers the column's front face alone.
+    """
+    model, label, _, inliers = trial[:4]
+    m = model.offset.shape[0]
+    facing = model.normals() @ view - model.offset > 0.0
+    unseen = set(np.flatnonzero(~facing).tolist()) | set(
+        _grazing_faces(model, x, label, inliers, view, width)
+    )
+    kept = [f for f in range(m) if f not in unseen]
+    if not unseen or not kept:
+        return None
+    remap = np.full(m, -1, dtype=np.int64)
+    remap[kept] = np.arange(len(kept))
+    labels = np.where(inliers, remap[label], -1)
+    if not all(np.count_nonzero(labels == k) >= 3 for k in range(len(kept))):
+        return None
+    return _faces.Frame(
+        model.axes.copy(),
+        model.face_axis[kept].copy(),
+        model.face_sign[kept].copy(),
+        model.offset[kept].copy(),
+        labels,
+    )
 
 
 def _msac(residual: np.ndarray, cap: float) -> float:
@@ -285,6 +454,33 @@ def _rejected_are_background(trial, x: np.ndarray, noise: float, cutoff: float) 
         x.shape[0],
         cutoff * noise,
     )
+
+
+def counted_outliers(trial, x: np.ndarray, view: np.ndarray, trusted: bool, width: float) -> int:
+    """How many shots a frame's fit rejects that count against its outlier limit: all of them,
+    but with a ``trusted`` viewpoint ``view`` (3,) metres (centred frame) those seen past the
+    box (:func:`asbuilt.fit._cuboid_background.seen_past`; ``width`` metres, the inlier
+    cutoff). ``x`` (n, 3) metres, centred."""
+    count = int(np.count_nonzero(~trial[3]))
+    if not trusted or count == 0:
+        return count
+    return count - int(np.count_nonzero(seen_past_shots(trial, x, view, width)))
+
+
+def seen_past_shots(trial, x: np.ndarray, view: np.ndarray, width: float) -> np.ndarray:
+    """Which of the n shots a frame's fit rejects are background seen past the box, shape (n,)
+    bool (:func:`asbuilt.fit._cuboid_background.seen_past`; ``view`` (3,) metres, the trusted
+    viewpoint, and ``x`` (n, 3) metres, centred; ``width`` metres, the inlier cutoff)."""
+    model, _, _, inliers = trial[:4]
+    rejected = ~inliers
+    out = np.zeros(x.shape[0], dtype=bool)
+    if not rejected.any() or not inliers.any():
+        return out
+    ranges = np.linalg.norm(x - view, axis=1)
+    out[rejected] = seen_past(
+        model.all_residuals(x[rejected]), ranges[rejected], ranges[inliers], width
+    )
+    return out
 
 
 def _one_station_frames(trial, x: np.ndarray, width: float) -> list:
@@ -388,7 +584,7 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
     that are not edge-bisection shots (for :func:`_on_a_line`). Returns :func:`_fit_frame`'s
     tuple.
     """
-    x, noise, floor, cutoff, _, view, trusted = fit_args
+    x, noise, floor, cutoff, _, view, trusted = fit_args[:7]
     n = x.shape[0]
     cap = cutoff * max(noise, floor)
     done: list[tuple] = []  # (frame, fit): each frame is fitted once
@@ -408,7 +604,9 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
             quality = -_msac(trial[2], cap)
         else:
             quality = -_information(trial, cap / cutoff, cutoff)
-        return (plausible(trial[0], view, trusted), quality)
+        # A fit with a face seen edge-on from every shot (a fan of beams) comes after every
+        # other plausible fit.
+        return (plausible(trial[0], view, trusted), not trial[0].grazing, quality)
 
     best = fitted(frames[0])
     best_rank = rank(best, True)
@@ -416,12 +614,20 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
     settled = best[3].all() or (
         trusted and known_noise and _rejected_are_background(best, x, cap / cutoff, cutoff)
     )
-    if not (best_rank[0] and settled) or _on_a_line(best, x, cap, raster):
+    if not (best_rank[0] and best_rank[1] and settled) or _on_a_line(best, x, cap, raster):
         first = int(np.count_nonzero(frames[0].labels >= 0))
         frames = exhaustive()
         for frame in frames:
             fewer = np.count_nonzero(frame.labels >= 0) < first
-            if fewer and (trusted or best_rank[0] or _faces.has_opposite(frame.face_axis)):
+            # With a trusted viewpoint, while no plausible fit stands (a face seen edge-on
+            # from every shot took in a raster line's fan of beams: the frame explaining the
+            # most shots had it), a frame explaining fewer is fitted too.
+            doubtful = trusted and not (best_rank[0] and best_rank[1])
+            if (
+                fewer
+                and not doubtful
+                and (trusted or best_rank[0] or _faces.has_opposite(frame.face_axis))
+            ):
                 # Without a viewpoint, while only frames with opposite faces (which no single
                 # station sees) stand, one that a station can have seen is fitted even if its
                 # faces explain fewer shots: the rest may be mixed returns along the beams of
@@ -430,11 +636,21 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
                 # its opposite faces).
                 continue
             trial = fitted(frame)
-            if fewer and n - np.count_nonzero(trial[3]) > _ONE_STATION_OUTLIERS * n:
+            if fewer and counted_outliers(trial, x, view, trusted, cap) > _ONE_STATION_OUTLIERS * n:
                 continue
             trial_rank = rank(trial, True)
             if trial_rank > best_rank:
                 best, best_rank = trial, trial_rank
+    if trusted and not (best_rank[0] and best_rank[1]):
+        # No fit that a station can have seen: the fits without their unseen faces.
+        for _, trial in list(done):
+            frame = _without_unseen_faces(trial, x, view, cutoff * max(trial[4], noise))
+            if frame is None:
+                continue
+            sub = fitted(frame)
+            sub_rank = rank(sub, True)
+            if sub_rank > best_rank:
+                best, best_rank = sub, sub_rank
     if not trusted and not best_rank[0]:
         # Without a viewpoint opposite faces are doubtful; a face of an opposite pair that is
         # one line of shots may be the side face seen at grazing incidence instead.
@@ -443,13 +659,17 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
             trial_rank = rank(trial, True)
             if trial_rank > best_rank:
                 best, best_rank = trial, trial_rank
-    if n - np.count_nonzero(best[3]) > max_outlier_fraction * n:
+    if counted_outliers(best, x, view, trusted, cap) > max_outlier_fraction * n:
         best_rank = rank(best, False)
         for frame in frames:
             trial = fitted(frame)
             trial_rank = rank(trial, False)
             if trial_rank > best_rank:
                 best, best_rank = trial, trial_rank
-            if best_rank[0] and n - best_rank[1] <= max_outlier_fraction * n:
+            if (
+                best_rank[0]
+                and best_rank[1]
+                and counted_outliers(best, x, view, trusted, cap) <= max_outlier_fraction * n
+            ):
                 break
     return best

@@ -29,6 +29,13 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    ``outlier_cutoff_sigma`` robust sigmas are rejected and a plain least-squares refit on the
    inliers gives the final estimate and its covariance (Gauss-Newton normal matrix). Faces the
    refined frame reveals among the rejected points are then added and the fit repeated.
+   With the shots a raster from the viewpoint, a face's shots spread along the beams (a
+   raster column on a column and the next on the wall behind, in one plane nearly through
+   the station: :mod:`asbuilt.fit._beam_fans`) are left out but for the group nearest the
+   station and the frame is fitted again; a fit with a face seen edge-on from every shot,
+   which the other faces leave free to turn, ranks after the other plausible fits; shots
+   seen past the box (behind every seen face, farther than every kept shot) are background,
+   not counted against ``max_outlier_fraction``.
 3. Sizes: between two opposite seen faces (``observed`` True); otherwise from a seen face (the
    fitted corner edge) to the farthest inlier along that axis, or between the extreme inliers
    when no face bounds the axis (``observed`` False: the paper's point-projection step). Those
@@ -76,6 +83,7 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette
+from asbuilt.fit._beam_fans import raster_lines
 from asbuilt.fit._common import noise_level, random_subset
 from asbuilt.fit._cuboid_sizes import (
     bounds,
@@ -88,6 +96,7 @@ from asbuilt.fit._cuboid_sizes import (
 from asbuilt.fit._joint import (
     best_fit,
     complexity,
+    counted_outliers,
     expand_frame,
     median,
     plausible,
@@ -256,7 +265,9 @@ NOISE_LADDER_MISSES = 2
 _TIE = 1e-9
 
 
-def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolerances, plausible):
+def _likeliest_noise(
+    attempt, estimate: float, x: np.ndarray, tolerances: Tolerances, plausible, outliers=None
+):
     """The noise level, and its fit, that explain the points best when the sensor's is unknown.
 
     The estimate (:func:`asbuilt.fit._faces.noise_scale`) comes from planes of neighbouring
@@ -290,6 +301,9 @@ def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolera
     plausible : callable
         ``plausible(model) -> bool`` (:func:`asbuilt.fit._joint.plausible`); an implausible
         fit scores nothing.
+    outliers : callable, optional
+        ``outliers(fitted, noise) -> int``, the rejected shots that count against the outlier
+        limit (:func:`asbuilt.fit._joint.counted_outliers`); default every rejected shot.
 
     Returns
     -------
@@ -310,10 +324,10 @@ def _likeliest_noise(attempt, estimate: float, x: np.ndarray, tolerances: Tolera
             return math.inf
         model, _, residual, inliers = fitted[:4]
         score = math.inf
-        if (
-            plausible(model)
-            and n - int(np.count_nonzero(inliers)) <= tolerances.max_outlier_fraction * n
-        ):
+        rejected = (
+            n - int(np.count_nonzero(inliers)) if outliers is None else outliers(fitted, level)
+        )
+        if plausible(model) and rejected <= tolerances.max_outlier_fraction * n:
             score = mixture_score(residual, inliers, extent, floor) + complexity(fitted)
         tried[level] = (score, fitted)
         return score
@@ -461,6 +475,10 @@ def fit_cuboid(
         # A dense cloud: faces are found on a random subsample; the fit still uses every point.
         seg = random_subset(seg, _SEGMENTED_POINTS, np.random.default_rng(seg.size))
     xs = x[seg]
+    # The shots' raster rows and columns, for the test that no face holds
+    # shots spread along the beams (:mod:`asbuilt.fit._beam_fans`). Only where the shots are
+    # checked to be a raster from the viewpoint: from a wrong viewpoint every face would split.
+    raster = None if grid is None else (seen[1], raster_lines(seen[1], grid[4]))
     normals, local_rms, hood = local_normals(xs, tolerances.normal_neighbours)
     fourth = hood[:, min(3, hood.shape[1] - 1)]
     reach = median(np.linalg.norm(xs[fourth] - xs, axis=1))
@@ -486,7 +504,7 @@ def fit_cuboid(
         return best_fit(
             frames,
             lambda: segmentation(True),
-            (x, noise, floor, cutoff, gap, viewpoint - origin, trusted),
+            (x, noise, floor, cutoff, gap, viewpoint - origin, trusted, raster),
             tolerances.max_outlier_fraction,
             edges[0] < 0,
             known_noise=sigma is not None,
@@ -502,6 +520,9 @@ def fit_cuboid(
             x,
             tolerances,
             lambda model: plausible(model, viewpoint - origin, trusted),
+            lambda fitted, level: counted_outliers(
+                fitted, x, viewpoint - origin, trusted, cutoff * max(level, floor)
+            ),
         )
     model, label, residual, inliers, scale, iterations, one_face = fitted
     notes: list[str] = []
@@ -511,7 +532,12 @@ def fit_cuboid(
             "and the unseen depth is set to the smaller visible width (not measured)"
         )
     n_out = n - int(np.count_nonzero(inliers))
-    if n_out > tolerances.max_outlier_fraction * n:
+    # Shots seen past the box (the wall behind a column, in an operator's window) are
+    # background, not a sign that the points are not one box.
+    width = cutoff * max(scale, noise)
+    if counted_outliers(fitted, x, viewpoint - origin, trusted, width) > (
+        tolerances.max_outlier_fraction * n
+    ):
         raise FitError(
             f"cuboid: {n_out} of {n} points are outliers (more than "
             f"{tolerances.max_outlier_fraction:.0%}); the points do not look like one box. "

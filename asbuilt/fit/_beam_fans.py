@@ -1,0 +1,153 @@
+"""Shots of one cuboid face that run along the beams: a fan through the station, not a surface.
+
+Private helper of the cuboid joint fit (:mod:`asbuilt.fit._joint`). Lengths in metres, angles
+in radians.
+
+A pan-tilt raster's column of shots lies in one plane through the station whatever it hits,
+and its range noise lies in that plane too. A raster column that grazes a box column's side
+and the next column, which misses the box and reaches the wall behind, therefore lie in one
+plane seen at 85-89 degrees incidence and fit it to a fraction of a millimetre: a "face"
+whose shots are on the column and on the wall metres behind. Fitted as a side face, it made
+box columns 0.3-0.6 m across tens of metres deep (their size along that face taken from the
+wall's shots).
+
+On a real face, shots next to each other on one raster line lie apart across the beams by
+about the range times the angle between their beams, and their ranges differ by that spacing
+times the tangent of the incidence. So the ranges of two such shots of one face may differ by
+at most ``tan(MAX_INCIDENCE_DEG)`` times their spacing across the beams, plus the range noise:
+the incidence at which the cuboid segmentation already stops trusting a face's raster spacing
+(``asbuilt.fit._faces._MIN_STRETCHED_COS``, 80 degrees). A face whose shots fall apart into
+groups that no such link joins holds shots spread along the beams; the group nearest the
+station is the face (what lies behind it along the beams is background seen past the box),
+and the others are left out of the face, to be outliers.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from asbuilt.fit._common import row_norms
+
+__all__ = ["MAX_INCIDENCE_DEG", "beam_fan_shots", "neighbours", "raster_lines"]
+
+#: Incidence (degrees) beyond which the range step between neighbouring shots of one face is
+#: taken to run along the beams: the cuboid segmentation's cap on a face's stretched raster
+#: spacing.
+MAX_INCIDENCE_DEG = 80.0
+_RANGE_PER_SPACING = math.tan(math.radians(MAX_INCIDENCE_DEG))
+#: Range noise allowance of a link, in inlier cutoffs (each end's range is off by up to one).
+_NOISE_CUTOFFS = 2.0
+#: Shots closer than this share of the raster step in one angle are on one raster line.
+_IN_LINE = 0.5
+
+
+def raster_lines(angles: np.ndarray, steps) -> tuple[np.ndarray, np.ndarray]:
+    """The raster row and column of each shot, for :func:`neighbours`.
+
+    Parameters
+    ----------
+    angles : ndarray, shape (n, 2), radians
+        Each shot's pan and tilt from the station
+        (:func:`asbuilt.fit._silhouette.shot_angles`).
+    steps : array_like, shape (2,), radians
+        The raster's pan and tilt steps.
+
+    Returns
+    -------
+    ndarray, shape (n, 2), int
+        Each shot's row id (tilts within ``_IN_LINE`` of a tilt step of the next) and column
+        id (likewise in pan). Fill and bisection shots sit on the row or column they were shot
+        along.
+    """
+    return np.column_stack(
+        [
+            _line_ids(angles[:, 1], _IN_LINE * float(steps[1])),
+            _line_ids(angles[:, 0], _IN_LINE * float(steps[0])),
+        ]
+    )
+
+
+def neighbours(angles: np.ndarray, lines: np.ndarray, among: np.ndarray):
+    """The pairs of shots ``among`` (n,) bool next to each other on a raster row or column.
+
+    ``angles`` (n, 2) radians and ``lines`` (n, 2) int as for :func:`raster_lines`. Returns
+    ``i, j`` (p,) int, indices into the n shots: consecutive in pan along a row, or in tilt
+    along a column, counting only the shots ``among``.
+    """
+    idx = np.flatnonzero(among)
+    firsts, seconds = [], []
+    for along, line in ((0, lines[idx, 0]), (1, lines[idx, 1])):
+        order = np.lexsort((angles[idx, along], line))
+        same = line[order[1:]] == line[order[:-1]]
+        firsts.append(idx[order[:-1][same]])
+        seconds.append(idx[order[1:][same]])
+    return np.concatenate(firsts), np.concatenate(seconds)
+
+
+def _line_ids(values: np.ndarray, width: float) -> np.ndarray:
+    """Ids (n,) int of the groups of ``values`` (n,) that lie within ``width`` of the next."""
+    order = np.argsort(values, kind="stable")
+    starts = np.concatenate([[0], (np.diff(values[order]) > width).astype(np.int64)])
+    ids = np.empty(values.shape[0], dtype=np.int64)
+    ids[order] = np.cumsum(starts)
+    return ids
+
+
+def beam_fan_shots(points, viewpoint, noise: float, pairs) -> np.ndarray:
+    """Which shots of one face lie behind its nearest group along the beams, shape (m,) bool.
+
+    Parameters
+    ----------
+    points : ndarray, shape (m, 3), metres
+        The face's inlier shots.
+    viewpoint : ndarray, shape (3,), metres
+        The trusted station, in the same frame.
+    noise : float, metres
+        The inlier cutoff: how far along its beam a shot's range may be off.
+    pairs : tuple of two ndarray, shape (p,), int
+        The neighbouring shots among ``points`` (rows of it; :func:`neighbours`).
+
+    Returns
+    -------
+    ndarray, shape (m,), bool
+        True for the shots of every group but the one holding the shot nearest the station
+        (all False when the face's shots form one group). Groups are the connected components
+        of the neighbour links whose ranges differ by at most ``tan(MAX_INCIDENCE_DEG)``
+        times the mean range times the angle between the beams, plus ``_NOISE_CUTOFFS``
+        cutoffs.
+    """
+    m = points.shape[0]
+    out = np.zeros(m, dtype=bool)
+    if m < 2:
+        return out
+    i, j = pairs
+    beams = points - viewpoint
+    ranges = row_norms(beams)
+    units = beams / np.maximum(ranges, 1e-12)[:, None]
+    angle = 2.0 * np.arcsin(np.clip(0.5 * row_norms(units[i] - units[j]), 0.0, 1.0))
+    mean_range = 0.5 * (ranges[i] + ranges[j])
+    kept = np.abs(ranges[i] - ranges[j]) <= (
+        _RANGE_PER_SPACING * mean_range * angle + _NOISE_CUTOFFS * noise
+    )
+    group = _components(m, i[kept], j[kept])
+    if np.all(group == group[0]):
+        return out
+    return group != group[int(np.argmin(ranges))]
+
+
+def _components(m: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Connected-component label (m,) int (the least member's index) of m nodes joined by the
+    edges i-j; min-label propagation with pointer jumping (a face has tens of shots: cheaper
+    than importing and calling scipy's graph routines)."""
+    group = np.arange(m)
+    while True:
+        low = np.minimum(group[i], group[j])
+        fresh = group.copy()
+        np.minimum.at(fresh, i, low)
+        np.minimum.at(fresh, j, low)
+        fresh = fresh[fresh]
+        if np.array_equal(fresh, group):
+            return group
+        group = fresh

@@ -1,0 +1,148 @@
+"""Box columns scanned over an operator's window with a wall behind: no face along the beams.
+
+The scans are ray-cast here, independently of ``asbuilt.sim``: a box column 7 m from the
+station (the scan frame's origin, which the raster check then trusts), a cell-centred raster
+over its silhouette window widened by one raster step each side, and a wall square to the
+view ``behind`` metres behind the column, which every beam that misses the column reaches.
+A raster column grazing the column's side and the next one, on the wall, lie in one plane
+nearly through the station; before the beam-fan test that plane was a face, and the columns
+came out metres to tens of metres deep (+27 m with the wall 15 m behind). The tanks are an
+independent review's ray-cast scans (``tanks_with_wall_behind.json``).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fit_scans import cell_centres, corner_angles, shoot, sizes_in_true_order
+
+from asbuilt.fit._beam_fans import beam_fan_shots, neighbours, raster_lines
+from asbuilt.fit.auto import fit_auto
+from asbuilt.fit.cuboid import fit_cuboid
+from asbuilt.primitives import Cuboid
+
+DISTANCE = 7.0  # station to the column's axis, metres
+SIGMA = 0.002  # range noise, metres
+
+
+def column_scan(size, yaw_deg: float, behind: float, columns: int, seed: int):
+    """Points (n, 3), which shots hit the column (n,) bool, its rotation (3, 3; columns its
+    axes) and the column, for a column of ``size`` (3,) metres turned ``yaw_deg`` from the
+    view, a raster of ``columns`` pan columns x 7 tilt rows and the wall ``behind`` metres."""
+    rng = np.random.default_rng(seed)
+    bearing = np.radians(-150.0 + 40.0 * seed)
+    los = np.array([np.cos(bearing), np.sin(bearing), 0.0])
+    a = bearing + np.radians(yaw_deg)
+    rot = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    column = Cuboid(DISTANCE * los + [0.0, 0.0, 0.5], rot.T, size)
+    pans, tilts = corner_angles(column)
+    step = np.ptp(pans) / (columns - 2)  # the window is a step wider than the column each side
+    pan, tilt = np.meshgrid(
+        cell_centres(pans.min() - step, pans.max() + step, columns),
+        cell_centres(tilts.min(), tilts.max(), 7),
+    )
+    points, hit = shoot(
+        column,
+        pan.ravel(),
+        tilt.ravel(),
+        rng,
+        range_sigma=SIGMA,
+        miss_range=lambda beams: (DISTANCE + behind) / (beams @ los),
+    )
+    return points, hit, rot, column
+
+
+def _axis_errors_deg(result, rot) -> np.ndarray:
+    """Angle (3,) degrees between each true axis and the fitted axis nearest it."""
+    cosines = np.abs(np.asarray(result.primitive.axes) @ rot).max(axis=0)
+    return np.degrees(np.arccos(np.clip(cosines, 0.0, 1.0)))
+
+
+@pytest.mark.parametrize("behind", [1.0, 4.0, 15.0])
+@pytest.mark.parametrize("yaw_deg", [30.0, 55.0])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_column_with_a_wall_behind_keeps_its_size(behind, yaw_deg, seed):
+    size = np.array([0.45, 0.35, 4.0])
+    points, hit, rot, column = column_scan(size, yaw_deg, behind, 7, seed)
+    # The scene: a column of wall shots on either side of the column.
+    assert np.count_nonzero(~hit) >= 10
+    result = fit_cuboid(points, sigma=SIGMA)
+    fitted, _, _ = sizes_in_true_order(result, rot)
+    # Across the column the wall shots widen the raster window a step each side, which the
+    # unseen edges are placed on (the operator-window rule): up to two steps (here 0.1 m
+    # each) over, never the metres of a face reaching the wall.
+    assert np.all(np.abs(fitted[:2] - size[:2]) < 2 * 0.11 + 0.03), fitted - size
+    assert abs(fitted[2] - size[2]) < 0.03
+    assert np.all(_axis_errors_deg(result, rot) < 1.0)
+    # The wall is background: every shot on it is rejected, and none counts against the box.
+    assert not result.inliers[~hit].any()
+    assert np.count_nonzero(~result.inliers[hit]) <= 1  # (a shot grazing an edge may go)
+
+
+@pytest.mark.parametrize("behind", [4.0, 15.0])
+@pytest.mark.parametrize("yaw_deg", [10.0, 170.0])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_narrow_column_is_not_stretched_to_the_wall(behind, yaw_deg, seed):
+    # Two raster columns on the column's front, one each side on the wall (the review's
+    # 0.32 x 0.55 m steel column came out 26.5 m deep). Two lines of shots leave the column's
+    # depth to be assumed and its turn about its axis weakly held; it must not reach the wall.
+    size = np.array([0.32, 0.55, 4.0])
+    points, hit, rot, _ = column_scan(size, yaw_deg, behind, 4, seed)
+    result = fit_cuboid(points, sigma=SIGMA)
+    fitted, _, _ = sizes_in_true_order(result, rot)
+    assert np.all(fitted < size + 0.3), fitted - size
+    assert abs(fitted[2] - size[2]) < 0.03
+    assert _axis_errors_deg(result, rot)[2] < 1.0  # the column's axis: its lean is measured
+    assert not result.inliers[~hit].any()
+
+
+def test_a_raster_column_and_the_wall_behind_fall_apart_along_the_beams():
+    # One face's shots: a raster column on a column 7 m away and the next on a wall 3 m
+    # behind, both in one plane nearly through the station.
+    pan = np.repeat(np.radians([0.0, 1.5]), 5)
+    tilt = np.tile(np.radians([-8.0, -4.0, 0.0, 4.0, 8.0]), 2)
+    ranges = np.where(pan == 0.0, 7.0, 10.0) / np.cos(tilt)
+    beams = np.column_stack([np.cos(tilt) * np.cos(pan), np.cos(tilt) * np.sin(pan), np.sin(tilt)])
+    points = beams * ranges[:, None]
+    angles = np.column_stack([pan, tilt])
+    lines = raster_lines(angles, np.radians([1.5, 4.0]))
+    pairs = neighbours(angles, lines, np.ones(10, bool))
+    fan = beam_fan_shots(points, np.zeros(3), 0.006, pairs)
+    assert fan.tolist() == [False] * 5 + [True] * 5  # the wall's, behind the nearest group
+    # A face seen at 60 degrees: neighbouring columns' ranges step by r * step * tan(60).
+    step = np.radians(1.5)
+    ranges = 7.0 * (1.0 + np.tan(np.radians(60.0)) * step * (pan / step)) / np.cos(tilt)
+    assert not beam_fan_shots(beams * ranges[:, None], np.zeros(3), 0.006, pairs).any()
+
+
+def test_a_shot_behind_the_face_does_not_part_its_neighbours():
+    # Neighbours are counted among the shots given: a mixed return behind a face, left out,
+    # leaves the shots on either side of it neighbours.
+    angles = np.column_stack([np.radians([0.0, 1.0, 2.0]), np.zeros(3)])
+    lines = raster_lines(angles, np.radians([1.0, 1.0]))
+    first, second = neighbours(angles, lines, np.array([True, False, True]))
+    assert sorted(zip(first.tolist(), second.tolist())) == [(0, 2)]
+
+
+def _tanks():
+    data = json.loads((Path(__file__).parent / "tanks_with_wall_behind.json").read_text())
+    return [pytest.param(dict(scan, file=data), id=scan["id"]) for scan in data["scans"]]
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="not fixed: the tank's raster column and the wall's next to it span a face seen at "
+    "74-79 degrees, within the 80 degree bound the beam-fan test (and the segmentation) "
+    "trust; a face that close to grazing is a real side face in other scans "
+    "(test_one_raster_column_on_a_grazing_side_face_is_that_face: 76 degrees)",
+)
+@pytest.mark.parametrize("scan", _tanks())
+def test_auto_does_not_call_a_tank_with_a_wall_behind_a_cuboid(scan):
+    points = np.asarray(scan["points"])
+    file = scan["file"]
+    result = fit_auto(points, sigma=file["range_sigma"], viewpoint=file["viewpoint"])
+    assert result.primitive.kind == "cylinder"
+    assert result.primitive.radius == pytest.approx(scan["radius"], abs=0.05)
