@@ -24,7 +24,8 @@ import dataclasses
 import cadquery as cq
 import numpy as np
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
-from OCP.gp import gp_Trsf
+from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt, gp_Trsf
 from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
 
 from asbuilt.errors import SolidBuildError
@@ -141,18 +142,60 @@ def _reducer(geometry: Reducer) -> cq.Shape:
     return outer.cut(inner)
 
 
+def _seamed_cylinder(
+    start: np.ndarray, end: np.ndarray, radius: float, seam: np.ndarray
+) -> cq.Solid:
+    """A solid cylinder of ``radius`` (m) from ``start`` to ``end`` whose lateral face has its
+    seam on the side ``seam`` points to ((3,), not along the axis).
+
+    The seam is the lateral face's u = 0 line, the x direction of the cylinder's frame;
+    ``cq.Solid.makeCylinder`` lets the kernel pick that direction from the axis alone, so where
+    the seam falls changes with tiny turns of the axis.
+    """
+    axis = end - start
+    length = float(np.linalg.norm(axis))
+    direction = axis / length
+    side = seam - (seam @ direction) * direction
+    frame = gp_Ax2(
+        gp_Pnt(*(float(v) for v in start)),
+        gp_Dir(*(float(v) for v in direction)),
+        gp_Dir(*(float(v) for v in _unit(side))),
+    )
+    return cq.Solid(BRepPrimAPI_MakeCylinder(frame, radius, length).Shape())
+
+
 def _tee(geometry: Tee) -> cq.Shape:
-    run = _cylinder(geometry.run_start, geometry.run_end, geometry.outer_radius)
-    branch = _cylinder(geometry.center, geometry.branch_end, geometry.branch_outer_radius)
-    shape = run.fuse(branch)
+    """Run and branch cylinders fused, then both bores cut when the wall is known.
+
+    The run's (and run bore's) seam is put through the middle of the branch hole, and the
+    branch's seam on the run's side. Files get closed faces split in two at the middle of their
+    parameter range (:func:`split_closed_faces`), which is then the run's side opposite the
+    branch, clear of the hole; the hole itself crosses the seam, so no face keeps it as an inner
+    wire. With the seam wherever the kernel put it, the seam or the split line ran along the
+    hole's edge for some turns of the run (NPS 4 and smaller: up to half of the branch directions),
+    and STEP readers rebuilt that face into intersecting wires (an invalid solid). Seam
+    opposite the branch fails the same way for small branches, as the split then crosses the
+    hole.
+    """
+    run_axis = geometry.run_end - geometry.run_start
+    branch_axis = geometry.branch_end - geometry.center
+    if np.linalg.norm(np.cross(run_axis, branch_axis)) <= 1e-9 * (
+        np.linalg.norm(run_axis) * np.linalg.norm(branch_axis)
+    ):
+        raise ValueError("its branch is parallel to its run")
+
+    def run(radius: float) -> cq.Solid:
+        return _seamed_cylinder(geometry.run_start, geometry.run_end, radius, branch_axis)
+
+    def branch(radius: float) -> cq.Solid:
+        return _seamed_cylinder(geometry.center, geometry.branch_end, radius, run_axis)
+
+    shape = run(geometry.outer_radius).fuse(branch(geometry.branch_outer_radius))
     if geometry.wall > 0:
-        bore = _cylinder(
-            geometry.run_start, geometry.run_end, geometry.outer_radius - geometry.wall
+        bores = run(geometry.outer_radius - geometry.wall).fuse(
+            branch(geometry.branch_outer_radius - geometry.wall)
         )
-        branch_bore = _cylinder(
-            geometry.center, geometry.branch_end, geometry.branch_outer_radius - geometry.wall
-        )
-        shape = shape.cut(bore.fuse(branch_bore))
+        shape = shape.cut(bores)
     return shape.clean()
 
 
