@@ -18,12 +18,18 @@ import os
 import shutil
 import stat
 import tempfile
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
 from .errors import ExportError
 
-__all__ = ["atomic_write", "AtomicBatch", "check_target", "default_file_mode"]
+__all__ = ["atomic_write", "AtomicBatch", "check_target", "default_file_mode", "TERMINATING"]
+
+#: Set by the command line's SIGTERM handler until the command returns: a batch committed while
+#: it is set publishes nothing. The handler's exception can be swallowed on the way up (by
+#: ifcopenshell's bare ``except``), and the run would otherwise go on to publish its outputs.
+TERMINATING = threading.Event()
 
 
 def default_file_mode() -> int:
@@ -220,6 +226,8 @@ class AtomicBatch:
         """
         done = []
         try:
+            if TERMINATING.is_set():
+                raise ExportError("the run is being terminated; no output was written")
             while self._staged:
                 temp, final, special = self._staged[0]
                 try:

@@ -155,6 +155,19 @@ def test_a_failed_rename_discards_what_is_not_published(tmp_path, monkeypatch):
     assert not [p for p in tmp_path.iterdir() if p.name.endswith(".part")]
 
 
+def test_a_batch_publishes_nothing_while_the_process_terminates(tmp_path):
+    from asbuilt.atomic import TERMINATING
+
+    TERMINATING.set()
+    try:
+        with pytest.raises(ExportError, match="terminated"):
+            with AtomicBatch() as batch:
+                batch.stage(tmp_path / "a.bin").write_bytes(b"a")
+    finally:
+        TERMINATING.clear()
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_link_to_a_pipe_writes_into_the_pipe(tmp_path):
     # As /dev/stdout -> /proc/self/fd/1 -> pipe:[...] when the output is piped.
     import os

@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Callable, Iterable, Sequence
+import signal
+import threading
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from importlib import import_module
 from pathlib import Path
@@ -166,6 +168,41 @@ def _writer_options(
     return {}
 
 
+@contextlib.contextmanager
+def _sigterm_deferred() -> Iterator[None]:
+    """Hold back a SIGTERM until the block ends, then deliver it to the handler there was.
+
+    For imports of the CAD kernel (CadQuery, OCP, VTK: seconds): an exception raised by the
+    handler in the middle of an extension module's initialisation left it half made, and the
+    process crashed (exit 139) instead of stopping cleanly.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending: list[int] = []
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: pending.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        if pending:
+            signal.raise_signal(signal.SIGTERM)
+
+
+def _load_writers(exporters: Sequence[Exporter]) -> None:
+    """Import the CAD layer (when a format needs solids) and every writer's module.
+
+    Done before any file is staged, with SIGTERM held back (:func:`_sigterm_deferred`): a kill
+    during these imports then stops the run before it has created anything. An optional
+    package a writer lacks (ifcopenshell) is reported by that writer, as before.
+    """
+    with _sigterm_deferred():
+        if any(exporter.needs_cad for exporter in exporters):
+            import_module("asbuilt.cad")
+        for exporter in exporters:
+            import_module(f"{__name__}.{exporter.module}")
+
+
 def export_models(
     model,
     paths: Iterable,
@@ -226,6 +263,7 @@ def export_models(
                     "write; check that the scan has objects",
                     source=str(target),
                 )
+    _load_writers(exporters)
     mode = default_file_mode()
     sizes = []
     with contextlib.nullcontext(batch) if batch is not None else AtomicBatch() as batch:
