@@ -219,12 +219,19 @@ class AtomicBatch:
     def commit(self) -> list[Path]:
         """Publish every staged file to its target; return the targets.
 
+        Pipes and devices get their content first, then the files are renamed into place, so
+        a pipe or device that fails (``/dev/full``) leaves every file unpublished.
+
         Raises
         ------
         ExportError
             A rename or copy failed (the files not yet published are discarded).
         """
         done = []
+        # Pipes and devices first: writing into one can fail (a full device, a closed pipe)
+        # and cannot be taken back, while the renames that follow hardly fail; so a failure
+        # leaves no regular file published. (Stable sort: each kind keeps its order.)
+        self._staged.sort(key=lambda staged: not staged[2])
         try:
             if TERMINATING.is_set():
                 raise ExportError("the run is being terminated; no output was written")
