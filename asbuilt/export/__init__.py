@@ -35,7 +35,9 @@ __all__ = [
 @dataclass(frozen=True)
 class Exporter:
     """One output format: ``suffix`` (``".step"``), ``name`` (``"STEP"``), a description,
-    whether it needs the CAD solids, and where its writer lives (module, function)."""
+    whether it needs the CAD model (``needs_cad``: a :class:`asbuilt.cad.CadModel`, else the
+    model itself), where its writer lives (module, function), and whether it needs the B-rep
+    solids (``needs_solids``; the others use only the parts' meshes)."""
 
     suffix: str
     name: str
@@ -43,6 +45,7 @@ class Exporter:
     needs_cad: bool
     module: str
     function: str
+    needs_solids: bool = False
 
     def write(self, source, path, **options) -> None:
         """Write ``source`` (a CadModel when ``needs_cad``, else a Model) to ``path``."""
@@ -58,6 +61,7 @@ _EXPORTERS = (
         True,
         "step",
         "write_step",
+        True,
     ),
     Exporter(
         ".stp",
@@ -66,6 +70,7 @@ _EXPORTERS = (
         True,
         "step",
         "write_step",
+        True,
     ),
     Exporter(".glb", "glTF", "binary glTF 2.0, metres, Y up", True, "gltf", "write_gltf"),
     Exporter(
@@ -275,7 +280,13 @@ def export_models(
                 if progress is not None:
                     progress("solids", done, total)
 
-            cad = prepare(model, plate_thickness=plate_thickness, progress=solids_progress)
+            # Mesh formats alone need no B-rep solids (a dense hull's takes minutes to sew).
+            cad = prepare(
+                model,
+                plate_thickness=plate_thickness,
+                progress=solids_progress,
+                solids=any(exporter.needs_solids for exporter in exporters),
+            )
         for done, (exporter, temp, target) in enumerate(zip(exporters, temps, targets), 1):
             options = _writer_options(exporter, target, step_schema, mesh_units, plate_thickness)
             try:
