@@ -189,7 +189,8 @@ def _sigterm_deferred() -> Iterator[None]:
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        # None: a handler installed outside Python, which cannot be put back; the default then.
+        signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
         if pending:
             signal.raise_signal(signal.SIGTERM)
 
