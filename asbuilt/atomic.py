@@ -18,12 +18,18 @@ import os
 import shutil
 import stat
 import tempfile
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
 from .errors import ExportError
 
-__all__ = ["atomic_write", "AtomicBatch", "check_target", "default_file_mode"]
+__all__ = ["atomic_write", "AtomicBatch", "check_target", "default_file_mode", "TERMINATING"]
+
+#: Set by the command line's SIGTERM handler until the command returns: a batch committed while
+#: it is set publishes nothing. The handler's exception can be swallowed on the way up (by
+#: ifcopenshell's bare ``except``), and the run would otherwise go on to publish its outputs.
+TERMINATING = threading.Event()
 
 
 def default_file_mode() -> int:
@@ -213,13 +219,22 @@ class AtomicBatch:
     def commit(self) -> list[Path]:
         """Publish every staged file to its target; return the targets.
 
+        Pipes and devices get their content first, then the files are renamed into place, so
+        a pipe or device that fails (``/dev/full``) leaves every file unpublished.
+
         Raises
         ------
         ExportError
             A rename or copy failed (the files not yet published are discarded).
         """
         done = []
+        # Pipes and devices first: writing into one can fail (a full device, a closed pipe)
+        # and cannot be taken back, while the renames that follow hardly fail; so a failure
+        # leaves no regular file published. (Stable sort: each kind keeps its order.)
+        self._staged.sort(key=lambda staged: not staged[2])
         try:
+            if TERMINATING.is_set():
+                raise ExportError("the run is being terminated; no output was written")
             while self._staged:
                 temp, final, special = self._staged[0]
                 try:

@@ -155,6 +155,59 @@ def test_a_failed_rename_discards_what_is_not_published(tmp_path, monkeypatch):
     assert not [p for p in tmp_path.iterdir() if p.name.endswith(".part")]
 
 
+@pytest.mark.skipif(not __import__("os").path.exists("/dev/full"), reason="needs /dev/full")
+def test_a_device_that_fails_at_commit_leaves_the_files_unpublished(tmp_path):
+    """``--out ok.glb --out full.step`` with full.step a link to /dev/full: ok.glb was renamed
+    into place before the device refused its bytes, so the failed run left one output."""
+    import os
+
+    ok, full = tmp_path / "ok.glb", tmp_path / "full.step"
+    ok.write_bytes(b"old")
+    os.symlink("/dev/full", full)
+    with pytest.raises(ExportError) as info:
+        with AtomicBatch() as batch:
+            batch.stage(ok).write_bytes(b"new")
+            batch.stage(full).write_bytes(b"x" * 100_000)
+    assert "No space left on device" in str(info.value)
+    assert ok.read_bytes() == b"old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["full.step", "ok.glb"]
+
+
+def test_pipes_get_their_content_before_files_are_renamed(tmp_path, monkeypatch):
+    import os
+    import shutil
+    import threading
+
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    order = []
+    real_replace, real_copy = os.replace, shutil.copyfileobj
+    monkeypatch.setattr(os, "replace", lambda a, b: (order.append("rename"), real_replace(a, b)))
+    monkeypatch.setattr(shutil, "copyfileobj", lambda a, b: (order.append("pipe"), real_copy(a, b)))
+    received = []
+    reader = threading.Thread(target=lambda: received.append(fifo.read_bytes()))
+    reader.start()
+    with AtomicBatch() as batch:
+        batch.stage(tmp_path / "a.bin").write_bytes(b"a")
+        batch.stage(fifo).write_bytes(b"p")
+        batch.stage(tmp_path / "b.bin").write_bytes(b"b")
+    reader.join(timeout=10)
+    assert order == ["pipe", "rename", "rename"] and received == [b"p"]
+
+
+def test_a_batch_publishes_nothing_while_the_process_terminates(tmp_path):
+    from asbuilt.atomic import TERMINATING
+
+    TERMINATING.set()
+    try:
+        with pytest.raises(ExportError, match="terminated"):
+            with AtomicBatch() as batch:
+                batch.stage(tmp_path / "a.bin").write_bytes(b"a")
+    finally:
+        TERMINATING.clear()
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_link_to_a_pipe_writes_into_the_pipe(tmp_path):
     # As /dev/stdout -> /proc/self/fd/1 -> pipe:[...] when the output is piped.
     import os

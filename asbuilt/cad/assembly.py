@@ -19,7 +19,14 @@ from asbuilt.model import Component, Model
 from .colours import colour_for, component_status
 from .mesh import LINEAR_DEFLECTION, Mesh, tessellate
 from .meshgen import mesh_for
-from .solids import check_solid, place, placed_solid, split_closed_faces
+from .solids import (
+    build_error,
+    check_geometry,
+    check_solid,
+    place,
+    placed_solid,
+    split_closed_faces,
+)
 
 __all__ = ["CadPart", "CadModel", "prepare", "build_assembly", "fused_spool_solid"]
 
@@ -30,10 +37,12 @@ class CadPart:
 
     ``solid`` is in place (scan frame); ``local`` is the same solid built about ``origin``
     ((3,) metres), which the assembly places by a transform (:func:`asbuilt.cad.solids.placed_solid`).
+    Both are None when the model was prepared for meshes only (``prepare(..., solids=False)``)
+    and the part's mesh needs no solid (all but tees).
     """
 
     component: Component
-    solid: cq.Solid
+    solid: cq.Solid | None
     colour: tuple[float, float, float, float]
     status: str | None = None
     group: str | None = None
@@ -109,10 +118,15 @@ class CadModel:
             self._meshes[part.id] = mesh
         return mesh
 
+    def _need_solids(self) -> None:
+        if any(part.solid is None for part in self.parts):
+            raise ValueError("this CadModel was prepared for meshes only (solids=False)")
+
     def assembly(self) -> cq.Assembly:
         """The CadQuery assembly (built once): root > group > object, each leaf named by its id
         and coloured by kind or status; its solids are local, placed by the leaf's location,
         with closed faces split (for files, not for booleans)."""
+        self._need_solids()
         if self._assembly is None:
             self._assembly = _assemble(self)
         return self._assembly
@@ -120,6 +134,7 @@ class CadModel:
     def fused_spool(self, spool_id: str) -> cq.Solid:
         """The spool's components fused into one valid solid (metres); SolidBuildError when they
         do not form one connected solid."""
+        self._need_solids()
         members = [part for part in self.parts if part.group == spool_id]
         if not members:
             raise SolidBuildError("no components belong to this spool", where=f"spool {spool_id}")
@@ -172,8 +187,9 @@ def prepare(
     plate_thickness: float | None = None,
     colour_by_status: bool = True,
     progress: Callable[[int, int], None] | None = None,
+    solids: bool = True,
 ) -> CadModel:
-    """Build every component's solid once.
+    """Build every component's solid once (or, with ``solids=False``, only its mesh).
 
     Parameters
     ----------
@@ -185,6 +201,14 @@ def prepare(
         Colour components with error findings red and warnings amber.
     progress : callable(done, total), optional
         Called after each solid (for a progress display).
+    solids : bool
+        False for outputs that need only :meth:`CadModel.mesh` (glTF, DXF, STL, OBJ): each
+        part gets its closed-form mesh and no B-rep solid (``solid`` and ``local`` None), but
+        tees, whose mesh is tessellated from their solid. Sewing a dense hull's solid takes
+        seconds to minutes, its mesh milliseconds. A geometry no solid can be built from is
+        refused all the same (:func:`asbuilt.cad.solids.check_geometry`); the kernel's
+        validity check of the solid itself is skipped. :meth:`CadModel.assembly` and
+        :meth:`CadModel.fused_spool` then raise ValueError.
 
     Raises
     ------
@@ -204,9 +228,15 @@ def prepare(
     parts = []
     total = len(model.components)
     source = model.scan.source if model.scan is not None else None
+    meshes: dict[str, Mesh] = {}
     for done, component in enumerate(model.components, start=1):
+        local, origin = None, (0.0, 0.0, 0.0)
         try:
-            local, origin = placed_solid(component, plate_thickness=thickness)
+            mesh = None if solids else _mesh_only(component, thickness)
+            if mesh is None:
+                local, origin = placed_solid(component, plate_thickness=thickness)
+            else:
+                meshes[component.id] = mesh
         except SolidBuildError as exc:
             if source is None or exc.source is not None:
                 raise
@@ -217,7 +247,7 @@ def prepare(
         parts.append(
             CadPart(
                 component=component,
-                solid=place(local, origin),
+                solid=None if local is None else place(local, origin),
                 colour=colour_for(component.type, state),
                 status=state,
                 group=group_of(component),
@@ -230,7 +260,29 @@ def prepare(
     name = model.name or "scan"
     while name in ids:
         name = f"{name} (scan)"
-    return CadModel(model=model, parts=tuple(parts), name=name, plate_thickness=float(thickness))
+    return CadModel(
+        model=model,
+        parts=tuple(parts),
+        name=name,
+        plate_thickness=float(thickness),
+        _meshes=meshes,
+    )
+
+
+def _mesh_only(component: Component, thickness: float) -> Mesh | None:
+    """The component's closed-form mesh, its geometry checked as its solid's builder would; None
+    when only the kernel can mesh it (a tee: the caller builds its solid)."""
+    check_geometry(component, plate_thickness=thickness)
+    try:
+        mesh = mesh_for(component.geometry, plate_thickness=thickness)
+    except Exception as exc:
+        raise build_error(component, exc) from None
+    if mesh is not None and not mesh.volume > 0:
+        raise SolidBuildError(
+            "its solid encloses no volume; check its fitted size and refit it",
+            where=f"object {component.id}",
+        )
+    return mesh
 
 
 def build_assembly(

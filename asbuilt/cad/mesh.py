@@ -42,8 +42,15 @@ class Mesh:
 
     @property
     def volume(self) -> float:
-        """Enclosed volume, cubic metres (divergence theorem over the triangles)."""
-        tri = self.vertices[self.faces]
+        """Enclosed volume, cubic metres (divergence theorem over the triangles).
+
+        Summed about the vertices' mean: about the scan's origin, a mesh at survey coordinates
+        (5,000 km) sums products of 1e6 m that cancel to noise larger than the volume itself.
+        """
+        vertices = (
+            self.vertices - self.vertices.mean(axis=0) if len(self.vertices) else self.vertices
+        )
+        tri = vertices[self.faces]
         return float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6)
 
     def merged(self, decimals: int = 9) -> tuple[np.ndarray, np.ndarray]:

@@ -24,7 +24,8 @@ import dataclasses
 import cadquery as cq
 import numpy as np
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
-from OCP.gp import gp_Trsf
+from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt, gp_Trsf
 from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
 
 from asbuilt.errors import SolidBuildError
@@ -39,6 +40,8 @@ __all__ = [
     "local_origin",
     "split_closed_faces",
     "check_solid",
+    "check_geometry",
+    "build_error",
     "plate_solid",
 ]
 
@@ -82,11 +85,9 @@ def _fitted_cylinder(geometry: Cylinder) -> cq.Shape:
     return _cylinder(start, end, geometry.radius)
 
 
-def _bend(geometry: Bend) -> cq.Shape:
-    """Revolve the pipe's cross-section at ``start`` about the bend axis by the bend angle."""
-    r_start = geometry.start - geometry.center
-    r_end = geometry.end - geometry.center
-    normal = np.cross(r_start, r_end)
+def _bend_normal(geometry: Bend) -> np.ndarray:
+    """The unit normal of the bend's plane (3,); ValueError for a bend no solid can have."""
+    normal = np.cross(geometry.start - geometry.center, geometry.end - geometry.center)
     if np.linalg.norm(normal) < 1e-9 * geometry.bend_radius**2:
         raise ValueError("its ends and centre are collinear, so the bend plane is undefined")
     if geometry.outer_radius >= geometry.bend_radius:
@@ -94,7 +95,13 @@ def _bend(geometry: Bend) -> cq.Shape:
             f"the bend radius {geometry.bend_radius:.4g} m is not larger than the outer radius "
             f"{geometry.outer_radius:.4g} m"
         )
-    normal = _unit(normal)
+    return _unit(normal)
+
+
+def _bend(geometry: Bend) -> cq.Shape:
+    """Revolve the pipe's cross-section at ``start`` about the bend axis by the bend angle."""
+    r_start = geometry.start - geometry.center
+    normal = _bend_normal(geometry)
     tangent = _unit(np.cross(normal, r_start))
     outer = cq.Wire.makeCircle(geometry.outer_radius, _v(geometry.start), _v(tangent))
     inner = []
@@ -124,11 +131,15 @@ def _oblique_frustum(geometry: Reducer, inset: float) -> cq.Solid:
     return cq.Solid.makeLoft(circles, True)
 
 
+def _check_reducer(geometry: Reducer) -> None:
+    if geometry.length <= 0:
+        raise ValueError("its start and end coincide")
+
+
 def _reducer(geometry: Reducer) -> cq.Shape:
     """A truncated cone from ``start`` to ``end``; oblique (a loft) when eccentric."""
     length = geometry.length
-    if length <= 0:
-        raise ValueError("its start and end coincide")
+    _check_reducer(geometry)
     r1, r2, wall = geometry.outer_radius_start, geometry.outer_radius_end, geometry.wall
     if geometry.eccentric:
         outer = _oblique_frustum(geometry, 0.0)
@@ -141,18 +152,60 @@ def _reducer(geometry: Reducer) -> cq.Shape:
     return outer.cut(inner)
 
 
+def _seamed_cylinder(
+    start: np.ndarray, end: np.ndarray, radius: float, seam: np.ndarray
+) -> cq.Solid:
+    """A solid cylinder of ``radius`` (m) from ``start`` to ``end`` whose lateral face has its
+    seam on the side ``seam`` points to ((3,), not along the axis).
+
+    The seam is the lateral face's u = 0 line, the x direction of the cylinder's frame;
+    ``cq.Solid.makeCylinder`` lets the kernel pick that direction from the axis alone, so where
+    the seam falls changes with tiny turns of the axis.
+    """
+    axis = end - start
+    length = float(np.linalg.norm(axis))
+    direction = axis / length
+    side = seam - (seam @ direction) * direction
+    frame = gp_Ax2(
+        gp_Pnt(*(float(v) for v in start)),
+        gp_Dir(*(float(v) for v in direction)),
+        gp_Dir(*(float(v) for v in _unit(side))),
+    )
+    return cq.Solid(BRepPrimAPI_MakeCylinder(frame, radius, length).Shape())
+
+
 def _tee(geometry: Tee) -> cq.Shape:
-    run = _cylinder(geometry.run_start, geometry.run_end, geometry.outer_radius)
-    branch = _cylinder(geometry.center, geometry.branch_end, geometry.branch_outer_radius)
-    shape = run.fuse(branch)
+    """Run and branch cylinders fused, then both bores cut when the wall is known.
+
+    The run's (and run bore's) seam is put through the middle of the branch hole, and the
+    branch's seam on the run's side. Files get closed faces split in two at the middle of their
+    parameter range (:func:`split_closed_faces`), which is then the run's side opposite the
+    branch, clear of the hole; the hole itself crosses the seam, so no face keeps it as an inner
+    wire. With the seam wherever the kernel put it, the seam or the split line ran along the
+    hole's edge for some turns of the run (NPS 4 and smaller: up to half of the branch directions),
+    and STEP readers rebuilt that face into intersecting wires (an invalid solid). Seam
+    opposite the branch fails the same way for small branches, as the split then crosses the
+    hole.
+    """
+    run_axis = geometry.run_end - geometry.run_start
+    branch_axis = geometry.branch_end - geometry.center
+    if np.linalg.norm(np.cross(run_axis, branch_axis)) <= 1e-9 * (
+        np.linalg.norm(run_axis) * np.linalg.norm(branch_axis)
+    ):
+        raise ValueError("its branch is parallel to its run")
+
+    def run(radius: float) -> cq.Solid:
+        return _seamed_cylinder(geometry.run_start, geometry.run_end, radius, branch_axis)
+
+    def branch(radius: float) -> cq.Solid:
+        return _seamed_cylinder(geometry.center, geometry.branch_end, radius, run_axis)
+
+    shape = run(geometry.outer_radius).fuse(branch(geometry.branch_outer_radius))
     if geometry.wall > 0:
-        bore = _cylinder(
-            geometry.run_start, geometry.run_end, geometry.outer_radius - geometry.wall
+        bores = run(geometry.outer_radius - geometry.wall).fuse(
+            branch(geometry.branch_outer_radius - geometry.wall)
         )
-        branch_bore = _cylinder(
-            geometry.center, geometry.branch_end, geometry.branch_outer_radius - geometry.wall
-        )
-        shape = shape.cut(bore.fuse(branch_bore))
+        shape = shape.cut(bores)
     return shape.clean()
 
 
@@ -194,15 +247,8 @@ def _sphere(geometry: Sphere) -> cq.Shape:
     )
 
 
-def plate_solid(geometry: Plane, thickness: float) -> cq.Shape:
-    """A plate ``thickness`` metres thick from a plane's outline, centred on the plane.
-
-    Parameters
-    ----------
-    geometry : Plane
-        Its ``outline`` (k, 3) metres (k >= 3) is projected on the plane first.
-    thickness : float, metres
-    """
+def _plate_base(geometry: Plane, thickness: float) -> np.ndarray:
+    """The plate's bottom polygon (k, 3) metres; ValueError for an outline no plate can have."""
     if len(geometry.outline) < 3:
         raise ValueError("it has no outline (a bounded plate needs at least 3 outline points)")
     if not thickness > 0:
@@ -218,10 +264,22 @@ def plate_solid(geometry: Plane, thickness: float) -> cq.Shape:
         keep.pop()
     if len(keep) < 3:
         raise ValueError("its outline has fewer than 3 distinct points")
-    base = np.asarray(keep) - 0.5 * thickness * normal
+    return np.asarray(keep) - 0.5 * thickness * normal
+
+
+def plate_solid(geometry: Plane, thickness: float) -> cq.Shape:
+    """A plate ``thickness`` metres thick from a plane's outline, centred on the plane.
+
+    Parameters
+    ----------
+    geometry : Plane
+        Its ``outline`` (k, 3) metres (k >= 3) is projected on the plane first.
+    thickness : float, metres
+    """
+    base = _plate_base(geometry, thickness)
     wire = cq.Wire.makePolygon([_v(p) for p in base], close=True)
     face = cq.Face.makeFromWires(wire)
-    return cq.Solid.extrudeLinear(face, _v(thickness * normal))
+    return cq.Solid.extrudeLinear(face, _v(thickness * geometry.normal))
 
 
 def _convex_facets(vertices: np.ndarray, faces: np.ndarray) -> list[np.ndarray] | None:
@@ -284,6 +342,16 @@ def _hull_2d(points: np.ndarray) -> list[int]:
             upper.pop()
         upper.append(int(i))
     return lower[:-1] + upper[:-1]
+
+
+def _check_closed(geometry: Hull) -> None:
+    """ValueError unless every edge of the hull's triangles joins exactly two of them: a closed
+    surface, which sewing makes one shell of."""
+    faces = np.asarray(geometry.faces)
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    if len(faces) < 4 or np.any(counts != 2):
+        raise ValueError("its triangles do not sew into one closed shell")
 
 
 def _hull(geometry: Hull) -> cq.Shape:
@@ -441,9 +509,46 @@ def placed_solid(
     except SolidBuildError:
         raise
     except Exception as exc:  # the OCC kernel raises its own Standard_Failure types
-        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise SolidBuildError(
-            f"cannot build its {component.type} solid: {reason}; check its fitted geometry",
-            where=f"object {component.id}",
-        ) from None
+        raise build_error(component, exc) from None
     return check_solid(shape, component.id), origin
+
+
+def build_error(component: Component, exc: Exception) -> SolidBuildError:
+    """The one-line error naming the object whose solid the kernel (or a check) refused."""
+    reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+    return SolidBuildError(
+        f"cannot build its {component.type} solid: {reason}; check its fitted geometry",
+        where=f"object {component.id}",
+    )
+
+
+#: The checks of the solid builders that need no kernel, by geometry.
+_CHECKS = {Bend: _bend_normal, Reducer: _check_reducer, Hull: _check_closed}
+
+
+def check_geometry(component: Component, *, plate_thickness: float | None = None) -> None:
+    """Refuse, as :func:`placed_solid` would, a geometry no solid can be built from, without
+    building the solid (for outputs that need only meshes).
+
+    Runs the builders' own checks that need no kernel: a bend's ends and centre not collinear
+    and its radius larger than the pipe's, a reducer's ends apart, a plate's outline of at
+    least 3 distinct points, a hull's triangles closed (every edge shared by two). The
+    kernel's validity check of the solid itself is not run.
+
+    Raises
+    ------
+    SolidBuildError
+        Naming the object, with :func:`placed_solid`'s message.
+    """
+    geometry = component.geometry
+    if plate_thickness is None:
+        plate_thickness = DEFAULT_TOLERANCES.plate_thickness
+    try:
+        if isinstance(geometry, Plane):
+            _plate_base(geometry, float(plate_thickness))
+        elif type(geometry) in _CHECKS:
+            _CHECKS[type(geometry)](geometry)
+        elif type(geometry) not in _BUILDERS:
+            raise ValueError(f"there is no solid for geometry {type(geometry).__name__}")
+    except Exception as exc:
+        raise build_error(component, exc) from None

@@ -17,6 +17,7 @@ import threading
 from importlib import import_module
 
 from .. import __version__
+from ..atomic import TERMINATING
 from ..errors import AsbuiltError
 
 __all__ = ["main", "build_parser"]
@@ -59,9 +60,13 @@ class Terminated(KeyboardInterrupt):
     ``finally`` runs: staged outputs are removed, journals are closed, devices released."""
 
 
-#: Set by the SIGTERM handler: a signal that arrives while an extension module initialises
-#: (CadQuery's kernel takes seconds to import) surfaces as that module's ImportError instead.
-_termination = threading.Event()
+#: Set by the SIGTERM handler (and cleared when :func:`main` returns): whatever exception the
+#: run ends with after it, the command reports "terminated" (exit 143). The handler's own
+#: exception does not always arrive: a signal that lands while an extension module
+#: initialises surfaces as that module's ImportError, and ifcopenshell's bare ``except``
+#: swallows it and fails later with an error of its own. Staged outputs are not published
+#: while it is set (:data:`asbuilt.atomic.TERMINATING`).
+_termination = TERMINATING
 
 #: ``errno`` values of a standard output that cannot take the result: a full disk, a quota, a
 #: failed device.
@@ -94,8 +99,24 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     previous = None
+    _termination.clear()
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        return _run(handler, args)
+    except Exception:
+        if _termination.is_set():  # whatever the run failed with once it was told to stop
+            print("asbuilt: terminated", file=sys.stderr)
+            return 143
+        raise
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+        _termination.clear()
+
+
+def _run(handler, args) -> int:
+    """Run a subcommand's handler; map its errors and interruptions to messages and codes."""
     try:
         # Numerical warnings are the library's to handle (its fits drop overflowing starts):
         # on the command line they would only print noise around one clean result or error.
@@ -107,6 +128,8 @@ def main(argv: list[str] | None = None) -> int:
         sys.stdout.flush()  # a full disk under stdout is reported here, not at exit
         return code
     except AsbuiltError as exc:
+        if _termination.is_set():  # e.g. the commit refused after a swallowed SIGTERM
+            raise
         print(f"asbuilt: error: {exc}", file=sys.stderr)
         from ..fit import NothingFittedError
 
@@ -114,25 +137,17 @@ def main(argv: list[str] | None = None) -> int:
             for failure in exc.failures[1:]:  # the first one is the line above
                 print(f"asbuilt: error: {failure.error}", file=sys.stderr)
         return exc.exit_code
-    except Terminated:
-        print("asbuilt: terminated", file=sys.stderr)
-        return 143
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # Terminated included
+        if _termination.is_set():
+            print("asbuilt: terminated", file=sys.stderr)
+            return 143
         print("asbuilt: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0
-    except ImportError:
-        if _termination.is_set():  # SIGTERM while CadQuery's kernel was initialising
-            print("asbuilt: terminated", file=sys.stderr)
-            return 143
-        raise
     except OSError as exc:
-        if exc.filename is None and exc.errno in _OUTPUT_FULL:
+        if exc.filename is None and exc.errno in _OUTPUT_FULL and not _termination.is_set():
             _drop_stdout()
             print(f"asbuilt: error: cannot write the output ({exc.strerror})", file=sys.stderr)
             return 2
         raise
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)

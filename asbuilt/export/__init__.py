@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Callable, Iterable, Sequence
+import signal
+import threading
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from importlib import import_module
 from pathlib import Path
@@ -33,7 +35,9 @@ __all__ = [
 @dataclass(frozen=True)
 class Exporter:
     """One output format: ``suffix`` (``".step"``), ``name`` (``"STEP"``), a description,
-    whether it needs the CAD solids, and where its writer lives (module, function)."""
+    whether it needs the CAD model (``needs_cad``: a :class:`asbuilt.cad.CadModel`, else the
+    model itself), where its writer lives (module, function), and whether it needs the B-rep
+    solids (``needs_solids``; the others use only the parts' meshes)."""
 
     suffix: str
     name: str
@@ -41,6 +45,7 @@ class Exporter:
     needs_cad: bool
     module: str
     function: str
+    needs_solids: bool = False
 
     def write(self, source, path, **options) -> None:
         """Write ``source`` (a CadModel when ``needs_cad``, else a Model) to ``path``."""
@@ -56,6 +61,7 @@ _EXPORTERS = (
         True,
         "step",
         "write_step",
+        True,
     ),
     Exporter(
         ".stp",
@@ -64,6 +70,7 @@ _EXPORTERS = (
         True,
         "step",
         "write_step",
+        True,
     ),
     Exporter(".glb", "glTF", "binary glTF 2.0, metres, Y up", True, "gltf", "write_gltf"),
     Exporter(
@@ -166,6 +173,42 @@ def _writer_options(
     return {}
 
 
+@contextlib.contextmanager
+def _sigterm_deferred() -> Iterator[None]:
+    """Hold back a SIGTERM until the block ends, then deliver it to the handler there was.
+
+    For imports of the CAD kernel (CadQuery, OCP, VTK: seconds): an exception raised by the
+    handler in the middle of an extension module's initialisation left it half made, and the
+    process crashed (exit 139) instead of stopping cleanly.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending: list[int] = []
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: pending.append(signum))
+    try:
+        yield
+    finally:
+        # None: a handler installed outside Python, which cannot be put back; the default then.
+        signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+        if pending:
+            signal.raise_signal(signal.SIGTERM)
+
+
+def _load_writers(exporters: Sequence[Exporter]) -> None:
+    """Import the CAD layer (when a format needs solids) and every writer's module.
+
+    Done before any file is staged, with SIGTERM held back (:func:`_sigterm_deferred`): a kill
+    during these imports then stops the run before it has created anything. An optional
+    package a writer lacks (ifcopenshell) is reported by that writer, as before.
+    """
+    with _sigterm_deferred():
+        if any(exporter.needs_cad for exporter in exporters):
+            import_module("asbuilt.cad")
+        for exporter in exporters:
+            import_module(f"{__name__}.{exporter.module}")
+
+
 def export_models(
     model,
     paths: Iterable,
@@ -226,6 +269,7 @@ def export_models(
                     "write; check that the scan has objects",
                     source=str(target),
                 )
+    _load_writers(exporters)
     mode = default_file_mode()
     sizes = []
     with contextlib.nullcontext(batch) if batch is not None else AtomicBatch() as batch:
@@ -237,7 +281,13 @@ def export_models(
                 if progress is not None:
                     progress("solids", done, total)
 
-            cad = prepare(model, plate_thickness=plate_thickness, progress=solids_progress)
+            # Mesh formats alone need no B-rep solids (a dense hull's takes minutes to sew).
+            cad = prepare(
+                model,
+                plate_thickness=plate_thickness,
+                progress=solids_progress,
+                solids=any(exporter.needs_solids for exporter in exporters),
+            )
         for done, (exporter, temp, target) in enumerate(zip(exporters, temps, targets), 1):
             options = _writer_options(exporter, target, step_schema, mesh_units, plate_thickness)
             try:

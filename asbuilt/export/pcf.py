@@ -22,14 +22,20 @@ Written here:
   and a description saying so, never the catalog fitting's.
 
 Objects that are not piping (columns, tanks, walls) are not written: PCF has no records for
-them. Coordinates are millimetres with 0.1 mm resolution; text is ASCII (other characters are
-replaced by ``?``), the encoding ISOGEN reads.
+them. Coordinates are millimetres with 0.1 mm resolution; text is ASCII, the encoding ISOGEN
+reads: accented letters lose their accents (``Ä`` -> ``A``), other characters become ``?``.
+Names that identify something (pipeline references, groups, component ids) and are not plain
+ASCII also get ``~`` and 8 hex digits of a hash of the whole name (``LINE-Ä`` ->
+``LINE-A~...``), so two names never collapse into one (``LINE-Ä`` and ``LINE-Ö`` were both
+``LINE-?``) and a name is written the same in every file.
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
-from dataclasses import dataclass
+import unicodedata
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -72,9 +78,43 @@ _INDENT = "    "
 
 
 def _ascii(text: object) -> str:
-    """One line of ASCII text (ISOGEN reads ASCII; line breaks would start new records)."""
-    flat = " ".join(str(text).split())
+    """One line of ASCII text (ISOGEN reads ASCII; line breaks would start new records).
+
+    Letters lose their accents (compatibility decomposition, NFKD, without the combining marks:
+    ``Säule`` -> ``Saule``, ``ﬁ`` -> ``fi``); characters with no ASCII form become ``?``.
+    """
+    decomposed = unicodedata.normalize("NFKD", str(text))
+    stripped = "".join(c for c in decomposed if not unicodedata.combining(c))
+    flat = " ".join(stripped.split())
     return flat.encode("ascii", "replace").decode("ascii")
+
+
+@dataclass
+class _Identifiers:
+    """Names that identify pipelines, groups and components, written as distinct ASCII words.
+
+    A plain ASCII name (one line) is written as it is; any other gets its ASCII form
+    (:func:`_ascii`) and ``~`` plus 8 hex digits of the SHA-256 of the name, so distinct names
+    stay distinct after accents and other characters are dropped, and the same name is
+    written the same in every file (the digest depends on the name alone). Should that still
+    meet a name already written for another, the digest is lengthened.
+    """
+
+    written: dict[str, str] = field(default_factory=dict)
+    taken: set[str] = field(default_factory=set)
+
+    def __call__(self, name: object) -> str:
+        name = str(name)
+        if name in self.written:
+            return self.written[name]
+        plain = _ascii(name)
+        candidates = [plain] if plain == name else []
+        digest = hashlib.sha256(name.encode("utf-8", "surrogatepass")).hexdigest()
+        candidates += [f"{plain}~{digest[:n]}" for n in (8, 16, 64)]
+        result = next((c for c in candidates if c not in self.taken), candidates[-1])
+        self.written[name] = result
+        self.taken.add(result)
+        return result
 
 
 def _mm(point: np.ndarray) -> str:
@@ -260,12 +300,21 @@ def pcf_text(model: Model) -> str:
         "UNITS-BOLT-LENGTH MM",
     ]
     materials: dict[str, str] = {}
+    names = _Identifiers()
+    # Plain ASCII names first, so one never yields its place to a name that needed a digest.
+    for name in sorted(
+        {reference for reference, _, _ in pipelines}
+        | {group for _, group, _ in pipelines if group}
+        | {c.id for _, _, members in pipelines for c in members},
+        key=lambda name: (_ascii(name) != name, name),
+    ):
+        names(name)
     for reference, group, members in pipelines:
-        lines.append(f"PIPELINE-REFERENCE {_ascii(reference)}")
+        lines.append(f"PIPELINE-REFERENCE {names(reference)}")
         if model.name:
             lines.append(f"{_INDENT}PROJECT-IDENTIFIER {_ascii(model.name)}")
         if group:
-            lines.append(f"{_INDENT}ATTRIBUTE1 {_ascii(group)}")
+            lines.append(f"{_INDENT}ATTRIBUTE1 {names(group)}")
         for component in members:
             written = _records(component, bores)
             if written is None:  # piping type with another shape: no PCF records for it
@@ -276,7 +325,7 @@ def pcf_text(model: Model) -> str:
             lines.append(identifier)
             lines.extend(_INDENT + record for record in records)
             lines.append(f"{_INDENT}ITEM-CODE {code}")
-            lines.append(f"{_INDENT}COMPONENT-ATTRIBUTE1 {_ascii(component.id)}")
+            lines.append(f"{_INDENT}COMPONENT-ATTRIBUTE1 {names(component.id)}")
     lines.append("MATERIALS")
     for code, description in materials.items():
         lines.append(f"ITEM-CODE {code}")

@@ -5,10 +5,18 @@ Method
 The convex hull by Quickhull (Barber, Dobkin & Huhdanpaa 1996, via ``scipy.spatial.ConvexHull``),
 its triangles re-wound counter-clockwise seen from outside. A (nearly) planar set - a wall seen
 from one side - has no volume, so it is extruded before the hull is taken: every point gets a
-copy ``tolerances.plate_thickness`` behind it, along the plane's normal pointing away from the
-coordinate origin (the scanner station in a scan's frame; see
-:func:`asbuilt.fit.plane.fit_plane` for the orientation rule). The measured points stay on the
-hull's front face, so their residuals stay 0.
+copy behind it, along the plane's normal pointing away from the coordinate origin (the scanner
+station in a scan's frame; see :func:`asbuilt.fit.plane.fit_plane` for the orientation rule).
+The measured points stay on the hull's front face, so their residuals stay 0.
+
+"Nearly planar" is judged against the set itself: its RMS thickness (the spread along the
+third principal axis) is within the noise (at most ``FLAT_NOISE`` times the sensor's sigma, or
+``tolerances.sigma_floor`` without one) or below ``FLAT_RATIO`` of its RMS width (the spread
+along the second). The copy lies ``tolerances.plate_thickness`` behind, but no more than
+``PAD_RATIO`` of the set's width (its extent along the second principal axis): a plate for a
+wall, a sliver for a small flat part. Before, the test compared the thickness with the plate
+thickness itself, so a 6 x 6 x 3 mm part was "planar" and grew 10 mm behind its points (6.5
+times its volume).
 """
 
 from __future__ import annotations
@@ -22,9 +30,18 @@ from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Hull
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["fit_hull", "METHOD"]
+__all__ = ["fit_hull", "METHOD", "FLAT_NOISE", "FLAT_RATIO", "PAD_RATIO"]
 
 METHOD = "convex hull by Quickhull (Barber et al. 1996)"
+
+#: A set whose RMS thickness is at most this many noise sigmas is flat: its thickness is noise.
+FLAT_NOISE = 3.0
+#: A set whose RMS thickness is below this fraction of its RMS width is flat (a plate 1 m wide
+#: and under 10 mm thick), whatever the noise.
+FLAT_RATIO = 0.01
+#: A flat set is padded by at most this fraction of its width: enough for a solid with a volume
+#: CAD kernels and mesh viewers handle, small against the object itself.
+PAD_RATIO = 0.05
 
 
 def _extrusion_normal(points: np.ndarray, normal: np.ndarray) -> np.ndarray:
@@ -50,8 +67,9 @@ def _outward_faces(vertices: np.ndarray, simplices: np.ndarray) -> np.ndarray:
 def fit_hull(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES) -> FitResult:
     """Convex hull of the points, as a closed polyhedron.
 
-    Algorithm: Quickhull (Barber, Dobkin & Huhdanpaa 1996); planar sets are first extruded by
-    ``tolerances.plate_thickness`` behind the points (see the module docstring).
+    Algorithm: Quickhull (Barber, Dobkin & Huhdanpaa 1996); (nearly) planar sets are first
+    extruded behind the points by ``tolerances.plate_thickness``, at most ``PAD_RATIO`` of
+    their width (see the module docstring).
 
     Parameters
     ----------
@@ -59,7 +77,7 @@ def fit_hull(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES)
     sigma : float, optional, metres
         The sensor's range sigma; reported as the result's ``sigma`` when given (otherwise
         ``tolerances.sigma_floor`` with ``sigma_source`` ``"residuals"``: a hull estimates no
-        noise level).
+        noise level). A set no thicker than ``FLAT_NOISE`` times it is flat.
     tolerances : Tolerances
 
     Returns
@@ -82,14 +100,17 @@ def fit_hull(points, *, sigma=None, tolerances: Tolerances = DEFAULT_TOLERANCES)
     notes = []
     extruded = False
     cloud = pts
-    if spread[2] * 2.0 < tolerances.plate_thickness:
+    noise = float(sigma) if sigma is not None else tolerances.sigma_floor
+    if spread[2] <= max(FLAT_NOISE * noise, FLAT_RATIO * spread[1]):
         _, _, directions = principal_axes(pts)
         back = _extrusion_normal(pts, directions[2])
-        cloud = np.vstack([pts, pts + tolerances.plate_thickness * back])
+        width = float(np.ptp(pts @ directions[1]))
+        pad = min(tolerances.plate_thickness, PAD_RATIO * width)
+        cloud = np.vstack([pts, pts + pad * back])
         extruded = True
         notes.append(
-            f"The points are (nearly) planar: extruded {tolerances.plate_thickness * 1000:g} mm "
-            "behind them to close the hull."
+            f"The points are (nearly) planar: extruded {pad * 1000:.3g} mm behind them to close "
+            "the hull."
         )
     try:
         hull = ConvexHull(cloud)

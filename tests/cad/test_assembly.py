@@ -8,7 +8,7 @@ from cad_zoo import R4, W4, expected_volumes, zoo_model
 from asbuilt.cad import build_assembly, fused_spool_solid, prepare
 from asbuilt.cad.colours import KIND_COLOURS, STATUS_COLOURS
 from asbuilt.errors import SolidBuildError
-from asbuilt.model import Component, Model, Spool, Straight
+from asbuilt.model import Bend, Component, Model, Spool, Straight
 from asbuilt.primitives import Plane, Sphere
 
 
@@ -142,3 +142,51 @@ def test_the_sample_spool_fuses_into_one_valid_solid():
     assert len(members) == len(spool.components)
     # Fittings meet pipes at end faces only, so the fused volume is the sum of the parts'.
     assert solid.Volume() == pytest.approx(sum(p.solid.Volume() for p in members), rel=1e-4)
+
+
+def test_meshes_only_builds_no_solid_but_the_tees_and_gives_the_same_meshes(zoo, zoo_cad):
+    """Mesh formats need no B-rep solids; the tee's mesh is tessellated from its solid."""
+    import numpy as np
+
+    meshes_only = prepare(zoo, solids=False)
+    for part, full in zip(meshes_only.parts, zoo_cad.parts):
+        assert (part.solid is None) == (part.component.type != "tee"), part.id
+        assert (part.colour, part.status, part.group) == (full.colour, full.status, full.group)
+        mesh, reference = meshes_only.mesh(part), zoo_cad.mesh(full)
+        assert np.array_equal(mesh.vertices, reference.vertices), part.id
+        assert np.array_equal(mesh.faces, reference.faces), part.id
+    with pytest.raises(ValueError, match="meshes only"):
+        meshes_only.assembly()
+    with pytest.raises(ValueError, match="meshes only"):
+        meshes_only.fused_spool("S1")
+
+
+def _open_hull():
+    from cad_zoo import hull_geometry
+
+    hull = hull_geometry()
+    return type(hull)(hull.vertices, hull.faces[1:])  # one triangle missing: not closed
+
+
+@pytest.mark.parametrize(
+    ("component", "message"),
+    [
+        (Component("F9", "plane", Plane([0, 0, 0], [0, 0, 1])), "no outline"),
+        (Component("E9", "elbow", Bend([1, 0, 0], [-1, 0, 0], [0, 0, 0], 0.1)), "collinear"),
+        (Component("E8", "elbow", Bend([1, 0, 0], [0, 1, 0], [0, 0, 0], 1.5)), "bend radius"),
+        (Component("H9", "hull", None), "closed shell|validity check"),
+    ],
+    ids=["plate", "collinear bend", "tight bend", "open hull"],
+)
+def test_meshes_only_refuses_what_the_solids_refuse(component, message):
+    """One line naming the object, with or without building the solids; the same line but for
+    the open hull (the kernel sews it into a solid its validity check refuses)."""
+    if component.geometry is None:
+        component = Component(component.id, component.type, _open_hull())
+    model = Model(components=(component,))
+    errors = []
+    for solids in (True, False):
+        with pytest.raises(SolidBuildError, match=rf"^object {component.id}: .*{message}") as info:
+            prepare(model, solids=solids)
+        errors.append(str(info.value))
+    assert errors[0] == errors[1] or component.type == "hull"

@@ -37,6 +37,16 @@ def test_mesh_volume_and_merge_on_a_unit_cube():
     assert trimesh.Trimesh(merged_vertices, merged_faces, process=False).is_watertight
 
 
+def test_mesh_volume_at_survey_coordinates():
+    """A 0.1 m cube 5,000 km from the origin: summed about the origin, the volume was noise
+    (and the mesh-only checks refused a sample's elbow as enclosing no volume)."""
+    corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    hull = trimesh.convex.convex_hull(corners)
+    vertices = hull.vertices * 0.1 + [500_000.0, 5_000_000.0, 250.0]
+    mesh = Mesh(vertices, hull.faces, vertex_normals(vertices, hull.faces))
+    assert mesh.volume == pytest.approx(1e-3, rel=1e-6)
+
+
 def test_vertex_normals_of_a_flat_patch_are_its_normal():
     vertices = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
     faces = np.array([[0, 1, 2], [0, 2, 3]])

@@ -371,6 +371,86 @@ def test_sigterm_while_writing_leaves_no_partial_files(tmp_path, capsys, monkeyp
     assert signal.getsignal(signal.SIGTERM) is before  # restored for the caller
 
 
+class _KillOnImport:
+    """A meta path finder that sends this process a SIGTERM when ``name`` is imported and notes
+    the files in ``folder`` at that moment and whether the import went on after the signal."""
+
+    def __init__(self, name: str, folder: Path):
+        self.name, self.folder = name, folder
+        self.files_then: list[str] | None = None
+        self.went_on = False
+
+    def find_spec(self, fullname, path=None, target=None):
+        import os
+        import signal
+        import time
+
+        if fullname == self.name and self.files_then is None:
+            self.files_then = sorted(p.name for p in self.folder.iterdir())
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)  # the handler would raise here, in the middle of the import
+            self.went_on = True
+        return None  # the usual finders import it
+
+
+def test_sigterm_while_the_kernel_loads_stops_before_any_file(tmp_path, capsys, monkeypatch):
+    """A kill while the CAD kernel is imported: it used to come after the outputs were staged
+    (an exception in the middle of VTK's initialisation crashed the process, exit 139, and
+    left empty ``.part`` files); now the kernel is imported first and the signal is held back
+    until the import is done."""
+    import signal
+
+    for name in [m for m in sys.modules if m == "asbuilt.cad" or m.startswith("asbuilt.cad.")]:
+        monkeypatch.delitem(sys.modules, name)
+    finder = _KillOnImport("asbuilt.cad", tmp_path)
+    monkeypatch.setattr(sys, "meta_path", [finder, *sys.meta_path])
+    before = signal.getsignal(signal.SIGTERM)
+    argv = ["model", str(ROOT / "samples" / "spool.json"), "--quiet"]
+    argv += ["--out", str(tmp_path / "m.glb"), "--out", str(tmp_path / "m.json")]
+    assert main(argv) == 143
+    assert capsys.readouterr().err.strip() == "asbuilt: terminated"
+    assert finder.files_then == []  # nothing staged yet
+    assert finder.went_on  # not interrupted half way
+    assert list(tmp_path.iterdir()) == []
+    assert signal.getsignal(signal.SIGTERM) is before
+
+
+@pytest.mark.parametrize("then", ["fails", "carries on"])
+def test_sigterm_a_writer_swallows_still_terminates(tmp_path, capsys, monkeypatch, then):
+    """ifcopenshell's bare ``except`` swallows the SIGTERM handler's exception: the run then
+    failed with an unrelated traceback (exit 1), or could have published its outputs."""
+    import os
+    import signal
+    import time
+
+    from asbuilt.export import pcf
+
+    def swallowing_writer(model, path):
+        with open(path, "w") as stream:
+            stream.write("ISOGEN-FILES")
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)
+        except BaseException:  # what the third-party writer does
+            pass
+        if then == "fails":
+            raise RuntimeError("Couldn't find express schema")
+
+    monkeypatch.setattr(pcf, "write_pcf", swallowing_writer)
+    argv = ["model", str(ROOT / "samples" / "spool.json"), "--quiet"]
+    argv += ["--out", str(tmp_path / "m.json"), "--out", str(tmp_path / "m.pcf")]
+    assert main(argv) == 143
+    assert capsys.readouterr().err.strip() == "asbuilt: terminated"
+    assert list(tmp_path.iterdir()) == []
+    # The next command in this process is not taken for terminated.
+    assert (
+        main(
+            ["model", str(ROOT / "samples" / "spool.json"), "-q", "--out", str(tmp_path / "n.json")]
+        )
+        == 0
+    )
+
+
 @pytest.mark.parametrize(
     "argv",
     [

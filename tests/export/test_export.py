@@ -124,6 +124,32 @@ def test_an_object_without_a_solid_is_named_and_nothing_is_written(zoo, tmp_path
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize(
+    ("outputs", "built"),
+    [
+        ((".glb", ".gltf", ".dxf", ".stl", ".obj"), {"tee"}),
+        ((".glb", ".step"), None),  # every kind: STEP needs every solid
+    ],
+    ids=["mesh formats", "with STEP"],
+)
+def test_mesh_formats_build_no_solids_but_the_tees(zoo, tmp_path, monkeypatch, outputs, built):
+    """A 5,000-point hull to .glb spent 30 s sewing a B-rep solid nobody wrote (its mesh
+    takes milliseconds)."""
+    from asbuilt.cad import assembly
+
+    kinds = []
+    real = assembly.placed_solid
+
+    def counting(component, **options):
+        kinds.append(component.type)
+        return real(component, **options)
+
+    monkeypatch.setattr(assembly, "placed_solid", counting)
+    export_models(zoo, [tmp_path / f"zoo{suffix}" for suffix in outputs])
+    assert set(kinds) == (built or {c.type for c in zoo.components})
+    assert len(list(tmp_path.iterdir())) == len(outputs)
+
+
 def test_unknown_suffix_fails_before_anything_is_written(zoo, tmp_path):
     with pytest.raises(UnknownFormatError):
         export_models(zoo, [tmp_path / "a.json", tmp_path / "a.xyz"])

@@ -3,6 +3,8 @@ layout (unindented identifiers, indented attribute records)."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -178,7 +180,56 @@ def test_names_are_written_as_ascii():
     text = pcf_text(model)
     assert text.isascii()
     assert "PROJECT-IDENTIFIER ?? line next" in text
-    assert "COMPONENT-ATTRIBUTE1 S?ule-1" in text
+    assert re.search(r"COMPONENT-ATTRIBUTE1 Saule-1~[0-9a-f]{8}\r\n", text)
+
+
+def _two_lines() -> Model:
+    """Two spools whose names (and components' ids) differ only by letters beyond ASCII."""
+    components, spools = [], []
+    for k, (line, ids) in enumerate(
+        (("LINE-Ä", ("P-Ä1", "P-Ö1")), ("LINE-Ö", ("P-Ü1", "P-泵"))), start=1
+    ):
+        for j, ident in enumerate(ids):
+            y = float(k + j)
+            pipe = Straight([0, y, 0], [1, y, 0], R4, W4)
+            components.append(Component(ident, "pipe", pipe, nominal="4", group=line))
+        spools.append(Spool(line, ids))
+    plain = Component("P-A1", "pipe", Straight([0, 9, 0], [1, 9, 0], R4, W4), nominal="4")
+    components.append(plain)  # a plain ASCII id next to the transliterated ones keeps its name
+    return Model(components=tuple(components), catalog="asme-b36.10m", spools=tuple(spools))
+
+
+def test_distinct_names_stay_distinct_in_ascii():
+    """``LINE-Ä`` and ``LINE-Ö`` were both written ``LINE-?``: one pipeline for two spools."""
+    text = pcf_text(_two_lines())
+    assert text.isascii()
+    _, blocks = parse(text)
+    references = [b["pipeline"] for b in blocks if b["type"] == "PIPELINE-REFERENCE"]
+    assert len(references) == len(set(references)) == 3
+    assert [r.split("~")[0] for r in references] == ["LINE-A", "LINE-O", "P-A1"]
+    ids = [b["COMPONENT-ATTRIBUTE1"][0][0] for b in _components(blocks)]
+    assert len(set(ids)) == 5
+    assert [i.split("~")[0] for i in ids] == ["P-A1", "P-O1", "P-U1", "P-?", "P-A1"]
+    assert ids[-1] == "P-A1"
+    by_pipeline = {b["pipeline"]: b["ATTRIBUTE1"][0][0] for b in blocks if "ATTRIBUTE1" in b}
+    assert all(group == ref for ref, group in by_pipeline.items())
+
+
+def test_ascii_names_are_the_same_from_file_to_file():
+    """The digest depends on the name alone: the same spool gets the same reference in a file
+    of its own as next to other spools."""
+    model = _two_lines()
+    alone = Model(
+        components=tuple(c for c in model.components if c.group == "LINE-Ö"),
+        catalog="asme-b36.10m",
+        spools=(model.spools[1],),
+    )
+    assert "LINE-Ö" in alone.spools[0].id and len(alone.components) == 2
+
+    def reference(text):
+        return [line for line in text.splitlines() if line.startswith("PIPELINE-REFERENCE")]
+
+    assert reference(pcf_text(alone))[0] == reference(pcf_text(model))[1]
 
 
 def test_a_model_without_piping_is_refused(tmp_path):

@@ -56,6 +56,49 @@ def test_a_wall_seen_from_one_side_becomes_a_closed_plate_behind_it():
     assert any("extruded" in note for note in fit.notes)
 
 
+def test_a_small_part_is_not_taken_for_a_plane():
+    """Points of a 6 x 6 x 3 mm part (0.02 mm noise) were "nearly planar" against the 10 mm plate
+    thickness and extruded 10 mm: a hull of 276 mm^3 for 43 mm^3 of part."""
+    from scipy.spatial import ConvexHull
+
+    rng = np.random.default_rng(1)
+    directions = rng.normal(size=(40, 3))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    points = [0.08, 0.05, 0.005] + directions * [0.003, 0.003, 0.0015]
+    points += rng.normal(scale=2e-5, size=points.shape)
+    fit = fit_hull(points, sigma=2e-5)
+    assert fit.diagnostics["extruded"] == 0.0
+    assert _closed_and_outward(fit.primitive) == pytest.approx(ConvexHull(points).volume)
+    np.testing.assert_allclose(np.ptp(fit.primitive.vertices, axis=0), np.ptp(points, axis=0))
+
+
+def test_a_small_flat_part_is_padded_in_proportion_to_its_size():
+    rng = np.random.default_rng(2)
+    points = np.column_stack(
+        [np.full(30, 1.0), rng.uniform(0, 0.005, 30), rng.uniform(0, 0.004, 30)]
+    )
+    fit = fit_hull(points)
+    assert fit.diagnostics["extruded"] == 1.0
+    depth = np.ptp(fit.primitive.vertices[:, 0])
+    # At most PAD_RATIO (5%) of its width (4-5 mm), not the 10 mm plate thickness.
+    assert 0.0001 < depth <= 0.05 * np.ptp(points, axis=0).max()
+    _closed_and_outward(fit.primitive)
+
+
+def test_a_noisy_wall_is_still_planar_and_becomes_a_plate():
+    """Its thickness is the sensor's noise (3 mm sigma), so it is flat: a plate behind it."""
+    rng = np.random.default_rng(4)
+    n = 200
+    points = np.column_stack(
+        [5.0 + rng.normal(scale=0.003, size=n), rng.uniform(-2, 2, n), rng.uniform(0, 3, n)]
+    )
+    fit = fit_hull(points, sigma=0.003)
+    assert fit.diagnostics["extruded"] == 1.0
+    assert fit.primitive.vertices[:, 0].max() == pytest.approx(
+        points[:, 0].max() + DEFAULT_TOLERANCES.plate_thickness, abs=0.01
+    )
+
+
 def test_the_sensor_sigma_is_reported():
     points = np.array(list(itertools.product([0.0, 1.0], repeat=3)))
     assert fit_hull(points, sigma=0.003).sigma == 0.003
