@@ -329,7 +329,10 @@ def _fit_with_noise(
         result = function(np.array(points), sigma=sigma, tolerances=tolerances, **options)
     except FitError as first:
         try:
-            result = function(np.array(points), sigma=None, tolerances=tolerances, **options)
+            # With the prior-noise rescue: the fit of every shot at its own scale can be a
+            # metre-wide cylinder through pipe and wall at 60 mm, over the limit below, where
+            # the fit at the prior noise keeps the pipe (an optimistic 0.5 mm for a 2 mm finder).
+            result = _fit_without_sigma(function, points, tolerances, options, sigma)
         except FitError:
             raise first from None
         if not result.sigma <= WIDER_NOISE_LIMIT * sigma:
@@ -352,7 +355,9 @@ def _fit_with_noise(
 BACKGROUND_RATIO = 5.0
 
 
-def _fit_without_sigma(function, points: np.ndarray, tolerances, options) -> FitResult:
+def _fit_without_sigma(
+    function, points: np.ndarray, tolerances, options, sensor_sigma: float | None = None
+) -> FitResult:
     """The fit of a scan that gives no sensor sigma, with its noise level from its residuals;
     when that noise is over ``WIDER_NOISE_RATIO`` times ``tolerances.prior_range_sigma`` (or the
     fit is refused), the fit made with the prior noise as the sensor's is preferred if the shots
@@ -393,12 +398,17 @@ def _fit_without_sigma(function, points: np.ndarray, tolerances, options) -> Fit
         f"others fit to {noise * 1000:.3g} mm (a median {distance:.3g} m away) and "
         "were taken as background"
         + (
-            f"; without a sensor sigma a {result.kind} through all the shots would have fitted "
-            f"at {wide * 1000:.3g} mm"
+            f"; {'at its own scale' if sensor_sigma else 'without a sensor sigma'} a "
+            f"{result.kind} through all the shots would have fitted at {wide * 1000:.3g} mm"
             if result is not None
             else ""
         )
-        + ". Give sensor.range_sigma (and the station) so that the fit need not guess."
+        + (
+            # The sensor's sigma was given but refused every fit (the caller says why).
+            "."
+            if sensor_sigma
+            else ". Give sensor.range_sigma (and the station) so that the fit need not guess."
+        )
     )
     return dataclasses.replace(
         settled, sigma=noise, sigma_source="residuals", notes=(*settled.notes, note)

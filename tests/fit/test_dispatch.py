@@ -818,3 +818,32 @@ def test_a_cuboid_turned_anyhow_in_its_plane_says_so():
         "These points do not determine the cuboid (one standard error: orientation +-31 deg); "
         "measure more of its surface, or check its kind."
     )
+
+
+# --------------------------------------------------------------------------------------------
+# Whole raster rows on a wall behind a pipe (an independent review's ray caster)
+
+_FAR_WALL = {
+    scan["name"]: scan
+    for scan in json.loads((Path(__file__).parent / "pipes_before_far_wall_rows.json").read_text())[
+        "scans"
+    ]
+}
+
+
+def test_an_optimistic_sigma_falls_back_to_the_fit_at_the_prior_noise():
+    """An NPS 10 pipe at 8 m, 22 of 35 shots on it and two rows on the wall behind, declared
+    0.5 mm (real 2 mm): the fit with the sensor's sigma is refused, and the documented retry
+    without it had fitted every shot at its own scale (a 1 m cylinder at 62 mm, over five
+    sensor sigmas), so the refusal stood. The retry now has the prior-noise rescue of a scan
+    without a sigma, which keeps the pipe at its own 2 mm."""
+    scan = _FAR_WALL["p013"]
+    result = fit_points(
+        "cylinder", np.array(scan["points"]), sigma=0.0005, viewpoint=scan["station"]
+    )
+    assert result.primitive.radius == pytest.approx(scan["radius"], abs=0.003)
+    assert result.n_inliers >= scan["on_pipe"] - 1
+    assert result.sigma_source == "residuals" and result.sigma < 0.0025
+    assert any("scatter by" in note for note in result.notes)
+    # The sensor's sigma was given: no note tells the user to give it.
+    assert not any("Give sensor.range_sigma" in note for note in result.notes)
