@@ -1,0 +1,206 @@
+"""A pipe's own shots, split from whole raster lines on the background behind it.
+
+Private helper of the cylinder fit. An operator's raster window a little larger than a pipe
+puts whole rows (or columns) of shots on the wall or floor behind it: a third to a half of the
+shots, more than the robust starts are built for (a quarter), so every start either takes a
+metre-wide cylinder through pipe and wall or hides shots behind itself, and the fit was
+refused, or kept with the viewpoint ignored (an independent ray caster: 273 mm and 406 mm pipes
+4-6 m away with the wall 1-2 m behind refused; an NPS 3 pipe at 4 m fitted r 928 mm).
+
+The station sees the pipe in front of the wall: between neighbouring beams the range jumps
+by the pipe's distance from the wall, while along one surface it changes by the beams' spacing
+times the tangent of the incidence. Cut at those jumps, the shots fall into surfaces, and the
+nearest of them are the pipe's (range-image segmentation at depth discontinuities, Hoover et
+al. 1996, "An experimental comparison of range image segmentation algorithms"). A fit of
+those shots alone stands when every other shot can only be background: behind the first
+surface of the pipe its beam met, its beam clear of the pipe. Lengths in metres.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import Delaunay, QhullError
+
+from asbuilt.errors import FitError
+from asbuilt.fit._visibility import excess_and_beyond
+
+__all__ = [
+    "JUMP_SLOPE",
+    "JUMP_NOISE",
+    "NEAR_SHARE",
+    "MOST_SUBSETS",
+    "DETERMINED_RADIUS",
+    "depth_segments",
+    "near_subsets",
+    "only_background_behind",
+    "fit_without_background",
+]
+
+#: Neighbouring beams whose ranges differ by more than this many times their spacing across the
+#: beams (the range times the angle between them) lie on two surfaces: on one surface the range
+#: changes by the spacing times the tangent of the incidence, so this cuts beyond 72 degrees of
+#: incidence (a pipe's shot near its silhouette may be cut off, or a long pipe seen obliquely
+#: cut into its raster columns; the nearest surfaces are taken together and such shots taken
+#: back by their residuals), while a wall 0.3 m behind a pipe seen by beams 20-60 mm apart is
+#: 5-15 spacings off. The reviewer's 406 mm pipe seen at a steep yaw had its wall shots 4.2-4.6
+#: of its finest spacings off the pipe's far end.
+JUMP_SLOPE = 3.0
+#: ... and by more than this many range sigmas (two shots of one surface in nearly the same
+#: direction differ by their noise).
+JUMP_NOISE = 6.0
+#: A subset of the shots is tried only if it holds at least this share of them (a pipe framed
+#: by a raster a little larger than itself keeps about half; fewer would let one wall row be
+#: taken as a pipe).
+NEAR_SHARE = 0.4
+#: A subset's fit stands only if its radius is known to this fraction of itself (one standard
+#: error; as :data:`asbuilt.fit.UNDETERMINED_RELATIVE`): the front line of a thin pipe 10 m
+#: away, in front of its mixed returns, fits a 4 m "pipe" +-36 m.
+DETERMINED_RADIUS = 0.5
+#: At most this many subsets are fitted, nearest first.
+MOST_SUBSETS = 4
+
+
+def depth_segments(points: np.ndarray, view: np.ndarray, noise: float) -> list[np.ndarray]:
+    """The shots cut into surfaces at range jumps between neighbouring beams, nearest first.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    view : ndarray, shape (3,), metres
+        The station.
+    noise : float, metres
+        The range noise.
+
+    Returns
+    -------
+    list of ndarray of int
+        The shots of each surface (connected through neighbouring beams without a jump,
+        ``JUMP_SLOPE``, ``JUMP_NOISE``), ordered by their median range.
+    """
+    beams = points - view
+    ranges = np.sqrt(np.einsum("ij,ij->i", beams, beams))
+    directions = beams / ranges[:, None]
+    n = len(points)
+    # Neighbouring beams: the Delaunay triangulation of the directions, projected on the plane
+    # across their mean (a raster's rows and columns and its diagonals, however unequal its
+    # steps).
+    mean = directions.sum(axis=0)
+    mean /= np.linalg.norm(mean)
+    across = np.linalg.svd(directions - np.outer(directions @ mean, mean))[2][:2]
+    try:
+        triangles = Delaunay(directions @ across.T).simplices
+    except QhullError:
+        return [np.arange(n)]  # the beams lie on one line: no surfaces to tell apart
+    edges = np.unique(
+        np.sort(np.vstack([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [0, 2]]]), 1),
+        axis=0,
+    )
+    rows, cols = edges[:, 0], edges[:, 1]
+    angle = np.arccos(np.clip(np.einsum("ij,ij->i", directions[rows], directions[cols]), -1, 1))
+    # The spacing is the raster's finest step at either shot, not the edge's own length: a
+    # raster's columns can lie five rows' steps apart, and over such a step the wall 1.8 m
+    # behind a pipe is under five spacings off (a pipe's shots along it change range by the
+    # step times the tangent of the pipe's yaw, well under five of the finest steps).
+    finest = np.full(n, np.inf)
+    np.minimum.at(finest, rows, angle)
+    np.minimum.at(finest, cols, angle)
+    spacing = np.minimum(ranges[rows], ranges[cols]) * np.minimum(finest[rows], finest[cols])
+    jump = np.abs(ranges[rows] - ranges[cols])
+    linked = jump <= np.maximum(JUMP_SLOPE * spacing, JUMP_NOISE * noise)
+    graph = coo_matrix((np.ones(int(linked.sum())), (rows[linked], cols[linked])), shape=(n, n))
+    found, labels = connected_components(graph, directed=False)
+    segments = [np.flatnonzero(labels == k) for k in range(found)]
+    return sorted(segments, key=lambda members: float(np.median(ranges[members])))
+
+
+def near_subsets(points: np.ndarray, view: np.ndarray, noise: float) -> list[np.ndarray]:
+    """Masks (n,) bool of the nearest surfaces' shots, each holding at least ``NEAR_SHARE`` of
+    the shots and leaving some out, nearest first (at most ``MOST_SUBSETS``).
+
+    The nearest surface alone, then with the next nearest, and so on: a pipe's silhouette shots
+    seen nearly edge-on can be cut from its front by a jump of their own.
+    """
+    segments = depth_segments(points, view, noise)
+    if len(segments) < 2:
+        return []
+    n = len(points)
+    masks = []
+    mask = np.zeros(n, dtype=bool)
+    for members in segments[:-1]:
+        mask = mask.copy()
+        mask[members] = True
+        if mask.sum() >= NEAR_SHARE * n:
+            masks.append(mask)
+        if len(masks) == MOST_SUBSETS:
+            break
+    return masks
+
+
+def only_background_behind(cylinder, points: np.ndarray, view: np.ndarray, left_out, cutoff):
+    """Whether every shot ``left_out`` (n,) bool of a fitted ``cylinder`` (a
+    :class:`~asbuilt.primitives.Cylinder`) can only be background seen from ``view``: each lies
+    more than ``cutoff`` metres beyond the first surface of the pipe its beam met (where it
+    entered it, or where it passed closest to its axis), and its beam ran through the pipe by
+    at most ``cutoff`` (a beam cannot reach the wall through the pipe)."""
+    if not left_out.any():
+        return True
+    excess, beyond = excess_and_beyond(
+        cylinder.axis, cylinder.center, cylinder.radius, points[left_out], view
+    )
+    return bool((beyond > cutoff).all() and (excess <= cutoff).all())
+
+
+def fit_without_background(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances):
+    """The cylinder fit of the nearest surfaces' shots (:func:`near_subsets`), when it leaves
+    out only background; else None.
+
+    ``fit(points, sigma, tolerances, viewpoint)`` fits a subset of ``points`` (n, 3) metres as
+    seen from ``view`` (3,) metres (``sigma`` the sensor's, metres, or None). The shots of the
+    other surfaces within the outlier cutoff of the subset's fit are taken back and the fit
+    made again (a pipe's silhouette shot cut off by its own steep range). The fit stands when
+    it keeps at least ``NEAR_SHARE`` of the shots and every shot outside the subset it fitted
+    is background (:func:`only_background_behind`); the subset's own rejected shots were
+    judged by the fit. Its residuals and inliers are over every shot, with a note.
+    """
+    n = len(points)
+    prior = float(tolerances.prior_range_sigma)
+    for mask in near_subsets(points, view, sigma if sigma is not None else prior):
+        try:
+            found = fit(points[mask], sigma, tolerances, view)
+        except FitError:
+            continue
+        cutoff = tolerances.outlier_cutoff_sigma * (
+            sigma if sigma is not None else max(found.sigma, prior)
+        )
+        near = np.abs(found.primitive.distance(points)) <= cutoff
+        if (near & ~mask).any():
+            try:
+                found, mask = fit(points[mask | near], sigma, tolerances, view), mask | near
+            except FitError:
+                pass
+        inliers = np.zeros(n, dtype=bool)
+        inliers[mask] = found.inliers
+        radius = found.primitive.radius
+        if not found.stderr["radius"] <= DETERMINED_RADIUS * radius:
+            continue  # a few shots of a thin pipe's front line: no pipe to rescue it with
+        if inliers.sum() < NEAR_SHARE * n or not only_background_behind(
+            found.primitive, points, view, ~mask, cutoff
+        ):
+            continue
+        left = int(np.count_nonzero(~mask))
+        note = (
+            f"{left} shot(s) lie behind the pipe along their beams, on what the raster reached"
+            " past its silhouette (the range jumps there), and were left out as background"
+            " before the fit."
+        )
+        return dataclasses.replace(
+            found,
+            residuals=found.primitive.distance(points),
+            inliers=inliers,
+            notes=(*found.notes, note),
+        )
+    return None
