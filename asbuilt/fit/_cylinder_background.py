@@ -38,6 +38,11 @@ __all__ = [
     "near_subsets",
     "only_background_behind",
     "fit_without_background",
+    "PLANE_SHOTS",
+    "PLANE_SAMPLES",
+    "MOST_PLANES",
+    "behind_the_pipe",
+    "fit_without_background_plane",
 ]
 
 #: Neighbouring beams whose ranges differ by more than this many times their spacing across the
@@ -154,6 +159,25 @@ def only_background_behind(cylinder, points: np.ndarray, view: np.ndarray, left_
     return bool((beyond > cutoff).all() and (excess <= cutoff).all())
 
 
+#: Rounds of taking back left-out shots within the cutoff of the subset's fit and fitting again.
+TAKE_BACK_ROUNDS = 3
+
+
+def _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff: float):
+    """``found`` (the fit of ``points[mask]``) fitted again with the left-out shots within
+    ``cutoff`` metres of it, until none is left to take back (``TAKE_BACK_ROUNDS``), and the
+    mask of the shots it fitted; a refit that fails keeps the last fit."""
+    for _ in range(TAKE_BACK_ROUNDS):
+        near = (np.abs(found.primitive.distance(points)) <= cutoff) & ~mask
+        if not near.any():
+            break
+        try:
+            found, mask = fit(points[mask | near], sigma, tolerances, view), mask | near
+        except FitError:
+            break
+    return found, mask
+
+
 def fit_without_background(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances):
     """The cylinder fit of the nearest surfaces' shots (:func:`near_subsets`), when it leaves
     out only background; else None.
@@ -176,12 +200,7 @@ def fit_without_background(fit, points: np.ndarray, view: np.ndarray, sigma, tol
         cutoff = tolerances.outlier_cutoff_sigma * (
             sigma if sigma is not None else max(found.sigma, prior)
         )
-        near = np.abs(found.primitive.distance(points)) <= cutoff
-        if (near & ~mask).any():
-            try:
-                found, mask = fit(points[mask | near], sigma, tolerances, view), mask | near
-            except FitError:
-                pass
+        found, mask = _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff)
         inliers = np.zeros(n, dtype=bool)
         inliers[mask] = found.inliers
         radius = found.primitive.radius
@@ -196,6 +215,100 @@ def fit_without_background(fit, points: np.ndarray, view: np.ndarray, sigma, tol
             f"{left} shot(s) lie behind the pipe along their beams, on what the raster reached"
             " past its silhouette (the range jumps there), and were left out as background"
             " before the fit."
+        )
+        return dataclasses.replace(
+            found,
+            residuals=found.primitive.distance(points),
+            inliers=inliers,
+            notes=(*found.notes, note),
+        )
+    return None
+
+
+#: Without a viewpoint, a plane holding at least this many shots within the cutoff is taken as
+#: a candidate background (two raster rows on a wall: any two parallel rows are coplanar, so
+#: the planes of a pipe's row and a wall's row are candidates too, and the fit decides).
+PLANE_SHOTS = 6
+#: Random point triples tried for the planes, and how many of the fullest distinct planes are
+#: left out in turn.
+PLANE_SAMPLES = 300
+MOST_PLANES = 4
+
+
+def _fullest_planes(points: np.ndarray, cutoff: float, rng) -> list[np.ndarray]:
+    """Masks (n,) bool of the shots within ``cutoff`` metres of the fullest planes through
+    random triples of ``points`` (n, 3) metres, at least ``PLANE_SHOTS`` each, fullest first,
+    none the same set twice (at most ``MOST_PLANES``)."""
+    n = len(points)
+    triples = rng.integers(0, n, (PLANE_SAMPLES, 3))
+    first = points[triples[:, 0]]
+    normals = np.cross(points[triples[:, 1]] - first, points[triples[:, 2]] - first)
+    lengths = np.linalg.norm(normals, axis=1)
+    good = lengths > 1e-12
+    normals = normals[good] / lengths[good, None]
+    offsets = np.einsum("ij,ij->i", normals, first[good])
+    near = np.abs(points @ normals.T - offsets) <= cutoff  # (n, planes)
+    counts = near.sum(axis=0)
+    masks: list[np.ndarray] = []
+    for k in np.argsort(-counts, kind="stable"):
+        if counts[k] < PLANE_SHOTS or len(masks) == MOST_PLANES:
+            break
+        if not any((near[:, k] == mask).all() for mask in masks):
+            masks.append(near[:, k])
+    return masks
+
+
+def behind_the_pipe(cylinder, points: np.ndarray, inliers, left_out, cutoff: float) -> bool:
+    """Without a viewpoint: whether every shot ``left_out`` (n,) bool lies outside ``cylinder``
+    by more than ``cutoff`` metres and behind its axis, as seen from the side its ``inliers``
+    (n,) bool face (the station's side: a wall the raster reached past the pipe is behind it,
+    a rough surface's scatter or a second surface in front is not)."""
+    if not left_out.any():
+        return True
+    rel = points - cylinder.center
+    radial = rel - np.outer(rel @ cylinder.axis, cylinder.axis)
+    facing = radial[inliers].sum(axis=0)
+    if not np.linalg.norm(facing) > 0.0:
+        return False
+    residuals = np.linalg.norm(radial[left_out], axis=1) - cylinder.radius
+    return bool((residuals > cutoff).all() and (radial[left_out] @ facing < 0.0).all())
+
+
+def fit_without_background_plane(fit, points: np.ndarray, sigma: float, tolerances):
+    """Without a viewpoint: the cylinder fit with the shots of one of the fullest planes left
+    out (:func:`_fullest_planes`), when it keeps at least ``NEAR_SHARE`` of the shots, its radius
+    is known to ``DETERMINED_RADIUS`` of itself and every shot it leaves out is behind the pipe
+    (:func:`behind_the_pipe`); else None.
+
+    ``fit(points, sigma, tolerances, viewpoint)`` as in :func:`fit_without_background`; ``sigma``
+    metres (the sensor's, or the prior noise a scan without one is tried at). Whole raster rows
+    on a wall behind a pipe lie on one plane; with a third of the shots there the robust starts
+    found no cylinder at the prior noise (an independent ray caster's NPS 8 pipe, 12 of 42
+    shots on the wall 1.7 m behind), and a 1 m cylinder through pipe and wall at 38 mm was kept.
+    """
+    n = len(points)
+    cutoff = tolerances.outlier_cutoff_sigma * sigma
+    rng = np.random.default_rng(n)
+    for plane in _fullest_planes(points, cutoff, rng):
+        rest = ~plane
+        if rest.sum() < NEAR_SHARE * n:
+            continue
+        try:
+            found = fit(points[rest], sigma, tolerances, None)
+        except FitError:
+            continue
+        found, rest = _taken_back(fit, found, points, rest, sigma, tolerances, None, cutoff)
+        inliers = np.zeros(n, dtype=bool)
+        inliers[rest] = found.inliers
+        if (
+            inliers.sum() < NEAR_SHARE * n
+            or not found.stderr["radius"] <= DETERMINED_RADIUS * found.primitive.radius
+            or not behind_the_pipe(found.primitive, points, inliers, ~rest, cutoff)
+        ):
+            continue
+        note = (
+            f"{int(np.count_nonzero(~rest))} shot(s) on one plane behind the pipe (raster lines"
+            " past its silhouette, on a wall) were left out as background before the fit."
         )
         return dataclasses.replace(
             found,

@@ -63,7 +63,10 @@ from asbuilt.fit._common import (
     stderr_of,
     validate_points,
 )
-from asbuilt.fit._cylinder_background import fit_without_background
+from asbuilt.fit._cylinder_background import (
+    fit_without_background,
+    fit_without_background_plane,
+)
 from asbuilt.fit._cylinder_checks import (
     EDGE_ON_DEG,
     EDGE_ON_QUARTILE_DEG,
@@ -258,7 +261,15 @@ def fit_cylinder(
         result = _fit_cylinder(points, sigma, tolerances, viewpoint)
     except FitError as exc:
         if viewpoint is None:
-            raise
+            if sigma is None or len(np.asarray(points)) > DENSE_POINTS:
+                raise
+            # Without the beams, the rows on a wall behind a pipe are one plane of shots.
+            rescued = fit_without_background_plane(
+                _fit_cylinder, validate_points(points, "cylinder"), float(sigma), tolerances
+            )
+            if rescued is None:
+                raise
+            return rescued
         error = exc
     if viewpoint is None or (result is not None and not _view_ignored(result)):
         return result

@@ -4,8 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from asbuilt.fit._cylinder_background import depth_segments, near_subsets, only_background_behind
+from asbuilt.fit._cylinder_background import (
+    behind_the_pipe,
+    depth_segments,
+    fit_without_background_plane,
+    near_subsets,
+    only_background_behind,
+)
+from asbuilt.fit.cylinder import _fit_cylinder
 from asbuilt.primitives import Cylinder
+from asbuilt.tolerances import DEFAULT_TOLERANCES
 
 
 def _pipe_before_wall(rng, wall_behind=1.5):
@@ -65,3 +73,20 @@ def test_wall_shots_are_background_and_a_shot_in_front_is_not():
     # A wall shot whose beam ran through the pipe cannot be.
     through = np.vstack([points, [0.0, 5.5, 0.0]])
     assert not only_background_behind(pipe, through, np.zeros(3), np.append(~on_pipe, True), 0.006)
+
+
+def test_without_a_viewpoint_the_wall_rows_are_left_out_by_their_plane():
+    points, on_pipe, pipe = _pipe_before_wall(np.random.default_rng(4))
+    result = fit_without_background_plane(_fit_cylinder, points, 0.002, DEFAULT_TOLERANCES)
+    assert result is not None
+    assert abs(result.primitive.radius - pipe.radius) < 3 * result.stderr["radius"]
+    assert (result.inliers == on_pipe).all()
+
+
+def test_a_shot_in_front_of_the_pipe_is_not_behind_it():
+    points, on_pipe, pipe = _pipe_before_wall(np.random.default_rng(5))
+    assert behind_the_pipe(pipe, points, on_pipe, ~on_pipe, 0.006)
+    front = np.vstack([points, [0.0, 3.5, 0.0]])
+    assert not behind_the_pipe(
+        pipe, front, np.append(on_pipe, False), np.append(~on_pipe, True), 0.006
+    )
