@@ -384,7 +384,10 @@ def _fit_without_sigma(
     wide = prior if result is None else float(result.sigma)
     rejected = None if assumed is None else np.abs(assumed.residuals[~assumed.inliers])
     distance = float(np.median(rejected)) if rejected is not None and rejected.size else 0.0
-    if not distance >= BACKGROUND_RATIO * wide:
+    if not (
+        distance >= BACKGROUND_RATIO * wide
+        or _likelier_background(assumed, result, points, tolerances)
+    ):
         if result is None:
             raise refused
         return result
@@ -413,6 +416,42 @@ def _fit_without_sigma(
     return dataclasses.replace(
         settled, sigma=noise, sigma_source="residuals", notes=(*settled.notes, note)
     )
+
+
+#: A fit without a sensor sigma whose noise level is over this many times the prior range sigma
+#: is no rough surface's (measured roughness of pipes and walls: 5-10 mm); the fit at the prior
+#: noise may replace it on likelihood alone (:func:`_likelier_background`).
+FAR_WIDER_RATIO = 10.0
+
+
+def _likelier_background(assumed, result, points: np.ndarray, tolerances: Tolerances) -> bool:
+    """Whether the fit at the prior noise (``assumed``, its rejected shots taken as background)
+    explains ``points`` (n, 3) metres more likely than the fit of every shot at its own scale
+    (``result``), when that scale is over ``FAR_WIDER_RATIO`` prior sigmas.
+
+    Gaussian inliers at each fit's own noise and uniform outliers over the points' extent, with
+    the description length of which shots are outliers (:func:`asbuilt.fit._mixture`; the
+    same primitive, so the same parameter count). The median distance test
+    (``BACKGROUND_RATIO``) misses background near a wide fit: a 2.3 m sphere through a 1.3 m
+    sphere and the floor row below it scatters by 226 mm, and the floor shots lie a median
+    0.75 m from the 1.3 m sphere that fits the rest to 2 mm.
+    """
+    from asbuilt.fit._mixture import mixing_cost, mixture_score
+
+    if assumed is None or result is None:
+        return False
+    if not float(result.sigma) > FAR_WIDER_RATIO * float(tolerances.prior_range_sigma):
+        return False
+    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+    floor = float(tolerances.sigma_floor)
+    kept = int(np.count_nonzero(assumed.inliers))
+    narrow = mixture_score(assumed.residuals, assumed.inliers, extent, floor) + mixing_cost(
+        [kept, len(points) - kept]
+    )
+    wide = mixture_score(result.residuals, result.inliers, extent, floor) + mixing_cost(
+        [int(np.count_nonzero(result.inliers)), int(np.count_nonzero(~result.inliers))]
+    )
+    return narrow < wide
 
 
 def _residual_noise(result: FitResult, points: np.ndarray, tolerances: Tolerances) -> float:
