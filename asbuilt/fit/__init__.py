@@ -411,6 +411,17 @@ def _fit_without_sigma(
     ):
         if result is None:
             raise refused
+        if sensor_sigma is None and result.sigma > FAR_WIDER_RATIO * prior:
+            # Not presented as a fit like any other: a 2 m "pipe" through a pipe's shots and the
+            # wall rows behind it scatters by 40-60 mm.
+            note = (
+                f"The shots scatter by {result.sigma * 1000:.3g} mm about the {result.kind}, "
+                f"{result.sigma / prior:.0f} times the {prior * 1000:g} mm noise of a typical "
+                "range finder, and no fit at that noise explains most of them: a very rough "
+                "surface, or shots of more than one surface (background behind the object). "
+                "Give sensor.range_sigma and the station, or check the shots."
+            )
+            result = dataclasses.replace(result, notes=(*result.notes, note))
         return result
     noise = max(_residual_noise(assumed, points, tolerances), float(tolerances.sigma_floor))
     try:

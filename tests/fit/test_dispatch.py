@@ -875,3 +875,18 @@ def test_a_fit_scattering_over_five_sensor_sigmas_is_settled_at_its_own_noise():
     assert abs(result.primitive.radius - scan["radius"]) < 3 * result.stderr["radius"]
     assert result.n_inliers == scan["on_pipe"]
     assert result.sigma_source == "residuals" and result.sigma > 0.002
+
+
+def test_a_fit_scattering_ten_prior_sigmas_without_a_sigma_says_so(monkeypatch):
+    """Without a sensor sigma a fit whose shots scatter by over ten times the prior noise, and
+    which no fit at the prior noise replaces, is not presented like any other fit."""
+    monkeypatch.setitem(FITTERS, "sphere", (__name__, "wide_without_a_sigma"))
+    result = fit_points("sphere", octahedron())
+    assert "times the 2 mm noise of a typical range finder" in result.notes[-1]
+
+
+def wide_without_a_sigma(points, *, sigma=None, tolerances=DEFAULT_TOLERANCES) -> FitResult:
+    """A stand-in fit that scatters by 40 mm at its own noise and is refused at the prior."""
+    if sigma is not None:
+        raise FitError("28 of 36 points are outliers to the best sphere")
+    return replace(centroid_sphere(points), sigma=0.04, sigma_source="residuals")
