@@ -63,6 +63,10 @@ from asbuilt.fit._common import (
     stderr_of,
     validate_points,
 )
+from asbuilt.fit._cylinder_background import (
+    fit_without_background,
+    fit_without_background_plane,
+)
 from asbuilt.fit._cylinder_checks import (
     EDGE_ON_DEG,
     EDGE_ON_QUARTILE_DEG,
@@ -252,6 +256,51 @@ def fit_cylinder(
     FitError
         Too few points, identical, collinear or coplanar points, or too many outliers.
     """
+    result = error = None
+    try:
+        result = _fit_cylinder(points, sigma, tolerances, viewpoint)
+    except FitError as exc:
+        if viewpoint is None:
+            if sigma is None or len(np.asarray(points)) > DENSE_POINTS:
+                raise
+            # Without the beams, the rows on a wall behind a pipe are one plane of shots.
+            rescued = fit_without_background_plane(
+                _fit_cylinder, validate_points(points, "cylinder"), float(sigma), tolerances
+            )
+            if rescued is None:
+                raise
+            return rescued
+        error = exc
+    if viewpoint is None or (result is not None and not _view_ignored(result)):
+        return result
+    # Refused, or the viewpoint blamed: whole raster lines on the background behind the pipe
+    # can outnumber what the robust starts take; the shots in front of the range jumps alone
+    # may still be the pipe.
+    pts = validate_points(points, "cylinder")
+    if len(pts) <= DENSE_POINTS:
+        rescued = fit_without_background(
+            _fit_cylinder, pts, np.asarray(viewpoint, dtype=np.float64), sigma, tolerances
+        )
+        if rescued is not None:
+            return rescued
+    if result is None:
+        raise error
+    return result
+
+
+#: The note of a fit that ignored the stated viewpoint (:func:`_finished`).
+VIEW_IGNORED = (
+    "The viewpoint was ignored: more than a third of the shots would have been seen "
+    "through the pipe from it (check the scan's sensor position or the station)."
+)
+
+
+def _view_ignored(result: FitResult) -> bool:
+    return VIEW_IGNORED in result.notes
+
+
+def _fit_cylinder(points, sigma, tolerances, viewpoint) -> FitResult:
+    """:func:`fit_cylinder` of the shots as they are."""
     pts = validate_points(points, "cylinder")
     offset = pts.sum(axis=0) / len(pts)  # pts.mean(axis=0), without its overhead
     local = pts - offset
@@ -690,10 +739,7 @@ def _finished(robust, scene: _Scene, ignored_view, starts, reconsider) -> FitRes
         covariance = flip_covariance(covariance, axis, oriented)
     notes = []
     if ignored_view:
-        notes.append(
-            "The viewpoint was ignored: more than a third of the shots would have been seen "
-            "through the pipe from it (check the scan's sensor position or the station)."
-        )
+        notes.append(VIEW_IGNORED)
     outliers = int(len(pts) - robust.inliers.sum())
     if outliers:
         notes.append(

@@ -677,3 +677,37 @@ def test_without_a_sigma_square_on_shots_are_not_rejected_into_an_edge_on_refusa
     fit = fit_cylinder(np.array(scan["points"]), viewpoint=np.array(scan["station"]))
     assert fit.inliers.all()
     assert abs(fit.primitive.radius - scan["radius"]) < 3 * fit.stderr["radius"]
+
+
+_FAR_WALL = json.loads((Path(__file__).parent / "pipes_before_far_wall_rows.json").read_text())
+
+
+@pytest.mark.parametrize(
+    "scan",
+    [s for s in _FAR_WALL["scans"] if s["name"] in ("p039", "p000", "p115", "p030")],
+    ids=lambda s: s["name"],
+)
+def test_whole_rows_on_the_wall_behind_are_background_with_the_station(scan):
+    """Independent review's ray caster: pipes 4-6 m away framed by a raster a little larger
+    than each, so a third to a half of the shots are whole rows on a wall 0.3-2 m behind.
+    With the right sensor block (station and 2 mm) the 273 mm and 406 mm pipes were refused
+    ("No cylinder explains most of these points") and the NPS 3 pipe came out r 928 mm with
+    the viewpoint ignored. The shots in front of the range jumps are the pipe's."""
+    points = np.array(scan["points"])
+    result = fit_cylinder(points, sigma=scan["range_sigma"], viewpoint=scan["station"])
+    got, stderr = result.primitive, result.stderr
+    assert abs(got.radius - scan["radius"]) < 3 * stderr["radius"] + 0.001
+    assert angle_deg(got.axis, scan["axis"]) < 2.0
+    assert result.n_inliers >= scan["on_pipe"] - 1
+    assert not any("viewpoint was ignored" in note for note in result.notes)
+    assert any("left out as background" in note for note in result.notes)
+
+
+def test_a_wider_noise_level_does_not_move_the_fit_to_another_basin():
+    """A 0.61 m pipe, no station: found at the sensor's sigma with the wall's plane left out,
+    then refitted at its likeliest inliers' 4.5 mm, where the search went to a 0.88 m cylinder
+    through part of its shots; the fit at the sensor's sigma stands."""
+    scan = next(s for s in _FAR_WALL["scans"] if s["name"] == "p081_nopos")
+    result = fit_points("cylinder", np.array(scan["points"]), sigma=scan["range_sigma"])
+    assert abs(result.primitive.radius - scan["radius"]) < 0.05
+    assert angle_deg(result.primitive.axis, scan["axis"]) < 2.0

@@ -818,3 +818,75 @@ def test_a_cuboid_turned_anyhow_in_its_plane_says_so():
         "These points do not determine the cuboid (one standard error: orientation +-31 deg); "
         "measure more of its surface, or check its kind."
     )
+
+
+# --------------------------------------------------------------------------------------------
+# Whole raster rows on a wall behind a pipe (an independent review's ray caster)
+
+_FAR_WALL = {
+    scan["name"]: scan
+    for scan in json.loads((Path(__file__).parent / "pipes_before_far_wall_rows.json").read_text())[
+        "scans"
+    ]
+}
+
+
+def test_an_optimistic_sigma_falls_back_to_the_fit_at_the_prior_noise():
+    """An NPS 10 pipe at 8 m, 22 of 35 shots on it and two rows on the wall behind, declared
+    0.5 mm (real 2 mm): the fit with the sensor's sigma is refused, and the documented retry
+    without it had fitted every shot at its own scale (a 1 m cylinder at 62 mm, over five
+    sensor sigmas), so the refusal stood. The retry now has the prior-noise rescue of a scan
+    without a sigma, which keeps the pipe at its own 2 mm."""
+    scan = _FAR_WALL["p013"]
+    result = fit_points(
+        "cylinder", np.array(scan["points"]), sigma=0.0005, viewpoint=scan["station"]
+    )
+    assert result.primitive.radius == pytest.approx(scan["radius"], abs=0.003)
+    assert result.n_inliers >= scan["on_pipe"] - 1
+    assert result.sigma_source == "residuals" and result.sigma < 0.0025
+    assert any("scatter by" in note for note in result.notes)
+    # The sensor's sigma was given: no note tells the user to give it.
+    assert not any("Give sensor.range_sigma" in note for note in result.notes)
+
+
+def test_without_a_sensor_block_the_wall_rows_behind_a_pipe_are_background():
+    """An NPS 8 pipe at 6.9 m, 30 of 42 shots on it and two whole rows on a wall 1.7 m behind;
+    no sensor block. The fit at its own scale was a 1 m cylinder through pipe and wall at
+    38 mm, +-9.5 mm, every shot an inlier, and the fit at the prior noise found no cylinder
+    (the wall rows are more background than the robust starts take). Without the plane of the
+    wall rows the prior-noise fit finds the pipe, and the rows lie 1.7 m from it."""
+    scan = _FAR_WALL["p027"]
+    result = fit_points("cylinder", np.array(scan["points"]))
+    assert abs(result.primitive.radius - scan["radius"]) < 3 * result.stderr["radius"]
+    assert result.n_inliers >= scan["on_pipe"] - 1
+    assert result.sigma < 0.003
+    assert any("taken as background" in note for note in result.notes)
+
+
+def test_a_fit_scattering_over_five_sensor_sigmas_is_settled_at_its_own_noise():
+    """An NPS 8 pipe at 3.7 m declared 0.5 mm (real 2 mm, pointing noise on top), 24 of 36
+    shots on it: fitted with its wall rows left out at the sensor's sigma, 9 good shots
+    beyond 1.5 mm were rejected and the radius came out 7 mm small at +-0.5 mm. Its likeliest
+    inliers scatter by 2.9 mm, over five sensor sigmas, which used to leave the fit as it was."""
+    scan = _FAR_WALL["p037"]
+    result = fit_points(
+        "cylinder", np.array(scan["points"]), sigma=0.0005, viewpoint=scan["station"]
+    )
+    assert abs(result.primitive.radius - scan["radius"]) < 3 * result.stderr["radius"]
+    assert result.n_inliers == scan["on_pipe"]
+    assert result.sigma_source == "residuals" and result.sigma > 0.002
+
+
+def test_a_fit_scattering_ten_prior_sigmas_without_a_sigma_says_so(monkeypatch):
+    """Without a sensor sigma a fit whose shots scatter by over ten times the prior noise, and
+    which no fit at the prior noise replaces, is not presented like any other fit."""
+    monkeypatch.setitem(FITTERS, "sphere", (__name__, "wide_without_a_sigma"))
+    result = fit_points("sphere", octahedron())
+    assert "times the 2 mm noise of a typical range finder" in result.notes[-1]
+
+
+def wide_without_a_sigma(points, *, sigma=None, tolerances=DEFAULT_TOLERANCES) -> FitResult:
+    """A stand-in fit that scatters by 40 mm at its own noise and is refused at the prior."""
+    if sigma is not None:
+        raise FitError("28 of 36 points are outliers to the best sphere")
+    return replace(centroid_sphere(points), sigma=0.04, sigma_source="residuals")

@@ -1,0 +1,324 @@
+"""A pipe's own shots, split from whole raster lines on the background behind it.
+
+Private helper of the cylinder fit. An operator's raster window a little larger than a pipe
+puts whole rows (or columns) of shots on the wall or floor behind it: a third to a half of the
+shots, more than the robust starts are built for (a quarter), so every start either takes a
+metre-wide cylinder through pipe and wall or hides shots behind itself, and the fit was
+refused, or kept with the viewpoint ignored (an independent ray caster: 273 mm and 406 mm pipes
+4-6 m away with the wall 1-2 m behind refused; an NPS 3 pipe at 4 m fitted r 928 mm).
+
+The station sees the pipe in front of the wall: between neighbouring beams the range jumps
+by the pipe's distance from the wall, while along one surface it changes by the beams' spacing
+times the tangent of the incidence. Cut at those jumps, the shots fall into surfaces, and the
+nearest of them are the pipe's (range-image segmentation at depth discontinuities, Hoover et
+al. 1996, "An experimental comparison of range image segmentation algorithms"). A fit of
+those shots alone stands when every other shot can only be background: behind the first
+surface of the pipe its beam met, its beam clear of the pipe. Lengths in metres.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import Delaunay, QhullError
+
+from asbuilt.errors import FitError
+from asbuilt.fit._visibility import excess_and_beyond
+
+__all__ = [
+    "JUMP_SLOPE",
+    "JUMP_NOISE",
+    "NEAR_SHARE",
+    "MOST_SUBSETS",
+    "DETERMINED_RADIUS",
+    "depth_segments",
+    "near_subsets",
+    "only_background_behind",
+    "fit_without_background",
+    "PLANE_SHOTS",
+    "PLANE_SAMPLES",
+    "MOST_PLANES",
+    "behind_the_pipe",
+    "fit_without_background_plane",
+]
+
+#: Neighbouring beams whose ranges differ by more than this many times their spacing across the
+#: beams (the range times the angle between them) lie on two surfaces: on one surface the range
+#: changes by the spacing times the tangent of the incidence, so this cuts beyond 72 degrees of
+#: incidence (a pipe's shot near its silhouette may be cut off, or a long pipe seen obliquely
+#: cut into its raster columns; the nearest surfaces are taken together and such shots taken
+#: back by their residuals), while a wall 0.3 m behind a pipe seen by beams 20-60 mm apart is
+#: 5-15 spacings off. The reviewer's 406 mm pipe seen at a steep yaw had its wall shots 4.2-4.6
+#: of its finest spacings off the pipe's far end.
+JUMP_SLOPE = 3.0
+#: ... and by more than this many range sigmas (two shots of one surface in nearly the same
+#: direction differ by their noise).
+JUMP_NOISE = 6.0
+#: A subset of the shots is tried only if it holds at least this share of them (a pipe framed
+#: by a raster a little larger than itself keeps about half; fewer would let one wall row be
+#: taken as a pipe).
+NEAR_SHARE = 0.4
+#: A subset's fit stands only if its radius is known to this fraction of itself (one standard
+#: error; as :data:`asbuilt.fit.UNDETERMINED_RELATIVE`): the front line of a thin pipe 10 m
+#: away, in front of its mixed returns, fits a 4 m "pipe" +-36 m.
+DETERMINED_RADIUS = 0.5
+#: At most this many subsets are fitted, nearest first.
+MOST_SUBSETS = 4
+
+
+def depth_segments(points: np.ndarray, view: np.ndarray, noise: float) -> list[np.ndarray]:
+    """The shots cut into surfaces at range jumps between neighbouring beams, nearest first.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3), metres
+    view : ndarray, shape (3,), metres
+        The station.
+    noise : float, metres
+        The range noise.
+
+    Returns
+    -------
+    list of ndarray of int
+        The shots of each surface (connected through neighbouring beams without a jump,
+        ``JUMP_SLOPE``, ``JUMP_NOISE``), ordered by their median range.
+    """
+    beams = points - view
+    ranges = np.sqrt(np.einsum("ij,ij->i", beams, beams))
+    directions = beams / ranges[:, None]
+    n = len(points)
+    # Neighbouring beams: the Delaunay triangulation of the directions, projected on the plane
+    # across their mean (a raster's rows and columns and its diagonals, however unequal its
+    # steps).
+    mean = directions.sum(axis=0)
+    mean /= np.linalg.norm(mean)
+    across = np.linalg.svd(directions - np.outer(directions @ mean, mean))[2][:2]
+    try:
+        triangles = Delaunay(directions @ across.T).simplices
+    except QhullError:
+        return [np.arange(n)]  # the beams lie on one line: no surfaces to tell apart
+    edges = np.unique(
+        np.sort(np.vstack([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [0, 2]]]), 1),
+        axis=0,
+    )
+    rows, cols = edges[:, 0], edges[:, 1]
+    angle = np.arccos(np.clip(np.einsum("ij,ij->i", directions[rows], directions[cols]), -1, 1))
+    # The spacing is the raster's finest step at either shot, not the edge's own length: a
+    # raster's columns can lie five rows' steps apart, and over such a step the wall 1.8 m
+    # behind a pipe is under five spacings off (a pipe's shots along it change range by the
+    # step times the tangent of the pipe's yaw, well under five of the finest steps).
+    finest = np.full(n, np.inf)
+    np.minimum.at(finest, rows, angle)
+    np.minimum.at(finest, cols, angle)
+    spacing = np.minimum(ranges[rows], ranges[cols]) * np.minimum(finest[rows], finest[cols])
+    jump = np.abs(ranges[rows] - ranges[cols])
+    linked = jump <= np.maximum(JUMP_SLOPE * spacing, JUMP_NOISE * noise)
+    graph = coo_matrix((np.ones(int(linked.sum())), (rows[linked], cols[linked])), shape=(n, n))
+    found, labels = connected_components(graph, directed=False)
+    segments = [np.flatnonzero(labels == k) for k in range(found)]
+    return sorted(segments, key=lambda members: float(np.median(ranges[members])))
+
+
+def near_subsets(points: np.ndarray, view: np.ndarray, noise: float) -> list[np.ndarray]:
+    """Masks (n,) bool of the nearest surfaces' shots, each holding at least ``NEAR_SHARE`` of
+    the shots and leaving some out, nearest first (at most ``MOST_SUBSETS``).
+
+    The nearest surface alone, then with the next nearest, and so on: a pipe's silhouette shots
+    seen nearly edge-on can be cut from its front by a jump of their own.
+    """
+    segments = depth_segments(points, view, noise)
+    if len(segments) < 2:
+        return []
+    n = len(points)
+    masks = []
+    mask = np.zeros(n, dtype=bool)
+    for members in segments[:-1]:
+        mask = mask.copy()
+        mask[members] = True
+        if mask.sum() >= NEAR_SHARE * n:
+            masks.append(mask)
+        if len(masks) == MOST_SUBSETS:
+            break
+    return masks
+
+
+def only_background_behind(cylinder, points: np.ndarray, view: np.ndarray, left_out, cutoff):
+    """Whether every shot ``left_out`` (n,) bool of a fitted ``cylinder`` (a
+    :class:`~asbuilt.primitives.Cylinder`) can only be background seen from ``view``: each lies
+    more than ``cutoff`` metres beyond the first surface of the pipe its beam met (where it
+    entered it, or where it passed closest to its axis), and its beam ran through the pipe by
+    at most ``cutoff`` (a beam cannot reach the wall through the pipe)."""
+    if not left_out.any():
+        return True
+    excess, beyond = excess_and_beyond(
+        cylinder.axis, cylinder.center, cylinder.radius, points[left_out], view
+    )
+    return bool((beyond > cutoff).all() and (excess <= cutoff).all())
+
+
+#: Rounds of taking back left-out shots within the cutoff of the subset's fit and fitting again.
+TAKE_BACK_ROUNDS = 3
+
+
+def _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff: float):
+    """``found`` (the fit of ``points[mask]``) fitted again with the left-out shots within
+    ``cutoff`` metres of it, until none is left to take back (``TAKE_BACK_ROUNDS``), and the
+    mask of the shots it fitted; a refit that fails keeps the last fit."""
+    for _ in range(TAKE_BACK_ROUNDS):
+        near = (np.abs(found.primitive.distance(points)) <= cutoff) & ~mask
+        if not near.any():
+            break
+        try:
+            found, mask = fit(points[mask | near], sigma, tolerances, view), mask | near
+        except FitError:
+            break
+    return found, mask
+
+
+def fit_without_background(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances):
+    """The cylinder fit of the nearest surfaces' shots (:func:`near_subsets`), when it leaves
+    out only background; else None.
+
+    ``fit(points, sigma, tolerances, viewpoint)`` fits a subset of ``points`` (n, 3) metres as
+    seen from ``view`` (3,) metres (``sigma`` the sensor's, metres, or None). The shots of the
+    other surfaces within the outlier cutoff of the subset's fit are taken back and the fit
+    made again (a pipe's silhouette shot cut off by its own steep range). The fit stands when
+    it keeps at least ``NEAR_SHARE`` of the shots and every shot outside the subset it fitted
+    is background (:func:`only_background_behind`); the subset's own rejected shots were
+    judged by the fit. Its residuals and inliers are over every shot, with a note.
+    """
+    n = len(points)
+    prior = float(tolerances.prior_range_sigma)
+    for mask in near_subsets(points, view, sigma if sigma is not None else prior):
+        try:
+            found = fit(points[mask], sigma, tolerances, view)
+        except FitError:
+            continue
+        cutoff = tolerances.outlier_cutoff_sigma * (
+            sigma if sigma is not None else max(found.sigma, prior)
+        )
+        found, mask = _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff)
+        inliers = np.zeros(n, dtype=bool)
+        inliers[mask] = found.inliers
+        radius = found.primitive.radius
+        if not found.stderr["radius"] <= DETERMINED_RADIUS * radius:
+            continue  # a few shots of a thin pipe's front line: no pipe to rescue it with
+        if inliers.sum() < NEAR_SHARE * n or not only_background_behind(
+            found.primitive, points, view, ~mask, cutoff
+        ):
+            continue
+        left = int(np.count_nonzero(~mask))
+        note = (
+            f"{left} shot(s) lie behind the pipe along their beams, on what the raster reached"
+            " past its silhouette (the range jumps there), and were left out as background"
+            " before the fit."
+        )
+        return dataclasses.replace(
+            found,
+            residuals=found.primitive.distance(points),
+            inliers=inliers,
+            notes=(*found.notes, note),
+        )
+    return None
+
+
+#: Without a viewpoint, a plane holding at least this many shots within the cutoff is taken as
+#: a candidate background (two raster rows on a wall: any two parallel rows are coplanar, so
+#: the planes of a pipe's row and a wall's row are candidates too, and the fit decides).
+PLANE_SHOTS = 6
+#: Random point triples tried for the planes, and how many of the fullest distinct planes are
+#: left out in turn.
+PLANE_SAMPLES = 300
+MOST_PLANES = 4
+
+
+def _fullest_planes(points: np.ndarray, cutoff: float, rng) -> list[np.ndarray]:
+    """Masks (n,) bool of the shots within ``cutoff`` metres of the fullest planes through
+    random triples of ``points`` (n, 3) metres, at least ``PLANE_SHOTS`` each, fullest first,
+    none the same set twice (at most ``MOST_PLANES``)."""
+    n = len(points)
+    triples = rng.integers(0, n, (PLANE_SAMPLES, 3))
+    first = points[triples[:, 0]]
+    normals = np.cross(points[triples[:, 1]] - first, points[triples[:, 2]] - first)
+    lengths = np.linalg.norm(normals, axis=1)
+    good = lengths > 1e-12
+    normals = normals[good] / lengths[good, None]
+    offsets = np.einsum("ij,ij->i", normals, first[good])
+    near = np.abs(points @ normals.T - offsets) <= cutoff  # (n, planes)
+    counts = near.sum(axis=0)
+    masks: list[np.ndarray] = []
+    for k in np.argsort(-counts, kind="stable"):
+        if counts[k] < PLANE_SHOTS or len(masks) == MOST_PLANES:
+            break
+        if not any((near[:, k] == mask).all() for mask in masks):
+            masks.append(near[:, k])
+    return masks
+
+
+def behind_the_pipe(cylinder, points: np.ndarray, inliers, left_out, cutoff: float) -> bool:
+    """Without a viewpoint: whether every shot ``left_out`` (n,) bool lies outside ``cylinder``
+    by more than ``cutoff`` metres and behind the plane that touches its back, as seen from the
+    side its ``inliers`` (n,) bool face (the station's side: a wall the raster reached past the
+    pipe is behind it, since the pipe stands in front of it; a rough surface's scatter, a
+    second surface in front, or the shots of the true pipe beside a wrong one are not: with
+    "behind the axis" three of 36 fits rescued on the review's scans had been wrong ones)."""
+    if not left_out.any():
+        return True
+    rel = points - cylinder.center
+    radial = rel - np.outer(rel @ cylinder.axis, cylinder.axis)
+    facing = radial[inliers].sum(axis=0)
+    if not np.linalg.norm(facing) > 0.0:
+        return False
+    residuals = np.linalg.norm(radial[left_out], axis=1) - cylinder.radius
+    depth = radial[left_out] @ (facing / np.linalg.norm(facing))
+    return bool((residuals > cutoff).all() and (depth < cutoff - cylinder.radius).all())
+
+
+def fit_without_background_plane(fit, points: np.ndarray, sigma: float, tolerances):
+    """Without a viewpoint: the cylinder fit with the shots of one of the fullest planes left
+    out (:func:`_fullest_planes`), when it keeps at least ``NEAR_SHARE`` of the shots (on the
+    review's scans without a station, more than half would have refused 18 right rescues to
+    spare 2 wrong ones, which keep 10 of 22 and 12 of 28 shots), its radius
+    is known to ``DETERMINED_RADIUS`` of itself and every shot it leaves out is behind the pipe
+    (:func:`behind_the_pipe`); else None.
+
+    ``fit(points, sigma, tolerances, viewpoint)`` as in :func:`fit_without_background`; ``sigma``
+    metres (the sensor's, or the prior noise a scan without one is tried at). Whole raster rows
+    on a wall behind a pipe lie on one plane; with a third of the shots there the robust starts
+    found no cylinder at the prior noise (an independent ray caster's NPS 8 pipe, 12 of 42
+    shots on the wall 1.7 m behind), and a 1 m cylinder through pipe and wall at 38 mm was kept.
+    """
+    n = len(points)
+    cutoff = tolerances.outlier_cutoff_sigma * sigma
+    rng = np.random.default_rng(n)
+    for plane in _fullest_planes(points, cutoff, rng):
+        rest = ~plane
+        if rest.sum() < NEAR_SHARE * n:
+            continue
+        try:
+            found = fit(points[rest], sigma, tolerances, None)
+        except FitError:
+            continue
+        found, rest = _taken_back(fit, found, points, rest, sigma, tolerances, None, cutoff)
+        inliers = np.zeros(n, dtype=bool)
+        inliers[rest] = found.inliers
+        if (
+            inliers.sum() < NEAR_SHARE * n
+            or not found.stderr["radius"] <= DETERMINED_RADIUS * found.primitive.radius
+            or not behind_the_pipe(found.primitive, points, inliers, ~rest, cutoff)
+        ):
+            continue
+        note = (
+            f"{int(np.count_nonzero(~rest))} shot(s) on one plane behind the pipe (raster lines"
+            " past its silhouette, on a wall) were left out as background before the fit."
+        )
+        return dataclasses.replace(
+            found,
+            residuals=found.primitive.distance(points),
+            inliers=inliers,
+            notes=(*found.notes, note),
+        )
+    return None
