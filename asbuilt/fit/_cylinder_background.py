@@ -216,12 +216,7 @@ def fit_without_background(fit, points: np.ndarray, view: np.ndarray, sigma, tol
             " past its silhouette (the range jumps there), and were left out as background"
             " before the fit."
         )
-        return dataclasses.replace(
-            found,
-            residuals=found.primitive.distance(points),
-            inliers=inliers,
-            notes=(*found.notes, note),
-        )
+        return _rescued(found, points, inliers, note)
     return None
 
 
@@ -315,10 +310,16 @@ def fit_without_background_plane(fit, points: np.ndarray, sigma: float, toleranc
             f"{int(np.count_nonzero(~rest))} shot(s) on one plane behind the pipe (raster lines"
             " past its silhouette, on a wall) were left out as background before the fit."
         )
-        return dataclasses.replace(
-            found,
-            residuals=found.primitive.distance(points),
-            inliers=inliers,
-            notes=(*found.notes, note),
-        )
+        return _rescued(found, points, inliers, note)
     return None
+
+
+def _rescued(found, points, inliers, note: str):
+    """``found`` (a FitResult on a subset) as the fit of every one of ``points`` (n, 3) metres:
+    its residuals over all of them, ``inliers`` (n,) bool, and ``note`` added."""
+    return dataclasses.replace(
+        found,
+        residuals=found.primitive.distance(points),
+        inliers=inliers,
+        notes=(*found.notes, note),
+    )
