@@ -325,20 +325,8 @@ def _inline(b: _Builder, joint: Joint):
     b.ends[i, ki] = start
     b.ends[j, kj] = end
     b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"reducer {pi.id}-{pj.id}"
-    # The cone leaves either pipe's cylinder at its slope, half the step in OD over its length.
-    slope = abs(pi.od - pj.od) / (2.0 * max(float(length), 1e-9))
-    b.allowance[i, ki] = b.allowance[j, kj] = min(
-        TRIM_SURFACE_TOLERANCE / max(slope, 1e-9), float(length)
-    )
-    wall = min(pi.wall, pj.wall) if pi.wall and pj.wall else 0.0
-    geometry = Reducer(
-        start=start,
-        end=end,
-        outer_radius_start=0.5 * pi.od,
-        outer_radius_end=0.5 * pj.od,
-        wall=wall,
-        offset=offset,
-    )
+    geometry, allowance = _reducer_cone(start, end, pi, pj, float(length), offset)
+    b.allowance[i, ki] = b.allowance[j, kj] = allowance
     notes = list(large.dims.notes)
     note = b.reducer_notes.get((min(i, j), max(i, j)))
     if geometry.eccentric and note:
@@ -360,6 +348,24 @@ def _inline(b: _Builder, joint: Joint):
             "offset": float(np.linalg.norm(offset)),
         }
     return [("reducer", f"{pi.id}-{pj.id}", geometry, large, snap)]
+
+
+def _reducer_cone(start, end, first: PipeSpec, second: PipeSpec, length: float, offset=None):
+    """A reducer from ``first``'s size at ``start`` to ``second``'s at ``end`` ((3,) m each;
+    ``offset`` (3,) m, eccentric, or None) and the trim allowance (m) of the pipes meeting it:
+    the cone leaves either pipe's cylinder at its slope, half the step in OD over its length."""
+    slope = abs(first.od - second.od) / (2.0 * max(length, 1e-9))
+    allowance = min(TRIM_SURFACE_TOLERANCE / max(slope, 1e-9), length)
+    wall = min(first.wall, second.wall) if first.wall and second.wall else 0.0
+    geometry = Reducer(
+        start=start,
+        end=end,
+        outer_radius_start=0.5 * first.od,
+        outer_radius_end=0.5 * second.od,
+        wall=wall,
+        offset=np.zeros(3) if offset is None else offset,
+    )
+    return geometry, allowance
 
 
 def _reducer_source(b: _Builder, large: PipeSpec, small: PipeSpec, pipes) -> tuple[str, bool]:
@@ -518,16 +524,7 @@ def _run_reducer(b: _Builder, tee: str, run: PipeSpec, small: PipeSpec, end, por
     b.ends[end] = stop
     name = f"reducer after tee {tee}"
     b.fitting_at[end] = name
-    slope = abs(run.od - small.od) / (2.0 * max(length, 1e-9))
-    b.allowance[end] = min(TRIM_SURFACE_TOLERANCE / max(slope, 1e-9), length)
-    wall = min(run.wall, small.wall) if run.wall and small.wall else 0.0
-    geometry = Reducer(
-        start=start,
-        end=stop,
-        outer_radius_start=0.5 * run.od,
-        outer_radius_end=0.5 * small.od,
-        wall=wall,
-    )
+    geometry, b.allowance[end] = _reducer_cone(start, stop, run, small, length)
     snap = {
         "status": "fitting",
         "dimensions": run.dims.source,
