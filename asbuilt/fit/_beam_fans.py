@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from asbuilt.fit._common import row_norms
+from asbuilt.fit._neighbours import components
 
 __all__ = ["MAX_INCIDENCE_DEG", "beam_fan_shots", "neighbours", "raster_lines"]
 
@@ -131,23 +132,7 @@ def beam_fan_shots(points, viewpoint, noise: float, pairs) -> np.ndarray:
     kept = np.abs(ranges[i] - ranges[j]) <= (
         _RANGE_PER_SPACING * mean_range * angle + _NOISE_CUTOFFS * noise
     )
-    group = _components(m, i[kept], j[kept])
+    group = components(m, i[kept], j[kept])
     if np.all(group == group[0]):
         return out
     return group != group[int(np.argmin(ranges))]
-
-
-def _components(m: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
-    """Connected-component label (m,) int (the least member's index) of m nodes joined by the
-    edges i-j; min-label propagation with pointer jumping (a face has tens of shots: cheaper
-    than importing and calling scipy's graph routines)."""
-    group = np.arange(m)
-    while True:
-        low = np.minimum(group[i], group[j])
-        fresh = group.copy()
-        np.minimum.at(fresh, i, low)
-        np.minimum.at(fresh, j, low)
-        fresh = fresh[fresh]
-        if np.array_equal(fresh, group):
-            return group
-        group = fresh

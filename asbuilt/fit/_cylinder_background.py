@@ -21,11 +21,10 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import Delaunay, QhullError
 
 from asbuilt.errors import FitError
+from asbuilt.fit._neighbours import components
 from asbuilt.fit._visibility import excess_and_beyond
 
 __all__ = [
@@ -116,9 +115,8 @@ def depth_segments(points: np.ndarray, view: np.ndarray, noise: float) -> list[n
     spacing = np.minimum(ranges[rows], ranges[cols]) * np.minimum(finest[rows], finest[cols])
     jump = np.abs(ranges[rows] - ranges[cols])
     linked = jump <= np.maximum(JUMP_SLOPE * spacing, JUMP_NOISE * noise)
-    graph = coo_matrix((np.ones(int(linked.sum())), (rows[linked], cols[linked])), shape=(n, n))
-    found, labels = connected_components(graph, directed=False)
-    segments = [np.flatnonzero(labels == k) for k in range(found)]
+    labels = components(n, rows[linked], cols[linked])
+    segments = [np.flatnonzero(labels == k) for k in np.unique(labels)]
     return sorted(segments, key=lambda members: float(np.median(ranges[members])))
 
 

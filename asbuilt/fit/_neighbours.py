@@ -1,5 +1,5 @@
-"""Neighbourhoods of sparse points: k nearest neighbours and the local plane normals of the
-cuboid segmentation (:mod:`asbuilt.fit._faces`).
+"""Neighbourhoods of sparse points: k nearest neighbours, the local plane normals of the
+cuboid segmentation (:mod:`asbuilt.fit._faces`), and connected groups of linked shots.
 
 Everything is numpy (metres, unit vectors); a k-d tree (scipy) above 256 points.
 """
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["knn", "local_normals"]
+__all__ = ["components", "knn", "local_normals"]
 
 
 def knn(points: np.ndarray, k: int) -> np.ndarray:
@@ -64,3 +64,19 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, n
     dof = max(hood.shape[1] - 3, 1)
     rms = np.sqrt(np.clip(values[:, 0], 0.0, None) * hood.shape[1] / dof)
     return vectors[:, :, 0], rms, index
+
+
+def components(m: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Connected-component label (m,) int (the least member's index) of m nodes joined by the
+    edges i-j (each (e,) int); min-label propagation with pointer jumping (a face or a scan
+    has tens of shots: cheaper than importing and calling scipy's graph routines)."""
+    group = np.arange(m)
+    while True:
+        low = np.minimum(group[i], group[j])
+        fresh = group.copy()
+        np.minimum.at(fresh, i, low)
+        np.minimum.at(fresh, j, low)
+        fresh = fresh[fresh]
+        if np.array_equal(fresh, group):
+            return group
+        group = fresh
