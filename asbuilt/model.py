@@ -55,11 +55,19 @@ def _nonneg(value, name: str) -> float:
     return number
 
 
-def _wall(outer_radius: float, wall: float) -> float:
-    wall = _nonneg(wall, "wall")
+def _wall(
+    outer_radius: float, wall: float, name: str = "wall", radius_name: str = "outer radius"
+) -> float:
+    wall = _nonneg(wall, name)
     if wall >= outer_radius:
-        raise ValueError("The wall must be thinner than the outer radius (0 means solid).")
+        raise ValueError(f"The {name} must be thinner than the {radius_name} (0 means solid).")
     return wall
+
+
+def _hollow_or_solid(what: str, first: float, second: float) -> None:
+    # a bore that closes to nothing at one end is no fitting (and no valid solid)
+    if (first > 0) != (second > 0):
+        raise ValueError(f"A {what}'s walls must be both 0 (solid) or both positive.")
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,13 +154,19 @@ class Reducer:
     sideways step from the start end's axis to the end end's axis, perpendicular to the run:
     zero (the default) for a **concentric** reducer (the run is ``end - start``); for an
     **eccentric** reducer (ASME B16.9, flat on one side) its length is the difference of the
-    radii, and the run is ``end - start - offset``. ``wall`` metres, 0 for solid.
+    radii, and the run is ``end - start - offset``.
+
+    ``wall_start`` and ``wall_end`` metres are the wall thicknesses at the two ends, each that
+    of the pipe welded there (a B16.9 reducer is made to the schedule of each connecting pipe,
+    so its bore runs from one pipe's bore to the other's), 0 for solid. ``wall_end`` None (the
+    default) takes ``wall_start``: one wall at both ends, as in ``Reducer(s, e, r1, r2, wall)``.
 
     Raises
     ------
     ValueError
         Coinciding ends, an offset not perpendicular to the run, or one longer than the
-        difference of the radii (the small end would stick out of the large one's outline).
+        difference of the radii (the small end would stick out of the large one's outline); a
+        wall not thinner than its end's outer radius.
     """
 
     kind: ClassVar[str] = "reducer"
@@ -160,8 +174,9 @@ class Reducer:
     end: np.ndarray
     outer_radius_start: float
     outer_radius_end: float
-    wall: float = 0.0
+    wall_start: float = 0.0
     offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    wall_end: float | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "start", as_vector(self.start, "start"))
@@ -169,9 +184,14 @@ class Reducer:
         object.__setattr__(self, "offset", as_vector(self.offset, "reducer offset"))
         for name in ("outer_radius_start", "outer_radius_end"):
             object.__setattr__(self, name, _nonneg(getattr(self, name), name.replace("_", " ")))
-        object.__setattr__(
-            self, "wall", _wall(min(self.outer_radius_start, self.outer_radius_end), self.wall)
-        )
+        wall_end = self.wall_start if self.wall_end is None else self.wall_end
+        for name, radius, wall in (
+            ("start", self.outer_radius_start, self.wall_start),
+            ("end", self.outer_radius_end, wall_end),
+        ):
+            checked = _wall(radius, wall, f"wall {name}", f"outer radius {name}")
+            object.__setattr__(self, f"wall_{name}", checked)
+        _hollow_or_solid("reducer", self.wall_start, self.wall_end)
         run = self.end - self.start - self.offset
         length = float(np.linalg.norm(run))
         if length <= 0:
@@ -216,7 +236,13 @@ class Reducer:
 @dataclass(frozen=True, eq=False)
 class Tee:
     """An equal (or reducing-outlet) tee: a run from ``run_start`` to ``run_end`` through
-    ``center`` and a branch from ``center`` to ``branch_end``; points (3,) metres."""
+    ``center`` and a branch from ``center`` to ``branch_end``; points (3,) metres.
+
+    ``outer_radius`` and ``wall`` (metres) are the run's, ``branch_outer_radius`` and
+    ``branch_wall`` the branch outlet's: a B16.9 reducing tee is made to the schedule of each
+    connecting pipe, so each bore is its pipe's. ``branch_wall`` None (the default) takes
+    ``wall``: one wall throughout. 0 for solid.
+    """
 
     kind: ClassVar[str] = "tee"
     center: np.ndarray
@@ -226,6 +252,7 @@ class Tee:
     outer_radius: float
     branch_outer_radius: float
     wall: float = 0.0
+    branch_wall: float | None = None
 
     def __post_init__(self):
         for name in ("center", "run_start", "run_end", "branch_end"):
@@ -234,9 +261,14 @@ class Tee:
         object.__setattr__(
             self, "branch_outer_radius", _nonneg(self.branch_outer_radius, "branch outer radius")
         )
+        branch_wall = self.wall if self.branch_wall is None else self.branch_wall
+        object.__setattr__(self, "wall", _wall(self.outer_radius, self.wall))
         object.__setattr__(
-            self, "wall", _wall(min(self.outer_radius, self.branch_outer_radius), self.wall)
+            self,
+            "branch_wall",
+            _wall(self.branch_outer_radius, branch_wall, "branch wall", "branch outer radius"),
         )
+        _hollow_or_solid("tee", self.wall, self.branch_wall)
 
 
 Geometry = Straight | Bend | Reducer | Tee | Cylinder | Cuboid | Sphere | Plane | Hull

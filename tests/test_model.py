@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from asbuilt.model import Reducer
+from asbuilt.model import Reducer, Tee
 
 # NPS 6 x 4: OD 168.3 and 114.3 mm (ASME B36.10M), H = 140 mm (ASME B16.9)
 R6, R4, H = 0.16830 / 2, 0.11430 / 2, 0.140
@@ -77,3 +77,62 @@ def test_replace_keeps_the_offset():
     r = Reducer([0, 0, 0], [H, 0, R6 - R4], R6, R4, offset=[0, 0, R6 - R4])
     moved = dataclasses.replace(r, start=r.start + 5, end=r.end + 5)
     assert moved.eccentric and moved.offset == pytest.approx(r.offset)
+
+
+# NPS 6 / 4 / 2 SCH 40 walls (ASME B36.10M): 7.11, 6.02 and 3.91 mm
+W6, W4, W2, R2 = 0.00711, 0.00602, 0.00391, 0.0603 / 2
+
+
+def test_a_reducer_has_a_wall_at_each_end_and_one_wall_sets_both():
+    r = Reducer([0, 0, 0], [H, 0, 0], R6, R4, wall_start=W6, wall_end=W4)
+    assert (r.wall_start, r.wall_end) == (W6, W4)
+    one = Reducer([0, 0, 0], [H, 0, 0], R6, R4, W4)
+    assert (one.wall_start, one.wall_end) == (W4, W4)
+    assert dataclasses.replace(r, wall_end=0.005).wall_start == W6
+
+
+def test_a_tee_has_a_run_wall_and_a_branch_wall():
+    t = Tee([0, 0, 0], [-0.1, 0, 0], [0.1, 0, 0], [0, 0.1, 0], R6, R2, W6, W2)
+    assert (t.wall, t.branch_wall) == (W6, W2)
+    one = Tee([0, 0, 0], [-0.1, 0, 0], [0.1, 0, 0], [0, 0.1, 0], R6, R2, W2)
+    assert (one.wall, one.branch_wall) == (W2, W2)
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (
+            lambda: Reducer([0, 0, 0], [H, 0, 0], R6, R4, wall_start=R6),
+            "The wall start must be thinner than the outer radius start (0 means solid).",
+        ),
+        (
+            # the large end's wall is too thick for the small end
+            lambda: Reducer([0, 0, 0], [H, 0, 0], R6, R4, wall_start=0.06),
+            "The wall end must be thinner than the outer radius end (0 means solid).",
+        ),
+        (
+            lambda: Reducer([0, 0, 0], [H, 0, 0], R6, R4, wall_start=W6, wall_end=-1),
+            "The wall end must be a non-negative finite number, not -1.",
+        ),
+        (
+            lambda: Tee([0, 0, 0], [-0.1, 0, 0], [0.1, 0, 0], [0, 0.1, 0], R6, R2, R6),
+            "The wall must be thinner than the outer radius (0 means solid).",
+        ),
+        (
+            lambda: Tee([0, 0, 0], [-0.1, 0, 0], [0.1, 0, 0], [0, 0.1, 0], R6, R2, W6, R2),
+            "The branch wall must be thinner than the branch outer radius (0 means solid).",
+        ),
+        (
+            lambda: Reducer([0, 0, 0], [H, 0, 0], R6, R4, wall_start=W6, wall_end=0),
+            "A reducer's walls must be both 0 (solid) or both positive.",
+        ),
+        (
+            lambda: Tee([0, 0, 0], [-0.1, 0, 0], [0.1, 0, 0], [0, 0.1, 0], R6, R2, 0, W2),
+            "A tee's walls must be both 0 (solid) or both positive.",
+        ),
+    ],
+)
+def test_walls_are_checked_against_their_own_ends(make, message):
+    with pytest.raises(ValueError) as caught:
+        make()
+    assert str(caught.value) == message

@@ -91,7 +91,7 @@ def tube_mesh(
     us: np.ndarray,
     vs: np.ndarray,
     radii: np.ndarray,
-    wall: float = 0.0,
+    wall: float | np.ndarray = 0.0,
     n: int = SEGMENTS,
 ) -> Mesh:
     """A tube swept through rings.
@@ -104,8 +104,9 @@ def tube_mesh(
         Each ring's orthonormal in-plane axes, with ``cross(u, v)`` along the sweep direction.
     radii : ndarray, shape (k,), metres
         Outer radius at each ring.
-    wall : float, metres
-        Wall thickness (0: solid, with disc caps).
+    wall : float or ndarray of shape (k,), metres
+        Wall thickness, one for every ring or one at each (a reducer's bore runs from one
+        end's to the other's); 0 everywhere: solid, with disc caps.
     n : int
         Vertices per ring.
     """
@@ -125,7 +126,7 @@ def tube_mesh(
     outer = rings(radii)
     builder.patch(outer, _strip(rows, n))
     first, last = outer[:n], outer[-n:]
-    if wall > 0:
+    if np.any(np.asarray(wall) > 0):
         inner = rings(radii - wall)
         builder.patch(inner, _strip(rows, n, flip=True))
         for ring_out, ring_in, flip in ((first, inner[:n], True), (last, inner[-n:], False)):
@@ -309,7 +310,7 @@ def mesh_for(geometry, *, plate_thickness: float) -> Mesh | None:
             np.array([u, u]),
             np.array([v, v]),
             np.array([geometry.outer_radius_start, geometry.outer_radius_end]),
-            geometry.wall,
+            np.array([geometry.wall_start, geometry.wall_end]),
         )
     if isinstance(geometry, Bend):
         return _bend_mesh(geometry)

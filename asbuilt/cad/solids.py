@@ -117,16 +117,14 @@ def _bend(geometry: Bend) -> cq.Shape:
     )
 
 
-def _oblique_frustum(geometry: Reducer, inset: float) -> cq.Solid:
-    """A ruled loft between the two end circles (radii less ``inset`` metres), each in the plane
-    perpendicular to the run: an eccentric reducer's oblique truncated cone."""
+def _oblique_frustum(geometry: Reducer, r_start: float, r_end: float) -> cq.Solid:
+    """A ruled loft between circles of radius ``r_start`` and ``r_end`` (m) about the two end
+    centres, each in the plane perpendicular to the run: an eccentric reducer's oblique
+    truncated cone (its outside, or its bore)."""
     normal = _v(geometry.direction)
     circles = [
-        cq.Wire.makeCircle(radius - inset, _v(centre), normal)
-        for centre, radius in (
-            (geometry.start, geometry.outer_radius_start),
-            (geometry.end, geometry.outer_radius_end),
-        )
+        cq.Wire.makeCircle(radius, _v(centre), normal)
+        for centre, radius in ((geometry.start, r_start), (geometry.end, r_end))
     ]
     return cq.Solid.makeLoft(circles, True)
 
@@ -137,18 +135,24 @@ def _check_reducer(geometry: Reducer) -> None:
 
 
 def _reducer(geometry: Reducer) -> cq.Shape:
-    """A truncated cone from ``start`` to ``end``; oblique (a loft) when eccentric."""
+    """A truncated cone from ``start`` to ``end``; oblique (a loft) when eccentric.
+
+    The bore is a cone too, from the start end's bore to the end end's (each end's own wall),
+    so it runs on from the bore of the pipe welded at either end without a step.
+    """
     length = geometry.length
     _check_reducer(geometry)
-    r1, r2, wall = geometry.outer_radius_start, geometry.outer_radius_end, geometry.wall
+    r1, r2 = geometry.outer_radius_start, geometry.outer_radius_end
+    hollow = geometry.wall_start > 0 or geometry.wall_end > 0
+    bore1, bore2 = r1 - geometry.wall_start, r2 - geometry.wall_end
     if geometry.eccentric:
-        outer = _oblique_frustum(geometry, 0.0)
-        return outer if wall <= 0 else outer.cut(_oblique_frustum(geometry, wall))
+        outer = _oblique_frustum(geometry, r1, r2)
+        return outer.cut(_oblique_frustum(geometry, bore1, bore2)) if hollow else outer
     direction = _v(geometry.direction)
     outer = cq.Solid.makeCone(r1, r2, length, _v(geometry.start), direction)
-    if wall <= 0:
+    if not hollow:
         return outer
-    inner = cq.Solid.makeCone(r1 - wall, r2 - wall, length, _v(geometry.start), direction)
+    inner = cq.Solid.makeCone(bore1, bore2, length, _v(geometry.start), direction)
     return outer.cut(inner)
 
 
@@ -175,7 +179,8 @@ def _seamed_cylinder(
 
 
 def _tee(geometry: Tee) -> cq.Shape:
-    """Run and branch cylinders fused, then both bores cut when the wall is known.
+    """Run and branch cylinders fused, then both bores (each of its own wall) cut when the walls
+    are known.
 
     The run's (and run bore's) seam is put through the middle of the branch hole, and the
     branch's seam on the run's side. Files get closed faces split in two at the middle of their
@@ -201,9 +206,10 @@ def _tee(geometry: Tee) -> cq.Shape:
         return _seamed_cylinder(geometry.center, geometry.branch_end, radius, run_axis)
 
     shape = run(geometry.outer_radius).fuse(branch(geometry.branch_outer_radius))
-    if geometry.wall > 0:
+    if geometry.wall > 0 or geometry.branch_wall > 0:
+        # each bore is its own pipe's: the run's wall on the run, the outlet's on the outlet
         bores = run(geometry.outer_radius - geometry.wall).fuse(
-            branch(geometry.branch_outer_radius - geometry.wall)
+            branch(geometry.branch_outer_radius - geometry.branch_wall)
         )
         shape = shape.cut(bores)
     return shape.clean()

@@ -356,13 +356,16 @@ def _reducer_cone(start, end, first: PipeSpec, second: PipeSpec, length: float, 
     the cone leaves either pipe's cylinder at its slope, half the step in OD over its length."""
     slope = abs(first.od - second.od) / (2.0 * max(length, 1e-9))
     allowance = min(TRIM_SURFACE_TOLERANCE / max(slope, 1e-9), length)
-    wall = min(first.wall, second.wall) if first.wall and second.wall else 0.0
+    # each end has its pipe's wall (B16.9 reducers are made to each end's schedule), so the
+    # bore runs on from each pipe's; solid (0) throughout when either schedule is unknown
+    hollow = bool(first.wall and second.wall)
     geometry = Reducer(
         start=start,
         end=end,
         outer_radius_start=0.5 * first.od,
         outer_radius_end=0.5 * second.od,
-        wall=wall,
+        wall_start=first.wall if hollow else 0.0,
+        wall_end=second.wall if hollow else 0.0,
         offset=np.zeros(3) if offset is None else offset,
     )
     return geometry, allowance
@@ -400,7 +403,9 @@ def _flat_word(flat) -> str:
 def _tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
     c_run = run.dims.tee_run
     c_out = run.dims.tee_outlet
-    wall = min(run.wall, branch.wall) if run.wall and branch.wall else 0.0
+    # the run's wall on the run, the outlet pipe's on the outlet (as B16.9 reducing tees are
+    # made); solid (0) throughout when either schedule is unknown
+    hollow = bool(run.wall and branch.wall)
     geometry = Tee(
         center=center,
         run_start=center - c_run * run_dir,
@@ -408,7 +413,8 @@ def _tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
         branch_end=center + c_out * branch_dir,
         outer_radius=0.5 * run.od,
         branch_outer_radius=0.5 * branch.od,
-        wall=wall,
+        wall=run.wall if hollow else 0.0,
+        branch_wall=branch.wall if hollow else 0.0,
     )
     return geometry
 

@@ -145,3 +145,14 @@ def test_hollow_eccentric_reducer_mesh():
     # the end rings are centred on the end centres, in planes across the run
     ring_end = mesh.vertices[np.isclose(mesh.vertices[:, 0], 0.14)]
     assert ring_end[:, 1:].mean(axis=0) == pytest.approx([0, r6 - r4], abs=1e-9)
+
+
+def test_a_reducer_mesh_has_each_ends_own_wall():
+    # NPS 6 x 4 SCH 40 (B36.10M: OD 168.3 / 114.3 mm, wall 7.11 / 6.02 mm), H 140 mm (B16.9)
+    r6, r4, w6, w4 = 0.08415, 0.05715, 0.00711, 0.00602
+    for offset in ([0, 0, 0], [0, 0, r6 - r4]):
+        g = Reducer([0, 0, 0], np.array([0.14, 0, 0]) + offset, r6, r4, w6, offset, w4)
+        mesh = mesh_for(g, plate_thickness=0.01)
+        expected = _frustum(r6, r4, 0.14) - _frustum(r6 - w6, r4 - w4, 0.14)
+        assert mesh.volume == pytest.approx(expected, rel=1e-9)
+        assert _closed(mesh).is_watertight

@@ -215,3 +215,48 @@ def test_eccentric_reducer_is_a_valid_oblique_frustum(wall, offset):
         round(r6, 5): pytest.approx(r6, abs=1e-5),
         round(r4, 5): pytest.approx(r6, abs=1e-5),
     }
+
+
+def _circles_at(solid, point) -> list[float]:
+    """Radii (m) of the circular edges centred on ``point`` (3,), smallest first."""
+    radii = []
+    for edge in solid.Edges():
+        if edge.geomType() == "CIRCLE" and np.allclose(edge.Center().toTuple(), point, atol=1e-7):
+            radii.append(edge.radius())
+    return sorted(radii)
+
+
+# NPS 6 / 4 / 2 SCH 40 (ASME B36.10M): OD 168.3 / 114.3 / 60.3 mm, wall 7.11 / 6.02 / 3.91 mm;
+# NPS 6 x 4 reducer H = 140 mm (ASME B16.9)
+R6, R4, R2, W6, W4, W2 = 0.08415, 0.05715, 0.03015, 0.00711, 0.00602, 0.00391
+
+
+@pytest.mark.parametrize("step", [0.0, R6 - R4])
+def test_a_reducers_bore_is_a_cone_from_one_ends_bore_to_the_others(step):
+    """Each end circle of the bore is its pipe's bore; the volume is the outer frustum less
+    the bore's (concentric and eccentric alike, Cavalieri)."""
+    from asbuilt.model import Reducer
+
+    h, offset = 0.14, np.array([0.0, 0.0, step])
+    g = Reducer([2, 1, 1], np.array([2 + h, 1, 1]) + offset, R6, R4, W6, offset, W4)
+    solid = solid_for(Component("R1", "reducer", g))
+
+    def frustum(a, b):
+        return math.pi * h * (a * a + a * b + b * b) / 3
+
+    assert solid.isValid() and len(solid.Solids()) == 1
+    assert solid.Volume() == pytest.approx(frustum(R6, R4) - frustum(R6 - W6, R4 - W4), rel=1e-6)
+    assert _circles_at(solid, g.start) == pytest.approx([R6 - W6, R6], abs=1e-9)
+    assert _circles_at(solid, g.end) == pytest.approx([R4 - W4, R4], abs=1e-9)
+
+
+def test_a_reducing_tees_bores_are_the_run_pipes_and_the_outlet_pipes():
+    from asbuilt.model import Tee
+
+    c = np.array([0.0, 0.0, 1.0])
+    g = Tee(c, c - [0.143, 0, 0], c + [0.143, 0, 0], c + [0, 0.143, 0], R6, R2, W6, W2)
+    solid = solid_for(Component("T1", "tee", g))
+    assert solid.isValid() and len(solid.Solids()) == 1
+    for end in (g.run_start, g.run_end):
+        assert _circles_at(solid, end) == pytest.approx([R6 - W6, R6], abs=1e-9)
+    assert _circles_at(solid, g.branch_end) == pytest.approx([R2 - W2, R2], abs=1e-9)

@@ -316,7 +316,8 @@ def test_tees_read_back_valid_in_every_orientation(tmp_path, run_nps, branch_nps
     sizes = {size.nominal: size for size in catalog.sizes}
     run, branch = sizes[run_nps], sizes[branch_nps]
     dims = fitting_dims(catalog, run, run.od)
-    wall = min(catalog.wall(run_nps, "STD"), catalog.wall(branch_nps, "STD"))
+    # each end's own STD wall, as merging builds them
+    wall, branch_wall = catalog.wall(run_nps, "STD"), catalog.wall(branch_nps, "STD")
     tees = []
     for tilt in (1.0, 5.0):
         axis, across, up = _turned_frame(tilt)
@@ -331,6 +332,7 @@ def test_tees_read_back_valid_in_every_orientation(tmp_path, run_nps, branch_nps
                 run.od / 2,
                 branch.od / 2,
                 wall,
+                branch_wall,
             )
             tees.append(Component(f"T{tilt}/{turn}", "tee", geometry))
     assert _round_trip_invalid(tmp_path, tees) == []
@@ -356,8 +358,15 @@ def test_elbows_and_reducers_read_back_valid_in_every_orientation(tmp_path):
             bend = Bend(c - radius * out, c + radius * axis, c, big.od / 2, wall)
             parts.append(Component(f"E{large}/{turn}", "elbow", bend))
             offset = (big.od - little.od) / 2 * out if turn % 90 else np.zeros(3)
+            # the large end's STD wall at the start, the small end's at the end
             reducer = Reducer(
-                c, c + big.od * axis + offset, big.od / 2, little.od / 2, wall, offset
+                c,
+                c + big.od * axis + offset,
+                big.od / 2,
+                little.od / 2,
+                catalog.wall(large, "STD"),
+                offset,
+                wall,
             )
             parts.append(Component(f"R{large}/{turn}", "reducer", reducer))
     assert _round_trip_invalid(tmp_path, parts) == []
@@ -376,3 +385,81 @@ def test_spool_sample_reads_back_valid(tmp_path):
     assert len(solids) == len(cad.parts)
     assert [s.name for s in solids if not s.valid] == []
     assert all(s.volume > 0 for s in solids)
+
+
+def _merged_spool_6x4x2():
+    """An NPS 6 SCH 40 run with an NPS 2 outlet tee and a 6 x 4 reducer, made by merging."""
+    import importlib.util
+    import sys
+
+    name = "synthetic_pipes"
+    if name not in sys.modules:
+        path = Path(__file__).parents[1] / "merge" / "synthetic_pipes.py"
+        spec = importlib.util.spec_from_file_location(name, path)
+        sys.modules[name] = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(sys.modules[name])
+    from synthetic_pipes import Pipe, report_of
+
+    from asbuilt.merge import merge_model
+
+    pipes = [
+        Pipe("P1", (0, 0, 1), (1.8, 0, 1), 0.1683),
+        Pipe("P2", (2.2, 0, 1), (3.4, 0, 1), 0.1683),
+        Pipe("P3", (2, 0.2, 1), (2, 2, 1), 0.0603),
+        Pipe("P4", (3.6, 0, 1), (5, 0, 1), 0.1143),
+    ]
+    return merge_model(report_of(pipes), schedule="40")
+
+
+def _circle_radii_by_centre(path) -> list[tuple[np.ndarray, float]]:
+    """(centre (3,) mm, radius mm) of every circular edge in a STEP file, as read back."""
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+    from OCP.GeomAbs import GeomAbs_Circle
+    from OCP.STEPControl import STEPControl_Reader
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    reader = STEPControl_Reader()
+    assert reader.ReadFile(str(path)) == 1  # IFSelect_RetDone
+    reader.TransferRoots()
+    found = []
+    explorer = TopExp_Explorer(reader.OneShape(), TopAbs_EDGE)
+    while explorer.More():
+        curve = BRepAdaptor_Curve(TopoDS.Edge_s(explorer.Current()))
+        if curve.GetType() == GeomAbs_Circle:
+            circle = curve.Circle()
+            loc = circle.Location()
+            found.append((np.array([loc.X(), loc.Y(), loc.Z()]), circle.Radius()))
+        explorer.Next()
+    return found
+
+
+def test_the_bore_runs_on_without_a_step_at_every_weld_of_reducers_and_tees(tmp_path):
+    """Read back from STEP, the circles at each weld of the reducer and the tee are the outside
+    and one bore (the pipe's = the fitting's): 1.09 mm (6 x 4 reducer's large end) and 3.20 mm
+    (tee run) steps when fittings took the thinner of the two pipes' walls throughout."""
+    model = _merged_spool_6x4x2()
+    path = tmp_path / "spool.step"
+    write_step(prepare(model), path)
+    circles = _circle_radii_by_centre(path)
+    # ASME B36.10M SCH 40: OD 168.3 / 114.3 / 60.3 mm, wall 7.11 / 6.02 / 3.91 mm
+    bores = {"6": 168.3 / 2 - 7.11, "4": 114.3 / 2 - 6.02, "2": 60.3 / 2 - 3.91}
+    ods = {"6": 168.3 / 2, "4": 114.3 / 2, "2": 60.3 / 2}
+    fittings = [c for c in model.components if c.type in ("reducer", "tee")]
+    assert sorted(c.type for c in fittings) == ["reducer", "tee"]
+    welds = 0
+    for comp in fittings:
+        g = comp.geometry
+        if comp.type == "reducer":
+            ends = [(g.start, "6"), (g.end, "4")]
+        else:
+            ends = [(g.run_start, "6"), (g.run_end, "6"), (g.branch_end, "2")]
+        for point, nps in ends:
+            at = sorted(
+                {round(r, 6) for c, r in circles if np.linalg.norm(c - point * 1000) < 1e-3}
+            )
+            assert at == pytest.approx([bores[nps], ods[nps]], abs=1e-5), (comp.id, nps)
+            welds += 1
+    assert welds == 5
+    assert [s.name for s in read_step(path) if not s.valid] == []

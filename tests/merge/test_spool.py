@@ -139,3 +139,89 @@ def test_merged_spool_does_not_take_a_scan_object_id():
     (spool,) = model.spools
     assert spool.id != "S1" and model.component("S1").spool is None
     assert spool.id not in {obj["id"] for obj in scan["objects"]}
+
+
+# Walls of each end, from ASME B36.10M (/work/shared/reference/standards.md): NPS 6 OD 168.3 mm,
+# SCH 40 wall 7.11 mm; NPS 4 OD 114.3 mm, 6.02 mm; NPS 2 OD 60.3 mm, 3.91 mm. A B16.9 reducer
+# or reducing tee is made to each connecting pipe's schedule, so each end's bore is its pipe's.
+BORE6, BORE4, BORE2 = 0.1683 / 2 - 0.00711, 0.1143 / 2 - 0.00602, 0.0603 / 2 - 0.00391
+
+
+def _merged(pipes):
+    from synthetic_pipes import report_of
+
+    from asbuilt.merge import merge_model
+
+    model = merge_model(report_of(pipes), schedule="40")
+    return {c.id: c for c in model.components}
+
+
+def _bore(geometry, which: str) -> float:
+    """Inner radius (m) of a pipe, reducer end or tee end."""
+    if which == "pipe":
+        return geometry.outer_radius - geometry.wall
+    if which == "start":
+        return geometry.outer_radius_start - geometry.wall_start
+    if which == "end":
+        return geometry.outer_radius_end - geometry.wall_end
+    if which == "run":
+        return geometry.outer_radius - geometry.wall
+    return geometry.branch_outer_radius - geometry.branch_wall
+
+
+def test_a_reducer_has_each_pipes_bore_at_its_end():
+    """NPS 6 x 4 between SCH 40 pipes: no step in the bore at either weld (it was 1.09 mm at
+    the NPS 6 end when the reducer took the thinner NPS 4 wall throughout)."""
+    from synthetic_pipes import Pipe
+
+    comps = _merged(
+        [Pipe("P1", (0, 0, 0), (1.9, 0, 0), 0.1683), Pipe("P2", (2.1, 0, 0), (4, 0, 0), 0.1143)]
+    )
+    reducer = comps["P1-P2"].geometry
+    assert _bore(comps["P1"].geometry, "pipe") == pytest.approx(BORE6, abs=1e-9)
+    assert _bore(comps["P2"].geometry, "pipe") == pytest.approx(BORE4, abs=1e-9)
+    assert _bore(reducer, "start") == pytest.approx(BORE6, abs=1e-9)
+    assert _bore(reducer, "end") == pytest.approx(BORE4, abs=1e-9)
+    # and small to large: the start end is the small pipe's
+    comps = _merged(
+        [Pipe("P1", (0, 0, 0), (1.9, 0, 0), 0.1143), Pipe("P2", (2.1, 0, 0), (4, 0, 0), 0.1683)]
+    )
+    reducer = comps["P1-P2"].geometry
+    assert (_bore(reducer, "start"), _bore(reducer, "end")) == pytest.approx(
+        (BORE4, BORE6), abs=1e-9
+    )
+
+
+def test_a_reducing_tee_has_the_run_bore_and_the_branch_bore():
+    """NPS 6 run with an NPS 2 outlet (SCH 40): the run keeps 7.11 mm, the outlet 3.91 mm."""
+    from synthetic_pipes import Pipe
+
+    comps = _merged(
+        [
+            Pipe("P1", (0, 0, 0), (1.8, 0, 0), 0.1683),
+            Pipe("P2", (2.2, 0, 0), (4, 0, 0), 0.1683),
+            Pipe("P3", (2, 0.2, 0), (2, 2, 0), 0.0603),
+        ]
+    )
+    tee = comps["P1-P2-P3"].geometry
+    assert _bore(tee, "run") == pytest.approx(BORE6, abs=1e-9)
+    assert _bore(tee, "branch") == pytest.approx(BORE2, abs=1e-9)
+
+
+def test_a_run_that_reduces_at_a_tee_gets_a_tee_and_a_reducer_with_each_pipes_bore():
+    """NPS 6 x 4 run with an NPS 2 outlet: a NPS 6 tee and a 6 x 4 reducer on the NPS 4 side."""
+    from synthetic_pipes import Pipe
+
+    comps = _merged(
+        [
+            Pipe("P1", (0, 0, 0), (1.8, 0, 0), 0.1683),
+            Pipe("P2", (2.4, 0, 0), (4, 0, 0), 0.1143),
+            Pipe("P3", (2, 0.2, 0), (2, 2, 0), 0.0603),
+        ]
+    )
+    (tee,) = [c.geometry for c in comps.values() if c.type == "tee"]
+    (reducer,) = [c.geometry for c in comps.values() if c.type == "reducer"]
+    assert (_bore(tee, "run"), _bore(tee, "branch")) == pytest.approx((BORE6, BORE2), abs=1e-9)
+    assert (_bore(reducer, "start"), _bore(reducer, "end")) == pytest.approx(
+        (BORE6, BORE4), abs=1e-9
+    )
