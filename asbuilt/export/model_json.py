@@ -114,7 +114,10 @@ def _geometry_fields(geometry) -> dict:
             "end": geometry.end,
             "od_start": 2 * geometry.outer_radius_start,
             "od_end": 2 * geometry.outer_radius_end,
-            "wall": geometry.wall,
+            # for readers that know one wall (before per-end walls): the thinner, as they wrote
+            "wall": min(geometry.wall_start, geometry.wall_end),
+            "wall_start": geometry.wall_start,
+            "wall_end": geometry.wall_end,
             "offset": geometry.offset,
             "eccentric": geometry.eccentric,
         }
@@ -127,6 +130,7 @@ def _geometry_fields(geometry) -> dict:
             "od": 2 * geometry.outer_radius,
             "branch_od": 2 * geometry.branch_outer_radius,
             "wall": geometry.wall,
+            "branch_wall": geometry.branch_wall,
         }
     if isinstance(geometry, Cylinder):
         start, end = geometry.ends
@@ -478,7 +482,11 @@ def _require_object(entry, where: str, what: str, source: str | None) -> None:
         )
 
 
-def _wall(entry: dict) -> float:
+def _wall(entry: dict, key: str = "wall") -> float:
+    """The wall ``key`` (metres); one without it (a reducer's or tee's end, in documents
+    written before fittings had a wall per end) has the one ``wall``, or 0 (solid)."""
+    if entry.get(key) is not None:
+        return _number(entry, key)
     return _number(entry, "wall") if entry.get("wall") is not None else 0.0
 
 
@@ -497,8 +505,9 @@ def _geometry(entry: dict):
             _point(entry, "end"),
             _number(entry, "od_start") / 2,
             _number(entry, "od_end") / 2,
-            _wall(entry),
+            _wall(entry, "wall_start"),
             _point(entry, "offset") if entry.get("offset") is not None else np.zeros(3),
+            _wall(entry, "wall_end"),
         )
     if shape == "tee":
         run_start, run_end = _points(entry, "run", 2)
@@ -510,6 +519,7 @@ def _geometry(entry: dict):
             _positive(entry, "od") / 2,
             _number(entry, "branch_od") / 2,
             _wall(entry),
+            _wall(entry, "branch_wall"),
         )
     if shape == "cylinder":
         return Cylinder(

@@ -410,3 +410,80 @@ def test_reducer_offset_too_large_is_located():
         model_from_document(document, source="m.json")
     assert str(info.value).startswith("m.json: components[0] (R1)")
     assert "must not exceed the difference of the end radii" in str(info.value)
+
+
+def _merged_6x4x2_document(tmp_path):
+    """A merged NPS 6 SCH 40 run with an NPS 2 outlet tee and a 6 x 4 reducer, written and
+    read back."""
+    import importlib.util
+    import sys
+
+    name = "synthetic_pipes"
+    if name not in sys.modules:
+        path = ROOT / "tests" / "merge" / "synthetic_pipes.py"
+        spec = importlib.util.spec_from_file_location(name, path)
+        sys.modules[name] = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(sys.modules[name])
+    from synthetic_pipes import Pipe, report_of
+
+    from asbuilt.merge import merge_model
+
+    pipes = [
+        Pipe("P1", (0, 0, 1), (1.8, 0, 1), 0.1683),
+        Pipe("P2", (2.2, 0, 1), (3.4, 0, 1), 0.1683),
+        Pipe("P3", (2, 0.2, 1), (2, 2, 1), 0.0603),
+        Pipe("P4", (3.6, 0, 1), (5, 0, 1), 0.1143),
+    ]
+    model = merge_model(report_of(pipes), schedule="40")
+    path = tmp_path / "m.json"
+    write_model_json(model, path)
+    return model, json.loads(path.read_text()), load_model(path)
+
+
+def test_per_end_walls_round_trip(tmp_path):
+    import jsonschema
+
+    from asbuilt.export.model_json import model_schema
+
+    model, document, back = _merged_6x4x2_document(tmp_path)
+    jsonschema.Draft202012Validator(model_schema()).validate(document)
+    entries = {e["type"]: e for e in document["components"]}
+    # ASME B36.10M SCH 40 walls: NPS 6 7.11 mm, NPS 4 6.02 mm, NPS 2 3.91 mm
+    reducer, tee = entries["reducer"], entries["tee"]
+    assert (reducer["wall_start"], reducer["wall_end"]) == pytest.approx((0.00711, 0.00602))
+    assert reducer["wall"] == pytest.approx(0.00602)  # the thinner, for older readers
+    assert (tee["wall"], tee["branch_wall"]) == pytest.approx((0.00711, 0.00391))
+    for before, after in zip(model.components, back.components):
+        for name in ("wall", "wall_start", "wall_end", "branch_wall"):
+            assert getattr(after.geometry, name, None) == getattr(before.geometry, name, None)
+
+
+def test_documents_with_one_wall_per_fitting_still_read():
+    """Documents written before per-end walls have one ``wall`` for a reducer or tee (the
+    thinner pipe's): it is the wall at every end, as those versions built them."""
+    common = {"format": FORMAT, "version": 1}
+    reducer = {
+        "id": "R1",
+        "type": "reducer",
+        "shape": "reducer",
+        "start": [0, 0, 1],
+        "end": [0.14, 0, 1],
+        "od_start": 0.1683,
+        "od_end": 0.1143,
+        "wall": 0.00602,
+    }
+    tee = {
+        "id": "T1",
+        "type": "tee",
+        "shape": "tee",
+        "center": [1, 0, 1],
+        "run": [[0.857, 0, 1], [1.143, 0, 1]],
+        "branch_end": [1, 0.143, 1],
+        "od": 0.1683,
+        "branch_od": 0.0603,
+        "wall": 0.00391,
+    }
+    model = model_from_document({**common, "components": [reducer, tee]}, source="old.json")
+    r, t = (c.geometry for c in model.components)
+    assert (r.wall_start, r.wall_end) == (0.00602, 0.00602)
+    assert (t.wall, t.branch_wall) == (0.00391, 0.00391)
