@@ -326,7 +326,7 @@ class _Writer:
                 np.zeros(3),
                 branch_dir,
                 branch_length + BORE_OVERRUN,
-                g.branch_outer_radius - g.wall,
+                g.branch_outer_radius - g.branch_wall,
                 0.0,
             ),
         )
@@ -345,7 +345,7 @@ class _Writer:
             np.array([u, u]),
             np.array([v, v]),
             np.array([g.outer_radius_start, g.outer_radius_end]),
-            g.wall,
+            np.array([g.wall_start, g.wall_end]),
         )
 
     def box(self, g: Cuboid) -> object:
@@ -391,18 +391,22 @@ class _Writer:
         radius = _outer_radius(g)
         if radius is not None:
             props["OuterDiameter"] = self.f.createIfcPositiveLengthMeasure(2 * radius)
-        wall = getattr(g, "wall", 0.0)
+        wall = _wall(g)
         if wall:
             props["WallThickness"] = self.f.createIfcPositiveLengthMeasure(wall)
         if isinstance(g, Reducer):
             props["OuterDiameterEnd"] = self.f.createIfcPositiveLengthMeasure(
                 2 * g.outer_radius_end
             )
+            if g.wall_end:
+                props["WallThicknessEnd"] = self.f.createIfcPositiveLengthMeasure(g.wall_end)
             props["Eccentric"] = g.eccentric
         if isinstance(g, Tee):
             props["BranchOuterDiameter"] = self.f.createIfcPositiveLengthMeasure(
                 2 * g.branch_outer_radius
             )
+            if g.branch_wall:
+                props["BranchWallThickness"] = self.f.createIfcPositiveLengthMeasure(g.branch_wall)
         if isinstance(g, Bend):
             props["BendRadius"] = self.f.createIfcPositiveLengthMeasure(g.bend_radius)
             props["BendAngle"] = self.f.createIfcPlaneAngleMeasure(float(np.radians(g.angle_deg)))
@@ -441,7 +445,7 @@ class _Writer:
         """The standard's pset and quantities for a pipe segment or fitting."""
         g = component.geometry
         radius = _outer_radius(g)
-        wall = getattr(g, "wall", 0.0)
+        wall = _wall(g)
         segment = ifc_class == "IfcPipeSegment"
         props: dict = {"Status": "EXISTING"}
         if segment and radius is not None:
@@ -626,6 +630,14 @@ def _outer_radius(g) -> float | None:
     if isinstance(g, Cylinder):
         return g.radius
     return None
+
+
+def _wall(g) -> float:
+    """The wall (m) that goes with :func:`_outer_radius`: a reducer's at its start end, a tee's
+    run's; 0 when unknown or not piping."""
+    if isinstance(g, Reducer):
+        return g.wall_start
+    return getattr(g, "wall", 0.0)
 
 
 def _centreline_length(g) -> float | None:

@@ -94,10 +94,19 @@ def zoo_components() -> list[Component]:
             nominal="4",
             schedule="STD",
         ),
+        # a reducing tee and a reducer with each end's STD wall (NPS 4 run, NPS 3 outlet / end)
         Component(
-            "T1", "tee", Tee([3, 0, 0], [2.8, 0, 0], [3.2, 0, 0], [3, 0, 0.25], R4, R3), group="S2"
+            "T1",
+            "tee",
+            Tee([3, 0, 0], [2.8, 0, 0], [3.2, 0, 0], [3, 0, 0.25], R4, R3, W4, W3),
+            group="S2",
         ),
-        Component("R1", "reducer", Reducer([3.2, 0, 0], [3.35, 0, 0], R4, R3), group="S2"),
+        Component(
+            "R1",
+            "reducer",
+            Reducer([3.2, 0, 0], [3.35, 0, 0], R4, R3, wall_start=W4, wall_end=W3),
+            group="S2",
+        ),
         Component(
             "CY",
             "cylinder",
@@ -126,14 +135,17 @@ def zoo_components() -> list[Component]:
 def expected_volumes(plate_thickness: float = 0.010) -> dict[str, float]:
     """Each zoo component's volume, cubic metres, from formulas."""
     bend_arc = 0.2 * math.pi / 2
-    run = math.pi * R4**2 * 0.4
-    branch = math.pi * R3**2 * 0.25
+
+    def tee(run_r: float, branch_r: float) -> float:
+        return math.pi * (run_r**2 * 0.4 + branch_r**2 * 0.25) - tee_overlap(run_r, branch_r)
+
     return {
         "P1": annulus(R4, W4) * 1.0,
         "E1": annulus(R4, W4) * bend_arc,  # Pappus: area times the centroid's path
         "P2": annulus(R4, W4) * 1.0,
-        "T1": run + branch - tee_overlap(R4, R3),
-        "R1": frustum(R4, R3, 0.15),
+        # the bores lie inside the outsides: the outside's volume less the bores'
+        "T1": tee(R4, R3) - tee(R4 - W4, R3 - W3),
+        "R1": frustum(R4, R3, 0.15) - frustum(R4 - W4, R3 - W3, 0.15),
         "CY": math.pi * 0.15**2 * 3.0,
         "C1": 0.4 * 0.5 * 2.0,
         "SP": 4 / 3 * math.pi * 0.5**3,

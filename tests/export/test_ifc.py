@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cad_zoo import R3, R4, W4, expected_volumes, frustum, rotation_z, zoo_model
+from cad_zoo import R3, R4, W3, W4, expected_volumes, frustum, rotation_z, zoo_model
 
 from asbuilt.cad.colours import STATUS_COLOURS, colour_for
 from asbuilt.cli import main
@@ -237,7 +237,15 @@ def test_fitting_psets_and_quantities(elements):
     reducer = _psets(elements["ER"])["Asbuilt_Component"]
     assert reducer["Eccentric"] is True
     assert reducer["OuterDiameterEnd"] == pytest.approx(2 * R3)
-    assert _psets(elements["R1"])["Asbuilt_Component"]["Eccentric"] is False
+    # each end's own STD wall (NPS 4 6.02 mm, NPS 3 5.49 mm), the NPS 4 end's in the quantities
+    r1 = _psets(elements["R1"])
+    assert r1["Asbuilt_Component"]["Eccentric"] is False
+    assert r1["Asbuilt_Component"]["WallThickness"] == pytest.approx(W4)
+    assert r1["Asbuilt_Component"]["WallThicknessEnd"] == pytest.approx(W3)
+    net = r1["Qto_PipeFittingBaseQuantities"]["NetCrossSectionArea"]
+    assert net == pytest.approx(math.pi * (R4**2 - (R4 - W4) ** 2))
+    tee = _psets(elements["T1"])["Asbuilt_Component"]
+    assert (tee["WallThickness"], tee["BranchWallThickness"]) == pytest.approx((W4, W3))
 
 
 @pytest.mark.parametrize(
