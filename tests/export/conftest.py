@@ -29,6 +29,17 @@ def _load_zoo():
 zoo_module = _load_zoo()
 
 
+def _load_synthetic_pipes():
+    name = "synthetic_pipes"
+    if name not in sys.modules:
+        path = ROOT / "tests" / "merge" / "synthetic_pipes.py"
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    return sys.modules[name]
+
+
 @pytest.fixture(scope="session")
 def zoo():
     return zoo_module.zoo_model()
@@ -39,6 +50,24 @@ def zoo_cad(zoo):
     from asbuilt.cad import prepare
 
     return prepare(zoo)
+
+
+@pytest.fixture(scope="session")
+def spool_6x4x2():
+    """A merged NPS 6 SCH 40 run with an NPS 2 outlet tee and a 6 x 4 reducer on an NPS 4
+    pipe (synthetic fits, tests/merge/synthetic_pipes.py): fittings between pipes of two
+    walls."""
+    from asbuilt.merge import merge_model
+
+    pipes = _load_synthetic_pipes()
+    Pipe = pipes.Pipe
+    fits = [
+        Pipe("P1", (0, 0, 1), (1.8, 0, 1), 0.1683),
+        Pipe("P2", (2.2, 0, 1), (3.4, 0, 1), 0.1683),
+        Pipe("P3", (2, 0.2, 1), (2, 2, 1), 0.0603),
+        Pipe("P4", (3.6, 0, 1), (5, 0, 1), 0.1143),
+    ]
+    return merge_model(pipes.report_of(fits), schedule="40")
 
 
 def _node_modules() -> Path | None:

@@ -412,40 +412,14 @@ def test_reducer_offset_too_large_is_located():
     assert "must not exceed the difference of the end radii" in str(info.value)
 
 
-def _merged_6x4x2_document(tmp_path):
-    """A merged NPS 6 SCH 40 run with an NPS 2 outlet tee and a 6 x 4 reducer, written and
-    read back."""
-    import importlib.util
-    import sys
-
-    name = "synthetic_pipes"
-    if name not in sys.modules:
-        path = ROOT / "tests" / "merge" / "synthetic_pipes.py"
-        spec = importlib.util.spec_from_file_location(name, path)
-        sys.modules[name] = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(sys.modules[name])
-    from synthetic_pipes import Pipe, report_of
-
-    from asbuilt.merge import merge_model
-
-    pipes = [
-        Pipe("P1", (0, 0, 1), (1.8, 0, 1), 0.1683),
-        Pipe("P2", (2.2, 0, 1), (3.4, 0, 1), 0.1683),
-        Pipe("P3", (2, 0.2, 1), (2, 2, 1), 0.0603),
-        Pipe("P4", (3.6, 0, 1), (5, 0, 1), 0.1143),
-    ]
-    model = merge_model(report_of(pipes), schedule="40")
-    path = tmp_path / "m.json"
-    write_model_json(model, path)
-    return model, json.loads(path.read_text()), load_model(path)
-
-
-def test_per_end_walls_round_trip(tmp_path):
+def test_per_end_walls_round_trip(tmp_path, spool_6x4x2):
     import jsonschema
 
     from asbuilt.export.model_json import model_schema
 
-    model, document, back = _merged_6x4x2_document(tmp_path)
+    model, path = spool_6x4x2, tmp_path / "m.json"
+    write_model_json(model, path)
+    document, back = json.loads(path.read_text()), load_model(path)
     jsonschema.Draft202012Validator(model_schema()).validate(document)
     entries = {e["type"]: e for e in document["components"]}
     # ASME B36.10M SCH 40 walls: NPS 6 7.11 mm, NPS 4 6.02 mm, NPS 2 3.91 mm

@@ -387,30 +387,6 @@ def test_spool_sample_reads_back_valid(tmp_path):
     assert all(s.volume > 0 for s in solids)
 
 
-def _merged_spool_6x4x2():
-    """An NPS 6 SCH 40 run with an NPS 2 outlet tee and a 6 x 4 reducer, made by merging."""
-    import importlib.util
-    import sys
-
-    name = "synthetic_pipes"
-    if name not in sys.modules:
-        path = Path(__file__).parents[1] / "merge" / "synthetic_pipes.py"
-        spec = importlib.util.spec_from_file_location(name, path)
-        sys.modules[name] = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(sys.modules[name])
-    from synthetic_pipes import Pipe, report_of
-
-    from asbuilt.merge import merge_model
-
-    pipes = [
-        Pipe("P1", (0, 0, 1), (1.8, 0, 1), 0.1683),
-        Pipe("P2", (2.2, 0, 1), (3.4, 0, 1), 0.1683),
-        Pipe("P3", (2, 0.2, 1), (2, 2, 1), 0.0603),
-        Pipe("P4", (3.6, 0, 1), (5, 0, 1), 0.1143),
-    ]
-    return merge_model(report_of(pipes), schedule="40")
-
-
 def _circle_radii_by_centre(path) -> list[tuple[np.ndarray, float]]:
     """(centre (3,) mm, radius mm) of every circular edge in a STEP file, as read back."""
     from OCP.BRepAdaptor import BRepAdaptor_Curve
@@ -435,11 +411,11 @@ def _circle_radii_by_centre(path) -> list[tuple[np.ndarray, float]]:
     return found
 
 
-def test_the_bore_runs_on_without_a_step_at_every_weld_of_reducers_and_tees(tmp_path):
+def test_the_bore_runs_on_without_a_step_at_every_weld_of_reducers_and_tees(tmp_path, spool_6x4x2):
     """Read back from STEP, the circles at each weld of the reducer and the tee are the outside
     and one bore (the pipe's = the fitting's): 1.09 mm (6 x 4 reducer's large end) and 3.20 mm
     (tee run) steps when fittings took the thinner of the two pipes' walls throughout."""
-    model = _merged_spool_6x4x2()
+    model = spool_6x4x2
     path = tmp_path / "spool.step"
     write_step(prepare(model), path)
     circles = _circle_radii_by_centre(path)
