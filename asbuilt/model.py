@@ -166,7 +166,7 @@ class Reducer:
     ValueError
         Coinciding ends, an offset not perpendicular to the run, or one longer than the
         difference of the radii (the small end would stick out of the large one's outline); a
-        wall not thinner than its end's outer radius.
+        wall not thinner than its end's outer radius, or one end solid (0) and the other not.
     """
 
     kind: ClassVar[str] = "reducer"
@@ -242,6 +242,12 @@ class Tee:
     ``branch_wall`` the branch outlet's: a B16.9 reducing tee is made to the schedule of each
     connecting pipe, so each bore is its pipe's. ``branch_wall`` None (the default) takes
     ``wall``: one wall throughout. 0 for solid.
+
+    Raises
+    ------
+    ValueError
+        A wall not thinner than its own outer radius, or one of the two 0 (solid) and the
+        other not.
     """
 
     kind: ClassVar[str] = "tee"
