@@ -85,6 +85,7 @@ from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette
 from asbuilt.fit._beam_fans import raster_lines
 from asbuilt.fit._common import noise_level, random_subset
+from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
 from asbuilt.fit._cuboid_sizes import (
     bounds,
     covariance,
@@ -391,6 +392,10 @@ def fit_cuboid(
     inliers), sizes between opposite faces or from the fitted edges to the points' extent
     (generalising Kwon et al. 2004); see the module docstring for the steps.
 
+    With the viewpoint given, a fit with shots in front of its box or inside it, or a refused one, is
+    tried again on the nearest surfaces' shots, the rest left out when they can only be
+    background behind the box (:mod:`asbuilt.fit._cuboid_foreground`).
+
     Parameters
     ----------
     points : array_like, shape (n, 3), metres
@@ -434,6 +439,56 @@ def fit_cuboid(
         Too few points, coincident or collinear points, no planar face, or more outliers than
         ``tolerances.max_outlier_fraction``.
     """
+    options = {"edge_pad": edge_pad, "silhouette": silhouette}
+    if viewpoint is None:
+        return _fit_cuboid_shots(points, sigma=sigma, tolerances=tolerances, **options)
+    try:
+        view = np.array(as_vector(viewpoint, "viewpoint"))
+    except ValueError as exc:
+        raise FitError(f"cuboid: {exc}") from None
+    result = error = None
+    try:
+        result = _fit_cuboid_shots(
+            points, sigma=sigma, tolerances=tolerances, viewpoint=view, **options
+        )
+    except FitError as exc:
+        error = exc
+    pts = _validate(points)
+    contradictions = len(pts)
+    if result is not None:
+        width = tolerances.outlier_cutoff_sigma * max(result.sigma, tolerances.sigma_floor)
+        contradictions = int(np.count_nonzero(contradicting(result.primitive, pts, view, width)))
+        if contradictions < FRONT_SHOTS:
+            return result
+
+    def fit_subset(subset, sigma, tolerances, viewpoint):
+        return _fit_cuboid_shots(
+            subset,
+            sigma=sigma,
+            tolerances=tolerances,
+            viewpoint=viewpoint,
+            edge_pad=edge_pad,
+            silhouette=False,
+        )
+
+    rescued = fit_nearest_box(fit_subset, pts, view, sigma, tolerances, contradictions)
+    if rescued is not None:
+        return rescued
+    if result is None:
+        raise error
+    return result
+
+
+def _fit_cuboid_shots(
+    points,
+    *,
+    sigma: float | None = None,
+    tolerances: Tolerances = DEFAULT_TOLERANCES,
+    viewpoint=None,
+    edge_pad: float = 0.5,
+    silhouette: bool = True,
+) -> FitResult:
+    """:func:`fit_cuboid` of the shots as they are."""
     pts = _validate(points)
     n = pts.shape[0]
     try:

@@ -1,0 +1,205 @@
+"""A box's own shots, split from the background a raster window reached past it.
+
+Private helper of the cuboid fit. A rectangular pan-tilt window around a beam seen obliquely
+(a diagonal strip in the window), or around a column with a wall close behind, puts most of
+its shots on the wall: an independent ray caster's beams 0.15-0.6 m deep with a wall behind
+had 20-37 of 50-230 shots on the beam, and the fit took the wall for a face, reporting a box
+metres across (57 of 60 such scans) with centimetre standard errors. A file from another
+acquisition tool holds such shots; ``asbuilt scan`` drops them (``drivers/raster.py``,
+``foreground_threshold``).
+
+From the station, a box fitted to the wall has the beam's shots in front of it: their beams
+meet the fitted box farther away than they were measured, which no box can cause (the beam
+stops at the first surface it meets). When at least ``FRONT_SHOTS`` shots are so, or the fit
+was refused, the shots are cut into surfaces at the range jumps between neighbouring beams
+(:func:`asbuilt.fit._cylinder_background.depth_segments`, as for pipes) and the nearest
+surfaces are fitted alone. Such a fit stands when every shot it leaves out can only be
+background: not in front of the box, its beam not through it, and beyond the box's nearest
+point along the beam. Lengths in metres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from asbuilt.errors import FitError
+from asbuilt.fit._common import median_spacing
+from asbuilt.fit._cylinder_background import _rescued, depth_segments
+from asbuilt.tolerances import MIN_POINTS
+
+__all__ = [
+    "FRONT_SHOTS",
+    "MOST_SUBSETS",
+    "REACH_SPACINGS",
+    "TAKE_BACK_ROUNDS",
+    "beam_box",
+    "behind",
+    "contradicting",
+    "fit_nearest_box",
+    "seen_planes",
+]
+
+#: A fitted box with this many shots in front of it (along their beams, beyond the inlier
+#: cutoff) is a fit of something behind the object: one or two can be a stray return (dust,
+#: a wire), three lined up are a surface.
+FRONT_SHOTS = 3
+#: At most this many subsets of the nearest surfaces are fitted, nearest first.
+MOST_SUBSETS = 4
+#: Rounds of taking back left-out shots on a seen face's plane and fitting again.
+TAKE_BACK_ROUNDS = 3
+#: ... each within this many of the kept shots' spacings of the box.
+REACH_SPACINGS = 3.0
+
+
+def beam_box(cuboid, points: np.ndarray, view: np.ndarray, shrink: float = 0.0):
+    """Where each shot's beam crosses the box (slab method, Kay & Kajiya 1986).
+
+    Parameters
+    ----------
+    cuboid : Cuboid
+    points : ndarray, shape (n, 3), metres
+    view : ndarray, shape (3,), metres
+        The station.
+    shrink : float, metres
+        The box is taken this much smaller on every side (not below zero).
+
+    Returns
+    -------
+    ranges, entry, exit : ndarray, shape (n,), metres
+        Each shot's range, and the ranges along its beam where it enters and leaves the box
+        (``entry > exit`` where the beam misses it).
+    """
+    beams = points - view
+    ranges = np.linalg.norm(beams, axis=1)
+    directions = beams / ranges[:, None]
+    half = np.maximum(0.5 * np.asarray(cuboid.size) - shrink, 0.0)
+    start = (view - cuboid.center) @ cuboid.axes.T  # (3,) the station in the box's frame
+    along = directions @ cuboid.axes.T  # (n, 3)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        low = (-half - start) / along
+        high = (half - start) / along
+    near, far = np.fmin(low, high), np.fmax(low, high)
+    # A beam parallel to a slab is inside it for every range, or for none.
+    parallel = along == 0.0
+    inside = np.abs(start) <= half
+    near = np.where(parallel, np.where(inside, -np.inf, np.inf), near)
+    far = np.where(parallel, np.where(inside, np.inf, -np.inf), far)
+    return ranges, near.max(axis=1), far.min(axis=1)
+
+
+def contradicting(cuboid, points: np.ndarray, view: np.ndarray, cutoff: float) -> np.ndarray:
+    """Which shots no beam can have measured if the box were there, shape (n,) bool: more than
+    ``cutoff`` metres in front of it along their beams (the beam meets it farther away), or
+    that much inside it (the beam stops at its surface)."""
+    ranges, entry, leave = beam_box(cuboid, points, view)
+    front = (entry < leave) & (leave > 0.0) & (ranges < entry - cutoff)
+    return front | (cuboid.distance(points) < -cutoff)
+
+
+def behind(cuboid, points: np.ndarray, view: np.ndarray, cutoff: float) -> np.ndarray:
+    """Which shots can be background seen past the box, shape (n,) bool: more than ``cutoff``
+    metres beyond the box's nearest point along their beams, and their beams clear of the box
+    taken ``cutoff`` smaller on every side (a beam cannot reach a wall through the box; one
+    that grazed its edge and came back from the wall, or a mixed return, passes outside)."""
+    ranges, entry, leave = beam_box(cuboid, points, view, cutoff)
+    through = (entry < leave) & (leave > 0.0) & (ranges > entry)
+    directions = (points - view) / ranges[:, None]
+    nearest = ((cuboid.corners - view) @ directions.T).min(axis=0)  # (n,)
+    return ~through & (ranges > nearest + cutoff)
+
+
+def seen_planes(cuboid, points: np.ndarray, cutoff: float) -> list[tuple[np.ndarray, float]]:
+    """The planes ``(unit normal (3,), offset metres)`` of the box's faces that at least
+    ``FRONT_SHOTS`` of ``points`` (n, 3) metres lie within ``cutoff`` metres of, on the face."""
+    planes = []
+    for k in range(3):
+        normal = cuboid.axes[k]
+        along = (points - cuboid.center) @ normal
+        for sign in (-1.0, 1.0):
+            on = np.abs(along - sign * 0.5 * cuboid.size[k]) <= cutoff
+            on &= np.abs(cuboid.distance(points)) <= cutoff
+            if np.count_nonzero(on) >= FRONT_SHOTS:
+                planes.append((normal, float(normal @ cuboid.center + sign * 0.5 * cuboid.size[k])))
+    return planes
+
+
+def _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff: float):
+    """``found`` (the fit of ``points[mask]``) fitted again with the left-out shots within
+    ``cutoff`` metres of the plane of a face it saw (:func:`seen_planes`) and within
+    ``REACH_SPACINGS`` of its kept shots' spacing of the box (a beam seen obliquely is cut at
+    range jumps along its length, and its far part lies on the near part's faces, a raster step
+    or two on; a wall far behind meets those planes only metres away), until none is left to
+    take back (``TAKE_BACK_ROUNDS``), and the mask of the shots it fitted; a refit that fails
+    keeps the last fit."""
+    for _ in range(TAKE_BACK_ROUNDS):
+        kept = points[mask][found.inliers]
+        planes = seen_planes(found.primitive, kept, cutoff)
+        if not planes or len(kept) < 2:
+            break
+        reach = REACH_SPACINGS * median_spacing(kept)
+        near = ~mask & (found.primitive.distance(points) <= reach)
+        on_plane = np.zeros(len(points), dtype=bool)
+        for normal, offset in planes:
+            on_plane |= np.abs(points @ normal - offset) <= cutoff
+        near &= on_plane
+        if not near.any():
+            break
+        try:
+            found, mask = fit(points[mask | near], sigma, tolerances, view), mask | near
+        except FitError:
+            break
+    return found, mask
+
+
+def fit_nearest_box(
+    fit, points: np.ndarray, view: np.ndarray, sigma, tolerances, contradictions: int
+):
+    """The cuboid fit of the nearest surfaces' shots, when it leaves out only background;
+    else None.
+
+    ``fit(points, sigma, tolerances, viewpoint)`` fits a subset of ``points`` (n, 3) metres as
+    seen from ``view`` (3,) metres (``sigma`` the sensor's, metres, or None). The surfaces
+    (:func:`~asbuilt.fit._cylinder_background.depth_segments`) are taken nearest first, the
+    nearest alone, then with the next and so on (a box face seen at grazing incidence can be cut
+    from its front face by a jump of its own), each subset of at least the cuboid's
+    ``MIN_POINTS``; shots of the other surfaces on the planes of a subset's box's seen faces are
+    taken back and the box fitted again (:func:`_taken_back`). The first fit of whose left-out
+    shots fewer than ``FRONT_SHOTS``, and fewer than the ``contradictions`` (shots
+    :func:`contradicting` the fit of all of them; a large number for a refused fit), lie
+    anywhere but :func:`behind` it stands (a mixed return at a silhouette can pass through a
+    box fitted a little wide), its residuals over every shot, with a note.
+    """
+    n = len(points)
+    prior = float(tolerances.prior_range_sigma)
+    segments = depth_segments(points, view, sigma if sigma is not None else prior)
+    mask = np.zeros(n, dtype=bool)
+    tried = 0
+    for members in segments[:-1]:
+        mask = mask.copy()
+        mask[members] = True
+        if mask.sum() < MIN_POINTS["cuboid"]:
+            continue
+        tried += 1
+        if tried > MOST_SUBSETS:
+            break
+        try:
+            found = fit(points[mask], sigma, tolerances, view)
+        except FitError:
+            continue
+        cutoff = tolerances.outlier_cutoff_sigma * (
+            sigma if sigma is not None else max(found.sigma, prior)
+        )
+        found, kept = _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff)
+        left_out = ~kept
+        wrong = ~behind(found.primitive, points[left_out], view, cutoff)
+        if np.count_nonzero(wrong) >= min(FRONT_SHOTS, contradictions):
+            continue
+        inliers = np.zeros(n, dtype=bool)
+        inliers[kept] = found.inliers
+        note = (
+            f"{int(np.count_nonzero(left_out))} shot(s) lie behind the box along their beams, on "
+            "what the raster reached past it (the range jumps there), and were left out as "
+            "background before the fit."
+        )
+        return _rescued(found, points, inliers, note)
+    return None
