@@ -144,3 +144,39 @@ def test_auto_does_not_call_a_tank_with_a_wall_behind_a_cuboid(scan):
     result = fit_auto(points, sigma=file["range_sigma"], viewpoint=file["viewpoint"])
     assert result.primitive.kind == "cylinder"
     assert result.primitive.radius == pytest.approx(scan["radius"], abs=0.05)
+
+
+@pytest.mark.parametrize("behind", [1.0, 3.0])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_auto_keeps_a_box_with_one_column_on_a_grazing_side_and_a_wall_behind(behind, seed):
+    # The box of test_one_raster_column_on_a_grazing_side_face_is_that_face (its side seen at
+    # 76 degrees by one raster column, 0.39 m behind the front), the raster a column wider
+    # each side and a wall behind: a plane of the front sees the side column past it, but the
+    # box keeps no shot the plane sees past and leaves none in front out, so auto's rescoring
+    # on the shots in front of a background does not apply.
+    rng = np.random.default_rng(100 + seed)
+    turn = np.radians(35.0)
+    rot = np.array(
+        [[np.cos(turn), -np.sin(turn), 0.0], [np.sin(turn), np.cos(turn), 0.0], [0.0, 0.0, 1.0]]
+    )
+    centre, size = np.array([4.0, 1.5, 0.3]), np.array([0.5, 0.4, 0.8])
+    aim_pan = np.arctan2(centre[1], centre[0])
+    aim_tilt = np.arctan2(centre[2], np.hypot(centre[0], centre[1]))
+    los = np.array([np.cos(aim_pan), np.sin(aim_pan), 0.0])
+    pan, tilt = np.meshgrid(
+        aim_pan + np.radians(np.linspace(-6.0, 6.0, 9)),
+        aim_tilt + np.radians(np.linspace(-5.0, 5.0, 6)),
+    )
+    points, hit = shoot(
+        Cuboid(centre, rot.T, size),
+        pan.ravel(),
+        tilt.ravel(),
+        rng,
+        pointing_sigma=0.0,
+        miss_range=lambda beams: (np.hypot(*centre[:2]) + behind) / (beams @ los),
+    )
+    result = fit_auto(points, sigma=SIGMA, viewpoint=np.zeros(3))
+    assert result.primitive.kind == "cuboid", result.notes
+    assert result.diagnostics["faces"] == 2
+    assert not result.inliers[~hit].any()
+    assert not any("Scored on the" in note for note in result.notes)
