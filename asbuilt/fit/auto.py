@@ -32,6 +32,15 @@ wall otherwise passes for a 1 km sphere now and then (a chance drop of the resid
 sigma^2), while real curved or boxy objects win by tens to hundreds. A cuboid seen on one face
 is left to the plane; one that saw two opposite faces, which no single station sees, only
 wins by strong evidence over every other kind (a box scanned from two stations).
+
+With the station known, the chosen fit may have traded foreground for background: kept as its
+surface shots that another candidate sees past (farther from the station than every shot that
+one keeps, :func:`seen_past`), and left out shots in front that the other keeps. A left-out
+shot costs every model the same, so on every shot the trade is free: a tank's raster column and
+the wall's next one lie on one plane seen at 74-79 degrees, a box with that "face" leaves the
+tank's other column out, and its grazing face's small orthogonal residuals beat the tank's
+cylinder. The candidates are then scored again on the shots in front of that background
+(:func:`traded_background`), where a box has to explain the tank's shots.
 """
 
 from __future__ import annotations
@@ -43,7 +52,7 @@ import math
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit._common import require_spread, validate_points
+from asbuilt.fit._common import require_spread, row_norms, validate_points
 from asbuilt.fit._mixture import mixing_cost
 from asbuilt.fit.result import FitResult
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
@@ -55,6 +64,8 @@ __all__ = [
     "WEAK_EVIDENCE",
     "information_scores",
     "parameter_count",
+    "seen_past",
+    "traded_background",
     "RIVAL_PREFIX",
 ]
 
@@ -116,6 +127,7 @@ def information_scores(
     sigma: float | None,
     extent: float,
     tolerances: Tolerances = DEFAULT_TOLERANCES,
+    shots=None,
 ) -> dict[str, float]:
     """BIC of each fit of the same points (see the module docstring).
 
@@ -130,6 +142,9 @@ def information_scores(
     tolerances : Tolerances
         ``outlier_cutoff_sigma`` truncates residuals when ``sigma`` is known;
         ``sigma_floor`` floors the estimated sigmas.
+    shots : array_like, shape (n,), bool, optional
+        Score the fits on these shots only (every fit's residuals and inliers restricted to
+        them, ``n`` their count); all of them by default.
 
     Returns
     -------
@@ -139,12 +154,15 @@ def information_scores(
     cutoff = tolerances.outlier_cutoff_sigma
     for kind, result in results.items():
         residuals = np.asarray(result.residuals, dtype=np.float64)
+        kept = np.asarray(result.inliers, dtype=bool)
+        if shots is not None:
+            residuals, kept = residuals[shots], kept[shots]
         n = residuals.size
         if sigma is not None:
             scaled = residuals / sigma
             data = float(np.minimum(scaled * scaled, cutoff * cutoff).sum())
         else:
-            inliers = residuals[np.asarray(result.inliers, dtype=bool)]
+            inliers = residuals[kept]
             m = inliers.size
             variance = max(float(np.mean(inliers * inliers)), tolerances.sigma_floor**2)
             data = m * (1.0 + math.log(2.0 * math.pi * variance))
@@ -152,6 +170,98 @@ def information_scores(
             data += mixing_cost((m, n - m))
         scores[kind] = data + parameter_count(kind, result) * math.log(n)
     return scores
+
+
+def _choice(scores, candidates, counts) -> tuple[str, str, list[str]]:
+    """The best-scoring candidate, the chosen one and those within ``WEAK_EVIDENCE`` of the best.
+
+    ``scores`` and ``counts`` (:func:`parameter_count`) map kinds to their BIC and fitted
+    parameters; ``candidates`` are the kinds that may be chosen.
+    """
+    eligible = {kind: scores[kind] for kind in candidates}
+    best = min(eligible, key=lambda kind: (eligible[kind], counts[kind]))
+    close = [kind for kind in eligible if eligible[kind] <= eligible[best] + WEAK_EVIDENCE]
+    # Fewest fitted parameters first; between equals, the kind that claims less (a cuboid's
+    # sizes beyond its seen faces come from the points' extent, unverified), then the score.
+    chosen = min(close, key=lambda kind: (counts[kind], PARAMETERS[kind], scores[kind]))
+    return best, chosen, close
+
+
+def seen_past(result: FitResult, points: np.ndarray, viewpoint, cutoff: float) -> np.ndarray:
+    """Which shots a fit leaves out lie farther from the station than every shot it keeps.
+
+    Such a shot is background seen past the object (a wall behind a tank that a beam beside it
+    reached), by more than twice ``cutoff`` beyond the farthest kept shot (as the cuboid fit's
+    own background test, :func:`asbuilt.fit._cuboid_background.seen_past`).
+
+    Parameters
+    ----------
+    result : FitResult
+        A fit of ``points``.
+    points : ndarray, shape (n, 3), metres
+    viewpoint : array_like, shape (3,), metres
+        The station.
+    cutoff : float, metres
+        The inlier cutoff.
+
+    Returns
+    -------
+    ndarray, shape (n,), bool
+    """
+    kept = np.asarray(result.inliers, dtype=bool)
+    if not kept.any():
+        return np.zeros(kept.shape, dtype=bool)
+    ranges = row_norms(points - np.asarray(viewpoint, dtype=np.float64))
+    return ~kept & (ranges > ranges[kept].max() + 2.0 * cutoff)
+
+
+def traded_background(results, scores, candidates, chosen: str, points, viewpoint, cutoff: float):
+    """A fit that explains as its surface shots the chosen fit should have left as background.
+
+    The witness is a candidate fit whose left-out shots are all background seen past it
+    (:func:`seen_past`: it explains the scan as one object before a background), some of which
+    the ``chosen`` fit keeps as its surface while it leaves out, in front of them, shots the
+    witness keeps. The two fits trade foreground for background: a tank's raster column and the
+    wall's next column lie on one plane seen at grazing incidence (a "face" no range test tells
+    from a box's side), and a box with that face leaves the tank's other column out. The
+    maximum-likelihood criterion counts a left-out shot the same whatever it is, so the trade
+    costs the box nothing and the plane's small grazing residuals win it. Scored on the
+    witness's foreground, the box has to explain the tank's shots.
+
+    Parameters
+    ----------
+    results : dict of kind -> FitResult
+        Fits of ``points``.
+    scores : dict of kind -> float
+        Their scores on every shot (:func:`information_scores`).
+    candidates : list of str
+        The kinds that may be chosen (a witness is one of them).
+    chosen : str
+        The kind the criterion chose on every shot.
+    points : ndarray, shape (n, 3), metres
+    viewpoint : array_like, shape (3,), metres
+    cutoff : float, metres
+        The inlier cutoff (criterion's noise level times ``outlier_cutoff_sigma``).
+
+    Returns
+    -------
+    tuple of (str, ndarray of shape (n,), bool) or None
+        The witness of lowest score and the shots it sees past; None when no candidate is one.
+    """
+    kept = np.asarray(results[chosen].inliers, dtype=bool)
+    foreground_left = ~kept & ~seen_past(results[chosen], points, viewpoint, cutoff)
+    if not foreground_left.any():
+        return None
+    for kind in sorted(candidates, key=lambda kind: scores[kind]):
+        if kind == chosen:
+            continue
+        own = np.asarray(results[kind].inliers, dtype=bool)
+        past = seen_past(results[kind], points, viewpoint, cutoff)
+        if not np.array_equal(~own, past):
+            continue  # it leaves out a shot in front of its background
+        if (kept & past).any() and (foreground_left & own).any():
+            return kind, past
+    return None
 
 
 def fit_auto(
@@ -178,7 +288,8 @@ def fit_auto(
     -------
     FitResult
         The chosen kind's own result, with a note giving every candidate's score (or why it
-        could not be fitted) and the reason for the choice appended to ``notes``.
+        could not be fitted) and the reason for the choice appended to ``notes`` (and, when
+        they were scored on the shots in front of a background, which and why).
 
     Raises
     ------
@@ -222,32 +333,41 @@ def fit_auto(
         candidates.remove("cuboid")
         opposite = True
 
-    def scored(candidates):
+    def scored(candidates, shots=None):
         if sigma is not None:
             return (
-                information_scores(results, float(sigma), extent, tolerances),
+                information_scores(results, float(sigma), extent, tolerances, shots),
                 f"noise sigma {float(sigma) * 1000:.3g} mm",
+                float(sigma),
             )
-        own = information_scores(results, None, extent, tolerances)
+        own = information_scores(results, None, extent, tolerances, shots)
         leader = min(candidates, key=lambda kind: (own[kind], counts[kind]))
         noise = max(float(results[leader].sigma), float(tolerances.sigma_floor))
         return (
-            information_scores(results, noise, extent, tolerances),
+            information_scores(results, noise, extent, tolerances, shots),
             f"sigma {noise * 1000:.3g} mm from the {leader} fit",
+            noise,
         )
 
-    scores, basis = scored(candidates)
+    scores, basis, noise = scored(candidates)
     if opposite and scores["cuboid"] + WEAK_EVIDENCE < min(scores[k] for k in candidates):
         candidates = [kind for kind in CANDIDATES if kind in results]
         if sigma is None:  # the noise level may now come from the cuboid
-            scores, basis = scored(candidates)
+            scores, basis, noise = scored(candidates)
         opposite = False
-    eligible = {kind: scores[kind] for kind in candidates}
-    best = min(eligible, key=lambda kind: (eligible[kind], counts[kind]))
-    close = [kind for kind in eligible if eligible[kind] <= eligible[best] + WEAK_EVIDENCE]
-    # Fewest fitted parameters first; between equals, the kind that claims less (a cuboid's
-    # sizes beyond its seen faces come from the points' extent, unverified), then the score.
-    chosen = min(close, key=lambda kind: (counts[kind], PARAMETERS[kind], scores[kind]))
+    best, chosen, close = _choice(scores, candidates, counts)
+    traded = None
+    if viewpoint is not None:
+        cutoff = tolerances.outlier_cutoff_sigma * noise
+        traded = traded_background(results, scores, candidates, chosen, pts, viewpoint, cutoff)
+    if traded is not None:
+        # The chosen fit took shots another fit sees past as its surface and left out shots
+        # in front that the other explains: judged on every shot, the background counts for
+        # the chosen fit. Both are judged on the shots in front of that background.
+        witness, past = traded
+        swapped = chosen
+        scores, basis, noise = scored(candidates, ~past)
+        best, chosen, close = _choice(scores, candidates, counts)
     others = ", ".join(
         f"{kind} {scores[kind]:.1f}" for kind in CANDIDATES if kind in scores and kind != chosen
     )
@@ -255,13 +375,20 @@ def fit_auto(
     if others:
         why += f" (lower is better; {others})"
     why += f"; {basis}."
+    if traded is not None:
+        why += (
+            f" Scored on the {int(np.count_nonzero(~past))} shots in front of the"
+            f" {int(np.count_nonzero(past))} the {witness} fit sees past (farther than every"
+            f" shot it keeps): the {swapped} fit took some of those as its surface and left out"
+            f" shots in front that the {witness} explains."
+        )
     if chosen != best:
         simpler = "simpler" if counts[chosen] < counts[best] else "less claiming"
         why += (
             f" {best} scored {scores[chosen] - scores[best]:.1f} lower, not strong evidence"
             f" (< {WEAK_EVIDENCE:g}); the {simpler} {chosen} is preferred."
         )
-    if "cuboid" in scores and "cuboid" not in eligible:
+    if "cuboid" in scores and "cuboid" not in candidates:
         if opposite:
             why += (
                 " The cuboid fit saw two opposite faces, which no single station sees, and is"

@@ -311,3 +311,59 @@ def test_a_plate_with_shots_behind_it_is_not_a_loose_cylinder():
         math.degrees(math.acos(min(1.0, abs(result.primitive.normal @ data["scans"][0]["normal"]))))
         < 1.0
     )
+
+
+def test_information_scores_on_some_shots_restrict_every_fit_to_them():
+    residuals = np.array([0.001, -0.002, 0.0, 1.0])
+    shots = np.array([True, True, True, False])
+    scores = information_scores({"plane": _result(residuals)}, 0.001, extent=2.0, shots=shots)
+    assert scores["plane"] == pytest.approx(1 + 4 + 0 + 3 * math.log(3))
+
+
+# A station at the origin looking along +x: two shots on an object 5 m away, one beside it on
+# the same object, and two on a wall 8 m away.
+_RANGES = np.array([5.0, 5.1, 5.05, 8.0, 8.1])
+_POINTS = np.column_stack([_RANGES, np.zeros(5), np.zeros(5)])
+
+
+def test_shots_seen_past_a_fit_lie_beyond_every_shot_it_keeps():
+    fit = _result(np.zeros(5), [True, True, False, False, False])
+    assert auto.seen_past(fit, _POINTS, np.zeros(3), 0.006).tolist() == [
+        False,
+        False,
+        False,  # left out, but in front of the kept 5.1 m shot: not background
+        True,
+        True,
+    ]
+    kept_far = _result(np.zeros(5), [True, False, False, False, True])
+    assert not auto.seen_past(kept_far, _POINTS, np.zeros(3), 0.006).any()
+
+
+def test_a_fit_trading_foreground_for_background_is_found():
+    # The "cylinder" keeps the three near shots and sees the wall past them; the "cuboid"
+    # keeps a wall shot as its surface and leaves out a near shot the cylinder keeps.
+    results = {
+        "cylinder": _result(np.zeros(5), [True, True, True, False, False]),
+        "cuboid": _result(np.zeros(5), [True, True, False, True, False]),
+    }
+    scores = {"cylinder": 20.0, "cuboid": 10.0}
+    found = auto.traded_background(
+        results, scores, ["cylinder", "cuboid"], "cuboid", _POINTS, np.zeros(3), 0.006
+    )
+    assert found is not None
+    witness, past = found
+    assert witness == "cylinder"
+    assert past.tolist() == [False, False, False, True, True]
+    # Not a trade: the chosen fit leaves out only what lies past it, or the other fit leaves
+    # out a shot in front of its own background.
+    for chosen, other in (
+        ([True, True, True, False, False], [True, True, True, False, False]),
+        ([True, True, False, True, False], [False, True, True, False, False]),
+    ):
+        results = {"cylinder": _result(np.zeros(5), other), "cuboid": _result(np.zeros(5), chosen)}
+        assert (
+            auto.traded_background(
+                results, scores, ["cylinder", "cuboid"], "cuboid", _POINTS, np.zeros(3), 0.006
+            )
+            is None
+        )

@@ -22,7 +22,7 @@ from fit_scans import cell_centres, corner_angles, shoot, sizes_in_true_order
 from asbuilt.fit._beam_fans import beam_fan_shots, neighbours, raster_lines
 from asbuilt.fit.auto import fit_auto
 from asbuilt.fit.cuboid import fit_cuboid
-from asbuilt.primitives import Cuboid
+from asbuilt.primitives import Cuboid, Cylinder
 
 DISTANCE = 7.0  # station to the column's axis, metres
 SIGMA = 0.002  # range noise, metres
@@ -132,17 +132,93 @@ def _tanks():
     return [pytest.param(dict(scan, file=data), id=scan["id"]) for scan in data["scans"]]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="not fixed: the tank's raster column and the wall's next to it span a face seen at "
-    "74-79 degrees, within the 80 degree bound the beam-fan test (and the segmentation) "
-    "trust; a face that close to grazing is a real side face in other scans "
-    "(test_one_raster_column_on_a_grazing_side_face_is_that_face: 76 degrees)",
-)
 @pytest.mark.parametrize("scan", _tanks())
 def test_auto_does_not_call_a_tank_with_a_wall_behind_a_cuboid(scan):
+    # The tank's raster column and the wall's next to it span a "face" seen at 74-79 degrees,
+    # within the 80 degree bound a real side face can reach (76 degrees in
+    # test_one_raster_column_on_a_grazing_side_face_is_that_face), so the cuboid fit keeps it.
+    # Its box leaves the tank's other column out while the cylinder sees the wall past the
+    # tank: auto judges both on the shots in front of that wall.
     points = np.asarray(scan["points"])
     file = scan["file"]
     result = fit_auto(points, sigma=file["range_sigma"], viewpoint=file["viewpoint"])
     assert result.primitive.kind == "cylinder"
     assert result.primitive.radius == pytest.approx(scan["radius"], abs=0.05)
+
+
+@pytest.mark.parametrize("behind", [1.0, 3.0])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_auto_keeps_a_box_with_one_column_on_a_grazing_side_and_a_wall_behind(behind, seed):
+    # The box of test_one_raster_column_on_a_grazing_side_face_is_that_face (its side seen at
+    # 76 degrees by one raster column, 0.39 m behind the front), the raster a column wider
+    # each side and a wall behind: a plane of the front sees the side column past it, but the
+    # box keeps no shot the plane sees past and leaves none in front out, so auto's rescoring
+    # on the shots in front of a background does not apply.
+    rng = np.random.default_rng(100 + seed)
+    turn = np.radians(35.0)
+    rot = np.array(
+        [[np.cos(turn), -np.sin(turn), 0.0], [np.sin(turn), np.cos(turn), 0.0], [0.0, 0.0, 1.0]]
+    )
+    centre, size = np.array([4.0, 1.5, 0.3]), np.array([0.5, 0.4, 0.8])
+    aim_pan = np.arctan2(centre[1], centre[0])
+    aim_tilt = np.arctan2(centre[2], np.hypot(centre[0], centre[1]))
+    los = np.array([np.cos(aim_pan), np.sin(aim_pan), 0.0])
+    pan, tilt = np.meshgrid(
+        aim_pan + np.radians(np.linspace(-6.0, 6.0, 9)),
+        aim_tilt + np.radians(np.linspace(-5.0, 5.0, 6)),
+    )
+    points, hit = shoot(
+        Cuboid(centre, rot.T, size),
+        pan.ravel(),
+        tilt.ravel(),
+        rng,
+        pointing_sigma=0.0,
+        miss_range=lambda beams: (np.hypot(*centre[:2]) + behind) / (beams @ los),
+    )
+    result = fit_auto(points, sigma=SIGMA, viewpoint=np.zeros(3))
+    assert result.primitive.kind == "cuboid", result.notes
+    assert result.diagnostics["faces"] == 2
+    assert not result.inliers[~hit].any()
+    assert not any("Scored on the" in note for note in result.notes)
+
+
+def tank_scan(seed: int):
+    """Points (n, 3) metres of a vertical tank 1.5 m in radius 3-9 m from the station (the
+    origin), a raster of 5 pan columns x 5-6 tilt rows over a window 30-50% of its half-width
+    wider each side, and a wall square to the view 1-3 m behind it; and which shots hit it."""
+    rng = np.random.default_rng(seed)
+    radius = 1.5
+    distance = radius + rng.uniform(3.0, 9.0)
+    bearing = rng.uniform(-np.pi, np.pi)
+    los = np.array([np.cos(bearing), np.sin(bearing), 0.0])
+    height = rng.uniform(-0.5, 1.5)
+    tank = Cylinder(distance * los + [0.0, 0.0, height], [0.0, 0.0, 1.0], radius, 3.0)
+    half = np.arcsin(radius / distance)
+    wider = rng.uniform(0.3, 0.5) * half
+    rows = int(rng.choice([5, 6]))
+    pan, tilt = np.meshgrid(
+        cell_centres(bearing - half - wider, bearing + half + wider, 5),
+        cell_centres(
+            np.arctan2(height - 1.3, distance - radius),
+            np.arctan2(height + 1.3, distance - radius),
+            rows,
+        ),
+    )
+    wall = distance + radius + rng.uniform(1.0, 3.0)
+    return shoot(
+        tank, pan.ravel(), tilt.ravel(), rng, miss_range=lambda beams: wall / (beams @ los)
+    )
+
+
+@pytest.mark.parametrize("sigma", [SIGMA, None])
+@pytest.mark.parametrize("seed", range(8))
+def test_auto_does_not_call_a_ray_cast_tank_with_a_wall_behind_a_cuboid(seed, sigma):
+    # As the review's tanks, cast here: three raster columns on the tank, one on the wall each
+    # side. Before auto's rescoring in front of a background, 29 of 60 such scans were cuboids
+    # with the sensor's sigma, 51 without; 1 still is (a box through the three tank columns).
+    points, hit = tank_scan(seed)
+    assert np.count_nonzero(~hit) >= 10
+    result = fit_auto(points, sigma=sigma, viewpoint=np.zeros(3))
+    assert result.primitive.kind == "cylinder", result.notes
+    assert result.primitive.radius == pytest.approx(1.5, abs=0.05)
+    assert not result.inliers[~hit].any()
