@@ -108,6 +108,7 @@ from asbuilt.fit._joint import (
 )
 from asbuilt.fit._mixture import mixture_score
 from asbuilt.fit._neighbours import local_normals
+from asbuilt.fit._opposite import outside_outline
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cuboid, as_points, as_vector
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
@@ -548,6 +549,18 @@ def fit_cuboid(
             f"{tolerances.max_outlier_fraction:.0%}); the points do not look like one box. "
             "Check the object's points or fit it as a hull."
         )
+
+    if not trusted and not one_face:
+        # Without a station, two opposite faces are a measured size only if their shots share
+        # the box's outline (asbuilt.fit._opposite); a wall behind the box, shot past its
+        # sides, fits a "back face" as closely, and the frame built on it is wrong throughout.
+        face = outside_outline(model, x, label, inliers, width)
+        if face is not None:
+            raise FitError(
+                "cuboid: without the station, the shots of one face reach far past the outline "
+                "of the face opposite it (a wall or floor behind the object taken for its far "
+                "side?); give the scan's sensor position, or check the object's points."
+            )
 
     if n_out:
         notes.append(
