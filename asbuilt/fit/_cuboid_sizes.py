@@ -451,20 +451,24 @@ def silhouette_bounds(
         if not np.isfinite(beyond) or beyond < -0.5 * span or beyond > 2.0 * span:
             return False
     touched = _touched_sides(x, origin, viewpoint, found)
-    at = _silhouette._extent(new_lo, new_hi, model.axes, origin, viewpoint, pan0)
-    for k, side in free:
-        point = hi_pt[k] if side else lo_pt[k]
-        beyond = new_hi[k] - proj[point, k] if side else proj[point, k] - new_lo[k]
+    # The solved box and, per free bound, the box with that bound moved across its gap (one
+    # batch): which window sides each bound moves.
+    los = np.repeat(new_lo[None], len(free) + 1, axis=0)
+    his = np.repeat(new_hi[None], len(free) + 1, axis=0)
+    for c, (k, side) in enumerate(free):
         reach = 2.0 * pad[side, k]
         if gaps is not None and np.isfinite(gaps[side, k]):
             reach = max(reach, gaps[side, k])
-        moved_lo, moved_hi = new_lo.copy(), new_hi.copy()
         if side:
-            moved_hi[k] += reach
+            his[c + 1, k] += reach
         else:
-            moved_lo[k] -= reach
-        moved = _silhouette._extent(moved_lo, moved_hi, model.axes, origin, viewpoint, pan0)
-        if np.any(touched & (np.abs(moved - at) > 0.1 * np.repeat(steps, 2))):
+            los[c + 1, k] -= reach
+    extents = _silhouette._extents(los, his, model.axes, origin, viewpoint, pan0)
+    moves = np.abs(extents[1:] - extents[0]) > 0.1 * np.repeat(steps, 2)
+    for c, (k, side) in enumerate(free):
+        point = hi_pt[k] if side else lo_pt[k]
+        beyond = new_hi[k] - proj[point, k] if side else proj[point, k] - new_lo[k]
+        if np.any(touched & moves[c]):
             # A bisection placed a window side this bound moves: the solution is as good.
             pad[side, k] = max(beyond, 0.0)
             if fixed is not None:
