@@ -29,6 +29,7 @@ __all__ = [
     "extent_spans",
     "one_face_depth",
     "propagate",
+    "raster_gaps",
     "silhouette_bounds",
 ]
 
@@ -284,7 +285,7 @@ def bounds(x, label, inliers, model, noise, edge_pad, edges=None):
     return lo, hi, lo_face, hi_face, lo_pt, hi_pt, pads
 
 
-def extent_spans(x, label, inliers, model, noise, lo_pt, hi_pt, pad) -> np.ndarray:
+def extent_spans(x, label, inliers, model, noise, lo_pt, hi_pt, pad, pinned=None) -> np.ndarray:
     """How far (metres) beyond each extent bound's extreme inlier its edge may lie, (2, 3).
 
     Row 0 below lo, row 1 above hi (0 where a face bounds the side). The pad (:func:`bounds`)
@@ -292,8 +293,12 @@ def extent_spans(x, label, inliers, model, noise, lo_pt, hi_pt, pad) -> np.ndarr
     is the one the edge lies in. But the raster's lines are spaced differently on each face
     (a face seen obliquely spreads them, a pier's top seen from above too), and the edge
     beyond the extreme inlier lies within a step of its own face's lines
-    (:func:`_face_spacing`): the gap is the larger of twice the pad and that step. Without a
-    viewpoint nothing narrows it (no silhouette, no bisection shots told from the raster).
+    (:func:`_face_spacing`): the gap is the larger of twice the pad and that step. Only an
+    edge-bisection shot narrows it (``pinned`` (2, 3) bool, optional: the sides whose edge
+    :func:`bounds` found pinned by one, no pad; their gap stays twice the pad): a raster
+    window's solution (:func:`silhouette_bounds`) moves the bound but does not pin it, since
+    an operator's window side lies anywhere within a step of the last line of hits, and a
+    window side shared by several free bounds does not say which of them reaches it.
     ``noise`` is the residual cut (metres); ``lo_pt``/``hi_pt``/``pad`` as :func:`bounds`
     returns them.
     """
@@ -303,7 +308,7 @@ def extent_spans(x, label, inliers, model, noise, lo_pt, hi_pt, pad) -> np.ndarr
     spans = 2.0 * np.asarray(pad, dtype=np.float64)
     for k in range(3):
         for side, point in ((0, lo_pt[k]), (1, hi_pt[k])):
-            if point < 0:
+            if point < 0 or (pinned is not None and pinned[side, k]):
                 continue
             own = _face_spacing(proj, label, index, model, k, int(point), single, noise)
             if own is not None:
@@ -311,7 +316,95 @@ def extent_spans(x, label, inliers, model, noise, lo_pt, hi_pt, pad) -> np.ndarr
     return spans
 
 
-def silhouette_bounds(x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, found, edges):
+#: A neighbouring beam meeting the extreme shot's face beyond this incidence (degrees) says
+#: nothing about the gap: it runs along the face, and its hit is metres away or none.
+_GRAZING_DEG = 85.0
+
+
+def raster_gaps(x, origin, model, label, lo, hi, lo_pt, hi_pt, viewpoint, found, noise):
+    """The gap (metres) along each axis from an extent bound's extreme shot to the next raster line.
+
+    The shots are a pan-tilt raster seen from ``viewpoint`` (``found``:
+    :func:`asbuilt.fit._silhouette.raster_grid`'s answer, its pan and tilt steps). Each of the
+    raster's neighbouring beams of the extreme shot (a step of pan, or of tilt, either way)
+    meets the shot's face plane somewhere; where that is within the face across the axis
+    (between ``lo`` and ``hi`` (3,) along the face's third axis) and beyond the shot along
+    ``sign * axis k`` by more than ``noise`` (metres), the beam would have hit the face had it
+    reached so far, and did not (the shot is the extreme one; a beam just past the operator's
+    window is taken as a miss too, as the window's half-step rule takes it). The edge lies
+    between the shot and the nearest such point: the next raster line along that face (the
+    review's oblique faces: 0.1-0.35 m). Unlike the lines' spacing (:func:`_face_spacing`),
+    this holds on a face whose rows are not at one height (an oblique face's rows climb with
+    range) and on a face that is one line of shots.
+
+    ``x`` (n, 3): the points about ``origin`` (3,); ``label`` (n,): their faces; ``lo_pt`` /
+    ``hi_pt`` (3,): the extreme shots (:func:`bounds`, -1 at a face bound). Returns (2, 3),
+    row 0 below lo and row 1 above hi, NaN where no neighbouring beam meets the face within
+    ``_GRAZING_DEG`` of its normal and within it across the axis.
+    """
+    pan0, _window, _on_grid, _pinned, steps = found
+    gaps = np.full((2, 3), np.nan)
+    station = np.asarray(viewpoint, dtype=np.float64) - origin
+    proj = x @ model.axes.T
+    limit = math.cos(math.radians(_GRAZING_DEG))
+    for k in range(3):
+        for side, sign, point in ((0, -1.0, lo_pt[k]), (1, 1.0, hi_pt[k])):
+            if point < 0:
+                continue
+            f = int(label[point])
+            j = int(model.face_axis[f])
+            m = 3 - j - k
+            if m == j or m == k:
+                continue
+            normal = model.axes[j]
+            plane = model.face_sign[f] * model.offset[f]
+            pan, tilt = _silhouette._angles(x[point][None] + origin, viewpoint, pan0)[0]
+            pan += pan0
+            best = np.nan
+            for dp, dt in ((steps[0], 0.0), (-steps[0], 0.0), (0.0, steps[1]), (0.0, -steps[1])):
+                p, t = pan + dp, tilt + dt
+                beam = np.array([math.cos(t) * math.cos(p), math.cos(t) * math.sin(p), math.sin(t)])
+                facing = float(normal @ beam)
+                if abs(facing) < limit:
+                    continue  # along the face: its hit says nothing about the edge
+                reach = (plane - float(normal @ station)) / facing
+                if reach <= 0.0:
+                    continue
+                hit = (station + reach * beam) @ model.axes.T
+                if not lo[m] <= hit[m] <= hi[m]:
+                    continue  # past the face's side: a miss there bounds nothing along k
+                advance = sign * (hit[k] - proj[point, k])
+                if advance > noise and not advance >= best:
+                    best = advance
+            gaps[side, k] = best
+    return gaps
+
+
+def _touched_sides(x, origin, viewpoint, found) -> np.ndarray:
+    """Which raster window sides (4,) bool an edge-bisection shot placed.
+
+    ``found`` as :func:`asbuilt.fit._silhouette.raster_grid` returns it for the points
+    ``x + origin`` (x (n', 3), its first n rows the shots it read; mended rows after them). A
+    side is placed by bisection when it is pinned at a bisection hit, or put on the raster's
+    last line (a bisection hit just inside it) instead of half a step beyond: either way the
+    silhouette is known there to the session's tolerance, not to a raster step.
+    """
+    pan0, window, on_grid, pinned, steps = found
+    ang = _silhouette._angles(x[: on_grid.shape[0]][on_grid] + origin, viewpoint, pan0)
+    rule = np.array(
+        [
+            ang[:, 0].min() - 0.5 * steps[0],
+            ang[:, 0].max() + 0.5 * steps[0],
+            ang[:, 1].min() - 0.5 * steps[1],
+            ang[:, 1].max() + 0.5 * steps[1],
+        ]
+    )
+    return pinned | (np.abs(window - rule) > 0.05 * np.repeat(steps, 2))
+
+
+def silhouette_bounds(
+    x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, found, edges, gaps=None, fixed=None
+):
     """Replace extent bounds (in place: lo, hi, pad) by the raster silhouette solution.
 
     ``found`` is :func:`asbuilt.fit._silhouette.raster_grid`'s answer for ``viewpoint``. A
@@ -320,9 +413,17 @@ def silhouette_bounds(x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, fo
     at the half-step rule, which seen obliquely (a pier's foot from above) can put the edge a
     raster step of angle, most of a metre, away. The
     solution is used only if it cuts off less than half the box's extent along any axis; a
-    bound it would put inside an inlier stays at that inlier (a side pinned on a raster line is
-    short of the edge by up to a bisection bracket across the beam, more along a face seen at
-    grazing incidence). Returns whether it was used.
+    bound it would put at or inside its extreme inlier keeps the extent rule's pad (``pad`` as
+    :func:`bounds` set it): nothing pins that edge, which lies anywhere in the gap up to the
+    next raster line beyond the last hit (along a face seen obliquely, 0.1-0.35 m). Clamping
+    such a bound to the inlier, with no pad, had reported it to the range noise: an
+    independent review's cabinet 1.255 m high came out 1.117 +- 0.003 m. With ``gaps`` (2, 3)
+    (:func:`raster_gaps`) known for that side, its pad is half the gap instead. But where the
+    bound moves a window side that an edge-bisection shot placed (:func:`_touched_sides`: by
+    a tenth of a raster step or more as it crosses its gap), the solution is known to the
+    session's tolerance: it stands, pad 0 included, and the side is marked in ``fixed`` (2, 3)
+    bool, optional, in place (no gap beyond it: :func:`extent_spans`). Returns whether the
+    solution was used.
     """
     pan0, window, _on_grid, pinned, steps = found
 
@@ -349,13 +450,41 @@ def silhouette_bounds(x, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, fo
         span = hi[k] - lo[k]
         if not np.isfinite(beyond) or beyond < -0.5 * span or beyond > 2.0 * span:
             return False
-    for k, side in free:
+    touched = _touched_sides(x, origin, viewpoint, found)
+    # The solved box and, per free bound, the box with that bound moved across its gap (one
+    # batch): which window sides each bound moves.
+    los = np.repeat(new_lo[None], len(free) + 1, axis=0)
+    his = np.repeat(new_hi[None], len(free) + 1, axis=0)
+    for c, (k, side) in enumerate(free):
+        reach = 2.0 * pad[side, k]
+        if gaps is not None and np.isfinite(gaps[side, k]):
+            reach = max(reach, gaps[side, k])
         if side:
-            pad[1, k] = max(new_hi[k] - proj[hi_pt[k], k], 0.0)
-            hi[k] = proj[hi_pt[k], k] + pad[1, k]
+            his[c + 1, k] += reach
         else:
-            pad[0, k] = max(proj[lo_pt[k], k] - new_lo[k], 0.0)
-            lo[k] = proj[lo_pt[k], k] - pad[0, k]
+            los[c + 1, k] -= reach
+    extents = _silhouette._extents(los, his, model.axes, origin, viewpoint, pan0)
+    moves = np.abs(extents[1:] - extents[0]) > 0.1 * np.repeat(steps, 2)
+    for c, (k, side) in enumerate(free):
+        point = hi_pt[k] if side else lo_pt[k]
+        beyond = new_hi[k] - proj[point, k] if side else proj[point, k] - new_lo[k]
+        if np.any(touched & moves[c]):
+            # A bisection placed a window side this bound moves: the solution is as good.
+            pad[side, k] = max(beyond, 0.0)
+            if fixed is not None:
+                fixed[side, k] = True
+        # A solution at or inside the extreme inlier says only that this bound is not the one
+        # the window side reaches (another free bound meeting the same side took it up, or the
+        # operator's window ends short of the silhouette): the edge is still somewhere in the
+        # gap beyond the last hit, so the extent rule's pad (the middle of that gap) stays.
+        elif beyond > 0.0:
+            pad[side, k] = beyond
+        elif gaps is not None and np.isfinite(gaps[side, k]):
+            pad[side, k] = 0.5 * gaps[side, k]
+        if side:
+            hi[k] = proj[point, k] + pad[1, k]
+        else:
+            lo[k] = proj[point, k] - pad[0, k]
     return True
 
 

@@ -55,7 +55,10 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    extent widened by half a step (:mod:`asbuilt.fit._silhouette`; the project's raster shoots at
    cell centres), each side that edge-bisection shots reach beyond the last raster line being
    placed at the outermost of them, and a side with a bisection hit just inside its last line
-   on that line. Where the solution would cut off an inlier, the bound stays at the inlier.
+   on that line. Where the solution would put a bound at or inside its extreme inlier and no
+   bisection placed the window side it moves, the edge is still anywhere up to the next raster
+   beam along that face (:func:`asbuilt.fit._cuboid_sizes.raster_gaps`): the bound is put in
+   the middle of that gap, and the gap is its uncertainty.
    Over an operator's window (a little wider than the object) the half-step rule is right only
    within half a step either way; the bisection shots are what make those sizes accurate. Edge-bisection shots (an acquisition session's, told from the
    raster by their angles from a given viewpoint: :func:`asbuilt.fit._silhouette.edge_shots`)
@@ -66,8 +69,9 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    clean hit would. Bisection shots are left out of the segmentation where they crowd within
    millimetres of each other (no normal from such neighbourhoods). The size's standard error
    includes the remaining gap: the edge is taken as uniform between the extreme point and
-   twice the pad beyond it (variance pad^2 / 3 per extent bound), besides the extreme point's
-   own noise.
+   the larger of twice the pad and the gap to the next raster line along its face beyond it
+   (variance ``(gap/2 - pad)^2 + gap^2/12`` per extent bound; pad^2 / 3 at gap 2 pad),
+   besides the extreme point's own noise; a bound a bisection shot pins has no gap.
 4. One seen face: the face normal is fitted, the in-plane axes come from the minimum-area
    bounding rectangle of the projected points (rotating calipers, Freeman and Shapira 1975) and
    the unseen depth is set to the smaller in-plane width (a column seen face-on is about
@@ -92,6 +96,7 @@ from asbuilt.fit._cuboid_sizes import (
     extent_spans,
     one_face_depth,
     propagate,
+    raster_gaps,
     silhouette_bounds,
 )
 from asbuilt.fit._joint import (
@@ -104,6 +109,7 @@ from asbuilt.fit._joint import (
 )
 from asbuilt.fit._mixture import mixture_score
 from asbuilt.fit._neighbours import local_normals
+from asbuilt.fit._opposite import outside_outline
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cuboid, as_points, as_vector
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
@@ -599,6 +605,18 @@ def _fit_cuboid_shots(
             "Check the object's points or fit it as a hull."
         )
 
+    if not trusted and not one_face:
+        # Without a station, two opposite faces are a measured size only if their shots share
+        # the box's outline (asbuilt.fit._opposite); a wall behind the box, shot past its
+        # sides, fits a "back face" as closely, and the frame built on it is wrong throughout.
+        face = outside_outline(model, x, label, inliers, width)
+        if face is not None:
+            raise FitError(
+                "cuboid: without the station, the shots of one face reach far past the outline "
+                "of the face opposite it (a wall or floor behind the object taken for its far "
+                "side?); give the scan's sensor position, or check the object's points."
+            )
+
     if n_out:
         notes.append(
             f"{n_out} outlier point(s) rejected (beyond {cutoff:g} x "
@@ -621,10 +639,16 @@ def _fit_cuboid_shots(
     lo, hi, lo_face, hi_face, lo_pt, hi_pt, pad = bounds(
         xb, label_b, inliers_b, model, cutoff * scale, edge_pad, edges_b
     )
+    # Sides an edge-bisection shot pins (no pad): known to the session's tolerance.
+    pinned = (pad == 0.0) & (np.stack([lo_pt, hi_pt]) >= 0)
     used_window = False
+    gaps = None
     if silhouette and grid is not None and not one_face:
+        gaps = raster_gaps(
+            xb, origin, model, label_b, lo, hi, lo_pt, hi_pt, viewpoint, grid, cutoff * scale
+        )
         used_window = silhouette_bounds(
-            xb, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid, edges_b
+            xb, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid, edges_b, gaps, pinned
         )
     if used_window:
         notes.append(
@@ -643,10 +667,14 @@ def _fit_cuboid_shots(
     sig, source = noise_level(residual[inliers], n_par, sigma, tolerances)
     sig = max(sig, floor)
     cov = covariance(model, x[inliers], label[inliers], sig)
-    spans = None
-    if not trusted:
-        # Without a viewpoint the gap beyond an extent bound is its own face's raster step.
-        spans = extent_spans(xb, label_b, inliers_b, model, cutoff * scale, lo_pt, hi_pt, pad)
+    # The gap beyond an extent bound is its own face's raster step, unless a bisection shot
+    # pins the edge; a raster window's solution moves the bound within it, it does not pin it.
+    spans = extent_spans(xb, label_b, inliers_b, model, cutoff * scale, lo_pt, hi_pt, pad, pinned)
+    if gaps is not None:
+        # Over a raster, the gap up to the next raster line along the face is measured from
+        # the beams themselves (:func:`raster_gaps`), not from the lines' spacing.
+        known = np.isfinite(gaps) & ~pinned
+        spans[known] = np.maximum(2.0 * pad[known], gaps[known])
     size_se, centre_se = propagate(
         model, xb, cov, (lo_pt, hi_pt, lo_face, hi_face, pad), sig, one_face, spans
     )

@@ -16,10 +16,14 @@ can have seen is now offered and fitted too, and wins.
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 from fit_scans import cell_centres, corner_angles, shoot, sizes_in_true_order
 
+from asbuilt.errors import FitError
 from asbuilt.fit.cuboid import fit_cuboid
 from asbuilt.primitives import Cuboid
 
@@ -80,3 +84,20 @@ def test_extent_bound_covers_its_own_faces_raster_step(turn_deg, columns, rows, 
         size, stderr, observed = sizes_in_true_order(result, rot)
         assert not observed.any()
         assert np.all(np.abs(size - 2.0 * HALF) <= 3.0 * stderr), (seed, size, stderr)
+
+
+def test_a_wall_behind_is_no_back_face_without_the_station():
+    # An independent review's ray-cast column with a wall 3.1 m behind it, no station given
+    # (tests/fit/wall_as_back_face_no_station.json): the wall's shots, reaching far past the
+    # column's outline, were fitted as its back face, and the column came out 5.51 x 1.22 m
+    # with the 1.22 m "observed" to 0.8 mm. Two opposite faces must share one outline; a face
+    # that reaches past its opposite is left out. Here the shots left are then not one box,
+    # and the fit is refused rather than measured wrong.
+    scan = json.loads((Path(__file__).parent / "wall_as_back_face_no_station.json").read_text())
+    try:
+        fit = fit_cuboid(np.array(scan["points"]), sigma=scan["range_sigma"])
+    except FitError:
+        return
+    size, stderr, observed = sizes_in_true_order(fit, np.asarray(scan["axes"]))
+    z = (size - np.asarray(scan["size"])) / stderr
+    assert not np.any(observed & (np.abs(z) > 4.0)), (size, stderr, observed)
