@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
-import numpy as np
+import json
+from pathlib import Path
 
+import numpy as np
+import pytest
+
+from asbuilt.errors import FitError
+from asbuilt.fit import fit_points
 from asbuilt.fit._cylinder_background import (
     behind_the_pipe,
     depth_segments,
@@ -138,3 +144,20 @@ def test_a_plumb_pipe_before_wall_rows_is_fitted_from_its_own_shots():
     assert abs(result.primitive.radius - pipe.radius) < 3 * result.stderr["radius"] + 0.001
     assert not any("viewpoint was ignored" in note for note in result.notes)
     assert (result.inliers == on_pipe).all()
+
+
+def test_the_rescue_keeps_the_viewpoint_it_cut_the_surfaces_by():
+    """Independent review (batch c): a plumb NPS 4 pipe before a wall came out r 506 mm +-2.4
+    (true 57.2) with the station ignored: the rescue, which takes the station as right to cut
+    the shots at range jumps, returned a fit that had ignored it (at the 6.5 mm the shots
+    scatter by, which :func:`fit_points` retries with). No fit stands here."""
+    scan = json.loads(
+        (Path(__file__).parent / "pipe_before_wall_subset_view_ignored.json").read_text()
+    )
+    with pytest.raises(FitError):
+        fit_points(
+            "cylinder",
+            np.array(scan["points"]),
+            sigma=scan["range_sigma"],
+            viewpoint=scan["station"],
+        )
