@@ -156,7 +156,8 @@ def _crossing_along(axis, center, points: np.ndarray, viewpoint, a, b, discrimin
     """Where each beam from ``viewpoint`` to ``points`` (n, 3) metres crosses one infinite
     cylinder (``a``, ``b``, ``discriminant`` of :func:`_beam_crossings`, shape (1, n)), along
     ``axis`` from ``center``: ``(low, high)``, each (n,) metres, the ends of its chord through
-    the cylinder, or twice the point where a beam that misses it passes closest to its axis."""
+    the cylinder, or for a beam that misses it the point where it passes closest to its axis
+    (low and high the same)."""
     view = np.asarray(viewpoint, dtype=np.float64)
     axis = np.asarray(axis, dtype=np.float64)
     beams = points - view

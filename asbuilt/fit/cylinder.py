@@ -225,7 +225,8 @@ def fit_cylinder(
         the fit is settled again from the best starts of other basins and the beams decide
         between them (a shot's beam must reach it without passing through the pipe,
         :mod:`asbuilt.fit._visibility`); a viewpoint the shots cannot have come from is ignored
-        with a note.
+        with a note, unless from it the nearest surface holds ``NEAR_SHARE`` of the shots with
+        the rest behind it (a pipe before a wall that no fit found: refused).
 
     Returns
     -------
@@ -289,11 +290,9 @@ def fit_cylinder(
     noise = sigma if sigma is not None else tolerances.prior_range_sigma
     segments = depth_segments(pts, view, noise) if len(pts) <= DENSE_POINTS else []
     if len(segments) > 1 and len(segments[0]) >= NEAR_SHARE * len(pts):
-        # From the viewpoint the nearest surface holds much of the scan with the rest behind it
-        # across range jumps, as a pipe before a wall, and no fit of it stood: the fit ignoring
-        # the viewpoint takes the background for pipe (the review's ray caster, its stations
-        # all right: every such fit wrong). From a wrong station (the far side, another frame)
-        # the shots are one surface, or fragments with no large one nearest: still ignored.
+        # A pipe before a wall as seen from the viewpoint, and no fit of the pipe stood: a fit
+        # ignoring the viewpoint takes the wall for pipe. A wrong station (the far side, another
+        # frame) sees one surface, or fragments with no large one nearest (docs/fitting.md).
         raise FitError(VIEW_CONTRADICTED)
     return result
 
