@@ -159,7 +159,9 @@ def rejected_are_background(
       viewpoint is not one the inliers were mostly hidden from (as
       :func:`~asbuilt.fit._cylinder_checks.unseen`), and every rejected shot lies beyond the
       first surface of the pipe its beam met
-      (:func:`~asbuilt.fit._visibility.beyond_first_surface`): a shot that grazed the pipe
+      (:func:`~asbuilt.fit._visibility.beyond_first_surface`; a beam that passed the end of
+      the pipe, of its inliers' length, met none: a column's floor shots in front of its
+      foot, or its wall rows above its top, are background): a shot that grazed the pipe
       and came back from the wall, or a mixed return between them, lies beyond it; a shot in
       front of the pipe, off it, is another surface's (a wider pipe sharing this one's near
       side showed its fourth raster column 3-7 cm in front of the thinner fit's silhouette). No kept shot is a mixed return (:func:`_mixed_return_kept`):
@@ -186,7 +188,13 @@ def rejected_are_background(
         return False
     axis, center, radius = robust.state
     if view is not None:
-        excess, beyond = excess_and_beyond(axis, center, radius, local, view)
+        # The pipe as fitted, of its inliers' length (to the cutoff): a rejected shot whose beam
+        # passed its end (a column's wall rows above its top) met no pipe, so it is background
+        # wherever it lies; against the infinite cylinder a floor shot in front of a column's
+        # foot lay "in front of the pipe".
+        along = (local[robust.inliers] - center) @ axis
+        span = (float(along.min()) - cutoff, float(along.max()) + cutoff)
+        excess, beyond = excess_and_beyond(axis, center, radius, local, view, span)
         excess = excess[robust.inliers]
         unseen = np.count_nonzero(excess > 0.1 * radius) / max(excess.size, 1)
         if (excess > cutoff).any() or unseen > UNSEEN_FRACTION:

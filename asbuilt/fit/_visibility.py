@@ -130,12 +130,46 @@ def beyond_first_surface(axis, center, radius, points: np.ndarray, viewpoint) ->
     return _beyond(*_beam_crossings(axis, center, radius, points, viewpoint))
 
 
-def excess_and_beyond(axis, center, radius, points: np.ndarray, viewpoint):
+def excess_and_beyond(axis, center, radius, points: np.ndarray, viewpoint, span=None):
     """:func:`cylinder_beam_excess` and :func:`beyond_first_surface` of one cylinder (``axis``
     (3,), ``center`` (3,) metres, ``radius`` metres), each shape (n,) metres, from one
-    computation of where the beams cross it."""
+    computation of where the beams cross it.
+
+    ``span``: ``(low, high)`` metres along ``axis`` from ``center``, where the pipe is known to
+    be (a fitted pipe's kept shots), or None for an infinite cylinder. A beam whose crossing of
+    the infinite cylinder (its chord through it, or where a beam that misses it passes closest
+    to its axis) lies wholly outside the span met no pipe: excess 0 and beyond ``inf``. A
+    column's wall shots above its top, or a pipe's past its free end, passed the pipe's end;
+    counted against the infinite cylinder they were "seen through" it.
+    """
     crossings = _beam_crossings(axis, center, radius, points, viewpoint)
-    return _excess(*crossings)[0], _beyond(*crossings)
+    excess, beyond = _excess(*crossings)[0], _beyond(*crossings)
+    if span is not None:
+        low, high = _crossing_along(axis, center, points, viewpoint, *crossings[1:])
+        missed = (high < span[0]) | (low > span[1])
+        excess[missed] = 0.0
+        beyond[missed] = np.inf
+    return excess, beyond
+
+
+def _crossing_along(axis, center, points: np.ndarray, viewpoint, a, b, discriminant):
+    """Where each beam from ``viewpoint`` to ``points`` (n, 3) metres crosses one infinite
+    cylinder (``a``, ``b``, ``discriminant`` of :func:`_beam_crossings`, shape (1, n)), along
+    ``axis`` from ``center``: ``(low, high)``, each (n,) metres, the ends of its chord through
+    the cylinder, or for a beam that misses it the point where it passes closest to its axis
+    (low and high the same)."""
+    view = np.asarray(viewpoint, dtype=np.float64)
+    axis = np.asarray(axis, dtype=np.float64)
+    beams = points - view
+    directions = beams / np.maximum(np.linalg.norm(beams, axis=1), 1e-300)[:, None]
+    a = np.maximum(a[0], 1e-24)  # beams along the axis: never nearer it
+    middle = -b[0] / (2.0 * a)
+    half_chord = np.sqrt(np.maximum(discriminant[0], 0.0)) / (2.0 * a)
+    start = float((view - np.asarray(center, dtype=np.float64)) @ axis)
+    slope = directions @ axis  # along the axis per metre of beam
+    one = start + (middle - half_chord) * slope
+    other = start + (middle + half_chord) * slope
+    return np.minimum(one, other), np.maximum(one, other)
 
 
 def _beyond(lengths, a, b, discriminant) -> np.ndarray:

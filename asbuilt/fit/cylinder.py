@@ -64,6 +64,8 @@ from asbuilt.fit._common import (
     validate_points,
 )
 from asbuilt.fit._cylinder_background import (
+    NEAR_SHARE,
+    depth_segments,
     fit_without_background,
     fit_without_background_plane,
 )
@@ -223,7 +225,8 @@ def fit_cylinder(
         the fit is settled again from the best starts of other basins and the beams decide
         between them (a shot's beam must reach it without passing through the pipe,
         :mod:`asbuilt.fit._visibility`); a viewpoint the shots cannot have come from is ignored
-        with a note.
+        with a note, unless from it the nearest surface holds ``NEAR_SHARE`` of the shots with
+        the rest behind it (a pipe before a wall that no fit found: refused).
 
     Returns
     -------
@@ -277,14 +280,30 @@ def fit_cylinder(
     # can outnumber what the robust starts take; the shots in front of the range jumps alone
     # may still be the pipe.
     pts = validate_points(points, "cylinder")
+    view = np.asarray(viewpoint, dtype=np.float64)
     if len(pts) <= DENSE_POINTS:
-        rescued = fit_without_background(
-            _fit_cylinder, pts, np.asarray(viewpoint, dtype=np.float64), sigma, tolerances
-        )
+        rescued = fit_without_background(_fit_seen_from, pts, view, sigma, tolerances)
         if rescued is not None:
             return rescued
     if result is None:
         raise error
+    noise = sigma if sigma is not None else tolerances.prior_range_sigma
+    segments = depth_segments(pts, view, noise) if len(pts) <= DENSE_POINTS else []
+    if len(segments) > 1 and len(segments[0]) >= NEAR_SHARE * len(pts):
+        # A pipe before a wall as seen from the viewpoint, and no fit of the pipe stood: a fit
+        # ignoring the viewpoint takes the wall for pipe. A wrong station (the far side, another
+        # frame) sees one surface, or fragments with no large one nearest (docs/fitting.md).
+        raise FitError(VIEW_CONTRADICTED)
+    return result
+
+
+def _fit_seen_from(points, sigma, tolerances, viewpoint) -> FitResult:
+    """:func:`_fit_cylinder` of a subset that must keep its viewpoint: the background rescue
+    takes the viewpoint as right (its surfaces are cut by range jumps seen from it), so a
+    subset's fit that ignored it is no rescue (FitError)."""
+    result = _fit_cylinder(points, sigma, tolerances, viewpoint)
+    if _view_ignored(result):
+        raise FitError(VIEW_IGNORED)
     return result
 
 
@@ -292,6 +311,17 @@ def fit_cylinder(
 VIEW_IGNORED = (
     "The viewpoint was ignored: more than a third of the shots would have been seen "
     "through the pipe from it (check the scan's sensor position or the station)."
+)
+
+
+#: Why a fit that would ignore the viewpoint is refused (:func:`fit_cylinder`).
+VIEW_CONTRADICTED = (
+    "No cylinder fits these shots as seen from the viewpoint (each would hide more than a"
+    " third of them behind itself), yet from it the nearest surface holds much of the scan"
+    " with the rest behind it (range jumps between neighbouring beams), as a pipe before a"
+    " wall, and no fit of that surface stands: ignoring the viewpoint would take the"
+    " background for pipe. Check the scan's sensor position or the object's station; if"
+    " they are right, rescan with more of the raster on the pipe."
 )
 
 

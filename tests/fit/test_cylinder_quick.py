@@ -12,9 +12,10 @@ from fit_scans import angle_deg, raster_scan
 from asbuilt.errors import FitError
 from asbuilt.fit import cylinder as cylinder_module
 from asbuilt.fit._common import local_normals
-from asbuilt.fit._cylinder_quick import CLEAR_OF_CUTOFFS, quick_fit
+from asbuilt.fit._cylinder_model import MODEL
+from asbuilt.fit._cylinder_quick import CLEAR_OF_CUTOFFS, quick_fit, rejected_are_background
 from asbuilt.fit._cylinder_starts import axis_starts
-from asbuilt.fit._robust import keep_count
+from asbuilt.fit._robust import RobustFit, keep_count, refit_on
 from asbuilt.fit.cylinder import fit_cylinder
 from asbuilt.primitives import Cylinder
 from asbuilt.tolerances import DEFAULT_TOLERANCES
@@ -226,3 +227,31 @@ def test_a_mixed_return_kept_inside_the_pipe_is_left_to_the_full_search(clean):
         pytest.fail("no push along a shot's beam lands 1.5-2.5 sigma inside the pipe")
     found = _quick(mixed, view)
     assert found is None or not found[0].inliers[silhouette]
+
+
+def test_floor_shots_in_front_of_a_columns_foot_are_background():
+    """A rejected shot whose beam passed the fitted pipe's end met no pipe: floor shots in front
+    of a plumb column's foot lay "in front of" the infinite cylinder below the floor, and the
+    quick fit was left to the full search."""
+    rng = np.random.default_rng(11)
+    view = np.array([0.0, 0.0, 1.5])
+    pipe = Cylinder([4.0, 0.0, 0.5], [0.0, 0.0, 1.0], 0.1, 1.0)
+    pan, z = np.meshgrid(np.radians(np.linspace(-1.2, 1.2, 5)), np.linspace(0.05, 0.95, 8))
+    # Each beam's first crossing of the pipe (plumb: solve across the axis, z follows).
+    across = np.column_stack([np.cos(pan.ravel()), np.sin(pan.ravel())])
+    reach = 4.0 * across[:, 0] - np.sqrt(0.01 - (4.0 * across[:, 1]) ** 2)
+    on_pipe = np.column_stack([across * reach[:, None], z.ravel()])
+    floor = np.array([[3.5, -0.05, 0.0], [3.5, 0.0, 0.0], [3.5, 0.05, 0.0]])
+    points = np.vstack([on_pipe, floor])
+    beams = points - view
+    points = (
+        view
+        + beams * (1 + rng.normal(0, SIGMA, len(points)) / np.linalg.norm(beams, axis=1))[:, None]
+    )
+    offset = points.mean(axis=0)
+    local = points - offset
+    mask = np.arange(len(points)) < len(on_pipe)
+    state = (pipe.axis, pipe.center - offset, pipe.radius)
+    start = RobustFit(state, MODEL.residuals(state, local), mask, np.zeros((0, 5)), SIGMA)
+    robust = refit_on(MODEL, start, local, mask)
+    assert rejected_are_background(robust, local, SIGMA, view - offset, DEFAULT_TOLERANCES)

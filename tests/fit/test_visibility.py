@@ -202,3 +202,20 @@ def test_excess_and_beyond_are_the_two_functions_from_one_computation():
     np.testing.assert_array_equal(
         beyond, beyond_first_surface(axis, center, 0.7, points, viewpoint)
     )
+
+
+def test_a_beam_past_the_pipes_end_met_no_pipe():
+    """With the pipe's span along its axis, a beam over its top met nothing (excess 0, beyond
+    inf); one through it within the span is judged as against the infinite cylinder."""
+    view = np.array([-5.0, 0.0, 0.0])
+    over = np.array([[2.0, 0.0, 1.4]])  # crosses the unit pipe at z 0.8-1.2
+    below = np.array([[2.0, 0.0, 0.7]])  # at z 0.4-0.6
+    excess, beyond = excess_and_beyond(AXIS, np.zeros(3), 1.0, over, view)
+    assert excess[0] > 1.0 and np.isfinite(beyond[0])  # the infinite cylinder's answer
+    excess, beyond = excess_and_beyond(
+        AXIS, np.zeros(3), 1.0, over, view, (-1.0, 0.5)
+    )  # top at 0.5
+    assert excess[0] == 0.0 and beyond[0] == np.inf
+    both = excess_and_beyond(AXIS, np.zeros(3), 1.0, below, view)
+    spanned = excess_and_beyond(AXIS, np.zeros(3), 1.0, below, view, (-1.0, 1.0))
+    assert np.allclose(both, spanned)
