@@ -459,10 +459,14 @@ def fit_cuboid(
         )
     except FitError as exc:
         error = exc
+    if result is not None and result.inliers.all():
+        return result  # every shot on a face: none in front of the box or inside it
     pts = _validate(points)
     contradictions = len(pts)
     if result is not None:
         width = tolerances.outlier_cutoff_sigma * max(result.sigma, tolerances.sigma_floor)
+        # Every shot, not only the rejected: a frame built on the wall can keep shots of the
+        # object on a face's plane in front of another face.
         contradictions = int(np.count_nonzero(contradicting(result.primitive, pts, view, width)))
         if contradictions < FRONT_SHOTS:
             return result
