@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.fit import _faces
+from asbuilt.fit._common import median_spacing
 
 __all__ = ["outside_outline"]
 
@@ -29,15 +30,6 @@ __all__ = ["outside_outline"]
 #: others stop short of an edge by up to a step, this face's shots need not. The same 1.5
 #: spacings the segmentation allows between a face and its neighbour's plane.
 _REACH = 1.5
-
-
-def _spacing(points: np.ndarray) -> float:
-    """Median distance (metres) from each point (m, 3) to its nearest neighbour."""
-    if points.shape[0] < 2:
-        return 0.0
-    gaps = np.linalg.norm(points[:, None, :] - points[None, :, :], axis=-1)
-    np.fill_diagonal(gaps, np.inf)
-    return float(np.median(gaps.min(axis=1)))
 
 
 def outside_outline(model, x, label, inliers, width) -> int | None:
@@ -54,7 +46,7 @@ def outside_outline(model, x, label, inliers, width) -> int | None:
     if not _faces.has_opposite(model.face_axis):
         return None
     proj = x @ model.axes.T
-    tol = max(width, _REACH * _spacing(x[inliers]))
+    tol = max(width, _REACH * median_spacing(x[inliers]))
     worst, worst_face = tol, None
     for f in range(model.offset.shape[0]):
         k = int(model.face_axis[f])
