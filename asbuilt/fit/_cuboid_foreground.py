@@ -24,7 +24,7 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit._common import median_spacing
-from asbuilt.fit._cylinder_background import _rescued, depth_segments
+from asbuilt.fit._cylinder_background import _rescued, depth_segments, subset_fits
 from asbuilt.tolerances import MIN_POINTS
 
 __all__ = [
@@ -151,6 +151,23 @@ def _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff: float
     return found, mask
 
 
+def _nearest_first(segments: list, n: int):
+    """Masks (n,) bool of the nearest surfaces (``segments``, nearest first): the nearest
+    alone, then with the next and so on, each of at least the cuboid's ``MIN_POINTS`` shots
+    and leaving the farthest out, at most ``MOST_SUBSETS`` of them."""
+    mask = np.zeros(n, dtype=bool)
+    made = 0
+    for members in segments[:-1]:
+        mask = mask.copy()
+        mask[members] = True
+        if mask.sum() < MIN_POINTS["cuboid"]:
+            continue
+        yield mask
+        made += 1
+        if made == MOST_SUBSETS:
+            return
+
+
 def fit_nearest_box(
     fit, points: np.ndarray, view: np.ndarray, sigma, tolerances, contradictions: int
 ):
@@ -172,23 +189,8 @@ def fit_nearest_box(
     n = len(points)
     prior = float(tolerances.prior_range_sigma)
     segments = depth_segments(points, view, sigma if sigma is not None else prior)
-    mask = np.zeros(n, dtype=bool)
-    tried = 0
-    for members in segments[:-1]:
-        mask = mask.copy()
-        mask[members] = True
-        if mask.sum() < MIN_POINTS["cuboid"]:
-            continue
-        tried += 1
-        if tried > MOST_SUBSETS:
-            break
-        try:
-            found = fit(points[mask], sigma, tolerances, view)
-        except FitError:
-            continue
-        cutoff = tolerances.outlier_cutoff_sigma * (
-            sigma if sigma is not None else max(found.sigma, prior)
-        )
+    masks = _nearest_first(segments, n)
+    for found, mask, cutoff in subset_fits(fit, points, view, sigma, tolerances, masks):
         found, kept = _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff)
         left_out = ~kept
         wrong = ~behind(found.primitive, points[left_out], view, cutoff)

@@ -37,6 +37,7 @@ __all__ = [
     "near_subsets",
     "only_background_behind",
     "fit_without_background",
+    "subset_fits",
     "PLANE_SHOTS",
     "PLANE_SAMPLES",
     "MOST_PLANES",
@@ -184,6 +185,21 @@ def _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff: float
     return found, mask
 
 
+def subset_fits(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances, masks):
+    """``(fit, mask, cutoff)`` for each of ``masks`` ((n,) bool) whose shots ``fit(points[mask],
+    sigma, tolerances, view)`` fits (the rest are skipped), with the fit's inlier cutoff in
+    metres (``outlier_cutoff_sigma`` times the sensor's ``sigma``, else the fit's own noise
+    level but not below the prior)."""
+    prior = float(tolerances.prior_range_sigma)
+    for mask in masks:
+        try:
+            found = fit(points[mask], sigma, tolerances, view)
+        except FitError:
+            continue
+        noise = sigma if sigma is not None else max(found.sigma, prior)
+        yield found, mask, tolerances.outlier_cutoff_sigma * noise
+
+
 def fit_without_background(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances):
     """The cylinder fit of the nearest surfaces' shots (:func:`near_subsets`), when it leaves
     out only background; else None.
@@ -198,14 +214,8 @@ def fit_without_background(fit, points: np.ndarray, view: np.ndarray, sigma, tol
     """
     n = len(points)
     prior = float(tolerances.prior_range_sigma)
-    for mask in near_subsets(points, view, sigma if sigma is not None else prior):
-        try:
-            found = fit(points[mask], sigma, tolerances, view)
-        except FitError:
-            continue
-        cutoff = tolerances.outlier_cutoff_sigma * (
-            sigma if sigma is not None else max(found.sigma, prior)
-        )
+    masks = near_subsets(points, view, sigma if sigma is not None else prior)
+    for found, mask, cutoff in subset_fits(fit, points, view, sigma, tolerances, masks):
         found, mask = _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff)
         inliers = np.zeros(n, dtype=bool)
         inliers[mask] = found.inliers
