@@ -22,16 +22,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from asbuilt.errors import FitError
 from asbuilt.fit._common import median_spacing
-from asbuilt.fit._cylinder_background import _rescued, depth_segments, subset_fits
+from asbuilt.fit._cylinder_background import (
+    depth_segments,
+    rescued,
+    segment_noise,
+    subset_fits,
+    taken_back,
+)
 from asbuilt.tolerances import MIN_POINTS
 
 __all__ = [
     "FRONT_SHOTS",
     "MOST_SUBSETS",
     "REACH_SPACINGS",
-    "TAKE_BACK_ROUNDS",
     "beam_box",
     "behind",
     "contradicting",
@@ -45,9 +49,8 @@ __all__ = [
 FRONT_SHOTS = 3
 #: At most this many subsets of the nearest surfaces are fitted, nearest first.
 MOST_SUBSETS = 4
-#: Rounds of taking back left-out shots on a seen face's plane and fitting again.
-TAKE_BACK_ROUNDS = 3
-#: ... each within this many of the kept shots' spacings of the box.
+#: A left-out shot on a seen face's plane is taken back within this many of the kept shots'
+#: spacings of the box.
 REACH_SPACINGS = 3.0
 
 
@@ -123,32 +126,25 @@ def seen_planes(cuboid, points: np.ndarray, cutoff: float) -> list[tuple[np.ndar
     return planes
 
 
-def _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff: float):
-    """``found`` (the fit of ``points[mask]``) fitted again with the left-out shots within
-    ``cutoff`` metres of the plane of a face it saw (:func:`seen_planes`) and within
-    ``REACH_SPACINGS`` of its kept shots' spacing of the box (a beam seen obliquely is cut at
-    range jumps along its length, and its far part lies on the near part's faces, a raster step
-    or two on; a wall far behind meets those planes only metres away), until none is left to
-    take back (``TAKE_BACK_ROUNDS``), and the mask of the shots it fitted; a refit that fails
-    keeps the last fit."""
-    for _ in range(TAKE_BACK_ROUNDS):
+def _on_seen_planes(points: np.ndarray, cutoff: float):
+    """The cuboid's take-back rule (:func:`~asbuilt.fit._cylinder_background.taken_back`): the
+    shots within ``cutoff`` metres of the plane of a face the fit saw (:func:`seen_planes`) and
+    within ``REACH_SPACINGS`` of its kept shots' spacing of the box. A beam seen obliquely is
+    cut at range jumps along its length, and its far part lies on the near part's faces, a
+    raster step or two on; a wall far behind meets those planes only metres away."""
+
+    def nearby(found, mask) -> np.ndarray:
         kept = points[mask][found.inliers]
+        near = np.zeros(len(points), dtype=bool)
         planes = seen_planes(found.primitive, kept, cutoff)
         if not planes or len(kept) < 2:
-            break
-        reach = REACH_SPACINGS * median_spacing(kept)
-        near = ~mask & (found.primitive.distance(points) <= reach)
-        on_plane = np.zeros(len(points), dtype=bool)
+            return near
         for normal, offset in planes:
-            on_plane |= np.abs(points @ normal - offset) <= cutoff
-        near &= on_plane
-        if not near.any():
-            break
-        try:
-            found, mask = fit(points[mask | near], sigma, tolerances, view), mask | near
-        except FitError:
-            break
-    return found, mask
+            near |= np.abs(points @ normal - offset) <= cutoff
+        reach = REACH_SPACINGS * median_spacing(kept)
+        return near & (found.primitive.distance(points) <= reach)
+
+    return nearby
 
 
 def _nearest_first(segments: list, n: int):
@@ -180,18 +176,19 @@ def fit_nearest_box(
     nearest alone, then with the next and so on (a box face seen at grazing incidence can be cut
     from its front face by a jump of its own), each subset of at least the cuboid's
     ``MIN_POINTS``; shots of the other surfaces on the planes of a subset's box's seen faces are
-    taken back and the box fitted again (:func:`_taken_back`). The first fit of whose left-out
+    taken back and the box fitted again (:func:`_on_seen_planes`). The first fit of whose left-out
     shots fewer than ``FRONT_SHOTS``, and fewer than the ``contradictions`` (shots
     :func:`contradicting` the fit of all of them; a large number for a refused fit), lie
     anywhere but :func:`behind` it stands (a mixed return at a silhouette can pass through a
     box fitted a little wide), its residuals over every shot, with a note.
     """
     n = len(points)
-    prior = float(tolerances.prior_range_sigma)
-    segments = depth_segments(points, view, sigma if sigma is not None else prior)
+    segments = depth_segments(points, view, segment_noise(sigma, tolerances))
     masks = _nearest_first(segments, n)
     for found, mask, cutoff in subset_fits(fit, points, view, sigma, tolerances, masks):
-        found, kept = _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff)
+        found, kept = taken_back(
+            fit, found, points, mask, sigma, tolerances, view, _on_seen_planes(points, cutoff)
+        )
         left_out = ~kept
         wrong = ~behind(found.primitive, points[left_out], view, cutoff)
         if np.count_nonzero(wrong) >= min(FRONT_SHOTS, contradictions):
@@ -203,5 +200,5 @@ def fit_nearest_box(
             "what the raster reached past it (the range jumps there), and were left out as "
             "background before the fit."
         )
-        return _rescued(found, points, inliers, note)
+        return rescued(found, points, inliers, note)
     return None

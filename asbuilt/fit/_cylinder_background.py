@@ -37,7 +37,11 @@ __all__ = [
     "near_subsets",
     "only_background_behind",
     "fit_without_background",
+    "rescued",
+    "segment_noise",
     "subset_fits",
+    "taken_back",
+    "within",
     "PLANE_SHOTS",
     "PLANE_SAMPLES",
     "MOST_PLANES",
@@ -67,6 +71,12 @@ NEAR_SHARE = 0.4
 DETERMINED_RADIUS = 0.5
 #: At most this many subsets are fitted, nearest first.
 MOST_SUBSETS = 4
+
+
+def segment_noise(sigma, tolerances) -> float:
+    """The range noise (metres) the shots are cut into surfaces at: the sensor's ``sigma``,
+    else the prior noise."""
+    return float(sigma) if sigma is not None else float(tolerances.prior_range_sigma)
 
 
 def depth_segments(points: np.ndarray, view: np.ndarray, noise: float) -> list[np.ndarray]:
@@ -121,17 +131,16 @@ def depth_segments(points: np.ndarray, view: np.ndarray, noise: float) -> list[n
     return sorted(segments, key=lambda members: float(np.median(ranges[members])))
 
 
-def near_subsets(points: np.ndarray, view: np.ndarray, noise: float) -> list[np.ndarray]:
-    """Masks (n,) bool of the nearest surfaces' shots, each holding at least ``NEAR_SHARE`` of
-    the shots and leaving some out, nearest first (at most ``MOST_SUBSETS``).
+def near_subsets(segments: list, n: int) -> list[np.ndarray]:
+    """Masks (n,) bool of the nearest surfaces' shots (``segments``: :func:`depth_segments` of
+    the n shots), each holding at least ``NEAR_SHARE`` of the shots and leaving some out,
+    nearest first (at most ``MOST_SUBSETS``).
 
     The nearest surface alone, then with the next nearest, and so on: a pipe's silhouette shots
     seen nearly edge-on can be cut from its front by a jump of their own.
     """
-    segments = depth_segments(points, view, noise)
     if len(segments) < 2:
         return []
-    n = len(points)
     masks = []
     mask = np.zeros(n, dtype=bool)
     for members in segments[:-1]:
@@ -166,16 +175,19 @@ def only_background_behind(cylinder, points: np.ndarray, view: np.ndarray, left_
     return bool((beyond > cutoff).all() and (excess <= cutoff).all())
 
 
-#: Rounds of taking back left-out shots within the cutoff of the subset's fit and fitting again.
+#: Rounds of taking back left-out shots near a subset's fit (:func:`taken_back`) and fitting
+#: it again.
 TAKE_BACK_ROUNDS = 3
 
 
-def _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff: float):
-    """``found`` (the fit of ``points[mask]``) fitted again with the left-out shots within
-    ``cutoff`` metres of it, until none is left to take back (``TAKE_BACK_ROUNDS``), and the
-    mask of the shots it fitted; a refit that fails keeps the last fit."""
+def taken_back(fit, found, points, mask, sigma, tolerances, view, nearby):
+    """``found`` (the fit of ``points[mask]``) fitted again with the left-out shots that
+    ``nearby(found, mask)`` ((n,) bool) names, until none is left to take back
+    (``TAKE_BACK_ROUNDS``), and the mask of the shots it fitted; a refit that fails keeps the
+    last fit. The cylinder's rule is :func:`within`; the cuboid's is its seen faces' planes
+    (:mod:`asbuilt.fit._cuboid_foreground`)."""
     for _ in range(TAKE_BACK_ROUNDS):
-        near = (np.abs(found.primitive.distance(points)) <= cutoff) & ~mask
+        near = nearby(found, mask) & ~mask
         if not near.any():
             break
         try:
@@ -183,6 +195,12 @@ def _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff: float
         except FitError:
             break
     return found, mask
+
+
+def within(points: np.ndarray, cutoff: float):
+    """The take-back rule (:func:`taken_back`) of the shots within ``cutoff`` metres of the
+    fitted primitive's surface (a pipe's silhouette shot cut off by its own steep range)."""
+    return lambda found, _mask: np.abs(found.primitive.distance(points)) <= cutoff
 
 
 def subset_fits(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances, masks):
@@ -200,9 +218,12 @@ def subset_fits(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances, ma
         yield found, mask, tolerances.outlier_cutoff_sigma * noise
 
 
-def fit_without_background(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances):
+def fit_without_background(
+    fit, points: np.ndarray, view: np.ndarray, sigma, tolerances, segments=None
+):
     """The cylinder fit of the nearest surfaces' shots (:func:`near_subsets`), when it leaves
-    out only background; else None.
+    out only background; else None. ``segments``: :func:`depth_segments` of ``points`` at the
+    sensor's sigma (else the prior noise), when the caller has it already.
 
     ``fit(points, sigma, tolerances, viewpoint)`` fits a subset of ``points`` (n, 3) metres as
     seen from ``view`` (3,) metres (``sigma`` the sensor's, metres, or None). The shots of the
@@ -213,10 +234,13 @@ def fit_without_background(fit, points: np.ndarray, view: np.ndarray, sigma, tol
     judged by the fit. Its residuals and inliers are over every shot, with a note.
     """
     n = len(points)
-    prior = float(tolerances.prior_range_sigma)
-    masks = near_subsets(points, view, sigma if sigma is not None else prior)
+    if segments is None:
+        segments = depth_segments(points, view, segment_noise(sigma, tolerances))
+    masks = near_subsets(segments, n)
     for found, mask, cutoff in subset_fits(fit, points, view, sigma, tolerances, masks):
-        found, mask = _taken_back(fit, found, points, mask, sigma, tolerances, view, cutoff)
+        found, mask = taken_back(
+            fit, found, points, mask, sigma, tolerances, view, within(points, cutoff)
+        )
         inliers = np.zeros(n, dtype=bool)
         inliers[mask] = found.inliers
         radius = found.primitive.radius
@@ -232,7 +256,7 @@ def fit_without_background(fit, points: np.ndarray, view: np.ndarray, sigma, tol
             " past its silhouette (the range jumps there), and were left out as background"
             " before the fit."
         )
-        return _rescued(found, points, inliers, note)
+        return rescued(found, points, inliers, note)
     return None
 
 
@@ -313,7 +337,9 @@ def fit_without_background_plane(fit, points: np.ndarray, sigma: float, toleranc
             found = fit(points[rest], sigma, tolerances, None)
         except FitError:
             continue
-        found, rest = _taken_back(fit, found, points, rest, sigma, tolerances, None, cutoff)
+        found, rest = taken_back(
+            fit, found, points, rest, sigma, tolerances, None, within(points, cutoff)
+        )
         inliers = np.zeros(n, dtype=bool)
         inliers[rest] = found.inliers
         if (
@@ -326,11 +352,11 @@ def fit_without_background_plane(fit, points: np.ndarray, sigma: float, toleranc
             f"{int(np.count_nonzero(~rest))} shot(s) on one plane behind the pipe (raster lines"
             " past its silhouette, on a wall) were left out as background before the fit."
         )
-        return _rescued(found, points, inliers, note)
+        return rescued(found, points, inliers, note)
     return None
 
 
-def _rescued(found, points, inliers, note: str):
+def rescued(found, points, inliers, note: str):
     """``found`` (a FitResult on a subset) as the fit of every one of ``points`` (n, 3) metres:
     its residuals over all of them, ``inliers`` (n,) bool, and ``note`` added."""
     return dataclasses.replace(

@@ -68,6 +68,7 @@ from asbuilt.fit._cylinder_background import (
     depth_segments,
     fit_without_background,
     fit_without_background_plane,
+    segment_noise,
 )
 from asbuilt.fit._cylinder_checks import (
     EDGE_ON_DEG,
@@ -281,14 +282,14 @@ def fit_cylinder(
     # may still be the pipe.
     pts = validate_points(points, "cylinder")
     view = np.asarray(viewpoint, dtype=np.float64)
+    segments = []
     if len(pts) <= DENSE_POINTS:
-        rescued = fit_without_background(_fit_seen_from, pts, view, sigma, tolerances)
+        segments = depth_segments(pts, view, segment_noise(sigma, tolerances))
+        rescued = fit_without_background(_fit_seen_from, pts, view, sigma, tolerances, segments)
         if rescued is not None:
             return rescued
     if result is None:
         raise error
-    noise = sigma if sigma is not None else tolerances.prior_range_sigma
-    segments = depth_segments(pts, view, noise) if len(pts) <= DENSE_POINTS else []
     if len(segments) > 1 and len(segments[0]) >= NEAR_SHARE * len(pts):
         # A pipe before a wall as seen from the viewpoint, and no fit of the pipe stood: a fit
         # ignoring the viewpoint takes the wall for pipe. A wrong station (the far side, another

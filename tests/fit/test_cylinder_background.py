@@ -54,7 +54,7 @@ def test_the_pipe_and_the_wall_rows_behind_are_separate_surfaces():
     segments = depth_segments(points, np.zeros(3), 0.002)
     assert set(segments[0]) == set(np.flatnonzero(on_pipe))  # nearest first
     assert all(not on_pipe[s].any() for s in segments[1:])
-    masks = near_subsets(points, np.zeros(3), 0.002)
+    masks = near_subsets(segments, len(points))
     assert masks and (masks[0] == on_pipe).all()
 
 
@@ -65,8 +65,9 @@ def test_one_surface_is_not_cut():
     beams = np.column_stack([np.sin(pan.ravel()), np.cos(pan.ravel()), np.sin(tilt.ravel())])
     normal = np.array([0.5, 0.866, 0.0])
     ranges = 5.0 / (beams @ normal) + rng.normal(0, 0.002, len(beams))
-    assert len(depth_segments(beams * ranges[:, None], np.zeros(3), 0.002)) == 1
-    assert near_subsets(beams * ranges[:, None], np.zeros(3), 0.002) == []
+    segments = depth_segments(beams * ranges[:, None], np.zeros(3), 0.002)
+    assert len(segments) == 1
+    assert near_subsets(segments, len(beams)) == []
 
 
 def test_wall_shots_are_background_and_a_shot_in_front_is_not():
