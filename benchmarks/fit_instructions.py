@@ -82,6 +82,9 @@ def main(argv=None) -> int:
     parser.add_argument("--points", type=int, default=40)
     parser.add_argument("--trials", type=int, default=50, help="trials per cell (50)")
     parser.add_argument("--seed", type=int, default=2004)
+    parser.add_argument(
+        "--counts-out", type=Path, help="also write each fit's instructions (one per line)"
+    )
     parser.add_argument("--inner", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.inner:
@@ -106,6 +109,8 @@ def main(argv=None) -> int:
         subprocess.run(command, check=True, env=env, capture_output=True)
         counts = _counts(out)
     millions = [count / 1e6 for count in counts]
+    if args.counts_out is not None:
+        args.counts_out.write_text("".join(f"{count}\n" for count in counts))
     print(
         f"{args.kind}, {args.data}, viewpoint {args.viewpoint}: {len(millions)} fits, "
         f"median {statistics.median(millions):.2f} M instructions, "
