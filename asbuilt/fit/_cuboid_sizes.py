@@ -31,6 +31,7 @@ __all__ = [
     "propagate",
     "raster_gaps",
     "silhouette_bounds",
+    "single_lines",
 ]
 
 
@@ -88,6 +89,13 @@ def _single_lines(proj, label, index, model, width) -> list:
                 direction = vt[0]
         out.append(direction)
     return out
+
+
+def single_lines(x, label, inliers, model, width) -> list:
+    """:func:`_single_lines` of the points ``x`` (n, 3) metres, centred, with their faces
+    ``label`` (n,) and ``inliers`` (n,) bool: :func:`bounds` and :func:`extent_spans` take it
+    computed once (an SVD per face)."""
+    return _single_lines(x @ model.axes.T, label, inliers.nonzero()[0], model, width)
 
 
 def _line_faces(label, index, model, k, single) -> np.ndarray:
@@ -219,7 +227,7 @@ def _pinned(x, index, along, sign, axis, edges, tol) -> bool:
     return best is not None and float(np.max(sign * along)) - best <= tol
 
 
-def bounds(x, label, inliers, model, noise, edge_pad, edges=None):
+def bounds(x, label, inliers, model, noise, edge_pad, edges=None, single=None):
     """Per-axis (lo, hi) bounds in the centred frame, which come from faces, and the extreme points.
 
     An extent bound is the extreme inlier plus ``edge_pad`` times the sampling step there: the
@@ -235,6 +243,8 @@ def bounds(x, label, inliers, model, noise, edge_pad, edges=None):
     the pad of it (:func:`_pinned`), the extreme is the bound itself: the session bisects until
     the bracket is a few millimetres across, about the range noise, so no pad is added.
 
+    ``single``: :func:`single_lines` of these points, when already computed.
+
     Returns lo (3,), hi (3,), lo_face (3,) bool, hi_face (3,) bool, lo_point (3,) int, hi_point
     (3,) int (index of the extreme inlier defining an extent bound, -1 for face bounds), pad
     (2, 3) metres (what was added beyond the extreme point: row 0 below lo, row 1 above hi).
@@ -246,7 +256,8 @@ def bounds(x, label, inliers, model, noise, edge_pad, edges=None):
     pads = np.zeros((2, 3))
     index = inliers.nonzero()[0]
     inner = proj[index]
-    single = _single_lines(proj, label, index, model, noise)
+    if single is None:
+        single = _single_lines(proj, label, index, model, noise)
     # None: no raster lines cross the axis on a face along it (a face seen at grazing
     # incidence carries one line only): the spacing there is not measured.
     medians = []
@@ -285,7 +296,9 @@ def bounds(x, label, inliers, model, noise, edge_pad, edges=None):
     return lo, hi, lo_face, hi_face, lo_pt, hi_pt, pads
 
 
-def extent_spans(x, label, inliers, model, noise, lo_pt, hi_pt, pad, pinned=None) -> np.ndarray:
+def extent_spans(
+    x, label, inliers, model, noise, lo_pt, hi_pt, pad, pinned=None, single=None
+) -> np.ndarray:
     """How far (metres) beyond each extent bound's extreme inlier its edge may lie, (2, 3).
 
     Row 0 below lo, row 1 above hi (0 where a face bounds the side). The pad (:func:`bounds`)
@@ -300,11 +313,12 @@ def extent_spans(x, label, inliers, model, noise, lo_pt, hi_pt, pad, pinned=None
     an operator's window side lies anywhere within a step of the last line of hits, and a
     window side shared by several free bounds does not say which of them reaches it.
     ``noise`` is the residual cut (metres); ``lo_pt``/``hi_pt``/``pad`` as :func:`bounds`
-    returns them.
+    returns them; ``single``: :func:`single_lines` of these points, when already computed.
     """
     proj = x @ model.axes.T
     index = inliers.nonzero()[0]
-    single = _single_lines(proj, label, index, model, noise)
+    if single is None:
+        single = _single_lines(proj, label, index, model, noise)
     spans = 2.0 * np.asarray(pad, dtype=np.float64)
     for k in range(3):
         for side, point in ((0, lo_pt[k]), (1, hi_pt[k])):
@@ -344,39 +358,50 @@ def raster_gaps(x, origin, model, label, lo, hi, lo_pt, hi_pt, viewpoint, found,
     """
     pan0, _window, _on_grid, _pinned, steps = found
     gaps = np.full((2, 3), np.nan)
-    station = np.asarray(viewpoint, dtype=np.float64) - origin
-    proj = x @ model.axes.T
-    limit = math.cos(math.radians(_GRAZING_DEG))
+    # The sides whose extreme shot lies on a face along the axis (k, side, sign, point, face).
+    cases = []
     for k in range(3):
         for side, sign, point in ((0, -1.0, lo_pt[k]), (1, 1.0, hi_pt[k])):
             if point < 0:
                 continue
             f = int(label[point])
             j = int(model.face_axis[f])
-            m = 3 - j - k
-            if m == j or m == k:
-                continue
-            normal = model.axes[j]
-            plane = model.face_sign[f] * model.offset[f]
-            pan, tilt = _silhouette._angles(x[point][None] + origin, viewpoint, pan0)[0]
-            pan += pan0
-            best = np.nan
-            for dp, dt in ((steps[0], 0.0), (-steps[0], 0.0), (0.0, steps[1]), (0.0, -steps[1])):
-                p, t = pan + dp, tilt + dt
-                beam = np.array([math.cos(t) * math.cos(p), math.cos(t) * math.sin(p), math.sin(t)])
-                facing = float(normal @ beam)
-                if abs(facing) < limit:
-                    continue  # along the face: its hit says nothing about the edge
-                reach = (plane - float(normal @ station)) / facing
-                if reach <= 0.0:
-                    continue
-                hit = (station + reach * beam) @ model.axes.T
-                if not lo[m] <= hit[m] <= hi[m]:
-                    continue  # past the face's side: a miss there bounds nothing along k
-                advance = sign * (hit[k] - proj[point, k])
-                if advance > noise and not advance >= best:
-                    best = advance
-            gaps[side, k] = best
+            if j != k:
+                cases.append((k, side, sign, int(point), f, j))
+    if not cases:
+        return gaps
+    station = np.asarray(viewpoint, dtype=np.float64) - origin
+    k, side, sign, point, f, j = (np.array(column) for column in zip(*cases))
+    m = 3 - j - k
+    # Each extreme shot's four raster neighbours' beams (pan and tilt a step either way), all
+    # cases in one batch: (c, 4) angles, (c, 4, 3) unit beams.
+    ang = _silhouette._angles(x[point] + origin, viewpoint, pan0)
+    offsets = np.array(
+        [[steps[0], 0.0], [-steps[0], 0.0], [0.0, steps[1]], [0.0, -steps[1]]], dtype=np.float64
+    )
+    pan = ang[:, 0, None] + pan0 + offsets[None, :, 0]
+    tilt = ang[:, 1, None] + offsets[None, :, 1]
+    beam = np.stack([np.cos(tilt) * np.cos(pan), np.cos(tilt) * np.sin(pan), np.sin(tilt)], axis=-1)
+    normal = model.axes[j]  # (c, 3)
+    plane = model.face_sign[f] * model.offset[f]  # (c,)
+    facing = np.einsum("cbi,ci->cb", beam, normal)
+    # Along the face (beyond _GRAZING_DEG): its hit says nothing about the edge.
+    usable = np.abs(facing) >= math.cos(math.radians(_GRAZING_DEG))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        reach = (plane - normal @ station)[:, None] / facing
+    usable &= reach > 0.0
+    hit = (station + np.where(usable, reach, 0.0)[:, :, None] * beam) @ model.axes.T
+    rows = np.arange(len(cases))
+    across = hit[rows[:, None], np.arange(4)[None, :], m[:, None]]
+    # Past the face's side: a miss there bounds nothing along k.
+    usable &= (lo[m][:, None] <= across) & (across <= hi[m][:, None])
+    proj = np.einsum("ci,ci->c", x[point], model.axes[k])
+    advance = sign[:, None] * (
+        hit[rows[:, None], np.arange(4)[None, :], k[:, None]] - proj[:, None]
+    )
+    usable &= advance > noise
+    nearest = np.where(usable, advance, np.inf).min(axis=1)
+    gaps[side, k] = np.where(np.isfinite(nearest), nearest, np.nan)
     return gaps
 
 

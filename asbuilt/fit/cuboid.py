@@ -98,6 +98,7 @@ from asbuilt.fit._cuboid_sizes import (
     propagate,
     raster_gaps,
     silhouette_bounds,
+    single_lines,
 )
 from asbuilt.fit._joint import (
     best_fit,
@@ -640,8 +641,9 @@ def _fit_cuboid_shots(
             label_b = np.concatenate([label, extra_label])
             inliers_b = np.concatenate([inliers, np.ones(mended, bool)])
             edges_b = tuple(np.concatenate([e, e[extra_of]]) for e in edges)
+    single = single_lines(xb, label_b, inliers_b, model, cutoff * scale)
     lo, hi, lo_face, hi_face, lo_pt, hi_pt, pad = bounds(
-        xb, label_b, inliers_b, model, cutoff * scale, edge_pad, edges_b
+        xb, label_b, inliers_b, model, cutoff * scale, edge_pad, edges_b, single
     )
     # Sides an edge-bisection shot pins (no pad): known to the session's tolerance.
     pinned = (pad == 0.0) & (np.stack([lo_pt, hi_pt]) >= 0)
@@ -673,7 +675,9 @@ def _fit_cuboid_shots(
     cov = covariance(model, x[inliers], label[inliers], sig)
     # The gap beyond an extent bound is its own face's raster step, unless a bisection shot
     # pins the edge; a raster window's solution moves the bound within it, it does not pin it.
-    spans = extent_spans(xb, label_b, inliers_b, model, cutoff * scale, lo_pt, hi_pt, pad, pinned)
+    spans = extent_spans(
+        xb, label_b, inliers_b, model, cutoff * scale, lo_pt, hi_pt, pad, pinned, single
+    )
     if gaps is not None:
         # Over a raster, the gap up to the next raster line along the face is measured from
         # the beams themselves (:func:`raster_gaps`), not from the lines' spacing.
