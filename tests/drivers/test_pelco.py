@@ -256,7 +256,7 @@ def test_replies_split_across_reads_byte_by_byte():
         assert ptu.position_raw() == (1234, 35500)
 
 
-def test_a_late_frame_after_a_failure_is_not_taken_for_the_next_reply():
+def test_the_query_after_a_bad_reply_reads_the_next_good_one():
     calls = {"n": 0}
 
     def respond(got):
