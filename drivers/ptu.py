@@ -29,6 +29,8 @@ __all__ = [
     "PTULimitError",
     "PTULimits",
     "PanTiltUnit",
+    "PAN_TILT_PROTOCOLS",
+    "open_pan_tilt_unit",
 ]
 
 _ARCSEC = math.pi / (180.0 * 3600.0)  # radians per second of arc
@@ -506,3 +508,33 @@ class PanTiltUnit:
     def version(self) -> str:
         """Firmware version text (``V``)."""
         return self.command("V")
+
+
+#: Head protocols accepted by :func:`open_pan_tilt_unit` and ``asbuilt scan --ptu-protocol``.
+PAN_TILT_PROTOCOLS = ("flir", "pelco-d")
+
+
+def open_pan_tilt_unit(url: str, protocol: str = "flir", **options):
+    """Open the pan-tilt head at ``url`` with the driver for ``protocol``.
+
+    Parameters
+    ----------
+    url : str
+        Device path or pyserial URL.
+    protocol : {"flir", "pelco-d"}
+        FLIR / Directed Perception ASCII (:class:`PanTiltUnit`) or Pelco-D
+        (:class:`~asbuilt.drivers.pelco.PelcoD`).
+    **options
+        Passed to the driver's ``open`` (``baudrate``, ``timeout``, ``move_timeout``; Pelco-D
+        also ``address``, ``tilt_sign``, ``tilt_zero``...).
+    """
+    if protocol == "flir":
+        return PanTiltUnit.open(url, **options)
+    if protocol == "pelco-d":
+        from .pelco import PelcoD
+
+        return PelcoD.open(url, **options)
+    raise DeviceError(
+        f"{url}: unknown pan-tilt protocol {protocol!r}; use one of "
+        + ", ".join(PAN_TILT_PROTOCOLS)
+    )

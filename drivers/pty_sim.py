@@ -58,9 +58,13 @@ class PtyServer:
     Parameters
     ----------
     rig : SimulatedRig
-    lrf_protocol : {"dimetix", "ldm"}
+    lrf_protocol : {"dimetix", "ldm", "lw20"}
     device_id : int
         Dimetix device id.
+    ptu_protocol : {"flir", "pelco-d"}
+        The pan-tilt head's protocol.
+    ptu_address : int
+        Pelco-D address (1-255).
 
     Attributes
     ----------
@@ -68,10 +72,20 @@ class PtyServer:
         The tty paths to give the drivers (valid after :meth:`start`).
     """
 
-    def __init__(self, rig, lrf_protocol: str = "dimetix", device_id: int = 0):
+    def __init__(
+        self,
+        rig,
+        lrf_protocol: str = "dimetix",
+        device_id: int = 0,
+        *,
+        ptu_protocol: str = "flir",
+        ptu_address: int = 1,
+    ):
         self.rig = rig
         self.lrf_protocol = lrf_protocol
         self.device_id = device_id
+        self.ptu_protocol = ptu_protocol
+        self.ptu_address = ptu_address
         self._endpoints: list[_Endpoint] = []
         self._thread: threading.Thread | None = None
         self._wake_r = self._wake_w = -1
@@ -90,7 +104,13 @@ class PtyServer:
         """Open the pseudo-terminals and start serving in a daemon thread."""
         try:
             self._endpoints = [
-                _Endpoint(make_device("sim-ptu", self.rig, {})),
+                _Endpoint(
+                    make_device(
+                        "sim-ptu",
+                        self.rig,
+                        {"protocol": self.ptu_protocol, "address": str(self.ptu_address)},
+                    )
+                ),
                 _Endpoint(
                     make_device(
                         "sim-lrf",

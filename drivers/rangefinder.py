@@ -68,7 +68,7 @@ class RangeFinder(Protocol):
 
 
 #: Driver names accepted by :func:`open_range_finder` and ``asbuilt scan --lrf-protocol``.
-RANGE_FINDER_PROTOCOLS = ("dimetix", "ldm")
+RANGE_FINDER_PROTOCOLS = ("dimetix", "ldm", "lw20")
 
 
 def open_range_finder(url: str, protocol: str = "dimetix", *, timeout: float = 3.0, **options):
@@ -78,8 +78,8 @@ def open_range_finder(url: str, protocol: str = "dimetix", *, timeout: float = 3
     ----------
     url : str
         Device path or pyserial URL.
-    protocol : {"dimetix", "ldm"}
-        Dimetix DLS/FLS or Jenoptik LDM41/42.
+    protocol : {"dimetix", "ldm", "lw20"}
+        Dimetix DLS/FLS, Jenoptik LDM41/42 or LightWare LW20/SF20.
     timeout : float
         Seconds to wait for a measurement.
     **options
@@ -93,6 +93,10 @@ def open_range_finder(url: str, protocol: str = "dimetix", *, timeout: float = 3
         from .ldm import LDM4x
 
         return LDM4x.open(url, timeout=timeout, **options)
+    if protocol == "lw20":
+        from .lw20 import LW20
+
+        return LW20.open(url, timeout=timeout, **options)
     raise DeviceError(
         f"{url}: unknown range finder protocol {protocol!r}; use one of "
         + ", ".join(RANGE_FINDER_PROTOCOLS)

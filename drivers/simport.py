@@ -13,7 +13,9 @@ Rig (either URL; the first one opened for a rig must give ``scene``):
     ``min_cos``, ``max_range`` (m), ``seed``, ``speed`` (positions/s, 0 = instant),
     ``station`` (scene station id; default the first).
 Port:
-    ``protocol`` (sim-lrf only: ``dimetix`` (default) or ``ldm``), ``device_id`` (Dimetix id),
+    ``protocol`` (sim-ptu: ``flir`` (default) or ``pelco-d``; sim-lrf: ``dimetix`` (default),
+    ``ldm`` or ``lw20``), ``device_id`` (Dimetix id), ``address`` (Pelco-D address, 1),
+    ``trickle`` (Pelco-D: seconds between reply bytes), ``prefix`` (LW20: label before a distance),
     ``silent=1`` (the device never answers: timeouts), ``unplug_after=N`` (after N writes every
     read and write fails as if the cable were pulled).
 
@@ -46,8 +48,21 @@ def parse_sim_url(url: str) -> tuple[str, str, dict[str, str]]:
 
 
 def make_device(scheme: str, rig, options: dict[str, str]):
-    """The simulator for ``scheme`` over ``rig`` (port options: protocol, device_id)."""
+    """The simulator for ``scheme`` over ``rig`` (port options: protocol, device_id, address,
+    trickle, prefix)."""
     if scheme == "sim-ptu":
+        protocol = options.get("protocol", "flir").lower()
+        if protocol == "pelco-d":
+            from .sim_pelco import PelcoDSimulator
+
+            address = int(options.get("address", 1))
+            if not 1 <= address <= 255:
+                raise ValueError(f"address must be a Pelco-D address 1-255, not {address}")
+            return PelcoDSimulator(rig, address, trickle=float(options.get("trickle", 0)))
+        if protocol != "flir":
+            raise SerialException(
+                f"unknown simulated pan-tilt protocol {protocol!r}; use flir or pelco-d"
+            )
         from .sim_ptu import PTUSimulator
 
         return PTUSimulator(rig)
@@ -58,8 +73,12 @@ def make_device(scheme: str, rig, options: dict[str, str]):
         return DimetixSimulator(rig, int(options.get("device_id", 0)))
     if protocol == "ldm":
         return LDMSimulator(rig)
+    if protocol == "lw20":
+        from .sim_lw20 import LW20Simulator
+
+        return LW20Simulator(rig, options.get("prefix", ""))
     raise SerialException(
-        f"unknown simulated range finder protocol {protocol!r}; use dimetix or ldm"
+        f"unknown simulated range finder protocol {protocol!r}; use dimetix, ldm or lw20"
     )
 
 

@@ -63,6 +63,20 @@ def test_wheel_contains_every_data_file(wheel):
     assert "asbuilt/catalogs/__init__.py" in names
 
 
+def test_wheel_contains_every_driver_module(wheel):
+    """Every module of drivers/ (the device drivers and simulators: pelco, lw20, sim_pelco...)
+    is installed as asbuilt.drivers.<name>."""
+    names = set(zipfile.ZipFile(wheel).namelist())
+    modules = {
+        f"asbuilt/drivers/{p.relative_to(ROOT / 'drivers').as_posix()}"
+        for p in (ROOT / "drivers").rglob("*.py")
+        if "__pycache__" not in p.parts
+    }
+    assert {"asbuilt/drivers/pelco.py", "asbuilt/drivers/lw20.py"} <= modules
+    missing = sorted(modules - names)
+    assert not missing, f"driver modules missing from the wheel: {missing}"
+
+
 def test_installed_wheel_works_on_its_own(wheel, tmp_path):
     target = tmp_path / "site"
     subprocess.run(
@@ -83,6 +97,9 @@ def test_installed_wheel_works_on_its_own(wheel, tmp_path):
         "import asbuilt, asbuilt.drivers, asbuilt.catalogs, importlib.resources as r\n"
         f"assert asbuilt.__file__.startswith({str(target)!r}), asbuilt.__file__\n"
         "from asbuilt.cli import build_parser\n"
+        "from asbuilt.drivers.pelco import PelcoD\n"
+        "from asbuilt.drivers.lw20 import LW20\n"
+        "from asbuilt.drivers import sim_pelco, sim_lw20\n"
         "build_parser()\n"
         "names = [p.name for p in r.files('asbuilt.catalogs').iterdir()]\n"
         "assert any(n.endswith('.csv') for n in names), names\n"

@@ -1,6 +1,7 @@
 """``asbuilt scan --ptu URL --lrf URL --out scan.json [--plan plan.json] [--resume]``.
 
-Runs an acquisition session with a FLIR/DP pan-tilt unit and a range finder (any pyserial URL:
+Runs an acquisition session with a pan-tilt head (FLIR/DP, or Pelco-D with ``--ptu-protocol
+pelco-d``) and a range finder (any pyserial URL:
 a device path, ``spy://`` for a traffic log, ``sim-ptu://`` / ``sim-lrf://`` simulators). For each
 object the operator gives an id, a kind and a window (two corners in the unit's degrees, or
 "aim" to jog the head to each corner); the session shoots a raster, fills it where the object
@@ -48,16 +49,45 @@ def register(subparsers) -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--lrf-protocol",
-        choices=("dimetix", "ldm"),
+        choices=("dimetix", "ldm", "lw20"),
         default="dimetix",
         help="range finder protocol (default dimetix)",
     )
-    parser.add_argument("--ptu-baud", type=int, default=9600, help="pan-tilt baud rate (9600)")
+    parser.add_argument(
+        "--ptu-protocol",
+        choices=("flir", "pelco-d"),
+        default="flir",
+        help="pan-tilt protocol: FLIR/DP ASCII or Pelco-D (default flir)",
+    )
+    parser.add_argument(
+        "--ptu-baud", type=int, default=None, help="pan-tilt baud rate (flir 9600, pelco-d 2400)"
+    )
+    parser.add_argument(
+        "--ptu-address",
+        type=int,
+        default=None,
+        metavar="N",
+        help="Pelco-D address 1-255 (1)",
+    )
+    parser.add_argument(
+        "--ptu-tilt-sign",
+        type=int,
+        choices=(1, -1),
+        default=None,
+        help="Pelco-D: -1 if the raw tilt grows downwards (default), 1 if upwards",
+    )
+    parser.add_argument(
+        "--ptu-tilt-zero",
+        type=float,
+        default=None,
+        metavar="DEG",
+        help="Pelco-D: the raw tilt of the level head, degrees (0)",
+    )
     parser.add_argument(
         "--lrf-baud",
         type=int,
         default=None,
-        help="range finder baud rate (dimetix 19200 7E1, ldm 9600 8N1)",
+        help="range finder baud rate (dimetix 19200 7E1, ldm 9600 8N1, lw20 115200 8N1)",
     )
     parser.add_argument(
         "--lrf-id",
@@ -139,9 +169,49 @@ def _check_devices_options(args) -> None:
             )
     if args.lrf_id is not None:
         if args.lrf_protocol != "dimetix":
-            raise ScanError("--lrf-id is the Dimetix device id; the LDM has none (leave it out)")
+            name = {"ldm": "LDM", "lw20": "LW20"}.get(args.lrf_protocol, args.lrf_protocol)
+            raise ScanError(
+                f"--lrf-id is the Dimetix device id; the {name} has none (leave it out)"
+            )
         if not 0 <= args.lrf_id <= 9:
             raise ScanError(f"--lrf-id must be a Dimetix device id 0-9, not {args.lrf_id}")
+
+
+def _check_head_options(args) -> None:
+    """Refuse pan-tilt options the chosen head cannot take (one line each)."""
+    import math
+
+    from asbuilt.errors import ScanError
+
+    pelco = ("ptu_address", "ptu_tilt_sign", "ptu_tilt_zero")
+    if args.ptu_protocol != "pelco-d":
+        for key in pelco:
+            if getattr(args, key) is not None:
+                raise ScanError(
+                    f"--{key.replace('_', '-')} is a Pelco-D option; add --ptu-protocol pelco-d "
+                    "or leave it out"
+                )
+    if args.ptu_address is not None and not 1 <= args.ptu_address <= 255:
+        raise ScanError(f"--ptu-address must be a Pelco-D address 1-255, not {args.ptu_address}")
+    if args.ptu_tilt_zero is not None and not math.isfinite(args.ptu_tilt_zero):
+        raise ScanError(f"--ptu-tilt-zero must be an angle in degrees, not {args.ptu_tilt_zero}")
+    if args.ptu_baud is not None and args.ptu_baud <= 0:
+        raise ScanError(f"--ptu-baud must be a baud rate > 0, not {args.ptu_baud}")
+
+
+def _head_options(args) -> dict:
+    """Keyword options of :func:`~asbuilt.drivers.ptu.open_pan_tilt_unit` from the arguments."""
+    options = {"timeout": args.timeout, "move_timeout": args.move_timeout}
+    if args.ptu_baud is not None:
+        options["baudrate"] = args.ptu_baud
+    for key, name in (
+        ("ptu_address", "address"),
+        ("ptu_tilt_sign", "tilt_sign"),
+        ("ptu_tilt_zero", "tilt_zero"),
+    ):
+        if getattr(args, key) is not None:
+            options[name] = getattr(args, key)
+    return options
 
 
 def _settings(args, plan):
@@ -326,6 +396,7 @@ def run(args: argparse.Namespace) -> int:
 
     err = Console(stderr=True)
     _check_devices_options(args)
+    _check_head_options(args)
     try:
         unit_factor(args.units)
     except ValueError as exc:
@@ -374,7 +445,7 @@ def _run(args, err, settings, plan, calibration) -> int:
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
     from rich.table import Table
 
-    from asbuilt.drivers.ptu import PanTiltUnit
+    from asbuilt.drivers.ptu import open_pan_tilt_unit
     from asbuilt.drivers.rangefinder import open_range_finder
     from asbuilt.drivers.session import DeviceShooter, ScanSession
     from asbuilt.errors import DeviceError
@@ -386,9 +457,7 @@ def _run(args, err, settings, plan, calibration) -> int:
         lrf_options.update(bytesize=8, parity="N")
     if args.lrf_id is not None:
         lrf_options["device_id"] = args.lrf_id
-    ptu = PanTiltUnit.open(
-        args.ptu, baudrate=args.ptu_baud, timeout=args.timeout, move_timeout=args.move_timeout
-    )
+    ptu = open_pan_tilt_unit(args.ptu, args.ptu_protocol, **_head_options(args))
     lrf = None
     session = None
     progress = Progress(

@@ -1,7 +1,8 @@
-"""``asbuilt simulate-device --scene SCENE [--lrf-protocol dimetix|ldm] [noise options]``.
+"""``asbuilt simulate-device --scene SCENE [--ptu-protocol flir|pelco-d] [--lrf-protocol
+dimetix|ldm|lw20] [noise options]``.
 
-Runs a simulated FLIR/DP pan-tilt unit and a simulated range finder (Dimetix DLS or Jenoptik
-LDM) on two pseudo-terminals, backed by a scene description or an exported model (ray cast
+Runs a simulated pan-tilt head (FLIR/DP, or Pelco-D at ``--ptu-address``) and a simulated range
+finder (Dimetix DLS, Jenoptik LDM or LightWare LW20) on two pseudo-terminals, backed by a scene description or an exported model (ray cast
 exactly), and prints the two /dev/pts paths on standard output::
 
     ptu /dev/pts/3
@@ -34,7 +35,9 @@ def register(subparsers) -> argparse.ArgumentParser:
         metavar="FILE",
         help="scene description (.json) or exported mesh (.stl, .glb, .obj, .ply)",
     )
-    parser.add_argument("--lrf-protocol", choices=("dimetix", "ldm"), default="dimetix")
+    parser.add_argument("--lrf-protocol", choices=("dimetix", "ldm", "lw20"), default="dimetix")
+    parser.add_argument("--ptu-protocol", choices=("flir", "pelco-d"), default="flir")
+    parser.add_argument("--ptu-address", type=int, default=1, help="Pelco-D address 1-255 (1)")
     parser.add_argument("--station", help="scene station the rig stands at (default: the first)")
     parser.add_argument("--device-id", type=int, default=0, help="Dimetix device id 0-9 (0)")
     parser.add_argument(
@@ -75,6 +78,10 @@ def run(args: argparse.Namespace) -> int:
         raise DeviceError(
             f"simulate-device: --device-id must be a Dimetix device id 0-9, not {args.device_id}"
         )
+    if not 1 <= args.ptu_address <= 255:
+        raise DeviceError(
+            f"simulate-device: --ptu-address must be a Pelco-D address 1-255, not {args.ptu_address}"
+        )
     world = load_world(args.scene)
     calibration, noise = station_defaults(world, args.station)
     if args.calibration:
@@ -97,7 +104,13 @@ def run(args: argparse.Namespace) -> int:
         # background job of a non-interactive shell inherits that), where Python would keep
         # ignoring it and the server would never stop.
         signal.signal(signal.SIGINT, signal.default_int_handler)
-    server = PtyServer(rig, args.lrf_protocol, args.device_id).start()
+    server = PtyServer(
+        rig,
+        args.lrf_protocol,
+        args.device_id,
+        ptu_protocol=args.ptu_protocol,
+        ptu_address=args.ptu_address,
+    ).start()
     try:
         print(f"ptu {server.ptu_path}", flush=True)
         print(f"lrf {server.lrf_path}", flush=True)
