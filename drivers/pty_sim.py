@@ -61,6 +61,9 @@ class PtyServer:
     lrf_protocol : {"dimetix", "ldm"}
     device_id : int
         Dimetix device id.
+    ptu_options, lrf_options : dict, optional
+        Keyword options of the simulators (:class:`~asbuilt.drivers.sim_ptu.PTUSimulator`,
+        :mod:`~asbuilt.drivers.sim_lrf`): a measuring time, a banner, 7E1 bytes...
 
     Attributes
     ----------
@@ -68,8 +71,18 @@ class PtyServer:
         The tty paths to give the drivers (valid after :meth:`start`).
     """
 
-    def __init__(self, rig, lrf_protocol: str = "dimetix", device_id: int = 0):
+    def __init__(
+        self,
+        rig,
+        lrf_protocol: str = "dimetix",
+        device_id: int = 0,
+        *,
+        ptu_options: dict | None = None,
+        lrf_options: dict | None = None,
+    ):
         self.rig = rig
+        self.ptu_options = dict(ptu_options or {})
+        self.lrf_options = dict(lrf_options or {})
         self.lrf_protocol = lrf_protocol
         self.device_id = device_id
         self._endpoints: list[_Endpoint] = []
@@ -90,12 +103,13 @@ class PtyServer:
         """Open the pseudo-terminals and start serving in a daemon thread."""
         try:
             self._endpoints = [
-                _Endpoint(make_device("sim-ptu", self.rig, {})),
+                _Endpoint(make_device("sim-ptu", self.rig, {}, self.ptu_options)),
                 _Endpoint(
                     make_device(
                         "sim-lrf",
                         self.rig,
                         {"protocol": self.lrf_protocol, "device_id": str(self.device_id)},
+                        self.lrf_options,
                     )
                 ),
             ]

@@ -41,10 +41,18 @@ class PTUSimulator:
     ----------
     rig : SimulatedRig
         Shared head state; this simulator moves it.
+    banner : str, optional
+        A line of text the unit sends on its own, once, right after its reply to command
+        number ``banner_after`` (counted from 1; 0: at power-up), as a unit that restarts or
+        prints a power-up banner mid-session does (neither ``*`` nor ``!``).
+    banner_after : int
     """
 
-    def __init__(self, rig: SimulatedRig):
+    def __init__(self, rig: SimulatedRig, *, banner: str | None = None, banner_after: int = 0):
         self.rig = rig
+        self.banner = banner
+        self.banner_after = int(banner_after)
+        self._commands = 0
         self.echo = True
         self.verbose = True
         self.enforce = True
@@ -66,7 +74,9 @@ class PTUSimulator:
         }
 
     def startup(self) -> list[tuple[float, bytes]]:
-        """Output at power-up (none for this unit)."""
+        """Output at power-up (none, unless a ``banner`` is due after 0 commands)."""
+        if self.banner is not None and self.banner_after == 0:
+            return [(time.monotonic(), self.banner.encode("ascii") + b"\r\n")]
         return []
 
     def feed(self, data: bytes) -> list[tuple[float, bytes]]:
@@ -80,7 +90,12 @@ class PTUSimulator:
                 if self._token:
                     token = bytes(self._token)
                     self._token.clear()
-                    out.extend(self._execute(token, now))
+                    replies = self._execute(token, now)
+                    out.extend(replies)
+                    self._commands += 1
+                    if self.banner is not None and self._commands == self.banner_after:
+                        at = max([now] + [t for t, _ in replies])
+                        out.append((at, self.banner.encode("ascii") + b"\r\n"))
             else:
                 self._token.append(byte)
                 if len(self._token) > 64:
