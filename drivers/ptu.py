@@ -33,6 +33,8 @@ __all__ = [
 
 _ARCSEC = math.pi / (180.0 * 3600.0)  # radians per second of arc
 _NUMBER = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?")
+#: Lines that are no reply (neither ``*`` nor ``!``) one command's reply may follow, at most.
+MAX_UNSOLICITED = 20
 _LIMIT_NOTICE = re.compile(r"^(?:!\s*[PT])+$", re.IGNORECASE)
 
 
@@ -132,6 +134,9 @@ class PanTiltUnit:
         self._notices: list[str] = []  # limit notices since the current move was commanded
         self._unsynced = False  # a reply may be owed (timeout): resynchronise first
         self._verify = False  # check the head's position after the next move
+        #: Lines the unit sent that are no reply (a power-up banner...), skipped, oldest first;
+        #: whoever keeps a log takes them (the scan session notes them in its journal).
+        self.unsolicited: list[str] = []
 
     @classmethod
     def open(
@@ -220,6 +225,7 @@ class PanTiltUnit:
     def _reply(self, cmd: str, timeout: float | None, query: bool) -> str:
         upper = cmd.upper()
         notice_seen = False
+        skipped = 0
         while True:
             wait = timeout
             if notice_seen:  # the notice may have replaced the '*' (it came "on its own")
@@ -254,10 +260,17 @@ class PanTiltUnit:
                 raise PTUCommandError(
                     f"{self.channel.name}: {cmd!r} refused: {line[1:].strip() or 'error'}"
                 )
-            raise DeviceProtocolError(
-                f"{self.channel.name}: unexpected reply {line!r} to {cmd!r} (neither '*' nor "
-                "'!'); check the baud rate and that this is a FLIR/DP ASCII unit"
-            )
+            # Not a reply (every reply starts with '*' or '!'): a power-up banner or other
+            # text the unit sent on its own. Skipped and kept (:attr:`unsolicited`); a stream
+            # of such lines is no unit speaking this protocol.
+            skipped += 1
+            if skipped > MAX_UNSOLICITED:
+                raise DeviceProtocolError(
+                    f"{self.channel.name}: unexpected reply {line!r} to {cmd!r} (neither '*' "
+                    f"nor '!', after {MAX_UNSOLICITED} such lines); check the baud rate and "
+                    "that this is a FLIR/DP ASCII unit"
+                )
+            self.unsolicited.append(line)
 
     def _take_notice(self, line: str) -> bool:
         """Keep a limit notice (``!P``, ``!T``, ``!P!T``...) for the move; False if ``line`` is none."""
@@ -278,8 +291,12 @@ class PanTiltUnit:
     def _collect_pending(self) -> None:
         """Read what arrived unasked: limit notices are kept, late replies dropped."""
         for line in self.channel.pending_lines():
-            if not self._take_notice(line):
+            if self._take_notice(line):
+                continue
+            if line.startswith(("*", "!")):
                 self._verify = True  # a reply nobody waited for: check the next move
+            else:
+                self.unsolicited.append(line)  # no reply at all (a banner): kept, skipped
 
     def _sync(self) -> None:
         """Get back in step with the unit: a lone delimiter ends any half-written command (its

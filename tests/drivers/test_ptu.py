@@ -5,7 +5,13 @@ from __future__ import annotations
 import math
 
 import pytest
-from asbuilt.drivers.ptu import PanTiltUnit, PTUCommandError, PTULimitError, PTULimits
+from asbuilt.drivers.ptu import (
+    MAX_UNSOLICITED,
+    PanTiltUnit,
+    PTUCommandError,
+    PTULimitError,
+    PTULimits,
+)
 from asbuilt.drivers.simrig import register_rig
 from driver_helpers import wall_rig
 
@@ -130,9 +136,19 @@ def test_reset_accepts_the_calibration_sweep_notices(scripted):
     assert port.written == ["R"]
 
 
-@pytest.mark.parametrize("reply", [b"hello\r\n", b"# 12\r\n"])
-def test_garbage_reply_is_a_protocol_error(scripted, reply):
-    ptu, _ = _unit(scripted, [("V", reply)])
+@pytest.mark.parametrize("text", [b"hello", b"# 12"])
+def test_text_that_is_no_reply_is_skipped_and_kept(scripted, text):
+    # every reply starts with '*' or '!': other text (a power-up banner) is the unit's own
+    ptu, _ = _unit(scripted, [("V", text + b"\r\n* 2.14\r\n")])
+    assert ptu.command("V") == "2.14"
+    assert ptu.unsolicited == [text.decode()]
+    ptu, _ = _unit(scripted, [("V", text + b"\r\n")])
+    with pytest.raises(DeviceTimeout):
+        ptu.command("V")
+
+
+def test_a_stream_of_text_that_is_no_reply_is_a_protocol_error(scripted):
+    ptu, _ = _unit(scripted, [("V", b"hello\r\n" * (MAX_UNSOLICITED + 1))])
     with pytest.raises(DeviceProtocolError, match="neither"):
         ptu.command("V")
 
