@@ -134,6 +134,9 @@ class PanTiltUnit:
         self._notices: list[str] = []  # limit notices since the current move was commanded
         self._unsynced = False  # a reply may be owed (timeout): resynchronise first
         self._verify = False  # check the head's position after the next move
+        #: Pan and tilt speeds read at opening (``PS`` / ``TS``, positions/s; None: refused).
+        self.speeds: tuple[float | None, float | None] = (None, None)
+        self._at: tuple[int, int] | None = None  # the last target acknowledged, counts
         #: Lines the unit sent that are no reply (a power-up banner...), skipped, oldest first;
         #: whoever keeps a log takes them (the scan session notes them in its journal).
         self.unsolicited: list[str] = []
@@ -161,7 +164,7 @@ class PanTiltUnit:
         move_timeout : float
             Seconds to wait for a move to finish.
         initialize : bool
-            Send ``FT``/``ED`` and read resolution and limits.
+            Send ``FT``/``ED`` and read resolution, limits and speeds.
         """
         port = open_port(url, baudrate=baudrate, write_timeout=timeout)
         unit = cls(LineChannel(port, f"pan-tilt unit on {url}", timeout), move_timeout=move_timeout)
@@ -345,7 +348,9 @@ class PanTiltUnit:
 
     def initialize(self) -> PTULimits:
         """Resynchronise (:meth:`_sync`: a lone delimiter ends a command a killed program left
-        half-written), then terse feedback, echo off, immediate mode, resolution and limits.
+        half-written), then terse feedback, echo off, immediate mode, resolution and limits, and
+        the axes' speeds (``PS`` / ``TS``, for the wait of a position command: see
+        :meth:`_move_wait`; a unit refusing them keeps the reply timeout).
 
         Returns
         -------
@@ -370,7 +375,37 @@ class PanTiltUnit:
                 f"{self.channel.name}: resolution must be positive, got "
                 f"{self.limits.pan_resolution} / {self.limits.tilt_resolution} arcsec"
             )
+        self.speeds = (self._speed("PS"), self._speed("TS"))
+        self._at = None
         return self.limits
+
+    def _speed(self, query: str) -> float | None:
+        """An axis's speed (``PS`` / ``TS``, positions/s), or None if the unit refuses it."""
+        try:
+            speed = self.query_number(query)
+        except PTUCommandError:
+            return None
+        return speed if math.isfinite(speed) and speed > 0 else None
+
+    def _move_wait(self, axis: int, target: int) -> float | None:
+        """Seconds to wait for the ``*`` of a ``PP`` / ``TP`` to ``target`` counts.
+
+        A unit may acknowledge a position command only when the move has ended: the wait is
+        the reply timeout plus twice the travel time at the speed read at opening (``PS`` /
+        ``TS``; twice, for the acceleration ramps), from the last target (from the farthest
+        limit before the first move), at most ``move_timeout``. None (the reply timeout) when
+        the speed is unknown.
+        """
+        speed = self.speeds[axis]
+        if speed is None or self.limits is None:
+            return None
+        lim = self.limits
+        lo, hi = (lim.pan_min, lim.pan_max) if axis == 0 else (lim.tilt_min, lim.tilt_max)
+        distance = (
+            abs(target - self._at[axis]) if self._at is not None else max(target - lo, hi - target)
+        )
+        wait = self.channel.timeout + 2.0 * distance / speed
+        return max(self.channel.timeout, min(wait, self.move_timeout))
 
     def limit_hit_after_move(self) -> bool:
         """Whether ``!P`` / ``!T`` arrived after the last move's ``*`` (read without waiting).
@@ -458,8 +493,11 @@ class PanTiltUnit:
                 f"limits [{math.degrees(lo):.3f}, {math.degrees(hi):.3f}] deg; aim inside them"
             )
         self.limit_hit_after_move()  # a notice now is the previous move's, not this one's
-        self.command(f"PP{pc}")
-        self.command(f"TP{tc}")
+        pan_wait, tilt_wait = self._move_wait(0, pc), self._move_wait(1, tc)
+        self._at = None  # until both are acknowledged: where the head is is not known
+        self.command(f"PP{pc}", timeout=pan_wait)
+        self.command(f"TP{tc}", timeout=tilt_wait)
+        self._at = (pc, tc)
         if wait:
             self.await_completion()
             if self._verify:

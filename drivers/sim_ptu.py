@@ -46,10 +46,21 @@ class PTUSimulator:
         number ``banner_after`` (counted from 1; 0: at power-up), as a unit that restarts or
         prints a power-up banner mid-session does (neither ``*`` nor ``!``).
     banner_after : int
+    ack_at_end : bool
+        Acknowledge ``PP`` / ``TP`` (immediate mode) only when the move has ended, as some
+        units do, instead of at once.
     """
 
-    def __init__(self, rig: SimulatedRig, *, banner: str | None = None, banner_after: int = 0):
+    def __init__(
+        self,
+        rig: SimulatedRig,
+        *,
+        banner: str | None = None,
+        banner_after: int = 0,
+        ack_at_end: bool = False,
+    ):
         self.rig = rig
+        self.ack_at_end = bool(ack_at_end)
         self.banner = banner
         self.banner_after = int(banner_after)
         self._commands = 0
@@ -72,6 +83,8 @@ class PTUSimulator:
             "PL": 0,
             "TL": 0,
         }
+        if rig.speed > 0:  # the speed the rig moves at is the one the unit reports
+            self.settings["PS"] = self.settings["TS"] = int(round(rig.speed))
 
     def startup(self) -> list[tuple[float, bytes]]:
         """Output at power-up (none, unless a ``banner`` is due after 0 commands)."""
@@ -203,10 +216,12 @@ class PTUSimulator:
             target = min(max(target, lo), hi)
             self._limit_notice += b"!P" if pan_axis else b"!T"
         self._pending[key] = target
-        reply = self._ok(now)
-        if not self.slaved:
-            reply += self._start_moves(now)
-        return reply
+        if self.slaved:
+            return self._ok(now)
+        started = self._start_moves(now)
+        if self.ack_at_end:
+            return started + [(max(now, self.rig.move_end()), b"*\r\n")]
+        return self._ok(now) + started
 
     def _start_moves(self, now: float) -> list[tuple[float, bytes]]:
         """Start the pending moves; a limit notice goes out when the move ends."""

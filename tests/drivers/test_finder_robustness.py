@@ -206,3 +206,16 @@ def test_a_finder_taking_seconds_per_measurement(protocol, seconds):
                 pan, tilt = ptu.move_to(math.radians(pan_deg), 0.0)
                 assert lrf.measure() == pytest.approx(4.0 / math.cos(pan), abs=1e-3)
         assert server.error is None
+
+
+# -- 6. a unit that acknowledges a position command when the move ends --------------------------
+def test_a_long_move_acknowledged_at_its_end_waits_for_the_travel_time():
+    rig = wall_rig(4.0)
+    rig.speed = 1000.0  # positions/s: 60 deg of pan (1167 counts) take over a second
+    with PtyServer(rig, "dimetix", ptu_options={"ack_at_end": True}) as server:
+        with PanTiltUnit.open(server.ptu_path, timeout=0.5, move_timeout=10.0) as ptu:
+            assert ptu.speeds == (1000.0, 1000.0)
+            for pan_deg in (30, -30, 0):
+                pan, _ = ptu.move_to(math.radians(pan_deg), 0.0)
+                assert ptu.position() == pytest.approx((pan, 0.0), abs=1e-3)
+        assert server.error is None

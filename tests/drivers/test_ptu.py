@@ -31,6 +31,8 @@ INIT_VERBOSE_ECHO = [
     ("TX", b"* 1500\r\n"),
     ("PR", b"* 46.2857\r\n"),
     ("TR", b"* 11.5714\r\n"),
+    ("PS", b"* 1000\r\n"),
+    ("TS", b"! Illegal Command\r\n"),  # a unit without the query keeps the reply timeout
 ]
 
 
@@ -58,6 +60,8 @@ def test_verbose_replies_are_parsed(scripted):
         ("TX", b"* Maximum Tilt position is 604\r\n"),
         ("PR", b"* 185.1428 seconds arc per Pan position\r\n"),
         ("TR", b"* 185.1428 seconds arc per Tilt position\r\n"),
+        ("PS", b"* Target Pan speed is 1000 positions/sec\r\n"),
+        ("TS", b"* Target Tilt speed is 1000 positions/sec\r\n"),
         ("PP", b"* Current Pan position is 120\r\n"),
         ("TP", b"* Current Tilt position is -40\r\n"),
     ]
