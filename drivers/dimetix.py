@@ -83,11 +83,19 @@ class DimetixDLS:
         parity: str = "E",
         timeout: float = 3.0,
     ) -> DimetixDLS:
-        """Open the sensor at ``url`` (default 19200 baud 7E1, the common factory setting)."""
+        """Open the sensor at ``url`` (default 19200 baud 7E1, the common factory setting).
+
+        With 7 data bits, bit 7 of every received byte is cleared: a pseudo-terminal, opened
+        8N1 whatever is asked (:func:`~asbuilt.drivers.transport.open_port`), passes a 7E1
+        device's even parity bit through as bit 7.
+        """
         port = open_port(
             url, baudrate=baudrate, bytesize=bytesize, parity=parity, write_timeout=timeout
         )
-        return cls(LineChannel(port, f"Dimetix range finder on {url}", timeout), device_id)
+        channel = LineChannel(
+            port, f"Dimetix range finder on {url}", timeout, seven_bit=int(bytesize) == 7
+        )
+        return cls(channel, device_id)
 
     def __enter__(self) -> DimetixDLS:
         return self

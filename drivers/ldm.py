@@ -5,15 +5,17 @@ A distance comes back in the selected output format: d ``004.996`` (metres at sc
 ``004.996 000985`` (with the signal quality 0-1024) or h (hexadecimal millimetres, e.g.
 ``001388``); an error as ``Exx`` CR LF, e.g. ``E15`` (poor reflectance or too short a
 measuring time). The driver reads all three formats, at scale factor 1 (``SF``), the factory
-setting; it changes no setting. A reply matching ``E`` and one to three digits is an error
-code, never a hexadecimal distance (the manual's own error spelling; a zero-padded hex reply,
-as the formats' examples are, never has that shape). Only E15's meaning is documented in the
-reference used here; other codes are reported as the device sent them.
+setting. A reply of ``E`` and exactly two digits is an error code (the manual's ``Exx``); any
+other hexadecimal reply (``E9``, ``E100``, ``000E10``) is a distance. An unpadded hexadecimal
+distance can still look like an error (3600 mm is ``E10``), so :meth:`LDM4x.probe` sets format
+d (``SDd``) when the meter's answer is not a decimal distance. Only E15's meaning is
+documented in the reference used here; other codes are reported as the device sent them.
 
 Command line ending: the reference shows the replies' (CR LF) but not the commands'. The
-driver sends CR LF; a meter that ends a command at CR and again at LF answers the empty
-second one too (an ``Exx``, before or after the distance). :meth:`LDM4x.probe` listens for
-that second reply and then sends CR alone.
+driver sends CR LF; :meth:`LDM4x.probe` switches to CR alone for a meter that ends a command at
+CR and again at LF (it answers the empty second one too, an ``Exx`` before or after the
+distance) and for one that ends it at CR and keeps the LF as the start of the next command (which
+it then refuses: a second ``DM`` at the same aim answered with an error).
 
 Keeping replies with their shots: the input is cleared before every ``DM`` (a power-up
 autostart line, a stale answer); the protocol has no stop command, so after a timeout the next
@@ -43,7 +45,7 @@ LDM_ERRORS = {
 
 _DISTANCE = re.compile(r"^([+-]?\d+\.\d+)(?:\s+(\d+))?$")
 _HEX_MM = re.compile(r"^[0-9A-Fa-f]+$")
-_ERROR = re.compile(r"^E(\d{1,3})$")
+_ERROR = re.compile(r"^E(\d{2})$")  # the manual's "Exx": exactly two digits
 
 #: Seconds :meth:`LDM4x.probe` listens, after a distance, for a second reply to its one ``DM``
 #: (the empty command after CR answered at once).
@@ -63,6 +65,7 @@ class LDM4x:
         self.channel = channel
         self.last_quality: int | None = None
         self._late = False  # a DM timed out: its answer may still come
+        self._last_reply = ""  # the last DM's reply line, as sent
         #: Command line ending: CR LF, or CR alone once :meth:`probe` found that the meter
         #: ends a command at each.
         self.eol = "\r\n"
@@ -126,6 +129,7 @@ class LDM4x:
 
     def _distance(self, line: str) -> float:
         """The distance in metres a reply line holds; raises as :meth:`measure` does."""
+        self._last_reply = line
         m = _ERROR.match(line)
         if m:
             code = int(m.group(1))
@@ -146,34 +150,113 @@ class LDM4x:
         )
 
     def probe(self) -> None:
-        """Check that the meter answers on these line settings, and how it ends commands: one
-        ``DM`` (an error code is an answer too; the reference lists no query without a
-        measurement).
+        """Check that the meter answers on these line settings, settle how commands end and make
+        sure distances come back in decimal (the reference lists no query without a
+        measurement, so every check is a ``DM``; an error code is an answer too).
 
-        A second reply to that one ``DM`` means the meter ended the command at CR and again at
-        LF: an error first (the empty command's, answered at once) is followed by the distance
-        within the reply timeout; a distance first by the error within
-        ``SECOND_REPLY_WAIT``. Commands then end with CR alone (:attr:`eol`), checked by one more
-        ``DM``.
+        1. One ``DM`` CR LF. A second reply to it means the meter ended the command at CR and
+           again at LF: an error first (the empty command's, answered at once) is followed by
+           the distance within the reply timeout; a distance first by the error within
+           ``SECOND_REPLY_WAIT``. Commands then end with CR alone (:attr:`eol`).
+        2. Otherwise a second ``DM`` CR LF at the same aim must be answered in kind (a distance
+           after a distance, the same code after a code). A meter that ends a command at CR
+           and keeps the LF as the first byte of the next command refuses that second one (an
+           error after a distance, another code, or silence): a lone CR then ends the stray LF's
+           command, its answer is dropped, and two ``DM`` CR must be answered in kind, else
+           the driver goes back to CR LF.
+        3. A reply that is not a decimal distance (format h, or an error code, which at format h
+           can also be a hexadecimal distance such as ``E10``) makes the driver set format d
+           (``SDd``, its acknowledgement read and dropped) and measure once more. A meter
+           already at format d or s is left as it is.
 
         Raises
         ------
         DeviceTimeout, DeviceProtocolError
             Silence, or a reply that is neither a distance nor ``Exx`` (wrong baud rate).
         """
-        try:
-            self.measure()
-            wait = SECOND_REPLY_WAIT
-        except RangeFinderError:
-            wait = None  # the channel's timeout: the distance may follow the empty command's error
+        first = self._answer()
+        # after an error, the distance may follow the empty command's error: the full timeout
+        wait = SECOND_REPLY_WAIT if _kind(first) == "distance" else None
         try:
             second = self._line("second reply", wait)
         except DeviceTimeout:
-            return
-        if _ERROR.match(second) is None:
-            self._distance(second)  # anything else is the baud rate's problem, said as such
-        self.eol = "\r"
+            second = None
+        if second is not None:
+            if _ERROR.match(second) is None:
+                self._distance(second)  # anything else is the baud rate's problem, said as such
+            self.eol = "\r"
+            last = self._answer()
+        else:
+            try:
+                last = self._answer()
+            except DeviceTimeout:  # a meter that stays silent for a command it does not know
+                last = None
+            if _kind(last) != _kind(first):
+                last = self._try_cr(first, last)
+        if not _decimal(last):
+            self._set_decimal()
+
+    def _answer(self) -> str:
+        """One ``DM``'s reply line as sent (a distance or ``Exx``), checked but not converted."""
         try:
             self.measure()
-        except RangeFinderError:
+        except RangeFinderError as exc:
+            return exc.code
+        return self._last_reply
+
+    def _try_cr(self, first: str, second: str | None) -> str:
+        """Commands ended with CR LF drew replies of different kinds (``first``, ``second``;
+        None for silence): try CR alone (see :meth:`probe`, step 2); the last reply of the
+        ending kept."""
+        self._flush("\r")
+        self._late = False  # the flush waited for, and dropped, anything still owed
+        self.eol = "\r"
+        try:
+            a = self._answer()
+            b = self._answer()
+        except DeviceTimeout:
+            a = b = None
+        if (
+            a is not None
+            and _kind(a) == _kind(b)
+            and (_kind(first) == "distance" or _kind(a) != _kind(second))
+        ):
+            return b
+        self._late = False
+        self._flush("\r\n")
+        self.eol = "\r\n"
+        return self._answer()
+
+    def _flush(self, ending: str) -> None:
+        """Send ``ending`` alone (it ends whatever the meter holds of a command) and drop the
+        answer it may draw."""
+        self.channel.write(ending)
+        try:
+            while True:
+                self.channel.read_line(SECOND_REPLY_WAIT)
+        except DeviceTimeout:
             pass
+        self.channel.discard_input()
+
+    def _set_decimal(self) -> None:
+        """``SDd``: output format d (see :meth:`probe`, step 3), then one ``DM``."""
+        self.channel.discard_input()
+        self.channel.write("SDd" + self.eol)
+        try:  # the reference gives no acknowledgement: one line or silence, dropped
+            self.channel.read_line(SECOND_REPLY_WAIT)
+        except DeviceTimeout:
+            pass
+        self.channel.discard_input()
+        self._answer()
+
+
+def _kind(reply: str | None) -> str | None:
+    """``"distance"`` or the error code: what two answers at the same aim share."""
+    if reply is None:
+        return None
+    return reply if _ERROR.match(reply) else "distance"
+
+
+def _decimal(reply: str) -> bool:
+    """Whether ``reply`` is a decimal distance (format d or s)."""
+    return _DISTANCE.match(reply) is not None

@@ -35,6 +35,8 @@ __all__ = [
 
 _ARCSEC = math.pi / (180.0 * 3600.0)  # radians per second of arc
 _NUMBER = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?")
+#: Lines that are no reply (neither ``*`` nor ``!``) one command's reply may follow, at most.
+MAX_UNSOLICITED = 20
 _LIMIT_NOTICE = re.compile(r"^(?:!\s*[PT])+$", re.IGNORECASE)
 
 
@@ -134,6 +136,12 @@ class PanTiltUnit:
         self._notices: list[str] = []  # limit notices since the current move was commanded
         self._unsynced = False  # a reply may be owed (timeout): resynchronise first
         self._verify = False  # check the head's position after the next move
+        #: Pan and tilt speeds read at opening (``PS`` / ``TS``, positions/s; None: refused).
+        self.speeds: tuple[float | None, float | None] = (None, None)
+        self._at: tuple[int, int] | None = None  # the last target acknowledged, counts
+        #: Lines the unit sent that are no reply (a power-up banner...), skipped, oldest first;
+        #: whoever keeps a log takes them (the scan session notes them in its journal).
+        self.unsolicited: list[str] = []
 
     @classmethod
     def open(
@@ -158,7 +166,7 @@ class PanTiltUnit:
         move_timeout : float
             Seconds to wait for a move to finish.
         initialize : bool
-            Send ``FT``/``ED`` and read resolution and limits.
+            Send ``FT``/``ED`` and read resolution, limits and speeds.
         """
         port = open_port(url, baudrate=baudrate, write_timeout=timeout)
         unit = cls(LineChannel(port, f"pan-tilt unit on {url}", timeout), move_timeout=move_timeout)
@@ -222,6 +230,7 @@ class PanTiltUnit:
     def _reply(self, cmd: str, timeout: float | None, query: bool) -> str:
         upper = cmd.upper()
         notice_seen = False
+        skipped = 0
         while True:
             wait = timeout
             if notice_seen:  # the notice may have replaced the '*' (it came "on its own")
@@ -256,10 +265,17 @@ class PanTiltUnit:
                 raise PTUCommandError(
                     f"{self.channel.name}: {cmd!r} refused: {line[1:].strip() or 'error'}"
                 )
-            raise DeviceProtocolError(
-                f"{self.channel.name}: unexpected reply {line!r} to {cmd!r} (neither '*' nor "
-                "'!'); check the baud rate and that this is a FLIR/DP ASCII unit"
-            )
+            # Not a reply (every reply starts with '*' or '!'): a power-up banner or other
+            # text the unit sent on its own. Skipped and kept (:attr:`unsolicited`); a stream
+            # of such lines is no unit speaking this protocol.
+            skipped += 1
+            if skipped > MAX_UNSOLICITED:
+                raise DeviceProtocolError(
+                    f"{self.channel.name}: unexpected reply {line!r} to {cmd!r} (neither '*' "
+                    f"nor '!', after {MAX_UNSOLICITED} such lines); check the baud rate and "
+                    "that this is a FLIR/DP ASCII unit"
+                )
+            self.unsolicited.append(line)
 
     def _take_notice(self, line: str) -> bool:
         """Keep a limit notice (``!P``, ``!T``, ``!P!T``...) for the move; False if ``line`` is none."""
@@ -280,8 +296,12 @@ class PanTiltUnit:
     def _collect_pending(self) -> None:
         """Read what arrived unasked: limit notices are kept, late replies dropped."""
         for line in self.channel.pending_lines():
-            if not self._take_notice(line):
+            if self._take_notice(line):
+                continue
+            if line.startswith(("*", "!")):
                 self._verify = True  # a reply nobody waited for: check the next move
+            else:
+                self.unsolicited.append(line)  # no reply at all (a banner): kept, skipped
 
     def _sync(self) -> None:
         """Get back in step with the unit: a lone delimiter ends any half-written command (its
@@ -330,7 +350,9 @@ class PanTiltUnit:
 
     def initialize(self) -> PTULimits:
         """Resynchronise (:meth:`_sync`: a lone delimiter ends a command a killed program left
-        half-written), then terse feedback, echo off, immediate mode, resolution and limits.
+        half-written), then terse feedback, echo off, immediate mode, resolution and limits, and
+        the axes' speeds (``PS`` / ``TS``, for the wait of a position command: see
+        :meth:`_move_wait`; a unit refusing them keeps the reply timeout).
 
         Returns
         -------
@@ -355,7 +377,37 @@ class PanTiltUnit:
                 f"{self.channel.name}: resolution must be positive, got "
                 f"{self.limits.pan_resolution} / {self.limits.tilt_resolution} arcsec"
             )
+        self.speeds = (self._speed("PS"), self._speed("TS"))
+        self._at = None
         return self.limits
+
+    def _speed(self, query: str) -> float | None:
+        """An axis's speed (``PS`` / ``TS``, positions/s), or None if the unit refuses it."""
+        try:
+            speed = self.query_number(query)
+        except PTUCommandError:
+            return None
+        return speed if math.isfinite(speed) and speed > 0 else None
+
+    def _move_wait(self, axis: int, target: int) -> float | None:
+        """Seconds to wait for the ``*`` of a ``PP`` / ``TP`` to ``target`` counts.
+
+        A unit may acknowledge a position command only when the move has ended: the wait is
+        the reply timeout plus twice the travel time at the speed read at opening (``PS`` /
+        ``TS``; twice, for the acceleration ramps), from the last target (from the farthest
+        limit before the first move), at most ``move_timeout``. None (the reply timeout) when
+        the speed is unknown.
+        """
+        speed = self.speeds[axis]
+        if speed is None or self.limits is None:
+            return None
+        lim = self.limits
+        lo, hi = (lim.pan_min, lim.pan_max) if axis == 0 else (lim.tilt_min, lim.tilt_max)
+        distance = (
+            abs(target - self._at[axis]) if self._at is not None else max(target - lo, hi - target)
+        )
+        wait = self.channel.timeout + 2.0 * distance / speed
+        return max(self.channel.timeout, min(wait, self.move_timeout))
 
     def limit_hit_after_move(self) -> bool:
         """Whether ``!P`` / ``!T`` arrived after the last move's ``*`` (read without waiting).
@@ -443,8 +495,11 @@ class PanTiltUnit:
                 f"limits [{math.degrees(lo):.3f}, {math.degrees(hi):.3f}] deg; aim inside them"
             )
         self.limit_hit_after_move()  # a notice now is the previous move's, not this one's
-        self.command(f"PP{pc}")
-        self.command(f"TP{tc}")
+        pan_wait, tilt_wait = self._move_wait(0, pc), self._move_wait(1, tc)
+        self._at = None  # until both are acknowledged: where the head is is not known
+        self.command(f"PP{pc}", timeout=pan_wait)
+        self.command(f"TP{tc}", timeout=tilt_wait)
+        self._at = (pc, tc)
         if wait:
             self.await_completion()
             if self._verify:

@@ -65,6 +65,10 @@ class PtyServer:
         The pan-tilt head's protocol.
     ptu_address : int
         Pelco-D address (1-255).
+    ptu_options, lrf_options : dict, optional
+        Keyword options of the FLIR, Dimetix and LDM simulators
+        (:class:`~asbuilt.drivers.sim_ptu.PTUSimulator`, :mod:`~asbuilt.drivers.sim_lrf`): a
+        measuring time, a banner, 7E1 bytes...
 
     Attributes
     ----------
@@ -80,8 +84,12 @@ class PtyServer:
         *,
         ptu_protocol: str = "flir",
         ptu_address: int = 1,
+        ptu_options: dict | None = None,
+        lrf_options: dict | None = None,
     ):
         self.rig = rig
+        self.ptu_options = dict(ptu_options or {})
+        self.lrf_options = dict(lrf_options or {})
         self.lrf_protocol = lrf_protocol
         self.device_id = device_id
         self.ptu_protocol = ptu_protocol
@@ -109,6 +117,7 @@ class PtyServer:
                         "sim-ptu",
                         self.rig,
                         {"protocol": self.ptu_protocol, "address": str(self.ptu_address)},
+                        self.ptu_options,
                     )
                 ),
                 _Endpoint(
@@ -116,6 +125,7 @@ class PtyServer:
                         "sim-lrf",
                         self.rig,
                         {"protocol": self.lrf_protocol, "device_id": str(self.device_id)},
+                        self.lrf_options,
                     )
                 ),
             ]

@@ -51,10 +51,12 @@ finished objects come back as they were and the interrupted object's algorithm i
 its recorded shots served from the journal until it needs new ones.
 
 Shots with device errors are retried ``retries`` times, then skipped and counted; a move the
-pan-tilt unit refuses (``! <message>``) skips its shot. A range finder that times out or answers
-unreadably (wrong line settings), or a unit that refuses, on ``lost_after`` consecutive shots,
-or a port that fails, ends the session with a :class:`~asbuilt.errors.DeviceError` (the journal
-keeps everything up to that shot).
+pan-tilt unit refuses (``! <message>``) skips its shot. A range finder that times out, answers
+unreadably (wrong line settings) or with an error that is not a miss (a refused command, an
+interface or temperature error, a code of unknown meaning: anything but signal too weak, too
+strong or too much background light), or a unit that refuses, on ``lost_after`` consecutive
+shots, or a port that fails, ends the session with a :class:`~asbuilt.errors.DeviceError`
+naming the device's code and its meaning (the journal keeps everything up to that shot).
 """
 
 from __future__ import annotations
@@ -219,11 +221,18 @@ class DeviceShooter:
         self.ptu = ptu
         self.lrf = lrf
         self.settings = settings
-        self.lost_in_a_row = 0  # shots whose every attempt timed out or was unreadable
+        self.lost_in_a_row = 0  # shots whose every attempt failed (not a miss)
 
     def __call__(self, pan: float, tilt: float, phase: str) -> Shot:
         from .ptu import PTUCommandError, PTULimitError
-        from .rangefinder import RangeFinderError
+        from .rangefinder import (
+            RangeFinderError,
+            SignalTooStrong,
+            SignalTooWeak,
+            TooMuchBackgroundLight,
+        )
+
+        misses = (SignalTooWeak, SignalTooStrong, TooMuchBackgroundLight)
 
         try:
             pan_at, tilt_at = self._move(pan, tilt)
@@ -242,7 +251,10 @@ class DeviceShooter:
             try:
                 value = float(self.lrf.measure())
             except RangeFinderError as exc:
-                error, failure = exc.code or type(exc).__name__, None
+                error = exc.code or type(exc).__name__
+                # no return at this aim (a miss) vs a device that needs attention (a refused
+                # command, an interface or temperature error, a code of unknown meaning)
+                failure = None if isinstance(exc, misses) else exc
                 continue
             except (DeviceTimeout, DeviceProtocolError) as exc:  # silence, wrong line settings
                 error = "timeout" if isinstance(exc, DeviceTimeout) else "protocol"
@@ -266,10 +278,12 @@ class DeviceShooter:
         """Count a shot lost to ``failure``; raise its kind once ``lost_after`` are in a row."""
         self.lost_in_a_row += 1
         if self.lost_in_a_row >= self.settings.lost_after:
-            raise type(failure)(
+            message = (
                 f"{failure} ({self.lost_in_a_row} shots in a row); then continue with "
                 "asbuilt scan --resume"
             )
+            code = getattr(failure, "code", None)
+            raise type(failure)(message, code=code) if code else type(failure)(message)
 
     def _move(self, pan: float, tilt: float) -> tuple[float, float]:
         """Move with retries on timeouts; the last timeout propagates (the unit is lost)."""
@@ -635,6 +649,7 @@ class ScanSession:
         def live(pan: float, tilt: float, phase: str) -> Shot:
             nonlocal seq
             shot = self.shooter(pan, tilt, phase)
+            self._note_unsolicited()
             self.journal.append(shot.to_record(target.id, seq))
             seq += 1
             return shot
@@ -663,6 +678,14 @@ class ScanSession:
         self.failed.pop(target.id, None)
         self.write_scan()
         return result
+
+    def _note_unsolicited(self) -> None:
+        """Journal the lines the pan-tilt unit sent on its own (a power-up banner...), which
+        its driver skipped, as ``note`` records (a resume ignores them)."""
+        lines = getattr(getattr(self.shooter, "ptu", None), "unsolicited", None)
+        if isinstance(lines, list) and lines:
+            self.journal.append({"type": "note", "device": "ptu", "unsolicited": list(lines)})
+            lines.clear()
 
     def _too_few(self, shots: list[Shot], n: int, minimum: int) -> str:
         """Why an object with ``n`` shots on it is not in the scan: aim, or the unit's reach."""

@@ -14,7 +14,13 @@ LDM41/42: ``DM`` (also ``DW`` / ``DX`` on a white target) -> ``004.996`` in outp
 ``004.996 000985`` in format s (signal quality 0-1024) at scale 1, or ``E15`` (poor
 reflectance). ``SDd`` / ``SDs`` choose the format, ``OF<metres>`` an offset (both answered with
 the setting read back: the simulator's assumption, the manual's exact acknowledgement may differ),
-``TP`` the temperature. Unknown commands get no reply.
+``TP`` the temperature. Unknown commands get no reply (or ``unknown_reply``).
+
+Options (constructor keywords; :class:`~asbuilt.drivers.pty_sim.PtyServer` passes them on):
+both take ``measure_time`` (seconds per measurement); the Dimetix ``parity_bit7`` (7E1 bytes as
+an 8N1 pty passes them) and ``refuse`` (an error code for every ``sNg``); the LDM
+``command_end`` (``"cr-keep-lf"``: commands end at CR, an LF starts the next one),
+``output_format``, ``hex_digits`` (0: unpadded format h) and ``unknown_reply``.
 """
 
 from __future__ import annotations
@@ -31,28 +37,55 @@ _DIMETIX = re.compile(rb"^s(\d)([a-z]+)([+-]\d+)?$")
 
 
 class _LineDevice(ABC):
-    """Common line assembly: bytes in, one command per CR/LF-terminated line."""
+    """Common line assembly: bytes in, one command per CR/LF-terminated line.
 
-    def __init__(self, rig: SimulatedRig):
+    Parameters
+    ----------
+    rig : SimulatedRig
+    measure_time : float
+        Seconds a measurement takes: its reply is sent that long after the command (or after
+        the previous measurement's reply, the device measuring one at a time).
+    command_end : {"any", "cr-keep-lf"}
+        ``"any"``: CR or LF ends a command (empty ones ignored). ``"cr-keep-lf"``: only CR does;
+        an LF is kept as the first byte of the next command, which then is no command this
+        device knows (a meter whose commands end at CR, sent CR LF).
+    """
+
+    def __init__(self, rig: SimulatedRig, measure_time: float = 0.0, command_end: str = "any"):
+        if command_end not in ("any", "cr-keep-lf"):
+            raise ValueError(f"command_end must be 'any' or 'cr-keep-lf', got {command_end!r}")
         self.rig = rig
+        self.measure_time = float(measure_time)
+        self.command_end = command_end
         self._line = bytearray()
+        self._busy_until = 0.0
 
     def feed(self, data: bytes) -> list[tuple[float, bytes]]:
         """Consume bytes from the host; return ``(deliver_at, bytes)`` chunks to send back."""
         now = time.monotonic()
         out: list[tuple[float, bytes]] = []
+        ends = b"\r" if self.command_end == "cr-keep-lf" else b"\r\n"
         for byte in data:
-            if byte in b"\r\n":
+            if byte in ends:
                 if self._line:
-                    line = bytes(self._line).strip()
+                    raw = bytes(self._line)
+                    line = raw.strip(b" ") if self.command_end == "cr-keep-lf" else raw.strip()
                     self._line.clear()
                     if line:
-                        out.extend((now, reply + b"\r\n") for reply in self._execute(line))
+                        at = now
+                        if self._measures(line) and self.measure_time > 0:
+                            at = max(now, self._busy_until) + self.measure_time
+                            self._busy_until = at
+                        out.extend((at, reply + b"\r\n") for reply in self._execute(line))
             else:
                 self._line.append(byte)
                 if len(self._line) > 64:
                     self._line.clear()
         return out
+
+    def _measures(self, line: bytes) -> bool:
+        """Whether the command ``line`` takes a measurement (``measure_time``)."""
+        return False
 
     @abstractmethod
     def _execute(self, line: bytes) -> list[bytes]:
@@ -62,15 +95,40 @@ class _LineDevice(ABC):
 class DimetixSimulator(_LineDevice):
     """A Dimetix DLS sensor with id ``device_id`` over a rig."""
 
-    def __init__(self, rig: SimulatedRig, device_id: int = 0):
-        super().__init__(rig)
+    def __init__(
+        self,
+        rig: SimulatedRig,
+        device_id: int = 0,
+        *,
+        measure_time: float = 0.0,
+        parity_bit7: bool = False,
+        refuse: int | None = None,
+    ):
+        super().__init__(rig, measure_time)
         self.device_id = device_id
         self.user_offset = 0  # 0.1 mm
         self.laser = False
+        #: Send 7E1 characters as an 8N1 port (a pseudo-terminal) passes them on: the even
+        #: parity bit as bit 7.
+        self.parity_bit7 = bool(parity_bit7)
+        #: Answer every ``sNg`` with this error code (a device that needs attention: E203,
+        #: E222-E224, E252, E254...).
+        self.refuse = refuse
 
     def startup(self) -> list[tuple[float, bytes]]:
         """Power-up message ``gN?``."""
-        return [(time.monotonic(), f"g{self.device_id}?\r\n".encode())]
+        return [(time.monotonic(), self._wire(f"g{self.device_id}?\r\n".encode()))]
+
+    def feed(self, data: bytes) -> list[tuple[float, bytes]]:
+        return [(at, self._wire(chunk)) for at, chunk in super().feed(data)]
+
+    def _wire(self, data: bytes) -> bytes:
+        if not self.parity_bit7:
+            return data
+        return bytes(b | (0x80 if bin(b).count("1") % 2 else 0) for b in data)
+
+    def _measures(self, line: bytes) -> bool:
+        return line.endswith(b"g") and len(line) == 3
 
     def _execute(self, line: bytes) -> list[bytes]:
         m = _DIMETIX.match(line)
@@ -82,6 +140,8 @@ class DimetixSimulator(_LineDevice):
         cmd, arg = m.group(2).decode(), m.group(3)
         ok = f"g{n}?".encode()
         if cmd == "g" and arg is None:
+            if self.refuse is not None:
+                return [f"g{n}@E{int(self.refuse):03d}".encode()]
             value = self.rig.measure()
             if value is None:
                 return [f"g{n}@E255".encode()]
@@ -107,17 +167,36 @@ class DimetixSimulator(_LineDevice):
 class LDMSimulator(_LineDevice):
     """A Jenoptik LDM41/42 over a rig."""
 
-    def __init__(self, rig: SimulatedRig):
-        super().__init__(rig)
-        self.format = "d"
+    def __init__(
+        self,
+        rig: SimulatedRig,
+        *,
+        measure_time: float = 0.0,
+        command_end: str = "any",
+        output_format: str = "d",
+        hex_digits: int = 6,
+        unknown_reply: str | None = None,
+    ):
+        super().__init__(rig, measure_time, command_end)
+        if output_format not in ("d", "s", "h"):
+            raise ValueError(f"output_format must be d, s or h, got {output_format!r}")
+        self.format = output_format
+        #: Zero-padded width of format h (0: no padding, e.g. ``E10`` for 3600 mm).
+        self.hex_digits = int(hex_digits)
+        #: Reply to a command this device does not know (None: silence).
+        self.unknown_reply = unknown_reply
         self.offset = 0.0
+
+    def _measures(self, line: bytes) -> bool:
+        return line.upper() in (b"DM", b"DW", b"DX")
 
     def startup(self) -> list[tuple[float, bytes]]:
         """Output at power-up (none with autostart off)."""
         return []
 
     def _execute(self, line: bytes) -> list[bytes]:
-        text = line.decode("ascii", "replace").strip()
+        text = line.decode("ascii", "replace")
+        text = text.strip(" ") if self.command_end == "cr-keep-lf" else text.strip()  # "\nDM"
         cmd, arg = text[:2].upper(), text[2:].strip()
         if cmd in ("DM", "DW", "DX") and not arg:
             value = self.rig.measure()
@@ -129,7 +208,7 @@ class LDMSimulator(_LineDevice):
             if self.format == "s":
                 return [f"{value:07.3f} {1000:06d}".encode()]
             if self.format == "h":  # hexadecimal millimetres
-                return [f"{max(round(value * 1000), 0):06X}".encode()]
+                return [f"{max(round(value * 1000), 0):0{self.hex_digits}X}".encode()]
             return [f"{value:07.3f}".encode()]
         if cmd == "SD" and arg.lower() in ("d", "s", "h"):
             self.format = arg.lower()
@@ -142,4 +221,4 @@ class LDMSimulator(_LineDevice):
             return [f"OF{self.offset:+.3f}".encode()]
         if cmd == "TP" and not arg:
             return [b"+25.0"]
-        return []
+        return [] if self.unknown_reply is None else [self.unknown_reply.encode("ascii")]

@@ -41,10 +41,29 @@ class PTUSimulator:
     ----------
     rig : SimulatedRig
         Shared head state; this simulator moves it.
+    banner : str, optional
+        A line of text the unit sends on its own, once, right after its reply to command
+        number ``banner_after`` (counted from 1; 0: at power-up), as a unit that restarts or
+        prints a power-up banner mid-session does (neither ``*`` nor ``!``).
+    banner_after : int
+    ack_at_end : bool
+        Acknowledge ``PP`` / ``TP`` (immediate mode) only when the move has ended, as some
+        units do, instead of at once.
     """
 
-    def __init__(self, rig: SimulatedRig):
+    def __init__(
+        self,
+        rig: SimulatedRig,
+        *,
+        banner: str | None = None,
+        banner_after: int = 0,
+        ack_at_end: bool = False,
+    ):
         self.rig = rig
+        self.ack_at_end = bool(ack_at_end)
+        self.banner = banner
+        self.banner_after = int(banner_after)
+        self._commands = 0
         self.echo = True
         self.verbose = True
         self.enforce = True
@@ -64,9 +83,13 @@ class PTUSimulator:
             "PL": 0,
             "TL": 0,
         }
+        if rig.speed > 0:  # the speed the rig moves at is the one the unit reports
+            self.settings["PS"] = self.settings["TS"] = int(round(rig.speed))
 
     def startup(self) -> list[tuple[float, bytes]]:
-        """Output at power-up (none for this unit)."""
+        """Output at power-up (none, unless a ``banner`` is due after 0 commands)."""
+        if self.banner is not None and self.banner_after == 0:
+            return [(time.monotonic(), self.banner.encode("ascii") + b"\r\n")]
         return []
 
     def feed(self, data: bytes) -> list[tuple[float, bytes]]:
@@ -80,7 +103,12 @@ class PTUSimulator:
                 if self._token:
                     token = bytes(self._token)
                     self._token.clear()
-                    out.extend(self._execute(token, now))
+                    replies = self._execute(token, now)
+                    out.extend(replies)
+                    self._commands += 1
+                    if self.banner is not None and self._commands == self.banner_after:
+                        at = max([now] + [t for t, _ in replies])
+                        out.append((at, self.banner.encode("ascii") + b"\r\n"))
             else:
                 self._token.append(byte)
                 if len(self._token) > 64:
@@ -188,10 +216,12 @@ class PTUSimulator:
             target = min(max(target, lo), hi)
             self._limit_notice += b"!P" if pan_axis else b"!T"
         self._pending[key] = target
-        reply = self._ok(now)
-        if not self.slaved:
-            reply += self._start_moves(now)
-        return reply
+        if self.slaved:
+            return self._ok(now)
+        started = self._start_moves(now)
+        if self.ack_at_end:
+            return started + [(max(now, self.rig.move_end()), b"*\r\n")]
+        return self._ok(now) + started
 
     def _start_moves(self, now: float) -> list[tuple[float, bytes]]:
         """Start the pending moves; a limit notice goes out when the move ends."""

@@ -47,9 +47,11 @@ def parse_sim_url(url: str) -> tuple[str, str, dict[str, str]]:
     return scheme, name, options
 
 
-def make_device(scheme: str, rig, options: dict[str, str]):
+def make_device(scheme: str, rig, options: dict[str, str], settings: dict | None = None):
     """The simulator for ``scheme`` over ``rig`` (port options: protocol, device_id, address,
-    trickle, prefix)."""
+    trickle, prefix; ``settings``: the FLIR, Dimetix or LDM simulator class's keyword options,
+    e.g. ``measure_time``)."""
+    settings = dict(settings or {})
     if scheme == "sim-ptu":
         protocol = options.get("protocol", "flir").lower()
         if protocol == "pelco-d":
@@ -65,14 +67,14 @@ def make_device(scheme: str, rig, options: dict[str, str]):
             )
         from .sim_ptu import PTUSimulator
 
-        return PTUSimulator(rig)
+        return PTUSimulator(rig, **settings)
     from .sim_lrf import DimetixSimulator, LDMSimulator
 
     protocol = options.get("protocol", "dimetix").lower()
     if protocol == "dimetix":
-        return DimetixSimulator(rig, int(options.get("device_id", 0)))
+        return DimetixSimulator(rig, int(options.get("device_id", 0)), **settings)
     if protocol == "ldm":
-        return LDMSimulator(rig)
+        return LDMSimulator(rig, **settings)
     if protocol == "lw20":
         from .sim_lw20 import LW20Simulator
 

@@ -145,6 +145,10 @@ def _seconds(value, what: str, zero: bool = False) -> float:
     return seconds
 
 
+#: Byte translation clearing bit 7 (the parity bit a 7E1 device's byte carries on an 8N1 port).
+_SEVEN_BITS = bytes(b & 0x7F for b in range(256))
+
+
 class LineChannel:
     """Line-oriented ASCII exchange over an open port, with deadlines.
 
@@ -159,13 +163,26 @@ class LineChannel:
         Device name for messages (e.g. ``"pan-tilt unit on /dev/ttyUSB0"``).
     timeout : float
         Default seconds to wait for one reply line.
+    seven_bit : bool
+        The device sends 7 data bits (Dimetix 7E1): bit 7 of every byte received is cleared.
+        A port that cannot do 7 bits or parity (a pseudo-terminal, :func:`open_port` opens it
+        8N1) passes the parity bit through as bit 7; a real 7-bit port never sets it.
     """
 
-    def __init__(self, port: serial.SerialBase, name: str, timeout: float = 1.0):
+    def __init__(
+        self, port: serial.SerialBase, name: str, timeout: float = 1.0, seven_bit: bool = False
+    ):
         self.port = port
         self.name = name
         self.timeout = _seconds(timeout, "timeout")
+        self.seven_bit = bool(seven_bit)
         self._buffer = bytearray()
+
+    def _received(self, chunk: bytes) -> None:
+        """Append ``chunk`` to the line buffer (bit 7 cleared for a 7-bit device)."""
+        self._buffer.extend(chunk.translate(_SEVEN_BITS) if self.seven_bit else chunk)
+        if len(self._buffer) > 4096:
+            raise DeviceProtocolError(f"{self.name}: 4 KiB without a line end; check the baud rate")
 
     def write(self, text: str) -> None:
         """Send ``text`` (ASCII) at once; DeviceError if the port fails (cable unplugged)."""
@@ -202,11 +219,7 @@ class LineChannel:
                 chunk = self.port.read(self.port.in_waiting)
                 if not chunk:
                     break
-                self._buffer.extend(chunk)
-                if len(self._buffer) > 4096:
-                    raise DeviceProtocolError(
-                        f"{self.name}: 4 KiB without a line end; check the baud rate"
-                    )
+                self._received(chunk)
         except (serial.SerialException, OSError, _TermiosError) as exc:
             raise DeviceError(
                 f"{self.name}: read failed ({exc}); the cable may be unplugged"
@@ -274,11 +287,7 @@ class LineChannel:
                     f"{self.name}: read failed ({exc}); the cable may be unplugged"
                 ) from None
             if chunk:
-                self._buffer.extend(chunk)
-                if len(self._buffer) > 4096:
-                    raise DeviceProtocolError(
-                        f"{self.name}: 4 KiB without a line end; check the baud rate"
-                    )
+                self._received(chunk)
 
     def close(self) -> None:
         """Close the port (idempotent)."""

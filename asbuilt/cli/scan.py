@@ -530,9 +530,10 @@ def _run(args, err, settings, plan, calibration) -> int:
     except DeviceError as exc:
         if session is None:
             raise
+        # The session's own "lost" errors already say to resume: the hint once.
+        resume = "" if "--resume" in str(exc) else "; continue with asbuilt scan --resume"
         raise DeviceError(
-            f"{exc} (every shot so far is in {session.journal_path}; "
-            "continue with asbuilt scan --resume)"
+            f"{exc} (every shot so far is in {session.journal_path}{resume})"
         ) from None
     finally:
         if session is not None:

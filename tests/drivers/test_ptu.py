@@ -5,7 +5,13 @@ from __future__ import annotations
 import math
 
 import pytest
-from asbuilt.drivers.ptu import PanTiltUnit, PTUCommandError, PTULimitError, PTULimits
+from asbuilt.drivers.ptu import (
+    MAX_UNSOLICITED,
+    PanTiltUnit,
+    PTUCommandError,
+    PTULimitError,
+    PTULimits,
+)
 from asbuilt.drivers.simrig import register_rig
 from driver_helpers import wall_rig
 
@@ -25,6 +31,8 @@ INIT_VERBOSE_ECHO = [
     ("TX", b"* 1500\r\n"),
     ("PR", b"* 46.2857\r\n"),
     ("TR", b"* 11.5714\r\n"),
+    ("PS", b"* 1000\r\n"),
+    ("TS", b"! Illegal Command\r\n"),  # a unit without the query keeps the reply timeout
 ]
 
 
@@ -52,6 +60,8 @@ def test_verbose_replies_are_parsed(scripted):
         ("TX", b"* Maximum Tilt position is 604\r\n"),
         ("PR", b"* 185.1428 seconds arc per Pan position\r\n"),
         ("TR", b"* 185.1428 seconds arc per Tilt position\r\n"),
+        ("PS", b"* Target Pan speed is 1000 positions/sec\r\n"),
+        ("TS", b"* Target Tilt speed is 1000 positions/sec\r\n"),
         ("PP", b"* Current Pan position is 120\r\n"),
         ("TP", b"* Current Tilt position is -40\r\n"),
     ]
@@ -130,9 +140,19 @@ def test_reset_accepts_the_calibration_sweep_notices(scripted):
     assert port.written == ["R"]
 
 
-@pytest.mark.parametrize("reply", [b"hello\r\n", b"# 12\r\n"])
-def test_garbage_reply_is_a_protocol_error(scripted, reply):
-    ptu, _ = _unit(scripted, [("V", reply)])
+@pytest.mark.parametrize("text", [b"hello", b"# 12"])
+def test_text_that_is_no_reply_is_skipped_and_kept(scripted, text):
+    # every reply starts with '*' or '!': other text (a power-up banner) is the unit's own
+    ptu, _ = _unit(scripted, [("V", text + b"\r\n* 2.14\r\n")])
+    assert ptu.command("V") == "2.14"
+    assert ptu.unsolicited == [text.decode()]
+    ptu, _ = _unit(scripted, [("V", text + b"\r\n")])
+    with pytest.raises(DeviceTimeout):
+        ptu.command("V")
+
+
+def test_a_stream_of_text_that_is_no_reply_is_a_protocol_error(scripted):
+    ptu, _ = _unit(scripted, [("V", b"hello\r\n" * (MAX_UNSOLICITED + 1))])
     with pytest.raises(DeviceProtocolError, match="neither"):
         ptu.command("V")
 
