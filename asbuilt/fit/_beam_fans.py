@@ -157,24 +157,29 @@ def beam_fan_shots(points, viewpoint, noise: float, pairs) -> np.ndarray:
     # The other groups nearest first, each taken when on the plane of those already taken: a
     # receding face's far part grows the plane it is checked against as it goes. Taken shots
     # on one raster line span no plane (a face's near part seen by one row): the next group
-    # is taken with them when the one after it lies on the plane of the two, a steady run
-    # along the beams that a fan, one jump from a column to the wall, does not make.
+    # is taken with them when the one after it, a step on and not beside them, lies on the
+    # plane of the two: a steady run along the beams that a fan, one jump from a column to the
+    # wall, does not make.
     rest = sorted(np.unique(group[~taken]).tolist(), key=lambda g: float(ranges[group == g].min()))
     k = 0
     while k < len(rest):
         members = group == rest[k]
-        if _on_plane_of(points[taken], points[members], noise):
+        if _on_plane_of(points[taken], points[members], viewpoint, noise):
             taken |= members
         elif k + 1 < len(rest) and not _spans_plane(points[taken], noise):
             after = group == rest[k + 1]
-            if _on_plane_of(points[taken | members], points[after], noise):
+            # The one after must not step off the taken shots themselves: a wall's raster
+            # column parted in two by the box's shots, each half a raster step off the box's
+            # column, lies on any plane through that column and itself.
+            onward = not np.any((taken[i] & after[j]) | (after[i] & taken[j]))
+            if onward and _on_plane_of(points[taken | members], points[after], viewpoint, noise):
                 taken |= members | after
                 k += 1
         k += 1
     return ~taken
 
 
-def _on_plane_of(near: np.ndarray, far: np.ndarray, noise: float) -> bool:
+def _on_plane_of(near: np.ndarray, far: np.ndarray, viewpoint, noise: float) -> bool:
     """Whether every shot ``far`` (k, 3) lies on the plane of the shots ``near`` (m, 3) metres.
 
     The plane is the least-squares one of ``near`` alone; the allowance at a shot is ``noise``
@@ -189,11 +194,15 @@ def _on_plane_of(near: np.ndarray, far: np.ndarray, noise: float) -> bool:
     centroid = near.mean(axis=0)
     _, singular, basis = np.linalg.svd(near - centroid, full_matrices=False)
     spread = singular / math.sqrt(near.shape[0])
-    offsets = (far - centroid) @ basis.T
+    offsets = np.vstack([far, viewpoint]) - centroid
+    offsets = offsets @ basis.T
     allowance = noise * np.sqrt(
         1.0 + (offsets[:, 0] / spread[0]) ** 2 + (offsets[:, 1] / spread[1]) ** 2
     )
-    return bool(np.all(np.abs(offsets[:, 2]) <= allowance))
+    off = np.abs(offsets[:, 2]) <= allowance
+    # The station on the plane too: the plane holds the beams (the shots of one raster column,
+    # whatever they hit, lie on its plane through the station), and so says nothing.
+    return bool(np.all(off[:-1]) and not off[-1])
 
 
 def _spans_plane(points: np.ndarray, noise: float) -> bool:

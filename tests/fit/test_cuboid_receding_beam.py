@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from asbuilt.fit import fit_points
+from asbuilt.fit._beam_fans import beam_fan_shots, neighbours, raster_lines
 from asbuilt.primitives import Cuboid
 from asbuilt.sim.raycast import BoxShape, PlaneShape, direction_from_angles
 from asbuilt.sim.scene import Scene, SceneObject, Station
@@ -96,3 +97,39 @@ def test_a_receding_beam_keeps_its_far_part(wall, yaw_deg, pitch_deg, trial):
     # The beam's shots are the fit's, the wall's are not.
     assert np.count_nonzero(hit & ~fit.inliers) <= 2
     assert not fit.inliers[~hit].any()
+
+
+def _raster_face(pans_deg, tilts_deg, ranges):
+    """Shots (n, 3) at the given pans and tilts (n,) degrees and ranges (n,) metres from the
+    origin, and their raster-line neighbour pairs (every shot taken)."""
+    pan, tilt = np.radians(pans_deg), np.radians(tilts_deg)
+    points = direction_from_angles(pan, tilt) * np.asarray(ranges)[:, None]
+    angles = np.column_stack([pan, tilt])
+    lines = raster_lines(angles, np.radians([1.0, 1.0]))
+    return points, neighbours(angles, lines, np.ones(len(pan), dtype=bool))
+
+
+def test_a_bottom_face_seen_row_by_row_past_80_degrees_is_one_face():
+    # A beam's bottom 1 m above the station's level seen by rows 1 degree of tilt apart, 4.1-8.2
+    # m away (76-83 degrees): the far rows' ranges step past the 80 degree bound, yet every row
+    # lies on the near rows' plane.
+    tilts = np.repeat([14.0, 13.0, 12.0, 11.0, 10.0, 9.0, 8.0, 7.0], 3)
+    pans = np.tile([-1.0, 0.0, 1.0], 8)
+    ranges = 1.0 / np.sin(np.radians(tilts))
+    points, pairs = _raster_face(pans, tilts, ranges)
+    assert not beam_fan_shots(points, np.zeros(3), 0.006, pairs).any()
+
+
+def test_a_wall_column_parted_by_the_box_stays_out():
+    # A box's raster column 4.1-4.4 m away and the next column on the wall 3.5 m behind, the
+    # wall's shots in two runs (the rows between them on the box's other face): the wall's
+    # runs both lie on the plane through the two columns, but each steps off the box's column
+    # itself, not one on from the other.
+    box = np.arange(-15.0, 21.0, 5.0)
+    wall = np.array([20.0, 15.0, 5.0, -10.0, -15.0])
+    tilts = np.concatenate([box, wall])
+    pans = np.concatenate([np.zeros(box.size), np.full(wall.size, 2.5)])
+    ranges = np.concatenate([4.1 / np.cos(np.radians(box)), 7.6 / np.cos(np.radians(wall))])
+    points, pairs = _raster_face(pans, tilts, ranges)
+    fan = beam_fan_shots(points, np.zeros(3), 0.006, pairs)
+    assert fan.tolist() == [False] * box.size + [True] * wall.size
