@@ -20,6 +20,18 @@ the incidence at which the cuboid segmentation already stops trusting a face's r
 groups that no such link joins holds shots spread along the beams; the group nearest the
 station is the face (what lies behind it along the beams is background seen past the box),
 and the others are left out of the face, to be outliers.
+
+Past 80 degrees a real face can still go on: a beam receding from the station has its sides'
+far part seen at 80-88 degrees, and its ranges along a raster line step by more than the
+bound there. Such a far part lies on the plane of the near part's own shots, which a fan does
+not: a group parted from the nearest ones is taken back into the face when every one of its
+shots lies on the plane of the shots already taken (fitted to them alone, not to the face's
+plane that the fit turned toward the fan), within the inlier cutoff grown by how far the
+plane is carried past them. The near shots must span a plane for that (two raster lines or
+more across it, ``_MIN_SPREAD_CUTOFFS``): one raster column on a column's side is a line,
+the plane through it and the wall behind turns freely about it and predicts nothing, and the
+wall stays out. Measured on ray-cast receding beams 4-8 m long from 3-10 m (20-40 shots), the
+fan rule alone cut 0.5-7 m off 64% of them.
 """
 
 from __future__ import annotations
@@ -42,6 +54,10 @@ _RANGE_PER_SPACING = math.tan(math.radians(MAX_INCIDENCE_DEG))
 _NOISE_CUTOFFS = 2.0
 #: Shots closer than this share of the raster step in one angle are on one raster line.
 _IN_LINE = 0.5
+#: The near shots span a plane when their spread across the line they lie along (RMS, the
+#: second principal axis) is at least this many inlier cutoffs: one raster line's shots are
+#: off their line by the noise only.
+_MIN_SPREAD_CUTOFFS = 3.0
 
 
 def raster_lines(angles: np.ndarray, steps) -> tuple[np.ndarray, np.ndarray]:
@@ -114,10 +130,12 @@ def beam_fan_shots(points, viewpoint, noise: float, pairs) -> np.ndarray:
     -------
     ndarray, shape (m,), bool
         True for the shots of every group but the one holding the shot nearest the station
-        (all False when the face's shots form one group). Groups are the connected components
-        of the neighbour links whose ranges differ by at most ``tan(MAX_INCIDENCE_DEG)``
-        times the mean range times the angle between the beams, plus ``_NOISE_CUTOFFS``
-        cutoffs.
+        and those it takes back (all False when the face's shots form one group). Groups are
+        the connected components of the neighbour links whose ranges differ by at most
+        ``tan(MAX_INCIDENCE_DEG)`` times the mean range times the angle between the beams,
+        plus ``_NOISE_CUTOFFS`` cutoffs. The other groups, nearest first, are taken too when
+        all their shots lie on the plane of those taken (:func:`_on_plane_of`), or, when
+        those span no plane, with the next group when that one lies on the plane of both.
     """
     m = points.shape[0]
     out = np.zeros(m, dtype=bool)
@@ -135,4 +153,62 @@ def beam_fan_shots(points, viewpoint, noise: float, pairs) -> np.ndarray:
     group = components(m, i[kept], j[kept])
     if np.all(group == group[0]):
         return out
-    return group != group[int(np.argmin(ranges))]
+    taken = group == group[int(np.argmin(ranges))]
+    # The other groups nearest first, each taken when on the plane of those already taken: a
+    # receding face's far part grows the plane it is checked against as it goes. Taken shots
+    # on one raster line span no plane (a face's near part seen by one row): the next group
+    # is taken with them when the one after it, a step on and not beside them, lies on the
+    # plane of the two: a steady run along the beams that a fan, one jump from a column to the
+    # wall, does not make.
+    rest = sorted(np.unique(group[~taken]).tolist(), key=lambda g: float(ranges[group == g].min()))
+    k = 0
+    while k < len(rest):
+        members = group == rest[k]
+        if _on_plane_of(points[taken], points[members], viewpoint, noise):
+            taken |= members
+        elif k + 1 < len(rest) and not _spans_plane(points[taken], noise):
+            after = group == rest[k + 1]
+            # The one after must not step off the taken shots themselves: a wall's raster
+            # column parted in two by the box's shots, each half a raster step off the box's
+            # column, lies on any plane through that column and itself.
+            onward = not np.any((taken[i] & after[j]) | (after[i] & taken[j]))
+            if onward and _on_plane_of(points[taken | members], points[after], viewpoint, noise):
+                taken |= members | after
+                k += 1
+        k += 1
+    return ~taken
+
+
+def _on_plane_of(near: np.ndarray, far: np.ndarray, viewpoint, noise: float) -> bool:
+    """Whether every shot ``far`` (k, 3) lies on the plane of the shots ``near`` (m, 3) metres.
+
+    The plane is the least-squares one of ``near`` alone; the allowance at a shot is ``noise``
+    (metres, the inlier cutoff) times ``sqrt(1 + (a / s1)^2 + (b / s2)^2)``, ``a`` and ``b`` its
+    offsets from their centroid along their principal axes and ``s1``, ``s2`` their RMS spreads
+    along them: a plane fitted to a patch tilts by about the noise over the patch's extent, and
+    carried farther off by that much more. False when ``near`` spans no plane (a spread across
+    below ``_MIN_SPREAD_CUTOFFS`` cutoffs).
+    """
+    if not _spans_plane(near, noise):
+        return False
+    centroid = near.mean(axis=0)
+    _, singular, basis = np.linalg.svd(near - centroid, full_matrices=False)
+    spread = singular / math.sqrt(near.shape[0])
+    offsets = np.vstack([far, viewpoint]) - centroid
+    offsets = offsets @ basis.T
+    allowance = noise * np.sqrt(
+        1.0 + (offsets[:, 0] / spread[0]) ** 2 + (offsets[:, 1] / spread[1]) ** 2
+    )
+    off = np.abs(offsets[:, 2]) <= allowance
+    # The station on the plane too: the plane holds the beams (the shots of one raster column,
+    # whatever they hit, lie on its plane through the station), and so says nothing.
+    return bool(np.all(off[:-1]) and not off[-1])
+
+
+def _spans_plane(points: np.ndarray, noise: float) -> bool:
+    """Whether ``points`` (m, 3) metres spread across their line by ``_MIN_SPREAD_CUTOFFS``
+    inlier cutoffs ``noise`` (metres) or more (RMS, along their second principal axis)."""
+    if points.shape[0] < 3:
+        return False
+    singular = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
+    return bool(singular[1] >= _MIN_SPREAD_CUTOFFS * noise * math.sqrt(points.shape[0]))

@@ -52,6 +52,9 @@ MOST_SUBSETS = 4
 #: A left-out shot on a seen face's plane is taken back within this many of the kept shots'
 #: spacings of the box.
 REACH_SPACINGS = 3.0
+#: Beams within this many of the shots' median angular spacing are raster neighbours (a
+#: raster's diagonal is 1.41 steps when its steps are equal).
+_CHAIN_STEPS = 1.6
 
 
 def beam_box(cuboid, points: np.ndarray, view: np.ndarray, shrink: float = 0.0):
@@ -126,12 +129,25 @@ def seen_planes(cuboid, points: np.ndarray, cutoff: float) -> list[tuple[np.ndar
     return planes
 
 
-def _on_seen_planes(points: np.ndarray, cutoff: float):
+def _on_seen_planes(points: np.ndarray, cutoff: float, view: np.ndarray):
     """The cuboid's take-back rule (:func:`~asbuilt.fit._cylinder_background.taken_back`): the
     shots within ``cutoff`` metres of the plane of a face the fit saw (:func:`seen_planes`) and
     within ``REACH_SPACINGS`` of its kept shots' spacing of the box. A beam seen obliquely is
     cut at range jumps along its length, and its far part lies on the near part's faces, a
-    raster step or two on; a wall far behind meets those planes only metres away."""
+    raster step or two on; a wall far behind meets those planes only metres away.
+
+    A beam receding from the station (``view`` (3,) metres) has its sides' far part a raster
+    step on from the near part but metres off along the beams (seen at 80-88 degrees, each
+    step in range is 6-30 times the step across), so a shot on a seen face's plane is also
+    taken back when its beam is a raster neighbour (within ``_CHAIN_STEPS`` of the shots'
+    median angular spacing) of a shot on that plane already kept or taken, in a chain: the
+    face goes on, without a gap in the raster, as far as its shots do."""
+    beams = points - view
+    units = beams / np.linalg.norm(beams, axis=1)[:, None]
+    cosines = np.clip(units @ units.T, -1.0, 1.0)
+    np.fill_diagonal(cosines, -1.0)
+    step = float(np.median(np.arccos(cosines.max(axis=1))))
+    adjacent = cosines >= np.cos(_CHAIN_STEPS * step)
 
     def nearby(found, mask) -> np.ndarray:
         kept = points[mask][found.inliers]
@@ -139,10 +155,20 @@ def _on_seen_planes(points: np.ndarray, cutoff: float):
         planes = seen_planes(found.primitive, kept, cutoff)
         if not planes or len(kept) < 2:
             return near
-        for normal, offset in planes:
-            near |= np.abs(points @ normal - offset) <= cutoff
         reach = REACH_SPACINGS * median_spacing(kept)
-        return near & (found.primitive.distance(points) <= reach)
+        close = found.primitive.distance(points) <= reach
+        held = np.zeros(len(points), dtype=bool)
+        held[np.flatnonzero(mask)[found.inliers]] = True
+        for normal, offset in planes:
+            on = np.abs(points @ normal - offset) <= cutoff
+            grown = on & (held | close)
+            while True:
+                more = on & ~grown & adjacent[:, grown].any(axis=1)
+                if not more.any():
+                    break
+                grown |= more
+            near |= grown
+        return near
 
     return nearby
 
@@ -187,7 +213,7 @@ def fit_nearest_box(
     masks = _nearest_first(segments, n)
     for found, mask, cutoff in subset_fits(fit, points, view, sigma, tolerances, masks):
         found, kept = taken_back(
-            fit, found, points, mask, sigma, tolerances, view, _on_seen_planes(points, cutoff)
+            fit, found, points, mask, sigma, tolerances, view, _on_seen_planes(points, cutoff, view)
         )
         left_out = ~kept
         wrong = ~behind(found.primitive, points[left_out], view, cutoff)
