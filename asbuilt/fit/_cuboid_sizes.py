@@ -353,9 +353,11 @@ def raster_gaps(x, origin, model, label, lo, hi, lo_pt, hi_pt, viewpoint, found,
                 continue
             f = int(label[point])
             j = int(model.face_axis[f])
-            m = 3 - j - k
-            if m == j or m == k:
+            if j == k:
+                # The extreme shot lies on a face normal to axis k (that face is the bound):
+                # no edge of its face runs across k, and 3 - j - k is then no axis at all.
                 continue
+            m = 3 - j - k
             normal = model.axes[j]
             plane = model.face_sign[f] * model.offset[f]
             pan, tilt = _silhouette._angles(x[point][None] + origin, viewpoint, pan0)[0]
