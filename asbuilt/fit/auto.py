@@ -338,10 +338,17 @@ def fit_auto(
     extent = float(np.linalg.norm(np.ptp(pts, axis=0)))
     # Every kind judged by its shots' distances to the surface it returns (a cuboid's own
     # residuals are to its faces' infinite planes); the returned result keeps its own.
-    judged = {
-        kind: dataclasses.replace(result, residuals=surface_residuals(kind, result, pts))
-        for kind, result in results.items()
-    }
+    judged = {}
+    for kind, result in results.items():
+        residuals = surface_residuals(kind, result, pts)
+        # A shot kept for a face but beyond the box's edge by more than the fit's own inlier
+        # cutoff is no inlier of the box: without a sigma it is scored as an outlier, not let
+        # inflate the box's noise level (which made a 49 mm sphere the noise's "leader").
+        kept = np.asarray(result.inliers, dtype=bool)
+        if kind == "cuboid":
+            noise = max(float(result.sigma), tolerances.sigma_floor)
+            kept = kept & (np.abs(residuals) <= tolerances.outlier_cutoff_sigma * noise)
+        judged[kind] = dataclasses.replace(result, residuals=residuals, inliers=kept)
     counts = {kind: parameter_count(kind, result) for kind, result in results.items()}
     # Kinds that may be chosen, in CANDIDATES order (every fitted one is scored and named).
     candidates = [kind for kind in CANDIDATES if kind in results]
