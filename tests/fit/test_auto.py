@@ -247,6 +247,8 @@ def test_shots_equally_well_explained_by_two_kinds_are_called_ambiguous(monkeypa
         raise ImportError(kind)
 
     monkeypatch.setattr(auto, "_fitter", fitter)
+    # The fakes' surfaces are not where their residuals put the points: score the residuals.
+    monkeypatch.setattr(auto, "surface_residuals", lambda kind, result, points: result.residuals)
     result = fit_auto(points, sigma=0.002)
     assert result.kind == "cylinder"
     why = next(note for note in result.notes if note.startswith("auto chose"))
@@ -369,3 +371,49 @@ def test_a_fit_trading_foreground_for_background_is_found():
             )
             is None
         )
+
+
+_LARGE_PIPES = json.loads((Path(__file__).parent / "large_pipes_few_lines.json").read_text())
+
+
+@pytest.mark.skipif(not _has_cuboid(), reason="asbuilt.fit.cuboid is not there")
+@pytest.mark.parametrize("scan", _LARGE_PIPES["scans"], ids=lambda scan: scan["name"])
+def test_a_cuboid_is_scored_by_its_distance_to_the_box(scan):
+    """A large pipe seen by 5-6 raster lines: the cuboid fit lays faces over its arc, and
+    shots it takes for one face lie 10-200 mm beyond the box's edge, where the pipe bulges past
+    the corner. Its own residuals (to the faces' infinite planes) give those shots 0.1-2.5 mm;
+    the criterion scores every kind by the distance to the surface it returns (the box)."""
+    from asbuilt.fit.cuboid import fit_cuboid
+    from asbuilt.tolerances import DEFAULT_TOLERANCES
+
+    points = np.array(scan["points"])
+    sigma, station = scan["range_sigma"], np.array(scan["station"])
+    result = fit_auto(points, sigma=sigma, viewpoint=station)
+    assert result.kind == "cylinder"
+    box = fit_cuboid(points, sigma=sigma, viewpoint=station)
+    cut = DEFAULT_TOLERANCES.outlier_cutoff_sigma
+    to_box = np.minimum((box.primitive.distance(points) / sigma) ** 2, cut * cut).sum()
+    to_planes = np.minimum((box.residuals / sigma) ** 2, cut * cut).sum()
+    assert to_box > to_planes + 20.0  # the shots past the box's edges
+    penalty = auto.parameter_count("cuboid", box) * math.log(len(points))
+    why = next(note for note in result.notes if note.startswith("auto chose"))
+    scored = float(why.split("cuboid ")[1].split(")")[0].split(",")[0])
+    assert scored == pytest.approx(to_box + penalty, abs=0.06)
+
+
+def test_surface_residuals_of_a_cuboid_are_distances_to_the_box():
+    box = Cuboid([0, 0, 0], np.eye(3), [1.0, 1.0, 1.0])
+    points = np.array([[0.5, 0.0, 0.0], [0.5, 0.7, 0.0], [0.0, 0.0, 0.0]])
+    fitted = FitResult(
+        primitive=box,
+        residuals=np.zeros(3),  # each point on its face's infinite plane
+        inliers=np.ones(3, bool),
+        stderr={},
+        sigma=0.001,
+        sigma_source="sensor",
+        method="test",
+    )
+    np.testing.assert_allclose(
+        auto.surface_residuals("cuboid", fitted, points), [0.0, 0.2, -0.5], atol=1e-12
+    )
+    np.testing.assert_array_equal(auto.surface_residuals("cylinder", fitted, points), 0.0)

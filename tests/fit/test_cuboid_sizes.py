@@ -63,3 +63,26 @@ def test_window_bounded_sizes_cover_the_gap_to_the_next_raster_line(box):
         z.extend(((size - np.asarray(box.size)) / stderr)[np.isfinite(stderr)])
     z = np.abs(np.array(z))
     assert np.mean(z > 4.0) <= 0.05, np.round(np.sort(z)[-8:], 1)
+
+
+def test_raster_gaps_skip_an_extreme_shot_on_a_face_normal_to_its_axis():
+    """An extent bound along an axis whose extreme shot lies on a face normal to that axis: the
+    face has no edge across it, and ``3 - j - k`` named no axis (IndexError along axis 0, seen
+    in ``benchmarks/auto_choice.py``). The bound's gap is unknown (NaN), not an error."""
+    from types import SimpleNamespace
+
+    from asbuilt.fit._cuboid_sizes import raster_gaps
+
+    # A face x = 5 m seen head-on from the origin; shot 0 is the extreme one along x.
+    x = np.array([[5.0, 0.0, 0.0], [5.0, 0.1, 0.0], [5.0, 0.0, 0.1]])
+    model = SimpleNamespace(
+        axes=np.eye(3), face_axis=np.array([0]), face_sign=np.array([1.0]), offset=[5.0]
+    )
+    label = np.zeros(3, dtype=np.int64)
+    lo, hi = np.array([4.0, -1.0, -1.0]), np.array([5.0, 1.0, 1.0])
+    found = (0.0, None, None, None, (0.02, 0.02))
+    lo_pt, hi_pt = np.array([0, -1, -1]), -np.ones(3, dtype=np.int64)
+    gaps = raster_gaps(
+        x, np.zeros(3), model, label, lo, hi, lo_pt, hi_pt, np.zeros(3), found, 0.006
+    )
+    assert np.isnan(gaps[0, 0])
