@@ -47,7 +47,7 @@ QUICK_CHI2_TAIL = 1e-3
 #: A quick fit that rejected shots stands only if each lies more than this many inlier cutoffs
 #: off it. A shot nearer than that may be a good one a nearby basin keeps: letting them through
 #: changed 4 of 600 benchmark fits by up to 4.7 mm against the full search, none at twice the
-#: cutoff (and :func:`asbuilt.fit.cylinder._readmitted` leaves such fits alone).
+#: cutoff (and :func:`asbuilt.fit._cylinder_finish.readmitted` leaves such fits alone).
 CLEAR_OF_CUTOFFS = 2.0
 
 
