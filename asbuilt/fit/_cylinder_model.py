@@ -85,6 +85,30 @@ def _jacobian(state, points):
     return rho, jac
 
 
+#: The last weighted centroid :func:`_centroid` computed, with the very arrays it came from
+#: (held, so that their identities stay theirs): ``[points, weights, (gx, gy, gz)]``.
+_LAST_CENTROID: list = [None, None, None]
+
+
+def _centroid(points: np.ndarray, weights: np.ndarray) -> tuple[float, float, float]:
+    """The centroid of ``points`` (n, 3) metres weighted by ``weights`` (n,), as floats (the
+    plain mean when the weights sum to zero).
+
+    Least squares on a fixed inlier set (most of Gauss-Newton's steps) updates with the same
+    weights array every step, and a differenced Jacobian with the same unit weights five times:
+    the centroid of the same two arrays is taken from the last call (the fits never change a
+    weights array in place once handed to the model).
+    """
+    last = _LAST_CENTROID
+    if weights is last[1] and points is last[0]:
+        return last[2]
+    total = float(weights.sum())
+    centroid = (weights @ points) / total if total > 0 else points.mean(axis=0)
+    found = tuple(centroid.tolist())
+    last[0], last[1], last[2] = points, weights, found
+    return found
+
+
 def _update(state, delta, points, weights):
     axis, center, radius = state
     ux, uy, uz, vx, vy, vz = _frame(axis)[1]
@@ -99,9 +123,7 @@ def _update(state, delta, points, weights):
     cx, cy, cz = cx + d2 * ux + d3 * vx, cy + d2 * uy + d3 * vy, cz + d2 * uz + d3 * vz
     # Slide the centre along the axis to the weighted centroid's foot (residuals unchanged),
     # which keeps the axis tilts and the centre offsets uncorrelated.
-    total = float(weights.sum())
-    centroid = (weights @ points) / total if total > 0 else points.mean(axis=0)
-    gx, gy, gz = centroid.tolist()
+    gx, gy, gz = _centroid(points, weights)
     slide = (gx - cx) * ax + (gy - cy) * ay + (gz - cz) * az
     new_axis = np.array((ax, ay, az))
     new_center = np.array((cx + slide * ax, cy + slide * ay, cz + slide * az))
