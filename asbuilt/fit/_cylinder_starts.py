@@ -205,7 +205,7 @@ def line_axis(points: np.ndarray, keep: int, rng, samples: int = 32, steps: int 
     first = rng.integers(0, n, samples)
     second = rng.integers(0, n, samples)
     direction = points[second] - points[first]
-    norm = np.linalg.norm(direction, axis=1)
+    norm = row_norms(direction)
     good = norm > 1e-12
     if not np.any(good):
         return None
