@@ -86,8 +86,9 @@ def _jacobian(state, points):
 
 
 #: The last weighted centroid :func:`_centroid` computed, with the very arrays it came from
-#: (held, so that their identities stay theirs): ``[points, weights, (gx, gy, gz)]``.
-_LAST_CENTROID: list = [None, None, None]
+#: (held, so that their identities stay theirs): ``[(points, weights, (gx, gy, gz))]``, one
+#: tuple swapped whole (a thread never sees one call's arrays with another's centroid).
+_LAST_CENTROID: list = [(None, None, None)]
 
 
 def _centroid(points: np.ndarray, weights: np.ndarray) -> tuple[float, float, float]:
@@ -99,13 +100,13 @@ def _centroid(points: np.ndarray, weights: np.ndarray) -> tuple[float, float, fl
     the centroid of the same two arrays is taken from the last call (the fits never change a
     weights array in place once handed to the model).
     """
-    last = _LAST_CENTROID
-    if weights is last[1] and points is last[0]:
-        return last[2]
+    last_points, last_weights, found = _LAST_CENTROID[0]
+    if weights is last_weights and points is last_points:
+        return found
     total = float(weights.sum())
     centroid = (weights @ points) / total if total > 0 else points.mean(axis=0)
     found = tuple(centroid.tolist())
-    last[0], last[1], last[2] = points, weights, found
+    _LAST_CENTROID[0] = (points, weights, found)
     return found
 
 
