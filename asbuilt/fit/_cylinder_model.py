@@ -38,17 +38,21 @@ _FRAME_CACHE: dict[bytes, tuple] = {}
 
 
 def _frame(axis: np.ndarray):
-    """``(u, v, frame, u_and_v)`` for an axis: its :func:`~asbuilt.fit._common.orthonormal_basis`, the (3, 3) matrix
-    whose columns are ``axis, u, v``, and ``u, v`` as Python floats (six of them, for
-    :func:`_update`'s scalar arithmetic). Gauss-Newton asks for the same axis several times
-    (the Jacobian at a state, then the update from it), so the last few frames are
-    remembered."""
+    """``(frame, u_and_v)`` for an axis: the (3, 3) matrix whose columns are ``axis, u, v``
+    (``u, v`` its :func:`~asbuilt.fit._common.orthonormal_basis`), and ``u, v`` as Python
+    floats (six of them, for :func:`_update`'s scalar arithmetic). Gauss-Newton asks for the
+    same axis several times (the Jacobian at a state, then the update from it), so the last few
+    frames are remembered."""
     key = axis.tobytes()
     found = _FRAME_CACHE.get(key)
     if found is None:
-        floats = basis_floats(*axis.tolist())
-        u, v = np.array(floats[:3]), np.array(floats[3:])
-        found = (u, v, np.array((axis, u, v)).T, floats)
+        values = axis.tolist()
+        floats = basis_floats(*values)
+        # One array from the floats (the rows axis, u, v, transposed: the same values and
+        # memory layout as three arrays stacked, so the same products): most Jacobians are at
+        # a new axis.
+        frame = np.array((values, floats[:3], floats[3:])).T
+        found = (frame, floats)
         if len(_FRAME_CACHE) >= 8:
             _FRAME_CACHE.clear()
         _FRAME_CACHE[key] = found
@@ -57,13 +61,13 @@ def _frame(axis: np.ndarray):
 
 def _residuals(state, points):
     axis, center, radius = state
-    across = (points - center) @ _frame(axis)[2][:, 1:]
+    across = (points - center) @ _frame(axis)[0][:, 1:]
     return np.sqrt(np.einsum("ij,ij->i", across, across)) - radius
 
 
 def _jacobian(state, points):
     axis, center, radius = state
-    local = (points - center) @ _frame(axis)[2]
+    local = (points - center) @ _frame(axis)[0]
     # One-dimensional column views: numpy's per-call cost on (n, 2) views is paid per row.
     along, across_u, across_v = local[:, 0], local[:, 1], local[:, 2]
     rho = across_u * across_u
@@ -81,9 +85,34 @@ def _jacobian(state, points):
     return rho, jac
 
 
+#: The last weighted centroid :func:`_centroid` computed, with the very arrays it came from
+#: (held, so that their identities stay theirs): ``[(points, weights, (gx, gy, gz))]``, one
+#: tuple swapped whole (a thread never sees one call's arrays with another's centroid).
+_LAST_CENTROID: list = [(None, None, None)]
+
+
+def _centroid(points: np.ndarray, weights: np.ndarray) -> tuple[float, float, float]:
+    """The centroid of ``points`` (n, 3) metres weighted by ``weights`` (n,), as floats (the
+    plain mean when the weights sum to zero).
+
+    Least squares on a fixed inlier set (most of Gauss-Newton's steps) updates with the same
+    weights array every step, and a differenced Jacobian with the same unit weights five times:
+    the centroid of the same two arrays is taken from the last call (the fits never change a
+    weights array in place once handed to the model).
+    """
+    last_points, last_weights, found = _LAST_CENTROID[0]
+    if weights is last_weights and points is last_points:
+        return found
+    total = float(weights.sum())
+    centroid = (weights @ points) / total if total > 0 else points.mean(axis=0)
+    found = tuple(centroid.tolist())
+    _LAST_CENTROID[0] = (points, weights, found)
+    return found
+
+
 def _update(state, delta, points, weights):
     axis, center, radius = state
-    ux, uy, uz, vx, vy, vz = _frame(axis)[3]
+    ux, uy, uz, vx, vy, vz = _frame(axis)[1]
     d0, d1, d2, d3, d4 = delta.tolist()
     # Python floats: the same operations in the same order as on the arrays (so the same
     # rounding), without a numpy call per operation on 3-vectors.
@@ -95,9 +124,7 @@ def _update(state, delta, points, weights):
     cx, cy, cz = cx + d2 * ux + d3 * vx, cy + d2 * uy + d3 * vy, cz + d2 * uz + d3 * vz
     # Slide the centre along the axis to the weighted centroid's foot (residuals unchanged),
     # which keeps the axis tilts and the centre offsets uncorrelated.
-    total = float(weights.sum())
-    centroid = (weights @ points) / total if total > 0 else points.mean(axis=0)
-    gx, gy, gz = centroid.tolist()
+    gx, gy, gz = _centroid(points, weights)
     slide = (gx - cx) * ax + (gy - cy) * ay + (gz - cz) * az
     new_axis = np.array((ax, ay, az))
     new_center = np.array((cx + slide * ax, cy + slide * ay, cz + slide * az))

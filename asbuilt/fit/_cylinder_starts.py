@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from asbuilt.fit import _lapack as lapack
 from asbuilt.fit._circles import circle_starts
 from asbuilt.fit._common import (
     orthonormal_bases,
@@ -111,7 +112,7 @@ def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
     vectors = None
     for _ in range(2):
         scatter = (normals * weights[:, None]).T @ normals
-        _, vectors = np.linalg.eigh(scatter)
+        _, vectors = lapack.eigh(scatter)
         cosines = normals @ vectors[:, 0]
         scale = robust_scale(cosines, 0.02)
         weights = tukey_weights(cosines, scale)
@@ -204,7 +205,7 @@ def line_axis(points: np.ndarray, keep: int, rng, samples: int = 32, steps: int 
     first = rng.integers(0, n, samples)
     second = rng.integers(0, n, samples)
     direction = points[second] - points[first]
-    norm = np.linalg.norm(direction, axis=1)
+    norm = row_norms(direction)
     good = norm > 1e-12
     if not np.any(good):
         return None
@@ -222,7 +223,7 @@ def line_axis(points: np.ndarray, keep: int, rng, samples: int = 32, steps: int 
         point = closest.sum(axis=0) / len(closest)  # closest.mean(axis=0), less overhead
         centred = closest - point
         # Principal direction: the scatter matrix's leading eigenvector.
-        axis = np.linalg.eigh(centred.T @ centred)[1][:, 2]
+        axis = lapack.eigh(centred.T @ centred)[1][:, 2]
     return axis
 
 

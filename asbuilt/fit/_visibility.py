@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit._common import robust_scale, tukey_weights
+from asbuilt.fit._common import robust_scale, row_norms, tukey_weights
 from asbuilt.fit._mixture import mixing_cost, mixture_score
 from asbuilt.fit._robust import GeometricModel, RobustFit, gauss_newton, settled_fit
 from asbuilt.tolerances import Tolerances
@@ -161,7 +161,7 @@ def _crossing_along(axis, center, points: np.ndarray, viewpoint, a, b, discrimin
     view = np.asarray(viewpoint, dtype=np.float64)
     axis = np.asarray(axis, dtype=np.float64)
     beams = points - view
-    directions = beams / np.maximum(np.linalg.norm(beams, axis=1), 1e-300)[:, None]
+    directions = beams / np.maximum(row_norms(beams), 1e-300)[:, None]
     a = np.maximum(a[0], 1e-24)  # beams along the axis: never nearer it
     middle = -b[0] / (2.0 * a)
     half_chord = np.sqrt(np.maximum(discriminant[0], 0.0)) / (2.0 * a)

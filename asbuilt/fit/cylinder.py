@@ -39,28 +39,21 @@ scan says it needs no second look (clean, or every rejected shot where only back
 This module holds the sequence; the steps live in :mod:`asbuilt.fit._cylinder_starts` (1, and
 the order in which starts are trusted), :mod:`asbuilt.fit._cylinder_model` (3 and 5: the
 least-squares model, the far-side and incidence refits) and
-:mod:`asbuilt.fit._cylinder_checks` (4: the consistency checks and the MSAC rescue).
+:mod:`asbuilt.fit._cylinder_checks` (4: the consistency checks and the MSAC rescue); the chosen
+fit's last checks, refinements and result are :mod:`asbuilt.fit._cylinder_finish`'s.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit._circles import circle_starts
 from asbuilt.fit._common import (
-    arc_coverage_deg,
     check_spread,
-    covariance_from_jacobian,
     local_normals,
-    median_spacing,
-    noise_level,
-    orient,
     principal_axes,
     random_subset,
-    stderr_of,
     validate_points,
 )
 from asbuilt.fit._cylinder_background import (
@@ -71,31 +64,28 @@ from asbuilt.fit._cylinder_background import (
     segment_noise,
 )
 from asbuilt.fit._cylinder_checks import (
-    EDGE_ON_DEG,
-    EDGE_ON_QUARTILE_DEG,
     RESCUE_REJECTED,
     admissible,
     better_fit,
     consistent,
     doubtful,
-    doubtful_blind,
-    edge_on,
     half_line_axes,
     msac_fits,
     one_station_could_see,
     robust_extent,
     same_basin,
-    seen_through,
     unhidden_starts,
     unseen,
 )
+from asbuilt.fit._cylinder_finish import (
+    METHOD,
+    VIEW_IGNORED,
+    NeedsFullSearch,
+    Scene,
+    finished,
+)
 from asbuilt.fit._cylinder_model import (
     MODEL,
-    angles_about,
-    drop_far_side,
-    flip_covariance,
-    incidence_weighted,
-    rms,
     stacked,
 )
 from asbuilt.fit._cylinder_quick import quick_fit as _quick_fit
@@ -114,24 +104,15 @@ from asbuilt.fit._robust import (
     RobustFit,
     keep_count,
     likelier,
-    refit_on,
-    robust_geometric_fit,
 )
 from asbuilt.fit._visibility import (
     cylinder_beam_excess,
     reconsidered,
 )
 from asbuilt.fit.result import FitResult
-from asbuilt.primitives import Cylinder
-from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
+from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
 __all__ = ["fit_cylinder", "METHOD"]
-
-
-METHOD = (
-    "normal-based axis starts + Kasa circle + robust geometric Gauss-Newton on orthogonal "
-    "distances (Lukacs, Marshall & Martin 1998)"
-)
 
 
 #: How many of the best starts are settled again and judged by their beams when the viewpoint
@@ -247,8 +228,9 @@ def fit_cylinder(
         (the length is the inliers' extent, short of the pipe's by the part of the step after
         each end's last shot that the pipe still fills: uniform over a step ``s`` that is a
         root-mean-square shortfall of ``s / sqrt(3)``, so ``sqrt((s1^2 + s2^2) / 3)`` with
-        ``s1, s2`` the shots' step along the axis at each end (:func:`_end_gaps`), plus the
-        noise and the axis-tilt effect, in quadrature). Measured against the
+        ``s1, s2`` the shots' step along the axis at each end
+        (:func:`~asbuilt.fit._cylinder_finish.end_gaps`), plus the noise and the axis-tilt
+        effect, in quadrature). Measured against the
         scatter of repeated simulated scans (range 2 mm, angle 0.01 degree): the radius error
         is overstated by up to 1.4x at 3 m and understated by up to 1.25x at 10 m on the
         benchmark's raster, overstated up to 3.4x on rasters reaching the silhouette (oblique
@@ -308,13 +290,6 @@ def _fit_seen_from(points, sigma, tolerances, viewpoint) -> FitResult:
     return result
 
 
-#: The note of a fit that ignored the stated viewpoint (:func:`_finished`).
-VIEW_IGNORED = (
-    "The viewpoint was ignored: more than a third of the shots would have been seen "
-    "through the pipe from it (check the scan's sensor position or the station)."
-)
-
-
 #: Why a fit that would ignore the viewpoint is refused (:func:`fit_cylinder`).
 VIEW_CONTRADICTED = (
     "No cylinder fits these shots as seen from the viewpoint (each would hide more than a"
@@ -353,10 +328,10 @@ def _fit_cylinder(points, sigma, tolerances, viewpoint) -> FitResult:
         quick = _quick_fit(local, quick_axes(normal[0], directions), keep, sigma, view, tolerances)
         if quick is not None:
             robust, quick_starts, rejected = quick
-            scene = _Scene(pts, offset, local, None, view, sigma, tolerances)
+            scene = Scene(pts, offset, local, None, view, sigma, tolerances)
             try:
-                return _finished(robust, scene, False, quick_starts, None)
-            except _NeedsFullSearch:
+                return finished(robust, scene, False, quick_starts, None)
+            except NeedsFullSearch:
                 pass
             except FitError:
                 # A quick fit that rejected shots and that its last checks (edge-on shots, shots
@@ -503,9 +478,9 @@ def _fit_cylinder(points, sigma, tolerances, viewpoint) -> FitResult:
         # The robust choice among every start rejected only background (as the quick path
         # judges it): the beams' second look and the MSAC rescue would settle on it again.
         try:
-            return _finished(
+            return finished(
                 robust,
-                _Scene(pts, offset, local, None, view, sigma, tolerances),
+                Scene(pts, offset, local, None, view, sigma, tolerances),
                 False,
                 starts,
                 reconsider,
@@ -578,222 +553,5 @@ def _fit_cylinder(points, sigma, tolerances, viewpoint) -> FitResult:
                 " if they are right, the shots are mostly background and mixed returns around a"
                 " thin pipe: rescan with more shots on the pipe."
             )
-    scene = _Scene(pts, offset, local, everything, view, sigma, tolerances)
-    return _finished(robust, scene, ignored_view, starts, reconsider)
-
-
-def _readmitted(robust, local, cutoff: float):
-    """The least-squares fit of every shot, from ``robust``'s state, when it explains each
-    within ``cutoff`` metres and at an MSAC cost (cut at ``cutoff``) no higher than the robust
-    fit's; else ``robust``.
-
-    The robust choice can settle in a basin that rejects a few good shots: 30 shots over 120
-    degrees of a 0.1 m pipe, all within 2.6 sigma of the least-squares cylinder (r 96.5 mm),
-    came out r 90.7 mm with 3 rejected (the sensor's sigma given, no viewpoint). The later
-    checks (far side, hidden shots) still judge the re-admitted shots.
-    """
-    if robust.inliers.all() or np.max(np.abs(robust.residuals[~robust.inliers])) > 2 * cutoff:
-        return robust  # (a shot twice the cutoff off is no good shot a nearby fit could take)
-    every = refit_on(MODEL, robust, local, np.ones(len(local), bool))
-    if not (np.abs(every.residuals) <= cutoff).all():
-        return robust
-    kept = robust.residuals[robust.inliers]
-    robust_cost = float(kept @ kept) + cutoff * cutoff * int(np.count_nonzero(~robust.inliers))
-    if float(every.residuals @ every.residuals) > robust_cost:
-        return robust
-    return every
-
-
-#: Refits after dropping inliers seen through the pipe (:func:`_not_seen_through`) before the
-#: fit is refused: each refit can move the pipe onto other shots' beams.
-_THROUGH_ROUNDS = 3
-
-
-def _not_seen_through(robust, local, view, sigma, tolerances: Tolerances):
-    """The fit without the inliers its own pipe would have hidden from the viewpoint
-    (:func:`seen_through`), refitted by least squares, and how many were dropped; FitError when
-    too few shots are left, more than ``tolerances.max_outlier_fraction`` are rejected, or the
-    refits keep hiding shots.
-
-    The robust choice scores hidden shots but can still settle on a fit that hides a few (a
-    wide circle through a thin pipe's front shots and the wall rows behind it, when fewer than
-    ``UNSEEN_FRACTION`` of its inliers are hidden); those shots are outliers.
-    """
-    n = len(local)
-    dropped = 0
-    for round_ in range(_THROUGH_ROUNDS + 1):
-        cutoff = tolerances.outlier_cutoff_sigma * (sigma if sigma is not None else robust.scale)
-        through = seen_through(robust, local, view, cutoff)
-        count = int(np.count_nonzero(through))
-        if not count:
-            return robust, dropped
-        keep = robust.inliers & ~through
-        left = int(np.count_nonzero(keep))
-        if (
-            round_ == _THROUGH_ROUNDS
-            or left < MIN_POINTS["cylinder"]
-            or n - left > tolerances.max_outlier_fraction * n
-        ):
-            break
-        robust = refit_on(MODEL, robust, local, keep)
-        dropped += count
-    raise FitError(
-        f"The cylinder these shots fit best (r {robust.state[2] * 1000:.0f} mm) would hide"
-        f" {count} of its own shots behind itself as seen from the viewpoint, and without them"
-        f" {left} of the {n} shots are left: they are mostly background and mixed returns"
-        " around a thin pipe, or the station is wrong. Rescan with more shots across the pipe,"
-        " or check the scan's sensor position or the object's station."
-    )
-
-
-def _end_gaps(along: np.ndarray, spacing: float, noise: float) -> tuple[float, float]:
-    """The step of the shots along the axis beyond each end, metres: from the outermost shot to
-    the nearest one farther in by more than a row's own spread (a quarter of the median
-    nearest-neighbour ``spacing``, at least three ``noise``), else ``spacing``.
-
-    Each end lies somewhere in the step after the last shot that hit. The nearest-neighbour
-    spacing alone is the step across the raster where that is the smaller: the sample plant's
-    chimney, shot by rows metres apart of shots 0.3 m apart, had its length known to
-    +-0.12 m, and came out 2.7 m short (17.3 m of 20).
-    ``along``: the inliers' coordinates along the axis, shape (m,) metres.
-    """
-    ordered = np.sort(along)
-    same_row = max(0.25 * spacing, 3.0 * noise)
-    low = ordered[ordered > ordered[0] + same_row]
-    high = ordered[ordered < ordered[-1] - same_row]
-    return (
-        float(low[0] - ordered[0]) if low.size else spacing,
-        float(ordered[-1] - high[-1]) if high.size else spacing,
-    )
-
-
-class _NeedsFullSearch(Exception):
-    """Raised by :func:`_finished` when a quick fit needs the other starts it never made."""
-
-
-@dataclass(frozen=True)
-class _Scene:
-    """What the last stage of a cylinder fit (:func:`_finished`) needs of the scan.
-
-    ``pts`` (n, 3) metres as given; ``offset`` (3,) metres, their centroid; ``local`` (m, 3)
-    metres, ``pts - offset`` or a subsample of it when ``everything`` (n, 3) holds all of them
-    (dense clouds); ``view`` (3,) metres in ``local``'s frame, or None; ``sigma`` metres or
-    None.
-    """
-
-    pts: np.ndarray
-    offset: np.ndarray
-    local: np.ndarray
-    everything: np.ndarray | None
-    view: np.ndarray | None
-    sigma: float | None
-    tolerances: Tolerances
-
-
-def _finished(robust, scene: _Scene, ignored_view, starts, reconsider) -> FitResult:
-    """The chosen robust fit's checks and refinements (edge-on shots, dense clouds settled on
-    every point, far-side shots, incidence weights) and its :class:`FitResult` (see
-    :func:`fit_cylinder`; ``scene`` the scan, :class:`_Scene`;
-    ``reconsider(robust, None)`` settles a fit again from other starts, or is None when the
-    caller guarantees it is not needed)."""
-    pts, offset, local, everything = scene.pts, scene.offset, scene.local, scene.everything
-    view, sigma, tolerances = scene.view, scene.sigma, scene.tolerances
-    if not ignored_view:
-        # Without the sensor's sigma, at the prior noise level: a fit whose own scale came from
-        # its grazing shots (small errors across the surface) had rejected the square-on ones.
-        noise = sigma if sigma is not None else max(robust.scale, tolerances.prior_range_sigma)
-        robust = _readmitted(robust, local, tolerances.outlier_cutoff_sigma * noise)
-    if view is not None and edge_on(robust, local, view):
-        # Shots strung along the viewpoint's own beams also say that the viewpoint is right.
-        raise FitError(
-            "The shots this cylinder fits were nearly all seen edge-on from the viewpoint (half"
-            f" of them within {90 - EDGE_ON_DEG:g} degrees of grazing, or three quarters within"
-            f" {90 - EDGE_ON_QUARTILE_DEG:g}): they are returns strung"
-            " along their beams (mixed pixels between a thin pipe and what lies behind it), not"
-            " a pipe's surface. Rescan with more shots across the pipe, or check the station.",
-        )
-    if everything is not None:
-        local = everything
-        robust = robust_geometric_fit(
-            local, [robust.state], MODEL, kind="cylinder", sigma=sigma, tolerances=tolerances
-        )
-    near = robust
-    robust = drop_far_side(near, local, tolerances)
-    far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
-    if view is None and starts and far_side and doubtful_blind(robust, local):
-        # The far-side refit slid onto a plane: the likeliest other basin replaces it if closer
-        # (a plate with shots behind it is nearly a plane; a looser cylinder is no better).
-        if reconsider is None:
-            raise _NeedsFullSearch
-        settled = reconsider(robust, None)
-        if rms(settled.residuals[settled.inliers]) < rms(robust.residuals[robust.inliers]):
-            robust, far_side = settled, 0
-    through = 0
-    if view is not None and not ignored_view:
-        robust, through = _not_seen_through(robust, local, view, sigma, tolerances)
-    robust, relative = incidence_weighted(robust, local)
-    axis, center, radius = robust.state
-    kept = local[robust.inliers]
-    along = (kept - center) @ axis
-    low, high = float(along.min()), float(along.max())
-    length = high - low
-    if length <= 0:
-        raise FitError("The points must spread along the cylinder's axis to give it a length.")
-    mid = center + 0.5 * (low + high) * axis
-    # Noise level of a square-on shot; the inliers' weights are 1 / relative variance.
-    weights = 1.0 / relative[robust.inliers]
-    noise, source = noise_level(
-        robust.residuals[robust.inliers] * np.sqrt(weights), 5, sigma, tolerances
-    )
-    # Re-express the Jacobian about the mid-point (the reported centre): shift the along-axis
-    # coordinate used by the tilt columns.
-    jac = robust.jacobian.copy()
-    shift = 0.5 * (low + high)
-    jac[:, 0] -= shift * jac[:, 2]
-    jac[:, 1] -= shift * jac[:, 3]
-    covariance = covariance_from_jacobian(jac * np.sqrt(weights)[:, None], noise)
-    tilt_var = covariance[0, 0] + covariance[1, 1]
-    gaps = _end_gaps(along, median_spacing(kept), noise)
-    length_se = stderr_of(
-        (gaps[0] ** 2 + gaps[1] ** 2) / 3.0 + 2.0 * noise**2 + (radius**2) * tilt_var
-    )
-    oriented = orient(axis)
-    cylinder = Cylinder(mid + offset, oriented, radius, length)
-    angles = angles_about(axis, center, kept)
-    stderr = {
-        "radius": stderr_of(covariance[4, 4]),
-        "axis_deg": float(np.degrees(stderr_of(tilt_var))),
-        "center": stderr_of(covariance[2, 2] + covariance[3, 3]),
-        "length": length_se,
-    }
-    if oriented is not axis:
-        covariance = flip_covariance(covariance, axis, oriented)
-    notes = []
-    if ignored_view:
-        notes.append(VIEW_IGNORED)
-    outliers = int(len(pts) - robust.inliers.sum())
-    if outliers:
-        notes.append(
-            f"{outliers} outlier point(s) rejected (beyond {tolerances.outlier_cutoff_sigma:g}"
-            f" x {robust.scale * 1000:.3g} mm"
-            + (f", or {far_side} on the far side of the pipe" if far_side else "")
-            + (f", or {through} seen through it from the viewpoint" if through else "")
-            + ")."
-        )
-    diagnostics = {
-        "arc_deg": arc_coverage_deg(angles),
-        "length_over_diameter": length / (2.0 * radius),
-        "starts": float(len(starts)),
-    }
-    return FitResult(
-        primitive=cylinder,
-        residuals=cylinder.distance(pts),
-        inliers=robust.inliers,
-        stderr=stderr,
-        sigma=noise,
-        sigma_source=source,
-        method=METHOD,
-        covariance=covariance,
-        diagnostics=diagnostics,
-        notes=tuple(notes),
-    )
+    scene = Scene(pts, offset, local, everything, view, sigma, tolerances)
+    return finished(robust, scene, ignored_view, starts, reconsider)

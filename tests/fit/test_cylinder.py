@@ -11,7 +11,6 @@ from fit_scans import angle_deg, raster_scan
 from scipy.optimize import least_squares
 
 from asbuilt.errors import FitError
-from asbuilt.fit import cylinder as cylinder_module
 from asbuilt.fit import fit_points
 from asbuilt.fit._circles import kasa_batch
 from asbuilt.fit._common import orthonormal_basis
@@ -633,15 +632,6 @@ def test_the_length_error_covers_the_raster_step_along_the_axis():
     assert shortfall == pytest.approx(2.0, abs=0.05)
     assert fit.stderr["length"] == pytest.approx(np.sqrt(2 * 3.0**2 / 3.0), rel=0.05)
     assert shortfall < fit.stderr["length"]
-
-
-def test_end_gaps_are_the_step_to_the_next_row_in():
-    rows = np.repeat([0.0, 3.0, 6.0, 9.5], 4) + np.tile([0.0, 0.001, -0.001, 0.002], 4)
-    gaps = cylinder_module._end_gaps(rows, 0.2, 0.002)
-    assert gaps[0] == pytest.approx(3.001, abs=0.003)
-    assert gaps[1] == pytest.approx(3.5, abs=0.003)
-    # One row only: the nearest-neighbour spacing stands for the step.
-    assert cylinder_module._end_gaps(np.zeros(5), 0.2, 0.002) == (0.2, 0.2)
 
 
 @pytest.mark.parametrize("seed", [51, 55])

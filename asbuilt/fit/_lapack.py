@@ -1,0 +1,85 @@
+"""numpy's own LAPACK calls on small float64 matrices, without :mod:`numpy.linalg`'s wrappers.
+
+A sparse scan's fit solves, decomposes and inverts a few dozen 3 x 3 or 5 x 5 matrices, where
+:func:`numpy.linalg.eigh` and its siblings spend about three quarters of their 15 microseconds
+in Python (argument checks, type promotion, an error-state context with a callback that turns
+a LAPACK failure into :class:`numpy.linalg.LinAlgError`). The functions here call the same
+generalised ufuncs (``numpy.linalg._umath_linalg``) with the same signatures, so their results
+are the same bits; a LAPACK failure (or a non-finite input) leaves NaN in the output, and then
+the public function is called instead and decides, raising or returning exactly as before.
+Inputs other than float64 arrays go to the public function too.
+
+``numpy.linalg._umath_linalg`` is private: when it is missing (another numpy), every function
+here is the public one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+try:  # numpy >= 2
+    from numpy.linalg import _umath_linalg as _gufuncs
+except ImportError:  # pragma: no cover - older or other numpy builds
+    _gufuncs = None
+
+__all__ = ["eigh", "eigvalsh", "inv", "solve", "svd"]
+
+_FLOAT64 = np.dtype(np.float64)
+
+
+def _direct(*arrays) -> bool:
+    """Whether the gufuncs may take these arrays directly (float64 ndarrays)."""
+    return _gufuncs is not None and all(
+        type(a) is np.ndarray and a.dtype == _FLOAT64 for a in arrays
+    )
+
+
+def eigh(a: np.ndarray):
+    """:func:`numpy.linalg.eigh` (lower triangle) of float64 ``a`` (..., m, m): ``(w, v)``."""
+    if _direct(a) and a.ndim >= 2 and a.shape[-1] == a.shape[-2]:
+        with np.errstate(all="ignore"):
+            w, v = _gufuncs.eigh_lo(a, signature="d->dd")
+        if np.isfinite(w).all():
+            return w, v
+    return tuple(np.linalg.eigh(a))
+
+
+def eigvalsh(a: np.ndarray) -> np.ndarray:
+    """:func:`numpy.linalg.eigvalsh` (lower triangle) of float64 ``a`` (..., m, m)."""
+    if _direct(a) and a.ndim >= 2 and a.shape[-1] == a.shape[-2]:
+        with np.errstate(all="ignore"):
+            w = _gufuncs.eigvalsh_lo(a, signature="d->d")
+        if np.isfinite(w).all():
+            return w
+    return np.linalg.eigvalsh(a)
+
+
+def solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`numpy.linalg.solve` of float64 ``a`` (..., m, m) and ``b`` (..., m, k)."""
+    if _direct(a, b) and a.ndim >= 2 and b.ndim == a.ndim and a.shape[-1] == a.shape[-2]:
+        with np.errstate(all="ignore"):
+            x = _gufuncs.solve(a, b, signature="dd->d")
+        if np.isfinite(x).all():
+            return x
+    return np.linalg.solve(a, b)
+
+
+def inv(a: np.ndarray) -> np.ndarray:
+    """:func:`numpy.linalg.inv` of float64 ``a`` (..., m, m)."""
+    if _direct(a) and a.ndim >= 2 and a.shape[-1] == a.shape[-2]:
+        with np.errstate(all="ignore"):
+            x = _gufuncs.inv(a, signature="d->d")
+        if np.isfinite(x).all():
+            return x
+    return np.linalg.inv(a)
+
+
+def svd(a: np.ndarray):
+    """:func:`numpy.linalg.svd` of float64 ``a`` (..., m, n) with ``full_matrices=False``:
+    ``(u, s, vh)``."""
+    if _direct(a) and a.ndim >= 2:
+        with np.errstate(all="ignore"):
+            u, s, vh = _gufuncs.svd_s(a, signature="d->ddd")
+        if np.isfinite(s).all():
+            return u, s, vh
+    return tuple(np.linalg.svd(a, full_matrices=False))
