@@ -85,29 +85,14 @@ def _jacobian(state, points):
     return rho, jac
 
 
-#: The last weighted centroid :func:`_centroid` computed, with the very arrays it came from
-#: (held, so that their identities stay theirs): ``[(points, weights, (gx, gy, gz))]``, one
-#: tuple swapped whole (a thread never sees one call's arrays with another's centroid).
-_LAST_CENTROID: list = [(None, None, None)]
-
-
 def _centroid(points: np.ndarray, weights: np.ndarray) -> tuple[float, float, float]:
     """The centroid of ``points`` (n, 3) metres weighted by ``weights`` (n,), as floats (the
-    plain mean when the weights sum to zero).
-
-    Least squares on a fixed inlier set (most of Gauss-Newton's steps) updates with the same
-    weights array every step, and a differenced Jacobian with the same unit weights five times:
-    the centroid of the same two arrays is taken from the last call (the fits never change a
-    weights array in place once handed to the model).
-    """
-    last_points, last_weights, found = _LAST_CENTROID[0]
-    if weights is last_weights and points is last_points:
-        return found
+    plain mean when the weights sum to zero)."""
+    # (No memo of the last call's arrays: it saved a fraction of a percent and would go stale
+    # silently the day a caller changed a weights array in place.)
     total = float(weights.sum())
     centroid = (weights @ points) / total if total > 0 else points.mean(axis=0)
-    found = tuple(centroid.tolist())
-    _LAST_CENTROID[0] = (points, weights, found)
-    return found
+    return tuple(centroid.tolist())
 
 
 def _update(state, delta, points, weights):

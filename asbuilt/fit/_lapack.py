@@ -9,8 +9,9 @@ are the same bits; a LAPACK failure (or a non-finite input) leaves NaN in the ou
 the public function is called instead and decides, raising or returning exactly as before.
 Inputs other than float64 arrays go to the public function too.
 
-``numpy.linalg._umath_linalg`` is private: when it is missing (another numpy), every function
-here is the public one.
+``numpy.linalg._umath_linalg`` is private: when it is missing, or (checked once at import on a
+small matrix) lacks one of these functions or gives other bits than the public one (another
+numpy), every function here is the public one.
 """
 
 from __future__ import annotations
@@ -20,6 +21,33 @@ import numpy as np
 try:  # numpy >= 2
     from numpy.linalg import _umath_linalg as _gufuncs
 except ImportError:  # pragma: no cover - older or other numpy builds
+    _gufuncs = None
+
+
+def _same_as_public(gufuncs) -> bool:
+    """Whether ``gufuncs`` has the five functions with these signatures and they give the
+    public functions' bits on a small matrix: a numpy that renamed or changed them (they are
+    private) falls back to :mod:`numpy.linalg` instead of failing or differing."""
+    a = np.array([[4.0, 1.0, 0.5], [1.0, 3.0, 0.25], [0.5, 0.25, 2.0]])
+    b = np.array([[1.0], [2.0], [3.0]])
+    try:
+        with np.errstate(all="ignore"):
+            checks = (
+                (gufuncs.eigh_lo(a, signature="d->dd"), np.linalg.eigh(a)),
+                ((gufuncs.eigvalsh_lo(a, signature="d->d"),), (np.linalg.eigvalsh(a),)),
+                ((gufuncs.solve(a, b, signature="dd->d"),), (np.linalg.solve(a, b),)),
+                ((gufuncs.inv(a, signature="d->d"),), (np.linalg.inv(a),)),
+                (gufuncs.svd_s(a, signature="d->ddd"), np.linalg.svd(a, full_matrices=False)),
+            )
+        return all(
+            all(np.array_equal(mine, theirs) for mine, theirs in zip(ours, public, strict=True))
+            for ours, public in checks
+        )
+    except Exception:  # noqa: BLE001 - any failure means: do not use them
+        return False
+
+
+if _gufuncs is not None and not _same_as_public(_gufuncs):  # pragma: no cover - other numpy
     _gufuncs = None
 
 __all__ = ["eigh", "eigvalsh", "inv", "solve", "svd"]

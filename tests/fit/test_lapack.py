@@ -41,3 +41,28 @@ def test_failures_and_other_inputs_go_to_numpy():
         lapack.eigh(nan)
     single = np.eye(3, dtype=np.float32)
     assert lapack.eigvalsh(single).dtype == np.float32
+
+
+def test_a_numpy_without_these_gufuncs_is_not_used():
+    """The import-time check: gufuncs missing, or giving other bits, mean the public functions."""
+
+    class Renamed:  # a numpy whose private module lacks the names
+        pass
+
+    class Off:  # one that answers, but not as the public function does
+        def __getattr__(self, name):
+            def gufunc(*arrays, signature):
+                outputs = signature.split("->")[1]
+                return (
+                    tuple(np.zeros_like(arrays[0]) for _ in outputs)[: len(outputs)]
+                    if len(outputs) > 1
+                    else np.zeros_like(arrays[0])
+                )
+
+            return gufunc
+
+    assert not lapack._same_as_public(Renamed())
+    assert not lapack._same_as_public(Off())
+    from numpy.linalg import _umath_linalg
+
+    assert lapack._same_as_public(_umath_linalg)
