@@ -25,7 +25,7 @@ except ImportError:  # pragma: no cover - older or other numpy builds
 
 
 def _same_as_public(gufuncs) -> bool:
-    """Whether ``gufuncs`` has the five functions with these signatures and they give the
+    """Whether ``gufuncs`` has the seven gufuncs with these signatures and they give the
     public functions' bits on a small matrix: a numpy that renamed or changed them (they are
     private) falls back to :mod:`numpy.linalg` instead of failing or differing."""
     a = np.array([[4.0, 1.0, 0.5], [1.0, 3.0, 0.25], [0.5, 0.25, 2.0]])
@@ -36,6 +36,8 @@ def _same_as_public(gufuncs) -> bool:
                 (gufuncs.eigh_lo(a, signature="d->dd"), np.linalg.eigh(a)),
                 ((gufuncs.eigvalsh_lo(a, signature="d->d"),), (np.linalg.eigvalsh(a),)),
                 ((gufuncs.solve(a, b, signature="dd->d"),), (np.linalg.solve(a, b),)),
+                ((gufuncs.solve1(a, b[:, 0], signature="dd->d"),), (np.linalg.solve(a, b[:, 0]),)),
+                ((gufuncs.svd(a, signature="d->d"),), (np.linalg.svd(a, compute_uv=False),)),
                 ((gufuncs.inv(a, signature="d->d"),), (np.linalg.inv(a),)),
                 (gufuncs.svd_s(a, signature="d->ddd"), np.linalg.svd(a, full_matrices=False)),
             )
@@ -50,7 +52,7 @@ def _same_as_public(gufuncs) -> bool:
 if _gufuncs is not None and not _same_as_public(_gufuncs):  # pragma: no cover - other numpy
     _gufuncs = None
 
-__all__ = ["eigh", "eigvalsh", "inv", "solve", "svd"]
+__all__ = ["eigh", "eigvalsh", "inv", "singular_values", "solve", "svd"]
 
 _FLOAT64 = np.dtype(np.float64)
 
@@ -83,12 +85,16 @@ def eigvalsh(a: np.ndarray) -> np.ndarray:
 
 
 def solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """:func:`numpy.linalg.solve` of float64 ``a`` (..., m, m) and ``b`` (..., m, k)."""
-    if _direct(a, b) and a.ndim >= 2 and b.ndim == a.ndim and a.shape[-1] == a.shape[-2]:
-        with np.errstate(all="ignore"):
-            x = _gufuncs.solve(a, b, signature="dd->d")
-        if np.isfinite(x).all():
-            return x
+    """:func:`numpy.linalg.solve` of float64 ``a`` (..., m, m) and ``b`` (..., m, k), or ``b``
+    (m,) with ``a`` (m, m)."""
+    if _direct(a, b) and a.ndim >= 2 and a.shape[-1] == a.shape[-2]:
+        # numpy's own choice of gufunc: solve1 for one right-hand side vector
+        gufunc = _gufuncs.solve1 if b.ndim == 1 else _gufuncs.solve if b.ndim == a.ndim else None
+        if gufunc is not None:
+            with np.errstate(all="ignore"):
+                x = gufunc(a, b, signature="dd->d")
+            if np.isfinite(x).all():
+                return x
     return np.linalg.solve(a, b)
 
 
@@ -111,3 +117,13 @@ def svd(a: np.ndarray):
         if np.isfinite(s).all():
             return u, s, vh
     return tuple(np.linalg.svd(a, full_matrices=False))
+
+
+def singular_values(a: np.ndarray) -> np.ndarray:
+    """:func:`numpy.linalg.svd` of float64 ``a`` (..., m, n) with ``compute_uv=False``."""
+    if _direct(a) and a.ndim >= 2:
+        with np.errstate(all="ignore"):
+            s = _gufuncs.svd(a, signature="d->d")
+        if np.isfinite(s).all():
+            return s
+    return np.linalg.svd(a, compute_uv=False)
