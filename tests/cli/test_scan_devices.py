@@ -17,39 +17,6 @@ from asbuilt.cli import main
 
 pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs POSIX pseudo-terminals")
 
-SCENE = {
-    "format": "asbuilt-scene",
-    "version": 1,
-    "units": "m",
-    "stations": [{"id": "S1", "position": [0.0, 0.0, 1.5]}],
-    "objects": [
-        {
-            "id": "wall",
-            "scan": False,
-            "geometry": {
-                "type": "plate",
-                "center": [0.0, 6.0, 1.5],
-                "normal": [0, -1, 0],
-                "size": [20.0, 6.0],
-                "thickness": 0.2,
-            },
-        }
-    ],
-}
-PLAN = {
-    "format": "asbuilt-scan-plan",
-    "version": 1,
-    "settings": {"edge_pairs": 0},
-    "targets": [{"id": "W1", "kind": "plane", "window_deg": [80, -5, 100, 5]}],
-}
-
-
-@pytest.fixture
-def site(tmp_path):
-    (tmp_path / "scene.json").write_text(json.dumps(SCENE))
-    (tmp_path / "plan.json").write_text(json.dumps(PLAN))
-    return tmp_path
-
 
 def _server(site, device_id):
     world = load_world(site / "scene.json")
