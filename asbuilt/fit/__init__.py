@@ -25,7 +25,6 @@ import numpy as np
 from scipy.special import chdtri
 
 from asbuilt.errors import FitError, located
-from asbuilt.fit import _lapack as lapack
 from asbuilt.fit._stations import fuse_station_views
 from asbuilt.fit._window import beyond_window, open_ends
 from asbuilt.fit.result import FitFailure, FitReport, FitResult, ObjectFit
@@ -267,7 +266,7 @@ def _require_spread_beyond_noise(
     # RMS spread along the principal directions, largest first: the roots of the scatter
     # matrix's eigenvalues (the centred points' singular values / sqrt(n), at a third the cost).
     scatter = centred.T @ centred / len(points)
-    spread = np.sqrt(np.maximum(lapack.eigvalsh(scatter)[::-1], 0.0))
+    spread = np.sqrt(np.maximum(np.linalg.eigvalsh(scatter)[::-1], 0.0))
     if spread[1] <= limit:
         what = kind_phrase(kind)
         noise = (

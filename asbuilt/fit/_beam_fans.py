@@ -40,7 +40,6 @@ import math
 
 import numpy as np
 
-from asbuilt.fit import _lapack
 from asbuilt.fit._common import row_norms
 from asbuilt.fit._neighbours import components
 
@@ -193,7 +192,7 @@ def _on_plane_of(near: np.ndarray, far: np.ndarray, viewpoint, noise: float) -> 
     if not _spans_plane(near, noise):
         return False
     centroid = near.mean(axis=0)
-    _, singular, basis = _lapack.svd(near - centroid)
+    _, singular, basis = np.linalg.svd(near - centroid, full_matrices=False)
     spread = singular / math.sqrt(near.shape[0])
     offsets = np.vstack([far, viewpoint]) - centroid
     offsets = offsets @ basis.T
@@ -211,5 +210,5 @@ def _spans_plane(points: np.ndarray, noise: float) -> bool:
     inlier cutoffs ``noise`` (metres) or more (RMS, along their second principal axis)."""
     if points.shape[0] < 3:
         return False
-    singular = _lapack.singular_values(points - points.mean(axis=0))
+    singular = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
     return bool(singular[1] >= _MIN_SPREAD_CUTOFFS * noise * math.sqrt(points.shape[0]))

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from asbuilt.fit import _lapack as lapack
 from asbuilt.fit._common import orthonormal_bases
 
 __all__ = ["circle_starts", "kasa_batch", "INSIDE_CAP"]
@@ -54,7 +53,7 @@ def kasa_batch(xy: np.ndarray, weights: np.ndarray, design: np.ndarray | None = 
     system = (design.transpose(0, 2, 1) * weights[:, None, :]) @ design
     normal, right = system[:, :3, :3], system[:, :3, 3:]
     try:
-        solution = lapack.solve(normal, right)[:, :, 0]
+        solution = np.linalg.solve(normal, right)[:, :, 0]
     except np.linalg.LinAlgError:
         # Some projections are degenerate (points on a line across the axis): no circle there.
         singular = np.linalg.svd(normal, compute_uv=False)

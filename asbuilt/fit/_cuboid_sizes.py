@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from asbuilt.fit import _lapack, _silhouette
+from asbuilt.fit import _silhouette
 from asbuilt.fit._common import row_norms
 from asbuilt.fit._joint import (
     FaceModel,
@@ -84,7 +84,7 @@ def _single_lines(proj, label, index, model, width) -> list:
         direction = None
         if members.shape[0] >= 2:
             rel = proj[members] - proj[members].mean(axis=0)
-            _, spread, vt = _lapack.svd(rel)
+            _, spread, vt = np.linalg.svd(rel, full_matrices=False)
             if spread[1] < max(width * math.sqrt(members.shape[0]), _LINE_RATIO * spread[0]):
                 direction = vt[0]
         out.append(direction)

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from asbuilt.fit import _lapack as lapack
 from asbuilt.fit._circles import circle_starts
 from asbuilt.fit._common import (
     orthonormal_bases,
@@ -112,7 +111,7 @@ def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
     vectors = None
     for _ in range(2):
         scatter = (normals * weights[:, None]).T @ normals
-        _, vectors = lapack.eigh(scatter)
+        _, vectors = np.linalg.eigh(scatter)
         cosines = normals @ vectors[:, 0]
         scale = robust_scale(cosines, 0.02)
         weights = tukey_weights(cosines, scale)
@@ -223,7 +222,7 @@ def line_axis(points: np.ndarray, keep: int, rng, samples: int = 32, steps: int 
         point = closest.sum(axis=0) / len(closest)  # closest.mean(axis=0), less overhead
         centred = closest - point
         # Principal direction: the scatter matrix's leading eigenvector.
-        axis = lapack.eigh(centred.T @ centred)[1][:, 2]
+        axis = np.linalg.eigh(centred.T @ centred)[1][:, 2]
     return axis
 
 

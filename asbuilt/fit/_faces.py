@@ -19,7 +19,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from asbuilt.fit import _lapack
 from asbuilt.fit._common import median_spacing, quick_median, row_norms
 
 __all__ = [
@@ -186,7 +185,7 @@ def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
         mean = weight @ coords / count[:, None]
         second = (weight @ outer).reshape(-1, dim, dim) / count[:, None, None]
         cov = second - mean[:, :, None] * mean[:, None, :]
-        values, vectors = _lapack.eigh(cov)
+        values, vectors = np.linalg.eigh(cov)
         if _ == rounds:
             break
         fresh = vectors[:, :, 0] if basis is None else vectors[:, :, 0] @ basis.T
@@ -615,7 +614,7 @@ def on_one_line(points: np.ndarray, width: float) -> bool:
     """Whether points (m, 3) metres, m >= 2, lie within ``width`` metres (RMS) of one line: a
     single raster column or row, which lies in every plane through it."""
     rel = points - points.sum(axis=0) / points.shape[0]
-    return bool(_lapack.singular_values(rel)[1] < width * math.sqrt(points.shape[0]))
+    return bool(np.linalg.svd(rel, compute_uv=False)[1] < width * math.sqrt(points.shape[0]))
 
 
 def _one_station(points, axes, base, grown, threshold, gap) -> list:

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from asbuilt.fit import _faces, _lapack
+from asbuilt.fit import _faces
 from asbuilt.fit._beam_fans import MAX_INCIDENCE_DEG, beam_fan_shots, neighbours
 from asbuilt.fit._common import within_noise
 from asbuilt.fit._cuboid_background import only_background, seen_past
@@ -90,7 +90,7 @@ class FaceModel:
         weighted = jac.T * weights
         matrix = weighted @ jac
         matrix.flat[:: matrix.shape[0] + 1] += 1e-12 * max(float(matrix.trace()), 1e-30)
-        delta = _lapack.solve(matrix, -(weighted @ residual))
+        delta = np.linalg.solve(matrix, -(weighted @ residual))
         q = self.rot_basis.shape[1]
         rotation = rodrigues(self.rot_basis @ delta[:q])
         self.axes = self.axes @ rotation.T
@@ -340,7 +340,7 @@ def _grazing_faces(model, x, label, inliers, viewpoint, width: float) -> list:
         if not np.all(cosine < _GRAZING_COS):
             continue
         # RMS distance of the shots from the plane through the station that fits them best.
-        fan = _lapack.singular_values(beams)[-1] / math.sqrt(beams.shape[0])
+        fan = np.linalg.svd(beams, compute_uv=False)[-1] / math.sqrt(beams.shape[0])
         if fan <= width:
             out.append(f)
     return out

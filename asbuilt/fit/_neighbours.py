@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from asbuilt.fit import _lapack
-
 __all__ = ["components", "knn", "local_normals"]
 
 
@@ -62,7 +60,7 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, n
     hood = np.concatenate([points[:, None, :], points[index]], axis=1)
     centred = hood - hood.mean(axis=1, keepdims=True)
     cov = np.einsum("nki,nkj->nij", centred, centred) / hood.shape[1]
-    values, vectors = _lapack.eigh(cov)
+    values, vectors = np.linalg.eigh(cov)
     dof = max(hood.shape[1] - 3, 1)
     rms = np.sqrt(np.clip(values[:, 0], 0.0, None) * hood.shape[1] / dof)
     return vectors[:, :, 0], rms, index

@@ -35,8 +35,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from asbuilt.fit import _lapack
-
 __all__ = ["raster_grid", "raster_window", "edge_shots", "shot_angles", "solve_bounds"]
 
 #: Samples per box edge when measuring the box's angular extent (the tilt extreme of a convex
@@ -600,7 +598,7 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
             measured = _extents(los, his, axes, origin, viewpoint, pan0)
             base = measured[0]
             jac = ((measured[1:] - base) / eps).T / tol[:, None]
-            inverse = _lapack.inv(jac.T @ jac + prior)
+            inverse = np.linalg.inv(jac.T @ jac + prior)
         else:
             base = _extent(lo, hi, axes, origin, viewpoint, pan0)
         now = np.array([(hi if side else lo)[k] for k, side in free])

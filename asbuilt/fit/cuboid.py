@@ -86,7 +86,7 @@ import math
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit import _faces, _lapack, _silhouette
+from asbuilt.fit import _faces, _silhouette
 from asbuilt.fit._beam_fans import raster_lines
 from asbuilt.fit._common import noise_level, random_subset
 from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
@@ -230,7 +230,7 @@ def _validate(points) -> np.ndarray:
             f"cuboid: {pts.shape[0]} points are too few; a cuboid needs at least {need} "
             "(30 or more on two or three faces for a reliable size). Measure more points."
         )
-    spread = _lapack.singular_values(pts - pts.mean(axis=0))
+    spread = np.linalg.svd(pts - pts.mean(axis=0), compute_uv=False)
     if spread[0] < 1e-9:
         raise FitError(
             "cuboid: all points coincide; measure points spread over the object's faces."
