@@ -40,7 +40,7 @@ import serial
 from asbuilt.errors import DeviceError, DeviceProtocolError, DeviceTimeout
 
 from .ptu import PTULimitError
-from .transport import _seconds, _TermiosError, open_port
+from .transport import _seconds, open_port, read_bytes, reset_input, write_bytes
 
 __all__ = [
     "PelcoLimits",
@@ -299,26 +299,10 @@ class PelcoD:
     # -- wire ------------------------------------------------------------------------------
     def send(self, cmd1: int, cmd2: int, data1: int = 0, data2: int = 0) -> None:
         """Send one frame to this head's address."""
-        data = frame(self.address, cmd1, cmd2, data1, data2)
-        try:
-            self.port.write(data)
-            self.port.flush()
-        except serial.SerialTimeoutException:
-            raise DeviceTimeout(
-                f"{self.name}: write timed out; check the cable and the head's power"
-            ) from None
-        except (serial.SerialException, OSError, _TermiosError) as exc:
-            raise DeviceError(
-                f"{self.name}: write failed ({exc}); the cable may be unplugged"
-            ) from None
+        write_bytes(self.port, self.name, frame(self.address, cmd1, cmd2, data1, data2), "head")
 
     def _read_some(self) -> None:
-        try:
-            chunk = self.port.read(max(1, self.port.in_waiting))
-        except (serial.SerialException, OSError, _TermiosError) as exc:
-            raise DeviceError(
-                f"{self.name}: read failed ({exc}); the cable may be unplugged"
-            ) from None
+        chunk = read_bytes(self.port, self.name)
         if chunk:
             self._buffer.extend(chunk)
             if len(self._buffer) > 4096:  # only possible with no 0xFF at all, see _pop_frame
@@ -326,10 +310,7 @@ class PelcoD:
 
     def _discard_input(self) -> None:
         self._buffer.clear()
-        try:
-            self.port.reset_input_buffer()
-        except (serial.SerialException, OSError, _TermiosError) as exc:
-            raise DeviceError(f"{self.name}: cannot reset the input ({exc})") from None
+        reset_input(self.port, self.name)
 
     def _pop_frame(self, bad: list[bytes]) -> bytes | None:
         """The next frame with a valid checksum in the buffer, or None (wait for more bytes).
@@ -410,13 +391,7 @@ class PelcoD:
         deadline = time.monotonic() + self.timeout
         quiet_from = time.monotonic()
         while time.monotonic() < deadline and time.monotonic() - quiet_from < RESYNC_QUIET:
-            try:
-                waiting = self.port.in_waiting
-                chunk = self.port.read(waiting) if waiting else b""
-            except (serial.SerialException, OSError, _TermiosError) as exc:
-                raise DeviceError(
-                    f"{self.name}: read failed ({exc}); the cable may be unplugged"
-                ) from None
+            chunk = read_bytes(self.port, self.name, 0)  # no wait: only what has arrived
             if chunk:
                 quiet_from = time.monotonic()
             else:

@@ -149,6 +149,38 @@ def _seconds(value, what: str, zero: bool = False) -> float:
 _SEVEN_BITS = bytes(b & 0x7F for b in range(256))
 
 
+def write_bytes(port, name: str, data: bytes, device: str = "device") -> None:
+    """Send ``data`` on ``port`` at once; DeviceTimeout or DeviceError, naming ``name``, if the
+    port fails (``device``: what to check the power of)."""
+    try:
+        port.write(data)
+        port.flush()
+    except serial.SerialTimeoutException:
+        raise DeviceTimeout(
+            f"{name}: write timed out; check the cable and the {device}'s power"
+        ) from None
+    except (serial.SerialException, OSError, _TermiosError) as exc:
+        raise DeviceError(f"{name}: write failed ({exc}); the cable may be unplugged") from None
+
+
+def read_bytes(port, name: str, least: int = 1) -> bytes:
+    """What ``port`` has received: at least ``least`` bytes, or what arrives within the port's
+    timeout (``least=0``: only what has arrived, no wait); DeviceError, naming ``name``, if the
+    port fails."""
+    try:
+        return port.read(max(least, port.in_waiting))
+    except (serial.SerialException, OSError, _TermiosError) as exc:
+        raise DeviceError(f"{name}: read failed ({exc}); the cable may be unplugged") from None
+
+
+def reset_input(port, name: str) -> None:
+    """Drop the port's pending input; DeviceError, naming ``name``, if the port fails."""
+    try:
+        port.reset_input_buffer()
+    except (serial.SerialException, OSError, _TermiosError) as exc:
+        raise DeviceError(f"{name}: cannot reset the input ({exc})") from None
+
+
 class LineChannel:
     """Line-oriented ASCII exchange over an open port, with deadlines.
 
@@ -186,25 +218,12 @@ class LineChannel:
 
     def write(self, text: str) -> None:
         """Send ``text`` (ASCII) at once; DeviceError if the port fails (cable unplugged)."""
-        try:
-            self.port.write(text.encode("ascii"))
-            self.port.flush()
-        except serial.SerialTimeoutException:
-            raise DeviceTimeout(
-                f"{self.name}: write timed out; check the cable and the device's power"
-            ) from None
-        except (serial.SerialException, OSError, _TermiosError) as exc:
-            raise DeviceError(
-                f"{self.name}: write failed ({exc}); the cable may be unplugged"
-            ) from None
+        write_bytes(self.port, self.name, text.encode("ascii"))
 
     def discard_input(self) -> None:
         """Forget buffered and pending input (stale replies, power-up banners)."""
         self._buffer.clear()
-        try:
-            self.port.reset_input_buffer()
-        except (serial.SerialException, OSError) as exc:
-            raise DeviceError(f"{self.name}: cannot reset the input ({exc})") from None
+        reset_input(self.port, self.name)
 
     def pending_lines(self) -> list[str]:
         """The complete lines already received, without waiting (a partial line stays buffered).
@@ -279,13 +298,7 @@ class LineChannel:
                     f"{self.name}: no {expecting} within {wait:g} s{partial}; check the cable, "
                     "the port, the baud rate and that the device is powered"
                 )
-            try:
-                waiting = self.port.in_waiting
-                chunk = self.port.read(max(1, waiting))
-            except (serial.SerialException, OSError, _TermiosError) as exc:
-                raise DeviceError(
-                    f"{self.name}: read failed ({exc}); the cable may be unplugged"
-                ) from None
+            chunk = read_bytes(self.port, self.name)
             if chunk:
                 self._received(chunk)
 
