@@ -21,6 +21,7 @@ import numpy as np
 
 from asbuilt.atomic import atomic_write
 from asbuilt.errors import ExportError, ScanError
+from asbuilt.export._snap_fields import check_diagnostics, check_snap
 from asbuilt.export.stored_fit import (
     StoredFit,
     SummaryFieldError,
@@ -32,6 +33,7 @@ from asbuilt.export.stored_scan import scan_from_section, scan_section
 from asbuilt.findings import Finding, Suggestion
 from asbuilt.model import Bend, Component, Correction, Model, Reducer, Spool, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+from asbuilt.scan.load import MAX_COORDINATE_M
 from asbuilt.scan.model import Scan
 
 __all__ = [
@@ -336,7 +338,7 @@ def load_model_document(path) -> dict:
     except UnicodeDecodeError:
         raise ModelDocumentError("the file is not UTF-8 text", source=source) from None
     try:
-        document = json.loads(text)
+        document = json.loads(text, parse_int=_parse_int)
     except json.JSONDecodeError as exc:
         raise ModelDocumentError(
             f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",
@@ -344,6 +346,19 @@ def load_model_document(path) -> dict:
         ) from None
     _check_document(document, source)
     return document
+
+
+def _parse_int(literal: str) -> int | float:
+    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
+    float (over 308 digits), which every number field then refuses as not finite, by name (a
+    plain ``int`` there would overflow on conversion, far from the field)."""
+    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
+        return float(literal)  # +-inf: float() of a decimal string does not raise
+    return int(literal)
+
+
+#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
+_LONGEST_INTEGER = 308
 
 
 def _check_document(document, source: str | None) -> None:
@@ -388,6 +403,8 @@ def _number(entry: dict, key: str) -> float:
     value = entry[key]
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise _BadField(key, f"must be a finite number, not {_describe(value)}")
+    if abs(value) > MAX_COORDINATE_M:
+        raise _BadField(key, _BEYOND_SITE.format(value=value))
     return float(value)
 
 
@@ -411,7 +428,19 @@ def _point(entry: dict, key: str, value=None) -> list:
         )
     ):
         raise _BadField(key, f"must be 3 finite numbers [x, y, z], not {_describe(value)}")
+    for c in value:
+        if abs(c) > MAX_COORDINATE_M:
+            raise _BadField(key, _BEYOND_SITE.format(value=c))
     return value
+
+
+#: A number the document may not hold: lengths and coordinates are metres on a site, and
+#: their squares must not overflow the rules' and exports' arithmetic (the scan's own limit).
+_BEYOND_SITE = (
+    "{value:g} is beyond any site (at most "
+    + f"{MAX_COORDINATE_M:g}"
+    + " m, the scan's limit); check the number"
+)
 
 
 def _optional_text(entry: dict, key: str) -> None:
@@ -434,6 +463,8 @@ def _check_component_fields(entry: dict) -> None:
     snap = entry.get("snap")
     if snap is not None and not isinstance(snap, dict):
         raise _BadField("snap", f"must be an object or null, not {_describe(snap)}")
+    if snap is not None:
+        check_snap(snap)
     corrections = entry.get("corrections")
     if corrections is None:
         return
@@ -605,6 +636,8 @@ def _stored_fit(entry: dict, geometry) -> StoredFit | None:
     if not isinstance(summary, dict):
         raise _BadField("fitted", f"must be an object or null, not {_describe(summary)}")
     try:
+        if isinstance(summary.get("diagnostics"), dict):
+            check_diagnostics(summary["diagnostics"])
         primitive = _fit_primitive(summary, geometry)
         return None if primitive is None else stored_fit_from_summary(summary, primitive)
     except KeyError as exc:

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from asbuilt.primitives import Primitive
+from asbuilt.scan.load import MAX_COORDINATE_M
 
 __all__ = ["StoredFit", "SummaryFieldError", "stored_fit_from_summary"]
 
@@ -111,6 +112,9 @@ def summary_float(summary: Mapping, key: str, missing: float = math.nan) -> floa
         return missing
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise SummaryFieldError(key, f"must be a number or null, not {describe_value(value)}")
+    if math.isfinite(value) and abs(value) > MAX_COORDINATE_M:
+        # metres or counts on a site: a larger one is corrupt, and its square would overflow
+        raise SummaryFieldError(key, f"must be at most {MAX_COORDINATE_M:g} in size, not {value:g}")
     return float(value)
 
 

@@ -193,7 +193,11 @@ def _links(raw, known: set) -> tuple[tuple[str, str], ...]:
         raise _fail("links", f"must be a list of id pairs, not {_describe(raw)}")
     links = []
     for i, pair in enumerate(raw):
-        if not isinstance(pair, list) or len(pair) != 2 or not all(x in known for x in pair):
+        if (
+            not isinstance(pair, list)
+            or len(pair) != 2
+            or not all(isinstance(x, str) and x in known for x in pair)
+        ):
             message = f"must be a pair of ids listed in objects, not {_describe(pair)}"
             raise _fail(f"links[{i}]", message)
         links.append((pair[0], pair[1]))

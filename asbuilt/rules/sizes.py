@@ -57,6 +57,8 @@ def _candidates(component: Component, table: SizeTable | None, od: float, window
     for cand in (component.snap or {}).get("candidates") or ():
         if isinstance(cand, dict):
             nominal, cand_od = cand.get("nominal"), cand.get("od", cand.get("od_catalog"))
+        elif isinstance(cand, str):
+            continue  # a bare nominal size: no diameter to compare
         else:
             nominal, cand_od = (tuple(cand) + (None, None))[:2]
         if nominal is not None and cand_od is not None:

@@ -1,0 +1,153 @@
+"""A model document edited by hand: every field the program reads back is checked on loading.
+
+The cases are those a mutation fuzzer of a real document (``asbuilt model samples/spool.json
+--out model.json``, then ``asbuilt check model.json``) found failing deep in a rule or a
+reader with a traceback: each must now be one located error, and the CLI's exit code 2.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+
+import pytest
+
+from asbuilt.cli import main
+from asbuilt.export.model_json import (
+    ModelDocumentError,
+    load_model,
+    model_from_document,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def spool_document(tmp_path_factory) -> dict:
+    """The sample spool's model document, as ``asbuilt model`` writes it."""
+    path = tmp_path_factory.mktemp("doc") / "spool.json"
+    assert main(["model", str(ROOT / "samples" / "spool.json"), "--out", str(path)]) == 0
+    return json.loads(path.read_text())
+
+
+def _component(document: dict, kind: str) -> tuple[int, dict]:
+    """The first component of ``type`` ``kind`` with a fit, and its index."""
+    for index, component in enumerate(document["components"]):
+        if component["type"] == kind and component.get("fitted"):
+            return index, component
+    raise AssertionError(f"no fitted {kind} in the sample")
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "message"),
+    [
+        ("od_fit", [1, 2], "snap.od_fit: must be a finite number or null, not [1, 2]"),
+        ("od_stderr", "0.003", 'snap.od_stderr: must be a finite number or null, not "0.003"'),
+        ("od_fit", 1e300, "snap.od_fit: must be at most 1e+08 in size"),
+        ("status", 3, "snap.status: must be text or null, not 3"),
+        ("standard", "yes", 'snap.standard: must be true, false or null, not "yes"'),
+        ("connects", "P2", 'snap.connects: must be a list of text, not "P2"'),
+        ("hint", [1], "snap.hint: must be an object or null, not [1]"),
+        ("hint", {"od": "big"}, 'snap.hint.od: must be a finite number or null, not "big"'),
+        ("candidates", {"a": 1}, 'snap.candidates: must be a list or null, not {"a": 1}'),
+        ("candidates", [None], "snap.candidates[0]: must be an object, not null"),
+        ("candidates", [{"od": []}], "snap.candidates[0].od: must be a finite number or null"),
+        ("fit_up", [{"with": "P2"}], "snap.fit_up[0].miss: missing"),
+    ],
+)
+def test_snap_fields_are_checked(spool_document, field, value, message):
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    pipe["snap"][field] = value
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value).startswith(f"m.json: components[{index}] ({pipe['id']}).{message}")
+
+
+def test_unknown_snap_keys_are_kept(spool_document):
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    pipe["snap"]["site_note"] = ["anything", {"the": "user's"}]
+    model = model_from_document(document, source="m.json")
+    assert model.components[index].snap["site_note"] == ["anything", {"the": "user's"}]
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "message"),
+    [
+        ("arc_deg", [1], "must be a finite number or null, not [1]"),
+        ("length_over_diameter", "reducer", 'must be a finite number or null, not "reducer"'),
+    ],
+)
+def test_fit_diagnostics_are_numbers(spool_document, name, value, message):
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    pipe["fitted"]["diagnostics"][name] = value
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    where = f"m.json: components[{index}] ({pipe['id']}).fitted.diagnostics.{name}: "
+    assert str(info.value) == where + message
+
+
+def test_numbers_beyond_any_site_are_refused(spool_document):
+    """Finite but absurd: their squares overflowed the rules' distance searches."""
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    pipe["start"] = [1e300, 0.0, 0.0]
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value).startswith(
+        f"m.json: components[{index}] ({pipe['id']}).start: 1e+300 is beyond any site"
+    )
+    document = copy.deepcopy(spool_document)
+    document["components"][index]["od"] = 1e200
+    with pytest.raises(ModelDocumentError, match=r"\.od: 1e\+200 is beyond any site"):
+        model_from_document(document, source="m.json")
+
+
+def test_an_integer_beyond_any_float_is_a_located_error(spool_document, tmp_path):
+    """A 400-digit integer overflowed ``float()`` in whichever check met it first."""
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    pipe["od"] = 12345
+    text = json.dumps(document).replace('"od": 12345', '"od": ' + "9" * 400, 1)
+    path = tmp_path / "m.json"
+    path.write_text(text)
+    with pytest.raises(ModelDocumentError) as info:
+        load_model(path)
+    assert str(info.value) == (
+        f"{path}: components[{index}] ({pipe['id']}).od: must be a finite number, not Infinity"
+    )
+
+
+def test_a_link_naming_a_list_is_a_located_error(spool_document):
+    document = copy.deepcopy(spool_document)
+    document["scan"]["links"] = [[["P1"], "P2"]]
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value) == (
+        'm.json: scan.links[0]: must be a pair of ids listed in objects, not [["P1"], "P2"]'
+    )
+
+
+def test_check_reports_a_hand_edited_document_in_one_line(spool_document, tmp_path, capsys):
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    pipe["fitted"]["diagnostics"]["arc_deg"] = [1]
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(document))
+    assert main(["check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert err.startswith(f"asbuilt: error: {path}: components[{index}] ({pipe['id']}).fitted.")
+
+
+def test_bare_nominal_candidates_are_read_and_skipped_by_the_rules(spool_document, tmp_path):
+    """``candidates`` as bare sizes: the size rules took ``"3-1/2"`` apart as ("3", "-")."""
+    document = copy.deepcopy(spool_document)
+    _, pipe = _component(document, "pipe")
+    pipe["snap"]["candidates"] = ["4", "3-1/2"]
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(document))
+    assert main(["check", str(path)]) in (0, 1)
