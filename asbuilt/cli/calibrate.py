@@ -4,12 +4,15 @@ Estimates the pan-tilt/range finder calibration by least squares from a scan of 
 (planes, spheres, surveyed points; docs/calibration.md). The scan must carry each object's raw
 ``measurements`` (``asbuilt scan`` writes them). Prints the residual before and after, each
 estimated parameter with its standard error, and the parameters held fixed because the targets
-cannot tell them apart; writes the calibration file atomically.
+cannot tell them apart; writes the calibration file atomically. ``SCAN`` may be ``-`` (standard
+input, :mod:`asbuilt.cli._input`).
 """
 
 from __future__ import annotations
 
 import argparse
+
+from asbuilt.cli._input import SCAN_HELP
 
 __all__ = ["register", "run"]
 
@@ -24,7 +27,9 @@ def register(subparsers) -> argparse.ArgumentParser:
         "known targets by least squares.",
         epilog="Example: asbuilt calibrate room.json --targets room.targets.json --out rig.cal.json",
     )
-    parser.add_argument("scan", metavar="SCAN", help="asbuilt-scan file with measurements")
+    parser.add_argument(
+        "scan", metavar="SCAN", help=f"asbuilt-scan file with measurements ({SCAN_HELP})"
+    )
     parser.add_argument(
         "--targets",
         required=True,
@@ -65,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.table import Table
 
+    from asbuilt.cli._input import scan_input
     from asbuilt.drivers.calibration import (
         TargetShots,
         estimate_calibration,
@@ -74,9 +80,9 @@ def run(args: argparse.Namespace) -> int:
     )
     from asbuilt.drivers.kinematics import Calibration
     from asbuilt.errors import CalibrationError
-    from asbuilt.scan import load_scan
 
-    scan = load_scan(args.scan)
+    source = scan_input(args.scan)
+    scan = source.load_scan()
     targets = load_targets(args.targets)
     initial = load_calibration(args.initial) if args.initial else Calibration()
     shots = []
@@ -92,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
         if obj.measurements is None:
             raise CalibrationError(
                 "has no raw measurements; scan it with asbuilt scan (which records them)",
-                source=args.scan,
+                source=source.name,
                 where=obj.where,
             )
         m = np.asarray(obj.measurements, float)

@@ -8,12 +8,15 @@ format) and lists what it changed; the findings printed are then those left afte
 An object whose fit was refused is an error finding ``AB001 fit-refused`` that no selection
 drops and re-checks keep. A model document takes ``--catalog`` only where it decides something
 (unmerged, or its own catalog unreadable) and refuses ``--no-merge``, one line each.
+``SCAN`` may be ``-``: the scan or model document is read from standard input
+(:mod:`asbuilt.cli._input`), and findings and errors name it ``<stdin>``.
 """
 
 from __future__ import annotations
 
 import argparse
 
+from asbuilt.cli._input import SCAN_HELP
 from asbuilt.export import SUFFIXES
 
 __all__ = ["register", "run"]
@@ -41,7 +44,7 @@ def register(subparsers) -> argparse.ArgumentParser:
         "scan",
         metavar="SCAN",
         nargs="?",
-        help="an asbuilt-scan JSON file (or an asbuilt-model document)",
+        help=f"an asbuilt-scan JSON file (or an asbuilt-model document; {SCAN_HELP})",
     )
     parser.add_argument(
         "--list-rules",
@@ -106,30 +109,28 @@ def register(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
-def _load(args, config, design, progress=None):
+def _load(args, source, config, design, progress=None):
+    """The checked model of ``source`` (a :class:`~asbuilt.cli._input.ScanInput`)."""
     from asbuilt.errors import CatalogError
-    from asbuilt.export.model_json import is_model_document
     from asbuilt.pipeline import recheck
 
-    if is_model_document(args.scan):
+    if source.is_model():
         from asbuilt.cli._models import refuse_build_options
-        from asbuilt.export.model_json import load_model
 
-        refuse_build_options(args.scan, ["--no-merge"] if args.no_merge else [])
-        model = load_model(args.scan)
+        refuse_build_options(source.name, ["--no-merge"] if args.no_merge else [])
+        model = source.load_model()
         if args.catalog:
-            _refuse_resizing(args, model)
+            _refuse_resizing(args, source.name, model)
         try:
             findings = recheck(model, config, design, catalog=args.catalog or None)
         except CatalogError as exc:
             if exc.source is not None:
                 raise
-            raise CatalogError(exc.message, source=args.scan) from None
+            raise CatalogError(exc.message, source=source.name) from None
         return model.replace(findings=findings)
     from asbuilt.pipeline import build_model
-    from asbuilt.scan import load_scan
 
-    scan = load_scan(args.scan)
+    scan = source.load_scan()
     return build_model(
         scan,
         catalog=args.catalog,
@@ -142,7 +143,7 @@ def _load(args, config, design, progress=None):
     )
 
 
-def _refuse_resizing(args, model) -> None:
+def _refuse_resizing(args, name: str, model) -> None:
     """Refuse ``--catalog`` for a model document whose pipe sizes were chosen when it was built
     (their snap records decide the size rules, so another catalog would change nothing) and
     whose own catalog can be read; it is taken when it names that same catalog, when the
@@ -163,7 +164,7 @@ def _refuse_resizing(args, model) -> None:
         f"--catalog {args.catalog} cannot re-size this model's pipes: their sizes were chosen "
         f"from {own.name} when it was built; give the scan instead to size them against "
         "another catalog, or leave --catalog out",
-        source=args.scan,
+        source=name,
     )
 
 
@@ -228,6 +229,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.markup import escape
 
+    from asbuilt.cli._input import input_files, scan_input
     from asbuilt.cli._progress import stage_progress
     from asbuilt.pipeline import recheck, refused_findings
     from asbuilt.rules import apply_fixes, load_rules
@@ -239,7 +241,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.scan:
         from asbuilt.errors import ScanReadError
 
-        raise ScanReadError("check: give a SCAN file (or --list-rules)")
+        raise ScanReadError("check: give a SCAN file ('-': standard input), or --list-rules")
     select = [s for group in args.select or () for s in group]
     ignore = [s for group in args.ignore or () for s in group]
     if select or ignore:
@@ -254,13 +256,15 @@ def run(args: argparse.Namespace) -> int:
         from asbuilt.export import exporter_for
 
         exporter_for(args.fix)  # an unknown suffix, a directory or none fails before any work
-        check_target(args.fix, "--fix", inputs=[args.scan])
+        check_target(args.fix, "--fix", inputs=input_files(args.scan))
 
+    source = scan_input(args.scan)
     err = Console(file=sys.stderr, highlight=False, soft_wrap=True)
     with stage_progress(err) as bar:
         task = bar.add_task("", total=None, stage="fitting")
         model = _load(
             args,
+            source,
             config,
             design,
             lambda done, total, oid: bar.update(task, completed=done, total=total, description=oid),
@@ -290,7 +294,7 @@ def run(args: argparse.Namespace) -> int:
         for f in findings:
             where = ",".join(f.objects) or "-"
             out.print(
-                f"{escape(args.scan)}: {escape(where)}: [{colours[f.severity]}]{f.severity}"
+                f"{escape(source.name)}: {escape(where)}: [{colours[f.severity]}]{f.severity}"
                 f"[/] {f.slug}: {escape(f.message)}"
             )
         for change in changes:

@@ -5,7 +5,7 @@ fit's notes under it; ``--json``
 prints the shape documented in :mod:`asbuilt.fit.output`, lengths in the scan's units unless
 ``--units`` says otherwise; ``--output FILE`` writes that JSON atomically to FILE instead of
 standard output (``--output -``: standard output). ``SCAN`` may be ``-``: the scan is read from
-standard input (``cat scan.json | asbuilt fit - --json``). Progress goes to standard error.
+standard input (``cat scan.json | asbuilt fit - --json``; :mod:`asbuilt.cli._input`). Progress goes to standard error.
 
 An object whose fit is refused does not stop the others: the table is followed by one line per
 refused object (its id, kind and the fit's reason), ``--json`` lists it among the objects, in
@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 
+from asbuilt.cli._input import SCAN_HELP
 from asbuilt.units import UNITS
 
 __all__ = ["register", "run"]
@@ -32,9 +33,7 @@ def register(subparsers) -> argparse.ArgumentParser:
         "asbuilt-scan file (docs/scan-format.md) and show the result.",
         epilog="Example: asbuilt fit samples/spool.json --json --units mm",
     )
-    parser.add_argument(
-        "scan", metavar="SCAN", help="the asbuilt-scan JSON file ('-': standard input)"
-    )
+    parser.add_argument("scan", metavar="SCAN", help=f"the asbuilt-scan JSON file ({SCAN_HELP})")
     parser.add_argument(
         "--json", action="store_true", help="print the results as JSON instead of a table"
     )
@@ -82,23 +81,6 @@ def _report_dict(report, units: str) -> dict:
     return data
 
 
-def _standard_input() -> bytes:
-    """The scan's bytes from standard input, refused past the loader's size limit (read one
-    byte beyond it, not to the end of an endless stream)."""
-    import sys
-
-    from asbuilt.errors import ScanReadError
-    from asbuilt.scan.load import MAX_FILE_BYTES
-
-    data = sys.stdin.buffer.read(MAX_FILE_BYTES + 1)
-    if len(data) > MAX_FILE_BYTES:
-        raise ScanReadError(
-            f"-: standard input holds more than {MAX_FILE_BYTES // (1024 * 1024)} MiB, too "
-            "large for a sparse scan; split it into several scans"
-        )
-    return data
-
-
 def run(args: argparse.Namespace) -> int:
     """Load, fit, print; return the exit code: 0, or 1 when an object's fit was refused. Bad
     input (and a scan of which no object can be fitted) raises an AsbuiltError (exit 2)."""
@@ -110,20 +92,18 @@ def run(args: argparse.Namespace) -> int:
     from rich.table import Table
 
     from asbuilt.atomic import atomic_write, check_target
+    from asbuilt.cli._input import input_files, scan_input
     from asbuilt.cli._progress import stage_progress
     from asbuilt.fit import fit
     from asbuilt.fit.output import TABLE_COLUMNS, fit_table_notes, fit_table_rows
-    from asbuilt.scan import load_scan, loads_scan
 
     if args.output == "-":  # as elsewhere: '-' is standard output, not a file named '-'
         args.output, args.json = None, True
     if args.output is not None:
         # before any work; a directory is refused with a JSON file name to add
-        check_target(args.output, "--output", inputs=[args.scan], example="fit.json")
-    if args.scan == "-":
-        scan = loads_scan(_standard_input(), source="-")
-    else:
-        scan = load_scan(args.scan)
+        check_target(args.output, "--output", inputs=input_files(args.scan), example="fit.json")
+    source = scan_input(args.scan)
+    scan = source.load_scan()
     err = Console(file=sys.stderr, markup=False)
     with stage_progress(err) as bar:
         task = bar.add_task("", total=len(scan.objects), stage="fitting")
@@ -145,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
         if args.json:
             return status
 
-    title = scan.name or args.scan
+    title = scan.name or source.name
     heading = f"{title}: {len(report)} object{'s' if len(report) != 1 else ''}"
     if report.failures:
         heading = f"{title}: {len(report)} fitted, {len(report.failures)} refused"

@@ -7,6 +7,9 @@ counts go to standard output.
 An object whose fit is refused is left out of the outputs and said on standard error (one line
 each, also with ``--quiet``); the outputs are written and the exit code is 1. When no object can
 be fitted nothing is written (exit 2).
+
+``SCAN`` may be ``-``: the scan is read from standard input (:mod:`asbuilt.cli._input`); its
+errors name ``<stdin>`` where a file's name the file.
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ from __future__ import annotations
 import argparse
 
 from asbuilt.cli._args import positive_number
+from asbuilt.cli._input import SCAN_HELP
 from asbuilt.export import SUFFIXES
 
 __all__ = ["register", "run"]
@@ -34,7 +38,7 @@ def register(subparsers) -> argparse.ArgumentParser:
         epilog="Example: asbuilt model samples/spool.json --out spool.step --out spool.glb "
         "--out spool.dxf --out spool.json",
     )
-    parser.add_argument("scan", metavar="SCAN", help="the asbuilt-scan JSON file")
+    parser.add_argument("scan", metavar="SCAN", help=f"the asbuilt-scan JSON file ({SCAN_HELP})")
     parser.add_argument(
         "--out",
         "-o",
@@ -117,18 +121,18 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from asbuilt.atomic import AtomicBatch, check_target
+    from asbuilt.cli._input import input_files, scan_input
     from asbuilt.cli._models import say_refused
     from asbuilt.cli._progress import stage_progress
     from asbuilt.errors import ExportError
     from asbuilt.export import export_models, exporter_for
     from asbuilt.pipeline import build_model
-    from asbuilt.scan import load_scan
 
     outputs = [Path(p) for p in args.out]
     reports = [Path(p) for p in args.report or ()]
     for path in outputs:
         exporter_for(path)  # an unknown suffix or a missing directory fails before any work
-        check_target(path, "--out", inputs=[args.scan])
+        check_target(path, "--out", inputs=input_files(args.scan))
     seen = {path.resolve() for path in outputs}
     for report_path in reports:
         from asbuilt.report import report_format_for
@@ -141,10 +145,14 @@ def run(args: argparse.Namespace) -> int:
             )
         seen.add(report_path.resolve())
         check_target(
-            report_path, "--report", inputs=[args.scan], example=f"report{report_path.suffix}"
+            report_path,
+            "--report",
+            inputs=input_files(args.scan),
+            example=f"report{report_path.suffix}",
         )
 
-    scan = load_scan(args.scan)
+    source = scan_input(args.scan)
+    scan = source.load_scan()
     err = Console(file=sys.stderr, markup=False)
     with stage_progress(err, quiet=args.quiet) as bar:
         task = bar.add_task("", total=len(scan.objects), stage="fitting")
@@ -194,7 +202,7 @@ def run(args: argparse.Namespace) -> int:
                     view["gltf"] = StagedGltf(batch.staged_for(views[0]), views[0])
                 write_reports(model, reports, batch=batch, **view)
 
-    status = 1 if say_refused(err, model, args.scan) else 0  # written, but without them
+    status = 1 if say_refused(err, model, source.name) else 0  # written, but without them
     if args.quiet:
         return status
     out = Console(file=sys.stdout, highlight=False, soft_wrap=True, markup=False)

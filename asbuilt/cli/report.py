@@ -8,6 +8,8 @@ per component; or the same data as JSON. All or nothing. One summary line per fi
 findings counts go to standard output; the exit code is 0 (findings are in the report, not in
 the exit code: use ``asbuilt check`` for a QA gate), except 1 when an object's fit was refused:
 the reports are written without it, its finding says why, and standard error says so.
+``SCAN`` may be ``-``: the scan or model document is read from standard input
+(:mod:`asbuilt.cli._input`), named ``<stdin>`` in errors.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from __future__ import annotations
 import argparse
 
 from asbuilt.cli._args import positive_number
+from asbuilt.cli._input import SCAN_HELP
 
 __all__ = ["register", "run"]
 
@@ -43,7 +46,9 @@ def register(subparsers) -> argparse.ArgumentParser:
         epilog="Example: asbuilt report samples/spool.json --out qa.html --out qa.csv",
     )
     parser.add_argument(
-        "scan", metavar="SCAN", help="an asbuilt-scan JSON file (or an asbuilt-model document)"
+        "scan",
+        metavar="SCAN",
+        help=f"an asbuilt-scan JSON file (or an asbuilt-model document; {SCAN_HELP})",
     )
     parser.add_argument(
         "--out",
@@ -113,19 +118,16 @@ def register(subparsers) -> argparse.ArgumentParser:
 _BUILD_OPTIONS = (("schedule", "--schedule"), ("catalog", "--catalog"), ("no_merge", "--no-merge"))
 
 
-def _model(args, progress):
-    """The model and the catalog it was built with (None: the report reads the model's)."""
-    from asbuilt.export.model_json import is_model_document
-
-    if is_model_document(args.scan):
+def _model(args, source, progress):
+    """The model of ``source`` (a :class:`~asbuilt.cli._input.ScanInput`) and the catalog it
+    was built with (None: the report reads the model's)."""
+    if source.is_model():
         from asbuilt.cli._models import refuse_build_options
 
         refuse_build_options(
-            str(args.scan), [flag for name, flag in _BUILD_OPTIONS if getattr(args, name)]
+            source.name, [flag for name, flag in _BUILD_OPTIONS if getattr(args, name)]
         )
-        from asbuilt.export.model_json import load_model
-
-        model = load_model(args.scan)
+        model = source.load_model()
         if args.no_check or (args.rules is None and args.design is None):
             return model, None  # the findings the document records
         from asbuilt.pipeline import recheck
@@ -138,10 +140,9 @@ def _model(args, progress):
         return model.replace(findings=findings), catalog
     from asbuilt.merge import resolve_catalog
     from asbuilt.pipeline import build_model
-    from asbuilt.scan import load_scan
 
     catalog = resolve_catalog(args.catalog) if args.catalog is not None else None
-    scan = load_scan(args.scan)
+    scan = source.load_scan()
     progress.total = len(scan.objects)
     model = build_model(
         scan,
@@ -175,6 +176,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from asbuilt.atomic import check_target
+    from asbuilt.cli._input import input_files, scan_input
     from asbuilt.cli._models import say_refused
     from asbuilt.cli._progress import stage_progress
     from asbuilt.errors import ExportError
@@ -183,7 +185,7 @@ def run(args: argparse.Namespace) -> int:
     outputs = [Path(p) for p in args.out]
     for path in outputs:
         report_format_for(path)  # an unknown suffix fails before any work
-        check_target(path, "--out", inputs=[args.scan], example=f"report{path.suffix}")
+        check_target(path, "--out", inputs=input_files(args.scan), example=f"report{path.suffix}")
     if args.gltf is not None:
         if Path(args.gltf).suffix.lower() not in (".glb", ".gltf"):
             raise ExportError("--gltf must name a .glb or .gltf file", source=str(args.gltf))
@@ -193,6 +195,7 @@ def run(args: argparse.Namespace) -> int:
                 source=str(args.gltf),
             )
 
+    source = scan_input(args.scan)
     err = Console(file=sys.stderr, markup=False)
     with stage_progress(err, quiet=args.quiet) as bar:
         task = bar.add_task("", total=None, stage="fitting")
@@ -203,7 +206,7 @@ def run(args: argparse.Namespace) -> int:
             def __call__(self, done, total, oid):
                 bar.update(task, completed=done, total=total, description=oid)
 
-        model, catalog = _model(args, _Progress())
+        model, catalog = _model(args, source, _Progress())
         bar.update(task, completed=0, total=len(outputs), description="", stage="writing")
         options = {"figure_format": args.figures, "label_limit": args.labels}
         if args.density is not None:
@@ -214,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
             options["catalog"] = catalog
         written = write_reports(model, outputs, **options)
 
-    status = 1 if say_refused(err, model, args.scan) else 0  # written, but without them
+    status = 1 if say_refused(err, model, source.name) else 0  # written, but without them
     if args.quiet:
         return status
     out = Console(file=sys.stdout, highlight=False, soft_wrap=True, markup=False)

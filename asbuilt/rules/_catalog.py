@@ -6,7 +6,10 @@ one from a :class:`SizeTable`, a catalog object of :mod:`asbuilt.catalog`, or a 
 :meth:`SizeTable.find` reads a size written any way :func:`asbuilt.catalog.parse_nominal`
 understands (``6"``, ``NPS 6``, ``DN150``...) as one of the table's sizes, and
 :meth:`SizeTable.nps_of` gives a size's NPS (from the catalog's ``nps`` column when it has one),
-so that NPS-based tolerances apply to DN catalogs too.
+so that NPS-based tolerances apply to DN catalogs too. :func:`reducing_tee_made` says whether
+a fittings catalog makes a reducing-outlet tee of two sizes (the list shipped beside it as
+``catalogs/<fittings>-tees.toml``), as :func:`asbuilt.merge.reducers.reducer_made` does for
+reducers.
 """
 
 from __future__ import annotations
@@ -14,12 +17,19 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 from fractions import Fraction
+from functools import cache
+from importlib import resources
 
 import numpy as np
 
 from asbuilt.catalog import parse_nominal, size_by_system
 
-__all__ = ["SizeTable", "size_table", "nps_value"]
+try:  # Python 3.11+
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+__all__ = ["SizeTable", "size_table", "nps_value", "tee_outlets", "reducing_tee_made"]
 
 
 def nps_value(nominal: str) -> float | None:
@@ -52,6 +62,11 @@ class SizeTable:
     nps : dict
         Nominal to the nominal pipe size in inches, from the catalog's ``nps`` column (may be
         empty: an NPS table's nominals are then read as NPS, see :meth:`nps_of`).
+    fittings : str or None
+        The name of the fittings catalog that goes with the pipe catalog (``"asme-b16.9"``),
+        which says which reducing tees are made (:func:`reducing_tee_made`).
+    fittings_standard : str or None
+        That fittings catalog's standard, for messages (``"ASME B16.9"``).
     """
 
     standard: str
@@ -61,6 +76,8 @@ class SizeTable:
     nps: dict = field(default_factory=dict)
     tee_run: dict = field(default_factory=dict)
     reducer: dict = field(default_factory=dict)
+    fittings: str | None = None
+    fittings_standard: str | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "sizes", tuple(sorted(self.sizes, key=lambda s: s[2])))
@@ -160,8 +177,19 @@ def _from_catalog(catalog) -> SizeTable | None:
         return None
     standard = getattr(catalog, "standard", None) or getattr(catalog, "name", "the catalog")
     designation = getattr(catalog, "designation", None) or "NPS"
+    fitting_table = getattr(catalog, "fitting_table", None)
+    fittings_name = getattr(fitting_table, "name", None) or getattr(catalog, "fittings_name", None)
+    fittings_standard = getattr(fitting_table, "standard", None) or fittings_name
     return SizeTable(
-        str(standard), str(designation), tuple(sizes), elbows, nps, tee_run=tees, reducer=reducers
+        str(standard),
+        str(designation),
+        tuple(sizes),
+        elbows,
+        nps,
+        tee_run=tees,
+        reducer=reducers,
+        fittings=None if fittings_name is None else str(fittings_name),
+        fittings_standard=None if fittings_standard is None else str(fittings_standard),
     )
 
 
@@ -177,3 +205,26 @@ def size_table(catalog) -> SizeTable | None:
     if table is not None and not np.all(np.isfinite([s[2] for s in table.sizes])):
         return None
     return table
+
+
+@cache
+def tee_outlets(fittings: str | None) -> dict[str, frozenset[str]] | None:
+    """The ``{run: outlets}`` of the reducing-outlet tees the shipped fittings table
+    ``fittings`` (its name) makes, or None when no tee list ships with it."""
+    if not fittings:
+        return None
+    resource = resources.files("asbuilt.catalogs") / f"{fittings}-tees.toml"
+    if not resource.is_file():
+        return None
+    table = tomllib.loads(resource.read_text(encoding="utf-8"))
+    return {run: frozenset(outlets) for run, outlets in table.get("outlets", {}).items()}
+
+
+def reducing_tee_made(fittings: str | None, run: str | None, outlet: str | None) -> bool | None:
+    """Whether the fittings table ``fittings`` makes a reducing-outlet tee of run ``run`` and
+    outlet ``outlet`` (nominal names of its pipe catalog); None when it cannot be told (no tee
+    list, a size unknown, or a run the list does not cover)."""
+    table = tee_outlets(fittings)
+    if table is None or run is None or outlet is None or run not in table:
+        return None
+    return outlet in table[run]

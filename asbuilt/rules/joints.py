@@ -6,6 +6,10 @@ A pair still apart after merging is explained only when the gap is within the ru
 (collinear pipes) or when the pipes' axes meet where an ASME B16.9 elbow of their size and angle
 would put its ends (centre-to-end ``R tan(theta / 2)``, ``R`` the 90 degree long-radius
 centre-to-end; 1.5 x NPS inches when the catalog has no fittings).
+
+One problem is one finding: a pair merging's notes (merge-note, AB302) already report as not
+joined, a scan link no fitting realises, is not measured again by joint-gap (AB301) when
+merge-note reports it at least as gravely.
 """
 
 from __future__ import annotations
@@ -13,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.catalog import DEFAULT_CATALOG
-from asbuilt.findings import Suggestion
+from asbuilt.findings import SEVERITIES, Suggestion
 
 from ._catalog import SizeTable, nps_value, size_table
 from ._context import Context, centre_of, mm, stderr_value, verdict
@@ -158,8 +162,36 @@ def _length_se(comp) -> float:
     return 0.0 if se is None else se
 
 
+#: What merging's notes say of a pair it found but did not join (docs/merging.md: "Everything
+#: found but not joined goes to the pipes' merge_notes"): a link too far apart or whose axes
+#: miss, a bend past an elbow, an end another joint took.
+_NOT_JOINED = "not joined"
+
+
+def _notes_say_it(ctx: Context) -> bool:
+    """Whether merge-note reports merging's notes in this run at least as gravely as
+    joint-gap would report the pair (it runs, and its severity is no milder)."""
+    if not ctx.config.is_active("merge-note"):
+        return False
+    rank = SEVERITIES.index
+    return rank(ctx.config.severity("merge-note")) <= rank(ctx.config.severity("joint-gap"))
+
+
+def _said_not_joined(ca, cb) -> bool:
+    """Whether merging left a note on both pipes saying it did not join them (the same note
+    on each: merging puts a pair's note on both pipes)."""
+    notes_a = {str(n) for n in (ca.snap or {}).get("merge_notes") or ()}
+    notes_b = {str(n) for n in (cb.snap or {}).get("merge_notes") or ()}
+    return any(_NOT_JOINED in note for note in notes_a & notes_b)
+
+
 def check_joint_gap(ctx: Context, table: SizeTable | None) -> None:
+    """One finding per contiguous pair of pipes not joined by a fitting whose ends a B16.9
+    fitting does not explain; a pair merging's notes already report as not joined (a scan
+    link no fitting realises) is left to merge-note, which says why, when merge-note reports
+    it (:func:`_notes_say_it`)."""
     slug = "joint-gap"
+    by_notes = _notes_say_it(ctx)
     tol = float(ctx.opt(slug, "tolerance"))
     snap = float(ctx.general("angle_snap_deg"))
     touch = float(ctx.opt("clash", "touch_distance"))
@@ -174,6 +206,8 @@ def check_joint_gap(ctx: Context, table: SizeTable | None) -> None:
         if fittings_between(ctx.model, joined, a, b) is not None:
             continue  # joined directly or through fittings (a tee and the reducer after it)
         ca, cb = pipes[a], pipes[b]
+        if by_notes and _said_not_joined(ca, cb):
+            continue  # merge-note's finding on this pair says the same, and why
         geo = joint_geometry(ca.geometry, cb.geometry)
         se = float(np.hypot(_length_se(ca), _length_se(cb)))
         fitting = None

@@ -81,6 +81,17 @@ RULES: tuple[Rule, ...] = (
         "sizes",
     ),
     Rule(
+        "AB105",
+        "nonstandard-tee",
+        "warning",
+        "the tee {tee} joins an {run} run to an {outlet} outlet, a reducing tee {fittings} does "
+        "not make ({run} reduces on the outlet to {outlets} only)",
+        "ASME B16.9 Table 8 makes reducing-outlet tees for listed run x outlet pairs only (NPS 6 "
+        "reduces to 5 down to 2 1/2); a larger reduction is a branch outlet fitting (MSS SP-97) "
+        "or a tee with a reducer on its outlet.",
+        "sizes",
+    ),
+    Rule(
         "AB201",
         "misaligned-axis",
         "warning",

@@ -1,4 +1,5 @@
-"""Size rules: nonstandard-diameter, ambiguous-size, hint-mismatch, contiguous-diameter-mismatch.
+"""Size rules: nonstandard-diameter, ambiguous-size, hint-mismatch, contiguous-diameter-mismatch,
+nonstandard-tee.
 
 A pipe's measured outside diameter (``snap["od_fit"]`` or twice the fitted radius) with its
 standard error is compared with the catalog's sizes; a size is a candidate when within
@@ -11,10 +12,10 @@ import numpy as np
 
 from asbuilt.catalog import parse_nominal
 from asbuilt.findings import Suggestion
-from asbuilt.model import Component
+from asbuilt.model import Component, Tee
 from asbuilt.units import UNITS
 
-from ._catalog import SizeTable
+from ._catalog import SizeTable, reducing_tee_made, tee_outlets
 from ._context import Context, centre_of, ends_of, mm, stderr_value, verdict
 from ._graph import FITTING_PASS, adjacency, component_map, contiguous_pipes, fittings_between
 
@@ -451,9 +452,67 @@ def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
         )
 
 
+def _nps_key(nominal: str) -> float:
+    """An NPS nominal (``"2 1/2"``) as a number, for ordering sizes largest first."""
+    from ._catalog import nps_value
+
+    value = nps_value(nominal)
+    return -1.0 if value is None else value
+
+
+def _spoken_list(items) -> str:
+    """``"5, 4 and 3"``."""
+    items = list(items)
+    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} and {items[-1]}"
+
+
+def check_tee_sizes(ctx: Context, table: SizeTable | None) -> None:
+    """One warning per reducing-outlet tee whose run and outlet sizes the fittings catalog
+    does not make (ASME B16.9 Table 8, ``catalogs/<fittings>-tees.toml``), as merging notes a
+    reducer of a pair B16.9 does not make. Equal tees need no list; an outlet larger than the
+    run is contiguous-diameter-mismatch's error; a run size the list does not cover, or sizes
+    the catalog cannot name, give no verdict."""
+    slug = "nonstandard-tee"
+    if table is None or tee_outlets(table.fittings) is None:
+        return
+    for tee in ctx.model.components:
+        g = tee.geometry
+        if tee.type != "tee" or not isinstance(g, Tee):
+            continue
+        if g.branch_outer_radius >= g.outer_radius - 1e-9:
+            continue  # an equal tee, or an outlet larger than the run (AB104)
+        run = tee.nominal or table.nominal_for(2 * g.outer_radius)
+        outlet = table.nominal_for(2 * g.branch_outer_radius)
+        if reducing_tee_made(table.fittings, run, outlet) is not False:
+            continue
+        made = sorted(tee_outlets(table.fittings)[run], key=_nps_key, reverse=True)
+        connects = [str(c) for c in (tee.snap or {}).get("connects") or ()]
+        branch = connects[-1] if connects else "the outlet pipe"
+        run_pipes = ", ".join(connects[:-1]) or "the run"
+        fittings = table.fittings_standard or table.fittings
+        ctx.emit(
+            slug,
+            [tee.id, *connects],
+            f"the tee {tee.id} joins an {_label(table, run)} run to an {_label(table, outlet)} "
+            f"outlet, a reducing tee {fittings} does not make ({_label(table, run)} reduces on "
+            f"the outlet to {_spoken_list(made)} only)",
+            location=np.asarray(g.center, dtype=np.float64),
+            suggestions=(
+                Suggestion(
+                    f"check on site how {branch} joins {run_pipes}: a reduction this large is "
+                    "usually a branch outlet fitting (MSS SP-97, e.g. a weldolet), or a tee "
+                    f"of a listed outlet ({_spoken_list(made)}) with a reducer on it; the model "
+                    "shows a reducing tee"
+                ),
+                Suggestion(f"check the sizes of {run_pipes} and {branch}"),
+            ),
+        )
+
+
 CHECKS = {
     "nonstandard-diameter": check_nonstandard,
     "ambiguous-size": check_ambiguous,
     "hint-mismatch": check_hint,
     "contiguous-diameter-mismatch": check_contiguous,
+    "nonstandard-tee": check_tee_sizes,
 }

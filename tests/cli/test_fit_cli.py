@@ -442,6 +442,6 @@ def test_the_scan_may_come_on_standard_input_and_the_json_go_to_standard_output(
     )
     assert bad.returncode == 2
     assert bad.stderr == (
-        "asbuilt: error: -: line 1 column 13: invalid JSON (Expecting ',' delimiter); fix the "
+        "asbuilt: error: <stdin>: line 1 column 13: invalid JSON (Expecting ',' delimiter); fix the "
         "syntax there\n"
     )

@@ -1,6 +1,7 @@
 """joint-gap: gaps measured by hand; elbow centre-to-end from ASME B16.9 (NPS 4 LR: 152 mm)."""
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -212,3 +213,129 @@ def test_fit_up_is_one_finding_per_pair_with_the_miss_and_its_standard_error():
     assert f.objects == ("P1.1", "P1.2", "P2")
     assert (f.measured, f.stderr, f.allowed) == (0.030, 0.004, 0.012)
     assert "30.0 mm (+- 4.0 mm)" in f.message
+
+
+# A linked pair no fitting realises: merging says why (AB302) and joint-gap measured the same
+# gap again (AB301), two findings on one pair for one problem. The pair is reported once, as
+# merging's note, which names the cause (too far apart, axes that miss, a bend past an elbow).
+
+_PIPE_NPS4 = 0.1143  # ASME B36.10M NPS 4 OD
+
+
+def _linked_scene(p2_start, p2_end) -> dict:
+    """A station 5 m from an NPS 4 pipe P1 on x (x -2.5..-0.1 m) and a pipe P2 the scan links
+    to it."""
+    return {
+        "format": "asbuilt-scene",
+        "version": 1,
+        "units": "m",
+        "seed": 7,
+        "points": 32,
+        "stations": [
+            {
+                "id": "S1",
+                "position": [0.0, 0.0, 1.5],
+                "range_sigma": 0.002,
+                "angular_sigma_deg": 0.01,
+            }
+        ],
+        "objects": [
+            {
+                "id": "P1",
+                "kind": "cylinder",
+                "geometry": {
+                    "type": "cylinder",
+                    "start": [-2.5, 5.0, 1.0],
+                    "end": [-0.1, 5.0, 1.0],
+                    "od": _PIPE_NPS4,
+                },
+            },
+            {
+                "id": "P2",
+                "kind": "cylinder",
+                "geometry": {
+                    "type": "cylinder",
+                    "start": p2_start,
+                    "end": p2_end,
+                    "od": _PIPE_NPS4,
+                },
+            },
+        ],
+        "links": [["P1", "P2"]],
+    }
+
+
+@pytest.mark.parametrize(
+    "p2_start, p2_end, cause",
+    [
+        ([2.9, 5.0, 1.0], [5.3, 5.0, 1.0], "apart (a link may bridge"),  # 3 m gap in line
+        ([0.1, 5.0, 1.4], [2.5, 5.0, 1.4], "their axes do not meet"),  # parallel, 0.4 m up
+        ([0.0, 5.0, 1.1], [-1.0, 5.0, 2.8], "degree bend, beyond an elbow"),  # 120 degrees
+    ],
+    ids=["too-far", "offset", "past-an-elbow"],
+)
+def test_a_link_merging_could_not_make_is_one_finding_not_two(p2_start, p2_end, cause):
+    from asbuilt.pipeline import build_model
+    from asbuilt.scan import loads_scan
+    from asbuilt.sim.scene import scene_from_dict
+    from asbuilt.sim.simulate import simulate_scan
+
+    doc = simulate_scan(scene_from_dict(_linked_scene(p2_start, p2_end)), seed=7)
+    found = build_model(loads_scan(json.dumps(doc))).findings
+    on_pair = [f for f in found if set(f.objects) == {"P1", "P2"}]
+    assert [(f.code, f.slug) for f in on_pair] == [("AB302", "merge-note")]
+    assert cause in on_pair[0].message
+
+
+def _unrealised_link(gap=0.5):
+    """P1 and P2 in line ``gap`` apart, linked, carrying merging's note that it could not
+    join them (as merging leaves it: on both pipes), and no fitting between them."""
+    a = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    b = pipe("P2", [2 + gap, 0, 1], [4, 0, 1], 0.1143, nominal="4", length_se=0.0005)
+    note = "the scan links P1 and P2, but they are 0.50 m apart: not joined"
+    a.snap["merge_notes"] = [note]
+    b.snap["merge_notes"] = [note]
+    scan = Scan(
+        units="m",
+        objects=tuple(
+            ScanObject(id=c.id, kind="cylinder", points=np.zeros((6, 3)), index=k)
+            for k, c in enumerate((a, b))
+        ),
+        links=(("P1", "P2"),),
+    )
+    return model(a, b, scan=scan, merged=False)
+
+
+def test_joint_gap_leaves_a_pair_to_the_merge_note_that_says_why():
+    found = check_model(_unrealised_link(), catalog=B36)
+    assert [(f.code, f.objects) for f in found if f.code in ("AB301", "AB302")] == [
+        ("AB302", ("P1", "P2"))
+    ]
+
+
+@pytest.mark.parametrize(
+    "rules",
+    [
+        'ignore = ["merge-note"]',  # the note is not reported: the gap is
+        'select = ["AB301"]',
+        '[joint-gap]\nseverity = "error"',  # a gate on gaps keeps its error
+    ],
+    ids=["merge-note-ignored", "joint-gap-alone", "joint-gap-graver"],
+)
+def test_joint_gap_still_reports_the_pair_when_the_note_would_not_say_it(rules, tmp_path):
+    from asbuilt.rules import load_rules
+
+    path = tmp_path / "rules.toml"
+    path.write_text(rules + "\n")
+    found = check_model(_unrealised_link(), config=load_rules(path), catalog=B36)
+    gap = [f for f in found if f.code == "AB301"]
+    assert [(f.objects, f.measured) for f in gap] == [(("P1", "P2"), pytest.approx(0.5))]
+
+
+def test_a_note_on_one_pipe_of_the_pair_leaves_the_gap_to_joint_gap():
+    m = _unrealised_link()
+    a, b = m.components
+    b.snap["merge_notes"] = ["extended 269 mm at its end beyond its last shot"]
+    a.snap["merge_notes"] = ["extended 269 mm at its end beyond its last shot"]
+    found = check_model(m, catalog=B36)
+    assert [f.objects for f in found if f.code == "AB301"] == [("P1", "P2")]
