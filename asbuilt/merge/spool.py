@@ -230,12 +230,22 @@ def _elbow(b: _Builder, joint: Joint):
     tj = point - reach * oj
     inward = (-oj) - ((-oj) @ oi) * oi
     center = ti + radius * _unit(inward)
+    # each end is its pipe's size and wall (a B16.9 reducing elbow between two sizes), so
+    # neither weld steps; the larger end first, as reducing elbows are named (and a reader of
+    # one size per elbow sees the larger, as it was built before)
+    hollow = bool(pi.wall and pj.wall)
+    ends = [(ti, pi), (tj, pj)]
+    if pj.od > pi.od:
+        ends.reverse()
+    (first_end, first), (second_end, second) = ends
     geometry = Bend(
-        start=ti,
-        end=tj,
+        start=first_end,
+        end=second_end,
         center=center,
-        outer_radius=0.5 * big.od,
-        wall=min(pi.wall, pj.wall) if pi.wall and pj.wall else 0.0,
+        outer_radius=0.5 * first.od,
+        wall=first.wall if hollow else 0.0,
+        outer_radius_end=0.5 * second.od,
+        wall_end=second.wall if hollow else 0.0,
     )
     b.ends[i, ki] = ti
     b.ends[j, kj] = tj
@@ -244,7 +254,10 @@ def _elbow(b: _Builder, joint: Joint):
     bent = float(np.sqrt(2.0 * radius * TRIM_SURFACE_TOLERANCE))
     b.allowance[i, ki] = b.allowance[j, kj] = min(bent, float(reach))
     if not _same_size(pi, pj):
-        notes.append("pipes of different sizes meet at this elbow: built at the larger size")
+        notes.append(
+            "pipes of different sizes meet at this elbow: built as a reducing elbow, each end "
+            "the size and wall of its pipe, with the larger size's bend radius"
+        )
     degrees = float(np.degrees(theta))
     source = big.dims.source
     standard = min(abs(degrees - 45.0), abs(degrees - 90.0)) <= ELBOW45_WINDOW_DEG
