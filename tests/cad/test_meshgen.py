@@ -168,7 +168,7 @@ def test_a_reducing_elbow_mesh_has_each_ends_size_and_wall():
         return math.pi * radius * (math.pi / 2) * (a * a + a * b + b * b) / 3
 
     expected = tube(r6, r4) - tube(r6 - w6, r4 - w4)
-    assert mesh.volume == pytest.approx(expected, rel=2e-3)
+    assert mesh.volume == pytest.approx(expected, rel=1e-9)
     assert _closed(mesh).is_watertight
     # the first and last rings are the ends' (enlarged to equal area by the same factor)
     rings = np.linalg.norm(mesh.vertices[:, :2], axis=1)
