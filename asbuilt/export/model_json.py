@@ -102,8 +102,7 @@ def _geometry_fields(geometry) -> dict:
             "shape": "bend",
             "center": geometry.center,
             "ends": [geometry.start, geometry.end],
-            # od and wall for readers that know one size per elbow (before per-end sizes): the
-            # start end's OD (merging puts the larger first) and the thinner wall, as they wrote
+            # od and wall as readers of one size per elbow built it: the start's OD, thinner wall
             "od": 2 * geometry.radii[0],
             "wall": min(geometry.walls),
             "od_end": 2 * geometry.radii[1],
@@ -503,17 +502,10 @@ def _geometry(entry: dict):
         )
     if shape == "bend":
         start, end = _points(entry, "ends", 2)
-        od = _positive(entry, "od")
+        od = _positive(entry, "od")  # od_end, wall_start, wall_end: absent before per-end sizes
         od_end = _positive(entry, "od_end") if entry.get("od_end") is not None else od
-        return Bend(
-            start,
-            end,
-            _point(entry, "center"),
-            od / 2,
-            _wall(entry, "wall_start"),
-            od_end / 2,
-            _wall(entry, "wall_end"),
-        )
+        walls = _wall(entry, "wall_start"), _wall(entry, "wall_end")
+        return Bend(start, end, _point(entry, "center"), od / 2, walls[0], od_end / 2, walls[1])
     if shape == "reducer":
         return Reducer(
             _point(entry, "start"),

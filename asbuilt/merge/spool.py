@@ -230,23 +230,12 @@ def _elbow(b: _Builder, joint: Joint):
     tj = point - reach * oj
     inward = (-oj) - ((-oj) @ oi) * oi
     center = ti + radius * _unit(inward)
-    # each end is its pipe's size and wall (a B16.9 reducing elbow between two sizes), so
-    # neither weld steps; the larger end first, as reducing elbows are named (and a reader of
-    # one size per elbow sees the larger, as it was built before)
+    # each end its pipe's size and wall (a B16.9 reducing elbow), the larger end first (as such
+    # elbows are named; a reader of one size per elbow sees the larger, as built before)
+    (s, ps), (e, pe) = sorted([(ti, pi), (tj, pj)], key=lambda end: -end[1].od)
     hollow = bool(pi.wall and pj.wall)
-    ends = [(ti, pi), (tj, pj)]
-    if pj.od > pi.od:
-        ends.reverse()
-    (first_end, first), (second_end, second) = ends
-    geometry = Bend(
-        start=first_end,
-        end=second_end,
-        center=center,
-        outer_radius=0.5 * first.od,
-        wall=first.wall if hollow else 0.0,
-        outer_radius_end=0.5 * second.od,
-        wall_end=second.wall if hollow else 0.0,
-    )
+    walls = (ps.wall, pe.wall) if hollow else (0.0, 0.0)
+    geometry = Bend(s, e, center, 0.5 * ps.od, walls[0], 0.5 * pe.od, walls[1])
     b.ends[i, ki] = ti
     b.ends[j, kj] = tj
     b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"elbow {pi.id}-{pj.id}"
@@ -255,8 +244,7 @@ def _elbow(b: _Builder, joint: Joint):
     b.allowance[i, ki] = b.allowance[j, kj] = min(bent, float(reach))
     if not _same_size(pi, pj):
         notes.append(
-            "pipes of different sizes meet at this elbow: built as a reducing elbow, each end "
-            "the size and wall of its pipe, with the larger size's bend radius"
+            "pipes of different sizes meet here: a reducing elbow, each end its pipe's size and wall"
         )
     degrees = float(np.degrees(theta))
     source = big.dims.source
