@@ -107,6 +107,21 @@ class Bend:
 
     All points (3,) metres. The bend radius is ``|start - center|`` (= ``|end - center|``);
     the bend angle is the angle between them seen from ``center``.
+
+    ``outer_radius`` and ``wall`` (metres, wall 0 = solid) are the start end's;
+    ``outer_radius_end`` and ``wall_end`` the end end's, for a **reducing elbow** joining two
+    pipe sizes (ASME B16.9 makes it to each end's pipe, so each end's outside and bore are the
+    pipe's welded there; between the ends both change in proportion to the angle turned).
+    ``None`` (the default) takes the start end's: one size throughout, as in
+    ``Bend(s, e, c, r, wall)``. An end value equal to the start's is kept as ``None``, so a
+    bend of one size stays one size when :func:`dataclasses.replace` changes its start's.
+    Read :attr:`radii` and :attr:`walls` for both ends' values.
+
+    Raises
+    ------
+    ValueError
+        Ends not equidistant from the centre, a wall not thinner than its end's outer radius,
+        or one end solid (0) and the other not.
     """
 
     kind: ClassVar[str] = "bend"
@@ -115,6 +130,8 @@ class Bend:
     center: np.ndarray
     outer_radius: float
     wall: float = 0.0
+    outer_radius_end: float | None = None
+    wall_end: float | None = None
 
     def __post_init__(self):
         for name in ("start", "end", "center"):
@@ -125,6 +142,32 @@ class Bend:
             raise ValueError("A bend's ends must be equidistant from its centre.")
         object.__setattr__(self, "outer_radius", _nonneg(self.outer_radius, "outer radius"))
         object.__setattr__(self, "wall", _wall(self.outer_radius, self.wall))
+        radius_end = self.outer_radius
+        if self.outer_radius_end is not None:
+            radius_end = _nonneg(self.outer_radius_end, "outer radius end")
+        wall_end = self.wall if self.wall_end is None else self.wall_end
+        wall_end = _wall(radius_end, wall_end, "wall end", "outer radius end")
+        _hollow_or_solid("bend", self.wall, wall_end)
+        object.__setattr__(
+            self, "outer_radius_end", None if radius_end == self.outer_radius else radius_end
+        )
+        object.__setattr__(self, "wall_end", None if wall_end == self.wall else wall_end)
+
+    @property
+    def radii(self) -> tuple[float, float]:
+        """Outer radius (metres) at the start end and at the end end."""
+        end = self.outer_radius if self.outer_radius_end is None else self.outer_radius_end
+        return self.outer_radius, end
+
+    @property
+    def walls(self) -> tuple[float, float]:
+        """Wall (metres, 0 = solid) at the start end and at the end end."""
+        return self.wall, self.wall if self.wall_end is None else self.wall_end
+
+    @property
+    def reducing(self) -> bool:
+        """Whether the two ends differ in outer radius or wall."""
+        return self.outer_radius_end is not None or self.wall_end is not None
 
     @property
     def bend_radius(self) -> float:

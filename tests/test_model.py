@@ -136,3 +136,39 @@ def test_walls_are_checked_against_their_own_ends(make, message):
     with pytest.raises(ValueError) as caught:
         make()
     assert str(caught.value) == message
+
+
+def test_a_bend_has_a_size_and_wall_at_each_end_and_one_sets_both():
+    from asbuilt.model import Bend
+
+    c, radius = np.zeros(3), 0.229
+    start, end = np.array([radius, 0, 0]), np.array([0, radius, 0])
+    reducing = Bend(start, end, c, R6, W6, R4, W4)
+    assert (reducing.radii, reducing.walls, reducing.reducing) == ((R6, R4), (W6, W4), True)
+    one = Bend(start, end, c, R6, W6)
+    assert (one.radii, one.walls, one.reducing) == ((R6, R6), (W6, W6), False)
+    # an end equal to the start is one size, and stays so when the start is resized
+    same = Bend(start, end, c, R6, W6, R6, W6)
+    assert (same.outer_radius_end, same.wall_end, same.reducing) == (None, None, False)
+    resized = dataclasses.replace(same, outer_radius=R4, wall=W4)
+    assert (resized.radii, resized.walls) == ((R4, R4), (W4, W4))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        (
+            {"outer_radius_end": R4, "wall": 0.06},
+            "The wall end must be thinner than the outer radius end (0 means solid).",
+        ),
+        ({"outer_radius_end": -1.0}, "The outer radius end must be a non-negative finite number"),
+        ({"wall_end": 0.0}, "A bend's walls must be both 0 (solid) or both positive."),
+    ],
+)
+def test_a_bends_end_wall_is_checked_against_its_own_end(kwargs, message):
+    from asbuilt.model import Bend
+
+    args = {"outer_radius": R6, "wall": W6, **kwargs}
+    with pytest.raises(ValueError) as caught:
+        Bend([0.229, 0, 0], [0, 0.229, 0], [0, 0, 0], **args)
+    assert str(caught.value).startswith(message)

@@ -112,6 +112,9 @@ def test_a_refused_object_does_not_stop_the_others(spool_scan, refused_scan):
     assert _geometry(model) == _geometry(alone) and model.spools == alone.spools
     for got, want in zip(model.components, alone.components):
         for name, value in vars(want.geometry).items():
+            if value is None:  # a bend's end size or wall: None is the start's
+                assert getattr(got.geometry, name) is None, name
+                continue
             np.testing.assert_allclose(getattr(got.geometry, name), value, rtol=0, atol=1e-12)
     x1 = refused_scan.objects[-1]
     with pytest.raises(FitError) as direct:  # the fit's own reason, fitted alone

@@ -170,12 +170,15 @@ def _bend_mesh(geometry: Bend) -> Mesh:
     step = angle / (steps - 1)
     stretch = float(np.sqrt(step / np.sin(step)))
     us = np.repeat(normal[None, :], steps, axis=0)
+    # a reducing elbow's radii and walls change evenly with the angle turned (as the solid's)
+    share = np.linspace(0.0, 1.0, steps)
+    (r1, r2), (w1, w2) = geometry.radii, geometry.walls
     return tube_mesh(
         centres,
         us,
         radial,
-        np.full(steps, geometry.outer_radius * stretch),
-        geometry.wall * stretch,
+        (r1 + share * (r2 - r1)) * stretch,
+        (w1 + share * (w2 - w1)) * stretch,
     )
 
 

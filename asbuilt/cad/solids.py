@@ -90,19 +90,25 @@ def _bend_normal(geometry: Bend) -> np.ndarray:
     normal = np.cross(geometry.start - geometry.center, geometry.end - geometry.center)
     if np.linalg.norm(normal) < 1e-9 * geometry.bend_radius**2:
         raise ValueError("its ends and centre are collinear, so the bend plane is undefined")
-    if geometry.outer_radius >= geometry.bend_radius:
+    if max(geometry.radii) >= geometry.bend_radius:
         raise ValueError(
             f"the bend radius {geometry.bend_radius:.4g} m is not larger than the outer radius "
-            f"{geometry.outer_radius:.4g} m"
+            f"{max(geometry.radii):.4g} m"
         )
     return _unit(normal)
 
 
 def _bend(geometry: Bend) -> cq.Shape:
-    """Revolve the pipe's cross-section at ``start`` about the bend axis by the bend angle."""
+    """Revolve the pipe's cross-section at ``start`` about the bend axis by the bend angle.
+
+    A reducing elbow (ends of two sizes or walls) is swept instead: the start end's circles to
+    the end end's along the centreline arc, outside and bore each, the bore then cut out.
+    """
     r_start = geometry.start - geometry.center
     normal = _bend_normal(geometry)
     tangent = _unit(np.cross(normal, r_start))
+    if geometry.reducing:
+        return _reducing_bend(geometry, normal, tangent)
     outer = cq.Wire.makeCircle(geometry.outer_radius, _v(geometry.start), _v(tangent))
     inner = []
     if geometry.wall > 0:
@@ -115,6 +121,38 @@ def _bend(geometry: Bend) -> cq.Shape:
     return cq.Solid.revolve(
         face, geometry.angle_deg, _v(geometry.center), _v(geometry.center + normal)
     )
+
+
+def _reducing_bend(geometry: Bend, normal: np.ndarray, tangent: np.ndarray) -> cq.Shape:
+    """A bend whose ends differ: circles of each end's radius swept along the centreline arc
+    (the radius changes evenly with the angle turned; the volume is that of the linear law to
+    1e-4), the bore likewise between each end's bore when the walls are known.
+
+    ``normal`` is the bend plane's unit normal, ``tangent`` the travel direction at ``start``.
+    """
+    r_end = geometry.end - geometry.center
+    end_tangent = _unit(np.cross(normal, r_end))
+    half = 0.5 * np.radians(geometry.angle_deg)
+    bisector = _unit(geometry.start - geometry.center) * np.cos(half) + _unit(
+        np.cross(normal, geometry.start - geometry.center)
+    ) * np.sin(half)
+    middle = geometry.center + geometry.bend_radius * bisector
+    path = cq.Wire.assembleEdges(
+        [cq.Edge.makeThreePointArc(_v(geometry.start), _v(middle), _v(geometry.end))]
+    )
+
+    def sweep(r_first: float, r_second: float) -> cq.Solid:
+        sections = [
+            cq.Wire.makeCircle(r_first, _v(geometry.start), _v(tangent)),
+            cq.Wire.makeCircle(r_second, _v(geometry.end), _v(end_tangent)),
+        ]
+        return cq.Solid.sweep_multi(sections, path, True, False)
+
+    (r1, r2), (w1, w2) = geometry.radii, geometry.walls
+    outer = sweep(r1, r2)
+    if w1 <= 0 and w2 <= 0:
+        return outer
+    return outer.cut(sweep(r1 - w1, r2 - w2))
 
 
 def _oblique_frustum(geometry: Reducer, r_start: float, r_end: float) -> cq.Solid:

@@ -243,6 +243,12 @@ class _Writer:
                 "SweptSolid",
                 [self.extruded_tube(np.zeros(3), axis, g.length, g.radius, 0.0)],
             )
+        if isinstance(g, Bend) and g.reducing:
+            from asbuilt.cad.meshgen import mesh_for
+
+            # ends of two sizes: no profile revolves into it, so its faceted tube
+            mesh = mesh_for(g, plate_thickness=0.0)
+            return g.center, "Tessellation", [self.face_set(mesh, g.center)]
         if isinstance(g, Bend):
             return g.center, "SweptSolid", [self.bend(g)]
         if isinstance(g, Tee):
@@ -407,6 +413,11 @@ class _Writer:
             )
             if g.branch_wall:
                 props["BranchWallThickness"] = self.f.createIfcPositiveLengthMeasure(g.branch_wall)
+        if isinstance(g, Bend) and g.reducing:
+            radius_end, wall_end = g.radii[1], g.walls[1]
+            props["OuterDiameterEnd"] = self.f.createIfcPositiveLengthMeasure(2 * radius_end)
+            if wall_end:
+                props["WallThicknessEnd"] = self.f.createIfcPositiveLengthMeasure(wall_end)
         if isinstance(g, Bend):
             props["BendRadius"] = self.f.createIfcPositiveLengthMeasure(g.bend_radius)
             props["BendAngle"] = self.f.createIfcPlaneAngleMeasure(float(np.radians(g.angle_deg)))
@@ -633,8 +644,8 @@ def _outer_radius(g) -> float | None:
 
 
 def _wall(g) -> float:
-    """The wall (m) that goes with :func:`_outer_radius`: a reducer's at its start end, a tee's
-    run's; 0 when unknown or not piping."""
+    """The wall (m) that goes with :func:`_outer_radius`: a reducer's or elbow's at its start
+    end, a tee's run's; 0 when unknown or not piping."""
     if isinstance(g, Reducer):
         return g.wall_start
     return getattr(g, "wall", 0.0)

@@ -104,8 +104,12 @@ def _geometry_fields(geometry) -> dict:
             "shape": "bend",
             "center": geometry.center,
             "ends": [geometry.start, geometry.end],
-            "od": 2 * geometry.outer_radius,
-            "wall": geometry.wall,
+            # od and wall as readers of one size per elbow built it: the start's OD, thinner wall
+            "od": 2 * geometry.radii[0],
+            "wall": min(geometry.walls),
+            "od_end": 2 * geometry.radii[1],
+            "wall_start": geometry.walls[0],
+            "wall_end": geometry.walls[1],
             "bend_radius": geometry.bend_radius,
             "angle_deg": geometry.angle_deg,
         }
@@ -514,8 +518,8 @@ def _require_object(entry, where: str, what: str, source: str | None) -> None:
 
 
 def _wall(entry: dict, key: str = "wall") -> float:
-    """The wall ``key`` (metres); one without it (a reducer's or tee's end, in documents
-    written before fittings had a wall per end) has the one ``wall``, or 0 (solid)."""
+    """The wall ``key`` (metres); one without it (a reducer's, tee's or elbow's end, in
+    documents written before fittings had a wall per end) has the one ``wall``, or 0 (solid)."""
     if entry.get(key) is not None:
         return _number(entry, key)
     return _number(entry, "wall") if entry.get("wall") is not None else 0.0
@@ -529,7 +533,10 @@ def _geometry(entry: dict):
         )
     if shape == "bend":
         start, end = _points(entry, "ends", 2)
-        return Bend(start, end, _point(entry, "center"), _positive(entry, "od") / 2, _wall(entry))
+        od = _positive(entry, "od")  # od_end, wall_start, wall_end: absent before per-end sizes
+        od_end = _positive(entry, "od_end") if entry.get("od_end") is not None else od
+        walls = _wall(entry, "wall_start"), _wall(entry, "wall_end")
+        return Bend(start, end, _point(entry, "center"), od / 2, walls[0], od_end / 2, walls[1])
     if shape == "reducer":
         return Reducer(
             _point(entry, "start"),

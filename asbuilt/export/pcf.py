@@ -210,15 +210,16 @@ def _records(component: Component, bores: _Bores) -> tuple[str, list[str], list[
             [bore],
         )
     if isinstance(g, Bend):
-        bore = bores.bore(component, 2 * g.outer_radius)
+        # a reducing elbow's ends are of two sizes: each END-POINT has its own bore
+        first, second = (bores.bore(component, 2 * radius) for radius in g.radii)
         lines = [
-            f"END-POINT {_mm(g.start)} {bore}",
-            f"END-POINT {_mm(g.end)} {bore}",
+            f"END-POINT {_mm(g.start)} {first}",
+            f"END-POINT {_mm(g.end)} {second}",
             f"CENTRE-POINT {_mm(_corner(g))}",
             f"SKEY {_SKEY[identifier]}",
             f"ANGLE {round(100 * g.angle_deg):d}",
         ]
-        return identifier, lines, [bore]
+        return identifier, lines, [first] if first == second else [first, second]
     if isinstance(g, Tee):
         run = bores.bore(component, 2 * g.outer_radius)
         branch = bores.bore(component, 2 * g.branch_outer_radius)

@@ -230,13 +230,12 @@ def _elbow(b: _Builder, joint: Joint):
     tj = point - reach * oj
     inward = (-oj) - ((-oj) @ oi) * oi
     center = ti + radius * _unit(inward)
-    geometry = Bend(
-        start=ti,
-        end=tj,
-        center=center,
-        outer_radius=0.5 * big.od,
-        wall=min(pi.wall, pj.wall) if pi.wall and pj.wall else 0.0,
-    )
+    # each end its pipe's size and wall (a B16.9 reducing elbow), the larger end first (as such
+    # elbows are named; a reader of one size per elbow sees the larger, as built before)
+    (s, ps), (e, pe) = sorted([(ti, pi), (tj, pj)], key=lambda end: -end[1].od)
+    hollow = bool(pi.wall and pj.wall)
+    walls = (ps.wall, pe.wall) if hollow else (0.0, 0.0)
+    geometry = Bend(s, e, center, 0.5 * ps.od, walls[0], 0.5 * pe.od, walls[1])
     b.ends[i, ki] = ti
     b.ends[j, kj] = tj
     b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"elbow {pi.id}-{pj.id}"
@@ -244,7 +243,9 @@ def _elbow(b: _Builder, joint: Joint):
     bent = float(np.sqrt(2.0 * radius * TRIM_SURFACE_TOLERANCE))
     b.allowance[i, ki] = b.allowance[j, kj] = min(bent, float(reach))
     if not _same_size(pi, pj):
-        notes.append("pipes of different sizes meet at this elbow: built at the larger size")
+        notes.append(
+            "pipes of different sizes meet here: a reducing elbow, each end its pipe's size and wall"
+        )
     degrees = float(np.degrees(theta))
     source = big.dims.source
     standard = min(abs(degrees - 45.0), abs(degrees - 90.0)) <= ELBOW45_WINDOW_DEG

@@ -156,3 +156,22 @@ def test_a_reducer_mesh_has_each_ends_own_wall():
         expected = _frustum(r6, r4, 0.14) - _frustum(r6 - w6, r4 - w4, 0.14)
         assert mesh.volume == pytest.approx(expected, rel=1e-9)
         assert _closed(mesh).is_watertight
+
+
+def test_a_reducing_elbow_mesh_has_each_ends_size_and_wall():
+    # NPS 6 x 4 SCH 40 (B36.10M: OD 168.3 / 114.3 mm, wall 7.11 / 6.02 mm) on a 229 mm radius
+    r6, r4, w6, w4, radius = 0.08415, 0.05715, 0.00711, 0.00602, 0.229
+    g = Bend([radius, 0, 0], [0, radius, 0], [0, 0, 0], r6, w6, r4, w4)
+    mesh = mesh_for(g, plate_thickness=0.01)
+
+    def tube(a, b):  # radius a -> b linear in the angle over a quarter turn (Pappus)
+        return math.pi * radius * (math.pi / 2) * (a * a + a * b + b * b) / 3
+
+    expected = tube(r6, r4) - tube(r6 - w6, r4 - w4)
+    assert mesh.volume == pytest.approx(expected, rel=1e-9)
+    assert _closed(mesh).is_watertight
+    # the first and last rings are the ends' (enlarged to equal area by the same factor)
+    rings = np.linalg.norm(mesh.vertices[:, :2], axis=1)
+    at_start = np.abs(mesh.vertices[:, 1]) < 1e-12
+    spread = np.ptp(rings[at_start])
+    assert spread == pytest.approx(2 * r6 * (1 + 1e-3), rel=2e-2)

@@ -260,3 +260,48 @@ def test_a_reducing_tees_bores_are_the_run_pipes_and_the_outlet_pipes():
     for end in (g.run_start, g.run_end):
         assert _circles_at(solid, end) == pytest.approx([R6 - W6, R6], abs=1e-9)
     assert _circles_at(solid, g.branch_end) == pytest.approx([R2 - W2, R2], abs=1e-9)
+
+
+def _sampled_radii_at(solid, point) -> list[float]:
+    """Mean distance (m) from ``point`` (3,) of each edge of ``solid`` that keeps a constant
+    distance from it (to 1 um) on 64 samples, equal ones (to 1 um) once, smallest first."""
+    radii = []
+    for edge in solid.Edges():
+        samples = [edge.positionAt(t).toTuple() for t in np.linspace(0, 1, 64)]
+        distance = np.linalg.norm(np.array(samples) - point, axis=1)
+        if np.ptp(distance) < 1e-6:
+            radii.append(float(distance.mean()))
+    merged = []  # a swept circle comes in two halves
+    for radius in sorted(radii):
+        if not merged or radius - merged[-1] > 1e-6:
+            merged.append(radius)
+    return merged
+
+
+def _reducing_bend_volume(radius, angle, r1, r2) -> float:
+    """Volume (m^3) of a tube of radius r1 -> r2, linear in the angle, about a bend: Pappus
+    over each slice, pi R angle (r1^2 + r1 r2 + r2^2) / 3."""
+    return math.pi * radius * angle * (r1 * r1 + r1 * r2 + r2 * r2) / 3
+
+
+@pytest.mark.parametrize("angle_deg", [90.0, 45.0])
+def test_a_reducing_elbow_has_each_pipes_circles_at_its_ends(angle_deg):
+    """NPS 6 x 4 SCH 40 on the NPS 6 long radius (229 mm): each end's outside and bore are its
+    pipe's, and the volume is that of radii changing evenly with the angle turned (to 5e-6)."""
+    radius, angle = 0.229, math.radians(angle_deg)
+    c = np.array([1.0, 2.0, 0.5])
+    end = c + radius * np.array([math.cos(angle), math.sin(angle), 0.0])
+    g = Bend(c + [radius, 0, 0], end, c, R6, W6, R4, W4)
+    solid = solid_for(Component("E1", "elbow", g))
+    assert solid.isValid() and len(solid.Solids()) == 1
+    # the swept ends are B-spline circles: sampled, within 0.2 um of each pipe's radii
+    assert _sampled_radii_at(solid, g.start) == pytest.approx([R6 - W6, R6], abs=2e-7)
+    assert _sampled_radii_at(solid, g.end) == pytest.approx([R4 - W4, R4], abs=2e-7)
+    expected = _reducing_bend_volume(radius, angle, R6, R4) - _reducing_bend_volume(
+        radius, angle, R6 - W6, R4 - W4
+    )
+    assert solid.Volume() == pytest.approx(expected, rel=1e-4)
+    solid_bar = solid_for(Component("E2", "elbow", Bend(g.start, g.end, c, R6, 0, R4, 0)))
+    assert solid_bar.Volume() == pytest.approx(
+        _reducing_bend_volume(radius, angle, R6, R4), rel=1e-4
+    )

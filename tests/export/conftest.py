@@ -70,6 +70,18 @@ def spool_6x4x2():
     return merge_model(pipes.report_of(fits), schedule="40")
 
 
+@pytest.fixture(scope="session")
+def elbow_6x4():
+    """A merged L of NPS 6 and NPS 4 SCH 40 pipes (synthetic fits): an elbow between pipes of
+    two sizes and walls."""
+    from asbuilt.merge import merge_model
+
+    pipes = _load_synthetic_pipes()
+    Pipe = pipes.Pipe
+    fits = [Pipe("P1", (0, 0, 1), (1.8, 0, 1), 0.1683), Pipe("P2", (2, 0.2, 1), (2, 2, 1), 0.1143)]
+    return merge_model(pipes.report_of(fits), schedule="40")
+
+
 def _node_modules() -> Path | None:
     candidates = [
         os.environ.get("ASBUILT_NODE_MODULES"),

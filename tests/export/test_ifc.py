@@ -382,6 +382,40 @@ def test_pipe_length_and_diameter_from_the_geometry(shapes):
 
 
 @needs_ifc
+@needs_ifc
+def test_a_reducing_elbow_has_each_ends_size_and_wall(tmp_path, elbow_6x4):
+    """NPS 6 x 4 SCH 40 (ASME B36.10M: OD 168.3 / 114.3 mm, wall 7.11 / 6.02 mm): a faceted
+    tube with the volume of radii changing evenly with the angle (Pappus), and both ends'
+    sizes in the asbuilt pset; the file passes the schema and where-rule validators."""
+    import ifcopenshell
+    import ifcopenshell.geom
+    import ifcopenshell.util.shape
+    import ifcopenshell.validate
+
+    path = tmp_path / "elbow.ifc"
+    export_model(elbow_6x4, path)
+    f = ifcopenshell.open(str(path))
+    (elbow,) = [e for e in f.by_type("IfcPipeFitting") if e.Name == "P1-P2"]
+    props = _psets(elbow)["Asbuilt_Component"]
+    assert (props["OuterDiameter"], props["OuterDiameterEnd"]) == pytest.approx((0.1683, 0.1143))
+    assert (props["WallThickness"], props["WallThicknessEnd"]) == pytest.approx((0.00711, 0.00602))
+    g = elbow_6x4.component("P1-P2").geometry
+    angle = math.radians(g.angle_deg)
+
+    def tube(a, b):
+        return math.pi * g.bend_radius * angle * (a * a + a * b + b * b) / 3
+
+    (r1, r2), (w1, w2) = g.radii, g.walls
+    settings = ifcopenshell.geom.settings()
+    settings.set("use-world-coords", True)
+    shape = ifcopenshell.geom.create_shape(settings, elbow).geometry
+    volume = ifcopenshell.util.shape.get_volume(shape)
+    assert volume == pytest.approx(tube(r1, r2) - tube(r1 - w1, r2 - w2), rel=2e-3)
+    logger = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(f, logger, express_rules=True)
+    assert logger.statements == []
+
+
 def test_bend_and_tee_in_place(shapes):
     bend = _vertices(shapes["E1"])
     # Elbow from (1, 0, 0) to (1.2, 0.2, 0) about (1, 0.2, 0): outer fibre reaches x = 1.2 + R4.

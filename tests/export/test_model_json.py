@@ -461,3 +461,41 @@ def test_documents_with_one_wall_per_fitting_still_read():
     r, t = (c.geometry for c in model.components)
     assert (r.wall_start, r.wall_end) == (0.00602, 0.00602)
     assert (t.wall, t.branch_wall) == (0.00391, 0.00391)
+
+
+def test_a_reducing_elbow_round_trips_with_each_ends_size_and_wall(tmp_path, elbow_6x4):
+    import jsonschema
+
+    from asbuilt.export.model_json import model_schema
+
+    path = tmp_path / "elbow.json"
+    write_model_json(elbow_6x4, path)
+    document = json.loads(path.read_text())
+    jsonschema.Draft202012Validator(model_schema()).validate(document)
+    (entry,) = [e for e in document["components"] if e["type"] == "elbow"]
+    # ASME B36.10M SCH 40: NPS 6 OD 168.3 mm, wall 7.11 mm; NPS 4 OD 114.3 mm, wall 6.02 mm
+    assert (entry["od"], entry["od_end"]) == pytest.approx((0.1683, 0.1143))
+    assert (entry["wall_start"], entry["wall_end"]) == pytest.approx((0.00711, 0.00602))
+    # for older readers, od and wall are what they built: the larger OD, the thinner wall
+    assert entry["wall"] == pytest.approx(0.00602)
+    before, after = elbow_6x4.component("P1-P2").geometry, load_model(path).component("P1-P2")
+    assert after.geometry.radii == before.radii and after.geometry.walls == before.walls
+
+
+def test_elbows_with_one_size_still_read():
+    """Documents written before per-end sizes have one ``od`` and ``wall`` per elbow: the same
+    at both ends, as those versions built them."""
+    elbow = {
+        "id": "E1",
+        "type": "elbow",
+        "shape": "bend",
+        "center": [0, 0.229, 1],
+        "ends": [[0, 0, 1], [0.229, 0.229, 1]],
+        "od": 0.1683,
+        "wall": 0.00602,
+    }
+    document = {"format": FORMAT, "version": 1, "components": [elbow]}
+    (component,) = model_from_document(document, source="old.json").components
+    assert component.geometry.radii == (0.1683 / 2, 0.1683 / 2)
+    assert component.geometry.walls == (0.00602, 0.00602)
+    assert not component.geometry.reducing

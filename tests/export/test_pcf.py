@@ -293,3 +293,18 @@ def test_a_non_standard_elbow_gets_its_own_item_code(standard, code):
     assert "cut from a" in " ".join(
         " ".join(map(str, v)) for v in described[written[0]]["DESCRIPTION"]
     )
+
+
+def test_a_reducing_elbow_writes_each_ends_bore(elbow_6x4):
+    """An elbow between NPS 6 and NPS 4 pipes: END-POINT bores 6 and 4, each the bore of the
+    pipe welded there (it wrote 6 at both ends), and a two-size item code."""
+    _, blocks = parse(pcf_text(elbow_6x4))
+    found = _by_id(blocks)
+    ends = found["P1-P2"]["END-POINT"]
+    assert [e[3] for e in ends] == [6.0, 4.0]
+    for pipe_id in ("P1", "P2"):
+        for pipe_end in found[pipe_id]["END-POINT"]:
+            for end in ends:
+                if np.allclose(_point(end), _point(pipe_end), atol=5e-5):
+                    assert end[3] == pipe_end[3], pipe_id
+    assert found["P1-P2"]["ITEM-CODE"] == [["ELBOW-6X4IN-40"]]

@@ -339,8 +339,9 @@ def test_tees_read_back_valid_in_every_orientation(tmp_path, run_nps, branch_nps
 
 
 def test_elbows_and_reducers_read_back_valid_in_every_orientation(tmp_path):
-    """NPS 1/2 and 4 STD long-radius elbows and reducers (concentric and eccentric, flat side at
-    each turn) with the run 1 degree off x: valid after the round trip too."""
+    """NPS 1/2 and 4 STD long-radius elbows, reducing elbows (1/2 x 1/4, 4 x 2) and reducers
+    (concentric and eccentric, flat side at each turn) with the run 1 degree off x: valid after
+    the round trip too."""
     from asbuilt.catalog import fitting_dims, load_catalog
     from asbuilt.model import Bend, Reducer
 
@@ -369,6 +370,18 @@ def test_elbows_and_reducers_read_back_valid_in_every_orientation(tmp_path):
                 wall,
             )
             parts.append(Component(f"R{large}/{turn}", "reducer", reducer))
+            # a reducing elbow: each end the size and STD wall of its pipe (swept, not revolved)
+            c = np.array([len(parts) * 0.5, 5.0, 1.0])
+            reducing = Bend(
+                c - radius * out,
+                c + radius * axis,
+                c,
+                big.od / 2,
+                catalog.wall(large, "STD"),
+                little.od / 2,
+                wall,
+            )
+            parts.append(Component(f"RE{large}/{turn}", "elbow", reducing))
     assert _round_trip_invalid(tmp_path, parts) == []
 
 
@@ -439,3 +452,65 @@ def test_the_bore_runs_on_without_a_step_at_every_weld_of_reducers_and_tees(tmp_
             welds += 1
     assert welds == 5
     assert [s.name for s in read_step(path) if not s.valid] == []
+
+
+def _end_radii(path, point, normal) -> list[float]:
+    """Radii (mm) of the closed curves of a STEP file, as read back, that lie in the plane
+    through ``point`` (3,) mm across ``normal`` (3,) and round it at a constant distance (circles
+    or the B-spline circles of swept faces), equal ones (within 1 um) once, smallest first."""
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+    from OCP.STEPControl import STEPControl_Reader
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    reader = STEPControl_Reader()
+    assert reader.ReadFile(str(path)) == 1  # IFSelect_RetDone
+    reader.TransferRoots()
+    radii = []
+    explorer = TopExp_Explorer(reader.OneShape(), TopAbs_EDGE)
+    while explorer.More():
+        curve = BRepAdaptor_Curve(TopoDS.Edge_s(explorer.Current()))
+        params = np.linspace(curve.FirstParameter(), curve.LastParameter(), 64)
+        xyz = np.array(
+            [[curve.Value(u).X(), curve.Value(u).Y(), curve.Value(u).Z()] for u in params]
+        )
+        across = np.abs((xyz - point) @ normal)
+        distance = np.linalg.norm(xyz - point, axis=1)
+        if across.max() < 1e-4 and np.ptp(distance) < 1e-3:
+            radii.append(float(distance.mean()))
+        explorer.Next()
+    merged = []
+    for radius in sorted(radii):
+        if not merged or radius - merged[-1] > 1e-3:
+            merged.append(radius)
+    return merged
+
+
+def test_an_elbow_between_two_sizes_has_each_pipes_circles_at_its_welds(tmp_path, elbow_6x4):
+    """Read back from STEP, each weld of an NPS 6 x 4 SCH 40 elbow has exactly two radii, its
+    pipe's outside and bore, shared by the pipe and the elbow (it had the NPS 6 OD and the NPS 4
+    wall at both ends: 77.04, 78.13 and 84.15 mm at the NPS 6 weld); the spool still fuses into
+    one valid solid of the parts' summed volume."""
+    model = elbow_6x4
+    path = tmp_path / "elbow.step"
+    cad = prepare(model)
+    write_step(cad, path)
+    # ASME B36.10M SCH 40 (catalogs/asme-b36.10m.csv): OD 168.3 / 114.3 mm, wall 7.11 / 6.02 mm
+    expected = {"P1": [168.3 / 2 - 7.11, 168.3 / 2], "P2": [114.3 / 2 - 6.02, 114.3 / 2]}
+    elbow = model.component("P1-P2").geometry
+    for pipe_id, want in expected.items():
+        pipe = model.component(pipe_id).geometry
+        (point,) = [
+            p
+            for p in (elbow.start, elbow.end)
+            if min(np.linalg.norm(p - pipe.start), np.linalg.norm(p - pipe.end)) < 1e-9
+        ]
+        at = _end_radii(path, point * 1000, pipe.direction)
+        assert at == pytest.approx(want, abs=1e-4), pipe_id
+    assert [s.name for s in read_step(path) if not s.valid] == []
+    (spool,) = model.spools
+    fused = cad.fused_spool(spool.id)
+    assert fused.isValid() and len(fused.Solids()) == 1
+    total = sum(part.solid.Volume() for part in cad.parts)
+    assert fused.Volume() == pytest.approx(total, rel=1e-6)

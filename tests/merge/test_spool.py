@@ -225,3 +225,54 @@ def test_a_run_that_reduces_at_a_tee_gets_a_tee_and_a_reducer_with_each_pipes_bo
     assert (_bore(reducer, "start"), _bore(reducer, "end")) == pytest.approx(
         (BORE6, BORE4), abs=1e-9
     )
+
+
+def _b36_10m(nps: str, schedule: str) -> tuple[float, float]:
+    """(OD, wall) in metres of NPS ``nps`` in ``schedule``, read as text from
+    catalogs/asme-b36.10m.csv (not through asbuilt.catalog)."""
+    import csv
+    from pathlib import Path
+
+    path = Path(__file__).parents[2] / "catalogs" / "asme-b36.10m.csv"
+    lines = [line for line in path.read_text().splitlines() if not line.startswith("#")]
+    for row in csv.DictReader(lines):
+        if row["nominal"] == nps:
+            return float(row["od"]) / 1000, float(row[f"wall_{schedule.lower()}"]) / 1000
+    raise KeyError(nps)
+
+
+@pytest.mark.parametrize("large_first", [True, False])
+def test_an_elbow_between_two_sizes_has_each_pipes_od_and_bore_at_its_end(large_first):
+    """NPS 6 and NPS 4 SCH 40 at an elbow: each end is its pipe's size and wall (B16.9
+    reducing elbow). It was the NPS 6 OD with the NPS 4 wall at both ends: a 1.09 mm bore step
+    at the NPS 6 weld, a 27 mm (radius) OD step and 27 mm bore step at the NPS 4 weld."""
+    from synthetic_pipes import Pipe
+
+    (od6, w6), (od4, w4) = _b36_10m("6", "40"), _b36_10m("4", "40")
+    first, second = (od6, od4) if large_first else (od4, od6)
+    comps = _merged(
+        [
+            Pipe("P1", (0, 0, 1), (1.8, 0, 1), first),
+            Pipe("P2", (2.0, 0.2, 1), (2.0, 2.0, 1), second),
+        ]
+    )
+    elbow = comps["P1-P2"]
+    assert elbow.type == "elbow"
+    g = elbow.geometry
+    welds = {}
+    for point, radius, wall in zip((g.start, g.end), g.radii, g.walls):
+        (pipe,) = [
+            p.geometry
+            for p in (comps["P1"], comps["P2"])
+            if min(np.linalg.norm(p.geometry.start - point), np.linalg.norm(p.geometry.end - point))
+            < 1e-9
+        ]
+        # the fitting's end matches the pipe welded there, outside and inside
+        assert radius == pytest.approx(pipe.outer_radius, abs=1e-12)
+        assert radius - wall == pytest.approx(pipe.outer_radius - pipe.wall, abs=1e-12)
+        welds[round(2 * radius, 4)] = (2 * radius, 2 * (radius - wall))
+    assert welds[round(od6, 4)] == pytest.approx((od6, od6 - 2 * w6), abs=1e-9)
+    assert welds[round(od4, 4)] == pytest.approx((od4, od4 - 2 * w4), abs=1e-9)
+    # the larger end first, as B16.9 names reducing elbows (and readers of one size see it)
+    assert g.outer_radius == pytest.approx(od6 / 2) and g.wall == pytest.approx(w6)
+    assert "reducing elbow" in " ".join(elbow.snap["notes"])
