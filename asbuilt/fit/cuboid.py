@@ -89,6 +89,7 @@ from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette
 from asbuilt.fit._beam_fans import raster_lines
 from asbuilt.fit._common import noise_level, random_subset
+from asbuilt.fit._cuboid_edges import raster_corners
 from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
 from asbuilt.fit._cuboid_sizes import (
     bounds,
@@ -525,6 +526,9 @@ def _fit_cuboid_shots(
     edges = (
         _silhouette.edge_shots(pts, viewpoint, seen) if trusted else (-np.ones(n, np.int64),) * 2
     )
+    if grid is not None:
+        # A raster's lone corner shot, a whole step from its neighbour, is no bisection's.
+        edges = raster_corners(edges, seen, grid[4])
     if grid is not None and np.any(edges[0] >= 0):
         # Bisection shots are not raster shots, even when one falls within the line width of
         # the raster line it started from; they pin the window's sides.
