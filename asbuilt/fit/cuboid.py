@@ -91,6 +91,7 @@ from asbuilt.fit._beam_fans import raster_lines
 from asbuilt.fit._common import noise_level, random_subset
 from asbuilt.fit._cuboid_edges import raster_corners
 from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
+from asbuilt.fit._cuboid_open import open_past_faces
 from asbuilt.fit._cuboid_sizes import (
     bounds,
     covariance,
@@ -448,6 +449,17 @@ def fit_cuboid(
         ``tolerances.max_outlier_fraction``.
     """
     options = {"edge_pad": edge_pad, "silhouette": silhouette}
+    result = _fit_box(points, sigma, tolerances, viewpoint, options)
+    # Shots the fit left out that lie on a seen face's plane past an extent bound (a receding
+    # beam's far part, cut off at range jumps): that size is only a lower bound.
+    cutoff = tolerances.outlier_cutoff_sigma * max(result.sigma, tolerances.sigma_floor)
+    return open_past_faces(result, _validate(points), cutoff)
+
+
+def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
+    """:func:`fit_cuboid` before its open-end check: the shots' fit, or with ``viewpoint``
+    the nearest surfaces' when the first fit is contradicted or refused."""
+    edge_pad = options["edge_pad"]
     if viewpoint is None:
         return _fit_cuboid_shots(points, sigma=sigma, tolerances=tolerances, **options)
     try:
