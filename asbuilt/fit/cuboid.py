@@ -93,6 +93,7 @@ from asbuilt.fit._cuboid_edges import raster_corners
 from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
 from asbuilt.fit._cuboid_open import open_past_faces
 from asbuilt.fit._cuboid_sizes import (
+    SUBSET_GRAZING_DEG,
     bounds,
     covariance,
     extent_spans,
@@ -671,6 +672,27 @@ def _fit_cuboid_shots(
         )
         used_window = silhouette_bounds(
             xb, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid, edges_b, gaps, pinned
+        )
+    elif grid is not None and not one_face:
+        # Without the window (a subset of a raster: :func:`fit_cuboid`'s nearest surfaces, cut
+        # at range jumps) the raster's beams still say how far along each face the next line
+        # would have hit, and the edge lies anywhere in that gap: a receding beam's far face,
+        # seen at 80-88 degrees, has gaps of a metre where its lines' spacing said 0.2 m. The
+        # gap widens the standard error only: the bound stays, so the subset fit that stands
+        # (its box decides which shots lie behind it) is the same.
+        gaps = raster_gaps(
+            xb,
+            origin,
+            model,
+            label_b,
+            lo,
+            hi,
+            lo_pt,
+            hi_pt,
+            viewpoint,
+            grid,
+            cutoff * scale,
+            grazing_deg=SUBSET_GRAZING_DEG,
         )
     if used_window:
         notes.append(
