@@ -404,7 +404,9 @@ def fit_cuboid(
 
     With the viewpoint given, a fit with shots in front of its box or inside it, or a refused one, is
     tried again on the nearest surfaces' shots, the rest left out when they can only be
-    background behind the box (:mod:`asbuilt.fit._cuboid_foreground`).
+    background behind the box (:mod:`asbuilt.fit._cuboid_foreground`). An extent size past
+    whose end shots left out of the fit lie on a seen face's plane (a receding beam's far
+    part) is a lower bound: standard error infinite (:mod:`asbuilt.fit._cuboid_open`).
 
     Parameters
     ----------
@@ -441,7 +443,7 @@ def fit_cuboid(
         ``diagnostics`` ``faces``, ``outliers``, ``iterations``, ``scale`` (robust residual sigma,
         metres), ``faces_axis0..2`` (seen faces normal to each output axis), ``silhouette`` (1.0
         when the raster window placed the unseen edges), ``mended`` (rejected bisection shots put
-        back on the box along their beam).
+        back on the box along their beam), ``open_sizes`` (sizes made lower bounds, when any).
 
     Raises
     ------
