@@ -722,7 +722,10 @@ def _fit_cuboid_shots(
         # Over a raster, the gap up to the next raster line along the face is measured from
         # the beams themselves (:func:`raster_gaps`), not from the lines' spacing.
         known = np.isfinite(gaps) & ~pinned
-        spans[known] = np.maximum(2.0 * pad[known], gaps[known])
+        # Without the window, the gap only ever widens the lines' spacing (a subset's face
+        # spacing can be the wider: its raster has holes where the background was).
+        floor = 2.0 * pad[known] if silhouette else spans[known]
+        spans[known] = np.maximum(floor, gaps[known])
     size_se, centre_se = propagate(
         model, xb, cov, (lo_pt, hi_pt, lo_face, hi_face, pad), sig, one_face, spans
     )
