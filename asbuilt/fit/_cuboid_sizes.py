@@ -24,6 +24,7 @@ from asbuilt.fit._joint import (
 )
 
 __all__ = [
+    "SUBSET_GRAZING_DEG",
     "bounds",
     "covariance",
     "extent_spans",
@@ -333,9 +334,15 @@ def extent_spans(
 #: A neighbouring beam meeting the extreme shot's face beyond this incidence (degrees) says
 #: nothing about the gap: it runs along the face, and its hit is metres away or none.
 _GRAZING_DEG = 85.0
+#: The same for a fit without the window (a subset of a raster): there its gaps only widen the
+#: bounds' standard errors, and a face seen at 85-88 degrees (a receding beam's far part) has
+#: its next raster line metres on, which is the gap.
+SUBSET_GRAZING_DEG = 88.0
 
 
-def raster_gaps(x, origin, model, label, lo, hi, lo_pt, hi_pt, viewpoint, found, noise):
+def raster_gaps(
+    x, origin, model, label, lo, hi, lo_pt, hi_pt, viewpoint, found, noise, grazing_deg=None
+):
     """The gap (metres) along each axis from an extent bound's extreme shot to the next raster line.
 
     The shots are a pan-tilt raster seen from ``viewpoint`` (``found``:
@@ -354,8 +361,9 @@ def raster_gaps(x, origin, model, label, lo, hi, lo_pt, hi_pt, viewpoint, found,
     ``x`` (n, 3): the points about ``origin`` (3,); ``label`` (n,): their faces; ``lo_pt`` /
     ``hi_pt`` (3,): the extreme shots (:func:`bounds`, -1 at a face bound). Returns (2, 3),
     row 0 below lo and row 1 above hi, NaN where no neighbouring beam meets the face within
-    ``_GRAZING_DEG`` of its normal and within it across the axis.
+    ``grazing_deg`` (default ``_GRAZING_DEG``) of its normal and within it across the axis.
     """
+    grazing_deg = _GRAZING_DEG if grazing_deg is None else grazing_deg
     pan0, _window, _on_grid, _pinned, steps = found
     gaps = np.full((2, 3), np.nan)
     # The sides whose extreme shot lies on a face along the axis (k, side, sign, point, face).
@@ -386,7 +394,7 @@ def raster_gaps(x, origin, model, label, lo, hi, lo_pt, hi_pt, viewpoint, found,
     plane = model.face_sign[f] * model.offset[f]  # (c,)
     facing = np.einsum("cbi,ci->cb", beam, normal)
     # Along the face (beyond _GRAZING_DEG): its hit says nothing about the edge.
-    usable = np.abs(facing) >= math.cos(math.radians(_GRAZING_DEG))
+    usable = np.abs(facing) >= math.cos(math.radians(grazing_deg))
     with np.errstate(divide="ignore", invalid="ignore"):
         reach = (plane - normal @ station)[:, None] / facing
     usable &= reach > 0.0

@@ -89,8 +89,11 @@ from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette
 from asbuilt.fit._beam_fans import raster_lines
 from asbuilt.fit._common import noise_level, random_subset
+from asbuilt.fit._cuboid_edges import raster_corners
 from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
+from asbuilt.fit._cuboid_open import open_past_faces
 from asbuilt.fit._cuboid_sizes import (
+    SUBSET_GRAZING_DEG,
     bounds,
     covariance,
     extent_spans,
@@ -401,7 +404,9 @@ def fit_cuboid(
 
     With the viewpoint given, a fit with shots in front of its box or inside it, or a refused one, is
     tried again on the nearest surfaces' shots, the rest left out when they can only be
-    background behind the box (:mod:`asbuilt.fit._cuboid_foreground`).
+    background behind the box (:mod:`asbuilt.fit._cuboid_foreground`). An extent size past
+    whose end shots left out of the fit lie on a seen face's plane (a receding beam's far
+    part) is a lower bound: standard error infinite (:mod:`asbuilt.fit._cuboid_open`).
 
     Parameters
     ----------
@@ -438,7 +443,7 @@ def fit_cuboid(
         ``diagnostics`` ``faces``, ``outliers``, ``iterations``, ``scale`` (robust residual sigma,
         metres), ``faces_axis0..2`` (seen faces normal to each output axis), ``silhouette`` (1.0
         when the raster window placed the unseen edges), ``mended`` (rejected bisection shots put
-        back on the box along their beam).
+        back on the box along their beam), ``open_sizes`` (sizes made lower bounds, when any).
 
     Raises
     ------
@@ -447,6 +452,17 @@ def fit_cuboid(
         ``tolerances.max_outlier_fraction``.
     """
     options = {"edge_pad": edge_pad, "silhouette": silhouette}
+    result = _fit_box(points, sigma, tolerances, viewpoint, options)
+    # Shots the fit left out that lie on a seen face's plane past an extent bound (a receding
+    # beam's far part, cut off at range jumps): that size is only a lower bound.
+    cutoff = tolerances.outlier_cutoff_sigma * max(result.sigma, tolerances.sigma_floor)
+    return open_past_faces(result, _validate(points), cutoff)
+
+
+def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
+    """:func:`fit_cuboid` before its open-end check: the shots' fit, or with ``viewpoint``
+    the nearest surfaces' when the first fit is contradicted or refused."""
+    edge_pad = options["edge_pad"]
     if viewpoint is None:
         return _fit_cuboid_shots(points, sigma=sigma, tolerances=tolerances, **options)
     try:
@@ -525,6 +541,9 @@ def _fit_cuboid_shots(
     edges = (
         _silhouette.edge_shots(pts, viewpoint, seen) if trusted else (-np.ones(n, np.int64),) * 2
     )
+    if grid is not None:
+        # A raster's lone corner shot, a whole step from its neighbour, is no bisection's.
+        edges = raster_corners(edges, seen, grid[4])
     if grid is not None and np.any(edges[0] >= 0):
         # Bisection shots are not raster shots, even when one falls within the line width of
         # the raster line it started from; they pin the window's sides.
@@ -656,6 +675,27 @@ def _fit_cuboid_shots(
         used_window = silhouette_bounds(
             xb, origin, model, lo, hi, lo_pt, hi_pt, pad, viewpoint, grid, edges_b, gaps, pinned
         )
+    elif grid is not None and not one_face:
+        # Without the window (a subset of a raster: :func:`fit_cuboid`'s nearest surfaces, cut
+        # at range jumps) the raster's beams still say how far along each face the next line
+        # would have hit, and the edge lies anywhere in that gap: a receding beam's far face,
+        # seen at 80-88 degrees, has gaps of a metre where its lines' spacing said 0.2 m. The
+        # gap widens the standard error only: the bound stays, so the subset fit that stands
+        # (its box decides which shots lie behind it) is the same.
+        gaps = raster_gaps(
+            xb,
+            origin,
+            model,
+            label_b,
+            lo,
+            hi,
+            lo_pt,
+            hi_pt,
+            viewpoint,
+            grid,
+            cutoff * scale,
+            grazing_deg=SUBSET_GRAZING_DEG,
+        )
     if used_window:
         notes.append(
             "edges no seen face bounds were placed on the pan-tilt raster's silhouette window "
@@ -682,7 +722,10 @@ def _fit_cuboid_shots(
         # Over a raster, the gap up to the next raster line along the face is measured from
         # the beams themselves (:func:`raster_gaps`), not from the lines' spacing.
         known = np.isfinite(gaps) & ~pinned
-        spans[known] = np.maximum(2.0 * pad[known], gaps[known])
+        # Without the window, the gap only ever widens the lines' spacing (a subset's face
+        # spacing can be the wider: its raster has holes where the background was).
+        floor = 2.0 * pad[known] if silhouette else spans[known]
+        spans[known] = np.maximum(floor, gaps[known])
     size_se, centre_se = propagate(
         model, xb, cov, (lo_pt, hi_pt, lo_face, hi_face, pad), sig, one_face, spans
     )
