@@ -21,7 +21,16 @@ import numpy as np
 
 from asbuilt.atomic import atomic_write
 from asbuilt.errors import ExportError, ScanError
-from asbuilt.export._snap_fields import check_diagnostics, check_snap
+from asbuilt.export._model_fields import (
+    check_component_fields,
+    check_diagnostics,
+    faces_field,
+    number_field,
+    point_field,
+    points_field,
+    positive_field,
+    wall_field,
+)
 from asbuilt.export.stored_fit import (
     StoredFit,
     SummaryFieldError,
@@ -33,7 +42,6 @@ from asbuilt.export.stored_scan import scan_from_section, scan_section
 from asbuilt.findings import Finding, Suggestion
 from asbuilt.model import Bend, Component, Correction, Model, Reducer, Spool, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
-from asbuilt.scan.load import MAX_COORDINATE_M
 from asbuilt.scan.model import Scan
 
 __all__ = [
@@ -402,114 +410,6 @@ def _check_document(document, source: str | None) -> None:
 _BadField = SummaryFieldError
 
 
-def _number(entry: dict, key: str) -> float:
-    """A finite number field (metres where it is a length)."""
-    value = entry[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise _BadField(key, f"must be a finite number, not {_describe(value)}")
-    if abs(value) > MAX_COORDINATE_M:
-        raise _BadField(key, _BEYOND_SITE.format(value=value))
-    return float(value)
-
-
-def _positive(entry: dict, key: str) -> float:
-    """A finite number field > 0 (a diameter, metres), named in its own terms when it is not."""
-    value = _number(entry, key)
-    if value <= 0:
-        raise _BadField(key, f"must be a positive length in metres, not {value:g}")
-    return value
-
-
-def _point(entry: dict, key: str, value=None) -> list:
-    """A field of 3 finite numbers [x, y, z]."""
-    value = entry[key] if value is None else value
-    if (
-        not isinstance(value, list)
-        or len(value) != 3
-        or not all(
-            isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
-            for c in value
-        )
-    ):
-        raise _BadField(key, f"must be 3 finite numbers [x, y, z], not {_describe(value)}")
-    for c in value:
-        if abs(c) > MAX_COORDINATE_M:
-            raise _BadField(key, _BEYOND_SITE.format(value=c))
-    return value
-
-
-#: A number the document may not hold: lengths and coordinates are metres on a site, and
-#: their squares must not overflow the rules' and exports' arithmetic (the scan's own limit).
-_BEYOND_SITE = (
-    "{value:g} is beyond any site (at most "
-    + f"{MAX_COORDINATE_M:g}"
-    + " m, the scan's limit); check the number"
-)
-
-
-def _optional_text(entry: dict, key: str) -> None:
-    value = entry.get(key)
-    if value is not None and not isinstance(value, str):
-        raise _BadField(key, f"must be text or null, not {_describe(value)}")
-
-
-def _check_component_fields(entry: dict) -> None:
-    """The non-geometric fields a component is rebuilt from, by type (``_BadField`` if not)."""
-    if not isinstance(entry["id"], str) or not entry["id"]:
-        raise _BadField("id", f"must be non-empty text, not {_describe(entry['id'])}")
-    for key in ("source", "spool", "group", "label", "nominal", "schedule"):
-        _optional_text(entry, key)
-    sources = entry.get("sources")
-    if sources is not None and (
-        not isinstance(sources, list) or not all(isinstance(item, str) for item in sources)
-    ):
-        raise _BadField("sources", f"must be a list of object ids, not {_describe(sources)}")
-    snap = entry.get("snap")
-    if snap is not None and not isinstance(snap, dict):
-        raise _BadField("snap", f"must be an object or null, not {_describe(snap)}")
-    if snap is not None:
-        check_snap(snap)
-    corrections = entry.get("corrections")
-    if corrections is None:
-        return
-    if not isinstance(corrections, list):
-        raise _BadField("corrections", f"must be a list, not {_describe(corrections)}")
-    for number, item in enumerate(corrections):
-        key = f"corrections[{number}]"
-        if not isinstance(item, dict):
-            raise _BadField(key, f"must be an object, not {_describe(item)}")
-        if not isinstance(item.get("what"), str):
-            raise _BadField(f"{key}.what", f"must be text, not {_describe(item.get('what'))}")
-        if "size" not in item:
-            raise _BadField(f"{key}.size", "missing; give the correction's size (a number)")
-        try:
-            _number(item, "size")
-        except _BadField as exc:
-            raise _BadField(f"{key}.size", str(exc)) from None
-
-
-def _points(entry: dict, key: str, count: int | None = None) -> list:
-    """A field holding a list of points (``count`` of them when given)."""
-    value = entry[key]
-    if not isinstance(value, list) or (count is not None and len(value) != count):
-        what = {None: "a list of points [[x, y, z], ...]", 2: "two points [[x, y, z], [x, y, z]]"}
-        shape = what.get(count, f"{count} points [[x, y, z], ...]")
-        raise _BadField(key, f"must be {shape}, not {_describe(value)}")
-    return [_point(entry, key, item) for item in value]
-
-
-def _faces(entry: dict) -> list:
-    value = entry["faces"]
-    if not isinstance(value, list) or not all(
-        isinstance(face, list)
-        and len(face) == 3
-        and all(isinstance(i, int) and not isinstance(i, bool) for i in face)
-        for face in value
-    ):
-        raise _BadField("faces", f"must be triangles [[i, j, k], ...], not {_describe(value)}")
-    return value
-
-
 def _require_object(entry, where: str, what: str, source: str | None) -> None:
     if not isinstance(entry, dict):
         raise ModelDocumentError(
@@ -517,64 +417,65 @@ def _require_object(entry, where: str, what: str, source: str | None) -> None:
         )
 
 
-def _wall(entry: dict, key: str = "wall") -> float:
-    """The wall ``key`` (metres); one without it (a reducer's, tee's or elbow's end, in
-    documents written before fittings had a wall per end) has the one ``wall``, or 0 (solid)."""
-    if entry.get(key) is not None:
-        return _number(entry, key)
-    return _number(entry, "wall") if entry.get("wall") is not None else 0.0
-
-
 def _geometry(entry: dict):
     shape = entry.get("shape")
     if shape == "straight":
         return Straight(
-            _point(entry, "start"), _point(entry, "end"), _positive(entry, "od") / 2, _wall(entry)
+            point_field(entry, "start"),
+            point_field(entry, "end"),
+            positive_field(entry, "od") / 2,
+            wall_field(entry),
         )
     if shape == "bend":
-        start, end = _points(entry, "ends", 2)
-        od = _positive(entry, "od")  # od_end, wall_start, wall_end: absent before per-end sizes
-        od_end = _positive(entry, "od_end") if entry.get("od_end") is not None else od
-        walls = _wall(entry, "wall_start"), _wall(entry, "wall_end")
-        return Bend(start, end, _point(entry, "center"), od / 2, walls[0], od_end / 2, walls[1])
+        start, end = points_field(entry, "ends", 2)
+        od = positive_field(
+            entry, "od"
+        )  # od_end, wall_start, wall_end: absent before per-end sizes
+        od_end = positive_field(entry, "od_end") if entry.get("od_end") is not None else od
+        walls = wall_field(entry, "wall_start"), wall_field(entry, "wall_end")
+        return Bend(
+            start, end, point_field(entry, "center"), od / 2, walls[0], od_end / 2, walls[1]
+        )
     if shape == "reducer":
         return Reducer(
-            _point(entry, "start"),
-            _point(entry, "end"),
-            _number(entry, "od_start") / 2,
-            _number(entry, "od_end") / 2,
-            _wall(entry, "wall_start"),
-            _point(entry, "offset") if entry.get("offset") is not None else np.zeros(3),
-            _wall(entry, "wall_end"),
+            point_field(entry, "start"),
+            point_field(entry, "end"),
+            number_field(entry, "od_start") / 2,
+            number_field(entry, "od_end") / 2,
+            wall_field(entry, "wall_start"),
+            point_field(entry, "offset") if entry.get("offset") is not None else np.zeros(3),
+            wall_field(entry, "wall_end"),
         )
     if shape == "tee":
-        run_start, run_end = _points(entry, "run", 2)
+        run_start, run_end = points_field(entry, "run", 2)
         return Tee(
-            _point(entry, "center"),
+            point_field(entry, "center"),
             run_start,
             run_end,
-            _point(entry, "branch_end"),
-            _positive(entry, "od") / 2,
-            _number(entry, "branch_od") / 2,
-            _wall(entry),
-            _wall(entry, "branch_wall"),
+            point_field(entry, "branch_end"),
+            positive_field(entry, "od") / 2,
+            number_field(entry, "branch_od") / 2,
+            wall_field(entry),
+            wall_field(entry, "branch_wall"),
         )
     if shape == "cylinder":
         return Cylinder(
-            _point(entry, "center"),
-            _point(entry, "axis"),
-            _number(entry, "radius"),
-            _number(entry, "length"),
+            point_field(entry, "center"),
+            point_field(entry, "axis"),
+            number_field(entry, "radius"),
+            number_field(entry, "length"),
         )
     if shape == "cuboid":
-        return Cuboid(_point(entry, "center"), _points(entry, "axes", 3), _point(entry, "size"))
+        return Cuboid(
+            point_field(entry, "center"), points_field(entry, "axes", 3), point_field(entry, "size")
+        )
     if shape == "sphere":
-        return Sphere(_point(entry, "center"), _number(entry, "radius"))
+        return Sphere(point_field(entry, "center"), number_field(entry, "radius"))
     if shape == "plane":
-        outline = _points(entry, "outline") if entry.get("outline") else np.zeros((0, 3))
-        return Plane(_point(entry, "point"), _point(entry, "normal"), outline)
+        outline = points_field(entry, "outline") if entry.get("outline") else np.zeros((0, 3))
+        return Plane(point_field(entry, "point"), point_field(entry, "normal"), outline)
     if shape == "hull":
-        return Hull(_points(entry, "vertices"), _faces(entry))
+        return Hull(points_field(entry, "vertices"), faces_field(entry))
     raise _BadField(
         "shape",
         f"unknown shape {_describe(shape)}; use one of straight, bend, reducer, tee, cylinder, "
@@ -699,7 +600,7 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
         if isinstance(entry.get("id"), str):
             first_of.setdefault(entry["id"], index)
         try:
-            _check_component_fields(entry)
+            check_component_fields(entry)
             sources = tuple(
                 entry.get("sources") or ([entry["source"]] if entry.get("source") else [])
             )
