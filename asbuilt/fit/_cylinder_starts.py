@@ -171,9 +171,11 @@ def polish_axes(
     least-squares descent may pull onto a background shot, is first brought within a quarter
     degree. Returns the polished (states, costs).
     """
+    states, costs = list(states), list(costs)
+    if not states:  # no circle across any candidate axis (scattered shots): nothing to polish
+        return states, costs
     ring = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
     cos_ring, sin_ring = np.cos(ring)[:, None], np.sin(ring)[:, None]
-    states, costs = list(states), list(costs)
     for step in steps:
         tilt = np.tan(np.radians(step))
         # Every state's ring at once (s, 8, 3), the same arithmetic as one state at a time.

@@ -717,3 +717,15 @@ def test_a_column_before_wall_rows_beside_and_above_it_is_fitted_from_its_own_sh
     assert angle_deg(result.primitive.axis, scan["axis"]) < 1.0
     assert not any("viewpoint was ignored" in note for note in result.notes)
     assert any("left out as background" in note for note in result.notes)
+
+
+def test_scattered_shots_with_no_circle_are_refused_not_crashed():
+    """Shots scattered over a dome, fitted as a cylinder with a loose sigma: no robust circle
+    across any candidate axis survived to the rescue's axis polish, which indexed the empty
+    list of starts (IndexError, found by a fuzzer of adversarial point sets). A FitError now."""
+    from asbuilt.fit._cylinder_starts import polish_axes
+
+    assert polish_axes(np.zeros((5, 3)), [], [], 4, np.random.default_rng(0)) == ([], [])
+    case = json.loads((Path(__file__).parent / "scattered_dome_as_cylinder.json").read_text())
+    with pytest.raises(FitError):
+        fit_points("cylinder", np.array(case["points"]), sigma=case["sigma"])
