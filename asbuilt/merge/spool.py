@@ -50,7 +50,14 @@ from asbuilt.model import (
 
 from .contiguity import Joint, connected_groups, line_closest_points
 from .ports import connection_mismatches, ports
-from .reducers import nps_order, reducer_made, small_ends
+from .reducers import (
+    nps_order,
+    reducer_made,
+    reducing_elbow_end,
+    reducing_elbow_ends,
+    reducing_tee_dims,
+    small_ends,
+)
 
 __all__ = [
     "PipeSpec",
@@ -401,9 +408,20 @@ def _flat_word(flat) -> str:
     return "side"
 
 
+def _tee_dims(run: PipeSpec, branch: PipeSpec) -> tuple[float, float, bool]:
+    """``(C, M, paired)``: the centre-to-end of run and outlet (metres) of the tee joining the
+    run pipe ``run`` to the outlet pipe ``branch``. A reducing outlet the fittings table lists
+    (ASME B16.9 Table 8, :func:`.reducers.reducing_tee_dims`) has its pair's own (NPS 6 x 2 1/2:
+    C 143, M 121 mm; ``paired`` True); any other tee the equal tee's of the run size."""
+    if not _same_size(run, branch) and branch.od < run.od:
+        pair = reducing_tee_dims(run.dims.source, run.nominal, branch.nominal)
+        if pair is not None:
+            return pair[0], pair[1], True
+    return run.dims.tee_run, run.dims.tee_outlet, False
+
+
 def _tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
-    c_run = run.dims.tee_run
-    c_out = run.dims.tee_outlet
+    c_run, c_out, _ = _tee_dims(run, branch)
     # the run's wall on the run, the outlet pipe's on the outlet (as B16.9 reducing tees are
     # made); solid (0) throughout when either schedule is unknown
     hollow = bool(run.wall and branch.wall)
@@ -447,10 +465,11 @@ def _tee(b: _Builder, joint: Joint):
     _, t, _, center = line_closest_points(b.base[branch_i, branch_k], ob, anchor, run_dir)
     center = anchor + t * run_dir
     geometry = _tee_geometry(center, run_dir, -ob, run, pb)
+    c_run, c_out, paired = _tee_dims(run, pb)
     b.ends[branch_i, branch_k] = geometry.branch_end
     b.fitting_at[branch_i, branch_k] = "a tee"
     # A tee's run and outlet are the pipes' own cylinders up to its centre-to-end dimensions.
-    b.allowance[branch_i, branch_k] = float(run.dims.tee_outlet)
+    b.allowance[branch_i, branch_k] = float(c_out)
 
     notes = list(run.dims.notes)
     source = run.dims.source
@@ -462,6 +481,11 @@ def _tee(b: _Builder, joint: Joint):
         notes.append(
             f"the outlet ({_size(pb)}) is larger than the run ({_size(run)}): no ASME B16.9 "
             "tee has one (tees reduce on the outlet only); built with the run's dimensions"
+        )
+    elif paired:
+        notes.append(
+            f"reducing outlet: NPS {run.nominal} x {pb.nominal} tee of {source} (C "
+            f"{c_run * 1000:.0f} mm, M {c_out * 1000:.0f} mm)"
         )
     elif not _same_size(run, pb):
         notes.append("reducing outlet: built with the equal tee's dimensions of the run size")
@@ -484,7 +508,7 @@ def _tee(b: _Builder, joint: Joint):
         name = f"{pi.id}-{pj.id}-{pb.id}"
         b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"tee {name}"
         b.fitting_at[branch_i, branch_k] = f"tee {name}"
-        b.allowance[i, ki] = b.allowance[j, kj] = float(run.dims.tee_run)
+        b.allowance[i, ki] = b.allowance[j, kj] = float(c_run)
         connects = [pi.id, pj.id, pb.id]
         if small is not None:
             end = (j, kj) if small is pj else (i, ki)
@@ -496,7 +520,7 @@ def _tee(b: _Builder, joint: Joint):
             )
     else:
         at = b.param(i, center)
-        b.splits.setdefault(i, []).append((at, run.dims.tee_run))
+        b.splits.setdefault(i, []).append((at, float(c_run)))
         name = None  # named after the pieces are known
         connects = [pi.id, pb.id]
     snap = {
