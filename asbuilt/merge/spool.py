@@ -225,10 +225,23 @@ def _elbow(b: _Builder, joint: Joint):
     if np.degrees(theta) < 1e-6:
         return _inline(b, Joint("inline", joint.ends, explicit=joint.explicit))
     big = pi if pi.od >= pj.od else pj
+    small = pj if big is pi else pi
     radius = max(pi.dims.bend_radius, pj.dims.bend_radius)
     reach = radius * np.tan(theta / 2)
     notes = list(big.dims.notes)
-    if big.dims.elbow45_end is not None and abs(np.degrees(theta) - 45.0) <= ELBOW45_WINDOW_DEG:
+    degrees = float(np.degrees(theta))
+    reducing = not _same_size(pi, pj)
+    # a listed B16.9 reducing elbow (90 degree long radius only): its centre-to-end A, or False
+    # for a pair the list does not make, None for no verdict
+    listed = reducing_elbow_end(big.dims.source, big.nominal, small.nominal) if reducing else None
+    if listed and abs(degrees - 90.0) <= ELBOW45_WINDOW_DEG:
+        if listed > reach + 1e-9:
+            notes.append(
+                "no short-radius reducing elbow in ASME B16.9: the long-radius reducing elbow used"
+            )
+        reach = listed
+        radius = reach / np.tan(theta / 2)
+    elif big.dims.elbow45_end is not None and abs(degrees - 45.0) <= ELBOW45_WINDOW_DEG:
         # a catalog 45 degree elbow: keep its centre-to-end, the radius follows
         reach = big.dims.elbow45_end
         radius = reach / np.tan(theta / 2)
@@ -249,13 +262,16 @@ def _elbow(b: _Builder, joint: Joint):
     # The bend leaves the pipe's cylinder by about s^2 / (2 R) at s along it.
     bent = float(np.sqrt(2.0 * radius * TRIM_SURFACE_TOLERANCE))
     b.allowance[i, ki] = b.allowance[j, kj] = min(bent, float(reach))
-    if not _same_size(pi, pj):
+    if reducing:
         notes.append(
             "pipes of different sizes meet here: a reducing elbow, each end its pipe's size and wall"
         )
-    degrees = float(np.degrees(theta))
     source = big.dims.source
     standard = min(abs(degrees - 45.0), abs(degrees - 90.0)) <= ELBOW45_WINDOW_DEG
+    if reducing:
+        source, standard = _reducing_elbow_source(
+            b, f"{pi.id}-{pj.id}", big, small, degrees, listed, source, standard, (i, j), notes
+        )
     if not standard:
         # B16.9 makes 45 and 90 degree elbows only: say what was built instead of labelling it
         if degrees < 90.0:
@@ -280,6 +296,39 @@ def _elbow(b: _Builder, joint: Joint):
         "notes": notes,
     }
     return [("elbow", f"{pi.id}-{pj.id}", geometry, big, snap)]
+
+
+def _reducing_elbow_source(b, name, big, small, degrees, listed, source, standard, pipes, notes):
+    """(``dimensions`` record, standard?) of the reducing elbow ``name`` from ``big`` to
+    ``small`` turning ``degrees``: ASME B16.9 makes reducing elbows as 90 degree long-radius
+    elbows of listed pairs only (``catalogs/<fittings>-elbows.toml``, ``listed`` its A, False
+    for a pair not made, None for no verdict). Any other is built as before, said to be
+    non-standard, with a note on ``pipes`` and in ``notes``."""
+    sizes = f"{_size(big)} to {_size(small)}"
+    if abs(degrees - 90.0) > ELBOW45_WINDOW_DEG:
+        text = (
+            f"the elbow {name} joins {sizes} turning {degrees:.0f} degrees: ASME B16.9 makes "
+            "reducing elbows as 90 degree long-radius elbows only; built as a bend of the "
+            f"{_size(big)} elbow's dimensions, each end its pipe's size, a fitting the standard "
+            "does not make (an elbow and a reducer, or check the sizes)"
+        )
+        if standard:
+            source = f"{source}, reducing elbow at {degrees:.0f} degrees (non-standard)"
+    elif listed is False:
+        made = reducing_elbow_ends(big.dims.source).get(big.nominal, {})
+        ends = sorted(made, key=nps_order, reverse=True)
+        text = (
+            f"no NPS {big.nominal} x {small.nominal} reducing elbow in {big.dims.source} (NPS "
+            f"{big.nominal} reduces to {', '.join(ends)} only): built as a 90 degree elbow of "
+            f"the {_size(big)} radius, each end its pipe's size, a fitting the standard does not "
+            "make (an elbow and a reducer, or check the sizes)"
+        )
+        source = f"{source} radius; no such reducing elbow (non-standard)"
+    else:
+        return source, standard
+    notes.append(text)
+    b.note(pipes, text)
+    return source, False
 
 
 def _inline(b: _Builder, joint: Joint):
