@@ -12,7 +12,8 @@ axes):
   catalog's 45 degree centre-to-end ``B`` instead, with ``R = B / tan(theta/2)``); ends
   ``T_k = P - R tan(theta/2) o_k``; the curvature centre is ``T_1 + R n`` with ``n`` the unit
   vector perpendicular to ``o_1`` towards ``-o_2``. Both pipes are trimmed (or extended) to
-  ``T_k``.
+  ``T_k``. Between two sizes (a reducing elbow) a listed 90 degree pair takes its B16.9 A
+  (:func:`.reducers.reducing_elbow_end`); another angle or pair is said to be non-standard.
 * **inline**, one size: ends within 5 mm (or overlapping) meet at their midpoint (a butt weld);
   a larger gap is filled by a **coupling** (a straight of the pipe size) up to
   :func:`coupling_limit`; a longer gap by pipe (both pipes extended to meet in its middle,
@@ -22,8 +23,9 @@ axes):
   (``Reducer.offset`` the sideways step between them) when merging placed them apart
   (:mod:`asbuilt.merge.eccentric`); ASME B16.9 gives both the same length H.
 * **tee**: centre ``J`` where the branch axis meets the run axis; run ends ``J -+ C d``,
-  branch end ``J + M b`` (``C``, ``M``: catalog centre-to-end of run and outlet). A tee in the
-  middle of a pipe splits it into pieces ``<id>.1``, ``<id>.2``...
+  branch end ``J + M b`` (``C``, ``M``: catalog centre-to-end of run and outlet; a reducing
+  outlet's pair's own from ASME B16.9 Table 8 when listed, :func:`.reducers.reducing_tee_dims`).
+  A tee in the middle of a pipe splits it into pieces ``<id>.1``, ``<id>.2``...
 
 A fitting that would leave a pipe shorter than 1 mm is not built (the joint is reported in the
 pipes' ``snap["merge_notes"]``) and the pipes keep their ends there.
