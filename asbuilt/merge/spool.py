@@ -12,7 +12,8 @@ axes):
   catalog's 45 degree centre-to-end ``B`` instead, with ``R = B / tan(theta/2)``); ends
   ``T_k = P - R tan(theta/2) o_k``; the curvature centre is ``T_1 + R n`` with ``n`` the unit
   vector perpendicular to ``o_1`` towards ``-o_2``. Both pipes are trimmed (or extended) to
-  ``T_k``.
+  ``T_k``. Between two sizes (a reducing elbow) a listed 90 degree pair takes its B16.9 A
+  (:func:`.reducers.reducing_elbow_end`); another angle or pair is said to be non-standard.
 * **inline**, one size: ends within 5 mm (or overlapping) meet at their midpoint (a butt weld);
   a larger gap is filled by a **coupling** (a straight of the pipe size) up to
   :func:`coupling_limit`; a longer gap by pipe (both pipes extended to meet in its middle,
@@ -22,8 +23,9 @@ axes):
   (``Reducer.offset`` the sideways step between them) when merging placed them apart
   (:mod:`asbuilt.merge.eccentric`); ASME B16.9 gives both the same length H.
 * **tee**: centre ``J`` where the branch axis meets the run axis; run ends ``J -+ C d``,
-  branch end ``J + M b`` (``C``, ``M``: catalog centre-to-end of run and outlet). A tee in the
-  middle of a pipe splits it into pieces ``<id>.1``, ``<id>.2``...
+  branch end ``J + M b`` (``C``, ``M``: catalog centre-to-end of run and outlet; a reducing
+  outlet's pair's own from ASME B16.9 Table 8 when listed, :func:`.reducers.reducing_tee_dims`).
+  A tee in the middle of a pipe splits it into pieces ``<id>.1``, ``<id>.2``...
 
 A fitting that would leave a pipe shorter than 1 mm is not built (the joint is reported in the
 pipes' ``snap["merge_notes"]``) and the pipes keep their ends there.
@@ -50,7 +52,14 @@ from asbuilt.model import (
 
 from .contiguity import Joint, connected_groups, line_closest_points
 from .ports import connection_mismatches, ports
-from .reducers import nps_order, reducer_made, small_ends
+from .reducers import (
+    nps_order,
+    reducer_made,
+    reducing_elbow_end,
+    reducing_elbow_ends,
+    reducing_tee_dims,
+    small_ends,
+)
 
 __all__ = [
     "PipeSpec",
@@ -218,10 +227,23 @@ def _elbow(b: _Builder, joint: Joint):
     if np.degrees(theta) < 1e-6:
         return _inline(b, Joint("inline", joint.ends, explicit=joint.explicit))
     big = pi if pi.od >= pj.od else pj
+    small = pj if big is pi else pi
     radius = max(pi.dims.bend_radius, pj.dims.bend_radius)
     reach = radius * np.tan(theta / 2)
     notes = list(big.dims.notes)
-    if big.dims.elbow45_end is not None and abs(np.degrees(theta) - 45.0) <= ELBOW45_WINDOW_DEG:
+    degrees = float(np.degrees(theta))
+    reducing = not _same_size(pi, pj)
+    # a listed B16.9 reducing elbow (90 degree long radius only): its centre-to-end A, or False
+    # for a pair the list does not make, None for no verdict
+    listed = reducing_elbow_end(big.dims.source, big.nominal, small.nominal) if reducing else None
+    if listed and abs(degrees - 90.0) <= ELBOW45_WINDOW_DEG:
+        if listed > reach + 1e-9:
+            notes.append(
+                "no short-radius reducing elbow in ASME B16.9: the long-radius reducing elbow used"
+            )
+        reach = listed
+        radius = reach / np.tan(theta / 2)
+    elif big.dims.elbow45_end is not None and abs(degrees - 45.0) <= ELBOW45_WINDOW_DEG:
         # a catalog 45 degree elbow: keep its centre-to-end, the radius follows
         reach = big.dims.elbow45_end
         radius = reach / np.tan(theta / 2)
@@ -242,13 +264,16 @@ def _elbow(b: _Builder, joint: Joint):
     # The bend leaves the pipe's cylinder by about s^2 / (2 R) at s along it.
     bent = float(np.sqrt(2.0 * radius * TRIM_SURFACE_TOLERANCE))
     b.allowance[i, ki] = b.allowance[j, kj] = min(bent, float(reach))
-    if not _same_size(pi, pj):
+    if reducing:
         notes.append(
             "pipes of different sizes meet here: a reducing elbow, each end its pipe's size and wall"
         )
-    degrees = float(np.degrees(theta))
     source = big.dims.source
     standard = min(abs(degrees - 45.0), abs(degrees - 90.0)) <= ELBOW45_WINDOW_DEG
+    if reducing:
+        source, standard = _reducing_elbow_source(
+            b, f"{pi.id}-{pj.id}", big, small, degrees, listed, source, standard, (i, j), notes
+        )
     if not standard:
         # B16.9 makes 45 and 90 degree elbows only: say what was built instead of labelling it
         if degrees < 90.0:
@@ -273,6 +298,39 @@ def _elbow(b: _Builder, joint: Joint):
         "notes": notes,
     }
     return [("elbow", f"{pi.id}-{pj.id}", geometry, big, snap)]
+
+
+def _reducing_elbow_source(b, name, big, small, degrees, listed, source, standard, pipes, notes):
+    """(``dimensions`` record, standard?) of the reducing elbow ``name`` from ``big`` to
+    ``small`` turning ``degrees``: ASME B16.9 makes reducing elbows as 90 degree long-radius
+    elbows of listed pairs only (``catalogs/<fittings>-elbows.toml``, ``listed`` its A, False
+    for a pair not made, None for no verdict). Any other is built as before, said to be
+    non-standard, with a note on ``pipes`` and in ``notes``."""
+    sizes = f"{_size(big)} to {_size(small)}"
+    if abs(degrees - 90.0) > ELBOW45_WINDOW_DEG:
+        text = (
+            f"the elbow {name} joins {sizes} turning {degrees:.0f} degrees: ASME B16.9 makes "
+            "reducing elbows as 90 degree long-radius elbows only; built as a bend of the "
+            f"{_size(big)} elbow's dimensions, each end its pipe's size, a fitting the standard "
+            "does not make (an elbow and a reducer, or check the sizes)"
+        )
+        if standard:
+            source = f"{source}, reducing elbow at {degrees:.0f} degrees (non-standard)"
+    elif listed is False:
+        made = reducing_elbow_ends(big.dims.source).get(big.nominal, {})
+        ends = sorted(made, key=nps_order, reverse=True)
+        text = (
+            f"no NPS {big.nominal} x {small.nominal} reducing elbow in {big.dims.source} (NPS "
+            f"{big.nominal} reduces to {', '.join(ends)} only): built as a 90 degree elbow of "
+            f"the {_size(big)} radius, each end its pipe's size, a fitting the standard does not "
+            "make (an elbow and a reducer, or check the sizes)"
+        )
+        source = f"{source} radius; no such reducing elbow (non-standard)"
+    else:
+        return source, standard
+    notes.append(text)
+    b.note(pipes, text)
+    return source, False
 
 
 def _inline(b: _Builder, joint: Joint):
@@ -401,9 +459,20 @@ def _flat_word(flat) -> str:
     return "side"
 
 
+def _tee_dims(run: PipeSpec, branch: PipeSpec) -> tuple[float, float, bool]:
+    """``(C, M, paired)``: the centre-to-end of run and outlet (metres) of the tee joining the
+    run pipe ``run`` to the outlet pipe ``branch``. A reducing outlet the fittings table lists
+    (ASME B16.9 Table 8, :func:`.reducers.reducing_tee_dims`) has its pair's own (NPS 6 x 2 1/2:
+    C 143, M 121 mm; ``paired`` True); any other tee the equal tee's of the run size."""
+    if not _same_size(run, branch) and branch.od < run.od:
+        pair = reducing_tee_dims(run.dims.source, run.nominal, branch.nominal)
+        if pair is not None:
+            return pair[0], pair[1], True
+    return run.dims.tee_run, run.dims.tee_outlet, False
+
+
 def _tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
-    c_run = run.dims.tee_run
-    c_out = run.dims.tee_outlet
+    c_run, c_out, _ = _tee_dims(run, branch)
     # the run's wall on the run, the outlet pipe's on the outlet (as B16.9 reducing tees are
     # made); solid (0) throughout when either schedule is unknown
     hollow = bool(run.wall and branch.wall)
@@ -447,10 +516,11 @@ def _tee(b: _Builder, joint: Joint):
     _, t, _, center = line_closest_points(b.base[branch_i, branch_k], ob, anchor, run_dir)
     center = anchor + t * run_dir
     geometry = _tee_geometry(center, run_dir, -ob, run, pb)
+    c_run, c_out, paired = _tee_dims(run, pb)
     b.ends[branch_i, branch_k] = geometry.branch_end
     b.fitting_at[branch_i, branch_k] = "a tee"
     # A tee's run and outlet are the pipes' own cylinders up to its centre-to-end dimensions.
-    b.allowance[branch_i, branch_k] = float(run.dims.tee_outlet)
+    b.allowance[branch_i, branch_k] = float(c_out)
 
     notes = list(run.dims.notes)
     source = run.dims.source
@@ -462,6 +532,11 @@ def _tee(b: _Builder, joint: Joint):
         notes.append(
             f"the outlet ({_size(pb)}) is larger than the run ({_size(run)}): no ASME B16.9 "
             "tee has one (tees reduce on the outlet only); built with the run's dimensions"
+        )
+    elif paired:
+        notes.append(
+            f"reducing outlet: NPS {run.nominal} x {pb.nominal} tee of {source} (C "
+            f"{c_run * 1000:.0f} mm, M {c_out * 1000:.0f} mm)"
         )
     elif not _same_size(run, pb):
         notes.append("reducing outlet: built with the equal tee's dimensions of the run size")
@@ -484,7 +559,7 @@ def _tee(b: _Builder, joint: Joint):
         name = f"{pi.id}-{pj.id}-{pb.id}"
         b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"tee {name}"
         b.fitting_at[branch_i, branch_k] = f"tee {name}"
-        b.allowance[i, ki] = b.allowance[j, kj] = float(run.dims.tee_run)
+        b.allowance[i, ki] = b.allowance[j, kj] = float(c_run)
         connects = [pi.id, pj.id, pb.id]
         if small is not None:
             end = (j, kj) if small is pj else (i, ki)
@@ -496,7 +571,7 @@ def _tee(b: _Builder, joint: Joint):
             )
     else:
         at = b.param(i, center)
-        b.splits.setdefault(i, []).append((at, run.dims.tee_run))
+        b.splits.setdefault(i, []).append((at, float(c_run)))
         name = None  # named after the pieces are known
         connects = [pi.id, pb.id]
     snap = {

@@ -343,6 +343,14 @@ def _fitting_size(component: Component, sizes: _Sizes) -> str:
             return run
         branch = sizes.nominal_for_od(2 * g.branch_outer_radius)
         return f"{run} x {branch or f'{2000 * g.branch_outer_radius:.1f} mm'}"
+    if isinstance(g, Bend) and abs(g.radii[0] - g.radii[1]) >= 2.5e-4:
+        # a reducing elbow is bought by both sizes, large x small (as reducers are)
+        ods = sorted((2 * r for r in g.radii), reverse=True)
+        big = sizes.nominal_for_od(ods[0]) or (
+            component.nominal if g.radii[0] >= g.radii[1] else None
+        )
+        small = sizes.nominal_for_od(ods[1]) or f"{ods[1] * 1000:.1f} mm"
+        return f"{sizes.label(big, ods[0])} x {small}"
     return sizes.label(component.nominal, _outer_diameter(g))
 
 

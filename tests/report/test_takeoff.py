@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from report_helpers import LR4, OD4, WALL4, known_model
 
-from asbuilt.model import Component, Model, Reducer, Straight, Tee
+from asbuilt.model import Bend, Component, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cylinder, Hull, Plane, Sphere
 from asbuilt.report.takeoff import DENSITIES, pipe_weight_per_metre, take_off
 
@@ -286,3 +286,44 @@ def test_pipe_weight_total_in_the_page():
     assert "1 of 2 pipes have no weight and are not in the total" in text
     text = html_text(report_data(_without_wall(known_model(), {"P1", "P2"})))
     assert "No pipe has a weight: their wall thickness is not known" in text
+
+
+def test_a_reducing_elbow_names_both_sizes():
+    """An elbow joining NPS 6 (start, OD 168.3 mm) to NPS 4 (end, 114.3 mm) was taken off as
+    "NPS 6", like an equal 6 inch elbow; it is bought as a 6 x 4 reducing elbow. An elbow whose
+    ends differ only in wall is still one size."""
+    r = 0.229
+    comps = (
+        Component(
+            "E1",
+            "elbow",
+            Bend([r, 0, 0], [0, r, 0], [0, 0, 0], 0.08415, 0.00711, 0.05715, 0.00602),
+            nominal="6",
+            schedule="STD",
+        ),
+        Component(
+            "E2",
+            "elbow",
+            Bend([r, 0, 2], [0, r, 2], [0, 0, 2], 0.08415, 0.00711),
+            nominal="6",
+            schedule="STD",
+        ),
+        Component(
+            "E3",
+            "elbow",
+            Bend([r, 0, 4], [0, r, 4], [0, 0, 4], 0.08415, 0.00711, None, 0.01097),
+            nominal="6",
+            schedule="STD",
+        ),
+        Component(
+            "E4",
+            "elbow",
+            Bend([r, 0, 6], [0, r, 6], [0, 0, 6], 0.05715, 0.00602, 0.08415, 0.00711),
+            nominal="4",
+        ),  # smaller end first: still named large x small
+    )
+    t = take_off(Model(components=comps, catalog="asme-b36.10m"))
+    rows = {row.id: row.size for row in t.rows}
+    assert rows == {"E1": "NPS 6 x 4", "E2": "NPS 6", "E3": "NPS 6", "E4": "NPS 6 x 4"}
+    sizes = sorted((f.size, f.count) for f in t.fittings)
+    assert ("NPS 6", 2) in sizes and ("NPS 6 x 4", 1) in sizes
