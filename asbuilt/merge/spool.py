@@ -44,12 +44,19 @@ from asbuilt.model import (
     Bend,
     Component,
     Correction,
-    Reducer,
     Spool,
     Straight,
-    Tee,
 )
 
+from ._fitting_shapes import (
+    TRIM_SURFACE_TOLERANCE,
+    flat_word,
+    reducer_cone,
+    same_size,
+    size_text,
+    tee_dims,
+    tee_geometry,
+)
 from .contiguity import Joint, connected_groups, line_closest_points
 from .ports import connection_mismatches, ports
 from .reducers import (
@@ -57,7 +64,6 @@ from .reducers import (
     reducer_made,
     reducing_elbow_end,
     reducing_elbow_ends,
-    reducing_tee_dims,
     small_ends,
 )
 
@@ -86,13 +92,6 @@ MAX_BEND_DEG = 100.0
 #: outermost shot, so the fitting then covers pipe the scan measured; 10 mm allows for shots
 #: on the weld bead and bevel and for range noise along the axis.
 TRIM_NOTE = 0.010
-#: A trimmed pipe end's shots within this (metres) of the fitting's own surface could be shots
-#: of the fitting: three times the 2 mm prior range noise, the fits' outlier cutoff. A trim no
-#: longer than the stretch over which the fitting's surface stays this close to the pipe's
-#: cylinder (``_Builder.allowance``, set where each fitting is built) gets no note: an
-#: operator's window that takes in a tee's or an elbow's first centimetres puts those shots on
-#: the pipe.
-TRIM_SURFACE_TOLERANCE = 0.006
 #: A pipe extended by more than this (metres) plus its mean shot spacing along the axis (the
 #: last shot is typically within a spacing of the end) gets a note: that much pipe was never
 #: measured. It is Tolerances.joint_distance's default: sparse
@@ -212,10 +211,6 @@ class _Builder:
         return float((np.asarray(point) - self.base[i, 0]) @ self.pipes[i].axis)
 
 
-def _same_size(a: PipeSpec, b: PipeSpec) -> bool:
-    return a.run == b.run or abs(a.od - b.od) < 1e-9
-
-
 def _elbow(b: _Builder, joint: Joint):
     (i, ki), (j, kj) = joint.ends
     pi, pj = b.pipes[i], b.pipes[j]
@@ -232,7 +227,7 @@ def _elbow(b: _Builder, joint: Joint):
     reach = radius * np.tan(theta / 2)
     notes = list(big.dims.notes)
     degrees = float(np.degrees(theta))
-    reducing = not _same_size(pi, pj)
+    reducing = not same_size(pi, pj)
     # a listed B16.9 reducing elbow (90 degree long radius only): its centre-to-end A, or False
     # for a pair the list does not make, None for no verdict
     listed = reducing_elbow_end(big.dims.source, big.nominal, small.nominal) if reducing else None
@@ -306,12 +301,12 @@ def _reducing_elbow_source(b, name, big, small, degrees, listed, source, standar
     elbows of listed pairs only (``catalogs/<fittings>-elbows.toml``, ``listed`` its A, False
     for a pair not made, None for no verdict). Any other is built as before, said to be
     non-standard, with a note on ``pipes`` and in ``notes``."""
-    sizes = f"{_size(big)} to {_size(small)}"
+    sizes = f"{size_text(big)} to {size_text(small)}"
     if abs(degrees - 90.0) > ELBOW45_WINDOW_DEG:
         text = (
             f"the elbow {name} joins {sizes} turning {degrees:.0f} degrees: ASME B16.9 makes "
             "reducing elbows as 90 degree long-radius elbows only; built as a bend of the "
-            f"{_size(big)} elbow's dimensions, each end its pipe's size, a fitting the standard "
+            f"{size_text(big)} elbow's dimensions, each end its pipe's size, a fitting the standard "
             "does not make (an elbow and a reducer, or check the sizes)"
         )
         if standard:
@@ -322,7 +317,7 @@ def _reducing_elbow_source(b, name, big, small, degrees, listed, source, standar
         text = (
             f"no NPS {big.nominal} x {small.nominal} reducing elbow in {big.dims.source} (NPS "
             f"{big.nominal} reduces to {', '.join(ends)} only): built as a 90 degree elbow of "
-            f"the {_size(big)} radius, each end its pipe's size, a fitting the standard does not "
+            f"the {size_text(big)} radius, each end its pipe's size, a fitting the standard does not "
             "make (an elbow and a reducer, or check the sizes)"
         )
         source = f"{source} radius; no such reducing elbow (non-standard)"
@@ -339,7 +334,7 @@ def _inline(b: _Builder, joint: Joint):
     ei, ej = b.base[i, ki], b.base[j, kj]
     oi = b.out[i, ki]
     gap = float(oi @ (ej - ei))
-    if _same_size(pi, pj):
+    if same_size(pi, pj):
         if gap <= BUTT_GAP:
             mid = 0.5 * (ei + ej)
             b.ends[i, ki] = mid
@@ -384,7 +379,7 @@ def _inline(b: _Builder, joint: Joint):
     b.ends[i, ki] = start
     b.ends[j, kj] = end
     b.fitting_at[i, ki] = b.fitting_at[j, kj] = f"reducer {pi.id}-{pj.id}"
-    geometry, allowance = _reducer_cone(start, end, pi, pj, float(length), offset)
+    geometry, allowance = reducer_cone(start, end, pi, pj, float(length), offset)
     b.allowance[i, ki] = b.allowance[j, kj] = allowance
     notes = list(large.dims.notes)
     note = b.reducer_notes.get((min(i, j), max(i, j)))
@@ -403,31 +398,10 @@ def _inline(b: _Builder, joint: Joint):
     }
     if geometry.eccentric:
         snap["eccentric"] = {
-            "flat": _flat_word(geometry.flat_side),
+            "flat": flat_word(geometry.flat_side),
             "offset": float(np.linalg.norm(offset)),
         }
     return [("reducer", f"{pi.id}-{pj.id}", geometry, large, snap)]
-
-
-def _reducer_cone(start, end, first: PipeSpec, second: PipeSpec, length: float, offset=None):
-    """A reducer from ``first``'s size at ``start`` to ``second``'s at ``end`` ((3,) m each;
-    ``offset`` (3,) m, eccentric, or None) and the trim allowance (m) of the pipes meeting it:
-    the cone leaves either pipe's cylinder at its slope, half the step in OD over its length."""
-    slope = abs(first.od - second.od) / (2.0 * max(length, 1e-9))
-    allowance = min(TRIM_SURFACE_TOLERANCE / max(slope, 1e-9), length)
-    # each end has its pipe's wall (B16.9 reducers are made to each end's schedule), so the
-    # bore runs on from each pipe's; solid (0) throughout when either schedule is unknown
-    hollow = bool(first.wall and second.wall)
-    geometry = Reducer(
-        start=start,
-        end=end,
-        outer_radius_start=0.5 * first.od,
-        outer_radius_end=0.5 * second.od,
-        wall_start=first.wall if hollow else 0.0,
-        wall_end=second.wall if hollow else 0.0,
-        offset=np.zeros(3) if offset is None else offset,
-    )
-    return geometry, allowance
 
 
 def _reducer_source(b: _Builder, large: PipeSpec, small: PipeSpec, pipes) -> tuple[str, bool]:
@@ -448,51 +422,6 @@ def _reducer_source(b: _Builder, large: PipeSpec, small: PipeSpec, pipes) -> tup
     return f"{source} H of the large end; no such reducer (non-standard)", False
 
 
-def _flat_word(flat) -> str:
-    """``"top"``, ``"bottom"`` or ``"side"`` for an eccentric reducer's flat side (3,)."""
-    if flat is None:
-        return "none"
-    if flat[2] > 1 - 1e-9:
-        return "top"
-    if flat[2] < -1 + 1e-9:
-        return "bottom"
-    return "side"
-
-
-def _tee_dims(run: PipeSpec, branch: PipeSpec) -> tuple[float, float, bool]:
-    """``(C, M, paired)``: the centre-to-end of run and outlet (metres) of the tee joining the
-    run pipe ``run`` to the outlet pipe ``branch``. A reducing outlet the fittings table lists
-    (ASME B16.9 Table 8, :func:`.reducers.reducing_tee_dims`) has its pair's own (NPS 6 x 2 1/2:
-    C 143, M 121 mm; ``paired`` True); any other tee the equal tee's of the run size."""
-    if not _same_size(run, branch) and branch.od < run.od:
-        pair = reducing_tee_dims(run.dims.source, run.nominal, branch.nominal)
-        if pair is not None:
-            return pair[0], pair[1], True
-    return run.dims.tee_run, run.dims.tee_outlet, False
-
-
-def _tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
-    c_run, c_out, _ = _tee_dims(run, branch)
-    # the run's wall on the run, the outlet pipe's on the outlet (as B16.9 reducing tees are
-    # made); solid (0) throughout when either schedule is unknown
-    hollow = bool(run.wall and branch.wall)
-    geometry = Tee(
-        center=center,
-        run_start=center - c_run * run_dir,
-        run_end=center + c_run * run_dir,
-        branch_end=center + c_out * branch_dir,
-        outer_radius=0.5 * run.od,
-        branch_outer_radius=0.5 * branch.od,
-        wall=run.wall if hollow else 0.0,
-        branch_wall=branch.wall if hollow else 0.0,
-    )
-    return geometry
-
-
-def _size(p: PipeSpec) -> str:
-    return f"NPS {p.nominal}" if p.nominal else f"OD {p.od * 1000:.1f} mm"
-
-
 def _tee(b: _Builder, joint: Joint):
     branch_i, branch_k = joint.ends[-1]
     pb = b.pipes[branch_i]
@@ -503,7 +432,7 @@ def _tee(b: _Builder, joint: Joint):
         pi, pj = b.pipes[i], b.pipes[j]
         run_dir = b.out[i, ki]
         anchor = b.base[i, ki]
-        if not _same_size(pi, pj):
+        if not same_size(pi, pj):
             # B16.9 tees reduce on the outlet only: a run that changes size at the tee is a
             # tee of the larger run and a reducer on the smaller side
             small = pj if pi.od > pj.od else pi
@@ -515,8 +444,8 @@ def _tee(b: _Builder, joint: Joint):
     run = pj if small is pi else pi
     _, t, _, center = line_closest_points(b.base[branch_i, branch_k], ob, anchor, run_dir)
     center = anchor + t * run_dir
-    geometry = _tee_geometry(center, run_dir, -ob, run, pb)
-    c_run, c_out, paired = _tee_dims(run, pb)
+    geometry = tee_geometry(center, run_dir, -ob, run, pb)
+    c_run, c_out, paired = tee_dims(run, pb)
     b.ends[branch_i, branch_k] = geometry.branch_end
     b.fitting_at[branch_i, branch_k] = "a tee"
     # A tee's run and outlet are the pipes' own cylinders up to its centre-to-end dimensions.
@@ -530,7 +459,7 @@ def _tee(b: _Builder, joint: Joint):
         standard = False
         source = f"{source}, outlet larger than the run (non-standard)"
         notes.append(
-            f"the outlet ({_size(pb)}) is larger than the run ({_size(run)}): no ASME B16.9 "
+            f"the outlet ({size_text(pb)}) is larger than the run ({size_text(run)}): no ASME B16.9 "
             "tee has one (tees reduce on the outlet only); built with the run's dimensions"
         )
     elif paired:
@@ -538,7 +467,7 @@ def _tee(b: _Builder, joint: Joint):
             f"reducing outlet: NPS {run.nominal} x {pb.nominal} tee of {source} (C "
             f"{c_run * 1000:.0f} mm, M {c_out * 1000:.0f} mm)"
         )
-    elif not _same_size(run, pb):
+    elif not same_size(run, pb):
         notes.append("reducing outlet: built with the equal tee's dimensions of the run size")
     square = float(np.degrees(np.arccos(min(1.0, abs(float(ob @ run_dir))))))
     if abs(square - 90.0) > ELBOW45_WINDOW_DEG:
@@ -566,7 +495,7 @@ def _tee(b: _Builder, joint: Joint):
             port = geometry.run_end if small is pj else geometry.run_start
             items = _run_reducer(b, name, run, small, end, port, (i, j, branch_i))
             notes.append(
-                f"the run changes from {_size(run)} to {_size(small)} here: tee of the larger "
+                f"the run changes from {size_text(run)} to {size_text(small)} here: tee of the larger "
                 + ("run, followed by a reducer" if items else "run, and no reducer can follow")
             )
     else:
@@ -593,10 +522,10 @@ def _run_reducer(b: _Builder, tee: str, run: PipeSpec, small: PipeSpec, end, por
     if reducer_made(run.dims.source, run.nominal, small.nominal) is False:
         b.note(
             pipes,
-            f"the run changes from {_size(run)} to {_size(small)} at the tee {tee}, but ASME "
+            f"the run changes from {size_text(run)} to {size_text(small)} at the tee {tee}, but ASME "
             f"B16.9 tees reduce on the outlet only and {run.dims.source} has no "
             f"{run.nominal} x {small.nominal} reducer to follow it: {small.id} meets the tee's "
-            f"{_size(run)} run end with nothing between",
+            f"{size_text(run)} run end with nothing between",
         )
         return []
     length = float(run.dims.reducer_length)
@@ -606,7 +535,7 @@ def _run_reducer(b: _Builder, tee: str, run: PipeSpec, small: PipeSpec, end, por
     b.ends[end] = stop
     name = f"reducer after tee {tee}"
     b.fitting_at[end] = name
-    geometry, b.allowance[end] = _reducer_cone(start, stop, run, small, length)
+    geometry, b.allowance[end] = reducer_cone(start, stop, run, small, length)
     snap = {
         "status": "fitting",
         "dimensions": run.dims.source,

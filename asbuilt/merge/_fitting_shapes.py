@@ -1,0 +1,108 @@
+"""The shapes of spool fittings from the sizes they join: reducer cones, tee dimensions and
+geometry, and the words merging's notes use for them.
+
+Private helper of :mod:`asbuilt.merge.spool` (which builds and places the fittings); each
+function takes the :class:`~asbuilt.merge.spool.PipeSpec` of the pipes a fitting joins.
+Numpy only; metres.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from asbuilt.model import Reducer, Tee
+
+from .reducers import reducing_tee_dims
+
+if TYPE_CHECKING:
+    from .spool import PipeSpec
+
+__all__ = [
+    "TRIM_SURFACE_TOLERANCE",
+    "flat_word",
+    "reducer_cone",
+    "same_size",
+    "size_text",
+    "tee_dims",
+    "tee_geometry",
+]
+
+#: A trimmed pipe end's shots within this (metres) of the fitting's own surface could be shots
+#: of the fitting: three times the 2 mm prior range noise, the fits' outlier cutoff. A trim no
+#: longer than the stretch over which the fitting's surface stays this close to the pipe's
+#: cylinder (``_Builder.allowance``, set where each fitting is built) gets no note: an
+#: operator's window that takes in a tee's or an elbow's first centimetres puts those shots on
+#: the pipe.
+TRIM_SURFACE_TOLERANCE = 0.006
+
+
+def same_size(a: PipeSpec, b: PipeSpec) -> bool:
+    return a.run == b.run or abs(a.od - b.od) < 1e-9
+
+
+def reducer_cone(start, end, first: PipeSpec, second: PipeSpec, length: float, offset=None):
+    """A reducer from ``first``'s size at ``start`` to ``second``'s at ``end`` ((3,) m each;
+    ``offset`` (3,) m, eccentric, or None) and the trim allowance (m) of the pipes meeting it:
+    the cone leaves either pipe's cylinder at its slope, half the step in OD over its length."""
+    slope = abs(first.od - second.od) / (2.0 * max(length, 1e-9))
+    allowance = min(TRIM_SURFACE_TOLERANCE / max(slope, 1e-9), length)
+    # each end has its pipe's wall (B16.9 reducers are made to each end's schedule), so the
+    # bore runs on from each pipe's; solid (0) throughout when either schedule is unknown
+    hollow = bool(first.wall and second.wall)
+    geometry = Reducer(
+        start=start,
+        end=end,
+        outer_radius_start=0.5 * first.od,
+        outer_radius_end=0.5 * second.od,
+        wall_start=first.wall if hollow else 0.0,
+        wall_end=second.wall if hollow else 0.0,
+        offset=np.zeros(3) if offset is None else offset,
+    )
+    return geometry, allowance
+
+
+def flat_word(flat) -> str:
+    """``"top"``, ``"bottom"`` or ``"side"`` for an eccentric reducer's flat side (3,)."""
+    if flat is None:
+        return "none"
+    if flat[2] > 1 - 1e-9:
+        return "top"
+    if flat[2] < -1 + 1e-9:
+        return "bottom"
+    return "side"
+
+
+def tee_dims(run: PipeSpec, branch: PipeSpec) -> tuple[float, float, bool]:
+    """``(C, M, paired)``: the centre-to-end of run and outlet (metres) of the tee joining the
+    run pipe ``run`` to the outlet pipe ``branch``. A reducing outlet the fittings table lists
+    (ASME B16.9 Table 8, :func:`.reducers.reducing_tee_dims`) has its pair's own (NPS 6 x 2 1/2:
+    C 143, M 121 mm; ``paired`` True); any other tee the equal tee's of the run size."""
+    if not same_size(run, branch) and branch.od < run.od:
+        pair = reducing_tee_dims(run.dims.source, run.nominal, branch.nominal)
+        if pair is not None:
+            return pair[0], pair[1], True
+    return run.dims.tee_run, run.dims.tee_outlet, False
+
+
+def tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
+    c_run, c_out, _ = tee_dims(run, branch)
+    # the run's wall on the run, the outlet pipe's on the outlet (as B16.9 reducing tees are
+    # made); solid (0) throughout when either schedule is unknown
+    hollow = bool(run.wall and branch.wall)
+    geometry = Tee(
+        center=center,
+        run_start=center - c_run * run_dir,
+        run_end=center + c_run * run_dir,
+        branch_end=center + c_out * branch_dir,
+        outer_radius=0.5 * run.od,
+        branch_outer_radius=0.5 * branch.od,
+        wall=run.wall if hollow else 0.0,
+        branch_wall=branch.wall if hollow else 0.0,
+    )
+    return geometry
+
+
+def size_text(p: PipeSpec) -> str:
+    return f"NPS {p.nominal}" if p.nominal else f"OD {p.od * 1000:.1f} mm"
