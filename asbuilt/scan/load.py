@@ -659,10 +659,20 @@ def _check_spread(points: np.ndarray, kind: str, where: str, ctx: _Context) -> N
     singular = np.linalg.svd(centred, compute_uv=False)
     scale = max(1.0, float(np.abs(points).max()))
     if singular[0] <= IDENTICAL_RTOL * scale:
+        spread = float(np.ptp(points, axis=0).max())
+        if spread == 0.0:
+            raise ctx.error(
+                where,
+                f"all {n} points are identical; {kind_phrase(kind)} needs points spread across "
+                "its surface (re-aim and rescan)",
+            )
+        # Not identical, but closer together than coordinates this far from the origin are
+        # trusted to resolve (a millimetre-sized object in a survey frame, or a unit slip).
         raise ctx.error(
             where,
-            f"all {n} points are identical; {kind_phrase(kind)} needs points spread across its "
-            "surface (re-aim and rescan)",
+            f"the {n} points span only {spread:.3g} m at coordinates of {scale:.3g} m, too "
+            f"little to resolve there (under {IDENTICAL_RTOL:g} of the coordinates); check the "
+            "units, or give the points relative to a site origin",
         )
     if singular[1] <= COLLINEAR_RTOL * singular[0]:
         # One point far from all the others (a survey-frame point pasted in, a unit slip) makes

@@ -113,6 +113,15 @@ def _identical(doc: dict):
     return doc
 
 
+def _unresolvable(doc: dict):
+    # A millimetre-sized cluster at survey-frame coordinates (1e6 m): not identical, but
+    # closer together than the loader resolves there.
+    doc["objects"][0]["points"] = [
+        [1e6 + 1e-4 * (i % 3), 2e6 + 1e-4 * (i % 5), 3e5 + 1e-4 * (i % 7)] for i in range(30)
+    ]
+    return doc
+
+
 def _collinear(doc: dict):
     doc["objects"][0]["points"] = [[0.1 * i, 0.2 * i, 1.0 - 0.05 * i] for i in range(30)]
     return doc
@@ -308,6 +317,14 @@ BAD = (
         _identical,
         "objects[0] (K1).points: all 30 points are identical; a cylinder needs points spread "
         "across its surface (re-aim and rescan)",
+        schema_catches=False,
+    ),
+    Bad(
+        "points too close for their coordinates",
+        _unresolvable,
+        "objects[0] (K1).points: the 30 points span only 0.0006 m at coordinates of 2e+06 m, too "
+        "little to resolve there (under 1e-09 of the coordinates); check the units, or give the "
+        "points relative to a site origin",
         schema_catches=False,
     ),
     Bad(
