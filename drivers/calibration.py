@@ -552,19 +552,22 @@ def estimate_calibration(
             f"unknown parameter {unknown[0]!r}; use names from: {', '.join(PARAMETERS)}"
         )
     candidates = [n for n in (free or PRIORITY) if n not in set(fixed)]
-    if free is None:
-        chosen, _ = observable_parameters(shots, initial, candidates, min_independence)
-    else:
-        chosen = tuple(candidates)
-    if not chosen:
-        raise CalibrationError("no calibration parameter is observable from these targets")
-    problem = _Problem(shots, initial, chosen)
-    x0 = problem.x0()
     try:
+        if free is None:
+            chosen, _ = observable_parameters(shots, initial, candidates, min_independence)
+        else:
+            chosen = tuple(candidates)
+        if not chosen:
+            raise CalibrationError("no calibration parameter is observable from these targets")
+        problem = _Problem(shots, initial, chosen)
+        x0 = problem.x0()
         r0 = problem.residuals(x0)
         sol = least_squares(problem.residuals, x0, method="trf", loss=loss, x_scale="jac")
         res = problem.residuals(sol.x)
         problem.calibration(sol.x)
+        jac = problem.jacobian(sol.x)
+    except CalibrationError:
+        raise
     except ValueError as exc:
         # A parameter left its valid range (a scale through zero, a non-finite offset) or the
         # residuals are not finite: the targets and the shots cannot be reconciled.
@@ -573,7 +576,6 @@ def estimate_calibration(
             "target's numbers, that the scan's objects are the targets named, and the initial "
             "calibration"
         ) from None
-    jac = problem.jacobian(sol.x)
     dof = max(len(res) - len(sol.x), 1)
     s2 = float(res @ res) / dof
     try:

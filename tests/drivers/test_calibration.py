@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -349,3 +350,11 @@ def test_targets_that_do_not_fit_the_shots_fail_the_estimate_in_one_line():
         "targets do not fit these shots: check each target's numbers, that the scan's objects "
         "are the targets named, and the initial calibration"
     )
+
+
+def test_an_initial_scale_near_zero_fails_the_estimate_in_one_line():
+    # fuzzing: an initial range scale of 1e-9 let the observability check's finite-difference
+    # step take the scale below zero (the Calibration's ValueError escaped as a traceback)
+    initial = dataclasses.replace(NOMINAL, range_scale=1e-9)
+    with pytest.raises(CalibrationError, match=r"^the estimate failed \(pan_scale, tilt_scale"):
+        estimate_calibration(_shots(TRUE, np.random.default_rng(5)), initial)
