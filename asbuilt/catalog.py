@@ -445,7 +445,7 @@ def _load_packaged(name: str) -> Catalog:
     return _attach_fittings(catalog, base=None)
 
 
-def _load_path(resolved: str, shown: str) -> Catalog:
+def _load_path(resolved: str, shown: str, *, attach: bool = True) -> Catalog:
     try:
         # utf-8-sig: spreadsheets save "CSV UTF-8" with a byte order mark.
         content = Path(resolved).read_text(encoding="utf-8-sig")
@@ -454,6 +454,8 @@ def _load_path(resolved: str, shown: str) -> Catalog:
     except (OSError, UnicodeDecodeError) as exc:
         raise CatalogError(f"cannot read the catalog ({exc})", source=shown) from None
     catalog = parse_catalog(content, source=shown)
+    if not attach:  # a fittings table: its own 'fittings' header is not followed (no cycles)
+        return catalog
     return _attach_fittings(catalog, base=Path(resolved).parent)
 
 
@@ -462,7 +464,7 @@ def _attach_fittings(catalog: Catalog, base: Path | None) -> Catalog:
     if catalog.kind != "pipe" or not ref:
         return catalog
     if base is not None and (base / ref).is_file():
-        table = _load_path(str((base / ref).resolve()), str(base / ref))
+        table = _load_path(str((base / ref).resolve()), str(base / ref), attach=False)
     elif _looks_like_path(ref) and base is not None:
         raise CatalogError(
             f"fittings catalog {ref!r} not found beside the catalog",
