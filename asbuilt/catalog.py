@@ -373,7 +373,15 @@ def catalog_names() -> list[str]:
 
 
 def _looks_like_path(name: str) -> bool:
-    return name.endswith(".csv") or "/" in name or "\\" in name or Path(name).is_file()
+    return name.endswith(".csv") or "/" in name or "\\" in name or _is_file(Path(name))
+
+
+def _is_file(path: Path) -> bool:
+    """``path.is_file()``, False for a name the system refuses (too long, NUL byte...)."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
 
 
 def load_catalog(name_or_path) -> Catalog:
@@ -463,7 +471,7 @@ def _attach_fittings(catalog: Catalog, base: Path | None) -> Catalog:
     ref = catalog.fittings_name
     if catalog.kind != "pipe" or not ref:
         return catalog
-    if base is not None and (base / ref).is_file():
+    if base is not None and _is_file(base / ref):
         table = _load_path(str((base / ref).resolve()), str(base / ref), attach=False)
     elif _looks_like_path(ref) and base is not None:
         raise CatalogError(

@@ -414,3 +414,15 @@ def test_a_fittings_cycle_is_one_located_line(tmp_path, files, message):
     with pytest.raises(CatalogError) as info:
         load_catalog(str(tmp_path / "my.csv"))
     assert str(info.value) == f"{tmp_path / 'my.csv'}: {message}"
+
+
+def test_a_fittings_name_too_long_for_the_system_is_one_located_line(tmp_path):
+    # found by fuzzing user catalogs: a 300-character 'fittings' name made is_file() raise
+    # OSError (File name too long) instead of answering False
+    name = "asme-b16.9" + "0" * 300
+    (tmp_path / "my.csv").write_text(_PIPES.format(fittings=name), encoding="utf-8")
+    with pytest.raises(CatalogError) as info:
+        load_catalog(str(tmp_path / "my.csv"))
+    assert str(info.value).startswith(
+        f"{tmp_path / 'my.csv'}: header 'fittings': unknown fittings catalog 'asme-b16.9000"
+    )
