@@ -373,7 +373,15 @@ def catalog_names() -> list[str]:
 
 
 def _looks_like_path(name: str) -> bool:
-    return name.endswith(".csv") or "/" in name or "\\" in name or Path(name).is_file()
+    return name.endswith(".csv") or "/" in name or "\\" in name or _is_file(Path(name))
+
+
+def _is_file(path: Path) -> bool:
+    """``path.is_file()``, False for a name the system refuses (too long, NUL byte...)."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
 
 
 def load_catalog(name_or_path) -> Catalog:
@@ -445,7 +453,7 @@ def _load_packaged(name: str) -> Catalog:
     return _attach_fittings(catalog, base=None)
 
 
-def _load_path(resolved: str, shown: str) -> Catalog:
+def _load_path(resolved: str, shown: str, *, attach: bool = True) -> Catalog:
     try:
         # utf-8-sig: spreadsheets save "CSV UTF-8" with a byte order mark.
         content = Path(resolved).read_text(encoding="utf-8-sig")
@@ -454,6 +462,8 @@ def _load_path(resolved: str, shown: str) -> Catalog:
     except (OSError, UnicodeDecodeError) as exc:
         raise CatalogError(f"cannot read the catalog ({exc})", source=shown) from None
     catalog = parse_catalog(content, source=shown)
+    if not attach:  # a fittings table: its own 'fittings' header is not followed (no cycles)
+        return catalog
     return _attach_fittings(catalog, base=Path(resolved).parent)
 
 
@@ -461,8 +471,8 @@ def _attach_fittings(catalog: Catalog, base: Path | None) -> Catalog:
     ref = catalog.fittings_name
     if catalog.kind != "pipe" or not ref:
         return catalog
-    if base is not None and (base / ref).is_file():
-        table = _load_path(str((base / ref).resolve()), str(base / ref))
+    if base is not None and _is_file(base / ref):
+        table = _load_path(str((base / ref).resolve()), str(base / ref), attach=False)
     elif _looks_like_path(ref) and base is not None:
         raise CatalogError(
             f"fittings catalog {ref!r} not found beside the catalog",

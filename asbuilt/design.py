@@ -30,6 +30,7 @@ from .catalog import parse_nominal
 from .errors import DesignError
 from .model import Component, Model, Straight
 from .primitives import Cuboid, Cylinder
+from .scan.load import MAX_COORDINATE_M
 from .units import UNITS, unit_factor
 
 __all__ = [
@@ -49,6 +50,9 @@ DESIGN_KINDS = {
     "box": ("cuboid",),
 }
 _LISTS = {"pipes": "pipe", "columns": "column", "boxes": "box"}
+
+#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
+_LONGEST_INTEGER = 308
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,7 +123,9 @@ class DesignMatch:
     extra: tuple[Component, ...]
 
 
-def _vector(value, where: str, source, factor: float, size: int = 3) -> np.ndarray:
+def _vector(
+    value, where: str, source, factor: float, size: int = 3, metres: bool = True
+) -> np.ndarray:
     if (
         not isinstance(value, list)
         or len(value) != size
@@ -129,7 +135,64 @@ def _vector(value, where: str, source, factor: float, size: int = 3) -> np.ndarr
     array = np.asarray(value, dtype=np.float64) * factor
     if not np.all(np.isfinite(array)):
         raise DesignError("must be finite numbers", source=source, where=where)
+    if metres and np.abs(array).max() > MAX_COORDINATE_M:
+        raise DesignError(
+            f"{float(np.abs(array).max()):.3g} m is beyond any site (at most {MAX_COORDINATE_M:g} m);"
+            ' check the number and the file\'s "units"',
+            source=source,
+            where=where,
+        )
     return array
+
+
+def _parse_int(literal: str) -> int | float:
+    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
+    float (over 308 digits), which every vector then refuses as not finite, by name (a plain
+    ``int`` would overflow on conversion, or exceed Python's 4,300-digit limit while parsing)."""
+    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
+        return float(literal)  # +-inf: float() of a decimal string does not raise
+    return int(literal)
+
+
+class _RepeatedKey(ValueError):
+    """A key given twice in one JSON object."""
+
+
+def _unique_keys(pairs: list) -> dict:
+    """``json.loads`` object hook: a dict, refusing a key given twice (JSON readers differ on
+    which one counts)."""
+    result = dict(pairs)
+    if len(result) != len(pairs):
+        seen: set[str] = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise _RepeatedKey(key)
+            seen.add(key)
+    return result
+
+
+def _ident(raw: dict, where: str, source) -> str:
+    ident = raw.get("id")
+    if not isinstance(ident, str) or not ident:
+        raise DesignError('needs an "id" string', source=source, where=where)
+    bad = next((c for c in ident if not c.isprintable()), None)
+    if bad is not None:
+        raise DesignError(
+            f'"id" holds a control character (\\u{ord(bad):04x}); use printable text',
+            source=source,
+            where=where,
+        )
+    if len(ident) > _MAX_ID_CHARACTERS:
+        raise DesignError(
+            f'"id" is {len(ident):,} characters long; use at most {_MAX_ID_CHARACTERS}',
+            source=source,
+            where=where,
+        )
+    return ident
+
+
+#: Longest id accepted, in characters (the scan's limit: DXF names hold at most 255).
+_MAX_ID_CHARACTERS = 255
 
 
 def _nominal(value, where: str, source) -> str | None:
@@ -151,9 +214,7 @@ def _nominal(value, where: str, source) -> str | None:
 def _item(kind: str, raw, where: str, source, factor: float) -> DesignedComponent:
     if not isinstance(raw, dict):
         raise DesignError("must be an object", source=source, where=where)
-    ident = raw.get("id")
-    if not isinstance(ident, str) or not ident:
-        raise DesignError('needs an "id" string', source=source, where=where)
+    ident = _ident(raw, where, source)
     where = f"{where} ({ident})"
     allowed = {
         "pipe": {"id", "nominal", "start", "end", "label"},
@@ -213,7 +274,7 @@ def _item(kind: str, raw, where: str, source, factor: float) -> DesignedComponen
         rows = raw["axes"]
         if not isinstance(rows, list) or len(rows) != 3:
             raise DesignError("must be 3 unit vectors", source=source, where=f"{where}.axes")
-        axes = np.array([_vector(r, f"{where}.axes", source, 1.0) for r in rows])
+        axes = np.array([_vector(r, f"{where}.axes", source, 1.0, metres=False) for r in rows])
         if np.abs(axes @ axes.T - np.eye(3)).max() > 1e-6:
             raise DesignError("must be orthonormal", source=source, where=f"{where}.axes")
     return DesignedComponent(ident, kind, center, size=size, axes=axes, where=where)
@@ -228,20 +289,33 @@ def loads_design(text: str, *, source: str | None = None) -> Design:
         Not JSON, wrong format tag, unknown units or fields, bad vectors, duplicate ids.
     """
     try:
-        doc = json.loads(text)
+        doc = json.loads(text, parse_int=_parse_int, object_pairs_hook=_unique_keys)
     except json.JSONDecodeError as exc:
         raise DesignError(
             f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",
+            source=source,
+        ) from None
+    except _RepeatedKey as exc:
+        raise DesignError(
+            f"key {exc.args[0]!r} given twice in one JSON object; keep one (JSON readers differ "
+            "on which one counts)",
+            source=source,
+            where=exc.args[0],
+        ) from None
+    except RecursionError:
+        raise DesignError(
+            "invalid JSON (nested too deeply); a design nests lists three levels at most",
             source=source,
         ) from None
     if not isinstance(doc, dict):
         raise DesignError("must be a JSON object", source=source)
     if doc.get("format", "asbuilt-design") != "asbuilt-design":
         raise DesignError('"format" must be "asbuilt-design"', source=source, where="format")
-    if doc.get("version", 1) != 1:
+    version = doc.get("version", 1)
+    if isinstance(version, bool) or version != 1:
         raise DesignError("only version 1 is known", source=source, where="version")
     units = doc.get("units", "m")
-    if units not in UNITS:
+    if not isinstance(units, str) or units not in UNITS:
         raise DesignError(
             f"unknown units {units!r}; use one of {', '.join(UNITS)}", source=source, where="units"
         )

@@ -37,6 +37,7 @@ import numpy as np
 
 from asbuilt.atomic import atomic_write
 from asbuilt.errors import CalibrationError
+from asbuilt.scan.load import MAX_COORDINATE_M
 
 from .kinematics import PARAMETERS, Calibration, forward
 
@@ -66,6 +67,63 @@ _SECTIONS = {
     "base": {"position_m", "rotation_deg"},
 }
 _TOP = {"format", "version", "estimate", "comment", *_SECTIONS}
+
+#: Largest angle a calibration or target field may hold, degrees: a turn either way.
+_MAX_DEGREES = 360.0
+#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
+_LONGEST_INTEGER = 308
+
+
+def _parse_int(literal: str) -> int | float:
+    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
+    float (over 308 digits), which every number field then refuses as not finite, by name (a
+    plain ``int`` would overflow on conversion, or exceed Python's 4,300-digit limit)."""
+    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
+        return float(literal)  # +-inf: float() of a decimal string does not raise
+    return int(literal)
+
+
+def _read_json(path: Path, what: str):
+    """The JSON document in ``path``; CalibrationError (one line) when it cannot be read."""
+    source = str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise CalibrationError(
+            f"cannot read the {what} ({exc.strerror}); check the path", source=source
+        ) from None
+    except UnicodeDecodeError as exc:
+        raise CalibrationError(
+            f"not UTF-8 text (byte {exc.start}); save the {what} as UTF-8 JSON", source=source
+        ) from None
+    return _loads(text, source)
+
+
+def _loads(text: str, source: str | None):
+    try:
+        return json.loads(text, parse_int=_parse_int)
+    except json.JSONDecodeError as exc:
+        raise CalibrationError(
+            f"not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})", source=source
+        ) from None
+    except RecursionError:
+        raise CalibrationError("not valid JSON (nested too deeply)", source=source) from None
+
+
+def _in_range(value: float, name: str, source, where: str) -> None:
+    """Refuse a finite length beyond any site or an angle beyond a turn, by name."""
+    if name.endswith("_deg") and abs(value) > _MAX_DEGREES:
+        raise CalibrationError(
+            f"{value:g} degrees is more than a turn; use an angle within +-{_MAX_DEGREES:g}",
+            source=source,
+            where=where,
+        )
+    if name.endswith("_m") and abs(value) > MAX_COORDINATE_M:
+        raise CalibrationError(
+            f"{value:.3g} m is beyond any site (at most {MAX_COORDINATE_M:g} m); check the number",
+            source=source,
+            where=where,
+        )
 
 
 # -- file I/O -----------------------------------------------------------------------------------
@@ -140,6 +198,10 @@ def calibration_from_dict(doc, source: str | None = None) -> Calibration:
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
             ):
                 raise CalibrationError("must be a list of 3 numbers", source=source, where=where)
+            if not all(math.isfinite(v) for v in value):
+                raise CalibrationError("must be 3 finite numbers", source=source, where=where)
+            for v in value:
+                _in_range(float(v), key, source, where)
             return [float(v) for v in value]
         if (
             not isinstance(value, (int, float))
@@ -147,6 +209,7 @@ def calibration_from_dict(doc, source: str | None = None) -> Calibration:
             or not math.isfinite(value)
         ):
             raise CalibrationError("must be a finite number", source=source, where=where)
+        _in_range(float(value), key, source, where)
         return float(value)
 
     signs = {}
@@ -173,31 +236,21 @@ def calibration_from_dict(doc, source: str | None = None) -> Calibration:
             base_position=tuple(get("base", "position_m", [0.0, 0.0, 0.0])),
             base_rotation=tuple(math.radians(a) for a in get("base", "rotation_deg", [0.0] * 3)),
         )
+    except CalibrationError:
+        raise  # a field's own located error (raised by get() inside the call)
     except ValueError as exc:
         raise CalibrationError(str(exc), source=source) from None
 
 
 def loads_calibration(text: str, source: str | None = None) -> Calibration:
     """Parse calibration JSON text."""
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise CalibrationError(
-            f"not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})", source=source
-        ) from None
-    return calibration_from_dict(doc, source)
+    return calibration_from_dict(_loads(text, source), source)
 
 
 def load_calibration(path) -> Calibration:
     """Read a calibration file; CalibrationError (one line, names the file) on any problem."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise CalibrationError(
-            f"cannot read the calibration file ({exc.strerror}); check the path", source=str(path)
-        ) from None
-    return loads_calibration(text, str(path))
+    return calibration_from_dict(_read_json(path, "calibration file"), str(path))
 
 
 def save_calibration(calibration: Calibration, path, estimate: dict | None = None) -> None:
@@ -499,18 +552,30 @@ def estimate_calibration(
             f"unknown parameter {unknown[0]!r}; use names from: {', '.join(PARAMETERS)}"
         )
     candidates = [n for n in (free or PRIORITY) if n not in set(fixed)]
-    if free is None:
-        chosen, _ = observable_parameters(shots, initial, candidates, min_independence)
-    else:
-        chosen = tuple(candidates)
-    if not chosen:
-        raise CalibrationError("no calibration parameter is observable from these targets")
-    problem = _Problem(shots, initial, chosen)
-    x0 = problem.x0()
-    r0 = problem.residuals(x0)
-    sol = least_squares(problem.residuals, x0, method="trf", loss=loss, x_scale="jac")
-    res = problem.residuals(sol.x)
-    jac = problem.jacobian(sol.x)
+    try:
+        if free is None:
+            chosen, _ = observable_parameters(shots, initial, candidates, min_independence)
+        else:
+            chosen = tuple(candidates)
+        if not chosen:
+            raise CalibrationError("no calibration parameter is observable from these targets")
+        problem = _Problem(shots, initial, chosen)
+        x0 = problem.x0()
+        r0 = problem.residuals(x0)
+        sol = least_squares(problem.residuals, x0, method="trf", loss=loss, x_scale="jac")
+        res = problem.residuals(sol.x)
+        problem.calibration(sol.x)
+        jac = problem.jacobian(sol.x)
+    except CalibrationError:
+        raise
+    except ValueError as exc:
+        # A parameter left its valid range (a scale through zero, a non-finite offset) or the
+        # residuals are not finite: the targets and the shots cannot be reconciled.
+        raise CalibrationError(
+            f"the estimate failed ({exc}); the targets do not fit these shots: check each "
+            "target's numbers, that the scan's objects are the targets named, and the initial "
+            "calibration"
+        ) from None
     dof = max(len(res) - len(sol.x), 1)
     s2 = float(res @ res) / dof
     try:
@@ -543,6 +608,10 @@ def _vec(value, source, where) -> tuple[float, float, float]:
         or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
     ):
         raise CalibrationError("must be a list of 3 numbers (metres)", source=source, where=where)
+    if not all(math.isfinite(v) for v in value):
+        raise CalibrationError("must be 3 finite numbers (metres)", source=source, where=where)
+    for v in value:
+        _in_range(float(v), "_m", source, where)
     return tuple(float(v) for v in value)
 
 
@@ -559,14 +628,7 @@ def load_targets(path) -> dict[str, object]:
     """
     path = Path(path)
     source = str(path)
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise CalibrationError(f"cannot read ({exc.strerror})", source=source) from None
-    except json.JSONDecodeError as exc:
-        raise CalibrationError(
-            f"not valid JSON (line {exc.lineno}: {exc.msg})", source=source
-        ) from None
+    doc = _read_json(path, "targets file")
     targets = doc.get("targets") if isinstance(doc, dict) else None
     if not isinstance(targets, dict) or not targets:
         raise CalibrationError("needs a non-empty 'targets' object", source=source)
@@ -584,20 +646,31 @@ def load_targets(path) -> dict[str, object]:
                         "must not be zero", source=source, where=f"{where}.normal"
                     )
                 offset = spec.get("offset", 0.0)
-                if not isinstance(offset, (int, float)):
+                if (
+                    not isinstance(offset, (int, float))
+                    or isinstance(offset, bool)
+                    or not math.isfinite(offset)
+                ):
                     raise CalibrationError(
-                        "must be a number", source=source, where=f"{where}.offset"
+                        "must be a finite number (metres)", source=source, where=f"{where}.offset"
                     )
+                _in_range(float(offset), "_m", source, f"{where}.offset")
                 scale = float(np.linalg.norm(normal))
                 out[name] = PlaneTarget(tuple(np.asarray(normal) / scale), float(offset) / scale)
             else:
                 out[name] = PlaneTarget()
         elif kind == "sphere":
             radius = spec.get("radius")
-            if not isinstance(radius, (int, float)) or radius <= 0:
+            if (
+                not isinstance(radius, (int, float))
+                or isinstance(radius, bool)
+                or not math.isfinite(radius)
+                or radius <= 0
+            ):
                 raise CalibrationError(
                     "must be a positive number (metres)", source=source, where=f"{where}.radius"
                 )
+            _in_range(float(radius), "_m", source, f"{where}.radius")
             center = _vec(spec["center"], source, f"{where}.center") if "center" in spec else None
             out[name] = SphereTarget(float(radius), center)
         elif kind == "point":

@@ -84,7 +84,7 @@ def _mend_tail(path: Path) -> None:
         tail = f.read()
         try:
             json.loads(tail)
-        except ValueError:  # torn: not a record (JSONDecodeError, or bytes that are not UTF-8)
+        except (ValueError, RecursionError):  # torn: not a record (bad JSON or UTF-8, too deep)
             f.truncate(start)
         else:
             f.write(b"\n")
@@ -105,18 +105,40 @@ def read_journal(path) -> list[dict]:
         lines = path.read_text(encoding="utf-8").splitlines()
     except OSError as exc:
         raise ScanError(f"cannot read the journal ({exc.strerror})", source=str(path)) from None
+    except UnicodeDecodeError as exc:
+        raise ScanError(
+            f"not UTF-8 text (byte {exc.start}); the journal was edited or corrupted and cannot "
+            "be resumed",
+            source=str(path),
+        ) from None
     records = []
     for i, line in enumerate(lines):
         if not line.strip():
             continue
         try:
-            records.append(json.loads(line))
-        except json.JSONDecodeError:
+            record = json.loads(line, parse_int=_parse_int)
+        except (json.JSONDecodeError, RecursionError):
             if i == len(lines) - 1:
                 break  # torn write at the crash
+            record = None
+        if not isinstance(record, dict):
             raise ScanError(
-                "corrupt line; the journal cannot be resumed",
+                "corrupt line (not a JSON object); the journal cannot be resumed",
                 source=str(path),
                 where=f"line {i + 1}",
-            ) from None
+            )
+        records.append(record)
     return records
+
+
+#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
+_LONGEST_INTEGER = 308
+
+
+def _parse_int(literal: str) -> int | float:
+    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
+    float (over 308 digits), which the record checks then refuse (a plain ``int`` would overflow
+    on conversion, or exceed Python's 4,300-digit limit while parsing)."""
+    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
+        return float(literal)  # +-inf: float() of a decimal string does not raise
+    return int(literal)

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from asbuilt.errors import ScanError
+from asbuilt.scan.load import MAX_POINTS
 from asbuilt.scan.model import KINDS
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 
@@ -78,6 +79,21 @@ class Window:
     def height(self) -> float:
         """Tilt extent, radians."""
         return self.tilt_max - self.tilt_min
+
+
+#: Largest window angle, degrees: a turn either way (a larger one overflows the raster planner).
+_MAX_DEGREES = 360.0
+#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
+_LONGEST_INTEGER = 308
+
+
+def _parse_int(literal: str) -> int | float:
+    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
+    float (over 308 digits), which every field then refuses by name (a plain ``int`` would
+    overflow on conversion, or exceed Python's 4,300-digit limit while parsing)."""
+    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
+        return float(literal)  # +-inf: float() of a decimal string does not raise
+    return int(literal)
 
 
 def required_points(kind: str, tolerances: Tolerances = DEFAULT_TOLERANCES) -> int:
@@ -161,6 +177,12 @@ class Target:
                 source=source,
                 where=f"{where}.window_deg",
             )
+        if not all(abs(v) <= _MAX_DEGREES for v in corners):  # NaN and infinities fail too
+            raise ScanError(
+                f"angles must be finite and within +-{_MAX_DEGREES:g} degrees (a turn)",
+                source=source,
+                where=f"{where}.window_deg",
+            )
         try:
             window = Window.from_degrees(corners)
         except ValueError as exc:
@@ -170,6 +192,12 @@ class Target:
             not isinstance(points, int) or isinstance(points, bool) or points < 1
         ):
             raise ScanError("must be a positive integer", source=source, where=f"{where}.points")
+        if points is not None and points > MAX_POINTS:
+            raise ScanError(
+                f"must be at most {MAX_POINTS:,} (the most a scan holds)",
+                source=source,
+                where=f"{where}.points",
+            )
         extra = {}
         for key in ("group", "label", "nominal"):
             value = raw.get(key)
@@ -270,13 +298,19 @@ def load_plan(path) -> Plan:
     path = Path(path)
     source = str(path)
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        doc = json.loads(path.read_text(encoding="utf-8"), parse_int=_parse_int)
     except OSError as exc:
         raise ScanError(
             f"cannot read the plan ({exc.strerror}); check the path", source=source
         ) from None
+    except UnicodeDecodeError as exc:
+        raise ScanError(
+            f"not UTF-8 text (byte {exc.start}); save the plan as UTF-8 JSON", source=source
+        ) from None
     except json.JSONDecodeError as exc:
         raise ScanError(f"not valid JSON (line {exc.lineno}: {exc.msg})", source=source) from None
+    except RecursionError:
+        raise ScanError("not valid JSON (nested too deeply)", source=source) from None
     if not isinstance(doc, dict) or doc.get("format") != "asbuilt-scan-plan":
         raise ScanError(
             'not a plan file; start it with {"format": "asbuilt-scan-plan", "version": 1}',
@@ -317,8 +351,9 @@ def load_plan(path) -> Plan:
             )
             expected = "a length in metres > 0"
         elif kind is int:
-            ok = isinstance(value, int) and not isinstance(value, bool) and value >= 0
-            expected = "an integer >= 0"
+            least = 1 if key == "lost_after" else 0
+            ok = isinstance(value, int) and not isinstance(value, bool) and value >= least
+            expected = f"an integer >= {least}"
         else:
             ok = isinstance(value, bool)
             expected = "true or false"

@@ -598,7 +598,7 @@ class ScanSession:
                         r.failed[oid] = rec.get("reason", "")
                     r.order.append(oid)
                     current = None
-            except (KeyError, TypeError, ValueError, IndexError) as exc:
+            except (KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
                 raise ScanError(
                     f"unreadable record ({exc})", source=source, where=f"line {i + 1}"
                 ) from None

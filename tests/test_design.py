@@ -154,3 +154,73 @@ def test_documented_example_loads():
     block = re.search(r"```json\n(.*?)```", text, re.S).group(1)
     design = loads_design(block, source="docs/design-format.md")
     assert [d.kind for d in design.components] == ["pipe", "pipe", "column", "box"]
+
+
+# Found by mutation fuzzing (asbuilt check MODEL --design FILE, 1,500 mutants of a design):
+# each was a traceback (or a silently accepted file) and is now one located line.
+_PIPE = '{"pipes": [{"id": "A", "start": %s, "end": [1, 0, 0]}]}'
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        (
+            '{"units": ["mm"]}',
+            "units: unknown units ['mm']; use one of m, mm, cm, in, ft",
+        ),
+        (
+            _PIPE % ("[1" + "0" * 400 + ", 0, 0]"),
+            "pipes[0] (A).start: must be finite numbers",
+        ),
+        (
+            _PIPE % ("[1" + "0" * 5000 + ", 0, 0]"),
+            "pipes[0] (A).start: must be finite numbers",
+        ),
+        (
+            "[" * 100_000,
+            "invalid JSON (nested too deeply); a design nests lists three levels at most",
+        ),
+        (
+            _PIPE % "[1e300, 0, 0]",
+            "pipes[0] (A).start: 1e+300 m is beyond any site (at most 1e+08 m); check the number "
+            'and the file\'s "units"',
+        ),
+        (
+            '{"pipes": [{"id": "a\\nb", "start": [0, 0, 0], "end": [1, 0, 0]}]}',
+            'pipes[0]: "id" holds a control character (\\u000a); use printable text',
+        ),
+        (
+            '{"pipes": [{"id": "%s", "start": [0, 0, 0], "end": [1, 0, 0]}]}' % ("x" * 300),
+            'pipes[0]: "id" is 300 characters long; use at most 255',
+        ),
+        ('{"version": true}', "version: only version 1 is known"),
+        (
+            '{"pipes": [], "pipes": [{"id": "A", "start": [0, 0, 0], "end": [1, 0, 0]}]}',
+            "pipes: key 'pipes' given twice in one JSON object; keep one (JSON readers differ on "
+            "which one counts)",
+        ),
+    ],
+    ids=[
+        "units-list",
+        "integer-400-digits",
+        "integer-5000-digits",
+        "nested-too-deeply",
+        "coordinate-beyond-any-site",
+        "id-control-character",
+        "id-too-long",
+        "version-true",
+        "repeated-key",
+    ],
+)
+def test_fuzzed_design_files_are_one_located_line(text, message):
+    with pytest.raises(DesignError) as info:
+        loads_design(text, source="design.json")
+    assert str(info.value) == f"design.json: {message}"
+
+
+def test_box_axes_are_not_held_to_the_site_limit():
+    doc = {
+        "boxes": [{"id": "B", "center": [0, 0, 0], "size": [1, 1, 1], "axes": [[2e8, 0, 0]] * 3}]
+    }
+    with pytest.raises(DesignError, match=r"boxes\[0\] \(B\)\.axes: must be orthonormal"):
+        loads_design(json.dumps(doc), source="design.json")

@@ -55,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
 
     from asbuilt.atomic import atomic_write, check_target
     from asbuilt.errors import SceneError
+    from asbuilt.scan.load import MAX_POINTS
     from asbuilt.sim.scene import load_scene
     from asbuilt.sim.simulate import dumps_scan, simulate_scan
 
@@ -62,6 +63,8 @@ def run(args: argparse.Namespace) -> int:
         raise SceneError(f"--seed must be a non-negative integer, not {args.seed}")
     if args.points is not None and args.points < 1:
         raise SceneError(f"--points must be a positive integer, not {args.points}")
+    if args.points is not None and args.points > MAX_POINTS:
+        raise SceneError(f"--points must be at most {MAX_POINTS:,} (the most a scan holds)")
     if args.out != "-":
         check_target(args.out, "--out", inputs=[args.scene], example="scan.json")  # before any work
     scene = load_scene(args.scene)

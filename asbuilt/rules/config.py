@@ -10,6 +10,7 @@ gives the object merging should use.
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
@@ -150,6 +151,14 @@ def _check_value(value, default, where: str, source: str | None, option=None):
 
     ``option`` is ``(table, key)`` when the value has a range to name in the error.
     """
+    wanted = _type_name(default) if option is None else describe(_type_name(default), *option)
+    if isinstance(value, int) and not isinstance(value, bool) and not _fits_float(value):
+        # TOML integers are unbounded: one past any float would overflow the range check
+        raise RulesConfigError(
+            f"must be {wanted}, not an integer of {len(str(abs(value))):,} digits",
+            source=source,
+            where=where,
+        )
     if isinstance(default, bool):
         if isinstance(value, bool):
             return value
@@ -171,8 +180,15 @@ def _check_value(value, default, where: str, source: str | None, option=None):
                 ]
             if all(isinstance(v, str) for v in value):
                 return list(value)
-    wanted = _type_name(default) if option is None else describe(_type_name(default), *option)
     raise RulesConfigError(f"must be {wanted}, not {value!r}", source=source, where=where)
+
+
+def _fits_float(value: int) -> bool:
+    try:
+        float(value)
+    except OverflowError:
+        return False
+    return True
 
 
 def _parse(text: str, source: str | None) -> dict:
@@ -180,6 +196,24 @@ def _parse(text: str, source: str | None) -> dict:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise RulesConfigError(f"not valid TOML ({exc}); fix the syntax", source=source) from None
+    except RecursionError:
+        raise RulesConfigError(
+            "not valid TOML (nested too deeply); a rules file nests lists two levels at most",
+            source=source,
+        ) from None
+    except ValueError:  # tomllib's int() of a literal past Python's 4,300-digit limit
+        found = re.search(rf"\d{{{_LONGEST_INTEGER_LITERAL},}}", text)
+        where = f"line {text.count(chr(10), 0, found.start()) + 1}" if found else None
+        raise RulesConfigError(
+            f"a number of over {_LONGEST_INTEGER_LITERAL - 1:,} digits; fix the number there",
+            source=source,
+            where=where,
+        ) from None
+
+
+#: Digits of the shortest integer literal tomllib cannot convert (Python's default
+#: ``sys.int_info.default_max_str_digits`` is 4,300).
+_LONGEST_INTEGER_LITERAL = 4301
 
 
 @lru_cache(maxsize=1)

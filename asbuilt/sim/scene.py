@@ -20,6 +20,7 @@ import numpy as np
 
 from asbuilt.errors import SceneError
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Primitive, Sphere
+from asbuilt.scan.load import MAX_COORDINATE_M, MAX_POINTS
 from asbuilt.scan.model import KINDS
 from asbuilt.tolerances import MIN_POINTS
 from asbuilt.units import UNITS
@@ -239,13 +240,32 @@ def load_scene(path) -> Scene:
 def loads_scene(text: str, *, source: str | None = None, base_dir=None) -> Scene:
     """Parse and validate a scene from JSON text (see :func:`load_scene`)."""
     try:
-        doc = json.loads(text)
+        doc = json.loads(text, parse_int=_parse_int)
     except json.JSONDecodeError as exc:
         raise SceneError(
             f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",
             source=source,
         ) from None
+    except RecursionError:
+        raise SceneError(
+            "invalid JSON (nested too deeply); a scene nests lists three levels at most",
+            source=source,
+        ) from None
     return scene_from_dict(doc, source=source, base_dir=base_dir)
+
+
+#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
+_LONGEST_INTEGER = 308
+
+
+def _parse_int(literal: str) -> int | float:
+    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
+    float (over 308 digits), which every number field then refuses as not finite, by name (a
+    plain ``int`` would overflow on conversion, or exceed Python's 4,300-digit limit while
+    parsing)."""
+    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
+        return float(literal)  # +-inf: float() of a decimal string does not raise
+    return int(literal)
 
 
 class _Reader:
@@ -291,7 +311,20 @@ class _Reader:
 
     def length(self, data, key, where, **kwargs) -> float:
         value = self.number(data, key, where, **kwargs)
-        return None if value is None else value * self.scale
+        if value is None:
+            return None
+        self._on_site(np.array([value * self.scale]), f"{where}.{key}")
+        return value * self.scale
+
+    def _on_site(self, metres: np.ndarray, where: str) -> None:
+        """Refuse lengths beyond any site: their squares would overflow the ray casting."""
+        largest = float(np.abs(metres).max()) if metres.size else 0.0
+        if largest > MAX_COORDINATE_M:
+            self.fail(
+                where,
+                f"{largest:.3g} m is beyond any site (at most {MAX_COORDINATE_M:g} m); check the "
+                'number and the scene\'s "units"',
+            )
 
     def vector(
         self, data, key, where, *, required=True, default=None, length=True, size=3
@@ -311,7 +344,10 @@ class _Reader:
         array = np.array(value, dtype=np.float64)
         if not np.all(np.isfinite(array)):
             self.fail(f"{where}.{key}", "must be finite")
-        return array * self.scale if length else array
+        if not length:
+            return array
+        self._on_site(array * self.scale, f"{where}.{key}")
+        return array * self.scale
 
     def direction(self, data, key, where, *, required=True, default=None) -> np.ndarray:
         vector = self.vector(data, key, where, required=required, default=None, length=False)
@@ -336,7 +372,7 @@ class _Reader:
         keys = [k for k in ("radius", "diameter", "od") if k in data]
         if len(keys) != 1:
             self.fail(where, "give exactly one of 'radius', 'diameter' or 'od'")
-        value = self.length(data, keys[0], where, positive=True)
+        value = self.length(data, keys[0], where, positive=True, required=True)
         return value if keys[0] == "radius" else 0.5 * value
 
 
@@ -362,7 +398,7 @@ def _load_mesh(reader: _Reader, geo, where) -> tuple[np.ndarray, np.ndarray]:
         try:
             vertices = np.array(vertices, dtype=np.float64)
             faces = np.array(faces, dtype=np.int64)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             reader.fail(where, "'vertices' must be [[x, y, z], ...] and 'faces' [[i, j, k], ...]")
     if vertices.ndim != 2 or vertices.shape[1] != 3 or len(vertices) < 4:
         reader.fail(f"{where}.vertices", "needs at least 4 vertices of 3 coordinates")
@@ -375,7 +411,22 @@ def _load_mesh(reader: _Reader, geo, where) -> tuple[np.ndarray, np.ndarray]:
     scale = reader.number(geo, "scale", where, default=1.0, positive=True)
     vertices = vertices * scale * reader.scale
     translate = reader.vector(geo, "translate", where, required=False, default=np.zeros(3))
+    reader._on_site(vertices + translate, f"{where}.vertices")
     return vertices + translate, faces
+
+
+def _rows(value) -> np.ndarray | None:
+    """``value`` as an array of numbers, None when it is not a list of lists of numbers."""
+    if not isinstance(value, list) or not all(
+        isinstance(row, list)
+        and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in row)
+        for row in value
+    ):
+        return None
+    try:
+        return np.array(value, dtype=np.float64)
+    except ValueError:  # rows of different lengths
+        return None
 
 
 def _cylinder_object(start, end, radius, capped: bool = True) -> tuple[Shape, Primitive]:
@@ -433,12 +484,13 @@ def _geometry(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
         if np.any(size <= 0):
             reader.fail(f"{where}.size", "every size must be positive")
         if "axes" in geo:
-            axes = (
-                np.array(geo["axes"], dtype=np.float64) if isinstance(geo["axes"], list) else None
-            )
+            axes = _rows(geo["axes"])
             if axes is None or axes.shape != (3, 3) or not np.all(np.isfinite(axes)):
                 reader.fail(f"{where}.axes", "must be three [x, y, z] rows")
-            axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
+            norms = np.linalg.norm(axes, axis=1, keepdims=True)
+            if not np.all((norms > 0) & np.isfinite(norms)):
+                reader.fail(f"{where}.axes", "rows must be non-zero finite vectors")
+            axes = axes / norms
             if np.abs(axes @ axes.T - np.eye(3)).max() > 1e-6:
                 reader.fail(f"{where}.axes", "rows must be mutually perpendicular")
         else:
@@ -657,7 +709,7 @@ def scene_from_dict(doc, *, source: str | None = None, base_dir=None) -> Scene:
             where="version",
         )
     units = doc.get("units", "m")
-    if units not in UNITS:
+    if not isinstance(units, str) or units not in UNITS:
         raise SceneError(
             f"unknown unit {units!r}; use one of " + ", ".join(UNITS), source=source, where="units"
         )
@@ -678,6 +730,8 @@ def scene_from_dict(doc, *, source: str | None = None, base_dir=None) -> Scene:
         or default_points < 1
     ):
         reader.fail("points", f"must be a positive integer, not {default_points!r}")
+    if default_points > MAX_POINTS:
+        reader.fail("points", f"must be at most {MAX_POINTS:,} (the most a scan holds)")
     seed = doc.get("seed")
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
         reader.fail("seed", f"must be a non-negative integer, not {seed!r}")
@@ -718,6 +772,10 @@ def scene_from_dict(doc, *, source: str | None = None, base_dir=None) -> Scene:
         points = data.get("points", default_points)
         if isinstance(points, bool) or not isinstance(points, int) or points < 1:
             reader.fail(f"{where}.points", f"must be a positive integer, not {points!r}")
+        if points > MAX_POINTS:
+            reader.fail(
+                f"{where}.points", f"must be at most {MAX_POINTS:,} (the most a scan holds)"
+            )
         if scan and points < MIN_POINTS[kind]:
             reader.fail(f"{where}.points", f"a {kind} needs at least {MIN_POINTS[kind]} points")
         station = data.get("station", stations[0].id)

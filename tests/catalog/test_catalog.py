@@ -380,3 +380,49 @@ def test_short_radius_has_no_45_degree_elbow_so_the_long_radius_45_stands_in():
     two = copper.size("2")
     ruled = fitting_dims(copper, two, two.od, "short")
     assert ruled.elbow45_end == pytest.approx(1.5 * 2 * 0.0254 * math.tan(math.radians(22.5)))
+
+
+_PIPES = """# name: my-pipes
+# kind: pipe
+# units: mm
+# fittings: {fittings}
+nominal,od,source
+4,114.3,test
+6,168.3,test
+"""
+
+
+@pytest.mark.parametrize(
+    "files, message",
+    [
+        (
+            {"my.csv": "my.csv"},
+            "header 'fittings': 'my.csv' is a pipe catalog, not a fittings catalog",
+        ),
+        (
+            {"my.csv": "other.csv", "other.csv": "my.csv"},
+            "header 'fittings': 'other.csv' is a pipe catalog, not a fittings catalog",
+        ),
+    ],
+    ids=["names-itself", "two-name-each-other"],
+)
+def test_a_fittings_cycle_is_one_located_line(tmp_path, files, message):
+    # found by fuzzing user catalogs: a pipe catalog naming itself (or another pipe catalog
+    # naming it back) as its fittings recursed until RecursionError
+    for name, fittings in files.items():
+        (tmp_path / name).write_text(_PIPES.format(fittings=fittings), encoding="utf-8")
+    with pytest.raises(CatalogError) as info:
+        load_catalog(str(tmp_path / "my.csv"))
+    assert str(info.value) == f"{tmp_path / 'my.csv'}: {message}"
+
+
+def test_a_fittings_name_too_long_for_the_system_is_one_located_line(tmp_path):
+    # found by fuzzing user catalogs: a 300-character 'fittings' name made is_file() raise
+    # OSError (File name too long) instead of answering False
+    name = "asme-b16.9" + "0" * 300
+    (tmp_path / "my.csv").write_text(_PIPES.format(fittings=name), encoding="utf-8")
+    with pytest.raises(CatalogError) as info:
+        load_catalog(str(tmp_path / "my.csv"))
+    assert str(info.value).startswith(
+        f"{tmp_path / 'my.csv'}: header 'fittings': unknown fittings catalog 'asme-b16.9000"
+    )

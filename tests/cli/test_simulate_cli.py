@@ -105,6 +105,16 @@ def test_missing_scene_and_bad_options(tmp_path, scene_file, capsys):
     assert "--points must be a positive integer" in capsys.readouterr().err
 
 
+def test_points_beyond_a_scan_are_refused_before_any_work(tmp_path, scene_file, capsys):
+    # found with the scene fuzzing: 10**30 shots overflowed the raster planner (a traceback)
+    out = tmp_path / "o.json"
+    assert main(["simulate", str(scene_file), "--out", str(out), "--points", "1" + "0" * 30]) == 2
+    assert capsys.readouterr().err == (
+        "asbuilt: error: --points must be at most 1,000,000 (the most a scan holds)\n"
+    )
+    assert not out.exists()
+
+
 def test_subprocess(scene_file, tmp_path):
     out = tmp_path / "scan.json"
     env = {**os.environ, "PYTHONPATH": str(ROOT)}

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -254,3 +255,106 @@ def test_bad_targets_files(tmp_path, targets, where):
     path.write_text(json.dumps({"targets": targets}))
     with pytest.raises(CalibrationError, match=where.replace(".", r"\.")):
         load_targets(path)
+
+
+# Found by mutation fuzzing (asbuilt calibrate with 1,000 mutated targets and initial
+# calibrations, asbuilt scan with 300 mutated --calibration files): each was a traceback (or a
+# message naming the file twice) and is now one located line.
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        (
+            b'{"pan": {"zero_deg": "\xff"}}',
+            "not UTF-8 text (byte 22); save the calibration file as UTF-8 JSON",
+        ),
+        ('{"tilt": {"sign": 1' + "0" * 400 + "}}", "tilt.sign: must be a finite number"),
+        (
+            '{"base": {"rotation_deg": [1' + "0" * 400 + ", 0, 0]}}",
+            "base.rotation_deg: must be 3 finite numbers",
+        ),
+        (
+            '{"laser": {"offset_m": [1e308, 0, 0]}}',
+            "laser.offset_m: 1e+308 m is beyond any site (at most 1e+08 m); check the number",
+        ),
+        (
+            '{"base": {"rotation_deg": [0, 1e308, 0]}}',
+            "base.rotation_deg: 1e+308 degrees is more than a turn; use an angle within +-360",
+        ),
+        ('{"pan": {"scale": "x"}}', "pan.scale: must be a finite number"),
+        ("[" * 100_000, "not valid JSON (nested too deeply)"),
+    ],
+    ids=[
+        "not-utf8",
+        "integer-400-digits",
+        "vector-integer-400-digits",
+        "offset-beyond-any-site",
+        "angle-beyond-a-turn",
+        "file-named-once",
+        "nested-too-deeply",
+    ],
+)
+def test_fuzzed_calibration_files_are_one_located_line(tmp_path, text, message):
+    path = tmp_path / "c.json"
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    with pytest.raises(CalibrationError) as info:
+        load_calibration(path)
+    assert str(info.value) == f"{path}: {message}"
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        (
+            b'{"targets": {"a\xff": {"type": "plane"}}}',
+            "not UTF-8 text (byte 15); save the targets file as UTF-8 JSON",
+        ),
+        (
+            '{"targets": {"a": {"type": "plane", "normal": [1' + "0" * 400 + ", 0, 0]}}}",
+            "targets.a.normal: must be 3 finite numbers (metres)",
+        ),
+        (
+            '{"targets": {"a": {"type": "plane", "normal": [0, 0, 1], "offset": NaN}}}',
+            "targets.a.offset: must be a finite number (metres)",
+        ),
+        (
+            '{"targets": {"a": {"type": "sphere", "radius": NaN}}}',
+            "targets.a.radius: must be a positive number (metres)",
+        ),
+        (
+            '{"targets": {"a": {"type": "point", "point": [0, 0, 1e300]}}}',
+            "targets.a.point: 1e+300 m is beyond any site (at most 1e+08 m); check the number",
+        ),
+    ],
+    ids=["not-utf8", "integer-400-digits", "offset-nan", "radius-nan", "point-beyond-any-site"],
+)
+def test_fuzzed_targets_files_are_one_located_line(tmp_path, text, message):
+    path = tmp_path / "t.json"
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    with pytest.raises(CalibrationError) as info:
+        load_targets(path)
+    assert str(info.value) == f"{path}: {message}"
+
+
+def test_targets_that_do_not_fit_the_shots_fail_the_estimate_in_one_line():
+    # fuzzing: a plane target's offset off by metres drove the range scale through zero and
+    # the Calibration's own ValueError escaped as a traceback
+    shots = _shots(TRUE, np.random.default_rng(5))
+    front = shots[1]
+    shots[1] = TargetShots(
+        front.name, PlaneTarget(front.target.normal, 0.0), front.pan, front.tilt, front.rng
+    )
+    with pytest.raises(CalibrationError) as info:
+        estimate_calibration(shots, NOMINAL)
+    assert str(info.value) == (
+        "the estimate failed (pan_scale, tilt_scale and range_scale must be positive); the "
+        "targets do not fit these shots: check each target's numbers, that the scan's objects "
+        "are the targets named, and the initial calibration"
+    )
+
+
+def test_an_initial_scale_near_zero_fails_the_estimate_in_one_line():
+    # fuzzing: an initial range scale of 1e-9 let the observability check's finite-difference
+    # step take the scale below zero (the Calibration's ValueError escaped as a traceback)
+    initial = dataclasses.replace(NOMINAL, range_scale=1e-9)
+    with pytest.raises(CalibrationError, match=r"^the estimate failed \(pan_scale, tilt_scale"):
+        estimate_calibration(_shots(TRUE, np.random.default_rng(5)), initial)

@@ -99,3 +99,34 @@ def test_a_complete_last_record_without_its_newline_is_kept(tmp_path):
     journal.append({"type": "resume"})
     journal.close()
     assert [r["type"] for r in read_journal(path)] == ["session", "shot", "resume"]
+
+
+# Found by mutation fuzzing (asbuilt scan --resume over the simulators, 400 journals cut short
+# and mutated): each was a traceback and is now one located line.
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (
+            b'{"type": "session"}\n{"type": "shot", "x": "\xff"}\n',
+            "not UTF-8 text (byte 43); the journal was edited or corrupted and cannot be resumed",
+        ),
+        (
+            b'{"type": "session"}\ntrue\n{"type": "done"}\n',
+            "line 2: corrupt line (not a JSON object); the journal cannot be resumed",
+        ),
+    ],
+    ids=["not-utf8", "record-not-an-object"],
+)
+def test_fuzzed_journals_are_one_located_line(tmp_path, content, message):
+    path = tmp_path / "scan.json.journal"
+    path.write_bytes(content)
+    with pytest.raises(ScanError) as info:
+        read_journal(path)
+    assert str(info.value) == f"{path}: {message}"
+
+
+def test_long_integers_in_a_journal_read_as_infinite(tmp_path):
+    # a 5,000-digit range escaped Python's integer-string limit as a ValueError
+    path = tmp_path / "scan.json.journal"
+    path.write_text('{"type": "shot", "range": 1' + "0" * 5000 + "}\n", encoding="utf-8")
+    assert read_journal(path) == [{"type": "shot", "range": float("inf")}]

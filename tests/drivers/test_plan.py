@@ -194,3 +194,59 @@ def test_edge_settings_in_a_plan_make_session_settings(tmp_path, settings):
     made = SessionSettings(**load_plan(path).settings)
     for key, value in settings.items():
         assert getattr(made, key) == value
+
+
+# Found by mutation fuzzing (asbuilt scan --plan over the simulators, 400 mutated plans): each
+# was a traceback (or the planner allocating gigabytes until the process was killed) and is
+# now one located line.
+_TARGET = '{"id": "A", "kind": "plane", "window_deg": %s%s}'
+
+
+def _plan_text(target=None, settings="{}"):
+    target = target or _TARGET % ("[0, 0, 10, 10]", "")
+    head = '"format": "asbuilt-scan-plan", "version": 1'
+    return f'{{{head}, "targets": [{target}], "settings": {settings}}}'
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (_plan_text().encode() + b"\xff", "not UTF-8 text (byte 134); save the plan as UTF-8 JSON"),
+        (
+            _plan_text(_TARGET % ("[0, 0, 10, 10]", ', "points": 1000000000')).encode(),
+            "targets[0] (A).points: must be at most 1,000,000 (the most a scan holds)",
+        ),
+        (
+            _plan_text(_TARGET % ("[-1e308, 0, 1e308, 10]", "")).encode(),
+            "targets[0] (A).window_deg: angles must be finite and within +-360 degrees (a turn)",
+        ),
+        (
+            _plan_text(_TARGET % ("[1" + "0" * 400 + ", 0, 10, 10]", "")).encode(),
+            "targets[0] (A).window_deg: angles must be finite and within +-360 degrees (a turn)",
+        ),
+        (
+            _plan_text(settings='{"lost_after": 0}').encode(),
+            "settings.lost_after: must be an integer >= 1",
+        ),
+        (
+            _plan_text(settings='{"retries": 1' + "0" * 5000 + "}").encode(),
+            "settings.retries: must be an integer >= 0",
+        ),
+        (("[" * 100_000).encode(), "not valid JSON (nested too deeply)"),
+    ],
+    ids=[
+        "not-utf8",
+        "points-beyond-a-scan",
+        "window-beyond-a-turn",
+        "window-integer-400-digits",
+        "lost-after-zero",
+        "integer-5000-digits",
+        "nested-too-deeply",
+    ],
+)
+def test_fuzzed_plans_are_one_located_line(tmp_path, content, message):
+    path = tmp_path / "plan.json"
+    path.write_bytes(content)
+    with pytest.raises(ScanError) as info:
+        load_plan(path)
+    assert str(info.value) == f"{path}: {message}"

@@ -122,3 +122,40 @@ def test_documented_rules_file_example_loads():
     assert not config.is_active("too-few-points")
     assert config.severity("clash") == "warning"
     assert config.tolerances.angle_snap_deg == 1.5
+
+
+# Found by mutation fuzzing (asbuilt check MODEL --rules FILE, 3,000 mutants of the shipped and
+# of a user rules file): each was a traceback and is now one located line.
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        (
+            "[general]\nk_sigma = 1" + "0" * 400,
+            "[general].k_sigma: must be a number at least 0 (standard errors a violation must "
+            "exceed its limit by), not an integer of 401 digits",
+        ),
+        (
+            "[general]\nrecommended_points_cylinder = 1" + "0" * 400,
+            "[general].recommended_points_cylinder: must be an integer at least 1 (points wanted "
+            "on a cylinder), not an integer of 401 digits",
+        ),
+        (
+            "[design-deviation]\nlength_tolerance = [[1" + "0" * 400 + ", 0.003]]",
+            "[design-deviation].length_tolerance[0][0]: must be a number, not an integer of 401 "
+            "digits",
+        ),
+        (
+            "[general]\nk_sigma = 1" + "0" * 5000,
+            "line 2: a number of over 4,300 digits; fix the number there",
+        ),
+        (
+            "x = " + "[" * 100_000,
+            "not valid TOML (nested too deeply); a rules file nests lists two levels at most",
+        ),
+    ],
+    ids=["float-option", "integer-option", "list-row", "beyond-int-limit", "nested-too-deeply"],
+)
+def test_fuzzed_rules_files_are_one_located_line(text, message):
+    with pytest.raises(RulesConfigError) as info:
+        loads_rules(text, source="rules.toml")
+    assert str(info.value) == f"rules.toml: {message}"

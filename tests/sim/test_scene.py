@@ -148,3 +148,132 @@ def test_bad_json_and_missing_file(tmp_path):
         loads_scene("{nope", source="x.json")
     with pytest.raises(SceneError, match="file not found"):
         load_scene(tmp_path / "missing.json")
+
+
+# Found by mutation fuzzing (asbuilt simulate SCENE, 2,000 mutants of the spool and plant scenes
+# and 1,000 of the plant's .obj mesh): each was a traceback and is now one located line.
+_SPOOL = {
+    "stations": [{"id": "S1", "position": [0.0, 0.0, 1.5]}],
+    "objects": [
+        {
+            "id": "X",
+            "kind": "cuboid",
+            "geometry": {"type": "box", "center": [3, 0, 0], "size": [1, 1, 1]},
+        }
+    ],
+}
+_BIG = "1" + "0" * 400
+
+
+def _with(geometry=None, **changes):
+    doc = json.loads(json.dumps(_SPOOL))
+    if geometry is not None:
+        doc["objects"][0]["geometry"] = geometry
+    for key, value in changes.items():
+        if key == "points":
+            doc["objects"][0]["points"] = value
+        else:
+            doc[key] = value
+    return json.dumps(doc)
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        (_with(units=["mm"]), "units: unknown unit ['mm']; use one of m, mm, cm, in, ft"),
+        (
+            _with().replace('"center": [3,', f'"center": [{_BIG},'),
+            "objects[0] (X).geometry.center: must be finite",
+        ),
+        (
+            _with(points=10**30),
+            "objects[0] (X).points: must be at most 1,000,000 (the most a scan holds)",
+        ),
+        (
+            _with(
+                {"type": "member", "start": [1e308, 0, 0], "end": [-1e308, 0, 0], "section": [1, 1]}
+            ),
+            "objects[0] (X).geometry.start: 1e+308 m is beyond any site (at most 1e+08 m); check "
+            'the number and the scene\'s "units"',
+        ),
+        (
+            _with({"type": "cylinder", "start": [0, 0, 0], "end": [1e300, 0, 0], "od": 0.1}),
+            "objects[0] (X).geometry.end: 1e+300 m is beyond any site (at most 1e+08 m); check "
+            'the number and the scene\'s "units"',
+        ),
+        (
+            _with(
+                {
+                    "type": "box",
+                    "center": [3, 0, 0],
+                    "size": [1, 1, 1],
+                    "axes": [[0, 0, 0], [0, 1, 0], [0, 0, 1]],
+                }
+            ),
+            "objects[0] (X).geometry.axes: rows must be non-zero finite vectors",
+        ),
+        (
+            _with(
+                {
+                    "type": "box",
+                    "center": [3, 0, 0],
+                    "size": [1, 1, 1],
+                    "axes": [[1, 0, 0], [0, 1], [0, 0, 1]],
+                }
+            ),
+            "objects[0] (X).geometry.axes: must be three [x, y, z] rows",
+        ),
+        (
+            _with(
+                {
+                    "type": "box",
+                    "center": [3, 0, 0],
+                    "size": [1, 1, 1],
+                    "axes": [["a", 0, 0], [0, 1, 0], [0, 0, 1]],
+                }
+            ),
+            "objects[0] (X).geometry.axes: must be three [x, y, z] rows",
+        ),
+        (
+            _with(
+                {
+                    "type": "mesh",
+                    "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+                    "faces": [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 10**30]],
+                }
+            ),
+            "objects[0] (X).geometry: 'vertices' must be [[x, y, z], ...] and 'faces' "
+            "[[i, j, k], ...]",
+        ),
+        (
+            _with({"type": "cylinder", "start": [0, 0, 0], "end": [1, 0, 0], "od": None}),
+            "objects[0] (X).geometry: missing field 'od'",
+        ),
+        (
+            "[" * 100_000,
+            "invalid JSON (nested too deeply); a scene nests lists three levels at most",
+        ),
+        (
+            _with(seed=0).replace('"seed": 0', '"seed": 1' + "0" * 5000),
+            "seed: must be a non-negative integer, not inf",
+        ),
+    ],
+    ids=[
+        "units-list",
+        "integer-400-digits",
+        "points-beyond-a-scan",
+        "member-beyond-any-site",
+        "cylinder-beyond-any-site",
+        "box-axes-zero-row",
+        "box-axes-ragged",
+        "box-axes-text",
+        "mesh-face-index-overflow",
+        "od-null",
+        "nested-too-deeply",
+        "integer-5000-digits",
+    ],
+)
+def test_fuzzed_scenes_are_one_located_line(text, message):
+    with pytest.raises(SceneError) as info:
+        loads_scene(text, source="s.json")
+    assert str(info.value) == f"s.json: {message}"
