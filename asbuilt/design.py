@@ -26,6 +26,8 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from asbuilt._json_numbers import parse_int as _parse_int
+
 from .catalog import parse_nominal
 from .errors import DesignError
 from .model import Component, Model, Straight
@@ -50,9 +52,6 @@ DESIGN_KINDS = {
     "box": ("cuboid",),
 }
 _LISTS = {"pipes": "pipe", "columns": "column", "boxes": "box"}
-
-#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
-_LONGEST_INTEGER = 308
 
 
 @dataclass(frozen=True, eq=False)
@@ -143,15 +142,6 @@ def _vector(
             where=where,
         )
     return array
-
-
-def _parse_int(literal: str) -> int | float:
-    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
-    float (over 308 digits), which every vector then refuses as not finite, by name (a plain
-    ``int`` would overflow on conversion, or exceed Python's 4,300-digit limit while parsing)."""
-    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
-        return float(literal)  # +-inf: float() of a decimal string does not raise
-    return int(literal)
 
 
 class _RepeatedKey(ValueError):

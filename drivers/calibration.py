@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from asbuilt._json_numbers import parse_int as _parse_int
 from asbuilt.atomic import atomic_write
 from asbuilt.errors import CalibrationError
 from asbuilt.scan.load import MAX_COORDINATE_M
@@ -70,17 +71,6 @@ _TOP = {"format", "version", "estimate", "comment", *_SECTIONS}
 
 #: Largest angle a calibration or target field may hold, degrees: a turn either way.
 _MAX_DEGREES = 360.0
-#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
-_LONGEST_INTEGER = 308
-
-
-def _parse_int(literal: str) -> int | float:
-    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
-    float (over 308 digits), which every number field then refuses as not finite, by name (a
-    plain ``int`` would overflow on conversion, or exceed Python's 4,300-digit limit)."""
-    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
-        return float(literal)  # +-inf: float() of a decimal string does not raise
-    return int(literal)
 
 
 def _read_json(path: Path, what: str):

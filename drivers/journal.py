@@ -13,6 +13,7 @@ import json
 import os
 from pathlib import Path
 
+from asbuilt._json_numbers import parse_int as _parse_int
 from asbuilt.errors import ScanError
 
 __all__ = ["Journal", "read_journal", "journal_path_for"]
@@ -129,16 +130,3 @@ def read_journal(path) -> list[dict]:
             )
         records.append(record)
     return records
-
-
-#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
-_LONGEST_INTEGER = 308
-
-
-def _parse_int(literal: str) -> int | float:
-    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
-    float (over 308 digits), which the record checks then refuse (a plain ``int`` would overflow
-    on conversion, or exceed Python's 4,300-digit limit while parsing)."""
-    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
-        return float(literal)  # +-inf: float() of a decimal string does not raise
-    return int(literal)

@@ -23,6 +23,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from asbuilt._json_numbers import parse_int as _parse_int
 from asbuilt.errors import ScanError
 from asbuilt.scan.load import MAX_POINTS
 from asbuilt.scan.model import KINDS
@@ -83,17 +84,6 @@ class Window:
 
 #: Largest window angle, degrees: a turn either way (a larger one overflows the raster planner).
 _MAX_DEGREES = 360.0
-#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
-_LONGEST_INTEGER = 308
-
-
-def _parse_int(literal: str) -> int | float:
-    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
-    float (over 308 digits), which every field then refuses by name (a plain ``int`` would
-    overflow on conversion, or exceed Python's 4,300-digit limit while parsing)."""
-    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
-        return float(literal)  # +-inf: float() of a decimal string does not raise
-    return int(literal)
 
 
 def required_points(kind: str, tolerances: Tolerances = DEFAULT_TOLERANCES) -> int:

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from asbuilt._json_numbers import parse_int as _parse_int
 from asbuilt.atomic import atomic_write
 from asbuilt.errors import ExportError, ScanError
 from asbuilt.export._model_fields import (
@@ -358,19 +359,6 @@ def load_model_document(path) -> dict:
         ) from None
     _check_document(document, source)
     return document
-
-
-def _parse_int(literal: str) -> int | float:
-    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
-    float (over 308 digits), which every number field then refuses as not finite, by name (a
-    plain ``int`` there would overflow on conversion, far from the field)."""
-    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
-        return float(literal)  # +-inf: float() of a decimal string does not raise
-    return int(literal)
-
-
-#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
-_LONGEST_INTEGER = 308
 
 
 def _check_document(document, source: str | None) -> None:

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from asbuilt._json_numbers import parse_int as _parse_int
 from asbuilt.errors import SceneError
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Primitive, Sphere
 from asbuilt.scan.load import MAX_COORDINATE_M, MAX_POINTS
@@ -252,20 +253,6 @@ def loads_scene(text: str, *, source: str | None = None, base_dir=None) -> Scene
             source=source,
         ) from None
     return scene_from_dict(doc, source=source, base_dir=base_dir)
-
-
-#: Digits of the longest integer a float holds (``sys.float_info.max`` is about 1.8e308).
-_LONGEST_INTEGER = 308
-
-
-def _parse_int(literal: str) -> int | float:
-    """``json.loads`` integer hook: an ``int``, or an infinite float for an integer beyond any
-    float (over 308 digits), which every number field then refuses as not finite, by name (a
-    plain ``int`` would overflow on conversion, or exceed Python's 4,300-digit limit while
-    parsing)."""
-    if len(literal) - literal.startswith("-") > _LONGEST_INTEGER:
-        return float(literal)  # +-inf: float() of a decimal string does not raise
-    return int(literal)
 
 
 class _Reader:
