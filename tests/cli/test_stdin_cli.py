@@ -179,6 +179,25 @@ def test_a_bad_model_document_on_stdin_names_stdin_and_the_field(tmp_path, monke
     assert not (tmp_path / "r.csv").exists()
 
 
+def test_a_400_digit_integer_in_a_model_document_on_stdin_is_named(tmp_path, monkeypatch, capsys):
+    """Standard input's document is read with the file reader's integer hook: the integer
+    overflowed float() in a field check (a traceback) where the file gave a located line."""
+    document = tmp_path / "model.json"
+    assert main(["model", str(SPOOL), "--out", str(document)]) == 0
+    capsys.readouterr()
+    doc = json.loads(document.read_text())
+    doc["components"][0]["od"] = 12345
+    text = json.dumps(doc).replace('"od": 12345', '"od": ' + "9" * 400, 1)
+    _feed(monkeypatch, text.encode())
+    assert main(["check", "-"]) == 2
+    _, err = capsys.readouterr()
+    component = doc["components"][0]["id"]
+    assert err == (
+        f"asbuilt: error: <stdin>: components[0] ({component}).od: must be a finite number, "
+        "not Infinity\n"
+    )
+
+
 def test_a_file_named_dash_is_not_the_input_an_output_would_replace(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "-").write_text("not the input")
