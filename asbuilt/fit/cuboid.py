@@ -453,10 +453,13 @@ def fit_cuboid(
     """
     options = {"edge_pad": edge_pad, "silhouette": silhouette}
     result = _fit_box(points, sigma, tolerances, viewpoint, options)
+    if result.inliers.all():
+        return result  # no shot left out, so none that could run on past an end
     # Shots the fit left out that lie on a seen face's plane past an extent bound (a receding
-    # beam's far part, cut off at range jumps): that size is only a lower bound.
+    # beam's far part, cut off at range jumps): that size is only a lower bound. (The points
+    # were validated by the fit, whose rows ``result`` follows.)
     cutoff = tolerances.outlier_cutoff_sigma * max(result.sigma, tolerances.sigma_floor)
-    return open_past_faces(result, _validate(points), cutoff)
+    return open_past_faces(result, np.asarray(points, dtype=np.float64), cutoff)
 
 
 def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
