@@ -71,7 +71,7 @@ from pathlib import Path
 
 import numpy as np
 
-from asbuilt.atomic import atomic_write
+from asbuilt.atomic import atomic_write, check_target
 from asbuilt.errors import DeviceProtocolError, DeviceTimeout, ScanError
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 from asbuilt.units import unit_factor
@@ -519,6 +519,8 @@ class ScanSession:
         self.objects: dict[str, ObjectScan] = {}
         self.failed: dict[str, str] = {}
         self._resumed = _Resumed()
+        # Check all before touching the journal (Journal() modifies nothing until an append).
+        check_target(self.out, "--out", example="scan.json")
         exists = self.journal_path.exists() and self.journal_path.stat().st_size > 0
         if resume:
             if not exists:
@@ -534,6 +536,14 @@ class ScanSession:
                 source=str(self.journal_path),
             )
         self.journal = Journal(self.journal_path)
+        self.objects.update(self._resumed.done)
+        self.failed.update(self._resumed.failed)
+        if self.objects:  # the finished objects, before the journal is appended to
+            try:
+                self.write_scan()
+            except BaseException:
+                self.journal.close()
+                raise
         if not resume:
             self.journal.append(
                 {
@@ -550,10 +560,6 @@ class ScanSession:
             self.journal.append(
                 {"type": "resume", "at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
             )
-        self.objects.update(self._resumed.done)
-        self.failed.update(self._resumed.failed)
-        if self.objects:
-            self.write_scan()
 
     # -- resume ----------------------------------------------------------------------------
     def _load_journal(self) -> None:
@@ -577,7 +583,7 @@ class ScanSession:
             )
         targets: dict[str, Target] = {}
         shots: dict[str, list[Shot]] = {}
-        current = None
+        current = begun = None  # the object begun last and not ended, its record's line
         r = self._resumed
         for i, rec in enumerate(recs):
             kind = rec.get("type")
@@ -586,7 +592,7 @@ class ScanSession:
                     target = Target.from_dict(rec["target"], source=source, where=f"line {i + 1}")
                     targets[target.id] = target
                     shots[target.id] = []
-                    current = target.id
+                    current, begun = target.id, i + 1
                 elif kind == "shot":
                     shots[rec["object"]].append(Shot.from_record(rec))
                 elif kind in ("done", "failed"):
@@ -603,6 +609,10 @@ class ScanSession:
                     f"unreadable record ({exc})", source=source, where=f"line {i + 1}"
                 ) from None
         if current is not None:
+            if current in r.done:  # scan() refuses a finished id before journaling its object
+                why = f"object {current!r} is begun again after it was finished; the journal"
+                where = f"line {begun}"
+                raise ScanError(f"{why} was edited, cannot resume", source=source, where=where)
             r.pending = targets[current]
             r.pending_shots = shots[current]
 

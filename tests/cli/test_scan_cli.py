@@ -452,3 +452,40 @@ def test_sighup_stops_cleanly_and_keeps_the_scan(site):
     assert last.startswith("hang-up: 1 finished object(s) saved in ") and "--resume" in last
     assert "Traceback" not in err
     assert [o["id"] for o in json.loads((site / "scan.json").read_text())["objects"]] == ["P1"]
+
+
+def _object_begun_again(site):
+    # an edited journal begins P1 again after its 'done' (its torn last line stays last)
+    journal = site / "scan.json.journal"
+    data = journal.read_bytes()
+    torn = data.rindex(b"\n") + 1
+    target = json.dumps({"id": "P1", "kind": "cylinder", "window_deg": [72, -6.5, 108, -1.5]})
+    journal.write_bytes(
+        data[:torn] + b'{"type":"object","target":' + target.encode() + b"}\n" + data[torn:]
+    )
+    return "begun again after it was finished; the journal was edited, cannot resume"
+
+
+def _out_made_a_directory(site):
+    (site / "scan.json").unlink()
+    (site / "scan.json").mkdir()
+    return "is a directory"
+
+
+@pytest.mark.parametrize(
+    "edit", [_object_begun_again, _out_made_a_directory], ids=["object-again", "out-dir"]
+)
+def test_a_refused_resume_is_one_line_and_leaves_the_journal_byte_for_byte(site, capsys, edit):
+    plan = ["--plan", str(site / "plan.json")]
+    assert main(_args(site, "r1", extra_lrf="?unplug_after=70", more=plan)) == 2
+    with open(site / "scan.json.journal", "ab") as f:
+        f.write(b'{"type":"shot","object":"C1","seq":40,"req":[1.1')  # the crash hit mid-write
+    message = edit(site)
+    capsys.readouterr()
+    before = (site / "scan.json.journal").read_bytes()
+    listing = sorted(p.name for p in site.iterdir())
+    assert main(_args(site, "r2", more=[*plan, "--resume"])) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert (site / "scan.json.journal").read_bytes() == before
+    assert sorted(p.name for p in site.iterdir()) == listing

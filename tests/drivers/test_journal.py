@@ -6,7 +6,7 @@ import json
 import os
 
 import pytest
-from asbuilt.drivers.journal import Journal, journal_path_for, read_journal
+from asbuilt.drivers.journal import Journal, journal_path_for, read_journal, torn_path_for
 
 from asbuilt.errors import ScanError
 
@@ -130,3 +130,60 @@ def test_long_integers_in_a_journal_read_as_infinite(tmp_path):
     path = tmp_path / "scan.json.journal"
     path.write_text('{"type": "shot", "range": 1' + "0" * 5000 + "}\n", encoding="utf-8")
     assert read_journal(path) == [{"type": "shot", "range": float("inf")}]
+
+
+TORN = b'{"type":"session"}\n{"type":"shot","seq":1}\n{"type":"shot","seq":2,"range":4.12'
+
+
+def test_opening_a_journal_modifies_nothing(tmp_path):
+    # a session opens the journal before it may still refuse (the scan file cannot be written):
+    # until the first append the bytes, torn last line included, are untouched
+    path = tmp_path / "s.json.journal"
+    path.write_bytes(TORN)
+    Journal(path).close()
+    assert path.read_bytes() == TORN
+    assert not torn_path_for(path).exists()
+
+
+def test_the_torn_last_line_is_kept_beside_the_journal_before_it_is_cut(tmp_path):
+    # the torn bytes may be the only trace of a shot's range: copied to <journal>.torn first
+    path = tmp_path / "s.json.journal"
+    path.write_bytes(TORN)
+    journal = Journal(path)
+    journal.append({"type": "resume"})
+    journal.close()
+    assert torn_path_for(path) == tmp_path / "s.json.journal.torn"
+    assert torn_path_for(path).read_bytes() == b'{"type":"shot","seq":2,"range":4.12\n'
+    assert path.read_bytes() == TORN.rsplit(b"\n", 1)[0] + b'\n{"type":"resume"}\n'
+    with open(path, "ab") as f:  # a second crash, a second torn line: kept after the first
+        f.write(b'{"type":"sh')
+    journal = Journal(path)
+    journal.append({"type": "resume"})
+    journal.close()
+    assert torn_path_for(path).read_bytes().splitlines() == [
+        b'{"type":"shot","seq":2,"range":4.12',
+        b'{"type":"sh',
+    ]
+    assert [r["type"] for r in read_journal(path)] == ["session", "shot", "resume", "resume"]
+
+
+def test_a_torn_line_that_cannot_be_kept_is_not_cut(tmp_path):
+    path = tmp_path / "s.json.journal"
+    path.write_bytes(TORN)
+    torn_path_for(path).mkdir()  # the copy cannot be written
+    journal = Journal(path)
+    with pytest.raises(ScanError, match="cannot write the journal .*nothing was appended"):
+        journal.append({"type": "resume"})
+    journal.close()
+    assert path.read_bytes() == TORN
+
+
+def test_a_complete_last_record_with_a_long_integer_is_not_torn(tmp_path):
+    # read_journal reads it (as infinite), so mending must not cut it as torn
+    path = tmp_path / "s.json.journal"
+    path.write_text('{"type":"session"}\n{"type":"shot","range":1' + "0" * 5000 + "}")
+    journal = Journal(path)
+    journal.append({"type": "resume"})
+    journal.close()
+    assert [r["type"] for r in read_journal(path)] == ["session", "shot", "resume"]
+    assert not torn_path_for(path).exists()

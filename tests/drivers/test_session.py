@@ -26,7 +26,7 @@ from asbuilt.drivers.session import (
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from asbuilt.errors import DeviceError, DeviceTimeout, ScanError
+from asbuilt.errors import AsbuiltError, DeviceError, DeviceTimeout, ScanError
 from asbuilt.tolerances import DEFAULT_TOLERANCES
 
 
@@ -267,6 +267,87 @@ def test_torn_last_journal_line_is_ignored(scene_file, tmp_path):
     assert len([r for r in read_journal(journal) if r["type"] == "shot"]) == 10
     session = _run(scene_file, out, "t2", [PIPE], resume=True)
     assert "P1" in session.objects
+
+
+def _crashed_in_c1(scene_file, tmp_path, rig):
+    """A journal with P1 finished and C1 interrupted (the range finder unplugged), ending in a
+    torn line (the crash hit mid-write); its path."""
+    out = tmp_path / "crashed.json"
+    with pytest.raises(DeviceError):
+        _run(scene_file, out, rig, [PIPE, COLUMN], lrf_options="?unplug_after=70")
+    journal = journal_path_for(out)
+    with open(journal, "a") as f:
+        f.write('{"type":"shot","object":"C1","seq":9,"req":[1.2')  # torn: the only trace
+    return journal
+
+
+def _resume_pending(scene_file, out, rig):
+    """What ``asbuilt scan --resume`` does first: open the session, finish the pending object."""
+    ptu, lrf = _devices(scene_file, rig)
+    try:
+        with ScanSession(DeviceShooter(ptu, lrf), STATION, out, resume=True) as session:
+            if session.pending is not None:
+                session.scan(session.pending)
+    finally:
+        ptu.close()
+        lrf.close()
+
+
+def _pending_object_finished_earlier(journal, out):
+    # an edited journal begins P1 again after its 'done': the pending object is in the scan
+    with open(journal, "r+b") as f:
+        data = f.read()
+        torn = data.rindex(b"\n") + 1
+        f.seek(torn)
+        f.write(b'{"type":"object","target":' + json.dumps(PIPE.to_dict()).encode() + b"}\n")
+        f.write(data[torn:])
+        f.truncate()
+    return out
+
+
+def _out_is_a_directory(journal, out):
+    # the scan file's name is now a directory: the finished P1 cannot be written back
+    out.unlink()
+    out.mkdir()
+    return out
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (_pending_object_finished_earlier, "P1"),
+        (_out_is_a_directory, "is a directory"),
+    ],
+    ids=["pending-object-finished-earlier", "out-is-a-directory"],
+)
+def test_a_refused_resume_leaves_the_journal_byte_for_byte(scene_file, tmp_path, edit, message):
+    """Refusing a journal must not cut its torn last line, append a resume record or write a
+    sidecar: the bytes before and after are the same (both paths modified it before)."""
+    journal = _crashed_in_c1(scene_file, tmp_path, "rj1")
+    out = edit(journal, tmp_path / "crashed.json")
+    before = journal.read_bytes()
+    listing = sorted(p.name for p in tmp_path.iterdir())
+    with pytest.raises(AsbuiltError, match=message):
+        _resume_pending(scene_file, out, "rj2")
+    assert journal.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == listing
+
+
+def test_a_resume_refused_for_its_units_leaves_the_journal_byte_for_byte(scene_file, tmp_path):
+    journal = _crashed_in_c1(scene_file, tmp_path, "ru1")
+    before = journal.read_bytes()
+    with pytest.raises(ScanError, match="resume with --units m"):
+        ScanSession(lambda *a: None, STATION, tmp_path / "crashed.json", units="mm", resume=True)
+    assert journal.read_bytes() == before
+
+
+def test_an_accepted_resume_keeps_the_torn_last_line_beside_the_journal(scene_file, tmp_path):
+    journal = _crashed_in_c1(scene_file, tmp_path, "rk1")
+    torn = journal.read_bytes().rsplit(b"\n", 1)[1]
+    _resume_pending(scene_file, tmp_path / "crashed.json", "rk2")
+    assert (tmp_path / "crashed.json.journal.torn").read_bytes() == torn + b"\n"
+    assert torn not in journal.read_bytes()
+    assert read_journal(journal)[-1]["type"] == "done"
 
 
 def test_resume_without_journal(tmp_path):
