@@ -26,7 +26,7 @@ from importlib import resources
 from pathlib import Path
 from types import MappingProxyType
 
-from .errors import CatalogError
+from .errors import CatalogError, quoted
 from .units import UNITS
 
 __all__ = [
@@ -433,7 +433,7 @@ def model_catalog(model, catalog=None):
             return load_catalog(model.catalog), None
         except CatalogError:
             return None, (
-                f"catalog {model.catalog!r} is no shipped catalog and the model does not "
+                f"catalog {quoted(model.catalog)} is no shipped catalog and the model does not "
                 "record its file (made before the file was recorded); build the model again "
                 "from the scan with --catalog FILE"
             )
@@ -445,7 +445,7 @@ def _load_packaged(name: str) -> Catalog:
     names = catalog_names()
     if name not in names:
         raise CatalogError(
-            f"unknown catalog {name!r}; use one of {', '.join(names)} or a CSV file path"
+            f"unknown catalog {quoted(name)}; use one of {', '.join(names)} or a CSV file path"
         )
     resource = resources.files("asbuilt.catalogs") / f"{name}.csv"
     content = resource.read_text(encoding="utf-8")
@@ -475,7 +475,7 @@ def _attach_fittings(catalog: Catalog, base: Path | None) -> Catalog:
         table = _load_path(str((base / ref).resolve()), str(base / ref), attach=False)
     elif _looks_like_path(ref) and base is not None:
         raise CatalogError(
-            f"fittings catalog {ref!r} not found beside the catalog",
+            f"fittings catalog {quoted(ref)} not found beside the catalog",
             source=catalog.path,
             where="header 'fittings'",
         )
@@ -484,13 +484,13 @@ def _attach_fittings(catalog: Catalog, base: Path | None) -> Catalog:
             table = _load_packaged(ref)
         except CatalogError:
             raise CatalogError(
-                f"unknown fittings catalog {ref!r}; use one of {', '.join(catalog_names())}",
+                f"unknown fittings catalog {quoted(ref)}; use one of {', '.join(catalog_names())}",
                 source=catalog.path,
                 where="header 'fittings'",
             ) from None
     if table.kind != "fittings":
         raise CatalogError(
-            f"{ref!r} is a {table.kind} catalog, not a fittings catalog",
+            f"{quoted(ref)} is a {table.kind} catalog, not a fittings catalog",
             source=catalog.path,
             where="header 'fittings'",
         )
@@ -516,15 +516,15 @@ def _number(cell: str, *, source: str, line: int, column: str, scale: float) -> 
         value = float(cell)
     except ValueError:
         raise CatalogError(
-            f"{cell!r} is not a number; write a plain number like 114.3",
+            f"{quoted(cell)} is not a number; write a plain number like 114.3",
             source=source,
-            where=f"line {line}, column {column!r}",
+            where=f"line {line}, column {quoted(column)}",
         ) from None
     if not math.isfinite(value) or value <= 0:
         raise CatalogError(
-            f"{cell!r} must be a positive number",
+            f"{quoted(cell)} must be a positive number",
             source=source,
-            where=f"line {line}, column {column!r}",
+            where=f"line {line}, column {quoted(column)}",
         )
     return round(value * scale, 12)
 
@@ -547,7 +547,7 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
             key = key.lower()
             if key not in _HEADER_KEYS:
                 raise CatalogError(
-                    f"unknown header key {key!r}; use {', '.join(sorted(_HEADER_KEYS))}",
+                    f"unknown header key {quoted(key)}; use {', '.join(sorted(_HEADER_KEYS))}",
                     source=source,
                     where=f"line {number}",
                 )
@@ -560,14 +560,14 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
     kind = header["kind"].lower()
     if kind not in _KINDS:
         raise CatalogError(
-            f"kind must be pipe or fittings, not {header['kind']!r}",
+            f"kind must be pipe or fittings, not {quoted(header['kind'])}",
             source=source,
             where="header 'kind'",
         )
     units = header["units"]
     if units not in UNITS:
         raise CatalogError(
-            f"units must be one of {', '.join(UNITS)}, not {units!r}",
+            f"units must be one of {', '.join(UNITS)}, not {quoted(units)}",
             source=source,
             where="header 'units'",
         )
@@ -587,10 +587,10 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
         if column in allowed or (kind == "pipe" and column.startswith("wall_") and len(column) > 5):
             continue
         raise CatalogError(
-            f"unknown column {column!r}; use nominal, dn, nps, od, source, "
+            f"unknown column {quoted(column)}; use nominal, dn, nps, od, source, "
             + ("wall_<schedule>" if kind == "pipe" else ", ".join(FITTING_COLUMNS)),
             source=source,
-            where=f"line {col_line}, column {column!r}",
+            where=f"line {col_line}, column {quoted(column)}",
         )
     if len(set(columns)) != len(columns):
         raise CatalogError("a column appears twice", source=source, where=f"line {col_line}")
@@ -615,7 +615,7 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
         key = _nominal_key(nominal)
         if key in seen:
             raise CatalogError(
-                f"nominal size {nominal!r} repeats line {seen[key]}",
+                f"nominal size {quoted(nominal)} repeats line {seen[key]}",
                 source=source,
                 where=f"line {line_no}, column 'nominal'",
             )
@@ -632,7 +632,7 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
             nps = _parse_number(row["nps"])
             if nps is None:
                 raise CatalogError(
-                    f"{row['nps']!r} is not a size in inches (e.g. 4 or 1 1/2)",
+                    f"{quoted(row['nps'])} is not a size in inches (e.g. 4 or 1 1/2)",
                     source=source,
                     where=f"line {line_no}, column 'nps'",
                 )
@@ -667,7 +667,7 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
                             raise CatalogError(
                                 "the wall must be thinner than half the OD",
                                 source=source,
-                                where=f"line {line_no}, column {column!r}",
+                                where=f"line {line_no}, column {quoted(column)}",
                             )
                         walls[column[5:].upper()] = wall
             sizes.append(
@@ -708,7 +708,7 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
         for a, b in zip(sizes, sizes[1:]):
             if abs(a.od - b.od) < 1e-9:
                 raise CatalogError(
-                    f"sizes {a.nominal!r} (line {a.line}) and {b.nominal!r} have the same OD",
+                    f"sizes {quoted(a.nominal)} (line {a.line}) and {quoted(b.nominal)} have the same OD",
                     source=source,
                     where=f"line {b.line}, column 'od'",
                 )
@@ -758,7 +758,7 @@ def fitting_dims(
         OD), tee centre-to-end of run and outlet = OD, reducer length = OD of the large end.
     """
     if elbow_radius not in ("long", "short"):
-        raise ValueError(f"elbow_radius must be 'long' or 'short', not {elbow_radius!r}")
+        raise ValueError(f"elbow_radius must be 'long' or 'short', not {quoted(elbow_radius)}")
     row = catalog.fitting(size) if size is not None else None
     dims = dict(row.dims) if row is not None else {}
     notes: list[str] = []

@@ -43,6 +43,28 @@ def located(source: str | None, where: str | None, message: str) -> str:
     return ": ".join(part for part in (source, where, message) if part)
 
 
+#: The most characters of a user's value an error message quotes (:func:`quoted`).
+QUOTE_LIMIT = 40
+
+
+def quoted(value, limit: int = QUOTE_LIMIT) -> str:
+    """``repr(value)`` for a message, its first ``limit`` characters and length when longer.
+
+    A message quotes the offending cell or name so the user can find it; a 5,000-digit cell
+    must not make a 5,000-character line.
+
+    >>> quoted("4x")
+    "'4x'"
+    >>> quoted("9" * 5000, limit=8)
+    "'99999999...' (5,000 characters)"
+    """
+    text = str(value)
+    if len(text) <= limit:
+        return repr(text)
+    head = repr(text[:limit])
+    return f"{head[:-1]}...{head[-1]} ({len(text):,} characters)"
+
+
 class _LocatedError(AsbuiltError):
     """An error that knows the file (``source``) and the place in it (``where``)."""
 

@@ -426,3 +426,43 @@ def test_a_fittings_name_too_long_for_the_system_is_one_located_line(tmp_path):
     assert str(info.value).startswith(
         f"{tmp_path / 'my.csv'}: header 'fittings': unknown fittings catalog 'asme-b16.9000"
     )
+
+
+LONG = "9" * 5000  # a pasted cell or a spreadsheet's runaway column
+
+
+@pytest.mark.parametrize(
+    ("text", "where"),
+    [
+        (GOOD.replace("114.3", LONG + "x"), "line 8, column 'od'"),  # not a number
+        (
+            GOOD.replace("nominal,od,", "nominal,nps,od,").replace("2,60", "2,x" + LONG + ",60"),
+            "line 7, column 'nps'",
+        ),
+        (
+            GOOD.replace("2,60.3", LONG + ",60.3").replace("4,114.3", LONG + ",114.3"),
+            "line 8, column 'nominal'",
+        ),  # repeats
+        (GOOD.replace("wall_std", "c" + LONG), "line 6, column 'c" + "9" * 39 + "...' (5,001"),
+        (GOOD.replace("# title", "# t" + LONG), "line 2"),  # unknown header key
+        (GOOD.replace("# kind: pipe", "# kind: " + LONG), "header 'kind'"),
+        (GOOD.replace("# units: mm", "# units: " + LONG), "header 'units'"),
+        (GOOD.replace("# units: mm", "# units: mm\n# fittings: x" + LONG), "header 'fittings'"),
+    ],
+    ids=["cell", "nps", "nominal", "column", "header-key", "kind", "units", "fittings"],
+)
+def test_a_long_value_is_quoted_shortened_with_its_length(tmp_path, text, where):
+    path = tmp_path / "long.csv"
+    path.write_text(text)
+    with pytest.raises(CatalogError) as info:
+        load_catalog(str(path))
+    line = str(info.value)
+    assert line.startswith(f"{path}: {where}")
+    assert "characters)" in line and "9" * 41 not in line
+    assert len(line) < len(str(path)) + 250
+
+
+def test_a_long_catalog_name_is_quoted_shortened():
+    with pytest.raises(CatalogError) as info:
+        load_catalog("n" * 5000)
+    assert str(info.value).startswith("unknown catalog '" + "n" * 40 + "...' (5,000 characters)")
