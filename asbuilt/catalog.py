@@ -19,7 +19,6 @@ import csv
 import functools
 import io
 import math
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import resources
@@ -27,6 +26,7 @@ from pathlib import Path
 from types import MappingProxyType
 
 from .errors import CatalogError, quoted
+from .nominal import NominalHint, parse_nominal, parse_number, size_by_system
 from .units import UNITS
 
 __all__ = [
@@ -158,16 +158,6 @@ class FittingDims:
     elbow45_notes: tuple[str, ...] = ()
 
 
-@dataclass(frozen=True)
-class NominalHint:
-    """An operator's size hint parsed: ``system`` is ``"nps"``, ``"dn"`` or ``"number"``
-    (a bare number, read in the catalog's designation first), ``value`` the number."""
-
-    system: str
-    value: float
-    text: str
-
-
 @dataclass(frozen=True, eq=False)
 class Catalog:
     """A loaded catalog: header fields and its sizes (sorted by outside diameter).
@@ -273,91 +263,6 @@ class Catalog:
             if size.dn is not None and row.dn is not None and row.dn == size.dn:
                 return row
         return None
-
-
-# ----------------------------------------------------------------------------------------------
-# nominal sizes
-
-
-#: Unicode fraction glyphs operators may type (``1½"``).
-_VULGAR = {"\u00bd": "1/2", "\u00bc": "1/4", "\u00be": "3/4", "\u215b": "1/8", "\u215c": "3/8"}
-
-_FRACTION = re.compile(r"^(?:(\d+)[\s-]+)?(\d+)/(\d+)$")
-
-
-def _parse_number(text: str) -> float | None:
-    text = text.strip()
-    match = _FRACTION.match(text)
-    if match:
-        whole = int(match.group(1) or 0)
-        den = int(match.group(3))
-        if den == 0:
-            return None
-        return whole + int(match.group(2)) / den
-    try:
-        value = float(text)
-    except ValueError:
-        return None
-    return value if math.isfinite(value) and value > 0 else None
-
-
-#: A schedule, weight class or pressure rating written after a size (``4" sch 40``, ``4" STD``,
-#: ``DN100 PN16``, ``4" 150#``): the size is read and the rest is left to the catalog.
-_TRAILING_RATING = re.compile(
-    r"\s*(?:,\s*)?(?:sch(?:edule)?\.?\s*\w+|std|xs|xxs|pn\s*\d+|class\s*\d+|\d+\s*#|"
-    r"\d+\s*lbs?)$"
-)
-
-
-def size_by_system(hint: NominalHint, designation: str | None, by_nps, by_dn):
-    """The size ``hint`` names, looked up by ``by_nps(value)`` or ``by_dn(value)`` (each the
-    size or None): by its own system when it says one (``6"``, ``DN150``), else (a bare
-    number) in the catalog's ``designation`` first, then the other."""
-    if hint.system == "nps":
-        return by_nps(hint.value)
-    if hint.system == "dn":
-        return by_dn(hint.value)
-    dn_first = (designation or "").upper() == "DN"
-    first, second = (by_dn, by_nps) if dn_first else (by_nps, by_dn)
-    return first(hint.value) or second(hint.value)
-
-
-def parse_nominal(text: str | None) -> NominalHint | None:
-    """Parse an operator's nominal size hint.
-
-    Understood forms: ``4"``, ``4 in``, ``4in``, ``4 in.``, ``4 inch``, ``4-inch``, ``NPS 4``,
-    ``1 1/2"``, ``1-1/2"``, ``1½"``, ``3/4``, ``DN100``, ``DN 100``, the JIS designations
-    ``100A`` (millimetres, as DN) and ``4B`` (inches), and a bare number such as ``4`` or
-    ``100`` (read as the catalog's own designation first: NPS for ASME catalogs, DN for
-    EN 10220). A schedule, weight class or rating after the size (``4" sch 40``, ``4" STD``,
-    ``DN100 PN16``, ``6" 150#``) is ignored. Returns None for anything else.
-    """
-    if text is None:
-        return None
-    raw = str(text).strip()
-    lowered = raw.lower().replace("\u201d", '"').replace("''", '"')
-    for glyph, text in _VULGAR.items():
-        lowered = lowered.replace(glyph, f" {text}")
-    lowered = " ".join(lowered.split())
-    for _ in range(2):  # "4\" sch 40 150#": a schedule and a rating
-        lowered = _TRAILING_RATING.sub("", lowered).strip()
-    match = re.match(r"^dn\s*(\d+(?:\.\d+)?)$", lowered) or re.match(r"^(\d+)\s*a$", lowered)
-    if match:
-        return NominalHint("dn", float(match.group(1)), raw)
-    match = re.match(r"^nps\s*(.+)$", lowered)
-    if match:
-        value = _parse_number(match.group(1))
-        return NominalHint("nps", value, raw) if value else None
-    match = re.match(r'^(.+?)\s*-?\s*(?:"|in\.?|inch|inches|b)$', lowered)
-    if match:
-        value = _parse_number(match.group(1))
-        return NominalHint("nps", value, raw) if value else None
-    value = _parse_number(lowered)
-    return NominalHint("number", value, raw) if value else None
-
-
-def _nps_from_text(text: str) -> float | None:
-    return _parse_number(text)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -504,7 +409,7 @@ def _fields(catalog: Catalog) -> dict:
 def _nominal_key(nominal: str):
     """What makes two nominal sizes the same: their number when they are one (``4`` and
     ``4.0``, ``1 1/2`` and ``1.5``), else their text in upper case (``DN100``)."""
-    value = _parse_number(nominal)
+    value = parse_number(nominal)
     return round(value, 9) if value is not None else nominal.strip().upper()
 
 
@@ -629,7 +534,7 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
         dn = _number(row.get("dn", ""), source=source, line=line_no, column="dn", scale=1.0)
         nps = None
         if row.get("nps"):
-            nps = _parse_number(row["nps"])
+            nps = parse_number(row["nps"])
             if nps is None:
                 raise CatalogError(
                     f"{quoted(row['nps'])} is not a size in inches (e.g. 4 or 1 1/2)",
@@ -638,7 +543,7 @@ def parse_catalog(content: str, *, source: str = "<catalog>") -> Catalog:
                 )
         designation = header.get("designation", "").upper()
         if nps is None and designation != "DN":
-            nps = _nps_from_text(nominal)
+            nps = parse_number(nominal)
         if dn is None and designation == "DN":
             dn = _number(nominal, source=source, line=line_no, column="nominal", scale=1.0)
         od = _number(row.get("od", ""), source=source, line=line_no, column="od", scale=scale)
