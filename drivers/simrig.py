@@ -140,17 +140,14 @@ def load_world(path):
                 source=str(path),
             )
         return loader(path)
-    import trimesh
-
+    from asbuilt.sim.meshfile import read_mesh_file
     from asbuilt.sim.raycast import MeshShape
 
     try:
-        mesh = trimesh.load(str(path), force="mesh")
-    except Exception as exc:  # trimesh raises many kinds for bad files
-        raise SceneError(f"cannot read the model ({exc})", source=str(path)) from None
-    if len(getattr(mesh, "faces", ())) == 0:
-        raise SceneError("the model holds no triangles", source=str(path))
-    shape = MeshShape(vertices=np.asarray(mesh.vertices, float), faces=np.asarray(mesh.faces))
+        vertices, faces = read_mesh_file(path)
+    except ValueError as exc:
+        raise SceneError(str(exc), source=str(path)) from None
+    shape = MeshShape(vertices=vertices, faces=faces)
     return ShapesWorld([shape])
 
 

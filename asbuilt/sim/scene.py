@@ -27,6 +27,7 @@ from asbuilt.tolerances import MIN_POINTS
 from asbuilt.units import UNITS
 
 from .geometry import frustum_mesh, member_axes, plate_axes, rotation_zyx, torus_segment_mesh
+from .meshfile import mesh_problem, read_mesh_file
 from .raycast import (
     BoxShape,
     CylinderShape,
@@ -370,13 +371,9 @@ def _load_mesh(reader: _Reader, geo, where) -> tuple[np.ndarray, np.ndarray]:
         if not path.is_absolute():
             path = reader.base_dir / path
         try:
-            import trimesh
-
-            mesh = trimesh.load(str(path), force="mesh")
-        except Exception as exc:  # trimesh raises many kinds for unreadable files
-            reader.fail(f"{where}.file", f"cannot load mesh {str(path)!r} ({exc})")
-        vertices = np.asarray(mesh.vertices, dtype=np.float64)
-        faces = np.asarray(mesh.faces, dtype=np.int64)
+            vertices, faces = read_mesh_file(path)
+        except ValueError as exc:
+            reader.fail(f"{where}.file", f"mesh {str(path)!r}: {exc}")
     else:
         vertices = geo.get("vertices")
         faces = geo.get("faces")
@@ -399,6 +396,9 @@ def _load_mesh(reader: _Reader, geo, where) -> tuple[np.ndarray, np.ndarray]:
     vertices = vertices * scale * reader.scale
     translate = reader.vector(geo, "translate", where, required=False, default=np.zeros(3))
     reader._on_site(vertices + translate, f"{where}.vertices")
+    problem = mesh_problem(vertices + translate, faces)
+    if problem:
+        reader.fail(where, problem)
     return vertices + translate, faces
 
 
