@@ -156,3 +156,26 @@ def test_trimesh_log_stays_off_stderr(tmp_path):
     assert result.returncode == 0, result.stderr
     assert result.stderr.startswith("simulated 1 objects, 30 points")
     assert "Traceback" not in result.stderr and "face_normals" not in result.stderr
+
+
+@pytest.mark.parametrize(
+    "option, message",
+    [
+        (["--seed", "-1"], "seed must be a non-negative integer, not -1"),
+        (
+            ["--speed", "nan"],
+            "speed must be a finite number >= 0 (positions per second; 0 moves instantly), not nan",
+        ),
+        (
+            ["--speed", "-5"],
+            "speed must be a finite number >= 0 (positions per second; 0 moves instantly), "
+            "not -5.0",
+        ),
+    ],
+    ids=["negative-seed", "nan-speed", "negative-speed"],
+)
+def test_bad_simulate_device_options(tmp_path, capsys, option, message):
+    path = tmp_path / "box.stl"
+    trimesh.creation.box(extents=[1, 1, 1]).apply_translation([3.5, 0, 0]).export(path)
+    code, err = _run(capsys, "simulate-device", "--scene", str(path), *option)
+    assert (code, err) == (2, f"asbuilt: error: simulate-device: {message}\n")
