@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from asbuilt.errors import DeviceError, SceneError
+from asbuilt.errors import AsbuiltError, DeviceError, SceneError
 
 from .kinematics import Calibration, beam
 
@@ -89,6 +89,9 @@ class SimNoise:
                 raise ValueError(f"{name} must be a finite number >= 0")
         if not 0.0 <= self.dropout <= 1.0:
             raise ValueError("dropout must be between 0 and 1")
+        seed = self.seed
+        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
+            raise ValueError(f"seed must be a non-negative integer, not {seed!r}")
 
 
 class ShapesWorld:
@@ -140,17 +143,14 @@ def load_world(path):
                 source=str(path),
             )
         return loader(path)
-    import trimesh
-
+    from asbuilt.sim.meshfile import read_mesh_file
     from asbuilt.sim.raycast import MeshShape
 
     try:
-        mesh = trimesh.load(str(path), force="mesh")
-    except Exception as exc:  # trimesh raises many kinds for bad files
-        raise SceneError(f"cannot read the model ({exc})", source=str(path)) from None
-    if len(getattr(mesh, "faces", ())) == 0:
-        raise SceneError("the model holds no triangles", source=str(path))
-    shape = MeshShape(vertices=np.asarray(mesh.vertices, float), faces=np.asarray(mesh.faces))
+        vertices, faces = read_mesh_file(path)
+    except ValueError as exc:
+        raise SceneError(str(exc), source=str(path)) from None
+    shape = MeshShape(vertices=vertices, faces=faces)
     return ShapesWorld([shape])
 
 
@@ -199,6 +199,11 @@ class SimulatedRig:
     options: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        if not (np.isfinite(self.speed) and self.speed >= 0):
+            raise ValueError(
+                f"speed must be a finite number >= 0 (positions per second; 0 moves instantly), "
+                f"not {self.speed!r}"
+            )
         self.pan = _Axis()
         self.tilt = _Axis()
         self.lock = threading.RLock()
@@ -409,8 +414,10 @@ def _rig_from_options(opts: dict[str, str]) -> SimulatedRig:
             noise_kwargs["seed"] = int(opts["seed"])
         noise = SimNoise(**noise_kwargs)
         speed = float(opts.get("speed", 0.0))
+        if "calibration" in opts:
+            calibration = load_calibration(opts["calibration"])
+        return SimulatedRig(world, calibration, noise, speed=speed, options=dict(opts))
     except ValueError as exc:
+        if isinstance(exc, AsbuiltError):  # a bad calibration file says so itself
+            raise
         raise DeviceError(f"simulated rig: bad option value ({exc})") from None
-    if "calibration" in opts:
-        calibration = load_calibration(opts["calibration"])
-    return SimulatedRig(world, calibration, noise, speed=speed, options=dict(opts))

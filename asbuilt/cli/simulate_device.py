@@ -96,9 +96,9 @@ def run(args: argparse.Namespace) -> int:
         noise["divergence"] = args.divergence_mrad * 1e-3
     try:
         sim_noise = SimNoise(seed=args.seed, **noise)
+        rig = SimulatedRig(world, calibration, sim_noise, speed=args.speed)
     except ValueError as exc:
         raise DeviceError(f"simulate-device: {exc}") from None
-    rig = SimulatedRig(world, calibration, sim_noise, speed=args.speed)
     if threading.current_thread() is threading.main_thread():
         # Ctrl-C (SIGINT) stops the server even when it was started with SIGINT ignored (a
         # background job of a non-interactive shell inherits that), where Python would keep

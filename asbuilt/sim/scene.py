@@ -21,12 +21,13 @@ import numpy as np
 from asbuilt._json_numbers import parse_int as _parse_int
 from asbuilt.errors import SceneError
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Primitive, Sphere
-from asbuilt.scan.load import MAX_COORDINATE_M, MAX_POINTS
+from asbuilt.scan.load import MAX_POINTS
 from asbuilt.scan.model import KINDS
 from asbuilt.tolerances import MIN_POINTS
 from asbuilt.units import UNITS
 
 from .geometry import frustum_mesh, member_axes, plate_axes, rotation_zyx, torus_segment_mesh
+from .meshfile import mesh_problem, read_mesh_file
 from .raycast import (
     BoxShape,
     CylinderShape,
@@ -37,6 +38,7 @@ from .raycast import (
     SphereShape,
     raycast,
 )
+from .scene_fields import FieldReader as _Reader
 
 __all__ = [
     "Station",
@@ -255,114 +257,6 @@ def loads_scene(text: str, *, source: str | None = None, base_dir=None) -> Scene
     return scene_from_dict(doc, source=source, base_dir=base_dir)
 
 
-class _Reader:
-    """Field access with located errors, converting lengths by the scene's unit factor."""
-
-    def __init__(self, source: str | None, scale: float, base_dir):
-        self.source = source
-        self.scale = scale
-        self.base_dir = Path(base_dir) if base_dir is not None else Path(".")
-
-    def fail(self, where: str, message: str):
-        raise SceneError(message, source=self.source, where=where)
-
-    def number(
-        self,
-        data,
-        key,
-        where,
-        *,
-        default=None,
-        minimum=None,
-        maximum=None,
-        positive=False,
-        required=False,
-    ) -> float:
-        if key not in data or data[key] is None:
-            if required:
-                self.fail(where, f"missing field {key!r}")
-            return default
-        value = data[key]
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            self.fail(f"{where}.{key}", f"must be a number, not {value!r}")
-        value = float(value)
-        if not math.isfinite(value):
-            self.fail(f"{where}.{key}", "must be finite")
-        if positive and value <= 0:
-            self.fail(f"{where}.{key}", f"must be positive, not {value:g}")
-        if minimum is not None and value < minimum:
-            self.fail(f"{where}.{key}", f"must be at least {minimum:g}, not {value:g}")
-        if maximum is not None and value > maximum:
-            self.fail(f"{where}.{key}", f"must be at most {maximum:g}, not {value:g}")
-        return value
-
-    def length(self, data, key, where, **kwargs) -> float:
-        value = self.number(data, key, where, **kwargs)
-        if value is None:
-            return None
-        self._on_site(np.array([value * self.scale]), f"{where}.{key}")
-        return value * self.scale
-
-    def _on_site(self, metres: np.ndarray, where: str) -> None:
-        """Refuse lengths beyond any site: their squares would overflow the ray casting."""
-        largest = float(np.abs(metres).max()) if metres.size else 0.0
-        if largest > MAX_COORDINATE_M:
-            self.fail(
-                where,
-                f"{largest:.3g} m is beyond any site (at most {MAX_COORDINATE_M:g} m); check the "
-                'number and the scene\'s "units"',
-            )
-
-    def vector(
-        self, data, key, where, *, required=True, default=None, length=True, size=3
-    ) -> np.ndarray:
-        if key not in data or data[key] is None:
-            if required:
-                self.fail(where, f"missing field {key!r}")
-            return default
-        value = data[key]
-        ok = (
-            isinstance(value, list)
-            and len(value) == size
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
-        )
-        if not ok:
-            self.fail(f"{where}.{key}", f"must be a list of {size} numbers, not {value!r}")
-        array = np.array(value, dtype=np.float64)
-        if not np.all(np.isfinite(array)):
-            self.fail(f"{where}.{key}", "must be finite")
-        if not length:
-            return array
-        self._on_site(array * self.scale, f"{where}.{key}")
-        return array * self.scale
-
-    def direction(self, data, key, where, *, required=True, default=None) -> np.ndarray:
-        vector = self.vector(data, key, where, required=required, default=None, length=False)
-        if vector is None:
-            return default
-        norm = float(np.linalg.norm(vector))
-        if norm == 0.0:
-            self.fail(f"{where}.{key}", "must not be the zero vector")
-        return vector / norm
-
-    def text(self, data, key, where, *, required=False, default=None) -> str | None:
-        if key not in data or data[key] is None:
-            if required:
-                self.fail(where, f"missing field {key!r}")
-            return default
-        value = data[key]
-        if not isinstance(value, str) or not value.strip():
-            self.fail(f"{where}.{key}", f"must be a non-empty string, not {value!r}")
-        return value
-
-    def radius(self, data, where) -> float:
-        keys = [k for k in ("radius", "diameter", "od") if k in data]
-        if len(keys) != 1:
-            self.fail(where, "give exactly one of 'radius', 'diameter' or 'od'")
-        value = self.length(data, keys[0], where, positive=True, required=True)
-        return value if keys[0] == "radius" else 0.5 * value
-
-
 def _load_mesh(reader: _Reader, geo, where) -> tuple[np.ndarray, np.ndarray]:
     if "file" in geo:
         name = reader.text(geo, "file", where, required=True)
@@ -370,13 +264,9 @@ def _load_mesh(reader: _Reader, geo, where) -> tuple[np.ndarray, np.ndarray]:
         if not path.is_absolute():
             path = reader.base_dir / path
         try:
-            import trimesh
-
-            mesh = trimesh.load(str(path), force="mesh")
-        except Exception as exc:  # trimesh raises many kinds for unreadable files
-            reader.fail(f"{where}.file", f"cannot load mesh {str(path)!r} ({exc})")
-        vertices = np.asarray(mesh.vertices, dtype=np.float64)
-        faces = np.asarray(mesh.faces, dtype=np.int64)
+            vertices, faces = read_mesh_file(path)
+        except ValueError as exc:
+            reader.fail(f"{where}.file", f"mesh {str(path)!r}: {exc}")
     else:
         vertices = geo.get("vertices")
         faces = geo.get("faces")
@@ -399,6 +289,9 @@ def _load_mesh(reader: _Reader, geo, where) -> tuple[np.ndarray, np.ndarray]:
     vertices = vertices * scale * reader.scale
     translate = reader.vector(geo, "translate", where, required=False, default=np.zeros(3))
     reader._on_site(vertices + translate, f"{where}.vertices")
+    problem = mesh_problem(vertices + translate, faces)
+    if problem:
+        reader.fail(where, problem)
     return vertices + translate, faces
 
 

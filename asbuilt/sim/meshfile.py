@@ -1,0 +1,128 @@
+"""Read a triangle mesh file (STL, glTF/GLB, OBJ, PLY...) for the simulator, and check meshes.
+
+trimesh reads the bytes; this module turns whatever a damaged or wrong file makes trimesh do
+(many kinds of exception, non-finite vertices it would silently drop, triangles without area)
+into one :class:`ValueError` line saying what is wrong and what to do. The callers add the
+place: the scene loader names the scene file, object and field, ``simulate-device`` the model.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from asbuilt.scan.load import MAX_COORDINATE_M
+
+__all__ = ["read_mesh_file", "mesh_problem", "MESH_SUFFIXES"]
+
+#: Mesh formats the documentation promises (trimesh may read a few more).
+MESH_SUFFIXES = (".stl", ".glb", ".gltf", ".obj", ".ply")
+
+
+def _reason(exc: BaseException) -> str:
+    """trimesh's complaint as a short single line."""
+    if isinstance(exc, ImportError):
+        # trimesh falls back to guessing a text encoding (an optional package) for bytes that
+        # are neither the binary format nor UTF-8 text: the file is damaged or not this format
+        return "neither a valid binary file nor UTF-8 text"
+    text = " ".join(str(exc).split())
+    if isinstance(exc, (KeyError, OSError)) or not text:
+        text = f"{type(exc).__name__} {text}".strip()
+    return text if len(text) <= 160 else text[:157] + "..."
+
+
+@contextlib.contextmanager
+def _quiet_trimesh():
+    """Keep trimesh's log (warnings with tracebacks on stderr) out of the one-line promise."""
+    logger = logging.getLogger("trimesh")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
+def read_mesh_file(path) -> tuple[np.ndarray, np.ndarray]:
+    """The vertices (n, 3) and triangles (m, 3) of a mesh file, as stored (no unit change).
+
+    Raises
+    ------
+    ValueError
+        One line: the file is missing, not a regular file, of an unknown format, unreadable,
+        or holds no usable triangles (see :func:`mesh_problem`).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise ValueError("file not found; check the path")
+    if not path.is_file():  # a directory, or a pipe that would block the reader forever
+        raise ValueError("not a regular file; give a mesh file (" + ", ".join(MESH_SUFFIXES) + ")")
+    import trimesh
+
+    suffix = path.suffix.lower()
+    if suffix.lstrip(".") not in trimesh.available_formats():
+        found = f"'{path.suffix}'" if path.suffix else "no suffix"
+        raise ValueError(
+            f"unknown mesh format ({found}); give a mesh file (" + ", ".join(MESH_SUFFIXES) + ")"
+        )
+    try:
+        # process=False: trimesh's processing drops non-finite vertices silently; check first
+        with _quiet_trimesh():
+            mesh = trimesh.load(str(path), force="mesh", process=False)
+        vertices = np.asarray(getattr(mesh, "vertices", ()), dtype=np.float64)
+        faces = np.asarray(getattr(mesh, "faces", ()))
+    except Exception as exc:  # trimesh raises many kinds for damaged files
+        raise ValueError(
+            f"cannot read the file as {suffix[1:].upper()} ({_reason(exc)}); check the file or "
+            "export it again"
+        ) from None
+    if faces.size == 0:
+        raise ValueError("the model holds no triangles; check the file or export it again")
+    problem = mesh_problem(vertices, faces)
+    if problem:
+        raise ValueError(problem)
+    with _quiet_trimesh():
+        mesh.process()  # merge duplicate vertices, as trimesh does by default
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    problem = mesh_problem(vertices, faces)  # merging may collapse tiny triangles
+    if problem:
+        raise ValueError(problem)
+    return vertices, faces
+
+
+def mesh_problem(vertices: np.ndarray, faces: np.ndarray) -> str | None:
+    """What makes a mesh unusable for ray casting, or None when it is fine.
+
+    Checks the shapes, that every vertex is finite and on a site (at most
+    :data:`~asbuilt.scan.load.MAX_COORDINATE_M` from the origin, or ray casting overflows),
+    that the triangles index the vertices and that they enclose some area.
+    """
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        return "vertices must be [x, y, z] points; check the file or export it again"
+    if faces.ndim != 2 or faces.shape[1] != 3 or not np.issubdtype(faces.dtype, np.integer):
+        return "faces must be triangles [i, j, k]; triangulate the model and export it again"
+    bad = np.flatnonzero(~np.all(np.isfinite(vertices), axis=1))
+    if bad.size:
+        return (
+            f"vertex {bad[0]} is not finite (NaN or infinity; {bad.size} in all); "
+            "fix or export the model again"
+        )
+    largest = float(np.abs(vertices).max()) if vertices.size else 0.0
+    if largest > MAX_COORDINATE_M:
+        return (
+            f"a vertex lies {largest:.3g} m from the origin, beyond any site (at most "
+            f"{MAX_COORDINATE_M:g} m); check the model's units"
+        )
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        return "faces must index the vertices (0-based); check the file or export it again"
+    a, b, c = (vertices[faces[:, k]] for k in range(3))
+    if not np.any(np.linalg.norm(np.cross(b - a, c - a), axis=1) > 0):
+        return (
+            "every triangle has zero area (its corners coincide or lie on a line), so nothing "
+            "can be hit; check the file or export it again"
+        )
+    return None
