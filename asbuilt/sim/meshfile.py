@@ -46,8 +46,11 @@ def _quiet_trimesh():
         logger.setLevel(level)
 
 
-def read_mesh_file(path) -> tuple[np.ndarray, np.ndarray]:
+def read_mesh_file(path, on_site: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """The vertices (n, 3) and triangles (m, 3) of a mesh file, as stored (no unit change).
+
+    ``on_site``: the stored numbers are metres, checked against the site limit here; a caller
+    that scales them (a scene in mm) passes False and checks the scaled metres itself.
 
     Raises
     ------
@@ -81,25 +84,25 @@ def read_mesh_file(path) -> tuple[np.ndarray, np.ndarray]:
         ) from None
     if faces.size == 0:
         raise ValueError("the model holds no triangles; check the file or export it again")
-    problem = mesh_problem(vertices, faces)
+    problem = mesh_problem(vertices, faces, on_site)
     if problem:
         raise ValueError(problem)
     with _quiet_trimesh():
         mesh.process()  # merge duplicate vertices, as trimesh does by default
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces, dtype=np.int64)
-    problem = mesh_problem(vertices, faces)  # merging may collapse tiny triangles
+    problem = mesh_problem(vertices, faces, on_site)  # merging may collapse tiny triangles
     if problem:
         raise ValueError(problem)
     return vertices, faces
 
 
-def mesh_problem(vertices: np.ndarray, faces: np.ndarray) -> str | None:
+def mesh_problem(vertices: np.ndarray, faces: np.ndarray, on_site: bool = True) -> str | None:
     """What makes a mesh unusable for ray casting, or None when it is fine.
 
-    Checks the shapes, that every vertex is finite and on a site (at most
-    :data:`~asbuilt.scan.load.MAX_COORDINATE_M` from the origin, or ray casting overflows),
-    that the triangles index the vertices and that they enclose some area.
+    Checks the shapes, that every vertex is finite and (``on_site``: the vertices are metres)
+    on a site (at most :data:`~asbuilt.scan.load.MAX_COORDINATE_M` from the origin, or ray
+    casting overflows), that the triangles index the vertices and that they enclose some area.
     """
     if vertices.ndim != 2 or vertices.shape[1] != 3:
         return "vertices must be [x, y, z] points; check the file or export it again"
@@ -112,7 +115,7 @@ def mesh_problem(vertices: np.ndarray, faces: np.ndarray) -> str | None:
             "fix or export the model again"
         )
     largest = float(np.abs(vertices).max()) if vertices.size else 0.0
-    if largest > MAX_COORDINATE_M:
+    if on_site and largest > MAX_COORDINATE_M:
         return (
             f"a vertex lies {largest:.3g} m from the origin, beyond any site (at most "
             f"{MAX_COORDINATE_M:g} m); check the model's units"

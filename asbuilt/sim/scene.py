@@ -264,7 +264,7 @@ def _load_mesh(reader: _Reader, geo, where) -> tuple[np.ndarray, np.ndarray]:
         if not path.is_absolute():
             path = reader.base_dir / path
         try:
-            vertices, faces = read_mesh_file(path)
+            vertices, faces = read_mesh_file(path, on_site=False)  # scaled, then checked
         except ValueError as exc:
             reader.fail(f"{where}.file", f"mesh {str(path)!r}: {exc}")
     else:

@@ -99,6 +99,24 @@ def test_mesh_file_and_elbow(tmp_path, scene_doc):
     np.testing.assert_allclose(hull.vertices.max(axis=0), [2, 12, 2])
 
 
+def test_mesh_file_scaled_to_metres_before_the_site_limit(tmp_path, scene_doc):
+    """A mesh of a site far from the origin, given with ``scale`` 0.001 (a model in mm): its
+    stored numbers pass the 1e8 m site limit only once scaled, and the limit judges metres."""
+    far = 2e8  # stored units; 2e5 m once scaled
+    obj = tmp_path / "far.obj"
+    obj.write_text(
+        f"v {far} 0 0\nv {far + 1000} 0 0\nv {far} 1000 0\nv {far} 0 1000\n"
+        "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+    )
+    scene_doc["objects"].append(
+        {"id": "H", "kind": "hull", "geometry": {"type": "mesh", "file": "far.obj", "scale": 0.001}}
+    )
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(scene_doc))
+    hull = load_scene(path).object("H").truth
+    np.testing.assert_allclose(hull.vertices.max(axis=0), [far / 1000 + 1, 1, 1])
+
+
 BAD = [
     (lambda d: d.update(units="furlong"), "units: unknown unit 'furlong'"),
     (lambda d: d.update(stations=[]), "stations: give a list"),
