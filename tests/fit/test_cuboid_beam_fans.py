@@ -222,3 +222,50 @@ def test_auto_does_not_call_a_ray_cast_tank_with_a_wall_behind_a_cuboid(seed, si
     assert result.primitive.kind == "cylinder", result.notes
     assert result.primitive.radius == pytest.approx(1.5, abs=0.05)
     assert not result.inliers[~hit].any()
+
+
+#: A sparse raster's seven shots (column, row) over a 5 x 5 cell-centred window: an X, so that
+#: most shots have no raster neighbour on their face.
+_SPARSE_SEVEN = [(0, 0), (4, 0), (1, 1), (2, 2), (3, 3), (0, 4), (4, 4)]
+
+
+@pytest.mark.parametrize("yaw_deg", [35.0, 45.0, 55.0])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_seven_shots_on_two_faces_are_not_fans(yaw_deg, seed):
+    # Seven shots on a column's two seen faces, the fewest a cuboid takes. Shots with no
+    # raster neighbour on their face were each a group of their own, left out as fans with no
+    # step along the beams seen: the fit kept one "face" through two raster columns on
+    # different faces, rejected the rest, and came out 35-45 degrees off with the widths
+    # doubled.
+    rng = np.random.default_rng(seed)
+    size = np.array([0.42, 0.46, 3.0])
+    bearing = np.radians(20.0 + 40.0 * seed)
+    los = np.array([np.cos(bearing), np.sin(bearing), 0.0])
+    a = bearing + np.radians(yaw_deg)
+    rot = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    column = Cuboid(DISTANCE * los, rot.T, size)
+    pans, tilts = corner_angles(column)
+    pan_cells = cell_centres(pans.min(), pans.max(), 5)
+    tilt_cells = cell_centres(tilts.min(), tilts.max(), 5)
+    pan = np.array([pan_cells[c] for c, _ in _SPARSE_SEVEN])
+    tilt = np.array([tilt_cells[r] for _, r in _SPARSE_SEVEN])
+    points, hit = shoot(column, pan, tilt, rng, range_sigma=SIGMA)
+    assert hit.all()
+    result = fit_cuboid(points, sigma=SIGMA)
+    fitted, _, _ = sizes_in_true_order(result, rot)
+    assert np.all(_axis_errors_deg(result, rot) < 2.0)
+    assert np.all(np.abs(fitted[:2] - size[:2]) < 0.05), fitted - size
+    assert result.inliers.all()
+
+
+def test_a_shot_without_raster_neighbours_is_no_fan():
+    # One face's shots: two on one raster column, one on its own a column and a row away, all
+    # at the face's range. No link between them failed the bound, so none lies behind.
+    pan = np.radians([0.0, 0.0, 1.0])
+    tilt = np.radians([4.0, -4.0, 0.0])
+    beams = np.column_stack([np.cos(tilt) * np.cos(pan), np.cos(tilt) * np.sin(pan), np.sin(tilt)])
+    points = beams * (7.0 / beams[:, 0])[:, None]  # a wall square to the view, 7 m away
+    angles = np.column_stack([pan, tilt])
+    lines = raster_lines(angles, np.radians([1.0, 4.0]))
+    pairs = neighbours(angles, lines, np.ones(3, bool))
+    assert not beam_fan_shots(points, np.zeros(3), 0.006, pairs).any()
