@@ -379,7 +379,7 @@ def merge_model(
     for joint in joints:
         if joint.kind == "inline":
             parallel_groups.append([joint.ends[0][0], joint.ends[1][0]])
-        elif joint.kind == "tee" and joint.through is None:
+        elif joint.kind in ("tee", "lateral") and joint.through is None:
             parallel_groups.append([joint.ends[0][0], joint.ends[1][0]])
     axis_se = np.array([_stderr_value(item.result, "axis_deg") for item in items])
     directions = regularize_directions(
@@ -702,7 +702,7 @@ def _constraints(joints: tuple[Joint, ...], eccentric=None):
             coaxial.append((joint.ends[0][0], joint.ends[1][0]))
             found = eccentric.get(index)
             offsets.append(None if found is None else found.offset)
-        elif joint.kind == "tee":
+        elif joint.kind in ("tee", "lateral"):
             branch = joint.ends[-1][0]
             if joint.through is None:
                 coaxial.append((joint.ends[0][0], joint.ends[1][0]))

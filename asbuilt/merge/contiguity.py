@@ -85,7 +85,8 @@ _JOINED_BY = {
     "elbow": "an elbow",
     "tee": "a tee",
     "inline": "an inline joint",
-    "contact": "a lateral",
+    "contact": "a contact",
+    "lateral": "a lateral",
 }
 
 #: A pipe end: (pipe index, 0 for the start end / 1 for the end end).
@@ -99,12 +100,14 @@ class Joint:
     Attributes
     ----------
     kind : str
-        ``"elbow"``, ``"inline"``, ``"tee"``, ``"contact"`` (joined without a fitting of the
-        catalog: the pipes of a lateral) or ``"link"`` (the scan links the pair but nothing
+        ``"elbow"``, ``"inline"``, ``"tee"``, ``"lateral"`` (an inline pair with a branch
+        meeting it obliquely: a wye, built from the measured ends), ``"contact"`` (joined
+        without a fitting) or ``"link"`` (the scan links the pair but nothing
         joins them: no fitting and no spool together, only one size estimate; a note says why).
     ends : tuple of End
         elbow/inline/contact: the two joined ends; tee: the run ends (two for a tee at an inline
-        joint, none for a tee in the middle of a pipe) followed by the branch end.
+        joint, none for a tee in the middle of a pipe) followed by the branch end; lateral: the
+        two run ends followed by the branch end.
     through : int or None
         Tee in the middle of a pipe: that pipe's index.
     explicit : bool
@@ -126,8 +129,8 @@ class Joint:
 
     @property
     def branch(self) -> End | None:
-        """The branch end of a tee."""
-        return self.ends[-1] if self.kind == "tee" else None
+        """The branch end of a tee or a lateral."""
+        return self.ends[-1] if self.kind in ("tee", "lateral") else None
 
 
 def pipe_ends(centers: np.ndarray, axes: np.ndarray, lengths: np.ndarray):
@@ -452,8 +455,8 @@ def find_joints(
         linked_inline, used, tree, radius, pts, out, axes, ods, tol, slack, notes, names
     )
     joints.extend(lateral)
-    for run, branch in zip(lateral[::2], lateral[1::2]):  # the lateral's two contacts
-        trio = {*run.pipes, *branch.pipes}
+    for found in lateral:
+        trio = set(found.pipes)
         teed.update(key for key in linked_pairs if set(key) <= trio)
     # 1d. the other links, one by one; a link no fitting or butt joint realises gets a note
     # (decided after every joint is found: a tee through a pipe may still join the pair)
@@ -533,8 +536,9 @@ def find_joints(
         used.update((cand.a, cand.b, b))
         joints.append(Joint("tee", (cand.a, cand.b, b)))
 
-    # 2b. laterals: an inline pair with a third end meeting it obliquely; all three become
-    # contacts (no lateral in the catalog), and no elbow may take one of their ends
+    # 2b. laterals: an inline pair with a third end meeting it obliquely; one lateral joint of
+    # the three (no lateral in the catalog: built from the measured ends), and no elbow may
+    # take one of their ends
     joints.extend(
         _laterals(candidates, used, tree, radius, pts, out, axes, ods, tol, slack, notes, names)
     )
@@ -622,8 +626,9 @@ def _tee_around_elbow(cand, claimed, used, tree, radius, pts, out, axes, ods, to
 
 
 def _laterals(candidates, used, tree, radius, pts, out, axes, ods, tol, slack, notes, names):
-    """Inline candidates with an oblique third end (a lateral): contacts among the three pipes
-    (the lateral fitting fills the gap, so no coupling is built); return the joints."""
+    """Inline candidates with an oblique third end (a lateral): one ``"lateral"`` joint of the
+    run ends and the branch end (the lateral fills the gap, so no coupling is built); return
+    the joints."""
     found = []
     for cand in candidates:
         if cand.kind != "inline" or cand.a in used or cand.b in used:
@@ -638,10 +643,8 @@ def _laterals(candidates, used, tree, radius, pts, out, axes, ods, tol, slack, n
         if cand.a in used or cand.b in used or b in used:
             continue
         used.update((cand.a, cand.b, b))
-        # the lateral fitting fills the gap between the run ends: no coupling or butt weld there
-        joints.append(Joint("contact", (cand.a, cand.b)))
-        near = min((cand.a, cand.b), key=lambda e: float(np.linalg.norm(pts[e] - pts[b])))
-        joints.append(Joint("contact", (b, near)))
+        # the lateral fills the gap between the run ends: no coupling or butt weld there
+        joints.append(Joint("lateral", (cand.a, cand.b, b), explicit=cand.explicit))
         i, j, k = cand.a[0], cand.b[0], b[0]
         cos = abs(float(axes[k] @ axes[i]))
         angle = float(np.degrees(np.arccos(min(1.0, cos))))
@@ -649,8 +652,8 @@ def _laterals(candidates, used, tree, radius, pts, out, axes, ods, tol, slack, n
             (
                 (k, i, j),
                 f"{names[k]} meets the joint of {names[i]} and {names[j]} at {angle:.0f} "
-                "degrees: a lateral (wye), which the catalog does not have; no fitting built "
-                "(the three pipes kept in one spool without one)",
+                "degrees: a lateral (wye), which the catalog does not have; built from the "
+                "measured pipe ends (non-standard)",
             )
         )
     return joints

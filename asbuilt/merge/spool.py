@@ -22,6 +22,7 @@ axes):
   gap; both pipes end at its ends. It is concentric when the aligned axes coincide, eccentric
   (``Reducer.offset`` the sideways step between them) when merging placed them apart
   (:mod:`asbuilt.merge.eccentric`); ASME B16.9 gives both the same length H.
+* **lateral** (oblique branch; in no catalog): a tee-shaped fitting, :mod:`.laterals`.
 * **tee**: centre ``J`` where the branch axis meets the run axis; run ends ``J -+ C d``,
   branch end ``J + M b`` (``C``, ``M``: catalog centre-to-end of run and outlet; a reducing
   outlet's pair's own from ASME B16.9 Table 8 when listed, :func:`.reducers.reducing_tee_dims`).
@@ -58,6 +59,7 @@ from ._fitting_shapes import (
     tee_geometry,
 )
 from .contiguity import Joint, connected_groups, line_closest_points
+from .laterals import build_lateral
 from .ports import connection_mismatches, ports
 from .reducers import (
     nps_order,
@@ -638,6 +640,8 @@ def build_spools(
                 built.extend((joint, item) for item in _inline(b, joint))
             elif joint.kind == "tee":
                 built.extend((joint, item) for item in _tee(b, joint))
+            elif joint.kind == "lateral":
+                built.extend((joint, item) for item in build_lateral(b, joint))
         bad = [i for i in range(len(pipes)) if not _piece_ok(b, i)]
         if not bad:
             break

@@ -57,7 +57,8 @@ def test_a_135_degree_bend_is_not_built_as_an_elbow():
 def test_a_lateral_gets_no_elbow_and_no_coupling():
     """A 45 degree lateral: run P1, P2 (0.4 m gap for the fitting) and a branch P3 whose end is
     0.25 m from the junction. Before the fix P2-P3 could be a 135 degree elbow or P1-P2 a 400 mm
-    coupling; a lateral is not in the catalog, so the three are one spool without fittings."""
+    coupling. A lateral is in no catalog: it is built as a tee-shaped fitting (non-standard)
+    from the measured ends, which lie beyond its saddle here, so nothing is trimmed."""
     branch = np.array([1.0, 0, 1.0]) / math.sqrt(2)
     junction = np.array([0.0, 0, 1.0])
     pipes = [
@@ -66,14 +67,24 @@ def test_a_lateral_gets_no_elbow_and_no_coupling():
         Pipe("P3", tuple(junction + 0.25 * branch), tuple(junction + 1.8 * branch), NPS4),
     ]
     model = merge_model(report_of(pipes))
-    assert types(model) == ["pipe", "pipe", "pipe"]
-    assert [s.components for s in model.spools] == [("P1", "P2", "P3")]
+    assert types(model) == ["pipe", "tee", "pipe", "pipe"]
+    assert [s.components for s in model.spools] == [("P1", "P1-P2-P3", "P2", "P3")]
     assert any("45 degrees: a lateral" in n for n in notes(model, "P3"))
-    # the pipes keep their measured ends: nothing was trimmed or extended for a fitting
-    assert by_id(model)["P2"].geometry.start == pytest.approx([0.2, 0, 1.0], abs=1e-6)
+    lateral = by_id(model)["P1-P2-P3"]
+    assert lateral.snap["standard"] is False
+    assert lateral.snap["angle_deg"] == pytest.approx(45.0)
+    # the pipes keep their measured ends: nothing was trimmed or extended for the lateral,
+    # which fills the run's gap and reaches the branch's end
+    ends = {"P1": ("end", [-0.2, 0, 1.0]), "P2": ("start", [0.2, 0, 1.0])}
+    for pid, (side, point) in ends.items():
+        assert getattr(by_id(model)[pid].geometry, side) == pytest.approx(point, abs=1e-6)
+    g = lateral.geometry
+    assert (g.run_start, g.run_end) == (pytest.approx([-0.2, 0, 1.0]), pytest.approx([0.2, 0, 1]))
+    assert g.branch_end == pytest.approx(junction + 0.25 * branch)
+    assert g.branch_end == pytest.approx(by_id(model)["P3"].geometry.start)
 
 
-def test_a_lateral_is_contacts_in_find_joints():
+def test_a_lateral_is_one_lateral_joint_in_find_joints():
     branch = np.array([1.0, 1.0, 0]) / math.sqrt(2)
     starts = np.array([[-2.0, 0, 0], [0.2, 0, 0], 0.25 * branch])
     ends = np.array([[-0.2, 0, 0], [2.0, 0, 0], 1.8 * branch])
@@ -88,8 +99,9 @@ def test_a_lateral_is_contacts_in_find_joints():
         notes=found,
         names=["A", "B", "C"],
     )
-    assert sorted(j.kind for j in joints) == ["contact", "contact"]
-    assert {frozenset(j.pipes) for j in joints} == {frozenset((0, 1)), frozenset((2, 1))}
+    (joint,) = joints
+    assert joint.kind == "lateral"
+    assert sorted(joint.pipes[:2]) == [0, 1] and joint.branch == (2, 0)
     assert [pipes for pipes, _ in found] == [(2, 0, 1)]
 
 
@@ -203,10 +215,12 @@ def test_a_link_merging_cannot_make_is_noted_and_joins_no_spool(pipes, links, pa
 @pytest.mark.parametrize("links", [[], [("P1", "P3"), ("P1", "P2")]], ids=["unlinked", "linked"])
 def test_a_linked_lateral_is_a_lateral_not_a_coupling(links):
     """Linked, the 45 degree lateral's run became a 286 mm "coupling" across the wye's gap and
-    the link to the branch a silent contact; it must be the lateral the unlinked scan gives."""
+    the link to the branch a silent contact; it must be the lateral the unlinked scan gives
+    (a tee-shaped fitting, non-standard, since laterals fuse into one body)."""
     model = merge_model(report_of(_junction(45), links=links))
-    assert types(model) == ["pipe", "pipe", "pipe"]
-    assert [s.components for s in model.spools] == [("P1", "P3", "P2")]
+    assert types(model) == ["pipe", "tee", "pipe", "pipe"]
+    assert [s.components for s in model.spools] == [("P1", "P1-P3-P2", "P3", "P2")]
+    assert by_id(model)["P1-P3-P2"].snap["standard"] is False
     for pid in ("P1", "P2", "P3"):
         assert [n for n in notes(model, pid) if "45 degrees: a lateral" in n], notes(model, pid)
     assert not [n for n in notes(model, "P2") if "not joined" in n]
