@@ -466,6 +466,16 @@ def _spoken_list(items) -> str:
     return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} and {items[-1]}"
 
 
+def _branch_off_square_deg(tee: Tee) -> float:
+    """How far (degrees) a tee's branch axis is from square to its run."""
+    run = np.asarray(tee.run_end, dtype=np.float64) - np.asarray(tee.run_start, dtype=np.float64)
+    branch = np.asarray(tee.branch_end, dtype=np.float64) - np.asarray(tee.center, np.float64)
+    lengths = float(np.linalg.norm(run) * np.linalg.norm(branch))
+    if lengths == 0.0:
+        return 0.0
+    return float(np.degrees(np.arcsin(min(1.0, abs(float(run @ branch)) / lengths))))
+
+
 def check_tee_sizes(ctx: Context, table: SizeTable | None) -> None:
     """One warning per reducing-outlet tee whose run and outlet sizes the fittings catalog
     does not make (ASME B16.9 Table 8, ``catalogs/<fittings>-tees.toml``), as merging notes a
@@ -481,6 +491,8 @@ def check_tee_sizes(ctx: Context, table: SizeTable | None) -> None:
             continue
         if g.branch_outer_radius >= g.outer_radius - 1e-9:
             continue  # an equal tee, or an outlet larger than the run (AB104)
+        if _branch_off_square_deg(g) > float(ctx.general("intended_angle_deg")):
+            continue  # a lateral: no B16.9 tee at all, merge-note's (AB302) to say
         run = tee.nominal or table.nominal_for(2 * g.outer_radius)
         outlet = table.nominal_for(2 * g.branch_outer_radius)
         if reducing_tee_made(table.fittings, run, outlet) is not False:

@@ -213,3 +213,44 @@ def test_a_scan_of_a_6_by_2_tee_is_reported_and_a_6_by_3_is_not():
     (f,) = found("2")
     assert set(f.objects) >= {"P1", "P2", "P3"}
     assert found("3") == []
+
+
+def _lateral(model: Model, angle_deg: float, outlet: str) -> Model:
+    """``model``'s tee and its NPS ``outlet`` pipe P3 turned about the tee's centre to
+    ``angle_deg`` from the run (in the x-z plane, towards +x)."""
+    a = np.radians(angle_deg)
+    direction = np.array([np.cos(a), 0.0, np.sin(a)])
+    centre = np.array([2.0, 0.0, 1.0])
+    comps = []
+    for c in model.components:
+        if c.type == "tee":
+            g = c.geometry
+            geometry = Tee(
+                center=g.center,
+                run_start=g.run_start,
+                run_end=g.run_end,
+                branch_end=centre + 0.2 * direction,
+                outer_radius=g.outer_radius,
+                branch_outer_radius=g.branch_outer_radius,
+            )
+            c = Component(c.id, c.type, geometry, nominal=c.nominal, snap=c.snap)
+        elif c.id == "P3":
+            c = pipe(
+                "P3",
+                centre + 0.2 * direction,
+                centre + 1.5 * direction,
+                OD[outlet],
+                nominal=c.nominal,
+                status="snapped",
+            )
+        comps.append(c)
+    return Model(components=tuple(comps), spools=model.spools, catalog=model.catalog)
+
+
+@pytest.mark.parametrize("angle", [45.0, 60.0, 75.0])
+def test_a_lateral_is_not_called_a_reducing_tee(angle):
+    # A 6 x 2 lateral (wye) is no B16.9 tee at all: merge-note (AB302) says it is built from
+    # the measured ends; this warning called it "a reducing tee B16.9 does not make".
+    assert _tee_findings(_lateral(_tee_model("6", "2"), angle, "2")) == []
+    # Within intended_angle_deg of square it is still a tee, and still reported.
+    assert len(_tee_findings(_lateral(_tee_model("6", "2"), 85.0, "2"))) == 1
