@@ -186,6 +186,19 @@ SNAP_FIELDS: dict[str, Callable] = {
         },
         required=("with", "miss", "stderr", "allowed", "at"),
     ),
+    "loose_ends": _objects(
+        {
+            "end": _text_problem,
+            "at": _point_problem,
+            "touches": _text_problem,
+            "touches_type": _text_problem,
+            "touches_pipes": _texts_problem,
+            "gap": _number_problem,
+            "angle_deg": _number_problem,
+            "noted": _flag_problem,
+        },
+        required=("end", "at", "touches"),
+    ),
 }
 
 

@@ -25,6 +25,7 @@ eccentric, axis shifted, end trimmed/extended), the way a spell checker lists wh
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
@@ -47,6 +48,7 @@ from .contiguity import (
 )
 from .eccentric import eccentric_joints
 from .joint import find_runs, joint_estimate
+from .loose import loose_ends
 from .regularize import align_lines, fit_up, regularize_directions
 from .snap import SnapResult, snap_diameter
 from .spool import PipeSpec, build_spools
@@ -615,6 +617,7 @@ def merge_model(
         taken_ids=[obj.id for obj in scan.objects],
         joint_distance=tol.joint_distance,
     )
+    pipe_components = _mark_loose_ends(pipe_components, joints, joint_notes, ids, slack, tol)
 
     # assemble in scan order: each pipe's components where the pipe was
     by_source: dict[str, list[Component]] = {}
@@ -633,6 +636,44 @@ def merge_model(
         else:
             ordered.append(others.get(k, comp))
     return base.replace(components=tuple(ordered), spools=tuple(spools), catalog=catalog.name)
+
+
+def _mark_loose_ends(components, joints, joint_notes, ids, slack, tol):
+    """The merged components with ``snap["loose_ends"]`` on pipes left loose at a fitting or
+    another pipe (:func:`asbuilt.merge.loose.loose_ends`)."""
+    # a lateral's three pipes (its two contacts) are joined to each other
+    contacts = [joint.pipes for joint in joints if joint.kind == "contact"]
+    groups = [set(pipes) for pipes in contacts]
+    for pipes in contacts:
+        touching = [g for g in groups if g & set(pipes)]
+        groups = [g for g in groups if not g & set(pipes)] + [set().union(*touching)]
+    joined = {
+        frozenset((ids[p], ids[q]))
+        for pipes in [joint.pipes for joint in joints if joint.kind != "link"] + groups
+        for p in pipes
+        for q in pipes
+        if p != q
+    }
+    noted = {
+        frozenset((ids[p], ids[q]))
+        for pipes, _ in joint_notes
+        for p in pipes
+        for q in pipes
+        if p != q
+    }
+    found = loose_ends(
+        components,
+        reach=tol.joint_distance,
+        slack=dict(zip(ids, (float(s) for s in slack))),
+        joined=joined,
+        noted=noted,
+    )
+    return [
+        dataclasses.replace(comp, snap={**comp.snap, "loose_ends": found[comp.id]})
+        if comp.id in found
+        else comp
+        for comp in components
+    ]
 
 
 def _mean_spacing(item, cylinder) -> float:

@@ -1,4 +1,4 @@
-"""Joint rules: joint-gap, merge-note and fit-up.
+"""Joint rules: joint-gap, merge-note, fit-up and unjoined-end.
 
 Two pipes are *contiguous* when the scan links them or their ends lie within
 ``Tolerances.joint_distance``; merged spools join such pipes end to end or through a fitting.
@@ -168,13 +168,13 @@ def _length_se(comp) -> float:
 _NOT_JOINED = "not joined"
 
 
-def _notes_say_it(ctx: Context) -> bool:
-    """Whether merge-note reports merging's notes in this run at least as gravely as
-    joint-gap would report the pair (it runs, and its severity is no milder)."""
+def _notes_say_it(ctx: Context, slug: str = "joint-gap") -> bool:
+    """Whether merge-note reports merging's notes in this run at least as gravely as rule
+    ``slug`` would report the pair (it runs, and its severity is no milder)."""
     if not ctx.config.is_active("merge-note"):
         return False
     rank = SEVERITIES.index
-    return rank(ctx.config.severity("merge-note")) <= rank(ctx.config.severity("joint-gap"))
+    return rank(ctx.config.severity("merge-note")) <= rank(ctx.config.severity(slug))
 
 
 def _said_not_joined(ca, cb) -> bool:
@@ -335,4 +335,111 @@ def check_fit_up(ctx: Context, table: SizeTable | None = None) -> None:
             )
 
 
-CHECKS = {"joint-gap": check_joint_gap, "merge-note": check_merge_notes, "fit-up": check_fit_up}
+#: A pipe whose outlet runs within this angle (degrees) of a tee's outlet axis, from the other
+#: side of the run, is where a straight cross's fourth outlet would be.
+_CROSS_DEG = 10.0
+
+
+def _outward_at(comp, end: str) -> np.ndarray:
+    start, stop, axis, _ = _ends(comp.geometry)
+    return axis if end == "end" else -axis
+
+
+def _unjoined_reason(record: dict, comp, other, names: str) -> tuple[str, str]:
+    """Why merging left the end loose, and what to do: ``(clause, suggestion)``."""
+    pipe, kind, target = comp.id, record.get("touches_type"), str(record["touches"])
+    angle = float(record.get("angle_deg", 90.0))
+    if kind == "tee":
+        geo = other.geometry if other is not None else None
+        outlet = None
+        if geo is not None and hasattr(geo, "branch_end"):
+            outlet = np.asarray(geo.branch_end, float) - np.asarray(geo.center, float)
+            outlet = outlet / max(float(np.linalg.norm(outlet)), 1e-12)
+        out = _outward_at(comp, str(record.get("end")))
+        if outlet is not None and float(out @ outlet) >= np.cos(np.radians(_CROSS_DEG)):
+            return (
+                f"the tee already joins {names}, and merging builds no cross (ASME B16.9 makes "
+                "straight crosses, but the catalog has no cross dimensions)",
+                f"if {pipe} is welded to {target} on site, the fitting is a cross: model it by "
+                f"hand (no cross in the catalog); if not, scan {pipe} up to its end",
+            )
+        return (
+            f"the tee already joins {names}, and no ASME B16.9 fitting joins a fourth pipe "
+            "that way",
+            f"check on site what joins {pipe} at {target} (a branch outlet fitting on the tee, "
+            f"a part the scan missed) and model it by hand; if nothing does, scan {pipe} up to "
+            "its end",
+        )
+    if kind == "pipe":
+        if angle < 90.0 - _CROSS_DEG and angle > _CROSS_DEG:
+            why = (
+                f"it meets {target} at {angle:.0f} degrees, and an ASME B16.9 tee's outlet is "
+                "square (a lateral or an angled branch outlet, which the catalog does not have)"
+            )
+        else:
+            why = (
+                f"no fitting of the catalog joins it there ({target}'s ends are taken or too near)"
+            )
+        return (
+            why,
+            f"check on site how {pipe} joins {target} (a branch outlet fitting such as an MSS "
+            "SP-97 latrolet or weldolet, a lateral, a field weld) and model it by hand; if it "
+            f"stops short of {target}, scan {pipe} up to its end",
+        )
+    return (
+        f"the {kind} already joins {names}",
+        f"check on site what joins {pipe} at {target} (a part the scan missed) and model it by "
+        f"hand; if nothing does, scan {pipe} up to its end",
+    )
+
+
+def check_unjoined_ends(ctx: Context, table: SizeTable | None = None) -> None:
+    """One finding per pipe end merging left loose at a fitting or another pipe
+    (``snap["loose_ends"]``, :func:`asbuilt.merge.loose.loose_ends`): a fourth pipe at a tee,
+    a pipe ending on another's side where no tee can be built. An end merging's notes already
+    report as not joined to it (a scan link it could not make) is left to merge-note when
+    merge-note reports it (:func:`_notes_say_it`); a pair of pipes whose ends joint-gap
+    measures (contiguous free ends) is left to joint-gap."""
+    slug = "unjoined-end"
+    by_notes = _notes_say_it(ctx, slug)
+    comps = {c.id: c for c in ctx.model.components}
+    gap_pairs = set()
+    if ctx.config.is_active("joint-gap"):
+        touch = float(ctx.opt("clash", "touch_distance"))
+        gap_pairs = inferred_pairs(ctx.model, touch, float(ctx.general("joint_distance")))
+    seen = set()
+    for comp in ctx.pipes:
+        for record in (comp.snap or {}).get("loose_ends") or ():
+            target = str(record["touches"])
+            if by_notes and record.get("noted"):
+                continue  # merge-note says this pair is not joined, and why
+            pair = frozenset((comp.id, target))
+            if pair in gap_pairs or pair in seen:
+                continue  # joint-gap measures these ends; or said from the other pipe's end
+            seen.add(pair)
+            other = comps.get(target)
+            kind = record.get("touches_type") or (other.type if other else "component")
+            joins = [str(p) for p in record.get("touches_pipes") or ()]
+            names = ", ".join(joins[:-1]) + f" and {joins[-1]}" if len(joins) > 1 else target
+            gap = float(record.get("gap", 0.0))
+            where = f"ends on the {kind}" if gap < 5e-4 else f"ends {mm(gap)} from the {kind}"
+            if kind == "pipe":
+                where = "ends on" if gap < 5e-4 else f"ends {mm(gap)} from"
+            why, suggestion = _unjoined_reason(record, comp, other, names)
+            ctx.emit(
+                slug,
+                [comp.id, target],
+                f"{comp.id} {where} {target} but is not joined to it: {why}",
+                location=np.asarray(record["at"], float),
+                measured=gap,
+                unit="m",
+                suggestions=(Suggestion(suggestion),),
+            )
+
+
+CHECKS = {
+    "joint-gap": check_joint_gap,
+    "merge-note": check_merge_notes,
+    "fit-up": check_fit_up,
+    "unjoined-end": check_unjoined_ends,
+}

@@ -149,6 +149,17 @@ RULES: tuple[Rule, ...] = (
         "joints",
     ),
     Rule(
+        "AB304",
+        "unjoined-end",
+        "warning",
+        "{pipe} ends {gap} from {target} but is not joined to it: {why}",
+        "Merging joins each pipe end to one other, at most three pipes at a tee (the catalog "
+        "has no crosses); a pipe end that runs into a fitting or another pipe within "
+        "joint_distance (plus its shot spacing) and is joined to nothing is a fitting the "
+        "model lacks, a part the scan missed, or a pipe that stops short.",
+        "joints",
+    ),
+    Rule(
         "AB401",
         "too-few-points",
         "warning",

@@ -1,0 +1,198 @@
+"""Pipe ends left loose at a fitting or another pipe: found after the fittings are built.
+
+Merging joins each pipe end to at most one other (:mod:`.contiguity`): a fourth pipe at a tee
+(no cross is built: ASME B16.9 makes straight crosses, but neither the shipped fittings tables
+nor the project's standards reference give their dimensions), a pipe ending on another's side at
+an angle no tee makes, or near a pipe end another joint already took, is left unjoined. A
+linked pair gets a note from contiguity; an unlinked one was silent.
+
+:func:`loose_ends` finds every open pipe end (no other component's port within
+:data:`PORT_TOUCH`) whose pipe, continued straight on by ``reach`` (``joint_distance``) plus
+its shot spacing (the last shot may be that far short of the real end, as contiguity allows),
+would run into another pipe or fitting: the swept pipe and the other component's body (capsules
+around their centrelines: a tee's run and outlet, an elbow's arc in chords, a reducer at its
+larger radius) come within the sum of their outer radii. A pipe that passes above or beside the
+other, or runs alongside it, does not. Pipes merging joined (a lateral's contacts, a fitting it
+could not build) are not loose to each other; a pair contiguity's notes already name (a link it
+could not make) is recorded with ``noted`` true, so the rules report it once.
+
+Each loose end becomes a record on its pipe's ``snap["loose_ends"]`` (docs/merging.md), read by
+the rule ``unjoined-end`` (AB304).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from asbuilt.model import Bend, Component, Reducer, Straight, Tee
+
+from .contiguity import segment_distance
+from .ports import ports
+
+__all__ = ["PORT_TOUCH", "loose_ends", "bodies"]
+
+#: Two ports closer than this (metres) are joined (merging makes them equal to rounding).
+PORT_TOUCH = 1e-3
+
+#: Chords an elbow's arc is split into for the distance test (a 90 degree bend: 11.25 degrees
+#: each, within 0.2% of its bend radius of the arc).
+_ARC_CHORDS = 8
+
+#: Spacing (m) of the points sampled along components to find those near an end.
+_SAMPLE_STEP = 0.25
+
+_PIPING = ("pipe", "coupling", "elbow", "tee", "reducer")
+
+
+def bodies(component: Component) -> list[tuple[np.ndarray, np.ndarray, float]]:
+    """Capsules ``(a, b, radius)`` (metres) around a piping component's centreline."""
+    g = component.geometry
+    if isinstance(g, Tee):
+        return [
+            (g.run_start, g.run_end, float(g.outer_radius)),
+            (g.center, g.branch_end, float(g.branch_outer_radius)),
+        ]
+    if isinstance(g, Reducer):
+        return [(g.start, g.end, float(max(g.outer_radius_start, g.outer_radius_end)))]
+    if isinstance(g, Bend):
+        radius = float(max(g.outer_radius, g.outer_radius_end or 0.0))
+        u, w = g.start - g.center, g.end - g.center
+        bend = float(np.linalg.norm(u))
+        u = u / bend
+        v = w - (w @ u) * u
+        v = v / np.linalg.norm(v)
+        angle = float(np.arctan2(w @ v, w @ u))
+        t = np.linspace(0.0, angle, _ARC_CHORDS + 1)
+        arc = g.center + bend * (np.cos(t)[:, None] * u + np.sin(t)[:, None] * v)
+        return [(arc[k], arc[k + 1], radius) for k in range(_ARC_CHORDS)]
+    if isinstance(g, Straight):
+        return [(g.start, g.end, float(g.outer_radius))]
+    return []
+
+
+def _point_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """Distance (m) from ``point`` to the segment ``a b``."""
+    d = b - a
+    t = float(np.clip((point - a) @ d / max(float(d @ d), 1e-24), 0.0, 1.0))
+    return float(np.linalg.norm(point - a - t * d))
+
+
+def _surface_gap(point: np.ndarray, capsules) -> float:
+    """Distance (m) from ``point`` to the nearest capsule's surface, 0 inside."""
+    return max(0.0, min(_point_distance(point, a, b) - radius for a, b, radius in capsules))
+
+
+def _angle_deg(u: np.ndarray, capsules, point: np.ndarray) -> float:
+    """Angle (degrees, 0-90) between direction ``u`` and the axis of the capsule nearest
+    ``point``."""
+    a, b, _ = min(capsules, key=lambda c: _point_distance(point, c[0], c[1]))
+    axis = (b - a) / max(float(np.linalg.norm(b - a)), 1e-12)
+    return float(np.degrees(np.arccos(min(1.0, abs(float(u @ axis))))))
+
+
+def loose_ends(
+    components: Sequence[Component],
+    *,
+    reach: float,
+    slack: Mapping[str, float] | None = None,
+    joined: Iterable[frozenset] = (),
+    noted: Iterable[frozenset] = (),
+) -> dict[str, list[dict]]:
+    """Open pipe ends that run into another pipe or fitting within ``reach`` (+ slack).
+
+    Parameters
+    ----------
+    components : sequence of Component
+        Merged pipes and fittings (others are ignored).
+    reach : float
+        How far (m) each open end is continued straight on (``Tolerances.joint_distance``).
+    slack : mapping, optional
+        Scan object id to how far (m) its fitted ends may fall short of the real ones.
+    joined, noted : iterables of frozenset of scan object ids
+        Pairs merging joined (never loose to each other) and pairs contiguity's notes name.
+
+    Returns
+    -------
+    dict
+        Pipe component id to its records: ``end`` (``"start"`` or ``"end"``), ``at`` (the end,
+        [x, y, z] m), ``touches`` (the component's id), ``touches_type``, ``touches_pipes``
+        (the scan pipes it is or joins), ``gap`` (m from the end to its surface, 0 touching or
+        inside), ``angle_deg`` (between the pipe and the nearest axis of it, 0-90) and
+        ``noted``.
+    """
+    slack = dict(slack or {})
+    joined, noted = set(joined), set(noted)
+    piping = [c for c in components if c.type in _PIPING]
+    source_of = {c.id: (c.sources[0] if c.sources else c.id) for c in piping if c.type == "pipe"}
+
+    def scan_pipes(comp: Component) -> list[str]:
+        if comp.type == "pipe":
+            return [source_of[comp.id]]
+        connects = (comp.snap or {}).get("connects") or ()
+        return list(dict.fromkeys(source_of.get(str(k), str(k)) for k in connects))
+
+    port_points = [np.asarray(p, float) for c in piping for p, _ in ports(c)]
+    port_owner = [c.id for c in piping for _ in ports(c)]
+    port_tree = cKDTree(np.array(port_points).reshape(-1, 3))
+    capsules = {c.id: bodies(c) for c in piping}
+    # points every _SAMPLE_STEP along every body: a k-d tree of them finds the components near
+    # an end whatever their length
+    samples, owners, widest = [], [], 0.0
+    for n, comp in enumerate(piping):
+        for a, b, rad in capsules[comp.id]:
+            count = max(2, int(np.ceil(float(np.linalg.norm(b - a)) / _SAMPLE_STEP)) + 1)
+            t = np.linspace(0.0, 1.0, count)[:, None]
+            samples.append(a + t * (b - a))
+            owners += [n] * count
+            widest = max(widest, rad)
+    sample_tree = cKDTree(np.concatenate(samples))
+    found: dict[str, list[dict]] = {}
+    for comp in piping:
+        if comp.type != "pipe":
+            continue
+        own = source_of[comp.id]
+        radius = float(comp.geometry.outer_radius)
+        for k, (point, out) in enumerate(ports(comp)):
+            point = np.asarray(point, float)
+            if any(port_owner[q] != comp.id for q in port_tree.query_ball_point(point, PORT_TOUCH)):
+                continue  # joined here
+            length = reach + float(slack.get(own, 0.0))
+            tip = point + length * np.asarray(out, float)
+            near = sample_tree.query_ball_point(
+                0.5 * (point + tip), 0.5 * length + radius + widest + _SAMPLE_STEP
+            )
+            best = None
+            for other in (piping[n] for n in sorted({owners[q] for q in near})):
+                if other.id == comp.id:
+                    continue
+                theirs = scan_pipes(other)
+                if own in theirs or any(frozenset((own, q)) in joined for q in theirs):
+                    continue  # a piece of the same pipe, or joined to this pipe by merging
+                if not any(
+                    segment_distance(point, tip, a, b) <= radius + rad
+                    for a, b, rad in capsules[other.id]
+                ):
+                    continue
+                gap = _surface_gap(point, capsules[other.id])
+                rank = (gap, other.type == "pipe")  # a fitting before the pipe it joins
+                if best is None or rank < best[0]:
+                    best = (rank, other, theirs)
+            if best is None:
+                continue
+            (gap, _), other, theirs = best
+            found.setdefault(comp.id, []).append(
+                {
+                    "end": ("start", "end")[k],
+                    "at": [float(x) for x in point],
+                    "touches": other.id,
+                    "touches_type": other.type,
+                    "touches_pipes": theirs,
+                    "gap": float(gap),
+                    "angle_deg": _angle_deg(np.asarray(out, float), capsules[other.id], point),
+                    "noted": any(frozenset((own, q)) in noted for q in theirs),
+                }
+            )
+    return found

@@ -1,0 +1,188 @@
+"""A pipe end merging leaves joined to nothing though it runs into a fitting or another pipe.
+
+Merging joins each pipe end to one other, at most three pipes at a tee (the catalog has no
+crosses): a fourth pipe at a tee, or a pipe ending on another's side at an angle no tee makes,
+was left loose without a word. Now merging records it (``snap["loose_ends"]``) and
+``asbuilt check`` reports it as AB304 ``unjoined-end``. Geometry hand-drawn: NPS 4 (OD 114.3 mm)
+pipes, ``joint_distance`` 0.15 m, a tee's run ends 105 mm from its centre (B16.9 C).
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from synthetic_pipes import Pipe, report_of
+
+from asbuilt.export.model_json import dumps_model, load_model
+from asbuilt.merge import merge_model
+from asbuilt.rules import check_model, load_rules
+
+OD = 0.1143
+
+#: a run along x split at x = 2, branches along y stopping 0.15 m from the run axis
+RUN = [Pipe("P1", (0, 0, 0), (1.9, 0, 0), OD), Pipe("P2", (2.1, 0, 0), (4, 0, 0), OD)]
+UP = Pipe("P3", (2, 0.15, 0), (2, 2, 0), OD)
+DOWN = Pipe("P4", (2, -0.15, 0), (2, -2, 0), OD)
+CROSS = [*RUN, UP, DOWN]
+
+LOOSE = [
+    # four pipes at one point: a tee takes three, the fourth is where a cross's outlet would be
+    pytest.param(CROSS, [], "P4", "P1-P2-P3", "cross", id="cross"),
+    # the scan links the run to one branch: that tee is built, the other branch is loose
+    pytest.param(CROSS, [("P1", "P2"), ("P1", "P4")], "P3", "P1-P2-P4", "cross", id="cross-linked"),
+    # a fourth pipe rising from the tee, square to both run and outlet: no B16.9 fitting
+    pytest.param(
+        [*RUN, UP, Pipe("P4", (2, 0, 0.15), (2, 0, 2), OD)],
+        [],
+        "P4",
+        "P1-P2-P3",
+        "no ASME B16.9 fitting joins a fourth pipe",
+        id="fourth-out-of-plane",
+    ),
+    # a pipe ending on another's side at 55 degrees: no tee (B16.9 outlets are square)
+    pytest.param(
+        [Pipe("P1", (0, 0, 0), (4, 0, 0), OD), Pipe("P2", (2, 0.06, 0), (3, 1.5, 0), OD)],
+        [],
+        "P2",
+        "P1",
+        "at 55 degrees",
+        id="oblique-on-a-pipe",
+    ),
+    # a pipe ending on the outside of an elbow
+    pytest.param(
+        [
+            Pipe("P1", (0, 0, 0), (3.8, 0, 0), OD),
+            Pipe("P5", (4, 0, 0.2), (4, 0, 2), OD),
+            Pipe("P2", (3.955, 0.1, 0.045), (3.955, 2, 0.045), OD),
+        ],
+        [],
+        "P2",
+        "P1-P5",
+        "the elbow already joins P1 and P5",
+        id="on-an-elbow",
+    ),
+]
+
+
+def _unjoined(model, config=None):
+    return [f for f in check_model(model, config=config) if f.slug == "unjoined-end"]
+
+
+@pytest.mark.parametrize(("pipes", "links", "pipe", "target", "why"), LOOSE)
+def test_a_loose_pipe_end_at_a_fitting_or_pipe_is_one_finding(pipes, links, pipe, target, why):
+    model = merge_model(report_of(pipes, links=links))
+    (record,) = [r for c in model.components for r in c.snap.get("loose_ends", ())]
+    assert record["touches"] == target and not record["noted"]
+    (f,) = _unjoined(model)
+    assert (f.code, f.severity, f.objects) == ("AB304", "warning", (pipe, target))
+    assert (
+        f.message.startswith(f"{pipe} ends ") and f" {target} but is not joined to it" in f.message
+    )
+    assert why in f.message
+    assert f.location is not None and f.suggestions and pipe in f.suggestions[0].description
+
+
+def test_the_cross_finding_reads_as_documented():
+    (f,) = _unjoined(merge_model(report_of(CROSS)))
+    assert f.message == (
+        "P4 ends 92.9 mm from the tee P1-P2-P3 but is not joined to it: the tee already joins "
+        "P1, P2 and P3, and merging builds no cross (ASME B16.9 makes straight crosses, but the "
+        "catalog has no cross dimensions)"
+    )
+    assert f.suggestions[0].description == (
+        "if P4 is welded to P1-P2-P3 on site, the fitting is a cross: model it by hand (no cross "
+        "in the catalog); if not, scan P4 up to its end"
+    )
+    assert f.measured == pytest.approx(0.15 - OD / 2, abs=1e-4)
+    assert list(f.location) == pytest.approx([2, -0.15, 0])
+
+
+JOINED = [
+    pytest.param([*RUN, UP], [], id="tee"),
+    pytest.param([RUN[0], Pipe("P2", (2.1, 0.2, 0), (2.1, 2, 0), OD)], [], id="elbow"),
+    pytest.param([*RUN, Pipe("P3", (2.1, 0.15, 0), (3.2, 1.5, 0), OD)], [], id="lateral"),
+    # crossing over the tee 0.3 m above it: the pipes do not meet
+    pytest.param([*RUN, UP, Pipe("P4", (1, -1, 0.3), (1, 1, 0.3), OD)], [], id="passes-above"),
+    # a rack: three parallel pipes 0.2 m apart, ends side by side
+    pytest.param(
+        [
+            Pipe(f"P{k}", (0.1 * (k == 3), 0.2 * k, 0), (4 + 0.1 * (k == 3), 0.2 * k, 0), OD)
+            for k in (1, 2, 3)
+        ],
+        [],
+        id="rack",
+    ),
+    # ending 0.34 m short of a pipe's side: beyond joint_distance
+    pytest.param(
+        [Pipe("P1", (0, 0, 0), (4, 0, 0), OD), Pipe("P2", (2, 0.4, 0), (3, 1.5, 0), OD)],
+        [],
+        id="short",
+    ),
+    # its axis passes 130 mm above the other's: the pipes do not meet
+    pytest.param(
+        [Pipe("P1", (0, 0, 0), (4, 0, 0), OD), Pipe("P2", (2, 0.1, 0.13), (2, 2, 0.13), OD)],
+        [],
+        id="axis-misses",
+    ),
+]
+
+
+@pytest.mark.parametrize(("pipes", "links"), JOINED)
+def test_no_finding_where_every_end_is_joined_or_free(pipes, links):
+    model = merge_model(report_of(pipes, links=links))
+    assert not [c.id for c in model.components if c.snap.get("loose_ends")]
+    assert not _unjoined(model)
+
+
+#: the scan links the run to the fourth pipe, whose end the tee P1-P2-P3 took: merging's note
+#: (AB302) says so already
+LINKED_FOURTH = [("P1", "P4"), ("P1", "P3")]
+
+
+def test_a_link_merging_already_notes_is_one_finding():
+    model = merge_model(report_of(CROSS, links=LINKED_FOURTH))
+    (record,) = [r for c in model.components for r in c.snap.get("loose_ends", ())]
+    assert record["touches"] == "P1-P2-P3" and record["noted"]
+    found = check_model(model)
+    assert [f.code for f in found if f.code in ("AB302", "AB304")] == ["AB302"]
+
+
+@pytest.mark.parametrize(
+    "rules",
+    ['ignore = ["merge-note"]', '[unjoined-end]\nseverity = "error"'],
+    ids=["merge-note-ignored", "unjoined-end-graver"],
+)
+def test_the_linked_fourth_pipe_is_reported_when_the_note_would_not_say_it(rules, tmp_path):
+    path = tmp_path / "rules.toml"
+    path.write_text(rules + "\n")
+    model = merge_model(report_of(CROSS, links=LINKED_FOURTH))
+    (f,) = _unjoined(model, config=load_rules(path))
+    assert f.objects == ("P4", "P1-P2-P3")
+
+
+@pytest.mark.parametrize(
+    "rules", ['ignore = ["AB304"]', 'ignore = ["unjoined-end"]', 'select = ["AB2"]']
+)
+def test_the_rule_can_be_deselected(rules, tmp_path):
+    path = tmp_path / "rules.toml"
+    path.write_text(rules + "\n")
+    assert not _unjoined(merge_model(report_of(CROSS)), config=load_rules(path))
+
+
+def test_the_severity_is_configurable(tmp_path):
+    path = tmp_path / "rules.toml"
+    path.write_text('[unjoined-end]\nseverity = "error"\n')
+    (f,) = _unjoined(merge_model(report_of(CROSS)), config=load_rules(path))
+    assert f.severity == "error"
+
+
+def test_the_model_document_carries_the_loose_end(tmp_path):
+    model = merge_model(report_of(CROSS))
+    text = dumps_model(model)
+    (entry,) = [c for c in json.loads(text)["components"] if c["snap"].get("loose_ends")]
+    assert entry["id"] == "P4" and entry["snap"]["loose_ends"][0]["touches"] == "P1-P2-P3"
+    path = tmp_path / "model.json"
+    path.write_text(text)
+    (f,) = _unjoined(load_model(path))
+    assert f.objects == ("P4", "P1-P2-P3")
