@@ -1,5 +1,5 @@
 """The shapes of spool fittings from the sizes they join: reducer cones, tee dimensions and
-geometry, and the words merging's notes use for them.
+geometry, whether a reducing elbow is a B16.9 one, and the words merging's notes use for them.
 
 Private helper of :mod:`asbuilt.merge.spool` (which builds and places the fittings); each
 function takes the :class:`~asbuilt.merge.spool.PipeSpec` of the pipes a fitting joins.
@@ -14,13 +14,21 @@ import numpy as np
 
 from asbuilt.model import Reducer, Tee
 
-from .reducers import reducing_tee_dims
+from .reducers import nps_order, reducing_elbow_ends, reducing_tee_dims
 
 if TYPE_CHECKING:
     from .spool import PipeSpec
 
+#: Bends within this many degrees of 45 use the catalog's 45 degree elbow centre-to-end; an
+#: elbow within it of 45 or 90 degrees, or a tee's branch within it of square, is a B16.9
+#: fitting (regularisation makes angles within ``angle_snap_deg``, 2, exact). Any other angle
+#: is built (a 90 degree elbow cut to angle is real practice) but said to be non-standard.
+ELBOW45_WINDOW_DEG = 2.0
+
 __all__ = [
+    "ELBOW45_WINDOW_DEG",
     "TRIM_SURFACE_TOLERANCE",
+    "reducing_elbow_source",
     "flat_word",
     "reducer_cone",
     "same_size",
@@ -106,3 +114,36 @@ def tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
 
 def size_text(p: PipeSpec) -> str:
     return f"NPS {p.nominal}" if p.nominal else f"OD {p.od * 1000:.1f} mm"
+
+
+def reducing_elbow_source(b, name, big, small, degrees, listed, source, standard, pipes, notes):
+    """(``dimensions`` record, standard?) of the reducing elbow ``name`` from ``big`` to
+    ``small`` turning ``degrees``: ASME B16.9 makes reducing elbows as 90 degree long-radius
+    elbows of listed pairs only (``catalogs/<fittings>-elbows.toml``, ``listed`` its A, False
+    for a pair not made, None for no verdict). Any other is built as before, said to be
+    non-standard, with a note on ``pipes`` and in ``notes``."""
+    sizes = f"{size_text(big)} to {size_text(small)}"
+    if abs(degrees - 90.0) > ELBOW45_WINDOW_DEG:
+        text = (
+            f"the elbow {name} joins {sizes} turning {degrees:.0f} degrees: ASME B16.9 makes "
+            "reducing elbows as 90 degree long-radius elbows only; built as a bend of the "
+            f"{size_text(big)} elbow's dimensions, each end its pipe's size, a fitting the standard "
+            "does not make (an elbow and a reducer, or check the sizes)"
+        )
+        if standard:
+            source = f"{source}, reducing elbow at {degrees:.0f} degrees (non-standard)"
+    elif listed is False:
+        made = reducing_elbow_ends(big.dims.source).get(big.nominal, {})
+        ends = sorted(made, key=nps_order, reverse=True)
+        text = (
+            f"no NPS {big.nominal} x {small.nominal} reducing elbow in {big.dims.source} (NPS "
+            f"{big.nominal} reduces to {', '.join(ends)} only): built as a 90 degree elbow of "
+            f"the {size_text(big)} radius, each end its pipe's size, a fitting the standard does not "
+            "make (an elbow and a reducer, or check the sizes)"
+        )
+        source = f"{source} radius; no such reducing elbow (non-standard)"
+    else:
+        return source, standard
+    notes.append(text)
+    b.note(pipes, text)
+    return source, False

@@ -50,9 +50,11 @@ from asbuilt.model import (
 )
 
 from ._fitting_shapes import (
+    ELBOW45_WINDOW_DEG,
     TRIM_SURFACE_TOLERANCE,
     flat_word,
     reducer_cone,
+    reducing_elbow_source,
     same_size,
     size_text,
     tee_dims,
@@ -65,7 +67,6 @@ from .reducers import (
     nps_order,
     reducer_made,
     reducing_elbow_end,
-    reducing_elbow_ends,
     small_ends,
 )
 
@@ -80,11 +81,6 @@ __all__ = [
 
 #: Inline ends closer than this (metres) meet at their midpoint rather than get a coupling.
 BUTT_GAP = 0.005
-#: Bends within this many degrees of 45 use the catalog's 45 degree elbow centre-to-end; an
-#: elbow within it of 45 or 90 degrees, or a tee's branch within it of square, is a B16.9
-#: fitting (regularisation makes angles within ``angle_snap_deg``, 2, exact). Any other angle
-#: is built (a 90 degree elbow cut to angle is real practice) but said to be non-standard.
-ELBOW45_WINDOW_DEG = 2.0
 #: Shortest pipe piece left after trimming, metres.
 MIN_PIPE_LENGTH = 0.001
 #: Largest elbow bend built by default (degrees): ASME B16.9 elbows turn 45 or 90 degrees, plus
@@ -268,7 +264,7 @@ def _elbow(b: _Builder, joint: Joint):
     source = big.dims.source
     standard = min(abs(degrees - 45.0), abs(degrees - 90.0)) <= ELBOW45_WINDOW_DEG
     if reducing:
-        source, standard = _reducing_elbow_source(
+        source, standard = reducing_elbow_source(
             b, f"{pi.id}-{pj.id}", big, small, degrees, listed, source, standard, (i, j), notes
         )
     if not standard:
@@ -295,39 +291,6 @@ def _elbow(b: _Builder, joint: Joint):
         "notes": notes,
     }
     return [("elbow", f"{pi.id}-{pj.id}", geometry, big, snap)]
-
-
-def _reducing_elbow_source(b, name, big, small, degrees, listed, source, standard, pipes, notes):
-    """(``dimensions`` record, standard?) of the reducing elbow ``name`` from ``big`` to
-    ``small`` turning ``degrees``: ASME B16.9 makes reducing elbows as 90 degree long-radius
-    elbows of listed pairs only (``catalogs/<fittings>-elbows.toml``, ``listed`` its A, False
-    for a pair not made, None for no verdict). Any other is built as before, said to be
-    non-standard, with a note on ``pipes`` and in ``notes``."""
-    sizes = f"{size_text(big)} to {size_text(small)}"
-    if abs(degrees - 90.0) > ELBOW45_WINDOW_DEG:
-        text = (
-            f"the elbow {name} joins {sizes} turning {degrees:.0f} degrees: ASME B16.9 makes "
-            "reducing elbows as 90 degree long-radius elbows only; built as a bend of the "
-            f"{size_text(big)} elbow's dimensions, each end its pipe's size, a fitting the standard "
-            "does not make (an elbow and a reducer, or check the sizes)"
-        )
-        if standard:
-            source = f"{source}, reducing elbow at {degrees:.0f} degrees (non-standard)"
-    elif listed is False:
-        made = reducing_elbow_ends(big.dims.source).get(big.nominal, {})
-        ends = sorted(made, key=nps_order, reverse=True)
-        text = (
-            f"no NPS {big.nominal} x {small.nominal} reducing elbow in {big.dims.source} (NPS "
-            f"{big.nominal} reduces to {', '.join(ends)} only): built as a 90 degree elbow of "
-            f"the {size_text(big)} radius, each end its pipe's size, a fitting the standard does not "
-            "make (an elbow and a reducer, or check the sizes)"
-        )
-        source = f"{source} radius; no such reducing elbow (non-standard)"
-    else:
-        return source, standard
-    notes.append(text)
-    b.note(pipes, text)
-    return source, False
 
 
 def _inline(b: _Builder, joint: Joint):
