@@ -41,6 +41,12 @@ def _load_synthetic_pipes():
 
 
 @pytest.fixture(scope="session")
+def synthetic_pipes():
+    """tests/merge/synthetic_pipes.py: pipes and fit reports made by hand."""
+    return _load_synthetic_pipes()
+
+
+@pytest.fixture(scope="session")
 def zoo():
     return zoo_module.zoo_model()
 

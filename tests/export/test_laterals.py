@@ -11,9 +11,7 @@ region integrated by Monte Carlo with numpy.
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -32,17 +30,6 @@ SIZES = (("4", "4"), ("6", "4"), ("6", "2"))
 ORIENTATIONS = ("horizontal", "vertical", "tilted")
 
 
-def _synthetic_pipes():
-    name = "synthetic_pipes"
-    if name not in sys.modules:
-        path = ROOT / "tests" / "merge" / "synthetic_pipes.py"
-        spec = importlib.util.spec_from_file_location(name, path)
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return sys.modules[name]
-
-
 def _frame(orientation: str) -> tuple[np.ndarray, np.ndarray]:
     """The run's direction and a unit vector across it the branch leans towards."""
     if orientation == "horizontal":
@@ -54,9 +41,8 @@ def _frame(orientation: str) -> tuple[np.ndarray, np.ndarray]:
     return run, across / np.linalg.norm(across)
 
 
-def _lateral_model(angle: float, run_nps: str, branch_nps: str, orientation: str):
+def _lateral_model(synthetic, angle: float, run_nps: str, branch_nps: str, orientation: str):
     """Run P1 | P2 with a 0.4 m gap centred on J, branch P3 from 0.3 m off J (SCH 40)."""
-    synthetic = _synthetic_pipes()
     run, across = _frame(orientation)
     theta = math.radians(angle)
     branch = math.cos(theta) * run + math.sin(theta) * across
@@ -136,9 +122,9 @@ def _step_solids(path: Path) -> list[bool]:
 @pytest.mark.parametrize("sizes", SIZES, ids=lambda s: f"{s[0]}x{s[1]}")
 @pytest.mark.parametrize("angle", ANGLES)
 def test_a_lateral_fuses_into_one_valid_solid_of_the_union_volume(
-    tmp_path, angle, sizes, orientation
+    tmp_path, synthetic_pipes, angle, sizes, orientation
 ):
-    model = _lateral_model(angle, *sizes, orientation)
+    model = _lateral_model(synthetic_pipes, angle, *sizes, orientation)
     assert sorted(c.type for c in model.components) == ["pipe", "pipe", "pipe", "tee"]
     (spool,) = model.spools
     (lateral,) = [c for c in model.components if c.type == "tee"]
