@@ -20,8 +20,6 @@ import pytest
 from asbuilt.cad import prepare
 from asbuilt.export.step import read_step, write_step
 
-ROOT = Path(__file__).resolve().parents[2]
-
 #: ASME B36.10M outside diameters (metres) by NPS.
 OD = {"2": 0.0603, "4": 0.1143, "6": 0.1683}
 ANGLES = (30, 45, 60, 75)
