@@ -12,7 +12,10 @@ docs/drivers.md and adjustable):
 
 * the set commands get no reply (some heads acknowledge: whatever arrives unasked is dropped
   before the next query), so a move waits for arrival by *polling the position queries* until
-  both axes report the target (within ``tolerance`` hundredths) or ``move_timeout`` passes;
+  both axes report the target (within ``tolerance`` hundredths) or ``move_timeout`` passes. A
+  head that has stopped (the same position reported for ``SETTLE_TIME`` seconds) within
+  ``SETTLE_NEAR`` hundredths of the target (its steps do not fall on every hundredth) has
+  arrived too; the position the head reports on arrival is returned as reached;
 * pan 0-35999 is a full turn: any finite pan angle is accepted and wrapped (``pan_limits``
   restricts it for a head with a stop); positions read back are signed, in (-180, 180] degrees;
 * tilt: raw 0 is level (``tilt_zero``) and the raw value grows *downwards* (``tilt_sign=-1``:
@@ -68,6 +71,13 @@ FULL_TURN = 36000  # hundredths of a degree
 RESYNC_QUIET = 0.1
 #: Consecutive unreadable position replies a move's polling tolerates (line noise).
 POLL_RETRIES = 3
+#: Seconds a reported position must stay the same for the head to count as stopped.
+SETTLE_TIME = 0.5
+#: Hundredths of a degree a stopped head may lie off its target and still count as arrived: a
+#: head whose steps do not fall on every hundredth (the reference gives no resolution) stops at
+#: the step nearest the target, and reports that; the position it reports is then the one
+#: returned as reached.
+SETTLE_NEAR = 10
 
 
 def checksum(addr: int, cmd1: int, cmd2: int, data1: int, data2: int) -> int:
@@ -493,8 +503,9 @@ class PelcoD:
         Returns
         -------
         (float, float)
-            The commanded angles rounded to hundredths of a degree, radians (pan as asked,
-            not wrapped).
+            Where the head reports it arrived (see :meth:`wait_for`; without ``wait``, the
+            commanded angles rounded to hundredths of a degree), radians, pan unwrapped as
+            asked.
 
         Raises
         ------
@@ -510,21 +521,30 @@ class PelcoD:
         self.send(0x00, PAN_ABSOLUTE, pan_raw >> 8, pan_raw & 0xFF)
         self.send(0x00, TILT_ABSOLUTE, tilt_raw >> 8, tilt_raw & 0xFF)
         if wait:
-            self.wait_for(pan_raw, tilt_raw)
+            at = self.wait_for(pan_raw, tilt_raw)
+            # where the head says it is (within tolerance of the target, or at the step
+            # nearest it), pan unwrapped as asked
+            pc += _signed(at[0] - pan_raw)
+            tc += self.tilt_sign * _signed(at[1] - tilt_raw)
         return math.radians(pc / 100), math.radians(tc / 100)
 
     def _near(self, a: int, b: int) -> bool:
         return abs(_signed(a - b)) <= self.tolerance
 
-    def wait_for(self, pan_raw: int, tilt_raw: int) -> None:
-        """Poll the position until it is the target (raw hundredths), up to ``move_timeout``.
+    def wait_for(self, pan_raw: int, tilt_raw: int) -> tuple[int, int]:
+        """Poll the position until it is the target (raw hundredths), up to ``move_timeout``;
+        returns the position last reported.
 
+        The head has arrived when both axes are within :attr:`tolerance` of the target, or when
+        it has stopped (the same position reported for ``SETTLE_TIME`` seconds) within
+        ``SETTLE_NEAR`` hundredths of it (a head whose steps do not fall on every hundredth).
         A reply that cannot be read (noise: bad checksum, short frame) is queried again, up to
         ``POLL_RETRIES`` in a row; silence (:class:`DeviceTimeout`) ends the wait at once.
         """
         deadline = time.monotonic() + self.move_timeout
         failures = 0
         at = None
+        last, since = None, 0.0  # the last position reported, and since when unchanged
         while True:
             try:
                 at = self.position_raw()
@@ -535,7 +555,16 @@ class PelcoD:
                     raise
                 continue
             if self._near(at[0], pan_raw) and self._near(at[1], tilt_raw):
-                return
+                return at
+            now = time.monotonic()
+            if at != last:
+                last, since = at, now
+            elif (
+                now - since >= SETTLE_TIME
+                and abs(_signed(at[0] - pan_raw)) <= SETTLE_NEAR
+                and abs(_signed(at[1] - tilt_raw)) <= SETTLE_NEAR
+            ):
+                return at
             if time.monotonic() > deadline:
                 raise DeviceTimeout(
                     f"{self.name}: the head reports pan {at[0]} / tilt {at[1]} hundredths of a "

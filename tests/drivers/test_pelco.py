@@ -360,3 +360,33 @@ def test_a_scan_session_with_the_simulated_pelco_head(scene_file, tmp_path):
     for _x, y, z in pipe_points:
         assert math.hypot(y - 4.0, z - 1.2) == pytest.approx(0.162, abs=0.003)
     assert "beyond the pan-tilt unit's tilt range [-90.000, 90.000] deg" in session.failed["H"]
+
+
+class SteppedHead(Head):
+    """A head whose steps fall on every ``step`` hundredths: it stops at the step nearest the
+    target and reports that (the reference gives no resolution for the position replies)."""
+
+    def __init__(self, step, **kwargs):
+        super().__init__(**kwargs)
+        self.step = step
+
+    def __call__(self, got: bytes):
+        cmd2, value = got[3], (got[4] << 8) | got[5]
+        if cmd2 in (0x4B, 0x4D):
+            value = round(value / self.step) * self.step % 36000
+            got = _frame(got[1], cmd2, value)
+        return super().__call__(got)
+
+
+def test_a_head_stopped_at_the_step_nearest_the_target_has_arrived_where_it_says():
+    head = SteppedHead(step=5, polls=2)
+    with FrameFake(head) as fake, _open(fake, move_timeout=3.0) as ptu:
+        # 12.34 deg -> the head stops at 1235; tilt 3.33 deg up (raw 35667) at 35665
+        pan, tilt = ptu.move_to(math.radians(12.34), math.radians(3.33))  # before: DeviceTimeout
+        assert math.degrees(pan) == pytest.approx(12.35)
+        assert math.degrees(tilt) == pytest.approx(3.35)
+        assert ptu.position() == pytest.approx((pan, tilt))
+        # one that stops far from the target still times out
+        head.step = 1000
+        with pytest.raises(DeviceTimeout, match="not the target"):
+            ptu.move_to(math.radians(12.34), 0.0)
