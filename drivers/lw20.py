@@ -6,7 +6,10 @@ CR LF selects serial mode, then ``LD`` CR LF returns the distance in metres as t
 What the reference leaves open and this driver assumes (docs/drivers.md):
 
 * ``www`` is sent once, when the port is opened; whatever the device answers to it (nothing, a
-  banner) is dropped: the input is cleared before every ``LD``;
+  banner, an acknowledgement) is read and dropped until the line has been quiet for
+  ``WWW_SETTLE`` seconds (at most the reply timeout), and the input is cleared before every
+  ``LD``. An answer to ``www`` slower than that can still be the first line after the probe's
+  ``LD``: the probe then measures once more;
 * the reply is one line holding a decimal number of metres, maybe with whitespace around it,
   a label before it (``ld:``, ``LD ``, ``ldf,0:``: letters, an optional ``,N``, then ``:``,
   ``=`` or a space) and a unit ``m`` after it. Anything else (no number, two numbers, stray
@@ -25,6 +28,7 @@ from __future__ import annotations
 
 import math
 import re
+import time
 
 from asbuilt.errors import DeviceProtocolError, DeviceTimeout
 
@@ -39,6 +43,9 @@ _REPLY = re.compile(
     r"\s*(?:m)?$"  # an optional unit
 )
 _ECHO = re.compile(r"^(?:LD|www)$", re.IGNORECASE)
+
+#: Seconds of quiet after ``www`` taken as the end of the device's answer to it (if any).
+WWW_SETTLE = 0.2
 
 
 def parse_distance(line: str, name: str = "LW20") -> float:
@@ -107,8 +114,17 @@ class LW20:
         self.channel.close()
 
     def select_serial_mode(self) -> None:
-        """``www``: put the device in serial mode (no reply is awaited; see the module docs)."""
+        """``www``: put the device in serial mode; what it answers (the reference gives no
+        answer; a banner or an acknowledgement line) is dropped until the line has been quiet
+        for ``WWW_SETTLE`` seconds, at most the channel's timeout (see the module docs)."""
         self.channel.write("www\r\n")
+        deadline = time.monotonic() + self.channel.timeout
+        while (left := deadline - time.monotonic()) > 0:
+            try:
+                self.channel.read_line(min(WWW_SETTLE, left), expecting="answer to www")
+            except (DeviceTimeout, DeviceProtocolError):
+                break
+        self.channel.discard_input()
 
     def _line(self, what: str, timeout: float | None) -> str:
         """The next line that is not our own command echoed back."""
@@ -144,8 +160,12 @@ class LW20:
 
     def probe(self) -> None:
         """Check that the device answers on these line settings: one ``LD`` (no target counts
-        as an answer)."""
+        as an answer). A first reply that is no distance may be a late answer to ``www``: one
+        more ``LD`` must then be answered with a distance."""
         try:
-            self.measure()
+            try:
+                self.measure()
+            except DeviceProtocolError:
+                self.measure()
         except SignalTooWeak:
             pass

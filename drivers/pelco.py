@@ -12,7 +12,12 @@ docs/drivers.md and adjustable):
 
 * the set commands get no reply (some heads acknowledge: whatever arrives unasked is dropped
   before the next query), so a move waits for arrival by *polling the position queries* until
-  both axes report the target (within ``tolerance`` hundredths) or ``move_timeout`` passes;
+  both axes report the target (within ``tolerance`` hundredths) or ``move_timeout`` passes. A
+  head that has stopped (the same position reported for ``SETTLE_TIME`` seconds) within
+  ``SETTLE_NEAR`` hundredths of the target (its steps do not fall on every hundredth) has
+  arrived too; the position the head reports on arrival is returned as reached. A head seen
+  moving that then stays away from the target for ``STALL_TIME`` seconds stopped short of it (a
+  mechanical limit, which the protocol cannot report): a limit error, not a timeout;
 * pan 0-35999 is a full turn: any finite pan angle is accepted and wrapped (``pan_limits``
   restricts it for a head with a stop); positions read back are signed, in (-180, 180] degrees;
 * tilt: raw 0 is level (``tilt_zero``) and the raw value grows *downwards* (``tilt_sign=-1``:
@@ -68,6 +73,18 @@ FULL_TURN = 36000  # hundredths of a degree
 RESYNC_QUIET = 0.1
 #: Consecutive unreadable position replies a move's polling tolerates (line noise).
 POLL_RETRIES = 3
+#: Seconds a reported position must stay the same for the head to count as stopped.
+SETTLE_TIME = 0.5
+#: Hundredths of a degree a stopped head may lie off its target and still count as arrived: a
+#: head whose steps do not fall on every hundredth (the reference gives no resolution) stops at
+#: the step nearest the target, and reports that; the position it reports is then the one
+#: returned as reached.
+SETTLE_NEAR = 10
+#: Seconds a reported position must stay the same, away from the target, for a head that has
+#: been seen moving to count as stopped short of it (a mechanical limit the protocol cannot
+#: report, an obstruction): the move is then refused as a limit instead of waiting out
+#: ``move_timeout``.
+STALL_TIME = 2.0
 
 
 def checksum(addr: int, cmd1: int, cmd2: int, data1: int, data2: int) -> int:
@@ -246,6 +263,7 @@ class PelcoD:
         self.limits = _limits(pan_limits, tilt_limits)
         self._buffer = bytearray()
         self._unsynced = False  # an exchange failed: late bytes may still come
+        self._seen_moving = False  # a position change seen while polling: the head obeys moves
 
     @classmethod
     def open(
@@ -493,13 +511,15 @@ class PelcoD:
         Returns
         -------
         (float, float)
-            The commanded angles rounded to hundredths of a degree, radians (pan as asked,
-            not wrapped).
+            Where the head reports it arrived (see :meth:`wait_for`; without ``wait``, the
+            commanded angles rounded to hundredths of a degree), radians, pan unwrapped as
+            asked.
 
         Raises
         ------
         PTULimitError
-            The target is outside the limits or not finite (nothing is sent).
+            The target is outside the limits or not finite (nothing is sent), or the head
+            stopped short of it (see :meth:`wait_for`).
         DeviceTimeout
             The head is not at the target within ``move_timeout``.
         """
@@ -510,21 +530,34 @@ class PelcoD:
         self.send(0x00, PAN_ABSOLUTE, pan_raw >> 8, pan_raw & 0xFF)
         self.send(0x00, TILT_ABSOLUTE, tilt_raw >> 8, tilt_raw & 0xFF)
         if wait:
-            self.wait_for(pan_raw, tilt_raw)
+            at = self.wait_for(pan_raw, tilt_raw)
+            # where the head says it is (within tolerance of the target, or at the step
+            # nearest it), pan unwrapped as asked
+            pc += _signed(at[0] - pan_raw)
+            tc += self.tilt_sign * _signed(at[1] - tilt_raw)
         return math.radians(pc / 100), math.radians(tc / 100)
 
     def _near(self, a: int, b: int) -> bool:
         return abs(_signed(a - b)) <= self.tolerance
 
-    def wait_for(self, pan_raw: int, tilt_raw: int) -> None:
-        """Poll the position until it is the target (raw hundredths), up to ``move_timeout``.
+    def wait_for(self, pan_raw: int, tilt_raw: int) -> tuple[int, int]:
+        """Poll the position until it is the target (raw hundredths), up to ``move_timeout``;
+        returns the position last reported.
 
+        The head has arrived when both axes are within :attr:`tolerance` of the target, or when
+        it has stopped (the same position reported for ``SETTLE_TIME`` seconds) within
+        ``SETTLE_NEAR`` hundredths of it (a head whose steps do not fall on every hundredth).
+        A head that has been seen moving (in this move or an earlier one) and then reports the
+        same position away from the target for ``STALL_TIME`` seconds has stopped short of it:
+        :class:`~asbuilt.drivers.ptu.PTULimitError` (a head never seen moving, which may not
+        take absolute moves at all, waits out ``move_timeout`` instead).
         A reply that cannot be read (noise: bad checksum, short frame) is queried again, up to
         ``POLL_RETRIES`` in a row; silence (:class:`DeviceTimeout`) ends the wait at once.
         """
         deadline = time.monotonic() + self.move_timeout
         failures = 0
         at = None
+        last, since = None, 0.0  # the last position reported, and since when unchanged
         while True:
             try:
                 at = self.position_raw()
@@ -535,7 +568,23 @@ class PelcoD:
                     raise
                 continue
             if self._near(at[0], pan_raw) and self._near(at[1], tilt_raw):
-                return
+                return at
+            now = time.monotonic()
+            if at != last:
+                self._seen_moving = self._seen_moving or last is not None
+                last, since = at, now
+            elif (
+                now - since >= SETTLE_TIME
+                and abs(_signed(at[0] - pan_raw)) <= SETTLE_NEAR
+                and abs(_signed(at[1] - tilt_raw)) <= SETTLE_NEAR
+            ):
+                return at
+            elif self._seen_moving and now - since >= STALL_TIME:
+                raise PTULimitError(
+                    f"{self.name}: the head stopped at pan {at[0]} / tilt {at[1]} hundredths of a "
+                    f"degree, short of the target {pan_raw} / {tilt_raw} (a mechanical limit or "
+                    "an obstruction); aim inside the head's reach"
+                )
             if time.monotonic() > deadline:
                 raise DeviceTimeout(
                     f"{self.name}: the head reports pan {at[0]} / tilt {at[1]} hundredths of a "

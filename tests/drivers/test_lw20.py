@@ -148,3 +148,34 @@ def test_a_scan_session_with_the_simulated_lw20(scene_file, tmp_path):
     ]
     errors = {r["error"] for r in journal if r["type"] == "shot" and r["object"] == "X"}
     assert errors == {"no-target"}  # misses, journaled with the driver's code
+
+
+def _answering_www(banner_delay: float, reply_delay: float):
+    """An LW20 on a pseudo-terminal that answers ``www`` with a line of its own after
+    ``banner_delay`` (the reference gives no answer; an independent device may send one) and
+    ``LD`` with 4.99 after ``reply_delay``."""
+    from pty_fakes import PtyFake
+
+    def respond(fake, command):
+        if command == "www":
+            fake.reply(b"LW20 ready, serial mode\r\n", banner_delay)
+        elif command == "LD":
+            fake.reply(b"4.99\r\n", reply_delay)
+
+    return PtyFake(respond)
+
+
+@pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs POSIX pseudo-terminals")
+@pytest.mark.parametrize(
+    "banner_delay, reply_delay",
+    [
+        (0.02, 0.05),  # the answer to www comes after the input was cleared for the first LD
+        (0.25, 0.3),  # ... after the settling time too: the probe's first reply, measured again
+    ],
+)
+def test_an_answer_to_www_is_not_taken_for_a_distance(banner_delay, reply_delay):
+    with _answering_www(banner_delay, reply_delay) as fake:
+        with LW20.open(fake.path, timeout=2.0) as lrf:
+            lrf.probe()  # before: "unexpected reply 'LW20 ready, serial mode' to LD"
+            assert lrf.measure() == pytest.approx(4.99)
+        assert fake.commands[0] == "www"

@@ -360,3 +360,64 @@ def test_a_scan_session_with_the_simulated_pelco_head(scene_file, tmp_path):
     for _x, y, z in pipe_points:
         assert math.hypot(y - 4.0, z - 1.2) == pytest.approx(0.162, abs=0.003)
     assert "beyond the pan-tilt unit's tilt range [-90.000, 90.000] deg" in session.failed["H"]
+
+
+class SteppedHead(Head):
+    """A head whose steps fall on every ``step`` hundredths: it stops at the step nearest the
+    target and reports that (the reference gives no resolution for the position replies)."""
+
+    def __init__(self, step, **kwargs):
+        super().__init__(**kwargs)
+        self.step = step
+
+    def __call__(self, got: bytes):
+        cmd2, value = got[3], (got[4] << 8) | got[5]
+        if cmd2 in (0x4B, 0x4D):
+            value = round(value / self.step) * self.step % 36000
+            got = _frame(got[1], cmd2, value)
+        return super().__call__(got)
+
+
+def test_a_head_stopped_at_the_step_nearest_the_target_has_arrived_where_it_says():
+    head = SteppedHead(step=5, polls=2)
+    with FrameFake(head) as fake, _open(fake, move_timeout=3.0) as ptu:
+        # 12.34 deg -> the head stops at 1235; tilt 3.33 deg up (raw 35667) at 35665
+        pan, tilt = ptu.move_to(math.radians(12.34), math.radians(3.33))  # before: DeviceTimeout
+        assert math.degrees(pan) == pytest.approx(12.35)
+        assert math.degrees(tilt) == pytest.approx(3.35)
+        assert ptu.position() == pytest.approx((pan, tilt))
+        # one that stops far from the target has stopped short of it (seen moving before)
+        head.step = 1000
+        with pytest.raises(PTULimitError, match="short of the target 1234 / 0"):
+            ptu.move_to(math.radians(12.34), 0.0)
+
+
+class ClampedHead(Head):
+    """A head whose tilt stops at a mechanical limit ``reach`` hundredths either side of level,
+    inside the driver's default +-90 degrees (the protocol has no way to report it)."""
+
+    def __init__(self, reach, **kwargs):
+        super().__init__(**kwargs)
+        self.reach = reach
+
+    def __call__(self, got: bytes):
+        cmd2, value = got[3], (got[4] << 8) | got[5]
+        if cmd2 == 0x4D:
+            signed = value - 36000 if value > 18000 else value
+            got = _frame(got[1], cmd2, max(-self.reach, min(self.reach, signed)) % 36000)
+        return super().__call__(got)
+
+
+def test_a_head_stopped_at_a_mechanical_limit_is_a_limit_error_not_a_timeout():
+    head = ClampedHead(reach=3000, polls=2)
+    with FrameFake(head) as fake, _open(fake, move_timeout=8.0) as ptu:
+        ptu.move_to(math.radians(10), math.radians(20))  # within reach: the head is seen moving
+        start = time.monotonic()
+        with pytest.raises(PTULimitError, match="stopped at pan 1000 / tilt 33000 .* short of"):
+            ptu.move_to(math.radians(10), math.radians(45))  # before: DeviceTimeout after 8 s
+        with pytest.raises(PTULimitError, match="short of the target 1000 / 31000"):
+            ptu.move_to(math.radians(10), math.radians(50))  # already there: does not move
+        assert time.monotonic() - start < 7.0
+        # back within reach, the head arrives as usual
+        pan, tilt = ptu.move_to(math.radians(5), math.radians(-10))
+        assert math.degrees(tilt) == pytest.approx(-10)
