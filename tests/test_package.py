@@ -120,6 +120,9 @@ def test_readme_test_command_is_what_ci_runs():
         line.strip() for line in readme.splitlines() if line.strip().endswith(".venv/bin/pytest")
     )
     assert command in ci
+    # ``set -e`` ignores a failure before ``&&``: the bare line let a failed install pass CI.
+    (line,) = [line.strip() for line in ci.splitlines() if command in line]
+    assert line.startswith("if ! {") and line.endswith("; }; then"), line
 
 
 SUBMODULE_PROBE = r"""
