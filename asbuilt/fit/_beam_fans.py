@@ -200,7 +200,7 @@ def _join_unparted(group, units, ranges, noise: float, parted) -> np.ndarray:
     links_i, links_j = [], []
     for g in np.unique(group):
         mine = group == g
-        sub = np.where(mine[:, None] | ~mine[None, :], -2.0, cosines)[mine]
+        sub = np.where(mine[None, :], -2.0, cosines)[mine]  # to shots of other groups
         rows = mine.nonzero()[0]
         flat = int(sub.argmax())
         a, b = int(rows[flat // sub.shape[1]]), flat % sub.shape[1]
