@@ -269,3 +269,17 @@ def test_a_shot_without_raster_neighbours_is_no_fan():
     lines = raster_lines(angles, np.radians([1.0, 4.0]))
     pairs = neighbours(angles, lines, np.ones(3, bool))
     assert not beam_fan_shots(points, np.zeros(3), 0.006, pairs).any()
+
+
+def test_a_lone_group_is_joined_to_the_group_nearest_it_in_angle():
+    from asbuilt.fit._beam_fans import _join_unparted
+
+    # Shot 0 on a wall 22 m away; 1 and 2 a raster column on a face 7 m away; 3 alone on that
+    # face next to 2. Group 3 is judged against its nearest shot (2), not against shot 0.
+    pan = np.radians([-3.0, 0.0, 0.0, 1.0])
+    tilt = np.radians([0.0, 4.0, -4.0, -4.0])
+    units = np.column_stack([np.cos(tilt) * np.cos(pan), np.cos(tilt) * np.sin(pan), np.sin(tilt)])
+    ranges = np.array([22.0, 7.0, 7.0, 7.0])
+    none = (np.array([], dtype=np.int64),) * 2
+    joined = _join_unparted(np.array([0, 1, 1, 3]), units, ranges, 0.006, none)
+    assert joined[1] == joined[2] == joined[3] != joined[0]
