@@ -53,6 +53,12 @@ D46_RESOLUTION = 185.1428
 D46_LIMITS = (-3090, 3090, -907, 604)
 
 
+#: Radians: the largest beam half-angle a simulated range finder takes. Laser range finders'
+#: beams spread by 0.1-3 mrad; at 0.1 rad (5.7 degrees) the four edge rays would probe a footprint
+#: metres wide at 10 m, no longer a laser's mixed edge return.
+MAX_DIVERGENCE = 0.1
+
+
 @dataclass(frozen=True)
 class SimNoise:
     """Sensor effects of the simulated range finder.
@@ -89,6 +95,13 @@ class SimNoise:
                 raise ValueError(f"{name} must be a finite number >= 0")
         if not 0.0 <= self.dropout <= 1.0:
             raise ValueError("dropout must be between 0 and 1")
+        if self.min_cos > 1.0:
+            raise ValueError(f"min_cos is a cosine, at most 1, not {self.min_cos:g}")
+        if self.divergence > MAX_DIVERGENCE:
+            raise ValueError(
+                f"divergence {self.divergence * 1e3:g} mrad is not a laser beam's: a range "
+                f"finder's beam spreads by a few milliradians (at most {MAX_DIVERGENCE * 1e3:g})"
+            )
         seed = self.seed
         if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
             raise ValueError(f"seed must be a non-negative integer, not {seed!r}")

@@ -551,8 +551,12 @@ def _station(reader: _Reader, data, where) -> Station:
         mixed_return=reader.number(
             data, "mixed_return", where, minimum=0.0, maximum=1.0, default=0.3
         ),
+        # a laser beam spreads by 0.2-3 mrad; 200 (11 degrees) is no laser's (the simulated
+        # device's half-angle limit, drivers.simrig.MAX_DIVERGENCE, doubled)
         beam_divergence=1e-3
-        * reader.number(data, "beam_divergence_mrad", where, minimum=0.0, default=0.5),
+        * reader.number(
+            data, "beam_divergence_mrad", where, minimum=0.0, maximum=200.0, default=0.5
+        ),
         spot_diameter=reader.length(
             data, "spot_diameter", where, minimum=0.0, default=0.003 / reader.scale
         ),

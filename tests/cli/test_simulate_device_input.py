@@ -171,8 +171,14 @@ def test_trimesh_log_stays_off_stderr(tmp_path):
             "speed must be a finite number >= 0 (positions per second; 0 moves instantly), "
             "not -5.0",
         ),
+        (
+            ["--divergence-mrad", "3000"],
+            "divergence 3000 mrad is not a laser beam's: a range finder's beam spreads by a few "
+            "milliradians (at most 100)",
+        ),
+        (["--divergence-mrad", "nan"], "divergence must be a finite number >= 0"),
     ],
-    ids=["negative-seed", "nan-speed", "negative-speed"],
+    ids=["negative-seed", "nan-speed", "negative-speed", "wide-beam", "nan-beam"],
 )
 def test_bad_simulate_device_options(tmp_path, capsys, option, message):
     path = tmp_path / "box.stl"

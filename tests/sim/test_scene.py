@@ -146,6 +146,10 @@ BAD = [
     (lambda d: d["objects"][1].update(id="P1"), "object ids must be unique"),
     (lambda d: d.update(links=[["P1", "nope"]]), "links[0]: must be a pair of object ids"),
     (lambda d: d["stations"][0].update(dropout=1.5), "stations[0].dropout: must be at most 0.9"),
+    (
+        lambda d: d["stations"][0].update(beam_divergence_mrad=3000),
+        "stations[0].beam_divergence_mrad: must be at most 200, not 3000",
+    ),
     (lambda d: d.update(format="asbuilt-scan"), "format: format is 'asbuilt-scan'"),
 ]
 
