@@ -16,10 +16,15 @@ import numpy as np
 
 from asbuilt.scan.load import MAX_COORDINATE_M
 
-__all__ = ["read_mesh_file", "mesh_problem", "MESH_SUFFIXES"]
+__all__ = ["read_mesh_file", "mesh_problem", "MESH_SUFFIXES", "MAX_MESH_BYTES"]
 
 #: Mesh formats the documentation promises (trimesh may read a few more).
 MESH_SUFFIXES = (".stl", ".glb", ".gltf", ".obj", ".ply")
+
+#: Bytes: the largest mesh file read. A binary STL of 512 MiB holds about 10 million triangles,
+#: which trimesh reads into some 2 GB; a plant model beyond that is better decimated or cut to
+#: the objects scanned than loaded for minutes and cast into slowly.
+MAX_MESH_BYTES = 512 * 1024 * 1024
 
 
 def _reason(exc: BaseException) -> str:
@@ -55,7 +60,8 @@ def read_mesh_file(path, on_site: bool = True) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     ValueError
-        One line: the file is missing, not a regular file, of an unknown format, unreadable,
+        One line: the file is missing, not a regular file, larger than
+        :data:`MAX_MESH_BYTES`, of an unknown format, unreadable,
         or holds no usable triangles (see :func:`mesh_problem`).
     """
     path = Path(path)
@@ -63,6 +69,12 @@ def read_mesh_file(path, on_site: bool = True) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError("file not found; check the path")
     if not path.is_file():  # a directory, or a pipe that would block the reader forever
         raise ValueError("not a regular file; give a mesh file (" + ", ".join(MESH_SUFFIXES) + ")")
+    size = path.stat().st_size
+    if size > MAX_MESH_BYTES:
+        raise ValueError(
+            f"the file is {size:,} bytes, larger than the {MAX_MESH_BYTES // 2**20} MiB a mesh "
+            "may be; decimate the model or export only the objects to scan"
+        )
     import trimesh
 
     suffix = path.suffix.lower()

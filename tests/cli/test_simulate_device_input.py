@@ -185,3 +185,16 @@ def test_bad_simulate_device_options(tmp_path, capsys, option, message):
     trimesh.creation.box(extents=[1, 1, 1]).apply_translation([3.5, 0, 0]).export(path)
     code, err = _run(capsys, "simulate-device", "--scene", str(path), *option)
     assert (code, err) == (2, f"asbuilt: error: simulate-device: {message}\n")
+
+
+def test_mesh_file_too_large(tmp_path, capsys):
+    # a sparse file: the size is checked before trimesh reads a byte of it
+    path = tmp_path / "plant.stl"
+    with open(path, "wb") as handle:
+        handle.truncate(512 * 1024 * 1024 + 1)
+    code, err = _run(capsys, "simulate-device", "--scene", str(path))
+    assert (code, err) == (
+        2,
+        f"asbuilt: error: {path}: the file is 536,870,913 bytes, larger than the 512 MiB a mesh "
+        "may be; decimate the model or export only the objects to scan\n",
+    )
