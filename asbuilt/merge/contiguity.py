@@ -53,6 +53,8 @@ from scipy.spatial import cKDTree
 
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
+from .crossing import branch_taken, cross_note, crossed_by, crossing_note
+
 __all__ = [
     "End",
     "Joint",
@@ -461,6 +463,9 @@ def find_joints(
     # 1d. the other links, one by one; a link no fitting or butt joint realises gets a note
     # (decided after every joint is found: a tee through a pipe may still join the pair)
     unrealised: list[tuple[int, int, str]] = []
+    # a straight joint through another pipe or straight joint (a cross's opposite outlets):
+    # left to the tee search, then noted once the joints are known
+    crossing: list[tuple[int, int, tuple[int, ...]]] = []
     for i, j in sorted(linked_pairs - teed):
         cand = link_candidates[i, j]
         if cand is None:
@@ -482,6 +487,8 @@ def find_joints(
                 f"pass {apart * 1000:.0f} mm apart, outside to outside) and no fitting joins "
                 "them: not joined; check the link or scan what lies between"
             )
+            if apart < 0:  # the clash rule spares linked pipes: say they interpenetrate
+                why = crossing_note(names, i, j, apart + 0.5 * (ods[i] + ods[j]))
         elif cand.kind == "oblique":
             why = _bend_note(names, i, j, _bend_deg(cand, out), tol)
         elif cand.a in used or cand.b in used:
@@ -494,6 +501,10 @@ def find_joints(
                 "more pipes at one end; no cross is built): not joined"
             )
         else:
+            across = crossed_by(cand, joints, pts, ods, tol.intended_angle_deg)
+            if across is not None:
+                crossing.append((i, j, across))
+                continue
             used.update((cand.a, cand.b))
             joints.append(Joint(cand.kind, (cand.a, cand.b), explicit=True))
             continue
@@ -546,6 +557,8 @@ def find_joints(
     for cand in candidates:
         if cand.a in used or cand.b in used:
             continue
+        if crossed_by(cand, joints, pts, ods, tol.intended_angle_deg) is not None:
+            continue  # a cross: one end may still be a tee's branch (step 3)
         used.update((cand.a, cand.b))
         joints.append(Joint(cand.kind, (cand.a, cand.b)))
 
@@ -553,6 +566,13 @@ def find_joints(
     free = [(i, k) for i in range(n) for k in (0, 1) if (i, k) not in used]
     if free:
         joints = _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, slack)
+    for i, j, across in crossing:
+        taken = {}
+        for end in (link_candidates[i, j].a, link_candidates[i, j].b):
+            joint = next((jt for jt in joints if end in jt.ends), None)
+            if joint is not None:
+                taken[end[0]] = (joint.kind, tuple(p for p in joint.pipes if p != end[0]))
+        unrealised.append((i, j, cross_note(names, i, j, across, taken)))
     for i, j, why in unrealised:
         if any(i in jt.pipes and j in jt.pipes for jt in joints):
             continue  # joined after all (a tee through one of them)
@@ -716,6 +736,8 @@ def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, s
             )
             if abs(s) > 0.5 * lengths[other] - ods[other]:
                 continue  # not inside the run pipe with room for the tee
+            if branch_taken(other, q_run, joints, pts, centers, axes, ods):
+                continue  # a cross's fourth outlet: left loose
             cost = _branch_cost(b, q_run, axes[other], ods[other], pts, out, axes, ods, tol, slack)
             if cost is not None and (best is None or cost < best[0]):
                 best = (cost, "through", other)

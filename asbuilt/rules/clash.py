@@ -12,7 +12,8 @@ errors of the gap between their surfaces (the fits' centre and radius or size st
 quadrature, split between the two); a shallower overlap (a pipe resting on a support, fitted a
 millimetre into it) is an unverifiable warning. Components joined end to end (ends within ``touch_distance``) or linked in the scan are never
 a clash; nor, with ``end_connections`` (the default), is a member whose axis *ends* inside the
-other solid: a beam framing into a column or a nozzle into a tank is a connection. A clash is
+other solid: a beam framing into a column or a nozzle into a tank is a connection (a fitting
+merging placed is not spared so: it ends only at its ports, :data:`FITTINGS`). A clash is
 one member passing through another. Two same-size pipes on one axis are judged before those
 exceptions: overlapping by more than a joint's scale (:data:`DUPLICATE_DIAMETERS` ODs or
 ``joint_distance``), or one wholly inside the other, they are a clash (a duplicate scan).
@@ -30,7 +31,12 @@ from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 from ._context import Context, axis_of, ends_of, mm, stderr_value
 from ._graph import end_pairs, linked_pairs
 
-__all__ = ["CHECKS", "inside", "bounds", "candidate_pairs", "overlap_volume"]
+__all__ = ["CHECKS", "FITTINGS", "inside", "bounds", "candidate_pairs", "overlap_volume"]
+
+#: Fittings merging places: they end only at their ports, which the pipes they join touch (a
+#: joint, never a clash); a fitting's end inside anything else is not a connection (a coupling
+#: through another at a cross, a pipe through a tee), so ``end_connections`` spares no fitting.
+FITTINGS = ("coupling", "elbow", "tee", "reducer", "lateral")
 
 
 def _in_segment(
@@ -441,8 +447,8 @@ def check_clash(ctx: Context) -> None:
         if frozenset((a.id, b.id)) in joined:
             continue
         if connections and (
-            ends_into(a.geometry, b.geometry, thickness)
-            or ends_into(b.geometry, a.geometry, thickness)
+            (a.type not in FITTINGS and ends_into(a.geometry, b.geometry, thickness))
+            or (b.type not in FITTINGS and ends_into(b.geometry, a.geometry, thickness))
         ):
             continue
         volume, se, centroid = overlap_volume(
