@@ -323,3 +323,21 @@ def test_duplicates_follow_the_clash_selection_and_severity():
     assert not clashes(a, b, config=loads_rules('ignore = ["clash"]'))
     (f,) = clashes(a, b, config=loads_rules('[clash]\nseverity = "warning"'))
     assert f.severity == "warning"
+
+
+@pytest.mark.parametrize("kind", ["coupling", "elbow"])
+def test_a_fitting_ending_inside_a_pipe_is_a_clash(kind):
+    # a beam ending in a column is a connection; a fitting ends only at its ports, so a fitting
+    # ending inside a pipe it does not join passes into it (was spared as a connection)
+    r = OD4 / 2
+    run = pipe("P1", [-1, 0, 1], [1, 0, 1], OD4)
+    if kind == "coupling":
+        geometry = Straight([0, -0.3, 1], [0, 0.01, 1], r)
+    else:
+        geometry = Bend([0.152, -0.142, 1], [0, 0.01, 1], [0, -0.142, 1], r)
+    fitting = Component(id="F1", type=kind, geometry=geometry)
+    (f,) = clashes(run, fitting)
+    assert f.code == "AB501" and set(f.objects) == {"P1", "F1"}
+    # the same solid as a pipe ending there is a branch framing in: a connection
+    stub = pipe("P2", [0, -0.3, 1], [0, 0.01, 1], OD4)
+    assert not clashes(run, stub)
