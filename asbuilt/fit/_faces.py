@@ -14,12 +14,14 @@ explaining the most points wins.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from asbuilt.fit._common import median_spacing, quick_median, row_norms
+from asbuilt.fit._cuboid_sparse import SPARSE_SHOTS
 
 __all__ = [
     "Frame",
@@ -36,6 +38,10 @@ _TRIPLES = 100
 #: than ``_ENOUGH`` of the points (two raster lines on different faces also span a plane).
 _MAX_FIRST = 3
 _MAX_FIRST_HARD = 6
+#: First planes kept, and second faces tried per first plane, from at most ``SPARSE_SHOTS``
+#: shots (:mod:`asbuilt.fit._cuboid_sparse`): there every triple is a hypothesis.
+_SPARSE_FIRST = 40
+_SPARSE_SECOND = 12
 _ENOUGH = 0.75
 _MAX_PAIRS = 150
 #: Above this many points, pairwise work is sampled or sorted instead of done on dense
@@ -247,7 +253,11 @@ def _first_planes(points, normals, threshold, cos_face, rng, limit=_MAX_FIRST_HA
     """Up to ``limit`` distinct refined planes with the largest consensus, best first."""
     n = points.shape[0]
     seeds = np.arange(n) if n <= 200 else rng.choice(n, 200, replace=False)
-    tri = rng.integers(0, n, size=(_TRIPLES, 3))
+    if n <= SPARSE_SHOTS:
+        tri = np.array(list(itertools.combinations(range(n), 3)), dtype=np.int64)
+        limit = _SPARSE_FIRST
+    else:
+        tri = rng.integers(0, n, size=(_TRIPLES, 3))
     a, b, c = points[tri[:, 0]], points[tri[:, 1]], points[tri[:, 2]]
     cross = cross_rows(b - a, c - a)
     scale = row_norms(b - a) * row_norms(c - a)
@@ -270,14 +280,15 @@ def _first_planes(points, normals, threshold, cos_face, rng, limit=_MAX_FIRST_HA
     return [(ref_n[i], float(ref_o[i]), masks[i]) for i in keep]
 
 
-def _second_plane(points, normals, first, threshold, gap, rng, viewpoint=None):
+def _second_plane(points, normals, first, threshold, gap, rng, viewpoint=None, every=False):
     """The best plane perpendicular to ``first`` among the points off it, contiguous with it
     (its shots allowed farther from the edge when seen at grazing incidence from a trusted
     ``viewpoint`` (3,) metres: :func:`_grazing_gap`)."""
     d1, o1, mask1 = first
+    least = _MIN_THIRD_FACE_POINTS if every else _MIN_FACE_POINTS
     rest = (~mask1).nonzero()[0]  # np.flatnonzero without its wrapper
-    if rest.size < _MIN_FACE_POINTS:
-        return None
+    if rest.size < least:
+        return [] if every else None
     sub = points[rest]
     basis = _perpendicular_basis(d1)
     # Point pairs: the plane through both that contains d1 (exactly perpendicular to face 1).
@@ -309,33 +320,40 @@ def _second_plane(points, normals, first, threshold, gap, rng, viewpoint=None):
     ok[:pairs] &= length[:pairs] > 2 * threshold
     cand_n = unit[ok]
     cand_p = np.concatenate([sub[i], seed_points])[ok]
+    found = []
     if cand_n.shape[0] == 0:
-        return None
+        return found if every else None
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = _ADD(np.abs(cand_n @ sub.T - offsets[:, None]) < threshold, axis=1)
     order = (-counts).argsort(kind="stable")
-    top = np.array(_distinct(cand_n, offsets, order, 0.999, threshold, 8), dtype=np.int64)
-    top = top[counts[top] >= _MIN_FACE_POINTS]
+    limit = _SPARSE_SECOND if every else 8
+    top = np.array(_distinct(cand_n, offsets, order, 0.999, threshold, limit), dtype=np.int64)
+    top = top[counts[top] >= least]
     if not top.size:
-        return None
+        return found if every else None
     ref_n, ref_o, masks, _ = _batch_refine(
         sub, cand_n[top], offsets[top], threshold, basis, rounds=1
     )
     sizes = _ADD(masks, axis=1)
     order = (-sizes).argsort(kind="stable")
-    order = order[sizes[order] >= _MIN_FACE_POINTS]
-    for c in _distinct(ref_n, ref_o, order, 0.999, threshold, 5):
+    order = order[sizes[order] >= least]
+    for c in _distinct(ref_n, ref_o, order, 0.999, threshold, limit if every else 5):
         mask = np.zeros(points.shape[0], bool)
         mask[rest[masks[c]]] = True
         face = (ref_n[c], float(ref_o[c]), mask)
         if _contiguous(points, first, face, threshold, gap):
-            return face
+            if not every:
+                return face
+            found.append(face)
+            continue
         if viewpoint is not None:
             # Asked only of a face the plain gap refuses: the grazing allowance is never less.
             wider = _grazing_gap(points, first, face, threshold, gap, viewpoint)
             if wider > gap and _contiguous(points, first, face, threshold, gap, wider):
-                return face
-    return None
+                if not every:
+                    return face
+                found.append(face)
+    return found if every else None
 
 
 def _pairs(r: int, index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -698,12 +716,16 @@ class Segmentation:
         if _already_a_face(self.built, d1, mask1, self.cos_face):
             return  # it would grow into a frame already built
         trusted = viewpoint if self.visible_only else None
-        second = _second_plane(points, self.normals, first, threshold, gap, self.rng, trusted)
-        if second is None:
+        sparse = len(points) <= SPARSE_SHOTS
+        second = _second_plane(
+            points, self.normals, first, threshold, gap, self.rng, trusted, every=sparse
+        )
+        if not sparse:
+            second = [] if second is None else [second]
+        if not second:
             axes = np.vstack([d1, _perpendicular_basis(d1).T])
-            faces = [(0, o1, mask1)]
-        else:
-            d2, o2, mask2 = second
+            self._add(axes, [(0, o1, mask1)])
+        for d2, _o2, mask2 in second:
             d2 = d2 - (d2 @ d1) * d1
             d2 /= np.linalg.norm(d2)
             axes = np.vstack([d1, d2, cross3(d1, d2)])
@@ -719,7 +741,7 @@ class Segmentation:
                 # axis's, and the greedy growth takes the first: the frame one station can
                 # have seen (no opposite faces) is offered too.
                 self._add(axes, _one_station(points, axes, base, faces, threshold, gap))
-        self._add(axes, faces)
+            self._add(axes, faces)
 
     def _add(self, axes, faces) -> None:
         """Rank and keep the frame of ``faces`` (axis, unsigned offset, mask) on ``axes``."""

@@ -18,6 +18,7 @@ from asbuilt.fit import _faces
 from asbuilt.fit._beam_fans import MAX_INCIDENCE_DEG, beam_fan_shots, neighbours
 from asbuilt.fit._common import within_noise
 from asbuilt.fit._cuboid_background import only_background, seen_past
+from asbuilt.fit._cuboid_sparse import SPARSE_SHOTS, corner_frames, rival
 from asbuilt.fit._mixture import mixing_cost
 from asbuilt.fit._rectangle import min_area_rectangle
 
@@ -53,6 +54,9 @@ class FaceModel:
         # A face every inlier of which sees at grazing incidence from the trusted viewpoint
         # (set by the fit: :func:`_grazing_face`); such a frame ranks below the others.
         self.grazing = False
+        # From few shots: how far (degrees) a frame that fits them as well lies, else None
+        # (set by :func:`best_fit`; the fit is then refused).
+        self.rival = None
 
     def normals(self) -> np.ndarray:
         return self.face_sign[:, None] * self.axes[self.face_axis]
@@ -614,7 +618,14 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
     settled = best[3].all() or (
         trusted and known_noise and _rejected_are_background(best, x, cap / cutoff, cutoff)
     )
-    if not (best_rank[0] and best_rank[1] and settled) or _on_a_line(best, x, cap, raster):
+    # From few shots every frame is compared (and checked for a rival below): a frame that
+    # keeps every shot may still be one of several.
+    sparse = n <= SPARSE_SHOTS
+    if (
+        sparse
+        or not (best_rank[0] and best_rank[1] and settled)
+        or _on_a_line(best, x, cap, raster)
+    ):
         first = int(np.count_nonzero(frames[0].labels >= 0))
         frames = exhaustive()
         for frame in frames:
@@ -672,4 +683,20 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
                 and counted_outliers(best, x, view, trusted, cap) <= max_outlier_fraction * n
             ):
                 break
+    if sparse:
+        sigma = cap / cutoff
+        # A face of two raster lines may be two faces meeting between them: fitted as a rival.
+        for frame in corner_frames(best, x, cutoff * max(best[4], noise), view, _faces.Frame):
+            fitted(frame)
+        found = rival(
+            best,
+            [trial for _, trial in done],
+            lambda trial: _msac(trial[2], cap) / sigma**2,
+            lambda trial: counted_outliers(trial, x, view, trusted, cap),
+            # A rival with a face seen edge-on counts: that face is free to turn, the
+            # very freedom that makes the frame uncertain.
+            lambda trial: plausible(trial[0], view, trusted),
+        )
+        if found is not None:
+            best[0].rival = found[1]
     return best

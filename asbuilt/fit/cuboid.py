@@ -103,6 +103,7 @@ from asbuilt.fit._cuboid_sizes import (
     silhouette_bounds,
     single_lines,
 )
+from asbuilt.fit._cuboid_sparse import AmbiguousFrame, describe
 from asbuilt.fit._joint import (
     best_fit,
     complexity,
@@ -477,6 +478,8 @@ def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
         result = _fit_cuboid_shots(
             points, sigma=sigma, tolerances=tolerances, viewpoint=view, **options
         )
+    except AmbiguousFrame:
+        raise  # a subset of the shots cannot tell the frames apart either
     except FitError as exc:
         error = exc
     if result is not None and result.inliers.all():
@@ -613,6 +616,9 @@ def _fit_cuboid_shots(
             ),
         )
     model, label, residual, inliers, scale, iterations, one_face = fitted
+    if model.rival is not None:
+        # Few shots that fit frames far apart as well: any one frame's standard errors lie.
+        raise AmbiguousFrame(describe(model.rival, n))
     notes: list[str] = []
     if one_face:
         notes.append(

@@ -1,0 +1,196 @@
+"""Cuboid fits from few shots: every plane hypothesis, and frames the shots cannot tell apart.
+
+Private helpers of :mod:`asbuilt.fit.cuboid`. With fewer than ``SPARSE_SHOTS`` shots a box's
+faces hold two to six shots each, and a plane through two raster lines on different faces (two
+parallel columns are always coplanar) holds as many as a face: the random triples and the
+six best first planes of the usual search (:mod:`asbuilt.fit._faces`) then often miss every
+true face, and the frame found leaves good shots out. There the segmentation takes every
+point triple and more first planes, a second face from two shots (its direction is fixed by
+the first face and the pair), and every contiguous second face rather than the first found;
+the joint fit then compares every frame (:func:`asbuilt.fit._joint.best_fit`).
+
+Even so, a few shots may fit two frames tens of degrees apart equally well: one raster column
+on each of two faces leaves the box free to turn about them (two perpendicular planes, each
+through one of two parallel lines, meet anywhere on a circle), and a face holding just two
+parallel raster lines may as well be two faces meeting at a corner between them
+(:func:`corner_frames` offers that frame). :func:`rival` finds such a frame among the fitted
+ones, and the fit is then refused: its standard errors would describe only the frame it
+happened to pick.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from asbuilt.errors import FitError
+
+__all__ = ["AmbiguousFrame", "SPARSE_SHOTS", "corner_frames", "describe", "frame_angle", "rival"]
+
+#: At most this many shots is a sparse fit (the accuracy benchmark starts at 20).
+SPARSE_SHOTS = 16
+#: Frames differing by more than this (degrees, the largest angle between matched axes) are
+#: different answers, not the same frame within its noise (sparse fits' axes stray 1-3
+#: degrees).
+RIVAL_DEG = 5.0
+#: A rival's MSAC cost (units of sigma squared) may exceed the winner's by at most this and
+#: still fit the shots as well: the chi-square 95% point for three degrees of freedom (the
+#: frame's rotation).
+RIVAL_COST = 7.81
+
+
+class AmbiguousFrame(FitError):
+    """A sparse cuboid fit refused: its shots fit frames far apart equally well. Not retried
+    on a subset of the shots (fewer shots cannot tell the frames apart either)."""
+
+
+def frame_angle(a: np.ndarray, b: np.ndarray) -> float:
+    """The largest angle (degrees) between each row of ``a`` (3, 3) and its nearest row of
+    ``b`` (3, 3), up to sign: how far apart two box frames are."""
+    cosines = np.abs(a @ b.T).max(axis=1)
+    return float(np.degrees(np.arccos(np.clip(cosines.min(), -1.0, 1.0))))
+
+
+def rival(best, others, costs, counts, admissible) -> tuple | None:
+    """A fitted frame that fits the shots as well as ``best`` but lies more than ``RIVAL_DEG``
+    from it, or None.
+
+    Parameters
+    ----------
+    best : tuple
+        The chosen fit (:func:`asbuilt.fit._joint._fit_frame`'s tuple; model first).
+    others : list of tuple
+        Every fit tried (``best`` among them is skipped).
+    costs : callable
+        Fit -> MSAC cost over all shots, units of sigma squared.
+    counts : callable
+        Fit -> shots it rejects that count against it (not background).
+    admissible : callable
+        Fit -> whether it can be the box (plausible, no face seen edge-on from every shot).
+
+    Returns
+    -------
+    tuple or None
+        (rival fit, angle degrees) of the farthest such frame.
+    """
+    cost, rejected = costs(best), counts(best)
+    found = None
+    for trial in others:
+        if trial is best or not admissible(trial):
+            continue
+        if counts(trial) > rejected or costs(trial) > cost + RIVAL_COST:
+            continue
+        angle = frame_angle(best[0].axes, trial[0].axes)
+        if angle > RIVAL_DEG and (found is None or angle > found[1]):
+            found = (trial, angle)
+    return found
+
+
+def describe(angle: float, n: int) -> str:
+    """The refusal message for a sparse fit with a rival frame ``angle`` degrees away."""
+    return (
+        f"cuboid: the {n} shots fit box frames {math.floor(angle)} degrees apart equally "
+        "well (too few shots across the faces: e.g. one raster column on a face leaves the "
+        "box free to turn about it); take more shots, at least two columns and two rows on "
+        "each seen face."
+    )
+
+
+def _two_lines(points: np.ndarray, normal: np.ndarray, width: float):
+    """Split a face's points (m, 3) metres on the plane of unit ``normal`` (3,) into two
+    parallel lines, each of two points at least and within ``width`` metres across, at least
+    ``4 * width`` apart: (line direction (3,), first line's mask (m,) bool), or None."""
+    m = points.shape[0]
+    for i in range(m - 1):
+        for j in range(i + 1, m):
+            step = points[j] - points[i]
+            step = step - (step @ normal) * normal
+            length = float(np.linalg.norm(step))
+            if length < 4 * width:
+                continue
+            direction = step / length
+            across = np.cross(normal, direction)
+            w = points @ across
+            order = np.argsort(w)
+            gaps = np.diff(w[order])
+            cut = int(gaps.argmax())
+            if gaps[cut] < 4 * width or cut < 1 or cut > m - 3:
+                continue
+            low, high = w[order[: cut + 1]], w[order[cut + 1 :]]
+            if np.ptp(low) > 2 * width or np.ptp(high) > 2 * width:
+                continue
+            first = np.zeros(m, dtype=bool)
+            first[order[: cut + 1]] = True
+            return direction, first
+    return None
+
+
+def corner_frames(trial, x: np.ndarray, width: float, view: np.ndarray, frame_class) -> list:
+    """Frames that split a fitted face holding two parallel lines of shots into two faces
+    meeting at a convex corner between them, each face turned 45 degrees from the viewpoint.
+
+    ``trial`` is :func:`asbuilt.fit._joint._fit_frame`'s tuple, ``x`` (n, 3) metres the
+    centred shots, ``width`` metres the inlier cutoff, ``view`` (3,) metres the viewpoint
+    (centred frame); ``frame_class`` builds the frame
+    (:class:`asbuilt.fit._faces.Frame`). Another seen face is kept when its normal lies
+    along the lines (the top of a pier whose sides hold one raster column each); the joint
+    fit then settles the corner.
+    """
+    model, label, _, inliers = trial[:4]
+    normals = model.normals()
+    out = []
+    for f in range(model.offset.shape[0]):
+        mine = inliers & (label == f)
+        if np.count_nonzero(mine) < 4:
+            continue
+        split = _two_lines(x[mine], normals[f], width)
+        if split is None:
+            continue
+        direction, first = split
+        # The corner's bisector points at the viewpoint (across the lines), so both faces
+        # face it.
+        toward = view - x[mine].mean(axis=0)
+        toward = toward - (toward @ direction) * direction
+        norm = float(np.linalg.norm(toward))
+        if norm == 0.0:
+            continue
+        toward /= norm
+        across = np.cross(toward, direction)
+        members = np.flatnonzero(mine)
+        a, b = members[first], members[~first]
+        if (x[a] @ across).mean() > (x[b] @ across).mean():
+            a, b = b, a
+        axes = np.vstack(
+            [
+                (toward - across) / math.sqrt(2.0),
+                (toward + across) / math.sqrt(2.0),
+                direction,
+            ]
+        )
+        face_axis, face_sign, face_offset = [0, 1], [1.0, 1.0], []
+        labels = -np.ones(x.shape[0], dtype=np.int64)
+        labels[a], labels[b] = 0, 1
+        face_offset = [float((x[a] @ axes[0]).mean()), float((x[b] @ axes[1]).mean())]
+        for g in range(model.offset.shape[0]):
+            along = float(normals[g] @ direction)
+            if g == f or abs(along) < math.cos(math.radians(RIVAL_DEG)):
+                continue
+            theirs = inliers & (label == g)
+            if not theirs.any():
+                continue
+            sign = 1.0 if along > 0 else -1.0
+            labels[theirs] = len(face_axis)
+            face_axis.append(2)
+            face_sign.append(sign)
+            face_offset.append(float((x[theirs] @ (sign * direction)).mean()))
+        out.append(
+            frame_class(
+                axes,
+                np.array(face_axis, dtype=np.int64),
+                np.array(face_sign),
+                np.array(face_offset),
+                labels,
+            )
+        )
+    return out
