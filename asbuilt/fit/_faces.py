@@ -22,6 +22,7 @@ import numpy as np
 
 from asbuilt.fit._common import median_spacing, quick_median, row_norms
 from asbuilt.fit._cuboid_sparse import SPARSE_SHOTS
+from asbuilt.fit._vectors import cross3, cross_rows, perpendicular_basis, unit_rows
 
 __all__ = [
     "Frame",
@@ -130,35 +131,6 @@ def noise_scale(points: np.ndarray, normals: np.ndarray, rms: np.ndarray, floor:
     return float(max(1.4826 * np.median(resid), floor))
 
 
-def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of (k, 3) arrays (``a`` may also be one (3,) vector)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
-    out = np.empty((b.shape[0], 3))
-    out[:, 0] = a1 * b2 - a2 * b1
-    out[:, 1] = a2 * b0 - a0 * b2
-    out[:, 2] = a0 * b1 - a1 * b0
-    return out
-
-
-def cross3(a, b) -> np.ndarray:
-    """Cross product of two (3,) vectors (faster than ``np.cross`` for one pair)."""
-    return np.array(
-        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-    )
-
-
-def unit_rows(vectors: np.ndarray, norms: np.ndarray | None = None):
-    """Unit rows of ``vectors`` (k, 3) and which rows had a length (k,) bool; ``norms`` (k,),
-    their lengths, may be passed when already computed."""
-    if norms is None:
-        norms = row_norms(vectors)
-    ok = norms > 1e-12
-    # The same division as ``vectors[ok] / norms[ok, None]``, in one call (a hot path).
-    out = np.divide(vectors, norms[:, None], out=np.zeros_like(vectors), where=ok[:, None])
-    return out, ok
-
-
 def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
     """Re-fit many candidate planes to their consensus sets at once (total least squares).
 
@@ -204,19 +176,6 @@ def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
     else:
         spread = np.full(normals.shape[0], np.inf)
     return normals, offsets, masks, spread
-
-
-def _perpendicular_basis(direction: np.ndarray) -> np.ndarray:
-    """Two unit columns, shape (3, 2), perpendicular to ``direction`` and to each other."""
-    # Python floats: the same IEEE arithmetic as numpy's scalars, without their overhead.
-    d = direction.tolist()
-    helper = [0.0, 0.0, 0.0]
-    helper[min(range(3), key=lambda k: abs(d[k]))] = 1.0  # the first smallest, as argmin
-    first = cross3(d, helper)
-    first /= math.sqrt(first @ first)  # np.linalg.norm's own sum for a vector, without its checks
-    f = first.tolist()
-    second = cross3(d, f)
-    return np.array([[f[0], second[0]], [f[1], second[1]], [f[2], second[2]]])
 
 
 def _distinct(normals, offsets, order, cos_face, threshold, limit):
@@ -290,7 +249,7 @@ def _second_plane(points, normals, first, threshold, gap, rng, viewpoint=None, e
     if rest.size < least:
         return [] if every else None
     sub = points[rest]
-    basis = _perpendicular_basis(d1)
+    basis = perpendicular_basis(d1)
     # Point pairs: the plane through both that contains d1 (exactly perpendicular to face 1).
     r = rest.size
     if r > _DENSE_LIMIT:
@@ -723,7 +682,7 @@ class Segmentation:
         if not sparse:
             second = [] if second is None else [second]
         if not second:
-            axes = np.vstack([d1, _perpendicular_basis(d1).T])
+            axes = np.vstack([d1, perpendicular_basis(d1).T])
             self._add(axes, [(0, o1, mask1)])
         for d2, _o2, mask2 in second:
             d2 = d2 - (d2 @ d1) * d1

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from asbuilt.fit import _faces
+from asbuilt.fit import _faces, _vectors
 from asbuilt.fit._beam_fans import MAX_INCIDENCE_DEG, beam_fan_shots, neighbours
 from asbuilt.fit._common import within_noise
 from asbuilt.fit._cuboid_background import only_background, seen_past
@@ -81,7 +81,7 @@ class FaceModel:
         # Filled in place (a hot path): rotation columns, then -1 in each point's face column
         # (-0.0 elsewhere, as negating a 0/1 indicator gives).
         jac = np.empty((x.shape[0], q + self.offset.shape[0]))
-        jac[:, :q] = _faces.cross_rows(normal, x) @ self.rot_basis
+        jac[:, :q] = _vectors.cross_rows(normal, x) @ self.rot_basis
         jac[:, q:] = -0.0
         jac[np.arange(x.shape[0]), q + label] = -1.0
         return jac
@@ -248,13 +248,13 @@ def _start(frame, x: np.ndarray, keep=None) -> FaceModel:
     if frame.n_faces != 1:
         return FaceModel(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
     normal = frame.axes[int(frame.face_axis[0])]
-    basis = _faces._perpendicular_basis(normal)
+    basis = _vectors.perpendicular_basis(normal)
     members = frame.labels == 0
     if keep is not None and np.count_nonzero(members & keep) >= 3:
         members = members & keep
     rect = min_area_rectangle(x[members] @ basis)
     in_plane = rect @ basis.T
-    axes = np.vstack([normal, in_plane[0], _faces.cross3(normal, in_plane[0])])
+    axes = np.vstack([normal, in_plane[0], _vectors.cross3(normal, in_plane[0])])
     model = FaceModel(axes, np.array([0]), frame.face_sign.copy(), frame.face_offset.copy(), None)
     model.rot_basis = axes[1:].T.copy()
     return model

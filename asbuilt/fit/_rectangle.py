@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from asbuilt.fit._faces import unit_rows
+from asbuilt.fit._vectors import unit_rows
 
 __all__ = ["min_area_rectangle"]
 

@@ -86,7 +86,7 @@ import math
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit import _faces, _silhouette
+from asbuilt.fit import _faces, _silhouette, _vectors
 from asbuilt.fit._beam_fans import raster_lines
 from asbuilt.fit._common import noise_level, random_subset
 from asbuilt.fit._cuboid_edges import raster_corners
@@ -255,7 +255,7 @@ def _canonical(axes, size, observed):
         new[2] = -new[2]
     if new[0, np.argmax(np.abs(new[0]))] < 0:
         new[0] = -new[0]
-    new[1] = _faces.cross3(new[2], new[0])
+    new[1] = _vectors.cross3(new[2], new[0])
     return new, size[order], tuple(bool(observed[k]) for k in order), order
 
 

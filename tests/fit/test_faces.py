@@ -9,11 +9,12 @@ import pytest
 
 from asbuilt.fit import _faces
 from asbuilt.fit._neighbours import local_normals
+from asbuilt.fit._vectors import perpendicular_basis
 
 
 def _plane_points(rng, normal, n=60, noise=0.0):
     normal = np.asarray(normal, float) / np.linalg.norm(normal)
-    basis = _faces._perpendicular_basis(normal)
+    basis = perpendicular_basis(normal)
     uv = rng.uniform(-0.5, 0.5, size=(n, 2))
     return uv @ basis.T + rng.normal(0.0, noise, n)[:, None] * normal, normal
 
@@ -92,20 +93,6 @@ def test_pairs_by_position_are_triu_indices(r):
     got_i, got_j = _faces._pairs(r, some)
     np.testing.assert_array_equal(got_i, i[some])
     np.testing.assert_array_equal(got_j, j[some])
-
-
-def test_perpendicular_basis_is_the_normalised_cross_products():
-    rng = np.random.default_rng(8)
-    for direction in rng.normal(size=(50, 3)):
-        direction /= np.linalg.norm(direction)
-        helper = np.eye(3)[int(np.argmin(np.abs(direction)))]
-        first = np.cross(direction, helper)
-        first /= np.linalg.norm(first)
-        expected = np.stack([first, np.cross(direction, first)], axis=1)
-        got = _faces._perpendicular_basis(direction)
-        np.testing.assert_allclose(got, expected, rtol=0, atol=1e-15)
-        np.testing.assert_allclose(got.T @ got, np.eye(2), atol=1e-12)
-        np.testing.assert_allclose(got.T @ direction, 0.0, atol=1e-12)
 
 
 def test_distinct_is_the_greedy_suppression_in_order():
