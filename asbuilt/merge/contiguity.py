@@ -53,7 +53,15 @@ from scipy.spatial import cKDTree
 
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
-from .crossing import branch_taken, cross_note, crossed_by, crossing_note
+from .crossing import JOINED_BY as _JOINED_BY
+from .crossing import (
+    End,
+    branch_taken,
+    cross_note,
+    crossed_by,
+    crossing_note,
+    segment_closest,
+)
 
 __all__ = [
     "End",
@@ -81,18 +89,6 @@ LINK_MARGIN = 0.5
 #: Largest elbow bend (degrees) before ``intended_angle_deg`` is added: ASME B16.9 elbows turn 45
 #: or 90 degrees (180 degree returns join parallel pipes, whose axes do not meet).
 ELBOW_MAX_DEG = 90.0
-
-#: How a note names the joint that took a pipe end.
-_JOINED_BY = {
-    "elbow": "an elbow",
-    "tee": "a tee",
-    "inline": "an inline joint",
-    "contact": "a contact",
-    "lateral": "a lateral",
-}
-
-#: A pipe end: (pipe index, 0 for the start end / 1 for the end end).
-End = tuple[int, int]
 
 
 @dataclass(frozen=True)
@@ -681,17 +677,7 @@ def _laterals(candidates, used, tree, radius, pts, out, axes, ods, tol, slack, n
 
 def segment_distance(p0, p1, q0, q1) -> float:
     """Closest distance (metres) between segments ``p0 p1`` and ``q0 q1`` (points (3,) m)."""
-    d1, d2, r = p1 - p0, q1 - q0, p0 - q0
-    a, e, f = float(d1 @ d1), float(d2 @ d2), float(d2 @ r)
-    c, b = float(d1 @ r), float(d1 @ d2)
-    denom = a * e - b * b
-    s = float(np.clip((b * f - c * e) / denom, 0.0, 1.0)) if denom > 1e-12 * a * e else 0.0
-    t = (b * s + f) / e
-    if t < 0.0:
-        t, s = 0.0, float(np.clip(-c / a, 0.0, 1.0))
-    elif t > 1.0:
-        t, s = 1.0, float(np.clip((b - c) / a, 0.0, 1.0))
-    return float(np.linalg.norm(p0 + s * d1 - q0 - t * d2))
+    return segment_closest(p0, p1, q0, q1)[0]
 
 
 def _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, slack):

@@ -21,13 +21,21 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["crossed_by", "cross_note", "crossing_note", "branch_taken"]
+__all__ = [
+    "End",
+    "JOINED_BY",
+    "crossed_by",
+    "cross_note",
+    "crossing_note",
+    "branch_taken",
+    "segment_closest",
+]
 
 #: A pipe end: (pipe index, 0 for the start end / 1 for the end end).
 End = tuple[int, int]
 
-#: How joints are named in the notes.
-_JOINED_BY = {
+#: How a note names the joint that took a pipe end (contiguity's notes too).
+JOINED_BY = {
     "elbow": "an elbow",
     "tee": "a tee",
     "inline": "an inline joint",
@@ -36,7 +44,7 @@ _JOINED_BY = {
 }
 
 
-def _closest(p0, p1, q0, q1) -> tuple[float, float, float]:
+def segment_closest(p0, p1, q0, q1) -> tuple[float, float, float]:
     """Closest points of segments ``p0 p1`` and ``q0 q1`` (points (3,) m).
 
     Returns
@@ -117,7 +125,7 @@ def crossed_by(
         m = int(m)
         if m in (a[0], b[0]):
             continue
-        dist, s, t_m = _closest(p0, p1, starts[m], stops[m])
+        dist, s, t_m = segment_closest(p0, p1, starts[m], stops[m])
         long = float(np.linalg.norm(d[m]))
         if (
             dist < radius + 0.5 * float(ods[m])
@@ -135,7 +143,7 @@ def crossed_by(
         if span < 1e-9 or abs(float(u @ (q1 - q0))) / span > cos_max:
             continue
         other = 0.5 * float(max(ods[e[0]], ods[f[0]]))
-        dist, s, t_m = _closest(p0, p1, q0, q1)
+        dist, s, t_m = segment_closest(p0, p1, q0, q1)
         if dist < radius + other and 0.0 < s < 1.0 and 0.0 < t_m < 1.0:
             return (e[0], f[0])
     return None
@@ -174,7 +182,7 @@ def cross_note(
     )
     done = [
         f"{names[p]} is joined to {', '.join(names[q] for q in taken[p][1])} by "
-        f"{_JOINED_BY.get(taken[p][0], 'a joint')}"
+        f"{JOINED_BY.get(taken[p][0], 'a joint')}"
         for p in (i, j)
         if p in taken
     ]
