@@ -35,6 +35,7 @@ __all__ = [
     "size_text",
     "tee_dims",
     "tee_geometry",
+    "tee_solid",
 ]
 
 #: A trimmed pipe end's shots within this (metres) of the fitting's own surface could be shots
@@ -96,20 +97,32 @@ def tee_dims(run: PipeSpec, branch: PipeSpec) -> tuple[float, float, bool]:
 
 def tee_geometry(center, run_dir, branch_dir, run: PipeSpec, branch: PipeSpec):
     c_run, c_out, _ = tee_dims(run, branch)
+    return tee_solid(
+        center,
+        center - c_run * run_dir,
+        center + c_run * run_dir,
+        center + c_out * branch_dir,
+        run,
+        branch,
+    )
+
+
+def tee_solid(center, run_start, run_end, branch_end, run: PipeSpec, branch: PipeSpec) -> Tee:
+    """A tee (or a lateral's tee-shaped fitting) between the given points ((3,) m each) with
+    ``run``'s size on the run and ``branch``'s on the outlet."""
     # the run's wall on the run, the outlet pipe's on the outlet (as B16.9 reducing tees are
     # made); solid (0) throughout when either schedule is unknown
     hollow = bool(run.wall and branch.wall)
-    geometry = Tee(
+    return Tee(
         center=center,
-        run_start=center - c_run * run_dir,
-        run_end=center + c_run * run_dir,
-        branch_end=center + c_out * branch_dir,
+        run_start=run_start,
+        run_end=run_end,
+        branch_end=branch_end,
         outer_radius=0.5 * run.od,
         branch_outer_radius=0.5 * branch.od,
         wall=run.wall if hollow else 0.0,
         branch_wall=branch.wall if hollow else 0.0,
     )
-    return geometry
 
 
 def size_text(p: PipeSpec) -> str:

@@ -27,9 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from asbuilt.model import Tee
-
-from ._fitting_shapes import size_text
+from ._fitting_shapes import size_text, tee_solid
 from .contiguity import Joint, line_closest_points
 
 if TYPE_CHECKING:
@@ -74,16 +72,13 @@ def build_lateral(b: _Builder, joint: Joint):
     at_i = min(float((b.base[i, ki] - center) @ run_dir), -(behind + LATERAL_CLEARANCE))
     at_j = max(float((b.base[j, kj] - center) @ run_dir), ahead + LATERAL_CLEARANCE)
     at_b = max(float((b.base[bi, bk] - center) @ branch_dir), reach + LATERAL_CLEARANCE)
-    hollow = bool(run.wall and pb.wall)
-    geometry = Tee(
-        center=center,
-        run_start=center + at_i * run_dir,
-        run_end=center + at_j * run_dir,
-        branch_end=center + at_b * branch_dir,
-        outer_radius=0.5 * run.od,
-        branch_outer_radius=0.5 * pb.od,
-        wall=run.wall if hollow else 0.0,
-        branch_wall=pb.wall if hollow else 0.0,
+    geometry = tee_solid(
+        center,
+        center + at_i * run_dir,
+        center + at_j * run_dir,
+        center + at_b * branch_dir,
+        run,
+        pb,
     )
     name = f"{pi.id}-{pj.id}-{pb.id}"
     b.ends[i, ki], b.ends[j, kj] = geometry.run_start, geometry.run_end
