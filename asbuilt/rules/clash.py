@@ -36,7 +36,8 @@ __all__ = ["CHECKS", "FITTINGS", "inside", "bounds", "candidate_pairs", "overlap
 #: Fittings merging places: they end only at their ports, which the pipes they join touch (a
 #: joint, never a clash); a fitting's end inside anything else is not a connection (a coupling
 #: through another at a cross, a pipe through a tee), so ``end_connections`` spares no fitting.
-FITTINGS = ("coupling", "elbow", "tee", "reducer", "lateral")
+#: (A lateral is built as a tee-shaped fitting of type ``"tee"``.)
+FITTINGS = ("coupling", "elbow", "tee", "reducer")
 
 
 def _in_segment(
