@@ -282,6 +282,7 @@ def _second_plane(points, normals, first, threshold, gap, rng, viewpoint=None, e
     found = []
     if cand_n.shape[0] == 0:
         return found if every else None
+    first_step: list = []  # face 1's raster step, for every candidate (:func:`_grazing_gap`)
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = _ADD(np.abs(cand_n @ sub.T - offsets[:, None]) < threshold, axis=1)
     order = (-counts).argsort(kind="stable")
@@ -307,7 +308,7 @@ def _second_plane(points, normals, first, threshold, gap, rng, viewpoint=None, e
             continue
         if viewpoint is not None:
             # Asked only of a face the plain gap refuses: the grazing allowance is never less.
-            wider = _grazing_gap(points, first, face, threshold, gap, viewpoint)
+            wider = _grazing_gap(points, first, face, threshold, gap, viewpoint, first_step)
             if wider > gap and _contiguous(points, first, face, threshold, gap, wider):
                 if not every:
                     return face
@@ -342,7 +343,7 @@ def _contiguous(points, face_a, face_b, threshold, gap, gap_b=None) -> bool:
     return True
 
 
-def _grazing_gap(points, face_a, face_b, threshold, gap, viewpoint) -> float:
+def _grazing_gap(points, face_a, face_b, threshold, gap, viewpoint, step_a=None) -> float:
     """The gap face b's shots may leave to face a's plane, seen from a trusted ``viewpoint``
     (3,) metres: ``gap``, or more when face b is seen near grazing incidence,
     ``threshold + _EDGE_STEPS * r * step / cos(b)`` with ``step`` the raster's angular step
@@ -356,6 +357,8 @@ def _grazing_gap(points, face_a, face_b, threshold, gap, viewpoint) -> float:
     was fitted as its front alone. A line of background shots a metre behind a column is still
     too far: a step there spans decimetres. Face b seen beyond ``_MIN_STRETCHED_COS`` gets
     ``gap``: a plane through the station holds every shot along one raster line's beams.
+    ``step_a``, optional: a list that holds face a's step once computed (empty before), so
+    that the candidates for face b against one face a share it.
     """
     beams_b = points[face_b[2]] - viewpoint
     ranges = row_norms(beams_b)
@@ -363,7 +366,12 @@ def _grazing_gap(points, face_a, face_b, threshold, gap, viewpoint) -> float:
     seen_a = points[face_a[2]] - viewpoint
     if cos_b < _MIN_STRETCHED_COS or seen_a.shape[0] < 2:
         return gap
-    step = median_spacing(seen_a / row_norms(seen_a)[:, None])  # chords of unit vectors
+    if step_a:
+        step = step_a[0]
+    else:
+        step = median_spacing(seen_a / row_norms(seen_a)[:, None])  # chords of unit vectors
+        if step_a is not None:
+            step_a.append(step)
     return max(gap, threshold + _EDGE_STEPS * quick_median(ranges) * step / cos_b)
 
 

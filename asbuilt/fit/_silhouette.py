@@ -91,13 +91,19 @@ _ANGLE_TOL = 1e-4
 _PRIOR_M = 0.1
 
 
-def _angles(points: np.ndarray, viewpoint: np.ndarray, pan0: float) -> np.ndarray:
-    """Pan (relative to ``pan0``) and tilt of points (k, 3) seen from ``viewpoint``; (k, 2) rad."""
+def _pan_tilt(points: np.ndarray, viewpoint: np.ndarray, pan0: float):
+    """Pan (relative to ``pan0``) and tilt (k,) each, radians, of points (k, 3) seen from
+    ``viewpoint``."""
     rel = points - viewpoint
     pan = np.arctan2(rel[:, 1], rel[:, 0]) - pan0
     pan = (pan + np.pi) % (2.0 * np.pi) - np.pi
     tilt = np.arctan2(rel[:, 2], np.hypot(rel[:, 0], rel[:, 1]))
-    return np.column_stack([pan, tilt])
+    return pan, tilt
+
+
+def _angles(points: np.ndarray, viewpoint: np.ndarray, pan0: float) -> np.ndarray:
+    """Pan (relative to ``pan0``) and tilt of points (k, 3) seen from ``viewpoint``; (k, 2) rad."""
+    return np.column_stack(_pan_tilt(points, viewpoint, pan0))
 
 
 def coordinate_quantum(points: np.ndarray) -> float:
@@ -541,8 +547,20 @@ def _extents(lo, hi, axes, origin, viewpoint, pan0) -> np.ndarray:
     """Angular extents (b, 4) of b boxes given by bounds lo, hi (b, 3) in one batch."""
     local = lo[:, None, :] + _FRACTIONS[None, :, :] * (hi - lo)[:, None, :]
     world = origin + local.reshape(-1, 3) @ axes
-    ang = _angles(world, viewpoint, pan0).reshape(lo.shape[0], -1, 2)
-    return np.concatenate([ang.min(axis=1), ang.max(axis=1)], axis=1)[:, [0, 2, 1, 3]]
+    pan, tilt = _pan_tilt(world, viewpoint, pan0)
+    # Each box's samples in a contiguous row: reducing along the middle axis of (b, m, 2)
+    # angles cost more than the angles themselves (the same least and greatest values). The
+    # (b, 4) answer is column-major, as the fancy-indexed one was: the solver's products of it
+    # go through BLAS in that layout, and another layout rounds differently.
+    pan, tilt = pan.reshape(lo.shape[0], -1), tilt.reshape(lo.shape[0], -1)
+    return np.stack(
+        [
+            np.minimum.reduce(pan, axis=1),
+            np.maximum.reduce(pan, axis=1),
+            np.minimum.reduce(tilt, axis=1),
+            np.maximum.reduce(tilt, axis=1),
+        ]
+    ).T
 
 
 def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations=10, side_tol=None):
