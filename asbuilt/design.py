@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -333,13 +332,12 @@ def loads_design(text: str, *, source: str | None = None) -> Design:
 
 def load_design(path) -> Design:
     """Load a design file (see :func:`loads_design`); DesignError when unreadable or invalid."""
+    from ._text import read_text
+
     source = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise DesignError("no such file; check the --design path", source=source) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DesignError(f"cannot read the design file ({exc})", source=source) from None
+    text = read_text(
+        path, DesignError, what="design file", missing="no such file; check the --design path"
+    )
     return loads_design(text, source=source)
 
 

@@ -75,17 +75,15 @@ _MAX_DEGREES = 360.0
 
 def _read_json(path: Path, what: str):
     """The JSON document in ``path``; CalibrationError (one line) when it cannot be read."""
+    from asbuilt._text import read_text
+
     source = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise CalibrationError(
-            f"cannot read the {what} ({exc.strerror}); check the path", source=source
-        ) from None
-    except UnicodeDecodeError as exc:
-        raise CalibrationError(
-            f"not UTF-8 text (byte {exc.start}); save the {what} as UTF-8 JSON", source=source
-        ) from None
+    text = read_text(
+        path,
+        CalibrationError,
+        what=what,
+        missing=f"cannot read the {what} (No such file or directory); check the path",
+    )
     return _loads(text, source)
 
 

@@ -79,22 +79,9 @@ class ScanInput:
     def _model_document(self):
         """Standard input's JSON object when it is an ``asbuilt-model`` document, else None
         (recognised as :func:`asbuilt.export.model_json.is_model_document` does a file)."""
-        import json
+        from asbuilt.export.model_json import model_document_in
 
-        from asbuilt._json_numbers import parse_int
-        from asbuilt.export.model_json import FORMAT
-
-        if b'"asbuilt-model"' not in self.data[:4096]:
-            return None
-        try:
-            # The integer hook the file reader uses: a 400-digit integer reads as infinite and
-            # is refused by its field's name, instead of overflowing float() in a check.
-            document = json.loads(self.data.decode("utf-8"), parse_int=parse_int)
-        except ValueError:  # not UTF-8, not JSON: the scan loader says where
-            return None
-        if isinstance(document, dict) and document.get("format") == FORMAT:
-            return document
-        return None
+        return model_document_in(self.data)
 
 
 def _standard_input() -> bytes:
