@@ -119,11 +119,13 @@ def _standard_input() -> bytes:
     return data
 
 
-def input_files(path) -> list:
-    """The input files named by a ``SCAN`` argument, which an output must not replace
-    (:func:`asbuilt.atomic.check_target`): none for standard input, whatever file is named
-    ``-``."""
-    return [] if path == STDIN else [path]
+def input_files(path, *others) -> list:
+    """The input files a command reads, which an output must not replace
+    (:func:`asbuilt.atomic.check_target`): the ``SCAN`` argument (none for standard input,
+    whatever file is named ``-``) and ``others``, the files of options such as ``--rules``,
+    ``--design``, ``--catalog`` (None when not given; a catalog name names no file and never
+    matches)."""
+    return [p for p in (None if path == STDIN else path, *others) if p is not None]
 
 
 def scan_input(path: str) -> ScanInput:

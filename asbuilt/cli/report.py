@@ -182,10 +182,11 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.errors import ExportError
     from asbuilt.report import SUFFIXES, report_format_for, write_reports
 
+    inputs = input_files(args.scan, args.rules, args.design, args.catalog, args.gltf)
     outputs = [Path(p) for p in args.out]
     for path in outputs:
         report_format_for(path)  # an unknown suffix fails before any work
-        check_target(path, "--out", inputs=input_files(args.scan), example=f"report{path.suffix}")
+        check_target(path, "--out", inputs=inputs, example=f"report{path.suffix}")
     if args.gltf is not None:
         if Path(args.gltf).suffix.lower() not in (".glb", ".gltf"):
             raise ExportError("--gltf must name a .glb or .gltf file", source=str(args.gltf))
