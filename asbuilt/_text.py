@@ -10,7 +10,28 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["decode_text", "read_text"]
+__all__ = ["REPEATED_KEY", "RepeatedKey", "decode_text", "read_text", "unique_keys"]
+
+#: The message for a key given twice in one JSON object (every reader refuses it, located at
+#: the key).
+REPEATED_KEY = "given twice in one JSON object; keep one (JSON readers differ on which one counts)"
+
+
+class RepeatedKey(ValueError):
+    """A key given twice in one JSON object (``args[0]``: the key)."""
+
+
+def unique_keys(pairs: list) -> dict:
+    """``json.loads`` ``object_pairs_hook``: a dict, refusing a key given twice (raises
+    :class:`RepeatedKey`; catch it before ``ValueError``, which JSONDecodeError also is)."""
+    result = dict(pairs)
+    if len(result) != len(pairs):
+        seen: set[str] = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise RepeatedKey(key)
+            seen.add(key)
+    return result
 
 
 def decode_text(data: bytes, error, *, source: str | None, what: str, kind: str = "JSON") -> str:

@@ -88,8 +88,12 @@ def _read_json(path: Path, what: str):
 
 
 def _loads(text: str, source: str | None):
+    from asbuilt._text import REPEATED_KEY, RepeatedKey, unique_keys
+
     try:
-        return json.loads(text, parse_int=_parse_int)
+        return json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
+    except RepeatedKey as exc:
+        raise CalibrationError(REPEATED_KEY, source=source, where=exc.args[0]) from None
     except json.JSONDecodeError as exc:
         raise CalibrationError(
             f"not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})", source=source

@@ -53,7 +53,7 @@ READERS = {
         "s.json",
         (ROOT / "samples" / "scenes" / "spool.scene.json")
         .read_text(encoding="utf-8")
-        .replace('"units"', '"name": "caf\u00e9", "units"', 1),
+        .replace('"name": "', '"name": "caf\u00e9 ', 1),
     ),
     "rules": (load_rules, "r.toml", '# caf\u00e9\nignore = ["too-few-points"]\n'),
     "catalog": (
@@ -66,7 +66,7 @@ READERS = {
         "cal.json",
         (EXAMPLES / "ptu-d46.cal.json")
         .read_text(encoding="utf-8")
-        .replace('"format"', '"comment": "caf\u00e9", "format"', 1),
+        .replace('"comment": "', '"comment": "caf\u00e9 ', 1),
     ),
     "targets": (
         load_targets,
@@ -137,3 +137,19 @@ def test_a_missing_file_is_one_line_naming_it_once(reader, tmp_path):
     message = str(info.value)
     assert message.startswith(f"{path}: "), message
     assert message.count(str(path)) == 1 and "Errno" not in message and "\n" not in message
+
+
+# Before: the scan and design readers refused a key given twice; the scene, model document,
+# calibration, targets and plan readers kept the last one without a word.
+@pytest.mark.parametrize("reader", sorted(r for r in READERS if READERS[r][1].endswith(".json")))
+def test_a_key_given_twice_is_refused_by_every_json_reader(reader, tmp_path):
+    load, name, text = READERS[reader]
+    assert '"version": 1' in text.replace('"version":1', '"version": 1'), reader
+    twice = text.replace('"version": 1', '"version": 1, "version": 1', 1)
+    path = _write(tmp_path, name, twice.encode("utf-8"))
+    with pytest.raises(AsbuiltError) as info:
+        load(path)
+    assert str(info.value) == (
+        f"{path}: version: given twice in one JSON object; keep one (JSON readers differ on "
+        "which one counts)"
+    )

@@ -74,6 +74,10 @@ class ScanInput:
                 "is not an asbuilt-model document (its format is not 'asbuilt-model')",
                 source=STDIN_NAME,
             )
+        # Read again as a file is (a key given twice refused): recognising it was lenient.
+        from asbuilt.export.model_json import loads_model_document
+
+        document = loads_model_document(self.data.decode("utf-8-sig"), source=STDIN_NAME)
         return model_from_document(document, source=STDIN_NAME)
 
     def _model_document(self):

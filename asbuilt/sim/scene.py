@@ -242,8 +242,12 @@ def load_scene(path) -> Scene:
 
 def loads_scene(text: str, *, source: str | None = None, base_dir=None) -> Scene:
     """Parse and validate a scene from JSON text (see :func:`load_scene`)."""
+    from .._text import REPEATED_KEY, RepeatedKey, unique_keys
+
     try:
-        doc = json.loads(text, parse_int=_parse_int)
+        doc = json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
+    except RepeatedKey as exc:
+        raise SceneError(REPEATED_KEY, source=source, where=exc.args[0]) from None
     except json.JSONDecodeError as exc:
         raise SceneError(
             f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",

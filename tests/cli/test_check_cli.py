@@ -423,8 +423,9 @@ def _deeply_nested_model(document: bytes) -> bytes:
 
 
 # Before: a model document with a byte order mark was taken for a scan ("is "asbuilt-model",
-# not "asbuilt-scan" ... report on it with 'asbuilt check'"), and one nested too deeply was a
-# RecursionError traceback (exit 1), from a file and from standard input alike.
+# not "asbuilt-scan" ... report on it with 'asbuilt check'"), one nested too deeply was a
+# RecursionError traceback (exit 1), from a file and from standard input alike, and a key given
+# twice was read as its last value (a scan or design refuses it).
 @pytest.mark.parametrize("command", ["check", "report"])
 @pytest.mark.parametrize("stdin", [False, True], ids=["file", "stdin"])
 @pytest.mark.parametrize(
@@ -434,14 +435,16 @@ def _deeply_nested_model(document: bytes) -> bytes:
         ("deep", "invalid JSON (nested too deeply)"),
     ],
 )
-def test_model_documents_with_a_bom_or_nested_too_deeply(
+def test_model_documents_with_a_bom_nested_too_deeply_or_a_repeated_key(
     model_document, command, stdin, mistake, expected, tmp_path
 ):
-    data = (
-        b"\xef\xbb\xbf" + model_document
-        if mistake == "bom"
-        else _deeply_nested_model(model_document)
-    )
+    data = {
+        "bom": lambda: b"\xef\xbb\xbf" + model_document,
+        "deep": lambda: _deeply_nested_model(model_document),
+        "repeated": lambda: model_document.replace(
+            b'"version": 1', b'"version": 1, "version": 1', 1
+        ),
+    }[mistake]()
     given = tmp_path / "given.json"
     given.write_bytes(data)
     out = tmp_path / ("out.json" if command == "check" else "out.csv")
