@@ -359,13 +359,20 @@ def _load_packaged(name: str) -> Catalog:
 
 
 def _load_path(resolved: str, shown: str, *, attach: bool = True) -> Catalog:
-    try:
-        # utf-8-sig: spreadsheets save "CSV UTF-8" with a byte order mark.
-        content = Path(resolved).read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise CatalogError("catalog file not found; check the path", source=shown) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CatalogError(f"cannot read the catalog ({exc})", source=shown) from None
+    from ._text import read_text
+
+    # Spreadsheets save "CSV UTF-8" with a byte order mark: read_text drops it. Messages name
+    # the file as the user gave it (``shown``), not as resolved.
+    def error(message, source):
+        return CatalogError(message, source=shown)
+
+    content = read_text(
+        resolved,
+        error,
+        what="catalog",
+        missing="catalog file not found; check the path",
+        kind="CSV" if str(resolved).endswith(".csv") else "TOML",
+    )
     catalog = parse_catalog(content, source=shown)
     if not attach:  # a fittings table: its own 'fittings' header is not followed (no cycles)
         return catalog

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -144,23 +143,6 @@ def _vector(
     return array
 
 
-class _RepeatedKey(ValueError):
-    """A key given twice in one JSON object."""
-
-
-def _unique_keys(pairs: list) -> dict:
-    """``json.loads`` object hook: a dict, refusing a key given twice (JSON readers differ on
-    which one counts)."""
-    result = dict(pairs)
-    if len(result) != len(pairs):
-        seen: set[str] = set()
-        for key, _ in pairs:
-            if key in seen:
-                raise _RepeatedKey(key)
-            seen.add(key)
-    return result
-
-
 def _ident(raw: dict, where: str, source) -> str:
     ident = raw.get("id")
     if not isinstance(ident, str) or not ident:
@@ -278,20 +260,17 @@ def loads_design(text: str, *, source: str | None = None) -> Design:
     DesignError
         Not JSON, wrong format tag, unknown units or fields, bad vectors, duplicate ids.
     """
+    from ._text import REPEATED_KEY, RepeatedKey, unique_keys
+
     try:
-        doc = json.loads(text, parse_int=_parse_int, object_pairs_hook=_unique_keys)
+        doc = json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
     except json.JSONDecodeError as exc:
         raise DesignError(
             f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",
             source=source,
         ) from None
-    except _RepeatedKey as exc:
-        raise DesignError(
-            f"key {exc.args[0]!r} given twice in one JSON object; keep one (JSON readers differ "
-            "on which one counts)",
-            source=source,
-            where=exc.args[0],
-        ) from None
+    except RepeatedKey as exc:
+        raise DesignError(REPEATED_KEY, source=source, where=exc.args[0]) from None
     except RecursionError:
         raise DesignError(
             "invalid JSON (nested too deeply); a design nests lists three levels at most",
@@ -333,13 +312,12 @@ def loads_design(text: str, *, source: str | None = None) -> Design:
 
 def load_design(path) -> Design:
     """Load a design file (see :func:`loads_design`); DesignError when unreadable or invalid."""
+    from ._text import read_text
+
     source = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise DesignError("no such file; check the --design path", source=source) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DesignError(f"cannot read the design file ({exc})", source=source) from None
+    text = read_text(
+        path, DesignError, what="design file", missing="no such file; check the --design path"
+    )
     return loads_design(text, source=source)
 
 

@@ -75,23 +75,25 @@ _MAX_DEGREES = 360.0
 
 def _read_json(path: Path, what: str):
     """The JSON document in ``path``; CalibrationError (one line) when it cannot be read."""
+    from asbuilt._text import read_text
+
     source = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise CalibrationError(
-            f"cannot read the {what} ({exc.strerror}); check the path", source=source
-        ) from None
-    except UnicodeDecodeError as exc:
-        raise CalibrationError(
-            f"not UTF-8 text (byte {exc.start}); save the {what} as UTF-8 JSON", source=source
-        ) from None
+    text = read_text(
+        path,
+        CalibrationError,
+        what=what,
+        missing=f"cannot read the {what} (No such file or directory); check the path",
+    )
     return _loads(text, source)
 
 
 def _loads(text: str, source: str | None):
+    from asbuilt._text import REPEATED_KEY, RepeatedKey, unique_keys
+
     try:
-        return json.loads(text, parse_int=_parse_int)
+        return json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
+    except RepeatedKey as exc:
+        raise CalibrationError(REPEATED_KEY, source=source, where=exc.args[0]) from None
     except json.JSONDecodeError as exc:
         raise CalibrationError(
             f"not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})", source=source

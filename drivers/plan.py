@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from asbuilt._json_numbers import parse_int as _parse_int
+from asbuilt._text import REPEATED_KEY, RepeatedKey, read_text, unique_keys
 from asbuilt.errors import ScanError
 from asbuilt.scan.load import MAX_POINTS
 from asbuilt.scan.model import KINDS
@@ -287,16 +288,16 @@ def load_plan(path) -> Plan:
     """Read a plan file; ScanError (one located line) on any problem."""
     path = Path(path)
     source = str(path)
+    text = read_text(
+        path,
+        ScanError,
+        what="plan",
+        missing="cannot read the plan (No such file or directory); check the path",
+    )
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"), parse_int=_parse_int)
-    except OSError as exc:
-        raise ScanError(
-            f"cannot read the plan ({exc.strerror}); check the path", source=source
-        ) from None
-    except UnicodeDecodeError as exc:
-        raise ScanError(
-            f"not UTF-8 text (byte {exc.start}); save the plan as UTF-8 JSON", source=source
-        ) from None
+        doc = json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
+    except RepeatedKey as exc:
+        raise ScanError(REPEATED_KEY, source=source, where=exc.args[0]) from None
     except json.JSONDecodeError as exc:
         raise ScanError(f"not valid JSON (line {exc.lineno}: {exc.msg})", source=source) from None
     except RecursionError:

@@ -196,8 +196,8 @@ _PIPE = '{"pipes": [{"id": "A", "start": %s, "end": [1, 0, 0]}]}'
         ('{"version": true}', "version: only version 1 is known"),
         (
             '{"pipes": [], "pipes": [{"id": "A", "start": [0, 0, 0], "end": [1, 0, 0]}]}',
-            "pipes: key 'pipes' given twice in one JSON object; keep one (JSON readers differ on "
-            "which one counts)",
+            "pipes: given twice in one JSON object; keep one (JSON readers differ on which one "
+            "counts)",
         ),
     ],
     ids=[

@@ -74,27 +74,18 @@ class ScanInput:
                 "is not an asbuilt-model document (its format is not 'asbuilt-model')",
                 source=STDIN_NAME,
             )
+        # Read again as a file is (a key given twice refused): recognising it was lenient.
+        from asbuilt.export.model_json import loads_model_document
+
+        document = loads_model_document(self.data.decode("utf-8-sig"), source=STDIN_NAME)
         return model_from_document(document, source=STDIN_NAME)
 
     def _model_document(self):
         """Standard input's JSON object when it is an ``asbuilt-model`` document, else None
         (recognised as :func:`asbuilt.export.model_json.is_model_document` does a file)."""
-        import json
+        from asbuilt.export.model_json import model_document_in
 
-        from asbuilt._json_numbers import parse_int
-        from asbuilt.export.model_json import FORMAT
-
-        if b'"asbuilt-model"' not in self.data[:4096]:
-            return None
-        try:
-            # The integer hook the file reader uses: a 400-digit integer reads as infinite and
-            # is refused by its field's name, instead of overflowing float() in a check.
-            document = json.loads(self.data.decode("utf-8"), parse_int=parse_int)
-        except ValueError:  # not UTF-8, not JSON: the scan loader says where
-            return None
-        if isinstance(document, dict) and document.get("format") == FORMAT:
-            return document
-        return None
+        return model_document_in(self.data)
 
 
 def _standard_input() -> bytes:
@@ -132,11 +123,13 @@ def _standard_input() -> bytes:
     return data
 
 
-def input_files(path) -> list:
-    """The input files named by a ``SCAN`` argument, which an output must not replace
-    (:func:`asbuilt.atomic.check_target`): none for standard input, whatever file is named
-    ``-``."""
-    return [] if path == STDIN else [path]
+def input_files(path, *others) -> list:
+    """The input files a command reads, which an output must not replace
+    (:func:`asbuilt.atomic.check_target`): the ``SCAN`` argument (none for standard input,
+    whatever file is named ``-``) and ``others``, the files of options such as ``--rules``,
+    ``--design``, ``--catalog`` (None when not given; a catalog name names no file and never
+    matches)."""
+    return [p for p in (None if path == STDIN else path, *others) if p is not None]
 
 
 def scan_input(path: str) -> ScanInput:

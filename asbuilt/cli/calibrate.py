@@ -70,7 +70,8 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.table import Table
 
-    from asbuilt.cli._input import scan_input
+    from asbuilt.atomic import check_target
+    from asbuilt.cli._input import input_files, scan_input
     from asbuilt.drivers.calibration import (
         TargetShots,
         estimate_calibration,
@@ -81,6 +82,14 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.drivers.kinematics import Calibration
     from asbuilt.errors import CalibrationError
 
+    # Before any work: the calibration must not replace the scan's measurements, the targets or
+    # the initial calibration, and its directory must exist.
+    check_target(
+        args.out,
+        "--out",
+        inputs=input_files(args.scan, args.targets, args.initial),
+        example="rig.cal.json",
+    )
     source = scan_input(args.scan)
     scan = source.load_scan()
     targets = load_targets(args.targets)

@@ -256,7 +256,11 @@ def run(args: argparse.Namespace) -> int:
         from asbuilt.export import exporter_for
 
         exporter_for(args.fix)  # an unknown suffix, a directory or none fails before any work
-        check_target(args.fix, "--fix", inputs=input_files(args.scan))
+        check_target(
+            args.fix,
+            "--fix",
+            inputs=input_files(args.scan, args.rules, args.design, args.catalog),
+        )
 
     source = scan_input(args.scan)
     err = Console(file=sys.stderr, highlight=False, soft_wrap=True)

@@ -128,11 +128,12 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.export import export_models, exporter_for
     from asbuilt.pipeline import build_model
 
+    inputs = input_files(args.scan, args.rules, args.design, args.catalog)
     outputs = [Path(p) for p in args.out]
     reports = [Path(p) for p in args.report or ()]
     for path in outputs:
         exporter_for(path)  # an unknown suffix or a missing directory fails before any work
-        check_target(path, "--out", inputs=input_files(args.scan))
+        check_target(path, "--out", inputs=inputs)
     seen = {path.resolve() for path in outputs}
     for report_path in reports:
         from asbuilt.report import report_format_for
@@ -147,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
         check_target(
             report_path,
             "--report",
-            inputs=input_files(args.scan),
+            inputs=inputs,
             example=f"report{report_path.suffix}",
         )
 

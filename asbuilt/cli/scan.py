@@ -389,6 +389,7 @@ def run(args: argparse.Namespace) -> int:
     """Open the devices, run the session, print a summary; see the module docstring."""
     from rich.console import Console
 
+    from asbuilt.atomic import check_target
     from asbuilt.drivers.calibration import load_calibration
     from asbuilt.drivers.kinematics import Calibration
     from asbuilt.drivers.plan import load_plan
@@ -403,6 +404,8 @@ def run(args: argparse.Namespace) -> int:
         from asbuilt.errors import ScanError
 
         raise ScanError(str(exc), where="--units") from None
+    # The scan (and its journal beside it) must not replace the plan or the calibration it reads.
+    check_target(args.out, "--out", inputs=[p for p in (args.plan, args.calibration) if p])
     plan = load_plan(args.plan) if args.plan else None
     settings = _settings(args, plan)
     if args.calibration:

@@ -322,17 +322,30 @@ def is_model_document(path) -> bool:
     False for anything unreadable or not JSON: the scan loader then reports the problem.
     """
     try:
-        with open(path, encoding="utf-8") as handle:
+        with open(path, "rb") as handle:
             head = handle.read(4096)
-    except (OSError, UnicodeDecodeError):
+            if b'"asbuilt-model"' not in head:
+                return False
+            return model_document_in(head + handle.read()) is not None
+    except OSError:
         return False
-    if '"asbuilt-model"' not in head:
-        return False
+
+
+def model_document_in(data: bytes) -> dict | None:
+    """The JSON object in ``data`` when it is an ``asbuilt-model`` document, else None (not
+    UTF-8, not JSON, nested too deeply, another format: the scan loader then says what is wrong).
+    A byte order mark is allowed, as every reader allows it."""
+    if b'"asbuilt-model"' not in data[:4096]:
+        return None
     try:
-        with open(path, encoding="utf-8") as handle:
-            return json.load(handle).get("format") == FORMAT
-    except (OSError, ValueError, AttributeError):
-        return False
+        # The integer hook the reader uses: a 400-digit integer reads as infinite and is refused
+        # by its field's name, instead of overflowing float() in a check.
+        document = json.loads(data.decode("utf-8-sig"), parse_int=_parse_int)
+    except (ValueError, RecursionError):
+        return None
+    if isinstance(document, dict) and document.get("format") == FORMAT:
+        return document
+    return None
 
 
 def load_model_document(path) -> dict:
@@ -343,18 +356,34 @@ def load_model_document(path) -> dict:
     ModelDocumentError
         When the file is unreadable, not JSON, or not an ``asbuilt-model`` version 1 document.
     """
+    from .._text import read_text
+
     source = str(path)
+    text = read_text(
+        path,
+        ModelDocumentError,
+        what="model document",
+        missing="cannot read the file (No such file or directory); check the path",
+    )
+    return loads_model_document(text, source=source)
+
+
+def loads_model_document(text: str, *, source: str | None = None) -> dict:
+    """:func:`load_model_document` of JSON text; ``source`` names it in errors."""
+    from .._text import REPEATED_KEY, RepeatedKey, unique_keys
+
     try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelDocumentError(f"cannot read the file ({exc.strerror})", source=source) from None
-    except UnicodeDecodeError:
-        raise ModelDocumentError("the file is not UTF-8 text", source=source) from None
-    try:
-        document = json.loads(text, parse_int=_parse_int)
+        document = json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
+    except RepeatedKey as exc:
+        raise ModelDocumentError(REPEATED_KEY, source=source, where=exc.args[0]) from None
     except json.JSONDecodeError as exc:
         raise ModelDocumentError(
             f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",
+            source=source,
+        ) from None
+    except RecursionError:
+        raise ModelDocumentError(
+            "invalid JSON (nested too deeply); fix or re-export the model document",
             source=source,
         ) from None
     _check_document(document, source)

@@ -15,7 +15,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
 from importlib import resources
-from pathlib import Path
 from types import MappingProxyType
 
 from asbuilt.errors import RulesConfigError
@@ -323,11 +322,14 @@ def load_rules(path=None) -> RulesConfig:
     """
     if path is None:
         return _resolve({}, None)
+    from .._text import read_text
+
     source = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise RulesConfigError("no such file; check the --rules path", source=source) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise RulesConfigError(f"cannot read the rules file ({exc})", source=source) from None
+    text = read_text(
+        path,
+        RulesConfigError,
+        what="rules file",
+        missing="no such file; check the --rules path",
+        kind="TOML",
+    )
     return loads_rules(text, source=source)

@@ -227,23 +227,27 @@ def load_scene(path) -> Scene:
         The file is missing, unreadable, not JSON, or any field is wrong (one line naming the
         file, the object and the field).
     """
+    from .._text import read_text
+
     path = Path(path)
     try:
-        if path.stat().st_size > _MAX_FILE_BYTES:
-            raise SceneError("file is larger than 20 MB; is this a scene file?", source=str(path))
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SceneError("file not found; check the path", source=str(path)) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        reason = getattr(exc, "strerror", None) or str(exc)
-        raise SceneError(f"cannot read the file ({reason})", source=str(path)) from None
+        too_large = path.is_file() and path.stat().st_size > _MAX_FILE_BYTES
+    except OSError:
+        too_large = False  # read_text says why it cannot be read
+    if too_large:
+        raise SceneError("file is larger than 20 MB; is this a scene file?", source=str(path))
+    text = read_text(path, SceneError, what="scene", missing="file not found; check the path")
     return loads_scene(text, source=str(path), base_dir=path.parent)
 
 
 def loads_scene(text: str, *, source: str | None = None, base_dir=None) -> Scene:
     """Parse and validate a scene from JSON text (see :func:`load_scene`)."""
+    from .._text import REPEATED_KEY, RepeatedKey, unique_keys
+
     try:
-        doc = json.loads(text, parse_int=_parse_int)
+        doc = json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
+    except RepeatedKey as exc:
+        raise SceneError(REPEATED_KEY, source=source, where=exc.args[0]) from None
     except json.JSONDecodeError as exc:
         raise SceneError(
             f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",

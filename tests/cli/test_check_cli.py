@@ -405,3 +405,68 @@ def test_model_document_catalog_is_used_or_refused(refused, capsys):
     code, out, _ = run([plain, "--catalog", "astm-b88"], capsys)
     assert code == 1 and out.count("error nonstandard-diameter: ") == 4
     assert "is no ASTM B88 size" in out
+
+
+@pytest.fixture(scope="module")
+def model_document(tmp_path_factory):
+    """The bytes of an asbuilt-model document of one fitted pipe (``check --fix``)."""
+    tmp = tmp_path_factory.mktemp("model")
+    scan = scan_file(tmp, PIPE)
+    assert main(["check", str(scan), "--fix", str(tmp / "model.json")]) == 0
+    return (tmp / "model.json").read_bytes()
+
+
+def _deeply_nested_model(document: bytes) -> bytes:
+    return document.replace(
+        b'"components"', b'"deep": ' + b"[" * 100_000 + b"]" * 100_000 + b', "components"', 1
+    )
+
+
+# Before: a model document with a byte order mark was taken for a scan ("is "asbuilt-model",
+# not "asbuilt-scan" ... report on it with 'asbuilt check'"), one nested too deeply was a
+# RecursionError traceback (exit 1), from a file and from standard input alike, and a key given
+# twice was read as its last value (a scan or design refuses it).
+@pytest.mark.parametrize("command", ["check", "report"])
+@pytest.mark.parametrize("stdin", [False, True], ids=["file", "stdin"])
+@pytest.mark.parametrize(
+    "mistake, expected",
+    [
+        ("bom", None),
+        ("deep", "invalid JSON (nested too deeply)"),
+    ],
+)
+def test_model_documents_with_a_bom_nested_too_deeply_or_a_repeated_key(
+    model_document, command, stdin, mistake, expected, tmp_path
+):
+    data = {
+        "bom": lambda: b"\xef\xbb\xbf" + model_document,
+        "deep": lambda: _deeply_nested_model(model_document),
+        "repeated": lambda: model_document.replace(
+            b'"version": 1', b'"version": 1, "version": 1', 1
+        ),
+    }[mistake]()
+    given = tmp_path / "given.json"
+    given.write_bytes(data)
+    out = tmp_path / ("out.json" if command == "check" else "out.csv")
+    option = "--fix" if command == "check" else "--out"
+    argv = [
+        sys.executable,
+        "-m",
+        "asbuilt",
+        command,
+        "-" if stdin else str(given),
+        option,
+        str(out),
+    ]
+    result = subprocess.run(argv, input=data, capture_output=True, timeout=300)
+    err = result.stderr.decode()
+    assert "Traceback" not in err
+    if expected is None:
+        assert result.returncode == 0, err
+        assert out.exists()
+    else:
+        assert result.returncode == 2
+        name = "<stdin>" if stdin else str(given)
+        assert err == f"asbuilt: error: {name}: {expected}\n"
+        assert not out.exists()
+    assert given.read_bytes() == data

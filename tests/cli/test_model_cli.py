@@ -510,3 +510,86 @@ def test_no_object_fitted_writes_nothing_and_exits_2(tmp_path, capsys):
     assert lines[0].startswith(f"asbuilt: error: {scan}: objects[0] (X1): ")
     assert lines[0].endswith("the other object (X2) was refused too.")
     assert lines[1].startswith(f"asbuilt: error: {scan}: objects[1] (X2): ")
+
+
+#: An output named like an option's input file: the input (a design, rules, a catalog, a glTF,
+#: calibration targets, a plan...) would be replaced by the output. Before, model, check and
+#: report compared outputs with the SCAN only, and calibrate and scan with nothing: the design,
+#: the measured scan given to calibrate or the plan given to scan was silently overwritten.
+_INPUT_AS_OUTPUT = [
+    ("model", ["model", "SPOOL", "-q", "--design", "design.json", "--out", "design.json"]),
+    (
+        "model-report",
+        ["model", "SPOOL", "-q", "--out", "m.json", "--design", "d.json", "--report", "d.json"],
+    ),
+    ("check", ["check", "SPOOL", "--design", "design.json", "--fix", "design.json"]),
+    ("report", ["report", "SPOOL", "-q", "--design", "design.json", "--out", "design.json"]),
+    ("report-catalog", ["report", "SPOOL", "-q", "--catalog", "cat.csv", "--out", "cat.csv"]),
+    ("calibrate-scan", ["calibrate", "scan.json", "--targets", "t.json", "--out", "scan.json"]),
+    ("calibrate-targets", ["calibrate", "SPOOL", "--targets", "t.json", "--out", "t.json"]),
+    (
+        "calibrate-initial",
+        ["calibrate", "SPOOL", "--targets", "t.json", "--initial", "c.json", "--out", "c.json"],
+    ),
+    (
+        "scan-plan",
+        [
+            "scan",
+            "--ptu",
+            "sim-ptu://x",
+            "--lrf",
+            "sim-lrf://x",
+            "--plan",
+            "p.json",
+            "--out",
+            "p.json",
+        ],
+    ),
+    (
+        "scan-calibration",
+        [
+            "scan",
+            "--ptu",
+            "sim-ptu://x",
+            "--lrf",
+            "sim-lrf://x",
+            "--calibration",
+            "c.json",
+            "--out",
+            "c.json",
+        ],
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    "argv", [a for _, a in _INPUT_AS_OUTPUT], ids=[i for i, _ in _INPUT_AS_OUTPUT]
+)
+def test_an_output_that_is_one_of_the_inputs_is_refused_and_the_input_kept(
+    tmp_path, capsys, monkeypatch, argv
+):
+    monkeypatch.chdir(tmp_path)
+    spool = (ROOT / "samples" / "spool.json").read_bytes()
+    contents = {
+        "design.json": b'{"format": "asbuilt-design", "version": 1}',
+        "d.json": b'{"format": "asbuilt-design", "version": 1}',
+        "cat.csv": (ROOT / "catalogs" / "asme-b36.10m.csv").read_bytes(),
+        "scan.json": spool,
+        "t.json": b'{"format": "asbuilt-targets", "version": 1, "targets": {}}',
+        "c.json": b'{"format": "asbuilt-calibration", "version": 1}',
+        "p.json": b'{"format": "asbuilt-scan-plan", "version": 1, "targets": []}',
+    }
+    for name, data in contents.items():
+        (tmp_path / name).write_bytes(data)
+    argv = [str(ROOT / "samples" / "spool.json") if a == "SPOOL" else a for a in argv]
+    target = argv[-1]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    option = argv[-2]
+    assert err == (
+        f"asbuilt: error: {target}: is the input file itself, which the output would replace; "
+        f"choose another {option}\n"
+    )
+    for name, data in contents.items():
+        assert (tmp_path / name).read_bytes() == data
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(contents)

@@ -64,9 +64,40 @@ def test_no_merge_counts_cylinders(tmp_path, capsys):
         (["--out", "{tmp}/nowhere/qa.html"], "directory does not exist"),
         (["--out", "{tmp}/qa.html", "--gltf", "{tmp}/model.step"], "--gltf must name"),
         (["--out", "{tmp}/qa.html", "--gltf", "{tmp}/none.glb"], "none.glb: --gltf file not found"),
+        # Before: any bytes named .glb/.gltf were embedded (exit 0) and the 3-D view failed
+        # only in the reader's browser; a directory was "not found".
+        (["--out", "{tmp}/qa.html", "--gltf", "{tmp}/dir.glb"], "dir.glb: --gltf is a directory"),
+        (
+            ["--out", "{tmp}/qa.html", "--gltf", "{tmp}/empty.glb"],
+            "empty.glb: --gltf file is not a glTF binary (it does not start with 'glTF')",
+        ),
+        (
+            ["--out", "{tmp}/qa.html", "--gltf", "{tmp}/scan.glb"],
+            "scan.glb: --gltf file is not a glTF binary (it does not start with 'glTF')",
+        ),
+        (
+            ["--out", "{tmp}/qa.html", "--gltf", "{tmp}/cut.glb"],
+            "cut.glb: --gltf file is truncated or padded (20 bytes, its header says 1,000)",
+        ),
+        (
+            ["--out", "{tmp}/qa.html", "--gltf", "{tmp}/scan.gltf"],
+            'scan.gltf: --gltf file is not glTF JSON (no "asset" object)',
+        ),
+        (
+            ["--out", "{tmp}/qa.html", "--gltf", "{tmp}/latin.gltf"],
+            "latin.gltf: --gltf file is not glTF JSON (not UTF-8 JSON)",
+        ),
     ],
 )
 def test_bad_outputs_exit_2_with_one_line(tmp_path, capsys, extra, needle):
+    (tmp_path / "dir.glb").mkdir()
+    (tmp_path / "empty.glb").write_bytes(b"")
+    (tmp_path / "scan.glb").write_bytes(Path(BAY).read_bytes())
+    (tmp_path / "cut.glb").write_bytes(
+        b"glTF" + (2).to_bytes(4, "little") + (1000).to_bytes(4, "little") + b"\0" * 8
+    )
+    (tmp_path / "scan.gltf").write_bytes(Path(BAY).read_bytes())
+    (tmp_path / "latin.gltf").write_bytes('{"asset": {"generator": "caf\u00e9"}}'.encode("latin-1"))
     argv = ["report", BAY, *[a.format(tmp=tmp_path) for a in extra]]
     code, out, err = run(argv, capsys)
     assert code == 2 and out == ""

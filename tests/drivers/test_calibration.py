@@ -265,7 +265,7 @@ def test_bad_targets_files(tmp_path, targets, where):
     [
         (
             b'{"pan": {"zero_deg": "\xff"}}',
-            "not UTF-8 text (byte 22); save the calibration file as UTF-8 JSON",
+            "is not UTF-8 text (byte 0xff at offset 22); save the calibration file as UTF-8 JSON",
         ),
         ('{"tilt": {"sign": 1' + "0" * 400 + "}}", "tilt.sign: must be a finite number"),
         (
@@ -306,7 +306,7 @@ def test_fuzzed_calibration_files_are_one_located_line(tmp_path, text, message):
     [
         (
             b'{"targets": {"a\xff": {"type": "plane"}}}',
-            "not UTF-8 text (byte 15); save the targets file as UTF-8 JSON",
+            "is not UTF-8 text (byte 0xff at offset 15); save the targets file as UTF-8 JSON",
         ),
         (
             '{"targets": {"a": {"type": "plane", "normal": [1' + "0" * 400 + ", 0, 0]}}}",

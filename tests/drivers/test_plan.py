@@ -211,7 +211,10 @@ def _plan_text(target=None, settings="{}"):
 @pytest.mark.parametrize(
     "content, message",
     [
-        (_plan_text().encode() + b"\xff", "not UTF-8 text (byte 134); save the plan as UTF-8 JSON"),
+        (
+            _plan_text().encode() + b"\xff",
+            "is not UTF-8 text (byte 0xff at offset 134); save the plan as UTF-8 JSON",
+        ),
         (
             _plan_text(_TARGET % ("[0, 0, 10, 10]", ', "points": 1000000000')).encode(),
             "targets[0] (A).points: must be at most 1,000,000 (the most a scan holds)",

@@ -1,0 +1,85 @@
+"""Reading a user's text file (design, model, scene, rules, catalog, calibration, plan) the same
+way everywhere: UTF-8 with or without a byte order mark, and one located line naming the file and
+what to do when it is missing, a directory, unreadable or not UTF-8.
+
+The scan loader (:mod:`asbuilt.scan.load`) has its own reader (a size limit, standard input) and
+words its messages the same way.
+"""
+
+from __future__ import annotations
+
+import os
+
+__all__ = ["REPEATED_KEY", "RepeatedKey", "decode_text", "read_text", "unique_keys"]
+
+#: The message for a key given twice in one JSON object (every reader refuses it, located at
+#: the key).
+REPEATED_KEY = "given twice in one JSON object; keep one (JSON readers differ on which one counts)"
+
+
+class RepeatedKey(ValueError):
+    """A key given twice in one JSON object (``args[0]``: the key)."""
+
+
+def unique_keys(pairs: list) -> dict:
+    """``json.loads`` ``object_pairs_hook``: a dict, refusing a key given twice (raises
+    :class:`RepeatedKey`; catch it before ``ValueError``, which JSONDecodeError also is)."""
+    result = dict(pairs)
+    if len(result) != len(pairs):
+        seen: set[str] = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise RepeatedKey(key)
+            seen.add(key)
+    return result
+
+
+def decode_text(data: bytes, error, *, source: str | None, what: str, kind: str = "JSON") -> str:
+    """``data`` as UTF-8 text, a leading byte order mark dropped (editors and spreadsheets on
+    Windows write one).
+
+    Raises ``error(message, source=source)`` naming the first byte that is not UTF-8 and its
+    offset, e.g. ``is not UTF-8 text (byte 0xe9 at offset 61); save the scene as UTF-8 JSON``.
+    """
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise error(
+            f"is not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
+            f"save the {what} as UTF-8 {kind}".rstrip(),
+            source=source,
+        ) from None
+
+
+def read_text(path, error, *, what: str, missing: str, kind: str = "JSON") -> str:
+    """The text of the user's file ``path`` (see :func:`decode_text`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    error : type
+        The located :class:`~asbuilt.errors.AsbuiltError` subclass to raise
+        (``error(message, source=...)``).
+    what : str
+        What the file is, for messages: ``"design file"``, ``"scene"``, ``"rules file"``...
+    missing : str
+        The message for a file that does not exist (it names the option to check).
+    kind : str
+        The format the user is told to save it as (``JSON``, ``TOML``, ``CSV``).
+    """
+    source = os.fspath(path)
+    if not source:
+        raise error(f"the {what} name is empty; give the {what}", source="''")
+    try:
+        with open(source, "rb") as handle:
+            data = handle.read()
+    except FileNotFoundError:
+        raise error(missing, source=source) from None
+    except IsADirectoryError:
+        raise error(f"is a directory; give the {what} itself", source=source) from None
+    except OSError as exc:
+        raise error(
+            f"cannot read the {what} ({exc.strerror or exc}); check the file's permissions",
+            source=source,
+        ) from None
+    return decode_text(data, error, source=source, what=what, kind=kind)
