@@ -141,6 +141,8 @@ def load_world(path):
         The file cannot be read or holds no geometry.
     """
     path = Path(path)
+    if path.is_dir():
+        raise SceneError("is a directory; give the scene or model file itself", source=str(path))
     if not path.is_file():
         raise SceneError(
             "scene file not found; give an existing scene or model file", source=str(path)

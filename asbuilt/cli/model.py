@@ -131,26 +131,26 @@ def run(args: argparse.Namespace) -> int:
     inputs = input_files(args.scan, args.rules, args.design, args.catalog)
     outputs = [Path(p) for p in args.out]
     reports = [Path(p) for p in args.report or ()]
-    for path in outputs:
-        exporter_for(path)  # an unknown suffix or a missing directory fails before any work
-        check_target(path, "--out", inputs=inputs)
+    for name in args.out:
+        # The name as typed first: a directory or a trailing slash is said as such (Path drops
+        # the slash and the suffix test would call it a file without a suffix), then an unknown
+        # suffix; all before any work.
+        check_target(name, "--out", inputs=inputs)
+        exporter_for(name)
     seen = {path.resolve() for path in outputs}
-    for report_path in reports:
+    for name, report_path in zip(args.report or (), reports):
         from asbuilt.report import report_format_for
 
-        report_format_for(report_path)  # an unknown report suffix fails before any work too
+        check_target(
+            name, "--report", inputs=inputs, example=f"report{report_path.suffix or '.html'}"
+        )
+        report_format_for(name)  # an unknown report suffix fails before any work too
         if report_path.resolve() in seen:
             raise ExportError(
                 "this report is also an --out file or another --report; name them apart",
                 source=str(report_path),
             )
         seen.add(report_path.resolve())
-        check_target(
-            report_path,
-            "--report",
-            inputs=inputs,
-            example=f"report{report_path.suffix}",
-        )
 
     source = scan_input(args.scan)
     scan = source.load_scan()

@@ -217,9 +217,10 @@ def run(args: argparse.Namespace) -> int:
 
     inputs = input_files(args.scan, args.rules, args.design, args.catalog, args.gltf)
     outputs = [Path(p) for p in args.out]
-    for path in outputs:
-        report_format_for(path)  # an unknown suffix fails before any work
-        check_target(path, "--out", inputs=inputs, example=f"report{path.suffix}")
+    for name, path in zip(args.out, outputs):
+        # As typed: a directory or a trailing slash is said as such before the suffix test.
+        check_target(name, "--out", inputs=inputs, example=f"report{path.suffix or '.html'}")
+        report_format_for(name)  # an unknown suffix fails before any work
     if args.gltf is not None:
         if Path(args.gltf).suffix.lower() not in (".glb", ".gltf"):
             raise ExportError("--gltf must name a .glb or .gltf file", source=str(args.gltf))

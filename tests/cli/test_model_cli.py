@@ -345,6 +345,36 @@ def test_an_output_that_is_a_directory_fails_before_any_work(
     assert [p.name for p in tmp_path.iterdir()] in (["taken"], ["taken.json"])
 
 
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["model", "SPOOL", "--out", "taken/"], "taken/: is a directory; give a file name"),
+        (["model", "SPOOL", "--out", "taken"], "taken: is a directory; give a file name"),
+        (["model", "SPOOL", "--out", "new/"], "new/: ends with a slash, so it names a directory"),
+        (
+            ["model", "SPOOL", "--out", "a.step", "--report", "taken/"],
+            "taken/: is a directory; give a file name to write (e.g. add /report.html)",
+        ),
+        (["report", "SPOOL", "--out", "taken/"], "taken/: is a directory; give a file name"),
+        (["model", "SPOOL", "--out", "a.stq"], "a.stq: unknown output format '.stq'"),
+        (["model", "SPOOL", "--out", "a"], "a: the output has no suffix"),
+    ],
+)
+def test_a_directory_output_is_named_as_typed_before_its_suffix_is_tested(
+    tmp_path, capsys, monkeypatch, argv, message
+):
+    """A directory without a suffix, or any name ending in a slash, is said to be a directory
+    (not "the output has no suffix" with the slash dropped); an unknown suffix is still named."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "taken").mkdir()
+    argv = [str(ROOT / "samples" / "spool.json") if a == "SPOOL" else a for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"asbuilt: error: {message}") and err.count("\n") == 1
+    assert [p.name for p in tmp_path.iterdir()] == ["taken"]
+    assert list((tmp_path / "taken").iterdir()) == []
+
+
 def test_sigterm_while_writing_leaves_no_partial_files(tmp_path, capsys, monkeypatch):
     """A ``kill`` (SIGTERM) during writing is handled like Ctrl-C: the staged files are removed
     and the exit code is 143 (audit D13: hidden ``.part`` files were left behind)."""

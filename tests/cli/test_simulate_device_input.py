@@ -198,3 +198,12 @@ def test_mesh_file_too_large(tmp_path, capsys):
         f"asbuilt: error: {path}: the file is 536,870,913 bytes, larger than the 512 MiB a mesh "
         "may be; decimate the model or export only the objects to scan\n",
     )
+
+
+def test_a_directory_as_the_scene(tmp_path, capsys):
+    # was "scene file not found" for a directory that exists
+    code, err = _run(capsys, "simulate-device", "--scene", str(tmp_path))
+    assert (code, err) == (
+        2,
+        f"asbuilt: error: {tmp_path}: is a directory; give the scene or model file itself\n",
+    )
