@@ -11,6 +11,11 @@ import numpy as np
 
 from asbuilt.fit._common import orthonormal_bases
 
+try:  # numpy.linalg.solve's own stacked solver (private, but there since numpy 1.8)
+    from numpy.linalg import _umath_linalg
+except ImportError:  # pragma: no cover - a numpy without it: the public function
+    _umath_linalg = None
+
 __all__ = ["circle_starts", "kasa_batch", "INSIDE_CAP"]
 
 #: In MSAC costs (``cutoff`` given), a shot between 1 and this many cutoffs inside a circle
@@ -29,6 +34,23 @@ def _kasa_design(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     design[:, :, 2] = 1.0
     np.negative(x * x + y * y, out=design[:, :, 3])
     return design
+
+
+def _raise_singular(error, flag):
+    raise np.linalg.LinAlgError("Singular matrix")
+
+
+def _solve_stacked(normal: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """:func:`numpy.linalg.solve` of float64 stacks ``normal`` (a, m, m) and ``right``
+    (a, m, k): the same LAPACK call under the same floating-point error handling (LinAlgError
+    when a matrix is singular), without the public function's argument checks and wrapping,
+    which cost more than the solve on a few 3 x 3 systems."""
+    if _umath_linalg is None:  # pragma: no cover
+        return np.linalg.solve(normal, right)
+    with np.errstate(
+        call=_raise_singular, invalid="call", over="ignore", divide="ignore", under="ignore"
+    ):
+        return _umath_linalg.solve(normal, right, signature="dd->d")
 
 
 def kasa_batch(xy: np.ndarray, weights: np.ndarray, design: np.ndarray | None = None):
@@ -53,7 +75,7 @@ def kasa_batch(xy: np.ndarray, weights: np.ndarray, design: np.ndarray | None = 
     system = (design.transpose(0, 2, 1) * weights[:, None, :]) @ design
     normal, right = system[:, :3, :3], system[:, :3, 3:]
     try:
-        solution = np.linalg.solve(normal, right)[:, :, 0]
+        solution = _solve_stacked(normal, right)[:, :, 0]
     except np.linalg.LinAlgError:
         # Some projections are degenerate (points on a line across the axis): no circle there.
         singular = np.linalg.svd(normal, compute_uv=False)
