@@ -16,6 +16,10 @@ try:
     from numpy.linalg import _umath_linalg
 except ImportError:  # pragma: no cover - a numpy without it: the public functions
     _umath_linalg = None
+if _umath_linalg is not None and not all(
+    hasattr(_umath_linalg, name) for name in ("solve", "eigh_lo")
+):  # pragma: no cover - renamed in some numpy: the public functions
+    _umath_linalg = None
 
 __all__ = ["eigh", "solve"]
 
