@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from asbuilt.fit._common import orthonormal_bases
+from asbuilt.fit._common import basis_floats
+from asbuilt.fit._small_linalg import solve
 
 __all__ = ["circle_starts", "kasa_batch", "INSIDE_CAP"]
 
@@ -53,7 +54,7 @@ def kasa_batch(xy: np.ndarray, weights: np.ndarray, design: np.ndarray | None = 
     system = (design.transpose(0, 2, 1) * weights[:, None, :]) @ design
     normal, right = system[:, :3, :3], system[:, :3, 3:]
     try:
-        solution = np.linalg.solve(normal, right)[:, :, 0]
+        solution = solve(normal, right)[:, :, 0]
     except np.linalg.LinAlgError:
         # Some projections are degenerate (points on a line across the axis): no circle there.
         singular = np.linalg.svd(normal, compute_uv=False)
@@ -131,13 +132,14 @@ def circle_starts(
     keep = min(keep, n)
     count = len(axes)
     axis_array = np.asarray(axes, dtype=np.float64)
-    frame = np.empty((2, count, 3))
-    frame[0], frame[1] = orthonormal_bases(axis_array)
+    # Every axis's u, then every v (orthonormal_bases' floats), built as one array.
+    bases = [basis_floats(*axis) for axis in axis_array.tolist()]
+    frame = np.array(([basis[:3] for basis in bases], [basis[3:] for basis in bases]))
     u, v = frame[0], frame[1]
     projected = points @ frame.reshape(2 * count, 3).T  # (n, 2a): every u, then every v
     # Contiguous (a, n) coordinates: numpy is several times slower on strided views.
     coordinates = np.ascontiguousarray(projected.T).reshape(2, count, n)
-    x, y = coordinates
+    x, y = coordinates[0], coordinates[1]  # (indexing costs less than unpacking)
     design = _kasa_design(x, y)
     rows = np.arange(count)
 
@@ -185,7 +187,8 @@ def circle_starts(
     # Every corner's coordinates in one gather, as contiguous (a, t) blocks (numpy is slower
     # on the strided ones the gather itself gives).
     corners = np.ascontiguousarray(coordinates[:, :, index.T].transpose(0, 2, 1, 3))
-    (ax_, bx, cx), (ay_, by, cy) = corners
+    xs, ys = corners[0], corners[1]
+    ax_, bx, cx, ay_, by, cy = xs[0], xs[1], xs[2], ys[0], ys[1], ys[2]
     bcy, cay, aby = by - cy, cy - ay_, ay_ - by
     det = 2.0 * (ax_ * bcy + bx * cay + cx * aby)
     sa, sb, sc = ax_ * ax_ + ay_ * ay_, bx * bx + by * by, cx * cx + cy * cy

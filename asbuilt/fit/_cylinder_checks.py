@@ -313,7 +313,7 @@ def seen_through(robust: RobustFit, points: np.ndarray, view, cutoff: float) -> 
     beams = points - view
     start = view - center
     start_across = start - (start @ axis) * axis
-    across = beams - np.outer(beams @ axis, axis)  # each beam's part across the axis
+    across = beams - (beams @ axis)[:, None] * axis  # (np.outer) each beam's part across the axis
     square = np.einsum("ij,ij->i", across, across)
     crossing = across @ start_across
     safe = np.maximum(square, 1e-300)

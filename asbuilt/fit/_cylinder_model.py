@@ -65,22 +65,36 @@ def _residuals(state, points):
     return np.sqrt(np.einsum("ij,ij->i", across, across)) - radius
 
 
+#: Per point count, an (n, 5) array whose last column is the Jacobian's constant -1 (the
+#: radius column): copying it costs less than filling that column of a new array.
+_JACOBIAN_TEMPLATES: dict[int, np.ndarray] = {}
+
+
 def _jacobian(state, points):
     axis, center, radius = state
-    local = (points - center) @ _frame(axis)[0]
-    # One-dimensional column views: numpy's per-call cost on (n, 2) views is paid per row.
-    along, across_u, across_v = local[:, 0], local[:, 1], local[:, 2]
+    # Rows of the transposed product: one-dimensional views (numpy's per-call cost on (n, 2)
+    # views is paid per row), each an integer index, cheaper than a column's tuple index.
+    local = ((points - center) @ _frame(axis)[0]).T
+    along, across_u, across_v = local[0], local[1], local[2]
     rho = across_u * across_u
     rho += across_v * across_v
     np.sqrt(rho, out=rho)
     np.maximum(rho, 1e-300, out=rho)
-    jac = np.empty((len(points), 5))
+    count = len(points)
+    template = _JACOBIAN_TEMPLATES.get(count)
+    if template is None:
+        if len(_JACOBIAN_TEMPLATES) >= 8:
+            _JACOBIAN_TEMPLATES.clear()
+        template = _JACOBIAN_TEMPLATES[count] = np.full((count, 5), -1.0)
+    jac = template.copy()
+    columns = jac.T
+    tilt_u, tilt_v, shift_u, shift_v = columns[0], columns[1], columns[2], columns[3]
     minus = np.negative(rho)
-    np.divide(across_u, minus, out=jac[:, 2])  # -(eu, ev)
-    np.divide(across_v, minus, out=jac[:, 3])
-    np.multiply(jac[:, 2], along, out=jac[:, 0])  # -along (eu, ev)
-    np.multiply(jac[:, 3], along, out=jac[:, 1])
-    jac[:, 4] = -1.0
+    # Positional outputs: the ``out=`` keyword costs an argument parse per call.
+    np.divide(across_u, minus, shift_u)  # -(eu, ev)
+    np.divide(across_v, minus, shift_v)
+    np.multiply(shift_u, along, tilt_u)  # -along (eu, ev)
+    np.multiply(shift_v, along, tilt_v)
     rho -= radius
     return rho, jac
 
@@ -91,8 +105,12 @@ def _centroid(points: np.ndarray, weights: np.ndarray) -> tuple[float, float, fl
     # (No memo of the last call's arrays: it saved a fraction of a percent and would go stale
     # silently the day a caller changed a weights array in place.)
     total = float(weights.sum())
-    centroid = (weights @ points) / total if total > 0 else points.mean(axis=0)
-    return tuple(centroid.tolist())
+    if total > 0:
+        # Divided as Python floats: the same correctly rounded quotients as numpy's, without
+        # an array operation.
+        sx, sy, sz = (weights @ points).tolist()
+        return sx / total, sy / total, sz / total
+    return tuple(points.mean(axis=0).tolist())
 
 
 def _update(state, delta, points, weights):

@@ -19,6 +19,7 @@ from asbuilt.fit._common import (
     row_norms,
     tukey_weights,
 )
+from asbuilt.fit._small_linalg import eigh
 
 __all__ = [
     "POLISH_BELOW",
@@ -111,7 +112,7 @@ def _normal_axis(normals: np.ndarray, flatness: np.ndarray):
     vectors = None
     for _ in range(2):
         scatter = (normals * weights[:, None]).T @ normals
-        _, vectors = np.linalg.eigh(scatter)
+        _, vectors = eigh(scatter)
         cosines = normals @ vectors[:, 0]
         scale = robust_scale(cosines, 0.02)
         weights = tukey_weights(cosines, scale)
@@ -224,7 +225,7 @@ def line_axis(points: np.ndarray, keep: int, rng, samples: int = 32, steps: int 
         point = closest.sum(axis=0) / len(closest)  # closest.mean(axis=0), less overhead
         centred = closest - point
         # Principal direction: the scatter matrix's leading eigenvector.
-        axis = np.linalg.eigh(centred.T @ centred)[1][:, 2]
+        axis = eigh(centred.T @ centred)[1][:, 2]
     return axis
 
 

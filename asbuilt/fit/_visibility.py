@@ -99,8 +99,9 @@ def _excess(lengths, a, b, discriminant) -> np.ndarray:
     excess = np.zeros(a.shape)
     hit = (discriminant > 0.0) & (a > 1e-24)
     if hit.any():
-        middle = -b[hit] / (2.0 * a[hit])
-        chord = np.sqrt(discriminant[hit]) / a[hit]
+        a_hit = a[hit]
+        middle = -b[hit] / (2.0 * a_hit)
+        chord = np.sqrt(discriminant[hit]) / a_hit
         reach = lengths[np.nonzero(hit)[1]]  # each hit's own range (rows are cylinders)
         excess[hit] = (2.0 * (reach - middle)).clip(0.0, chord)
     return excess
@@ -143,32 +144,36 @@ def excess_and_beyond(axis, center, radius, points: np.ndarray, viewpoint, span=
     counted against the infinite cylinder they were "seen through" it.
     """
     crossings = _beam_crossings(axis, center, radius, points, viewpoint)
-    excess, beyond = _excess(*crossings)[0], _beyond(*crossings)
+    excess = _excess(*crossings)[0]
+    # _beyond's terms, shared with the chords' ends along the axis (computed once).
+    lengths, a, b, discriminant = crossings
+    twice = 2.0 * np.maximum(a[0], 1e-24)
+    middle = -b[0] / twice
+    half_chord = np.sqrt(np.maximum(discriminant[0], 0.0)) / twice
+    entry = middle - half_chord
+    beyond = lengths - entry
     if span is not None:
-        low, high = _crossing_along(axis, center, points, viewpoint, *crossings[1:])
+        low, high = _chord_ends(axis, center, points, viewpoint, entry, middle + half_chord)
         missed = (high < span[0]) | (low > span[1])
         excess[missed] = 0.0
         beyond[missed] = np.inf
     return excess, beyond
 
 
-def _crossing_along(axis, center, points: np.ndarray, viewpoint, a, b, discriminant):
+def _chord_ends(axis, center, points: np.ndarray, viewpoint, near, far):
     """Where each beam from ``viewpoint`` to ``points`` (n, 3) metres crosses one infinite
-    cylinder (``a``, ``b``, ``discriminant`` of :func:`_beam_crossings`, shape (1, n)), along
-    ``axis`` from ``center``: ``(low, high)``, each (n,) metres, the ends of its chord through
-    the cylinder, or for a beam that misses it the point where it passes closest to its axis
-    (low and high the same)."""
+    cylinder, along ``axis`` from ``center``: ``(low, high)``, each (n,) metres, the ends of its
+    chord through the cylinder, or for a beam that misses it the point where it passes closest
+    to its axis (low and high the same). ``near`` and ``far`` (n,) metres along each beam: the
+    chord's ends, or both that closest point (:func:`excess_and_beyond`)."""
     view = np.asarray(viewpoint, dtype=np.float64)
     axis = np.asarray(axis, dtype=np.float64)
     beams = points - view
     directions = beams / np.maximum(row_norms(beams), 1e-300)[:, None]
-    a = np.maximum(a[0], 1e-24)  # beams along the axis: never nearer it
-    middle = -b[0] / (2.0 * a)
-    half_chord = np.sqrt(np.maximum(discriminant[0], 0.0)) / (2.0 * a)
     start = float((view - np.asarray(center, dtype=np.float64)) @ axis)
     slope = directions @ axis  # along the axis per metre of beam
-    one = start + (middle - half_chord) * slope
-    other = start + (middle + half_chord) * slope
+    one = start + near * slope
+    other = start + far * slope
     return np.minimum(one, other), np.maximum(one, other)
 
 
@@ -206,9 +211,9 @@ def edge_on_degrees(axis, center, points: np.ndarray, viewpoint) -> np.ndarray:
     """
     axis = np.asarray(axis, dtype=np.float64)
     rel = points - center
-    radial = rel - np.outer(rel @ axis, axis)
+    radial = rel - (rel @ axis)[:, None] * axis  # np.outer, without its wrapper
     beams = points - np.asarray(viewpoint, dtype=np.float64)
-    across = beams - np.outer(beams @ axis, axis)
+    across = beams - (beams @ axis)[:, None] * axis
     radial_length = np.sqrt(np.einsum("ij,ij->i", radial, radial))
     across_length = np.sqrt(np.einsum("ij,ij->i", across, across))
     beam_length = np.sqrt(np.einsum("ij,ij->i", beams, beams))

@@ -1,0 +1,54 @@
+"""numpy.linalg's solve and eigh of small stacked matrices, without the public functions'
+argument checks and wrapping.
+
+Private helper of the cylinder fit. On the few 3 x 3 matrices its starts solve and decompose,
+:func:`numpy.linalg.solve` and :func:`numpy.linalg.eigh` spend more on checking and wrapping
+their arguments than on LAPACK. These call the same generalised ufuncs (numpy's private
+``_umath_linalg``, there since numpy 1.8) under the same floating-point error handling, so they
+return the same values bit for bit and raise the same LinAlgError; float64 arrays only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+try:
+    from numpy.linalg import _umath_linalg
+except ImportError:  # pragma: no cover - a numpy without it: the public functions
+    _umath_linalg = None
+if _umath_linalg is not None and not all(
+    hasattr(_umath_linalg, name) for name in ("solve", "eigh_lo")
+):  # pragma: no cover - renamed in some numpy: the public functions
+    _umath_linalg = None
+
+__all__ = ["eigh", "solve"]
+
+
+def _raise_singular(error, flag):
+    raise np.linalg.LinAlgError("Singular matrix")
+
+
+def _raise_not_converged(error, flag):
+    raise np.linalg.LinAlgError("Eigenvalues did not converge")
+
+
+def solve(normal: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """:func:`numpy.linalg.solve` of float64 stacks ``normal`` (..., m, m) and ``right``
+    (..., m, k) (LinAlgError when a matrix is singular)."""
+    if _umath_linalg is None:  # pragma: no cover
+        return np.linalg.solve(normal, right)
+    with np.errstate(
+        call=_raise_singular, invalid="call", over="ignore", divide="ignore", under="ignore"
+    ):
+        return _umath_linalg.solve(normal, right, signature="dd->d")
+
+
+def eigh(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`numpy.linalg.eigh` of a float64 symmetric matrix (..., m, m) from its lower
+    triangle: eigenvalues ascending (..., m) and eigenvectors as columns (..., m, m)."""
+    if _umath_linalg is None:  # pragma: no cover
+        return tuple(np.linalg.eigh(matrix))
+    with np.errstate(
+        call=_raise_not_converged, invalid="call", over="ignore", divide="ignore", under="ignore"
+    ):
+        return _umath_linalg.eigh_lo(matrix, signature="d->dd")
