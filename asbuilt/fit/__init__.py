@@ -25,6 +25,7 @@ import numpy as np
 from scipy.special import chdtri
 
 from asbuilt.errors import FitError, located
+from asbuilt.fit._cuboid_sparse import AmbiguousFrame
 from asbuilt.fit._stations import fuse_station_views
 from asbuilt.fit._window import beyond_window, open_ends
 from asbuilt.fit.result import FitFailure, FitReport, FitResult, ObjectFit
@@ -327,6 +328,10 @@ def _fit_with_noise(
     sigma = float(sigma)
     try:
         result = function(np.array(points), sigma=sigma, tolerances=tolerances, **options)
+    except AmbiguousFrame:
+        # Shots that fit frames far apart as well at the sensor's noise: a lower level found
+        # without it would only make one frame look settled.
+        raise
     except FitError as first:
         try:
             # With the prior-noise rescue: the fit of every shot at its own scale can be a

@@ -26,7 +26,15 @@ import numpy as np
 
 from asbuilt.errors import FitError
 
-__all__ = ["AmbiguousFrame", "SPARSE_SHOTS", "corner_frames", "describe", "frame_angle", "rival"]
+__all__ = [
+    "AmbiguousFrame",
+    "SPARSE_SHOTS",
+    "corner_frames",
+    "describe",
+    "frame_angle",
+    "lone_face_shots",
+    "rival",
+]
 
 #: At most this many shots is a sparse fit (the accuracy benchmark starts at 20).
 SPARSE_SHOTS = 16
@@ -54,7 +62,14 @@ def frame_angle(a: np.ndarray, b: np.ndarray) -> float:
 
 def rival(best, others, costs, counts, admissible) -> tuple | None:
     """A fitted frame that fits the shots as well as ``best`` but lies more than ``RIVAL_DEG``
-    from it, or None.
+    from it, or that fits them significantly better (cost lower by more than ``RIVAL_COST``)
+    at any angle, or None.
+
+    The second kind has other faces under the shots, so other sizes: the winner was chosen on
+    costs that charged a shot alone on a face of its own (:func:`lone_face_shots`; a 0.2 m
+    pier's top shot, where the winner put a side's shot on a face of two shots with the top
+    shot and left the other out as seen past its box, sizes 23% off with standard errors of
+    millimetres).
 
     Parameters
     ----------
@@ -82,18 +97,69 @@ def rival(best, others, costs, counts, admissible) -> tuple | None:
         if counts(trial) > rejected or costs(trial) > cost + RIVAL_COST:
             continue
         angle = frame_angle(best[0].axes, trial[0].axes)
-        if angle > RIVAL_DEG and (found is None or angle > found[1]):
+        # (chi-square test at 95%, as for equally well: significantly better.)
+        better = costs(trial) < cost - RIVAL_COST
+        if (angle > RIVAL_DEG or better) and (found is None or angle > found[1]):
             found = (trial, angle)
     return found
 
 
+def lone_face_shots(trial, x: np.ndarray, view: np.ndarray, width: float) -> np.ndarray:
+    """Which shots a frame's fit rejects a face of their own can hold, shape (n,) bool.
+
+    A face no other shot reaches holds one shot exactly whatever its offset, so a shot alone on
+    a face (the top of a pier hit once) is rejected by the true frame while a frame tens of
+    degrees off can turn a seen face onto it and keep it: the shots cannot tell these frames
+    apart, and the rival comparison (:func:`rival`) must not count that shot against the true
+    one. Such a face is normal to an axis no seen face is normal to, faces the viewpoint
+    ``view`` (3,) metres (centred frame), and keeps the box a box: its shots within ``width``
+    metres (the inlier cutoff) of its plane and inside every seen face's, every inlier inside
+    its own. One face per free axis (the one holding the most rejected shots). ``trial`` is
+    :func:`asbuilt.fit._joint._fit_frame`'s tuple, ``x`` (n, 3) metres the centred shots.
+    """
+    model, _, _, inliers = trial[:4]
+    out = np.zeros(x.shape[0], dtype=bool)
+    rejected = np.flatnonzero(~inliers)
+    if rejected.size == 0 or not inliers.any():
+        return out
+    # Inside every seen face's plane (a shot past one is not on this box's surface).
+    inside = (model.all_residuals(x[rejected]) <= width).all(axis=1)
+    candidates = rejected[inside]
+    seen = np.bincount(model.face_axis, minlength=3)
+    for u in np.flatnonzero(seen == 0):
+        along = x @ model.axes[u]
+        best = None
+        for sign in (1.0, -1.0):
+            if sign * float(view @ model.axes[u]) <= 0.0:
+                continue
+            kept_max = float((sign * along[inliers]).max())
+            for i in candidates:
+                offset = sign * float(along[i])
+                if offset + width < kept_max or sign * float(view @ model.axes[u]) <= offset:
+                    continue
+                held = candidates[np.abs(sign * along[candidates] - offset) <= width]
+                if best is None or held.size > best.size:
+                    best = held
+        if best is not None:
+            out[best] = True
+            candidates = candidates[~out[candidates]]
+    return out
+
+
 def describe(angle: float, n: int) -> str:
     """The refusal message for a sparse fit with a rival frame ``angle`` degrees away."""
+    if angle <= RIVAL_DEG:
+        # A frame that fits significantly better, with other faces under the shots.
+        what = (
+            f"fit box frames {angle:.0f} degrees apart equally well or better, with other faces "
+            "under the shots"
+        )
+    else:
+        what = f"fit box frames {math.floor(angle)} degrees apart equally well"
     return (
-        f"cuboid: the {n} shots fit box frames {math.floor(angle)} degrees apart equally "
-        "well (too few shots across the faces: e.g. one raster column on a face leaves the "
-        "box free to turn about it); take more shots, at least two columns and two rows on "
-        "each seen face."
+        f"cuboid: the {n} shots {what} (too few shots across the faces: e.g. one raster "
+        "column on a face leaves the box free to turn about it, and a face hit once fits any "
+        "frame); take more shots, at least two columns and two rows on each seen face."
     )
 
 

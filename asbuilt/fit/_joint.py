@@ -18,7 +18,7 @@ from asbuilt.fit import _faces, _vectors
 from asbuilt.fit._beam_fans import MAX_INCIDENCE_DEG, beam_fan_shots, neighbours
 from asbuilt.fit._common import within_noise
 from asbuilt.fit._cuboid_background import only_background, seen_past
-from asbuilt.fit._cuboid_sparse import SPARSE_SHOTS, corner_frames, rival
+from asbuilt.fit._cuboid_sparse import SPARSE_SHOTS, corner_frames, lone_face_shots, rival
 from asbuilt.fit._mixture import mixing_cost
 from asbuilt.fit._rectangle import min_area_rectangle
 
@@ -688,11 +688,41 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
         # A face of two raster lines may be two faces meeting between them: fitted as a rival.
         for frame in corner_frames(best, x, cutoff * max(best[4], noise), view, _faces.Frame):
             fitted(frame)
+        if trusted:
+            # A frame whose segmentation explains fewer shots is compared too (the first
+            # loop skipped it): the true frame leaves out a shot alone on a face of its own
+            # (:func:`lone_face_shots`). It can tie the winner only if it leaves out no more
+            # shots than the winner rejects plus one per axis without a seen face (a second
+            # shot on that face would have made it a segmented face).
+            lost = int(np.count_nonzero(~best[3]))
+            for frame in frames:
+                free = 3 - np.unique(frame.face_axis).size
+                if n - np.count_nonzero(frame.labels >= 0) <= lost + free:
+                    fitted(frame)
+        lone: dict[int, np.ndarray] = {}
+
+        def alone(trial) -> np.ndarray:
+            """The shots ``trial`` rejects that a face of their own holds (with a viewpoint)."""
+            if id(trial) not in lone:
+                lone[id(trial)] = (
+                    lone_face_shots(trial, x, view, cap) if trusted else np.zeros(n, dtype=bool)
+                )
+            return lone[id(trial)]
+
+        def counted(trial) -> int:
+            if not trusted:
+                return counted_outliers(trial, x, view, trusted, cap)
+            past = seen_past_shots(trial, x, view, cap)
+            return int(np.count_nonzero(~trial[3] & ~past & ~alone(trial)))
+
         found = rival(
             best,
             [trial for _, trial in done],
-            lambda trial: _msac(trial[2], cap) / sigma**2,
-            lambda trial: counted_outliers(trial, x, view, trusted, cap),
+            # A shot alone on a face of its own costs nothing (its face fits it exactly).
+            lambda trial: (
+                (_msac(trial[2], cap) - cap**2 * np.count_nonzero(alone(trial))) / sigma**2
+            ),
+            counted,
             # A rival with a face seen edge-on counts: that face is free to turn, the
             # very freedom that makes the frame uncertain.
             lambda trial: plausible(trial[0], view, trusted),
