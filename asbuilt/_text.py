@@ -2,15 +2,18 @@
 way everywhere: UTF-8 with or without a byte order mark, and one located line naming the file and
 what to do when it is missing, a directory, unreadable or not UTF-8.
 
-The scan loader (:mod:`asbuilt.scan.load`) has its own reader (a size limit, standard input) and
-words its messages the same way.
+The scan loader (:mod:`asbuilt.scan.load`) opens its file itself (a size limit, standard input)
+and decodes it with :func:`decode_text`.
 """
 
 from __future__ import annotations
 
+import json
 import os
 
-__all__ = ["REPEATED_KEY", "RepeatedKey", "decode_text", "read_text", "unique_keys"]
+from asbuilt._json_numbers import parse_int
+
+__all__ = ["REPEATED_KEY", "RepeatedKey", "decode_text", "loads_json", "read_text", "unique_keys"]
 
 #: The message for a key given twice in one JSON object (every reader refuses it, located at
 #: the key).
@@ -32,6 +35,18 @@ def unique_keys(pairs: list) -> dict:
                 raise RepeatedKey(key)
             seen.add(key)
     return result
+
+
+def loads_json(text: str, error, *, source: str | None):
+    """``json.loads`` of a user's file as every reader parses it: a too-long integer reads as
+    infinite (refused by its field's name, :func:`asbuilt._json_numbers.parse_int`), and a key
+    given twice raises ``error(REPEATED_KEY, source=source, where=key)``. Syntax errors
+    (:class:`json.JSONDecodeError`) and ``RecursionError`` are left to the caller, whose
+    message says what its file is."""
+    try:
+        return json.loads(text, parse_int=parse_int, object_pairs_hook=unique_keys)
+    except RepeatedKey as exc:
+        raise error(REPEATED_KEY, source=source, where=exc.args[0]) from None
 
 
 def decode_text(data: bytes, error, *, source: str | None, what: str, kind: str = "JSON") -> str:

@@ -25,8 +25,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from asbuilt._json_numbers import parse_int as _parse_int
-
 from .catalog import parse_nominal
 from .errors import DesignError
 from .model import Component, Model, Straight
@@ -260,17 +258,15 @@ def loads_design(text: str, *, source: str | None = None) -> Design:
     DesignError
         Not JSON, wrong format tag, unknown units or fields, bad vectors, duplicate ids.
     """
-    from ._text import REPEATED_KEY, RepeatedKey, unique_keys
+    from ._text import loads_json
 
     try:
-        doc = json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
+        doc = loads_json(text, DesignError, source=source)
     except json.JSONDecodeError as exc:
         raise DesignError(
             f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",
             source=source,
         ) from None
-    except RepeatedKey as exc:
-        raise DesignError(REPEATED_KEY, source=source, where=exc.args[0]) from None
     except RecursionError:
         raise DesignError(
             "invalid JSON (nested too deeply); a design nests lists three levels at most",

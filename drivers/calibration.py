@@ -35,7 +35,6 @@ from pathlib import Path
 
 import numpy as np
 
-from asbuilt._json_numbers import parse_int as _parse_int
 from asbuilt.atomic import atomic_write
 from asbuilt.errors import CalibrationError
 from asbuilt.scan.load import MAX_COORDINATE_M
@@ -88,12 +87,10 @@ def _read_json(path: Path, what: str):
 
 
 def _loads(text: str, source: str | None):
-    from asbuilt._text import REPEATED_KEY, RepeatedKey, unique_keys
+    from asbuilt._text import loads_json
 
     try:
-        return json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
-    except RepeatedKey as exc:
-        raise CalibrationError(REPEATED_KEY, source=source, where=exc.args[0]) from None
+        return loads_json(text, CalibrationError, source=source)
     except json.JSONDecodeError as exc:
         raise CalibrationError(
             f"not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})", source=source

@@ -23,8 +23,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from asbuilt._json_numbers import parse_int as _parse_int
-from asbuilt._text import REPEATED_KEY, RepeatedKey, read_text, unique_keys
+from asbuilt._text import loads_json, read_text
 from asbuilt.errors import ScanError
 from asbuilt.scan.load import MAX_POINTS
 from asbuilt.scan.model import KINDS
@@ -295,9 +294,7 @@ def load_plan(path) -> Plan:
         missing="cannot read the plan (No such file or directory); check the path",
     )
     try:
-        doc = json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
-    except RepeatedKey as exc:
-        raise ScanError(REPEATED_KEY, source=source, where=exc.args[0]) from None
+        doc = loads_json(text, ScanError, source=source)
     except json.JSONDecodeError as exc:
         raise ScanError(f"not valid JSON (line {exc.lineno}: {exc.msg})", source=source) from None
     except RecursionError:

@@ -370,12 +370,10 @@ def load_model_document(path) -> dict:
 
 def loads_model_document(text: str, *, source: str | None = None) -> dict:
     """:func:`load_model_document` of JSON text; ``source`` names it in errors."""
-    from .._text import REPEATED_KEY, RepeatedKey, unique_keys
+    from .._text import loads_json
 
     try:
-        document = json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
-    except RepeatedKey as exc:
-        raise ModelDocumentError(REPEATED_KEY, source=source, where=exc.args[0]) from None
+        document = loads_json(text, ModelDocumentError, source=source)
     except json.JSONDecodeError as exc:
         raise ModelDocumentError(
             f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",

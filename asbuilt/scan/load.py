@@ -23,6 +23,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from asbuilt._text import REPEATED_KEY, decode_text
 from asbuilt.errors import ScanError, ScanReadError, located
 from asbuilt.scan.model import KINDS, Scan, ScanObject, Sensor, kind_phrase
 from asbuilt.tolerances import MIN_POINTS
@@ -201,17 +202,6 @@ def _too_large(source: str | None, size: int) -> str:
     )
 
 
-def _decode(data: bytes, source: str | None) -> str:
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise ScanError(
-            f"is not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
-            "save the scan as UTF-8 JSON",
-            source=source,
-        ) from None
-
-
 def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
     """Validate an ``asbuilt-scan`` document given as JSON text.
 
@@ -237,7 +227,7 @@ def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
     if len(text) > MAX_FILE_BYTES:
         raise ScanReadError(_too_large(source, len(text)))
     if isinstance(text, (bytes, bytearray)):
-        text = _decode(bytes(text), source)
+        text = decode_text(bytes(text), ScanError, source=source, what="scan")
     repeated: list[bool] = []
     try:
         document = json.loads(
@@ -264,7 +254,7 @@ def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
         where, key = _first_repeated(document, None)
         raise context.error(
             f"{where}.{key}" if where else key,
-            "given twice in one JSON object; keep one (JSON readers differ on which one counts)",
+            REPEATED_KEY,
         )
     return _scan_from_document(document, context)
 

@@ -18,7 +18,6 @@ from pathlib import Path
 
 import numpy as np
 
-from asbuilt._json_numbers import parse_int as _parse_int
 from asbuilt.errors import SceneError
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Primitive, Sphere
 from asbuilt.scan.load import MAX_POINTS
@@ -242,12 +241,10 @@ def load_scene(path) -> Scene:
 
 def loads_scene(text: str, *, source: str | None = None, base_dir=None) -> Scene:
     """Parse and validate a scene from JSON text (see :func:`load_scene`)."""
-    from .._text import REPEATED_KEY, RepeatedKey, unique_keys
+    from .._text import loads_json
 
     try:
-        doc = json.loads(text, parse_int=_parse_int, object_pairs_hook=unique_keys)
-    except RepeatedKey as exc:
-        raise SceneError(REPEATED_KEY, source=source, where=exc.args[0]) from None
+        doc = loads_json(text, SceneError, source=source)
     except json.JSONDecodeError as exc:
         raise SceneError(
             f"line {exc.lineno} column {exc.colno}: invalid JSON ({exc.msg}); fix the syntax there",
