@@ -118,39 +118,6 @@ def register(subparsers) -> argparse.ArgumentParser:
 _BUILD_OPTIONS = (("schedule", "--schedule"), ("catalog", "--catalog"), ("no_merge", "--no-merge"))
 
 
-def _gltf_problem(path) -> str | None:
-    """What is wrong with the ``--gltf`` file, or None: a ``.glb`` must start with the glTF 2.0
-    binary header and be as long as it says (an empty, truncated or foreign file would be
-    embedded and only fail in the reader's browser); a ``.gltf`` must be a JSON object with an
-    ``asset``."""
-    import json
-
-    try:
-        with open(path, "rb") as handle:
-            if path.suffix.lower() == ".glb":
-                header = handle.read(12)
-                size = path.stat().st_size
-            else:
-                document = json.loads(handle.read().decode("utf-8-sig"))
-    except OSError as exc:
-        return f"file cannot be read ({exc.strerror})"
-    except (ValueError, RecursionError):
-        return "file is not glTF JSON (not UTF-8 JSON)"
-    if path.suffix.lower() != ".glb":
-        if not isinstance(document, dict) or not isinstance(document.get("asset"), dict):
-            return 'file is not glTF JSON (no "asset" object)'
-        return None
-    if len(header) < 12 or header[:4] != b"glTF":
-        return "file is not a glTF binary (it does not start with 'glTF')"
-    version = int.from_bytes(header[4:8], "little")
-    length = int.from_bytes(header[8:12], "little")
-    if version != 2:
-        return f"file is glTF version {version}; the viewer reads version 2"
-    if length != size:
-        return f"file is truncated or padded ({size:,} bytes, its header says {length:,})"
-    return None
-
-
 def _model(args, source, progress):
     """The model of ``source`` (a :class:`~asbuilt.cli._input.ScanInput`) and the catalog it
     was built with (None: the report reads the model's)."""
@@ -235,7 +202,9 @@ def run(args: argparse.Namespace) -> int:
                 "--gltf file not found; write it first (asbuilt model SCAN --out model.glb)",
                 source=str(args.gltf),
             )
-        problem = _gltf_problem(Path(args.gltf))
+        from asbuilt.export.gltf import gltf_problem
+
+        problem = gltf_problem(Path(args.gltf))
         if problem:
             raise ExportError(
                 f"--gltf {problem}; write it again (asbuilt model SCAN --out model.glb)",

@@ -19,7 +19,7 @@ import numpy as np
 
 from asbuilt import __version__
 
-__all__ = ["write_gltf", "gltf_document", "z_up_to_y_up", "read_glb"]
+__all__ = ["write_gltf", "gltf_document", "z_up_to_y_up", "read_glb", "gltf_problem"]
 
 _ARRAY_BUFFER = 34962
 _ELEMENT_ARRAY_BUFFER = 34963
@@ -27,6 +27,8 @@ _FLOAT = 5126
 _UNSIGNED_SHORT = 5123
 _UNSIGNED_INT = 5125
 _TRIANGLES = 4
+#: A binary glTF file's first four bytes, "glTF", as a little-endian uint32.
+_GLB_MAGIC = 0x46546C67
 
 
 def z_up_to_y_up(points: np.ndarray) -> np.ndarray:
@@ -205,7 +207,7 @@ def _glb(document: dict, data: bytes) -> bytes:
     if data:
         data += b"\x00" * ((-len(data)) % 4)
         chunks += struct.pack("<II", len(data), 0x004E4942) + data
-    return struct.pack("<III", 0x46546C67, 2, 12 + len(chunks)) + chunks
+    return struct.pack("<III", _GLB_MAGIC, 2, 12 + len(chunks)) + chunks
 
 
 def write_gltf(cad, path, *, binary: bool | None = None) -> None:
@@ -238,7 +240,7 @@ def read_glb(path) -> tuple[dict, bytes]:
     """The JSON document and binary chunk of a ``.glb`` file (for checks and tests)."""
     raw = Path(path).read_bytes()
     magic, version, length = struct.unpack_from("<III", raw, 0)
-    if magic != 0x46546C67 or version != 2 or length != len(raw):
+    if magic != _GLB_MAGIC or version != 2 or length != len(raw):
         raise ValueError(f"{path}: not a glTF 2.0 binary file")
     json_length, _ = struct.unpack_from("<II", raw, 12)
     document = json.loads(raw[20 : 20 + json_length])
@@ -248,3 +250,35 @@ def read_glb(path) -> tuple[dict, bytes]:
         bin_length, _ = struct.unpack_from("<II", raw, offset)
         data = raw[offset + 8 : offset + 8 + bin_length]
     return document, data
+
+
+def gltf_problem(path: Path) -> str | None:
+    """What is wrong with a glTF file a report is to embed (``report --gltf``), or None: a
+    ``.glb`` must start with the glTF 2.0 binary header and be as long as it says (an empty,
+    truncated or foreign file would be embedded and only fail in the reader's browser); a
+    ``.gltf`` must be a JSON object with an ``asset``. The message starts with "file", for
+    the caller to name the option before it."""
+    try:
+        with open(path, "rb") as handle:
+            if path.suffix.lower() == ".glb":
+                header = handle.read(12)
+                size = path.stat().st_size
+            else:
+                document = json.loads(handle.read().decode("utf-8-sig"))
+    except OSError as exc:
+        return f"file cannot be read ({exc.strerror})"
+    except (ValueError, RecursionError):
+        return "file is not glTF JSON (not UTF-8 JSON)"
+    if path.suffix.lower() != ".glb":
+        if not isinstance(document, dict) or not isinstance(document.get("asset"), dict):
+            return 'file is not glTF JSON (no "asset" object)'
+        return None
+    if len(header) < 12 or int.from_bytes(header[:4], "little") != _GLB_MAGIC:
+        return "file is not a glTF binary (it does not start with 'glTF')"
+    version = int.from_bytes(header[4:8], "little")
+    length = int.from_bytes(header[8:12], "little")
+    if version != 2:
+        return f"file is glTF version {version}; the viewer reads version 2"
+    if length != size:
+        return f"file is truncated or padded ({size:,} bytes, its header says {length:,})"
+    return None
