@@ -145,13 +145,10 @@ def excess_and_beyond(axis, center, radius, points: np.ndarray, viewpoint, span=
     """
     crossings = _beam_crossings(axis, center, radius, points, viewpoint)
     excess = _excess(*crossings)[0]
-    # _beyond's terms, shared with the chords' ends along the axis (computed once).
-    lengths, a, b, discriminant = crossings
-    twice = 2.0 * np.maximum(a[0], 1e-24)
-    middle = -b[0] / twice
-    half_chord = np.sqrt(np.maximum(discriminant[0], 0.0)) / twice
+    # The chord's terms once, for what lies beyond its entry and for its ends along the axis.
+    middle, half_chord = _chord(*crossings[1:])
     entry = middle - half_chord
-    beyond = lengths - entry
+    beyond = crossings[0] - entry
     if span is not None:
         low, high = _chord_ends(axis, center, points, viewpoint, entry, middle + half_chord)
         missed = (high < span[0]) | (low > span[1])
@@ -177,13 +174,20 @@ def _chord_ends(axis, center, points: np.ndarray, viewpoint, near, far):
     return np.minimum(one, other), np.maximum(one, other)
 
 
+def _chord(a, b, discriminant) -> tuple[np.ndarray, np.ndarray]:
+    """Where each beam passes nearest one cylinder's axis and half its chord through the
+    cylinder (0 for a beam that misses it), each (n,) metres along the beam, from
+    :func:`_beam_crossings`' ``a``, ``b``, ``discriminant`` (1, n)."""
+    twice = 2.0 * np.maximum(a[0], 1e-24)  # beams along the axis: never nearer it, nor through it
+    return -b[0] / twice, np.sqrt(np.maximum(discriminant[0], 0.0)) / twice
+
+
 def _beyond(lengths, a, b, discriminant) -> np.ndarray:
     """:func:`beyond_first_surface`, shape (n,) metres, from :func:`_beam_crossings` of one
     cylinder."""
-    a = np.maximum(a[0], 1e-24)  # beams along the axis: never nearer it, nor through it
     # Nearest the axis at -b / 2a; a beam passing within the radius enters half a chord earlier.
-    half_chord = np.sqrt(np.maximum(discriminant[0], 0.0)) / (2.0 * a)
-    return lengths - (-b[0] / (2.0 * a) - half_chord)
+    middle, half_chord = _chord(a, b, discriminant)
+    return lengths - (middle - half_chord)
 
 
 def edge_on_degrees(axis, center, points: np.ndarray, viewpoint) -> np.ndarray:
