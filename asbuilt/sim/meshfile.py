@@ -34,6 +34,10 @@ def _reason(exc: BaseException) -> str:
         # are neither the binary format nor UTF-8 text: the file is damaged or not this format
         return "neither a valid binary file nor UTF-8 text"
     text = " ".join(str(exc).split())
+    if isinstance(exc, IndexError) or "could not be broadcast" in text:
+        # a reader indexing or stacking records that end early: numpy's words say nothing to
+        # the user about the file
+        return "damaged or truncated: a record ends early"
     if isinstance(exc, (KeyError, OSError)) or not text:
         text = f"{type(exc).__name__} {text}".strip()
     return text if len(text) <= 160 else text[:157] + "..."

@@ -52,6 +52,8 @@ def _box_glb(**accessor_changes) -> bytes:
     return b"glTF" + struct.pack("<II", 2, 12 + len(body)) + body
 
 
+_BOX_PLY = trimesh.creation.box(extents=[1, 1, 1]).export(file_type="ply")
+
 _BOX_OBJ = "v 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n"
 
 
@@ -92,6 +94,18 @@ _BOX_OBJ = "v 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3
             "the file or export it again",
         ),
         (
+            "cut.obj",
+            "v 3 0 0\nv 4 0 0\nv 3 ",
+            "cannot read the file as OBJ (damaged or truncated: a record ends early); check the "
+            "file or export it again",
+        ),
+        (
+            "cut.ply",
+            _BOX_PLY[: _BOX_PLY.index(b"property float z")],
+            "cannot read the file as PLY (damaged or truncated: a record ends early); check the "
+            "file or export it again",
+        ),
+        (
             "model",
             _BOX_OBJ,
             "unknown mesh format (no suffix); give a mesh file (.stl, .glb, .gltf, .obj, .ply)",
@@ -104,6 +118,8 @@ _BOX_OBJ = "v 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3
         "zero-area",
         "beyond-site",
         "garbage",
+        "obj-cut-mid-vertex",
+        "ply-cut-in-header",
         "no-suffix",
     ],
 )
