@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import re
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +42,25 @@ def _reason(exc: BaseException) -> str:
     if isinstance(exc, (KeyError, OSError)) or not text:
         text = f"{type(exc).__name__} {text}".strip()
     return text if len(text) <= 160 else text[:157] + "..."
+
+
+# An OBJ face needs 3 corners and a vertex 3 coordinates; trimesh drops a shorter record without
+# a word, so a file cut mid-record (a copy or download that stopped) would lose triangles silently.
+_SHORT_OBJ_RECORD = re.compile(rb"^(f|v)(?:[ \t]+[^ \t\r\n]+){0,2}[ \t]*\r?$", re.MULTILINE)
+
+
+def _obj_problem(data: bytes) -> str | None:
+    """A face with fewer than 3 corners or a vertex with fewer than 3 coordinates, or None."""
+    short = _SHORT_OBJ_RECORD.search(data)
+    if short is None:
+        return None
+    line = data.count(b"\n", 0, short.start()) + 1
+    what = "face" if short.group(1) == b"f" else "vertex"
+    needs = "3 corners" if what == "face" else "3 coordinates"
+    return (
+        f"damaged or truncated: the {what} on line {line} has fewer than {needs}; check the "
+        "file or export it again"
+    )
 
 
 @contextlib.contextmanager
@@ -87,6 +107,10 @@ def read_mesh_file(path, on_site: bool = True) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(
             f"unknown mesh format ({found}); give a mesh file (" + ", ".join(MESH_SUFFIXES) + ")"
         )
+    if suffix == ".obj":
+        problem = _obj_problem(path.read_bytes())
+        if problem:
+            raise ValueError(problem)
     try:
         # process=False: trimesh's processing drops non-finite vertices silently; check first
         with _quiet_trimesh():

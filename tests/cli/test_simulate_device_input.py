@@ -96,8 +96,15 @@ _BOX_OBJ = "v 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3
         (
             "cut.obj",
             "v 3 0 0\nv 4 0 0\nv 3 ",
-            "cannot read the file as OBJ (damaged or truncated: a record ends early); check the "
+            "damaged or truncated: the vertex on line 3 has fewer than 3 coordinates; check the "
             "file or export it again",
+        ),
+        (
+            "cut-face.obj",
+            _BOX_OBJ[: _BOX_OBJ.rindex(" ")],
+            # trimesh read the other three triangles and dropped this one without a word
+            "damaged or truncated: the face on line 8 has fewer than 3 corners; check the file "
+            "or export it again",
         ),
         (
             "cut.ply",
@@ -119,6 +126,7 @@ _BOX_OBJ = "v 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3
         "beyond-site",
         "garbage",
         "obj-cut-mid-vertex",
+        "obj-cut-mid-face",
         "ply-cut-in-header",
         "no-suffix",
     ],
