@@ -35,7 +35,11 @@ def _reason(exc: BaseException) -> str:
         # are neither the binary format nor UTF-8 text: the file is damaged or not this format
         return "neither a valid binary file nor UTF-8 text"
     text = " ".join(str(exc).split())
-    if isinstance(exc, IndexError) or "could not be broadcast" in text:
+    if (
+        isinstance(exc, IndexError)
+        or "could not be broadcast" in text
+        or "setting an array element with a sequence" in text
+    ):
         # a reader indexing or stacking records that end early: numpy's words say nothing to
         # the user about the file
         return "damaged or truncated: a record ends early"
@@ -47,6 +51,19 @@ def _reason(exc: BaseException) -> str:
 # An OBJ face needs 3 corners and a vertex 3 coordinates; trimesh drops a shorter record without
 # a word, so a file cut mid-record (a copy or download that stopped) would lose triangles silently.
 _SHORT_OBJ_RECORD = re.compile(rb"^(f|v)(?:[ \t]+[^ \t\r\n]+){0,2}[ \t]*\r?$", re.MULTILINE)
+
+
+_PLY_FACE_COUNT = re.compile(rb"^element[ \t]+face[ \t]+(\d+)[ \t]*\r?$", re.MULTILINE)
+
+
+def _ply_faces_declared(path: Path) -> int | None:
+    """The face count a PLY header declares (None without one): a text PLY cut short reads
+    fewer faces without a word from trimesh."""
+    with path.open("rb") as f:
+        head = f.read(65536)
+    end = head.find(b"end_header")
+    found = _PLY_FACE_COUNT.search(head, 0, end if end >= 0 else len(head))
+    return int(found.group(1)) if found else None
 
 
 def _obj_problem(data: bytes) -> str | None:
@@ -124,6 +141,12 @@ def read_mesh_file(path, on_site: bool = True) -> tuple[np.ndarray, np.ndarray]:
         ) from None
     if faces.size == 0:
         raise ValueError("the model holds no triangles; check the file or export it again")
+    declared = _ply_faces_declared(path) if suffix == ".ply" else None
+    if declared is not None and len(faces) < declared:  # a polygon gives 1+ triangles
+        raise ValueError(
+            f"damaged or truncated: the header declares {declared} faces, the file holds "
+            f"{len(faces)}; check the file or export it again"
+        )
     problem = mesh_problem(vertices, faces, on_site)
     if problem:
         raise ValueError(problem)

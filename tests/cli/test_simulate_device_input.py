@@ -54,6 +54,8 @@ def _box_glb(**accessor_changes) -> bytes:
 
 _BOX_PLY = trimesh.creation.box(extents=[1, 1, 1]).export(file_type="ply")
 
+_BOX_PLY_TEXT = trimesh.creation.box(extents=[1, 1, 1]).export(file_type="ply", encoding="ascii")
+
 _BOX_OBJ = "v 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n"
 
 
@@ -113,6 +115,13 @@ _BOX_OBJ = "v 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3
             "file or export it again",
         ),
         (
+            "cut-text.ply",
+            _BOX_PLY_TEXT[: _BOX_PLY_TEXT.rindex(b"\n3 ")],
+            # trimesh read 11 of the 12 triangles without a word
+            "damaged or truncated: the header declares 12 faces, the file holds 11; check the "
+            "file or export it again",
+        ),
+        (
             "model",
             _BOX_OBJ,
             "unknown mesh format (no suffix); give a mesh file (.stl, .glb, .gltf, .obj, .ply)",
@@ -128,6 +137,7 @@ _BOX_OBJ = "v 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3
         "obj-cut-mid-vertex",
         "obj-cut-mid-face",
         "ply-cut-in-header",
+        "text-ply-cut-before-last-face",
         "no-suffix",
     ],
 )
