@@ -43,6 +43,11 @@ def _reason(exc: BaseException) -> str:
         # a reader indexing or stacking records that end early: numpy's words say nothing to
         # the user about the file
         return "damaged or truncated: a record ends early"
+    if isinstance(exc, FileNotFoundError):  # a glTF's buffer or an OBJ's material file
+        missing = Path(exc.filename).name if exc.filename else text
+        return f"a file it refers to is missing: {missing}"
+    if isinstance(exc, AssertionError) and not text:  # a reader's own consistency check
+        return "damaged or truncated: its parts disagree in length"
     if isinstance(exc, (KeyError, OSError)) or not text:
         text = f"{type(exc).__name__} {text}".strip()
     return text if len(text) <= 160 else text[:157] + "..."

@@ -148,6 +148,27 @@ def test_bad_mesh_for_simulate_device(tmp_path, capsys, name, content, message):
     assert (code, err) == (2, f"asbuilt: error: {path}: {message}\n")
 
 
+@pytest.mark.parametrize("cut", [False, True], ids=["buffer-missing", "buffer-cut-short"])
+def test_gltf_with_a_bad_buffer_file(tmp_path, capsys, cut):
+    files = trimesh.creation.box(extents=[1, 1, 1]).export(file_type="gltf")
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+    buffer = tmp_path / next(name for name in files if name.endswith(".bin"))
+    if cut:
+        buffer.write_bytes(buffer.read_bytes()[:20])
+        reason = "damaged or truncated: its parts disagree in length"
+    else:
+        buffer.unlink()
+        reason = f"a file it refers to is missing: {buffer.name}"
+    path = tmp_path / "model.gltf"
+    code, err = _run(capsys, "simulate-device", "--scene", str(path))
+    assert (code, err) == (
+        2,
+        f"asbuilt: error: {path}: cannot read the file as GLTF ({reason}); check the file or "
+        "export it again\n",
+    )
+
+
 def _scene_with_mesh(tmp_path, mesh_name: str) -> Path:
     scene = {
         "stations": [{"id": "S1", "position": [0, -4, 1]}],
