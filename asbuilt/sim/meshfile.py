@@ -71,6 +71,15 @@ def _ply_faces_declared(path: Path) -> int | None:
     return int(found.group(1)) if found else None
 
 
+def _text_stl_cut(path: Path) -> bool:
+    """A text STL (``solid`` first) whose end lacks ``endsolid``: trimesh reads none of it."""
+    with path.open("rb") as f:
+        head = f.read(5)
+        f.seek(max(path.stat().st_size - 4096, 0))
+        tail = f.read()
+    return head.lower() == b"solid" and b"endsolid" not in tail.lower()
+
+
 def _obj_problem(data: bytes) -> str | None:
     """A face with fewer than 3 corners or a vertex with fewer than 3 coordinates, or None."""
     short = _SHORT_OBJ_RECORD.search(data)
@@ -145,6 +154,11 @@ def read_mesh_file(path, on_site: bool = True) -> tuple[np.ndarray, np.ndarray]:
             "export it again"
         ) from None
     if faces.size == 0:
+        if suffix == ".stl" and _text_stl_cut(path):
+            raise ValueError(
+                "damaged or truncated: a text STL without its closing 'endsolid' line; check "
+                "the file or export it again"
+            )
         raise ValueError("the model holds no triangles; check the file or export it again")
     declared = _ply_faces_declared(path) if suffix == ".ply" else None
     if declared is not None and len(faces) < declared:  # a polygon gives 1+ triangles

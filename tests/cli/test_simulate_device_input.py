@@ -56,6 +56,8 @@ _BOX_PLY = trimesh.creation.box(extents=[1, 1, 1]).export(file_type="ply")
 
 _BOX_PLY_TEXT = trimesh.creation.box(extents=[1, 1, 1]).export(file_type="ply", encoding="ascii")
 
+_BOX_STL_TEXT = trimesh.creation.box(extents=[1, 1, 1]).export(file_type="stl_ascii").encode()
+
 _BOX_OBJ = "v 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n"
 
 
@@ -122,6 +124,12 @@ _BOX_OBJ = "v 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3
             "file or export it again",
         ),
         (
+            "cut-text.stl",
+            _BOX_STL_TEXT[: len(_BOX_STL_TEXT) * 9 // 10],
+            "damaged or truncated: a text STL without its closing 'endsolid' line; check the "
+            "file or export it again",
+        ),
+        (
             "model",
             _BOX_OBJ,
             "unknown mesh format (no suffix); give a mesh file (.stl, .glb, .gltf, .obj, .ply)",
@@ -138,6 +146,7 @@ _BOX_OBJ = "v 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3
         "obj-cut-mid-face",
         "ply-cut-in-header",
         "text-ply-cut-before-last-face",
+        "text-stl-cut",
         "no-suffix",
     ],
 )
