@@ -53,11 +53,10 @@ def _reason(exc: BaseException) -> str:
     return text if len(text) <= 160 else text[:157] + "..."
 
 
-# An OBJ face needs 3 corners and a vertex 3 coordinates; trimesh drops a shorter record without
-# a word, so a file cut mid-record (a copy or download that stopped) would lose triangles silently.
+# Files cut short (a copy or download that stopped) that trimesh reads without a word, losing
+# triangles: an OBJ face needs 3 corners and a vertex 3 coordinates (a shorter record is dropped),
+# and a text PLY stops at the cut whatever count its header declares.
 _SHORT_OBJ_RECORD = re.compile(rb"^(f|v)(?:[ \t]+[^ \t\r\n]+){0,2}[ \t]*\r?$", re.MULTILINE)
-
-
 _PLY_FACE_COUNT = re.compile(rb"^element[ \t]+face[ \t]+(\d+)[ \t]*\r?$", re.MULTILINE)
 
 
