@@ -41,6 +41,7 @@ __all__ = [
     "FittingCount",
     "FITTING_KINDS",
     "fitting_kind",
+    "lateral_angle",
     "SolidQuantity",
     "ComponentRow",
     "SpoolQuantity",
@@ -65,18 +66,31 @@ FOOT = UNITS["ft"]
 FITTING_TYPES = ("elbow", "tee", "reducer", "coupling")
 
 #: The fitting kinds of the take-off, in its order: reducers are bought as concentric or
-#: eccentric (ASME B16.9 makes both, of the same length H), so they are counted apart.
-FITTING_KINDS = ("elbow", "tee", "concentric reducer", "eccentric reducer", "coupling")
+#: eccentric (ASME B16.9 makes both, of the same length H), so they are counted apart; a lateral
+#: (wye) is built as a tee-shaped component but bought as a lateral, at its angle.
+FITTING_KINDS = ("elbow", "tee", "lateral", "concentric reducer", "eccentric reducer", "coupling")
+
+
+def lateral_angle(component: Component) -> float | None:
+    """The branch angle in degrees of a lateral (a ``tee`` component merging built at the
+    measured oblique angle, which its ``snap`` records as ``angle_deg``), else None."""
+    if component.type != "tee":
+        return None
+    angle = (component.snap or {}).get("angle_deg")
+    return None if angle is None else float(angle)
 
 
 def fitting_kind(component: Component) -> str:
     """The take-off's kind of a fitting (one of :data:`FITTING_KINDS`): its type, with reducers
-    told concentric or eccentric; a reducer without a reducer's geometry (a model document may
-    give one a straight) has no offset, so it is counted concentric."""
+    told concentric or eccentric and laterals told from tees; a reducer without a reducer's
+    geometry (a model document may give one a straight) has no offset, so it is counted
+    concentric."""
     if component.type == "reducer":
         geometry = component.geometry
         eccentric = isinstance(geometry, Reducer) and geometry.eccentric
         return "eccentric reducer" if eccentric else "concentric reducer"
+    if lateral_angle(component) is not None:
+        return "lateral"
     return component.type
 
 
@@ -132,8 +146,8 @@ class PipeLine:
 @dataclass(frozen=True)
 class FittingCount:
     """Fittings of one type, size, schedule and angle: ``type`` one of :data:`FITTING_KINDS`
-    (``"concentric reducer"`` and ``"eccentric reducer"`` apart), ``angle_deg`` (elbows, whole
-    degrees, else None), ``bend_radius`` metres (elbows, else None), ``count`` and the ids."""
+    (``"concentric reducer"`` and ``"eccentric reducer"`` apart), ``angle_deg`` (elbows and
+    laterals, whole degrees, else None), ``bend_radius`` metres (elbows, else None), ``count`` and the ids."""
 
     type: str
     size: str
@@ -458,6 +472,8 @@ def take_off(model: Model, *, density: float | None = None, catalog=None) -> Tak
             unit, quantity = "m", length
         elif comp.type in FITTING_TYPES:
             angle = round(g.angle_deg) if isinstance(g, Bend) else None
+            if lateral_angle(comp) is not None:
+                angle = round(lateral_angle(comp))
             radius = round(g.bend_radius, 4) if isinstance(g, Bend) else None
             size = _fitting_size(comp, sizes)
             key = (fitting_kind(comp), size, comp.schedule, angle, radius)

@@ -22,7 +22,8 @@ LR6, H64 = 0.229, 0.140
 
 
 def every_fitting_model() -> Model:
-    """NPS 6 elbow, tee and coupling, a concentric and an eccentric 6 x 4 reducer."""
+    """NPS 6 elbow, tee, 45 degree lateral and coupling, a concentric and an eccentric 6 x 4
+    reducer."""
     r6, r4 = OD6 / 2, OD4 / 2
     six = {"nominal": "6", "schedule": "STD"}
     step = r6 - r4  # an eccentric reducer's axes are the difference of the radii apart
@@ -34,6 +35,13 @@ def every_fitting_model() -> Model:
                 "tee",
                 Tee([2, 0, 0], [1.85, 0, 0], [2.15, 0, 0], [2, 0.15, 0], r6, r6, WALL6),
                 **six,
+            ),
+            Component(
+                "L1",
+                "tee",  # a lateral: merging builds it tee-shaped, its angle in snap
+                Tee([2, 1, 0], [1.7, 1, 0], [2.3, 1, 0], [2.2, 1.2, 0], r6, r6, WALL6),
+                **six,
+                snap={"standard": False, "angle_deg": 45.0, "status": "fitting"},
             ),
             Component("K1", "coupling", Straight([3, 0, 0], [3.1, 0, 0], r6, WALL6), **six),
             Component(
@@ -66,6 +74,7 @@ def test_every_fitting_kind_validates_against_the_schema():
     assert {f["type"] for f in document["takeoff"]["fittings"]} == {
         "elbow",
         "tee",
+        "lateral",
         "coupling",
         "concentric reducer",
         "eccentric reducer",

@@ -327,3 +327,27 @@ def test_a_reducing_elbow_names_both_sizes():
     assert rows == {"E1": "NPS 6 x 4", "E2": "NPS 6", "E3": "NPS 6", "E4": "NPS 6 x 4"}
     sizes = sorted((f.size, f.count) for f in t.fittings)
     assert ("NPS 6", 2) in sizes and ("NPS 6 x 4", 1) in sizes
+
+
+def test_a_lateral_is_counted_apart_from_tees_by_its_angle():
+    # merging builds a lateral (wye) as a tee-shaped component and records its angle in snap;
+    # bought as a lateral, it must not be counted with the square tees of its size
+    def tee(cid, y, snap=None):
+        return Component(
+            cid,
+            "tee",
+            Tee([0, y, 0], [-0.14, y, 0], [0.14, y, 0], [0, y + 0.14, 0], 0.05715, 0.05715),
+            nominal="4",
+            schedule="40",
+            snap=snap or {},
+        )
+
+    lateral = {"standard": False, "angle_deg": 44.8, "status": "fitting"}
+    comps = (tee("T1", 0), tee("L1", 1, lateral), tee("L2", 2, dict(lateral, angle_deg=60.2)))
+    t = take_off(Model(components=comps, catalog="asme-b36.10m"))
+    assert [(f.type, f.size, f.angle_deg, f.components) for f in t.fittings] == [
+        ("tee", "NPS 4", None, ("T1",)),
+        ("lateral", "NPS 4", 45, ("L1",)),
+        ("lateral", "NPS 4", 60, ("L2",)),
+    ]
+    assert {r.id: r.type for r in t.rows}["L1"] == "tee"  # the component type is unchanged
