@@ -356,7 +356,7 @@ def test_a_wall_fitted_as_a_pipe_is_refused_not_reported_kilometres_wide(tmp_pat
     path.write_text(json.dumps(doc))
     assert main(["fit", str(path)]) == 2
     err = capsys.readouterr().err
-    assert "objects[0] (NotAPipe): points: These points do not determine the cylinder's" in err
+    assert "objects[0] (NotAPipe).points: These points do not determine the cylinder's" in err
     assert len(err.strip().splitlines()) == 1
 
 

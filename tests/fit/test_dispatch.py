@@ -63,6 +63,10 @@ def refuse_located(points, *, sigma=None, tolerances=DEFAULT_TOLERANCES) -> FitR
     raise FitError("only 2 faces seen", where="faces")
 
 
+def refuse_points(points, *, sigma=None, tolerances=DEFAULT_TOLERANCES) -> FitResult:
+    raise FitError("these points do not determine the radius", where="points")
+
+
 @pytest.fixture
 def stand_ins(monkeypatch):
     """Route every kind to the stand-ins above through a fake module."""
@@ -70,6 +74,7 @@ def stand_ins(monkeypatch):
     module.centroid_sphere = centroid_sphere
     module.refuse = refuse
     module.refuse_located = refuse_located
+    module.refuse_points = refuse_points
     monkeypatch.setitem(sys.modules, "stand_in_fits", module)
     for kind in FITTERS:
         monkeypatch.setitem(FITTERS, kind, ("stand_in_fits", "centroid_sphere"))
@@ -173,6 +178,8 @@ def test_fit_object_keeps_the_object_and_requested_kind(stand_ins):
     [
         ("refuse", "objects[2] (P3): the points are coplanar; scan the far side too"),
         ("refuse_located", "objects[2] (P3): faces: only 2 faces seen"),
+        # the object's own field, named as the scan loader names it
+        ("refuse_points", "objects[2] (P3).points: these points do not determine the radius"),
     ],
 )
 def test_fit_errors_are_located_at_the_object(stand_ins, monkeypatch, function, message):
