@@ -262,12 +262,15 @@ def _elbow(b: _Builder, joint: Joint):
             "pipes of different sizes meet here: a reducing elbow, each end its pipe's size and wall"
         )
     source = big.dims.source
-    standard = min(abs(degrees - 45.0), abs(degrees - 90.0)) <= ELBOW45_WINDOW_DEG
+    # a B16.9 angle; a reducing elbow may still be non-standard at it (a 45, a pair not made),
+    # which reducing_elbow_source says: only an angle B16.9 has no elbow for is cut or bent
+    b16_9_angle = min(abs(degrees - 45.0), abs(degrees - 90.0)) <= ELBOW45_WINDOW_DEG
+    standard = b16_9_angle
     if reducing:
         source, standard = reducing_elbow_source(
             b, f"{pi.id}-{pj.id}", big, small, degrees, listed, source, standard, (i, j), notes
         )
-    if not standard:
+    if not b16_9_angle:
         # B16.9 makes 45 and 90 degree elbows only: say what was built instead of labelling it
         if degrees < 90.0:
             made = f"a 90 degree elbow of that radius cut to {degrees:.0f} degrees"

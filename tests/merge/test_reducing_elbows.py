@@ -72,7 +72,10 @@ def test_a_45_degree_reducing_elbow_is_not_standard():
     model = merge_model(report_of(_bend(45, reach, OD["6"], OD["4"]), links=[("P1", "P2")]))
     elbow = _elbow(model)
     assert elbow.snap["standard"] is False
-    assert "non-standard" in elbow.snap["dimensions"]
+    # built on the NPS 6 45 degree elbow's B, not cut from a 90: that note and record, which
+    # also said "no ASME B16.9 elbow" turns 45 degrees, were added too before
+    assert elbow.snap["dimensions"] == "asme-b16.9, reducing elbow at 45 degrees (non-standard)"
+    assert not [n for n in _notes(model, "P1") if "cut to" in n or "no ASME B16.9 elbow" in n]
     said = [n for n in _notes(model, "P1") if "reducing elbow" in n]
     assert len(said) == 1 and "45 degrees" in said[0] and "90 degree long-radius" in said[0]
     assert said == [n for n in _notes(model, "P2") if "reducing elbow" in n]
@@ -84,6 +87,8 @@ def test_a_pair_b16_9_does_not_make_is_not_standard():
     model = merge_model(report_of(_bend(90, 0.229, OD["6"], OD["2"]), links=[("P1", "P2")]))
     elbow = _elbow(model)
     assert elbow.snap["standard"] is False
+    assert elbow.snap["dimensions"] == "asme-b16.9 radius; no such reducing elbow (non-standard)"
+    assert not [n for n in _notes(model, "P1") if "cut to" in n or "no ASME B16.9 elbow" in n]
     said = [n for n in _notes(model, "P1") if "reducing elbow" in n]
     assert len(said) == 1 and "6 x 2" in said[0] and "5, 4, 3 1/2, 3 only" in said[0]
 
