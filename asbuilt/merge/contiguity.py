@@ -38,9 +38,9 @@ invented over a gap nobody measured, and a note says why.
 
 ASME B16.9 elbows turn 45 or 90 degrees: two ends whose bend would exceed 90 degrees plus
 ``intended_angle_deg`` are never an elbow. An inline pair with a third end meeting it at an
-oblique angle (a **lateral** or wye, which the catalog does not have) becomes ``contact`` joints
-among the three pipes (one spool, no fitting: no coupling across the lateral's gap either), with
-a note; no elbow may take one of their ends.
+oblique angle (a **lateral** or wye, which the catalog does not have) becomes one ``lateral``
+joint of the three ends (one spool; no coupling across the lateral's gap), built from the
+measured pipe ends (:mod:`.laterals`), with a note; no elbow may take one of their ends.
 """
 
 from __future__ import annotations

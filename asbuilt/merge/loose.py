@@ -12,7 +12,7 @@ its shot spacing (the last shot may be that far short of the real end, as contig
 would run into another pipe or fitting: the swept pipe and the other component's body (capsules
 around their centrelines: a tee's run and outlet, an elbow's arc in chords, a reducer at its
 larger radius) come within the sum of their outer radii. A pipe that passes above or beside the
-other, or runs alongside it, does not. Pipes merging joined (a lateral's contacts, a fitting it
+other, or runs alongside it, does not. Pipes merging joined (a lateral's three pipes, a fitting it
 could not build) are not loose to each other; a pair contiguity's notes already name (a link it
 could not make) is recorded with ``noted`` true, so the rules report it once.
 
