@@ -147,7 +147,8 @@ class PipeLine:
 class FittingCount:
     """Fittings of one type, size, schedule and angle: ``type`` one of :data:`FITTING_KINDS`
     (``"concentric reducer"`` and ``"eccentric reducer"`` apart), ``angle_deg`` (elbows and
-    laterals, whole degrees, else None), ``bend_radius`` metres (elbows, else None), ``count`` and the ids."""
+    laterals, whole degrees, else None), ``bend_radius`` metres (elbows, else None), ``count``
+    and the ids."""
 
     type: str
     size: str
@@ -471,9 +472,9 @@ def take_off(model: Model, *, density: float | None = None, catalog=None) -> Tak
             size = sizes.label(comp.nominal, od)
             unit, quantity = "m", length
         elif comp.type in FITTING_TYPES:
+            lateral = lateral_angle(comp)
             angle = round(g.angle_deg) if isinstance(g, Bend) else None
-            if lateral_angle(comp) is not None:
-                angle = round(lateral_angle(comp))
+            angle = round(lateral) if lateral is not None else angle
             radius = round(g.bend_radius, 4) if isinstance(g, Bend) else None
             size = _fitting_size(comp, sizes)
             key = (fitting_kind(comp), size, comp.schedule, angle, radius)
