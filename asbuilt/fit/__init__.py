@@ -684,8 +684,8 @@ def fit_object(
             result = open_ends(result, obj.points, beyond, view)
     except FitError as exc:
         # a field of the scan's object as the scan loader names it: "objects[3] (P4).points"
-        field = exc.where in ("points", "kind")
-        where = f"{obj.where}.{exc.where}" if field else located(None, obj.where, exc.where)
+        object_field = exc.where in ("points", "kind")
+        where = f"{obj.where}.{exc.where}" if object_field else located(None, obj.where, exc.where)
         raise FitError(exc.message, source=exc.source, where=where) from exc
     return ObjectFit(object=obj, result=result, requested=obj.kind)
 
