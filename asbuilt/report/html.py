@@ -265,7 +265,9 @@ def _takeoff(data: ReportData) -> str:
     out = ['<section id="takeoff"><h2>Quantity take-off</h2>']
     if t.spools:
         out.append("<h3>Spools</h3>")
-        kinds = ("elbow", "tee", "reducer", "coupling")
+        # a lateral column only where a spool has one: most plants have none
+        has_laterals = any(sp.fittings.get("lateral") for sp in t.spools)
+        kinds = ("elbow", "tee") + (("lateral",) if has_laterals else ()) + ("reducer", "coupling")
         rows = [
             f'<tr id="spool-{anchor(sp.id)[4:]}">'
             + _td(_e(sp.id))
@@ -290,6 +292,7 @@ def _takeoff(data: ReportData) -> str:
                     ("Weight (kg)", True),
                     ("Elbows", True),
                     ("Tees", True),
+                    *((("Laterals", True),) if has_laterals else ()),
                     ("Reducers", True),
                     ("Couplings", True),
                     ("Findings", False),

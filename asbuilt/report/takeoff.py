@@ -209,7 +209,7 @@ class SpoolQuantity:
     ``pipe_weight`` kg (None when no pipe of it has a weight; the sum of those that have one
     otherwise), the number of ``pipes``, how many of them have no weight
     (``pipes_without_weight``: no wall or no density known), the number of each fitting type
-    (``fittings``: type -> count), its ``sizes`` (display labels) and ``findings`` (codes on its
+    (``fittings``: component type -> count, a lateral as ``"lateral"``, not ``"tee"``), its ``sizes`` (display labels) and ``findings`` (codes on its
     components, worst first)."""
 
     id: str
@@ -385,6 +385,8 @@ def _findings_by_object(model: Model) -> dict[str, list]:
 
 def _spools(model: Model, rows: list[ComponentRow]) -> tuple[SpoolQuantity, ...]:
     by_id = {row.id: row for row in rows}
+    # bought as laterals, not tees (see FITTING_KINDS), so counted apart here too
+    laterals = {c.id for c in model.components if lateral_angle(c) is not None}
     members: dict[str, list[ComponentRow]] = {}
     for spool in model.spools:
         members[spool.id] = [by_id[c] for c in spool.components if c in by_id]
@@ -400,7 +402,8 @@ def _spools(model: Model, rows: list[ComponentRow]) -> tuple[SpoolQuantity, ...]
         fittings: dict[str, int] = {}
         for r in parts:
             if r.type in FITTING_TYPES:
-                fittings[r.type] = fittings.get(r.type, 0) + 1
+                kind = "lateral" if r.id in laterals else r.type
+                fittings[kind] = fittings.get(kind, 0) + 1
         codes = sorted({(severity_rank(r.severity), code) for r in parts for code in r.findings})
         result.append(
             SpoolQuantity(

@@ -1,10 +1,11 @@
 """The HTML report: valid structure, every section, links that resolve, escaping."""
 
+import dataclasses
 import datetime as dt
 import re
 
 import pytest
-from report_helpers import check_html, known_model, many_findings, tiny_glb
+from report_helpers import ROOT, check_html, known_model, many_findings, tiny_glb
 
 from asbuilt.report import report_data
 from asbuilt.report.html import MODEL_VIEWER_URL, gltf_source, html_text, write_html
@@ -234,6 +235,31 @@ def test_spool_table(plant_model, plant_html):
         assert f'id="spool-{spool.id}"' in spools
     row = spools.split("</tr>", 2)[1]  # the first body row (after the header row)
     assert "NPS 8" in row
+    assert "Laterals" not in spools  # a column only where a spool has a lateral
+
+
+def test_spool_table_counts_laterals_in_their_own_column():
+    from asbuilt.pipeline import build_model
+    from asbuilt.scan import load_scan
+
+    model = build_model(load_scan(ROOT / "samples" / "spool.json"))
+    tees = [c for c in model.components if c.type == "tee"]
+    assert tees, "the spool sample has a tee to turn into a lateral"
+    lateral = {"standard": False, "angle_deg": 45.0, "status": "fitting"}
+    components = tuple(
+        dataclasses.replace(c, snap=lateral) if c is tees[0] else c for c in model.components
+    )
+    text = html_text(report_data(model.replace(components=components), generated=STAMP))
+    check_html(text)
+    spools = text.split('<table class="spools">', 1)[1].split("</table>", 1)[0]
+    header = re.findall(r"<th[^>]*>([^<]*)</th>", spools.split("</tr>", 1)[0])
+    assert header[header.index("Tees") + 1] == "Laterals"
+    spool = next(s for s in model.spools if tees[0].id in s.components)
+    row = next(r for r in spools.split("</tr>") if f'id="spool-{spool.id}"' in r)
+    cells = re.findall(r"<td[^>]*>([^<]*)</td>", row)
+    tees_in_spool = sum(1 for c in tees if c.id in spool.components)
+    assert cells[header.index("Laterals")] == "1"
+    assert cells[header.index("Tees")] == str(tees_in_spool - 1)
 
 
 def test_html5lib_parses_without_errors(plant_model):

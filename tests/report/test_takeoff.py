@@ -351,3 +351,16 @@ def test_a_lateral_is_counted_apart_from_tees_by_its_angle():
         ("lateral", "NPS 4", 60, ("L2",)),
     ]
     assert {r.id: r.type for r in t.rows}["L1"] == "tee"  # the component type is unchanged
+
+
+def test_a_spool_counts_its_laterals_apart_from_its_tees():
+    # the per-spool summary counted a 45 degree lateral under "tee", as the purchasing list
+    # once did
+    def tee(cid, y, snap=None):
+        geometry = Tee([0, y, 0], [-0.14, y, 0], [0.14, y, 0], [0, y + 0.14, 0], 0.05715, 0.05715)
+        return Component(cid, "tee", geometry, nominal="4", spool="S1", snap=snap or {})
+
+    lateral = {"standard": False, "angle_deg": 44.8, "status": "fitting"}
+    comps = (tee("T1", 0), tee("L1", 1, lateral), tee("L2", 2, lateral))
+    (spool,) = take_off(Model(components=comps, catalog="asme-b36.10m")).spools
+    assert dict(spool.fittings) == {"tee": 1, "lateral": 2}
