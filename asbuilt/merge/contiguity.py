@@ -32,9 +32,11 @@ unlinked limits) while the other meets that joint square-on (links say which pip
 contiguous, not that the others are not); a linked run with an oblique third end is a lateral
 as unlinked. A linked pair no fitting or butt joint realises (axes that do not meet, a bend
 beyond an elbow, an end another joint took) gets a note saying why and is kept as kind
-``link``: one size estimate, but no fitting and no spool together. A link farther apart than
-``joint_distance`` + :data:`LINK_MARGIN` (+ slack) is not modelled at all: no fitting is
-invented over a gap nobody measured, and a note says why.
+``link``: one size estimate, but no fitting and no spool together. A link whose ends form no
+inline pair and no bend even within the widened limits, and whose pipes lie farther apart than
+``joint_distance`` + :data:`LINK_MARGIN` (+ slack), is not modelled at all: no fitting is
+invented over a gap nobody measured, and a note says why (a linked elbow within its reach is
+built however far apart the pipes' segments are).
 
 ASME B16.9 elbows turn 45 or 90 degrees: two ends whose bend would exceed 90 degrees plus
 ``intended_angle_deg`` are never an elbow. An inline pair with a third end meeting it at an
