@@ -74,7 +74,7 @@ def rival(best, others, costs, counts, admissible) -> tuple | None:
     Parameters
     ----------
     best : tuple
-        The chosen fit (:func:`asbuilt.fit._joint._fit_frame`'s tuple; model first).
+        The chosen fit (:func:`asbuilt.fit._joint.fit_frame`'s tuple; model first).
     others : list of tuple
         Every fit tried (``best`` among them is skipped).
     costs : callable
@@ -115,7 +115,7 @@ def lone_face_shots(trial, x: np.ndarray, view: np.ndarray, width: float) -> np.
     ``view`` (3,) metres (centred frame), and keeps the box a box: its shots within ``width``
     metres (the inlier cutoff) of its plane and inside every seen face's, every inlier inside
     its own. One face per free axis (the one holding the most rejected shots). ``trial`` is
-    :func:`asbuilt.fit._joint._fit_frame`'s tuple, ``x`` (n, 3) metres the centred shots.
+    :func:`asbuilt.fit._joint.fit_frame`'s tuple, ``x`` (n, 3) metres the centred shots.
     """
     model, _, _, inliers = trial[:4]
     out = np.zeros(x.shape[0], dtype=bool)
@@ -196,7 +196,7 @@ def corner_frames(trial, x: np.ndarray, width: float, view: np.ndarray, frame_cl
     """Frames that split a fitted face holding two parallel lines of shots into two faces
     meeting at a convex corner between them, each face turned 45 degrees from the viewpoint.
 
-    ``trial`` is :func:`asbuilt.fit._joint._fit_frame`'s tuple, ``x`` (n, 3) metres the
+    ``trial`` is :func:`asbuilt.fit._joint.fit_frame`'s tuple, ``x`` (n, 3) metres the
     centred shots, ``width`` metres the inlier cutoff, ``view`` (3,) metres the viewpoint
     (centred frame); ``frame_class`` builds the frame
     (:class:`asbuilt.fit._faces.Frame`). Another seen face is kept when its normal lies

@@ -260,7 +260,7 @@ def _start(frame, x: np.ndarray, keep=None) -> FaceModel:
     return model
 
 
-def _fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted, raster=None):
+def fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted, raster=None):
     """Robust joint fit starting from one segmentation frame (plus faces it then reveals).
 
     With a ``trusted`` viewpoint and ``raster``, the shots' angles and raster lines
@@ -584,8 +584,8 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
     :func:`_information`, which charges each face its offset and its points' labels. If the
     winner still rejects more than ``max_outlier_fraction`` of the points, the frames are
     taken in turn and the plausible one keeping the most points wins. ``fit_args`` are
-    :func:`_fit_frame`'s arguments after the frame; ``raster`` (n,) bool, optional, the points
-    that are not edge-bisection shots (for :func:`_on_a_line`). Returns :func:`_fit_frame`'s
+    :func:`fit_frame`'s arguments after the frame; ``raster`` (n,) bool, optional, the points
+    that are not edge-bisection shots (for :func:`_on_a_line`). Returns :func:`fit_frame`'s
     tuple.
     """
     x, noise, floor, cutoff, _, view, trusted = fit_args[:7]
@@ -597,7 +597,7 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
         for other, trial in done:
             if other is frame or _same_frame(other, frame):
                 return trial
-        trial = _fit_frame(frame, *fit_args)
+        trial = fit_frame(frame, *fit_args)
         done.append((frame, trial))
         return trial
 

@@ -109,6 +109,7 @@ from asbuilt.fit._joint import (
     complexity,
     counted_outliers,
     expand_frame,
+    fit_frame,
     median,
     plausible,
 )
@@ -512,6 +513,21 @@ def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
     return result
 
 
+def _seed_frame(seed, x: np.ndarray, origin: np.ndarray, threshold: float) -> _faces.Frame:
+    """The segmentation frame of ``seed``'s faces (see :func:`_fit_cuboid_shots`) over the
+    centred points ``x`` (n, 3) metres, ``origin`` (3,) their centroid: each point labelled
+    with its nearest face plane within ``threshold`` metres, else -1."""
+    axes = np.array(seed.axes, dtype=np.float64)
+    face_axis = np.array(seed.face_axis, dtype=np.int64)
+    face_sign = np.array(seed.face_sign, dtype=np.float64)
+    normals = face_sign[:, None] * axes[face_axis]
+    offset = np.array(seed.face_offset, dtype=np.float64) - normals @ origin
+    distance = np.abs(x @ normals.T - offset[None, :])
+    labels = distance.argmin(axis=1)
+    labels[distance[np.arange(x.shape[0]), labels] >= threshold] = -1
+    return _faces.Frame(axes, face_axis, face_sign, offset, labels)
+
+
 def _fit_cuboid_shots(
     points,
     *,
@@ -520,8 +536,17 @@ def _fit_cuboid_shots(
     viewpoint=None,
     edge_pad: float = 0.5,
     silhouette: bool = True,
+    seed=None,
 ) -> FitResult:
-    """:func:`fit_cuboid` of the shots as they are."""
+    """:func:`fit_cuboid` of the shots as they are.
+
+    ``seed``, optional: the faces to fit instead of a segmentation's frames (two stations'
+    views of one box, :mod:`asbuilt.fit._cuboid_stations`): ``axes`` (3, 3) rows, ``face_axis``
+    (m,) int, ``face_sign`` (m,) +-1, ``face_offset`` (m,) metres from the scan frame's origin
+    (outward normal . point = offset) and ``noise`` (metres, the consensus level when
+    ``sigma`` is None). That frame alone is fitted: no search, so no frame a single station
+    could have seen replaces its opposite faces.
+    """
     pts = _validate(points)
     n = pts.shape[0]
     try:
@@ -601,7 +626,21 @@ def _fit_cuboid_shots(
             known_noise=sigma is not None,
         )
 
-    if sigma is not None:
+    if seed is not None:
+        noise = float(sigma) if sigma is not None else float(seed.noise)
+        threshold = cutoff * max(noise, floor)
+        fitted = fit_frame(
+            _seed_frame(seed, x, origin, threshold),
+            x,
+            noise,
+            floor,
+            cutoff,
+            threshold + 1.5 * reach,
+            viewpoint - origin,
+            trusted,
+            raster,
+        )
+    elif sigma is not None:
         noise = float(sigma)
         fitted = attempt(noise)
     else:
@@ -638,7 +677,8 @@ def _fit_cuboid_shots(
             "Check the object's points or fit it as a hull."
         )
 
-    if not trusted and not one_face:
+    if not trusted and not one_face and seed is None:
+        # (A seed's faces were each seen by a view fitted with its own station.)
         # Without a station, two opposite faces are a measured size only if their shots share
         # the box's outline (asbuilt.fit._opposite); a wall behind the box, shot past its
         # sides, fits a "back face" as closely, and the frame built on it is wrong throughout.
