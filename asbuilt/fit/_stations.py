@@ -1,4 +1,4 @@
-"""One pipe seen from two stations: two linked objects fitted as one.
+"""One pipe (or box) seen from two stations: two linked objects fitted as one.
 
 A pan-tilt station sees at most the half of a pipe that faces it; to see more, the operator
 moves the tripod and scans the pipe again, as a second object with its own ``station``, and
@@ -24,6 +24,7 @@ import dataclasses
 import numpy as np
 
 from asbuilt.errors import FitError
+from asbuilt.fit._cuboid_stations import fuse_box_views
 from asbuilt.fit.result import FitReport, ObjectFit
 from asbuilt.primitives import Cylinder
 from asbuilt.scan.model import ScanObject
@@ -69,7 +70,9 @@ def same_pipe(first, second, tolerances: Tolerances) -> bool:
 
 def fuse_station_views(report: FitReport, tolerances: Tolerances) -> FitReport:
     """``report`` with every linked pair of objects that is one pipe seen from two stations
-    (:func:`same_pipe`, each object's viewpoint different) fitted as one object.
+    (:func:`same_pipe`, each object's viewpoint different) fitted as one object; likewise a
+    linked pair of cuboids that is one box
+    (:func:`asbuilt.fit._cuboid_stations.fuse_box_views`).
 
     The fused object keeps the first object's id, place, group, label and size hint (the
     second's where the first has none), holds both objects' points (first's, then second's),
@@ -87,24 +90,37 @@ def fuse_station_views(report: FitReport, tolerances: Tolerances) -> FitReport:
         first, second = by_id.get(first_id), by_id.get(second_id)
         if first is None or second is None or {first_id, second_id} & (set(fused) | set(gone)):
             continue
-        if first.requested != "cylinder" or second.requested != "cylinder":
+        kind = first.requested
+        if kind not in ("cylinder", "cuboid") or second.requested != kind:
             continue  # a kind the operator left to auto stays as auto chose it
         views = (first.object.viewpoint(scan.sensor), second.object.viewpoint(scan.sensor))
         if any(view is None for view in views) or np.allclose(views[0], views[1]):
-            continue  # one station: contiguous pipes, not two views of one
-        if not same_pipe(first.result, second.result, tolerances):
-            continue
-        points = np.vstack([first.object.points, second.object.points])
-        try:
-            joint = fit_points(
-                "cylinder", points, sigma=scan.sensor.range_sigma, tolerances=tolerances
+            continue  # one station: contiguous objects, not two views of one
+        if kind == "cuboid":
+            joint = fuse_box_views(
+                first.result,
+                second.result,
+                np.asarray(first.object.points, dtype=np.float64),
+                np.asarray(second.object.points, dtype=np.float64),
+                scan.sensor.range_sigma,
+                tolerances,
             )
-        except FitError:
-            continue
-        if not same_pipe(joint, first.result, tolerances) or not same_pipe(
-            joint, second.result, tolerances
-        ):
-            continue  # the shots together fit something else: leave them apart
+            if joint is None:
+                continue
+        else:
+            if not same_pipe(first.result, second.result, tolerances):
+                continue
+            points = np.vstack([first.object.points, second.object.points])
+            try:
+                joint = fit_points(
+                    "cylinder", points, sigma=scan.sensor.range_sigma, tolerances=tolerances
+                )
+            except FitError:
+                continue
+            if not same_pipe(joint, first.result, tolerances) or not same_pipe(
+                joint, second.result, tolerances
+            ):
+                continue  # the shots together fit something else: leave them apart
         fused[first_id] = _fused(first, second, joint)
         gone[second_id] = first_id
     if not fused:
@@ -127,10 +143,14 @@ def _fused(first: ObjectFit, second: ObjectFit, joint) -> ObjectFit:
     first's points then the second's)."""
     one, two = first.object, second.object
     n = len(one.points) + len(two.points)
+    what = (
+        "one box seen from two stations (linked, square to each other and overlapping)"
+        if first.requested == "cuboid"
+        else "one pipe seen from two stations (linked, coaxial and overlapping)"
+    )
     note = (
-        f"{one.id} and {two.id} are one pipe seen from two stations (linked, coaxial and "
-        f"overlapping): fitted together from their {n} shots, without the viewpoints; "
-        f"{two.id} is part of this object."
+        f"{one.id} and {two.id} are {what}: fitted together from their {n} shots, without "
+        f"the viewpoints; {two.id} is part of this object."
     )
     points = np.vstack([one.points, two.points])
     points.setflags(write=False)
