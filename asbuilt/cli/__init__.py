@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import errno
+import io
 import signal
 import sys
 import threading
@@ -98,6 +99,7 @@ def main(argv: list[str] | None = None) -> int:
     if handler is None:
         parser.print_help()
         return 2
+    _tolerant_stdout()
     previous = None
     _termination.clear()
     if threading.current_thread() is threading.main_thread():
@@ -113,6 +115,19 @@ def main(argv: list[str] | None = None) -> int:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
         _termination.clear()
+
+
+def _tolerant_stdout() -> None:
+    """Let standard output take any text, as standard error does: an id the output's encoding
+    cannot write (a Chinese id to a Latin-1 terminal, a cp1252 redirect on Windows) is written
+    as a backslash escape instead of stopping the command with a traceback halfway through its
+    output (exit code 1, which ``check`` uses for error findings)."""
+    stream = sys.stdout
+    if isinstance(stream, io.TextIOWrapper) and stream.errors == "strict":
+        try:
+            stream.reconfigure(errors="backslashreplace")
+        except (AttributeError, ValueError, io.UnsupportedOperation):
+            pass
 
 
 def _run(handler, args) -> int:

@@ -115,7 +115,11 @@ def run(args: argparse.Namespace) -> int:
     status = 1 if report.failures else 0  # outputs are written, but objects are missing
     units = args.units or scan.units
     if args.json or args.output is not None:
+        # To a file: UTF-8. To standard output: as it is when its encoding can write it, else
+        # JSON's own \u escapes (a backslash escape of the stream would not be JSON beyond U+FFFF).
         text = json.dumps(_report_dict(report, units), indent=2, ensure_ascii=False) + "\n"
+        if args.output is None and not _encodable(text, sys.stdout):
+            text = json.dumps(_report_dict(report, units), indent=2) + "\n"
         if args.output is not None:
             with atomic_write(args.output, "w") as handle:
                 handle.write(text)
@@ -157,3 +161,13 @@ def run(args: argparse.Namespace) -> int:
         out.print("refused (not fitted; rescan or check these objects):")
         out.print(grid)
     return status
+
+
+def _encodable(text: str, stream) -> bool:
+    """Whether ``stream``'s encoding can write every character of ``text``."""
+    encoding = getattr(stream, "encoding", None) or "utf-8"
+    try:
+        text.encode(encoding)
+    except (UnicodeEncodeError, LookupError):
+        return False
+    return True

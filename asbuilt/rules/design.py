@@ -124,11 +124,15 @@ def _both_ends_joined(ctx: Context, comp) -> bool:
     )
 
 
-def _length_stderr(comp) -> float | None:
+def _length_stderr(ctx: Context, comp) -> float | None:
     """Standard error of a pipe's length, metres.
 
     A merged pipe (in a spool) ends where its fittings are, placed by the neighbouring axes: each
     end is known to about the fit's centre standard error, so the length to ``sqrt(2)`` times it.
+    An end at a reducer is not placed by any axis: merging centres the reducer on the gap between
+    the two pipes' last shots, extending each pipe by ``e`` (its ``extended at`` correction), so
+    the end lies anywhere within +-``e`` of where it is drawn; that adds ``e / sqrt(3)`` (the
+    standard deviation of a uniform spread over ``2 e``) to the end's error.
     A free pipe's length is its scanned extent: the fit's ``stderr["length"]``.
     """
     fit = comp.fit
@@ -136,8 +140,33 @@ def _length_stderr(comp) -> float | None:
         return None
     centre = stderr_value(fit.stderr, "center")
     if comp.spool is not None and centre is not None:
-        return float(np.sqrt(2.0) * centre)
+        variance = 2.0 * centre**2
+        for slack in _reducer_end_slack(ctx, comp):
+            variance += slack**2 / 3.0
+        return float(np.sqrt(variance))
     return stderr_value(fit.stderr, "length")
+
+
+def _reducer_end_slack(ctx: Context, comp) -> list[float]:
+    """For each end of ``comp`` at a reducer, how far merging extended it there (metres)."""
+    touch = float(ctx.opt("clash", "touch_distance"))
+    reducer_ends = [
+        end
+        for other in ctx.model.components
+        if other.type == "reducer" and other.id != comp.id
+        for end in ends_of(other.geometry)
+    ]
+    if not reducer_ends:
+        return []
+    reducer_ends = np.asarray(reducer_ends)
+    slack = []
+    for correction in comp.corrections:
+        if not correction.what.startswith("extended at") or correction.after is None:
+            continue
+        end = np.asarray(correction.after, dtype=float)
+        if end.shape == (3,) and np.min(np.linalg.norm(reducer_ends - end, axis=1)) <= touch:
+            slack.append(float(np.linalg.norm(end - np.asarray(correction.before, dtype=float))))
+    return slack
 
 
 def _line_distance(points, start, axis) -> float:
@@ -198,7 +227,7 @@ def _check_pipe(ctx, designed, comp, table: SizeTable, wanted: str | None):
     length = float(np.linalg.norm(ends[1] - ends[0]))
     tol, standard = _length_tolerance(ctx, table, wanted or built)
     off = length - designed.length
-    se = _length_stderr(comp)
+    se = _length_stderr(ctx, comp)
     if off >= 0 or _both_ends_joined(ctx, comp):
         _emit(
             ctx,

@@ -53,6 +53,20 @@ def check_points(ctx: Context) -> None:
         )
 
 
+def _apart(value: float, limit: float) -> tuple[str, str]:
+    """``value`` and ``limit`` written with the fewest decimals (0 to 3) that tell them apart,
+    so that a visible arc of 89.6 degrees reads ``89.6 < 90``, not ``90 < 90``."""
+
+    def text(number: float, decimals: int) -> str:
+        out = f"{number:.{decimals}f}"
+        return out.rstrip("0").rstrip(".") if decimals else out
+
+    for decimals in range(4):
+        if text(value, decimals) != text(limit, decimals):
+            break
+    return text(value, decimals), text(limit, decimals)
+
+
 def check_weak(ctx: Context) -> None:
     slug = "weak-geometry"
     min_arc = float(ctx.opt(slug, "min_arc_deg"))
@@ -67,7 +81,7 @@ def check_weak(ctx: Context) -> None:
         if fit.kind == "cylinder":
             arc = diag.get("arc_deg")
             if arc is not None and float(arc) < min_arc:
-                reasons.append(f"visible arc {float(arc):.0f} deg < {min_arc:.0f}")
+                reasons.append("visible arc {} deg < {}".format(*_apart(float(arc), min_arc)))
                 advice.append("shots across a wider arc (from a second position)")
             ld = diag.get("length_over_diameter", prim.length / (2 * prim.radius))
             if float(ld) < min_ld:

@@ -470,3 +470,31 @@ def test_model_documents_with_a_bom_nested_too_deeply_or_a_repeated_key(
         assert err == f"asbuilt: error: {name}: {expected}\n"
         assert not out.exists()
     assert given.read_bytes() == data
+
+
+def test_findings_on_ids_the_output_encoding_lacks_do_not_stop_check(tmp_path):
+    """`check` printing a finding on a Chinese id to a Latin-1 standard output stopped with a
+    UnicodeEncodeError traceback and exit code 1 (read as "error findings"); now the id is
+    written as a backslash escape and the exit code is the findings'."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    doc = json.loads((root / "samples" / "spool.json").read_text(encoding="utf-8"))
+    doc["objects"] = [o for o in doc["objects"] if o["id"] == "P5"]
+    doc["objects"][0]["id"] = "管 5"
+    doc["objects"][0]["points"] = doc["objects"][0]["points"][:12]  # too few: a warning
+    doc["objects"][0].pop("measurements", None)
+    doc["links"] = None
+    (tmp_path / "scan.json").write_text(json.dumps(doc, ensure_ascii=False), encoding="utf-8")
+    done = subprocess.run(
+        [sys.executable, "-m", "asbuilt", "check", "scan.json"],
+        cwd=tmp_path,
+        capture_output=True,
+        timeout=300,
+        env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin", "PYTHONIOENCODING": "latin-1"},
+    )
+    assert b"Traceback" not in done.stderr, done.stderr.decode("latin-1")
+    assert done.returncode == 0
+    assert "scan.json: \\u7ba1 5: warning too-few-points" in done.stdout.decode("latin-1")

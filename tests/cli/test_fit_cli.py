@@ -445,3 +445,34 @@ def test_the_scan_may_come_on_standard_input_and_the_json_go_to_standard_output(
         "asbuilt: error: <stdin>: line 1 column 13: invalid JSON (Expecting ',' delimiter); fix the "
         "syntax there\n"
     )
+
+
+def test_subprocess_ids_the_output_encoding_lacks(tmp_path):
+    """A Chinese id (and an astral one) to a Latin-1 standard output (a legacy terminal, a
+    cp1252 redirect on Windows) stopped `fit` with a UnicodeEncodeError traceback, exit code 1.
+    The table writes it as a backslash escape; --json as JSON's own escapes, so it reads back."""
+    doc = make_doc("mm", kinds=["sphere", "sphere"])
+    doc["objects"][0]["id"] = "管 2"
+    doc["objects"][1]["id"] = "𝔸 Ø"
+    (tmp_path / "scan.json").write_text(json.dumps(doc, ensure_ascii=False), encoding="utf-8")
+    env = {"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin", "PYTHONIOENCODING": "latin-1"}
+    done = subprocess.run(
+        [sys.executable, "-m", "asbuilt", "fit", "scan.json", "--json"],
+        cwd=tmp_path,
+        capture_output=True,
+        timeout=120,
+        env=env,
+    )
+    assert done.returncode == 0, done.stderr.decode("latin-1")
+    ids = [o["id"] for o in json.loads(done.stdout.decode("latin-1"))["objects"]]
+    assert ids[:2] == ["管 2", "𝔸 Ø"]
+    done = subprocess.run(
+        [sys.executable, "-m", "asbuilt", "fit", "scan.json"],
+        cwd=tmp_path,
+        capture_output=True,
+        timeout=120,
+        env=env,
+    )
+    assert done.returncode == 0, done.stderr.decode("latin-1")
+    assert b"Traceback" not in done.stderr
+    assert "\\u7ba1 2" in done.stdout.decode("latin-1")

@@ -46,6 +46,12 @@ def test_weak_cylinder(options, reason):
     assert reason in f.message
 
 
+def test_an_arc_just_under_the_limit_is_not_written_as_the_limit():
+    """89.6 degrees of arc against the 90 degree minimum was written "visible arc 90 deg < 90"."""
+    (f,) = only(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, arc_deg=89.6), "weak-geometry")
+    assert "visible arc 89.6 deg < 90" in f.message
+
+
 def test_short_cylinder_is_weak():
     (f,) = only(pipe("P1", [0, 0, 1], [0.08, 0, 1], 0.1143), "weak-geometry")
     assert "length/diameter 0.70" in f.message
