@@ -147,7 +147,7 @@ def _face_shots(box: Cuboid, points: np.ndarray, width: float, alone: bool = Fal
 def seen_faces(fit: FitResult, points: np.ndarray, width: float) -> list[tuple[np.ndarray, float]]:
     """The faces of ``fit``'s cuboid that hold at least ``MIN_FACE_SHOTS`` of its inliers
     within ``width`` metres (with one face seen, that face only): (outward unit normal (3,),
-    offset metres from the scan frame's origin) each. ``points`` (n, 3) metres are the fit's
+    the face's centre (3,) metres) each. ``points`` (n, 3) metres are the fit's
     shots."""
     box = fit.primitive
     half = 0.5 * box.size
@@ -159,18 +159,23 @@ def seen_faces(fit: FitResult, points: np.ndarray, width: float) -> list[tuple[n
         if assumed is not None and k != int(assumed):
             continue  # a lone face's rectangle sides are not faces
         normal = sign * box.axes[k]
-        faces.append((normal, float(normal @ box.center) + float(half[k])))
+        faces.append((normal, box.center + half[k] * normal))
     return faces
 
 
 def _seed(axes: np.ndarray, faces: list, noise: float) -> BoxSeed | None:
-    """The faces (outward normal, offset) on ``axes`` (3, 3): each on the axis nearest its
-    normal (a face two views saw: the mean of their offsets); None with fewer than two."""
+    """The faces (outward normal, centre point) on ``axes`` (3, 3): each on the axis nearest its
+    normal, through its centre (a face two views saw: the mean of their offsets); None with
+    fewer than two. (The offset is taken along the new normal through the face's centre: the
+    view's own offset along its own normal would put the plane kilometres off at survey
+    coordinates, where a milliradian between the normals times the distance from the origin
+    is metres.)"""
     offsets: dict[tuple[int, float], list[float]] = {}
-    for normal, offset in faces:
+    for normal, centre in faces:
         cosines = axes @ normal
         k = int(np.abs(cosines).argmax())
-        offsets.setdefault((k, float(np.sign(cosines[k]))), []).append(offset)
+        sign = float(np.sign(cosines[k]))
+        offsets.setdefault((k, sign), []).append(float(sign * axes[k] @ centre))
     if len(offsets) < 2:
         return None
     keys = sorted(offsets)

@@ -30,13 +30,22 @@ from asbuilt.primitives import Cylinder
 from asbuilt.scan.model import ScanObject
 from asbuilt.tolerances import Tolerances
 
-__all__ = ["MIN_OVERLAP", "SAME_AXIS_DEG", "SAME_LINE_RADII", "fuse_station_views", "same_pipe"]
+__all__ = [
+    "MIN_OVERLAP",
+    "SAME_AXIS_DEG",
+    "SAME_LINE_RADII",
+    "SAME_STATION",
+    "fuse_station_views",
+    "same_pipe",
+]
 
 #: Axes closer than this (degrees), or than three combined standard errors, are one direction.
 SAME_AXIS_DEG = 3.0
 #: Each axis must pass within this fraction of the radius of the other's: distinct pipes, which
 #: cannot share space, have axes at least the sum of their radii apart.
 SAME_LINE_RADII = 0.5
+#: Stations closer than this (metres) are one set-up.
+SAME_STATION = 1e-3
 #: Shortest overlap along the axis, as a fraction of the shorter object, for one pipe: two
 #: contiguous pipes meet end to end (a coupling between), overlapping only by their ends' noise.
 MIN_OVERLAP = 0.25
@@ -94,8 +103,12 @@ def fuse_station_views(report: FitReport, tolerances: Tolerances) -> FitReport:
         if kind not in ("cylinder", "cuboid") or second.requested != kind:
             continue  # a kind the operator left to auto stays as auto chose it
         views = (first.object.viewpoint(scan.sensor), second.object.viewpoint(scan.sensor))
-        if any(view is None for view in views) or np.allclose(views[0], views[1]):
-            continue  # one station: contiguous objects, not two views of one
+        # One station: contiguous objects, not two views of one. (An absolute test: a relative
+        # one, as np.allclose's, took stations 6 m apart at survey coordinates for one.)
+        if any(view is None for view in views) or (
+            float(np.linalg.norm(np.subtract(views[0], views[1]))) <= SAME_STATION
+        ):
+            continue
         if kind == "cuboid":
             joint = fuse_box_views(
                 first.result,

@@ -177,3 +177,16 @@ def test_the_fused_column_is_one_component():
     cuboids = [c for c in model.components if c.type == "cuboid"]
     assert [c.id for c in cuboids] == ["C1"]
     assert not [f for f in model.findings if f.code in ("AB501",)]  # no duplicate scan
+
+
+def test_the_views_are_fused_at_survey_coordinates():
+    shift = np.array([500000.0, 4500000.0, 120.0])
+    stations = ((-4.0, -3.0, 1.0), (4.0, 3.0, 1.0))
+    first, second = raster(stations[0], 9, 11, 0.1, 0), raster(stations[1], 13, 11, 0.12, 1)
+    near = _fit(_scan_doc(first, second, stations)).get("C1").result
+    far_stations = tuple(tuple(np.add(s, shift)) for s in stations)
+    report = _fit(_scan_doc(first + shift, second + shift, far_stations))
+    assert [item.object.id for item in report.fits] == ["C1"]
+    far = report.get("C1").result
+    assert far.primitive.size == pytest.approx(near.primitive.size, abs=1e-6)
+    assert far.primitive.center - shift == pytest.approx(near.primitive.center, abs=1e-6)

@@ -143,3 +143,34 @@ def test_asbuilt_fit_json_lists_the_fused_view_in_its_place(tmp_path, capsys):
     assert [o["id"] for o in objects] == ["P1", "P1b", "P9"]
     assert objects[1] == {"id": "P1b", "kind": "cylinder", "fused_into": "P1"}
     assert objects[0]["n_points"] == 30
+
+
+def test_two_views_are_fused_at_survey_coordinates():
+    # A relative test of "one station" (np.allclose) took stations 10 m apart at northing
+    # 4,500,000 m for one set-up, so the views stayed two objects (and a duplicate-scan clash).
+    shift = np.array([500000.0, 4500000.0, 120.0])
+    scan = _scan()
+    objects = [
+        {
+            "id": obj.id,
+            "kind": obj.kind,
+            "points": (np.asarray(obj.points) + shift).tolist(),
+            **(
+                {"station": (np.asarray(obj.station) + shift).tolist()}
+                if obj.station is not None
+                else {}
+            ),
+        }
+        for obj in scan.objects
+    ]
+    doc = {
+        "format": "asbuilt-scan",
+        "version": 1,
+        "units": "m",
+        "sensor": {"position": (FRONT + shift).tolist(), "range_sigma": 0.002},
+        "objects": objects,
+        "links": [list(link) for link in scan.links],
+    }
+    report = fit(loads_scan(json.dumps(doc), source="far.json"))
+    assert [item.object.id for item in report.fits] == ["P1", "P9"]
+    assert report.get("P1").object.extra["fused_with"] == "P1b"
