@@ -18,9 +18,13 @@ seen from the two stations measures a size.
 
 Two cuboid fits are one box when their axes agree, matched in any order and sign (within
 ``SAME_AXES_DEG`` or three combined standard errors), and their boxes overlap along every axis
-by more than ``MIN_OVERLAP`` of the shorter extent (two columns side by side do not). The joint
-fit stands when its axes agree with each view's by the same test and it keeps all but
-``max_outlier_fraction`` of the shots.
+by more than ``MIN_OVERLAP`` of the shorter extent (two columns side by side do not); a view
+that saw one face measured only that face's normal (its in-plane axes come from a rectangle
+around its shots). The joint fit stands when it keeps all but ``max_outlier_fraction`` of the
+shots, its axes and extent still agree with each view's by the same tests, and each face of a
+measured size holds ``MIN_FACE_SHOTS`` shots of its own, off the planes of the other faces (a
+second station sees a side up to the edge it shares with the first station's front; shots on
+that edge alone would leave the side's offset to nothing).
 """
 
 from __future__ import annotations
