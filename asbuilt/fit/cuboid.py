@@ -599,10 +599,14 @@ def _fit_cuboid_shots(
     fourth = hood[:, min(3, hood.shape[1] - 1)]
     reach = median(np.linalg.norm(xs[fourth] - xs, axis=1))
 
+    def bands(noise: float) -> tuple[float, float]:
+        """The consensus threshold and the face gap (metres) at ``noise`` (metres)."""
+        threshold = cutoff * max(noise, floor)
+        return threshold, threshold + 1.5 * reach
+
     def attempt(noise: float):
         """Segmentation and joint fit with the consensus threshold of ``noise`` (metres)."""
-        threshold = cutoff * max(noise, floor)
-        gap = threshold + 1.5 * reach
+        threshold, gap = bands(noise)
         search = _faces.Segmentation(
             xs, normals, threshold, gap, tolerances.face_angle_deg, viewpoint - origin, trusted
         )
@@ -628,14 +632,14 @@ def _fit_cuboid_shots(
 
     if seed is not None:
         noise = float(sigma) if sigma is not None else float(seed.noise)
-        threshold = cutoff * max(noise, floor)
+        threshold, gap = bands(noise)
         fitted = fit_frame(
             _seed_frame(seed, x, origin, threshold),
             x,
             noise,
             floor,
             cutoff,
-            threshold + 1.5 * reach,
+            gap,
             viewpoint - origin,
             trusted,
             raster,
