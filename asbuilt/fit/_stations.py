@@ -89,7 +89,6 @@ def fuse_station_views(report: FitReport, tolerances: Tolerances) -> FitReport:
     so. The second object leaves ``report.fits``, and the scan's links to it (in the report's
     copy of the scan; ``scan.objects`` keeps every measured point) go to the first.
     """
-    from asbuilt.fit import fit_points  # the package imports this module
 
     scan = report.scan
     by_id = {item.object.id: item for item in report.fits}
@@ -109,31 +108,17 @@ def fuse_station_views(report: FitReport, tolerances: Tolerances) -> FitReport:
             float(np.linalg.norm(np.subtract(views[0], views[1]))) <= SAME_STATION
         ):
             continue
-        if kind == "cuboid":
-            joint = fuse_box_views(
-                first.result,
-                second.result,
-                np.asarray(first.object.points, dtype=np.float64),
-                np.asarray(second.object.points, dtype=np.float64),
-                scan.sensor.range_sigma,
-                tolerances,
-            )
-            if joint is None:
-                continue
-        else:
-            if not same_pipe(first.result, second.result, tolerances):
-                continue
-            points = np.vstack([first.object.points, second.object.points])
-            try:
-                joint = fit_points(
-                    "cylinder", points, sigma=scan.sensor.range_sigma, tolerances=tolerances
-                )
-            except FitError:
-                continue
-            if not same_pipe(joint, first.result, tolerances) or not same_pipe(
-                joint, second.result, tolerances
-            ):
-                continue  # the shots together fit something else: leave them apart
+        fuse = fuse_box_views if kind == "cuboid" else _fuse_pipe_views
+        joint = fuse(
+            first.result,
+            second.result,
+            np.asarray(first.object.points, dtype=np.float64),
+            np.asarray(second.object.points, dtype=np.float64),
+            scan.sensor.range_sigma,
+            tolerances,
+        )
+        if joint is None:
+            continue
         fused[first_id] = _fused(first, second, joint)
         gone[second_id] = first_id
     if not fused:
@@ -149,6 +134,24 @@ def fuse_station_views(report: FitReport, tolerances: Tolerances) -> FitReport:
     return dataclasses.replace(
         report, fits=fits, scan=dataclasses.replace(scan, links=tuple(links))
     )
+
+
+def _fuse_pipe_views(one, two, points_one, points_two, sigma, tolerances: Tolerances):
+    """One cylinder fit of two views' shots (``points_one`` then ``points_two``, metres, as
+    fitted apart to ``one`` and ``two``), or None when they are not one pipe
+    (:func:`same_pipe`), the joint fit is refused, or it fits something else."""
+    from asbuilt.fit import fit_points  # the package imports this module
+
+    if not same_pipe(one, two, tolerances):
+        return None
+    points = np.vstack([points_one, points_two])
+    try:
+        joint = fit_points("cylinder", points, sigma=sigma, tolerances=tolerances)
+    except FitError:
+        return None
+    if not same_pipe(joint, one, tolerances) or not same_pipe(joint, two, tolerances):
+        return None  # the shots together fit something else: leave them apart
+    return joint
 
 
 def _fused(first: ObjectFit, second: ObjectFit, joint) -> ObjectFit:
