@@ -4,7 +4,9 @@ A suggestion's ``change`` is data; two kinds are understood:
 
 - ``{"object": id | "objects": [ids], "field": "nominal", "value": "4", "od": 0.1143}``: set the
   nominal size and the outside diameter (metres) of components (``reject_hint: true`` records
-  that the operator's hint was overridden);
+  that the operator's hint was overridden); a pipe or bend whose diameter changes takes the
+  catalog's wall of its new size in its schedule, or none (solid, as merging builds a size
+  without a listed wall) when the catalog lists none or is not at hand;
 - ``{"object": id, "field": "rotation", "value": 3x3 matrix, "about": [x, y, z]}``: rotate a
   component's geometry about a point (metres).
 
@@ -14,6 +16,7 @@ Each applied change is recorded on the component as a :class:`~asbuilt.model.Cor
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 
@@ -72,12 +75,14 @@ def rotate_geometry(geometry, rotation, about):
     raise TypeError(f"cannot rotate {type(g).__name__}")
 
 
-def resize_geometry(geometry, od: float):
-    """``geometry`` with outside diameter ``od`` (metres); a wall too thick for it becomes 0."""
+def resize_geometry(geometry, od: float, wall: float | None = None):
+    """``geometry`` with outside diameter ``od`` (metres) and, for a pipe or bend, wall ``wall``
+    (metres; None keeps its own); a wall too thick for it becomes 0."""
     radius = 0.5 * float(od)
     g = geometry
     if isinstance(g, (Straight, Bend)):
-        wall = g.wall if g.wall < radius else 0.0
+        wall = g.wall if wall is None else float(wall)
+        wall = wall if wall < radius else 0.0
         return dataclasses.replace(g, outer_radius=radius, wall=wall)
     if isinstance(g, Cylinder):
         return dataclasses.replace(g, radius=radius)
@@ -105,12 +110,34 @@ def _axis(geometry):
     return None
 
 
-def _apply(component: Component, change) -> Component:
+def _new_wall(component: Component, change, catalog) -> float | None:
+    """The wall (metres) a component re-sized by ``change`` takes: the catalog's wall of the new
+    size in the component's schedule, 0 (solid) when the catalog lists none or there is no
+    catalog; None (keep its own) when its diameter does not change and the catalog cannot say."""
+    od, before = change.get("od"), _od(component.geometry)
+    wall = None
+    if catalog is not None and component.schedule:
+        try:
+            wall = catalog.wall(str(change["value"]), component.schedule)
+        except KeyError:  # a size the catalog does not have
+            wall = None
+    if wall is not None:
+        return float(wall)
+    if od is None or (before is not None and abs(float(od) - before) < 1e-9):
+        return None
+    return 0.0
+
+
+def _apply(component: Component, change, catalog=None) -> Component:
     field = change.get("field")
     if field == "nominal":
         od = change.get("od")
         before_od = _od(component.geometry)
-        geometry = component.geometry if od is None else resize_geometry(component.geometry, od)
+        geometry = (
+            component.geometry
+            if od is None
+            else resize_geometry(component.geometry, od, _new_wall(component, change, catalog))
+        )
         snap = dict(component.snap or {})
         snap.update(status="snapped", reason="accepted with asbuilt check --fix")
         if od is not None:
@@ -148,13 +175,16 @@ def _apply(component: Component, change) -> Component:
     raise ValueError(f"unknown change field {field!r}")
 
 
-def apply_fixes(model: Model, findings) -> tuple[Model, list[str]]:
+def apply_fixes(model: Model, findings, *, catalog=None) -> tuple[Model, list[str]]:
     """Apply the first unambiguous suggestion of every finding.
 
     Parameters
     ----------
     model : Model
     findings : iterable of Finding
+    catalog : Catalog, str or Path, optional
+        The pipe catalog whose walls a re-sized pipe takes; default the one the model was built
+        with (:func:`asbuilt.catalog.model_catalog`). Without one a re-sized pipe is solid.
 
     Returns
     -------
@@ -162,6 +192,12 @@ def apply_fixes(model: Model, findings) -> tuple[Model, list[str]]:
         The corrected model (its findings cleared: run :func:`check_model` again) and one line
         per applied change, e.g. ``"P3: make P3's axis vertical (rotate it 3.1 deg ...)"``.
     """
+    from asbuilt.catalog import Catalog, model_catalog
+
+    if catalog is None or isinstance(catalog, Catalog) or isinstance(catalog, (str, Path)):
+        catalog = model_catalog(model, catalog)[0]
+    else:  # e.g. the rules' SizeTable, which has no walls
+        catalog = None
     components = {c.id: c for c in model.components}
     changes: list[str] = []
     for finding in findings:
@@ -172,7 +208,7 @@ def apply_fixes(model: Model, findings) -> tuple[Model, list[str]]:
         targets = change.get("objects") or [change.get("object")]
         applied = [t for t in targets if t in components]
         for target in applied:
-            components[target] = _apply(components[target], change)
+            components[target] = _apply(components[target], change, catalog)
         if applied:
             changes.append(f"{', '.join(applied)}: {chosen.description} ({finding.slug})")
     fixed = tuple(components[c.id] for c in model.components)

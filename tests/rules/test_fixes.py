@@ -145,3 +145,74 @@ def test_rotating_an_eccentric_reducer_turns_its_offset():
     assert turned.end == pytest.approx([0.14, -(r6 - r4), 1])
     assert turned.direction == pytest.approx([1, 0, 0])
     assert turned.flat_side == pytest.approx([0, -1, 0])
+
+
+def test_size_fix_takes_the_new_sizes_wall():
+    """A pipe re-sized by --fix gets the catalog's wall of its new size and schedule, not the
+    wall of the size it had: an NPS 3 STD pipe made NPS 4 has NPS 4 STD's 6.02 mm wall (its old
+    5.49 mm one gave the take-off a wrong weight and the exports a wrong bore)."""
+    import dataclasses
+
+    def with_wall(component, wall):
+        g = dataclasses.replace(component.geometry, wall=wall)
+        return dataclasses.replace(component, geometry=g, schedule="STD")
+
+    built = model(
+        with_wall(
+            pipe(
+                "P1",
+                [0, 0, 1],
+                [2, 0, 1],
+                0.1143,
+                nominal="4",
+                od_fit=0.1146,
+                status="snapped",
+                od_stderr=0.0004,
+            ),
+            0.00602,
+        ),
+        with_wall(
+            pipe(
+                "P2",
+                [2.05, 0, 1],
+                [4, 0, 1],
+                0.0889,
+                nominal="3",
+                od_fit=0.1010,
+                status="snapped",
+                od_stderr=0.005,
+            ),
+            0.00549,
+        ),
+    )
+    before = check_model(built, catalog=B36)
+    fixed, _ = apply_fixes(built, before, catalog="asme-b36.10m")
+    p2 = fixed.component("P2")
+    assert p2.nominal == "4"
+    assert p2.geometry.wall == pytest.approx(0.00602)
+    assert fixed.component("P1").geometry.wall == pytest.approx(0.00602)  # not re-sized
+
+
+def test_size_fix_without_a_catalog_wall_builds_solid():
+    """With no catalog at hand (or no wall listed for the new size in the pipe's schedule) a
+    re-sized pipe is solid, as merging builds such a size, rather than keeping a wall of
+    another size."""
+    import dataclasses
+
+    from asbuilt.findings import Finding, Suggestion
+
+    p = pipe("P1", [0, 0, 1], [2, 0, 1], 0.0889, nominal="3")
+    p = dataclasses.replace(
+        p, geometry=dataclasses.replace(p.geometry, wall=0.00549), schedule="STD"
+    )
+    change = {"object": "P1", "field": "nominal", "value": "4", "od": 0.1143}
+    finding = Finding(
+        "AB104",
+        "contiguous-diameter-mismatch",
+        "error",
+        ("P1",),
+        "x",
+        suggestions=(Suggestion("make P1 NPS 4", change, unambiguous=True),),
+    )
+    fixed, _ = apply_fixes(model(p), [finding])
+    assert fixed.component("P1").geometry.wall == 0.0
