@@ -273,7 +273,10 @@ def _require_spread_beyond_noise(
         noise = (
             f"the {limit * 1000:.3g} mm noise assumed without a sensor sigma"
             if assumed
-            else f"the range noise ({limit / LINE_SPREAD_SIGMAS * 1000:.3g} mm)"
+            # the limit itself, then how it is made: "within the range noise (3.5 mm)" above
+            # "RMS 6.96 mm" read as a contradiction (the limit is twice the noise)
+            else f"{limit * 1000:.3g} mm ({LINE_SPREAD_SIGMAS:g} x the range noise, "
+            f"{limit / LINE_SPREAD_SIGMAS * 1000:.3g} mm)"
         )
         extent = float((points.max(axis=0) - points.min(axis=0)).max())
         units = (
