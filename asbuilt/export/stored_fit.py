@@ -203,6 +203,12 @@ def _per_point(summary: Mapping, n_points: int, n_inliers: int) -> tuple[np.ndar
         raise SummaryFieldError(
             "inlier_mask", f"marks {kept} points as inliers but inliers is {n_inliers}"
         )
+    for index, item in enumerate(residuals):
+        if item is not None and math.isfinite(item) and abs(item) > MAX_COORDINATE_M:
+            raise SummaryFieldError(
+                f"residuals[{index}]",
+                f"must be at most {MAX_COORDINATE_M:g} in size (metres), not {item:g}",
+            )
     values = np.array([math.nan if item is None else item for item in residuals], np.float64)
     flags = np.array(mask, dtype=bool)
     values.setflags(write=False)

@@ -151,3 +151,93 @@ def test_bare_nominal_candidates_are_read_and_skipped_by_the_rules(spool_documen
     path = tmp_path / "m.json"
     path.write_text(json.dumps(document))
     assert main(["check", str(path)]) in (0, 1)
+
+
+def _inf_in(document: dict, edit, tmp_path) -> Path:
+    """The document with ``edit`` applied (it sets a value to 12345) and that value written as
+    ``1e999``, which JSON readers read as infinity."""
+    edit(document)
+    text = json.dumps(document).replace("12345", "1e999")
+    assert "1e999" in text
+    path = tmp_path / "m.json"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("edit", "where"),
+    [
+        (lambda d, i: d["components"][i]["fitted"].update(rms=12345), "fitted.rms"),
+        (lambda d, i: d["components"][i]["fitted"].update(sigma=12345), "fitted.sigma"),
+        (
+            lambda d, i: d["components"][i]["fitted"]["residuals"].__setitem__(2, 12345),
+            "fitted.residuals[2]",
+        ),
+        (
+            lambda d, i: d["components"][i]["fitted"]["stderr"].update(radius=12345),
+            "fitted.stderr.radius",
+        ),
+        (
+            lambda d, i: d["components"][i]["corrections"][0].update(before=12345),
+            "corrections[0].before",
+        ),
+    ],
+)
+def test_an_infinite_number_in_a_component_is_a_located_error(
+    spool_document, tmp_path, edit, where
+):
+    """The document promises finite numbers (non-finite ones are written null); ``1e999`` was
+    read as infinity and kept."""
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    path = _inf_in(document, lambda d: edit(d, index), tmp_path)
+    with pytest.raises(ModelDocumentError) as info:
+        load_model(path)
+    assert str(info.value) == (
+        f"{path}: components[{index}] ({pipe['id']}).{where}: must be a finite number or null, "
+        "not Infinity"
+    )
+
+
+def test_an_infinite_number_outside_the_components_is_a_located_error(spool_document, tmp_path):
+    """A spool's infinite ``pipe_length`` was kept, and writing IFC then failed inside
+    ifcopenshell ("Only finite values are allowed")."""
+    document = copy.deepcopy(spool_document)
+    path = _inf_in(document, lambda d: d["spools"][0].update(pipe_length=12345), tmp_path)
+    with pytest.raises(ModelDocumentError) as info:
+        load_model(path)
+    assert str(info.value) == (
+        f"{path}: spools[0].pipe_length: must be a finite number or null, not Infinity"
+    )
+    document = copy.deepcopy(spool_document)
+    document["findings"] = [
+        {
+            "code": "AB202",
+            "slug": "out-of-plumb",
+            "severity": "warning",
+            "objects": [],
+            "location": None,
+            "message": "m",
+            "measured": 12345,
+            "allowed": None,
+            "stderr": None,
+            "unit": "m",
+            "suggestions": [],
+            "unverifiable": False,
+        }
+    ]
+    path = _inf_in(document, lambda d: None, tmp_path)
+    with pytest.raises(ModelDocumentError, match=r"findings\[0\]\.measured: must be a finite"):
+        load_model(path)
+
+
+def test_a_residual_beyond_any_site_is_refused(spool_document):
+    """Fit summaries hold numbers of at most 1e8 (the scan's limit), residuals included."""
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    pipe["fitted"]["residuals"][0] = 1e300
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value).startswith(
+        f"m.json: components[{index}] ({pipe['id']}).fitted.residuals[0]: must be at most 1e+08"
+    )
