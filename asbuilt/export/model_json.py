@@ -44,6 +44,7 @@ from asbuilt.findings import Finding, Suggestion
 from asbuilt.model import Bend, Component, Correction, Model, Reducer, Spool, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 from asbuilt.scan.model import Scan
+from asbuilt.units import UNITS
 
 __all__ = [
     "FORMAT",
@@ -597,6 +598,17 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
         Naming the component or finding and field that is wrong.
     """
     _check_document(document, source)
+    display_units = document.get("display_units")
+    if display_units is not None and not (
+        isinstance(display_units, str) and display_units in UNITS
+    ):
+        # The unit STL and OBJ are written in: an unknown one failed there (ValueError).
+        raise ModelDocumentError(
+            f"must be one of {', '.join(UNITS)} or null, not {_describe(display_units)}",
+            source=source,
+            where="display_units",
+        )
+    name = _document_text(document, "name", source)  # IFC, glTF and STEP name things by it
     components = []
     fits: dict = {}
     first_of: dict = {}
@@ -709,8 +721,8 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
     return Model(
         components=tuple(components),
         scan=scan,
-        units=document.get("display_units") or "m",
-        name=document.get("name"),
+        units=display_units or "m",
+        name=name,
         catalog=document.get("catalog"),
         spools=tuple(spools),
         findings=tuple(findings),

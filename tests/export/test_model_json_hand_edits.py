@@ -241,3 +241,26 @@ def test_a_residual_beyond_any_site_is_refused(spool_document):
     assert str(info.value).startswith(
         f"m.json: components[{index}] ({pipe['id']}).fitted.residuals[0]: must be at most 1e+08"
     )
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [
+        (
+            "display_units",
+            "furlong",
+            'display_units: must be one of m, mm, cm, in, ft or null, not "furlong"',
+        ),
+        ("display_units", 5, "display_units: must be one of m, mm, cm, in, ft or null, not 5"),
+        ("name", 5, "name: must be text or null, not 5"),
+        ("name", ["a"], 'name: must be text or null, not ["a"]'),
+    ],
+)
+def test_top_level_texts_are_checked(spool_document, key, value, message):
+    """An unknown ``display_units`` failed writing STL or OBJ (``ValueError: unknown unit``), a
+    ``name`` that is not text failed writing IFC, glTF or STEP inside the writer."""
+    document = copy.deepcopy(spool_document)
+    document[key] = value
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value) == f"m.json: {message}"
