@@ -264,3 +264,24 @@ def test_top_level_texts_are_checked(spool_document, key, value, message):
     with pytest.raises(ModelDocumentError) as info:
         model_from_document(document, source="m.json")
     assert str(info.value) == f"m.json: {message}"
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "message"),
+    [
+        ("radius", 1e300, "fitted.radius: must be at most 1e+08 in size, not 1e+300"),
+        ("radius", "big", 'fitted.radius: must be a number or null, not "big"'),
+        ("size", "x", 'fitted.size: must be 3 numbers or null (metres), not "x"'),
+        ("size", [1, 2], "fitted.size: must be 3 numbers or null (metres), not [1, 2]"),
+        ("size", [1, 2, 1e300], "fitted.size[2]: must be at most 1e+08 in size, not 1e+300"),
+    ],
+)
+def test_fitted_radius_and_size_are_checked(spool_document, field, value, message):
+    """The fit summary's ``radius`` and ``size`` (read by tools; the rules use ``primitive``)
+    were kept whatever they held, although fit summaries hold numbers of at most 1e8."""
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    pipe["fitted"][field] = value
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value) == f"m.json: components[{index}] ({pipe['id']}).{message}"
