@@ -740,6 +740,11 @@ def _first_non_finite(value) -> tuple | None:
     if isinstance(value, dict):
         items = value.items()
     elif isinstance(value, list):
+        try:  # a point or another list of numbers, the bulk of a document: at C speed
+            if all(map(math.isfinite, value)):
+                return None
+        except (TypeError, OverflowError):  # not all numbers (or an int beyond any float)
+            pass
         items = enumerate(value)
     else:
         return None
