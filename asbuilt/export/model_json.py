@@ -44,6 +44,7 @@ from asbuilt.findings import Finding, Suggestion
 from asbuilt.model import Bend, Component, Correction, Model, Reducer, Spool, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 from asbuilt.scan.model import Scan
+from asbuilt.units import UNITS
 
 __all__ = [
     "FORMAT",
@@ -597,6 +598,17 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
         Naming the component or finding and field that is wrong.
     """
     _check_document(document, source)
+    display_units = document.get("display_units")
+    if display_units is not None and not (
+        isinstance(display_units, str) and display_units in UNITS
+    ):
+        # The unit STL and OBJ are written in: an unknown one failed there (ValueError).
+        raise ModelDocumentError(
+            f"must be one of {', '.join(UNITS)} or null, not {_describe(display_units)}",
+            source=source,
+            where="display_units",
+        )
+    name = _document_text(document, "name", source)  # IFC, glTF and STEP name things by it
     components = []
     fits: dict = {}
     first_of: dict = {}
@@ -704,16 +716,69 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
         except (TypeError, ValueError, AttributeError) as exc:
             raise ModelDocumentError(str(exc), source=source, where=f"spools[{index}]") from None
 
+    scan = _stored_scan(document, source)
+    _check_finite(document, source)
     return Model(
         components=tuple(components),
-        scan=_stored_scan(document, source),
-        units=document.get("display_units") or "m",
-        name=document.get("name"),
+        scan=scan,
+        units=display_units or "m",
+        name=name,
         catalog=document.get("catalog"),
         spools=tuple(spools),
         findings=tuple(findings),
         catalog_file=_document_text(document, "catalog_file", source),
         source=_document_text(document, "source", source),
+    )
+
+
+def _first_non_finite(value) -> tuple | None:
+    """The keys and indices leading to the first number in ``value`` that is not finite (a JSON
+    ``NaN``, ``Infinity``, ``1e999`` or an integer beyond any float), ``()`` when ``value`` is
+    one, or None."""
+    if isinstance(value, float):
+        return None if math.isfinite(value) else ()
+    if isinstance(value, dict):
+        items = value.items()
+    elif isinstance(value, list):
+        try:  # a point or another list of numbers, the bulk of a document: at C speed
+            if all(map(math.isfinite, value)):
+                return None
+        except (TypeError, OverflowError):  # not all numbers (or an int beyond any float)
+            pass
+        items = enumerate(value)
+    else:
+        return None
+    for key, item in items:
+        if isinstance(item, (float, dict, list)):
+            found = _first_non_finite(item)
+            if found is not None:
+                return (key, *found)
+    return None
+
+
+def _check_finite(document: dict, source: str | None) -> None:
+    """Refuse a number anywhere in the document that is not finite (the writer writes those as
+    null), naming its place; the fields checked one by one have already said theirs."""
+    try:
+        path = _first_non_finite(document)
+    except RecursionError:
+        raise ModelDocumentError(
+            "nested too deeply; fix or re-export the model document", source=source
+        ) from None
+    if path is None:
+        return
+    value = document
+    place = ""
+    for depth, key in enumerate(path):
+        value = value[key]
+        if isinstance(key, int):
+            place += f"[{key}]"
+            if depth == 1 and path[0] == "components" and isinstance(value, dict):
+                place += f" ({value.get('id')})"
+        else:
+            place += f".{key}" if place else str(key)
+    raise ModelDocumentError(
+        f"must be a finite number or null, not {_describe(value)}", source=source, where=place
     )
 
 

@@ -203,11 +203,35 @@ def _per_point(summary: Mapping, n_points: int, n_inliers: int) -> tuple[np.ndar
         raise SummaryFieldError(
             "inlier_mask", f"marks {kept} points as inliers but inliers is {n_inliers}"
         )
+    for index, item in enumerate(residuals):
+        if item is not None and math.isfinite(item) and abs(item) > MAX_COORDINATE_M:
+            raise SummaryFieldError(
+                f"residuals[{index}]",
+                f"must be at most {MAX_COORDINATE_M:g} in size (metres), not {item:g}",
+            )
     values = np.array([math.nan if item is None else item for item in residuals], np.float64)
     flags = np.array(mask, dtype=bool)
     values.setflags(write=False)
     flags.setflags(write=False)
     return values, flags
+
+
+def _fitted_sizes(summary: Mapping) -> None:
+    """Check the summary's ``radius`` (a number) and ``size`` (3 numbers), metres or null: read
+    by tools (the rules read ``primitive``), and numbers of at most 1e8 like the others."""
+    summary_float(summary, "radius")
+    size = summary.get("size")
+    if size is None:
+        return
+    if not isinstance(size, list) or len(size) != 3:
+        raise SummaryFieldError(
+            "size", f"must be 3 numbers or null (metres), not {describe_value(size)}"
+        )
+    for index, item in enumerate(size):
+        try:
+            summary_float({"v": item}, "v")
+        except SummaryFieldError as exc:
+            raise SummaryFieldError(f"size[{index}]", str(exc)) from None
 
 
 def stored_fit_from_summary(summary: Mapping, primitive: Primitive) -> StoredFit:
@@ -237,6 +261,7 @@ def stored_fit_from_summary(summary: Mapping, primitive: Primitive) -> StoredFit
     notes = summary.get("notes") or []
     if not isinstance(notes, list) or not all(isinstance(n, str) for n in notes):
         raise SummaryFieldError("notes", f"must be a list of text, not {describe_value(notes)}")
+    _fitted_sizes(summary)
     n_points, n_inliers = _count(summary, "points"), _count(summary, "inliers")
     residuals, inliers = _per_point(summary, n_points, n_inliers)
     return StoredFit(

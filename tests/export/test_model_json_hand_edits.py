@@ -151,3 +151,137 @@ def test_bare_nominal_candidates_are_read_and_skipped_by_the_rules(spool_documen
     path = tmp_path / "m.json"
     path.write_text(json.dumps(document))
     assert main(["check", str(path)]) in (0, 1)
+
+
+def _inf_in(document: dict, edit, tmp_path) -> Path:
+    """The document with ``edit`` applied (it sets a value to 12345) and that value written as
+    ``1e999``, which JSON readers read as infinity."""
+    edit(document)
+    text = json.dumps(document).replace("12345", "1e999")
+    assert "1e999" in text
+    path = tmp_path / "m.json"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("edit", "where"),
+    [
+        (lambda d, i: d["components"][i]["fitted"].update(rms=12345), "fitted.rms"),
+        (lambda d, i: d["components"][i]["fitted"].update(sigma=12345), "fitted.sigma"),
+        (
+            lambda d, i: d["components"][i]["fitted"]["residuals"].__setitem__(2, 12345),
+            "fitted.residuals[2]",
+        ),
+        (
+            lambda d, i: d["components"][i]["fitted"]["stderr"].update(radius=12345),
+            "fitted.stderr.radius",
+        ),
+        (
+            lambda d, i: d["components"][i]["corrections"][0].update(before=12345),
+            "corrections[0].before",
+        ),
+    ],
+)
+def test_an_infinite_number_in_a_component_is_a_located_error(
+    spool_document, tmp_path, edit, where
+):
+    """The document promises finite numbers (non-finite ones are written null); ``1e999`` was
+    read as infinity and kept."""
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    path = _inf_in(document, lambda d: edit(d, index), tmp_path)
+    with pytest.raises(ModelDocumentError) as info:
+        load_model(path)
+    assert str(info.value) == (
+        f"{path}: components[{index}] ({pipe['id']}).{where}: must be a finite number or null, "
+        "not Infinity"
+    )
+
+
+def test_an_infinite_number_outside_the_components_is_a_located_error(spool_document, tmp_path):
+    """A spool's infinite ``pipe_length`` was kept, and writing IFC then failed inside
+    ifcopenshell ("Only finite values are allowed")."""
+    document = copy.deepcopy(spool_document)
+    path = _inf_in(document, lambda d: d["spools"][0].update(pipe_length=12345), tmp_path)
+    with pytest.raises(ModelDocumentError) as info:
+        load_model(path)
+    assert str(info.value) == (
+        f"{path}: spools[0].pipe_length: must be a finite number or null, not Infinity"
+    )
+    document = copy.deepcopy(spool_document)
+    document["findings"] = [
+        {
+            "code": "AB202",
+            "slug": "out-of-plumb",
+            "severity": "warning",
+            "objects": [],
+            "location": None,
+            "message": "m",
+            "measured": 12345,
+            "allowed": None,
+            "stderr": None,
+            "unit": "m",
+            "suggestions": [],
+            "unverifiable": False,
+        }
+    ]
+    path = _inf_in(document, lambda d: None, tmp_path)
+    with pytest.raises(ModelDocumentError, match=r"findings\[0\]\.measured: must be a finite"):
+        load_model(path)
+
+
+def test_a_residual_beyond_any_site_is_refused(spool_document):
+    """Fit summaries hold numbers of at most 1e8 (the scan's limit), residuals included."""
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    pipe["fitted"]["residuals"][0] = 1e300
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value).startswith(
+        f"m.json: components[{index}] ({pipe['id']}).fitted.residuals[0]: must be at most 1e+08"
+    )
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [
+        (
+            "display_units",
+            "furlong",
+            'display_units: must be one of m, mm, cm, in, ft or null, not "furlong"',
+        ),
+        ("display_units", 5, "display_units: must be one of m, mm, cm, in, ft or null, not 5"),
+        ("name", 5, "name: must be text or null, not 5"),
+        ("name", ["a"], 'name: must be text or null, not ["a"]'),
+    ],
+)
+def test_top_level_texts_are_checked(spool_document, key, value, message):
+    """An unknown ``display_units`` failed writing STL or OBJ (``ValueError: unknown unit``), a
+    ``name`` that is not text failed writing IFC, glTF or STEP inside the writer."""
+    document = copy.deepcopy(spool_document)
+    document[key] = value
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value) == f"m.json: {message}"
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "message"),
+    [
+        ("radius", 1e300, "fitted.radius: must be at most 1e+08 in size, not 1e+300"),
+        ("radius", "big", 'fitted.radius: must be a number or null, not "big"'),
+        ("size", "x", 'fitted.size: must be 3 numbers or null (metres), not "x"'),
+        ("size", [1, 2], "fitted.size: must be 3 numbers or null (metres), not [1, 2]"),
+        ("size", [1, 2, 1e300], "fitted.size[2]: must be at most 1e+08 in size, not 1e+300"),
+    ],
+)
+def test_fitted_radius_and_size_are_checked(spool_document, field, value, message):
+    """The fit summary's ``radius`` and ``size`` (read by tools; the rules use ``primitive``)
+    were kept whatever they held, although fit summaries hold numbers of at most 1e8."""
+    document = copy.deepcopy(spool_document)
+    index, pipe = _component(document, "pipe")
+    pipe["fitted"][field] = value
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value) == f"m.json: components[{index}] ({pipe['id']}).{message}"
