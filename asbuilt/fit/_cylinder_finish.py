@@ -65,8 +65,10 @@ METHOD = (
 
 #: The note of a fit that ignored the stated viewpoint (:func:`finished`).
 VIEW_IGNORED = (
-    "The viewpoint was ignored: more than a third of the shots would have been seen "
-    "through the pipe from it (check the scan's sensor position or the station)."
+    "The viewpoint was ignored: every cylinder found that honours it would have more than a "
+    "third of the shots seen through the pipe from it. Check the scan's sensor position or the "
+    "station; if they are right, many shots lie on another surface beside the pipe (a wall it "
+    "enters, a flange): give only the pipe's shots."
 )
 
 

@@ -550,8 +550,9 @@ def _fit_cylinder(points, sigma, tolerances, viewpoint) -> FitResult:
                 f" than a third of them behind itself), and the best fit of the shots alone {why}."
                 " Check the scan's sensor position or the object's station (shots taken from"
                 ' two stations belong in one object per station, each with its "station");'
-                " if they are right, the shots are mostly background and mixed returns around a"
-                " thin pipe: rescan with more shots on the pipe."
+                " if they are right, many shots are background, mixed returns or another"
+                " surface beside the pipe (a wall it enters, a flange): give only the pipe's"
+                " shots, or rescan with more shots on the pipe."
             )
     scene = Scene(pts, offset, local, everything, view, sigma, tolerances)
     return finished(robust, scene, ignored_view, starts, reconsider)
