@@ -79,6 +79,12 @@ CANDIDATES = ("plane", "sphere", "cylinder", "cuboid")
 PARAMETERS = {"plane": 3, "sphere": 4, "cylinder": 5, "cuboid": 9}
 #: BIC difference a more complex model must beat to be chosen ("strong", Kass & Raftery 1995).
 WEAK_EVIDENCE = 6.0
+#: A sphere or cylinder whose radius is over this many times the points' extent (bounding-box
+#: diagonal) is a plane with a trace of curvature, not an object the shots outline: it is not
+#: preferred as the simpler kind over a better-scoring one. An independent review's pipes at
+#: 10 m (a 1.7 m strip of 27 shots over a 91-degree arc) went to spheres of 41 and 57 m
+#: radius, "simpler" than the cylinder that scored 2.4-3.4 better.
+FLAT_RADIUS_EXTENTS = 5.0
 #: Diagnostics key prefix of a kind that explains the points almost as well with as many fitted
 #: parameters (``auto_rival_cuboid``: its BIC minus the chosen kind's).
 RIVAL_PREFIX = "auto_rival_"
@@ -191,18 +197,21 @@ def information_scores(
     return scores
 
 
-def _choice(scores, candidates, counts) -> tuple[str, str, list[str]]:
+def _choice(scores, candidates, counts, flat=()) -> tuple[str, str, list[str]]:
     """The best-scoring candidate, the chosen one and those within ``WEAK_EVIDENCE`` of the best.
 
     ``scores`` and ``counts`` (:func:`parameter_count`) map kinds to their BIC and fitted
-    parameters; ``candidates`` are the kinds that may be chosen.
+    parameters; ``candidates`` are the kinds that may be chosen; ``flat`` kinds (a sphere or
+    cylinder far wider than the points, :data:`FLAT_RADIUS_EXTENTS`) are chosen only when they
+    score best, never as the simpler of two close kinds.
     """
     eligible = {kind: scores[kind] for kind in candidates}
     best = min(eligible, key=lambda kind: (eligible[kind], counts[kind]))
     close = [kind for kind in eligible if eligible[kind] <= eligible[best] + WEAK_EVIDENCE]
     # Fewest fitted parameters first; between equals, the kind that claims less (a cuboid's
     # sizes beyond its seen faces come from the points' extent, unverified), then the score.
-    chosen = min(close, key=lambda kind: (counts[kind], PARAMETERS[kind], scores[kind]))
+    simplest = [kind for kind in close if kind == best or kind not in flat]
+    chosen = min(simplest, key=lambda kind: (counts[kind], PARAMETERS[kind], scores[kind]))
     return best, chosen, close
 
 
@@ -381,13 +390,18 @@ def fit_auto(
             noise,
         )
 
+    flat = {
+        kind: float(results[kind].primitive.radius) / extent
+        for kind in ("sphere", "cylinder")
+        if kind in results and results[kind].primitive.radius > FLAT_RADIUS_EXTENTS * extent
+    }
     scores, basis, noise = scored(candidates)
     if opposite and scores["cuboid"] + WEAK_EVIDENCE < min(scores[k] for k in candidates):
         candidates = [kind for kind in CANDIDATES if kind in results]
         if sigma is None:  # the noise level may now come from the cuboid
             scores, basis, noise = scored(candidates)
         opposite = False
-    best, chosen, close = _choice(scores, candidates, counts)
+    best, chosen, close = _choice(scores, candidates, counts, flat)
     traded = None
     if viewpoint is not None:
         cutoff = tolerances.outlier_cutoff_sigma * noise
@@ -399,7 +413,7 @@ def fit_auto(
         witness, past = traded
         swapped = chosen
         scores, basis, noise = scored(candidates, ~past)
-        best, chosen, close = _choice(scores, candidates, counts)
+        best, chosen, close = _choice(scores, candidates, counts, flat)
     others = ", ".join(
         f"{kind} {scores[kind]:.1f}" for kind in CANDIDATES if kind in scores and kind != chosen
     )
@@ -419,6 +433,23 @@ def fit_auto(
         why += (
             f" {best} scored {scores[chosen] - scores[best]:.1f} lower, not strong evidence"
             f" (< {WEAK_EVIDENCE:g}); the {simpler} {chosen} is preferred."
+        )
+    passed = [
+        kind
+        for kind in close
+        if kind in flat
+        and kind != best
+        and (counts[kind], PARAMETERS[kind])
+        < (
+            counts[chosen],
+            PARAMETERS[chosen],
+        )
+    ]
+    for kind in passed:
+        why += (
+            f" The {kind} (radius {results[kind].primitive.radius:.3g} m, {flat[kind]:.0f} times"
+            " the points' extent) is a plane's trace of curvature, not an object these shots"
+            " outline: it is not preferred as the simpler kind."
         )
     if "cuboid" in scores and "cuboid" not in candidates:
         if opposite:

@@ -417,3 +417,20 @@ def test_surface_residuals_of_a_cuboid_are_distances_to_the_box():
         auto.surface_residuals("cuboid", fitted, points), [0.0, 0.2, -0.5], atol=1e-12
     )
     np.testing.assert_array_equal(auto.surface_residuals("cylinder", fitted, points), 0.0)
+
+
+def test_a_sphere_far_wider_than_the_shots_is_not_preferred_as_simpler():
+    # An independent review's pipes at 10 m (NPS 4 and NPS 2, 27 and 21 shots over a 91-degree
+    # arc, range sigma 3.5 mm): spheres of 41 m and 57 m radius scored within the weak-evidence
+    # margin of the cylinder and were chosen as "simpler", dozens of times the shots' extent.
+    from asbuilt.scan import load_scan
+
+    path = Path(__file__).with_name("auto_pipes_wide_spheres.json")
+    scan = load_scan(path)
+    truth = json.loads(path.read_text())["truth"]
+    for obj in scan.objects:
+        sensor = scan.sensor
+        result = auto.fit_auto(obj.points, sigma=sensor.range_sigma, viewpoint=sensor.position)
+        assert result.primitive.kind == "cylinder", result.notes
+        assert any("plane's trace of curvature" in note for note in result.notes)
+        assert abs(result.primitive.radius - truth[obj.id]["radius"]) < 3 * result.stderr["radius"]
