@@ -14,7 +14,8 @@ So when the fit finds no raster lattice from a trusted viewpoint
 (:func:`asbuilt.fit._silhouette.raster_grid`: the shots are hand-aimed, or there is no station
 to read a raster from), a size bounded by extent at an end no edge-bisection shot pins is a
 lower bound: its standard error is infinite (null in JSON), the centre's too, a note says so
-and ``diagnostics["unreached_sizes"]`` counts them, as for a size a session saw run on past its
+(with what the shots span of it, the bound itself: the size keeps its pad, so that it does not
+depend on the raster being read) and ``diagnostics["unreached_sizes"]`` counts them, as for a size a session saw run on past its
 window (:mod:`asbuilt.fit._window`). A dense cloud (``DENSE_SHOTS`` inliers or more: a
 scanner's sampling, not shots aimed one by one) reaches its edges to within its point
 spacing, and keeps the standard error of that spacing. Numpy only.
@@ -53,35 +54,44 @@ def unreached(lo_face, hi_face, pinned, lattice: bool, inliers: int) -> np.ndarr
     return lo_open | hi_open
 
 
-def note(sizes, trusted: bool) -> str:
-    """The note for the lower-bound ``sizes`` (metres, in output order)."""
-    what = ", ".join(f"{s:.3f} m" for s in sizes)
+def note(sizes, spans, trusted: bool) -> str:
+    """The note for the lower-bound ``sizes`` and what the shots span of each (metres, in
+    output order); ``trusted``: the fit had a station."""
     plural = len(sizes) > 1
+    what = ", ".join(
+        f"{size:.3f} m (the shots span {span:.3f} m of it)" for size, span in zip(sizes, spans)
+    )
     why = (
-        "the shots are not on a pan-tilt raster from the station (aimed by hand?)"
+        "The shots are not on a pan-tilt raster from the station (aimed by hand?)"
         if trusted
-        else "without the station the shots cannot be read as a pan-tilt raster"
+        else "Without the station the shots cannot be read as a pan-tilt raster"
     )
     advice = (
-        "Shoot a raster over the whole object, or a second face opposite, to measure "
+        "Shoot a raster over the whole object, or the face opposite, to measure "
         + ("them" if plural else "it")
         if trusted
-        else "Give the scan's sensor position (a raster is then recognised), or shoot a second "
-        "face opposite"
+        else "Give the scan's sensor position (a raster is then recognised), or shoot the face "
+        "opposite"
     )
     return (
         f"{why}, so nothing says how far the unseen edges lie beyond the outermost shots: the "
-        f"size{'s' if plural else ''} {what} bounded by the shots' extent "
-        f"{'are lower bounds' if plural else 'is a lower bound'} (at least this; standard "
-        f"error infinite), not {'measurements' if plural else 'a measurement'}. {advice}."
+        f"size{'s' if plural else ''} {what} bounded by their extent "
+        f"{'are lower bounds' if plural else 'is a lower bound'} (at least the span; "
+        f"standard error infinite), not {'measurements' if plural else 'a measurement'}. "
+        f"{advice}."
     )
 
 
-def lower_bounds(result: FitResult, sizes=None, trusted: bool = False) -> FitResult:
+def lower_bounds(result: FitResult, sizes=None, trusted: bool = False, spans=None) -> FitResult:
     """``result`` (a cuboid fit) with the ``sizes`` ((3,) bool in its output order; default:
     every size not ``observed``) that have a finite standard error made lower bounds (see the
     module docstring), or ``result`` itself when there is none. ``trusted``: the fit had a
-    station (the note's wording).
+    station (the note's wording); ``spans`` (3,) metres: what the shots span of each size (the
+    size without the pad added beyond the outermost shots; default: the sizes).
+
+    The size itself is left as fitted (padded by half the spacing of the shots that reached
+    the edge, as a raster's would be): it does not depend on whether a raster was read from
+    the shots (a scan's frame turned, or in survey coordinates without its station).
 
     By default for a fit that did not see where its shots came from (two stations' views
     fitted together, :mod:`asbuilt.fit._cuboid_stations`) when a view's own fit found sizes
@@ -98,7 +108,9 @@ def lower_bounds(result: FitResult, sizes=None, trusted: bool = False) -> FitRes
         size_se[k] = math.inf
     # Where the box lies along a size of unknown length is as unknown as the length.
     stderr = {**result.stderr, "size": tuple(size_se), "center": math.inf}
-    text = note([float(result.primitive.size[k]) for k in chosen], trusted)
+    size = np.asarray(result.primitive.size, dtype=np.float64)
+    spans = size if spans is None else np.minimum(np.asarray(spans, dtype=np.float64), size)
+    text = note([float(size[k]) for k in chosen], [float(spans[k]) for k in chosen], trusted)
     diagnostics = {**result.diagnostics, "unreached_sizes": float(len(chosen))}
     return dataclasses.replace(
         result, stderr=stderr, notes=(*result.notes, text), diagnostics=diagnostics

@@ -721,25 +721,16 @@ def _fit_cuboid_shots(
     # Sides an edge-bisection shot pins (no pad): known to the session's tolerance.
     pinned = (pad == 0.0) & (np.stack([lo_pt, hi_pt]) >= 0)
     # Sizes bounded by the shots' extent where no raster says the shots reach the edges (hand
-    # aimed, or no station to read a raster from) are lower bounds (asbuilt.fit._cuboid_reach):
-    # the extent itself, with no pad (half the step between an operator's clusters of shots is
-    # no gap the edge is known to lie in). A seed's views (two stations) were each checked by
-    # their own fits.
+    # aimed, or no station to read a raster from) are lower bounds (asbuilt.fit._cuboid_reach).
+    # The size itself stays padded as before: it does not depend on the raster being read (a
+    # scan's frame turned, or in survey coordinates without its station). A seed's views (two
+    # stations) were each checked by their own fits.
     short = np.zeros(3, bool)
     if seed is None:
         bisected = pinned & bool(np.any(edges_b[0] >= 0))
         short = unreached(
             lo_face, hi_face, bisected, grid is not None, int(np.count_nonzero(inliers))
         )
-        for k in np.flatnonzero(short):
-            for side, point in ((0, lo_pt[k]), (1, hi_pt[k])):
-                if point >= 0 and not bisected[side, k]:
-                    extreme = float(xb[point] @ model.axes[k])
-                    pad[side, k] = 0.0
-                    if side:
-                        hi[k] = extreme
-                    else:
-                        lo[k] = extreme
     used_window = False
     gaps = None
     if silhouette and grid is not None and not one_face:
@@ -863,4 +854,8 @@ def _fit_cuboid_shots(
         diagnostics=diagnostics,
         notes=tuple(notes),
     )
-    return lower_bounds(result, short[list(order)], trusted) if short.any() else result
+    if not short.any():
+        return result
+    # The lower bound is what the shots span: the size without its pads.
+    span = np.maximum(size - pad.sum(axis=0)[list(order)], 1e-6)
+    return lower_bounds(result, short[list(order)], trusted, span)
