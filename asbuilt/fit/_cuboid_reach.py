@@ -7,8 +7,8 @@ covers the object: the raster's next line would have hit the face had it run on,
 lies within a step of the last hit. Shots aimed by hand (clusters, kept away from the edges to
 avoid mixed returns) stop short of an edge by however far the operator stayed from it; the
 spacing between their clusters says nothing about that gap (an independent review's column,
-hand-aimed on two faces: a 300 mm width fitted 242.4 +- 6.9 mm, z -8.4; every such size short,
-z down to -9.4).
+hand-aimed on two faces: a 300 mm width fitted 242.4 +- 6.9 mm, z -8.4; over its 48 hand-aimed
+box scans 129 of 138 such sizes short, 37 by over 3 standard errors, z down to -9.4).
 
 So when the fit finds no raster lattice from a trusted viewpoint
 (:func:`asbuilt.fit._silhouette.raster_grid`: the shots are hand-aimed, or there is no station

@@ -72,6 +72,11 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    the larger of twice the pad and the gap to the next raster line along its face beyond it
    (variance ``(gap/2 - pad)^2 + gap^2/12`` per extent bound; pad^2 / 3 at gap 2 pad),
    besides the extreme point's own noise; a bound a bisection shot pins has no gap.
+   All of this presumes a raster that reached the edges. Without a raster lattice from a
+   trusted viewpoint (shots aimed by hand, or no station to read one from), a size bounded by
+   extent at an end no bisection shot pins is a lower bound: standard error infinite, the
+   centre's too, a note with what the shots span of it (:mod:`asbuilt.fit._cuboid_reach`);
+   the size keeps its pad. A dense cloud (``_cuboid_reach.DENSE_SHOTS`` inliers) is exempt.
 4. One seen face: the face normal is fitted, the in-plane axes come from the minimum-area
    bounding rectangle of the projected points (rotating calipers, Freeman and Shapira 1975) and
    the unseen depth is set to the smaller in-plane width (a column seen face-on is about
@@ -446,7 +451,9 @@ def fit_cuboid(
         ``diagnostics`` ``faces``, ``outliers``, ``iterations``, ``scale`` (robust residual sigma,
         metres), ``faces_axis0..2`` (seen faces normal to each output axis), ``silhouette`` (1.0
         when the raster window placed the unseen edges), ``mended`` (rejected bisection shots put
-        back on the box along their beam), ``open_sizes`` (sizes made lower bounds, when any).
+        back on the box along their beam), ``open_sizes`` (sizes made lower bounds, when any),
+        ``unreached_sizes`` (sizes made lower bounds because the shots are not a raster that
+        reaches the edges, when any: their standard errors infinite).
 
     Raises
     ------
