@@ -212,6 +212,7 @@ def fuse_box_views(
     between opposite faces or from the faces to the shots' extent), without a viewpoint.
     """
     from asbuilt.fit._cuboid_open import open_past_faces
+    from asbuilt.fit._cuboid_reach import lower_bounds
     from asbuilt.fit.cuboid import _fit_cuboid_shots
 
     axes = same_box(one, two)
@@ -246,4 +247,8 @@ def fuse_box_views(
     for row in np.flatnonzero(joint.observed).tolist():
         if min(alone[row], alone[row + 3]) < MIN_FACE_SHOTS:
             return None
+    if any(view.diagnostics.get("unreached_sizes") for view in (one, two)):
+        # A view's shots were not a raster reaching its edges (asbuilt.fit._cuboid_reach):
+        # nor are the joint fit's, which sees no station to tell.
+        joint = lower_bounds(joint, trusted=True)
     return joint

@@ -72,6 +72,11 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    the larger of twice the pad and the gap to the next raster line along its face beyond it
    (variance ``(gap/2 - pad)^2 + gap^2/12`` per extent bound; pad^2 / 3 at gap 2 pad),
    besides the extreme point's own noise; a bound a bisection shot pins has no gap.
+   All of this presumes a raster that reached the edges. Without a raster lattice from a
+   trusted viewpoint (shots aimed by hand, or no station to read one from), a size bounded by
+   extent at an end no bisection shot pins is a lower bound: standard error infinite, the
+   centre's too, a note with what the shots span of it (:mod:`asbuilt.fit._cuboid_reach`);
+   the size keeps its pad. A dense cloud (``_cuboid_reach.DENSE_SHOTS`` inliers) is exempt.
 4. One seen face: the face normal is fitted, the in-plane axes come from the minimum-area
    bounding rectangle of the projected points (rotating calipers, Freeman and Shapira 1975) and
    the unseen depth is set to the smaller in-plane width (a column seen face-on is about
@@ -92,6 +97,7 @@ from asbuilt.fit._common import noise_level, random_subset
 from asbuilt.fit._cuboid_edges import raster_corners
 from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
 from asbuilt.fit._cuboid_open import open_past_faces
+from asbuilt.fit._cuboid_reach import lower_bounds, unreached
 from asbuilt.fit._cuboid_sizes import (
     SUBSET_GRAZING_DEG,
     bounds,
@@ -445,7 +451,9 @@ def fit_cuboid(
         ``diagnostics`` ``faces``, ``outliers``, ``iterations``, ``scale`` (robust residual sigma,
         metres), ``faces_axis0..2`` (seen faces normal to each output axis), ``silhouette`` (1.0
         when the raster window placed the unseen edges), ``mended`` (rejected bisection shots put
-        back on the box along their beam), ``open_sizes`` (sizes made lower bounds, when any).
+        back on the box along their beam), ``open_sizes`` (sizes made lower bounds, when any),
+        ``unreached_sizes`` (sizes made lower bounds because the shots are not a raster that
+        reaches the edges, when any: their standard errors infinite).
 
     Raises
     ------
@@ -719,6 +727,17 @@ def _fit_cuboid_shots(
     )
     # Sides an edge-bisection shot pins (no pad): known to the session's tolerance.
     pinned = (pad == 0.0) & (np.stack([lo_pt, hi_pt]) >= 0)
+    # Sizes bounded by the shots' extent where no raster says the shots reach the edges (hand
+    # aimed, or no station to read a raster from) are lower bounds (asbuilt.fit._cuboid_reach).
+    # The size itself stays padded as before: it does not depend on the raster being read (a
+    # scan's frame turned, or in survey coordinates without its station). A seed's views (two
+    # stations) were each checked by their own fits.
+    short = np.zeros(3, bool)
+    if seed is None:
+        bisected = pinned & bool(np.any(edges_b[0] >= 0))
+        short = unreached(
+            lo_face, hi_face, bisected, grid is not None, int(np.count_nonzero(inliers))
+        )
     used_window = False
     gaps = None
     if silhouette and grid is not None and not one_face:
@@ -825,7 +844,7 @@ def _fit_cuboid_shots(
         )
     if not any(observed_t):
         notes.append("no two opposite faces seen: every size is bounded by the points' extent")
-    return FitResult(
+    result = FitResult(
         primitive=cuboid,
         residuals=residuals,
         inliers=inliers,
@@ -842,3 +861,8 @@ def _fit_cuboid_shots(
         diagnostics=diagnostics,
         notes=tuple(notes),
     )
+    if not short.any():
+        return result
+    # The lower bound is what the shots span: the size without its pads.
+    span = np.maximum(size - pad.sum(axis=0)[list(order)], 1e-6)
+    return lower_bounds(result, short[list(order)], trusted, span)

@@ -10,6 +10,9 @@ bound (``observed`` False) whose standard error must cover the truth, as it does
 station is given (the raster silhouette). Before the fix, the single line's shots, which
 share one coordinate across the face, were taken as raster lines spaced by their noise: the
 size stopped at the line (0.15-0.2 m for 0.4 m) with a 2 mm standard error (z -70 to -130).
+Without the station the shots cannot be read as a raster at all, so such a size is now a lower
+bound (standard error infinite, ``asbuilt.fit._cuboid_reach``); its value still follows the
+grazing face's step (``_cuboid_sizes._corner_step``) and agrees with the station's fit.
 """
 
 from __future__ import annotations
@@ -72,4 +75,8 @@ def test_with_the_station_given_the_fit_agrees():
     without = sizes_in_true_order(fit_cuboid(points, sigma=RANGE_SIGMA), rot)
     # Sizes across the column (the length's ends are placed differently: silhouette vs extent).
     assert without[0][:2] == pytest.approx(with_station[0][:2], abs=0.03)
-    assert without[1][:2] == pytest.approx(with_station[1][:2], rel=0.3)
+    # Without the station nothing says the shots are a raster reaching the edges: the sizes
+    # are lower bounds (before: standard errors within 30% of the station's), the station's
+    # fit keeps its finite ones.
+    assert np.all(np.isfinite(with_station[1][:2]))
+    assert np.all(np.isinf(without[1][:2]))
