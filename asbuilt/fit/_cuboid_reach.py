@@ -11,8 +11,9 @@ hand-aimed on two faces: a 300 mm width fitted 242.4 +- 6.9 mm, z -8.4; over its
 box scans 129 of 138 such sizes short, 37 by over 3 standard errors, z down to -9.4).
 
 So when the fit finds no raster lattice from a trusted viewpoint
-(:func:`asbuilt.fit._silhouette.raster_grid`: the shots are hand-aimed, or there is no station
-to read a raster from), a size bounded by extent at an end no edge-bisection shot pins is a
+(:func:`asbuilt.fit._silhouette.raster_grid`, and not even evenly spaced lines in pan or in
+tilt alone, which a raster with a few columns occluded still has: the shots are hand-aimed, or
+there is no station to read a raster from), a size bounded by extent at an end no edge-bisection shot pins is a
 lower bound: its standard error is infinite (null in JSON), the centre's too, a note says so
 (with what the shots span of it, the bound itself: the size keeps its pad, so that it does not
 depend on the raster being read) and ``diagnostics["unreached_sizes"]`` counts them, as for a size a session saw run on past its

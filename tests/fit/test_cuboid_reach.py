@@ -142,3 +142,16 @@ def test_lower_bounds_of_a_fit_without_its_station():
     assert bounded.stderr["axes_deg"] == result.stderr["axes_deg"]
     assert bounded.diagnostics["unreached_sizes"] == 3.0
     assert lower_bounds(bounded) is bounded  # nothing left to bound
+
+
+def test_a_raster_with_occluded_columns_keeps_its_standard_errors():
+    # The plant sample's beam B2 is a simulated raster whose pan columns have a gap (four
+    # steps, something in front): no grid is read from it, but its tilts lie on evenly spaced
+    # rows. Taken for hand-aimed shots, it got "aimed by hand?" and infinite errors.
+    scan = load_scan(HERE.parents[1] / "samples" / "plant.json")
+    beam = scan.object("B2")
+    result = fit_points(
+        "cuboid", beam.points, sigma=scan.sensor.range_sigma, viewpoint=scan.sensor.position
+    )
+    assert "unreached_sizes" not in result.diagnostics
+    assert all(math.isfinite(se) for se in result.stderr["size"])
