@@ -283,6 +283,32 @@ def test_list_rules_shows_the_rules_files_view(tmp_path, capsys):
     assert "fit-refused" in refused and "error" in refused and "always" in refused
 
 
+def _runs(out, code):
+    """The runs column of a rule's row in --list-rules' table."""
+    row = next(line for line in out.splitlines() if f" {code} " in line)
+    return [cell.strip() for cell in row.split("\u2502")][4]
+
+
+@pytest.mark.parametrize(
+    "options, runs",
+    [
+        (["--ignore", "slope"], {"AB203": "no", "AB202": "yes", "AB501": "yes"}),
+        (["--select", "AB2"], {"AB203": "yes", "AB202": "yes", "AB501": "no"}),
+        (["--select", "AB2", "--ignore", "AB203"], {"AB203": "no", "AB202": "yes", "AB501": "no"}),
+    ],
+)
+def test_list_rules_honours_select_and_ignore(tmp_path, capsys, options, runs):
+    code, out, _ = run(["--list-rules", *options], capsys)
+    assert code == 0
+    assert {c: _runs(out, c) for c in runs} == runs
+    assert _runs(out, "AB001") == "always"  # no selection drops a refused fit
+
+
+def test_list_rules_refuses_an_unknown_selector(capsys):
+    code, _, err = run(["--list-rules", "--ignore", "no-such-rule"], capsys)
+    assert code == 2 and "no-such-rule" in err
+
+
 def test_no_scan_is_bad_input(capsys):
     code, out, err = run([], capsys)
     assert code == 2 and out == "" and "SCAN" in err
