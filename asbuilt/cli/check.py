@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 
 from asbuilt.cli._input import SCAN_HELP
+from asbuilt.cli._text import plural
 from asbuilt.export import SUFFIXES
 
 __all__ = ["register", "run"]
@@ -215,11 +216,7 @@ def _list_rules(config) -> None:
     Console(file=sys.stdout, soft_wrap=False, width=160, markup=False).print(table)
 
 
-def _plural(n: int, word: str) -> str:
-    """``n`` and ``word`` in the plural unless n is 1 ("1 fix", "0 fixes", "2 errors")."""
-    if n == 1:
-        return f"{n} {word}"
-    return f"{n} {word}{'es' if word.endswith(('s', 'x', 'z', 'ch', 'sh')) else 's'}"
+_plural = plural  # the CLI's one plural helper (asbuilt.cli._text), under its older name here
 
 
 def run(args: argparse.Namespace) -> int:
