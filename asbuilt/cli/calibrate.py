@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 
 from asbuilt.cli._input import SCAN_HELP
+from asbuilt.cli._text import plural
 
 __all__ = ["register", "run"]
 
@@ -120,7 +121,9 @@ def run(args: argparse.Namespace) -> int:
     save_calibration(result.calibration, args.out, estimate=result.summary())
 
     out = Console(markup=False)
-    table = Table(title=f"calibration from {result.n_shots} shots at {len(shots)} targets")
+    table = Table(
+        title=f"calibration from {plural(result.n_shots, 'shot')} at {plural(len(shots), 'target')}"
+    )
     for col in ("parameter", "initial", "estimate", "stderr"):
         table.add_column(col, justify="left" if col == "parameter" else "right")
     for name in result.free:

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 
 from asbuilt.cli._input import SCAN_HELP
+from asbuilt.cli._text import plural
 from asbuilt.export import SUFFIXES
 
 __all__ = ["register", "run"]
@@ -49,7 +50,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     parser.add_argument(
         "--list-rules",
         action="store_true",
-        help="print every rule (code, slug, severity from --rules, source) and exit",
+        help="print every rule (code, slug, severity from --rules, whether it runs with "
+        "--rules, --select and --ignore, source) and exit",
     )
     parser.add_argument(
         "--design",
@@ -182,7 +184,8 @@ def _same_path(one, two) -> bool:
 
 
 def _list_rules(config) -> None:
-    """The registry as a table on stdout, with the severities the rules file gives."""
+    """The registry as a table on stdout, with the severities the rules file gives and whether
+    each rule runs under the rules file's and the command line's selection."""
     import sys
 
     from rich.console import Console
@@ -213,11 +216,7 @@ def _list_rules(config) -> None:
     Console(file=sys.stdout, soft_wrap=False, width=160, markup=False).print(table)
 
 
-def _plural(n: int, word: str) -> str:
-    """``n`` and ``word`` in the plural unless n is 1 ("1 fix", "0 fixes", "2 errors")."""
-    if n == 1:
-        return f"{n} {word}"
-    return f"{n} {word}{'es' if word.endswith(('s', 'x', 'z', 'ch', 'sh')) else 's'}"
+_plural = plural  # the CLI's one plural helper (asbuilt.cli._text), under its older name here
 
 
 def run(args: argparse.Namespace) -> int:
@@ -235,17 +234,17 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.rules import apply_fixes, load_rules
 
     config = load_rules(args.rules)
+    select = [s for group in args.select or () for s in group]
+    ignore = [s for group in args.ignore or () for s in group]
+    if select or ignore:
+        config = config.with_selection(select=select or None, ignore=ignore)
     if args.list_rules:
-        _list_rules(config)
+        _list_rules(config)  # runs: what a check with these options would run
         return 0
     if not args.scan:
         from asbuilt.errors import ScanReadError
 
         raise ScanReadError("check: give a SCAN file ('-': standard input), or --list-rules")
-    select = [s for group in args.select or () for s in group]
-    ignore = [s for group in args.ignore or () for s in group]
-    if select or ignore:
-        config = config.with_selection(select=select or None, ignore=ignore)
     design = None
     if args.design:
         from asbuilt.design import load_design

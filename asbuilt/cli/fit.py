@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 
 from asbuilt.cli._input import SCAN_HELP
+from asbuilt.cli._text import plural
 from asbuilt.units import UNITS
 
 __all__ = ["register", "run"]
@@ -130,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
             return status
 
     title = scan.name or source.name
-    heading = f"{title}: {len(report)} object{'s' if len(report) != 1 else ''}"
+    heading = f"{title}: {plural(len(report), 'object')}"
     if report.failures:
         heading = f"{title}: {len(report)} fitted, {len(report.failures)} refused"
     table = Table(title=heading)

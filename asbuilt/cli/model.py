@@ -18,6 +18,7 @@ import argparse
 
 from asbuilt.cli._args import positive_number
 from asbuilt.cli._input import SCAN_HELP
+from asbuilt.cli._text import plural
 from asbuilt.export import SUFFIXES
 
 __all__ = ["register", "run"]
@@ -210,18 +211,17 @@ def run(args: argparse.Namespace) -> int:
     for result in results:
         out.print(
             f"wrote {result.path} ({result.name}, {_size(result.size)}, "
-            f"{result.objects} object{'s' if result.objects != 1 else ''})"
+            f"{plural(result.objects, 'object')})"
         )
     for report_path in reports:
         out.print(f"wrote {report_path} (report)")
     counts = {severity: 0 for severity in ("error", "warning", "info")}
     for finding in model.findings:
         counts[finding.severity] += 1
-    spools = f", {len(model.spools)} spool{'s' if len(model.spools) != 1 else ''}"
+    spools = f", {plural(len(model.spools), 'spool')}"
     out.print(
-        f"{len(model.components)} components{spools if model.spools else ''}; findings: "
-        f"{counts['error']} error{'s' if counts['error'] != 1 else ''}, "
-        f"{counts['warning']} warning{'s' if counts['warning'] != 1 else ''}, "
+        f"{plural(len(model.components), 'component')}{spools if model.spools else ''}; "
+        f"findings: {plural(counts['error'], 'error')}, {plural(counts['warning'], 'warning')}, "
         f"{counts['info']} info"
     )
     return status

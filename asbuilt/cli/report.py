@@ -18,6 +18,7 @@ import argparse
 
 from asbuilt.cli._args import positive_number
 from asbuilt.cli._input import SCAN_HELP
+from asbuilt.cli._text import plural
 
 __all__ = ["register", "run"]
 
@@ -244,9 +245,8 @@ def run(args: argparse.Namespace) -> int:
     for finding in model.findings:
         counts[finding.severity] += 1
     out.print(
-        f"{len(model.components)} components; findings: "
-        f"{counts['error']} error{'s' if counts['error'] != 1 else ''}, "
-        f"{counts['warning']} warning{'s' if counts['warning'] != 1 else ''}, "
+        f"{plural(len(model.components), 'component')}; findings: "
+        f"{plural(counts['error'], 'error')}, {plural(counts['warning'], 'warning')}, "
         f"{counts['info']} info"
     )
     return status

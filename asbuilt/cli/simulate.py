@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import argparse
 
+from asbuilt.cli._text import plural
+
 __all__ = ["register", "run"]
 
 
@@ -77,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
             handle.write(text)
     total = sum(len(obj["points"]) for obj in doc["objects"])
     Console(file=sys.stderr).print(
-        f"simulated {len(doc['objects'])} objects, {total} points "
+        f"simulated {plural(len(doc['objects']), 'object')}, {plural(total, 'point')} "
         f"(seed {doc['simulation']['seed']}) -> {args.out}",
         highlight=False,
     )

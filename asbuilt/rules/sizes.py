@@ -247,6 +247,23 @@ def check_ambiguous(ctx: Context, table: SizeTable | None) -> None:
         )
 
 
+#: How many catalog size steps a hint may be off the fitted size for "use the fitted size" to be
+#: an unambiguous fix: one, the neighbouring size, is a plausible misread or mistyped hint
+#: (6" for an 8" pipe; steps are the catalog's, so NPS 3 1/2 makes 3" and 4" two). Further off, the operator's hint names a clearly different pipe and the
+#: fit is the doubtful side: lagging, insulation, a clamp or a coating make it larger (a 4" pipe
+#: under 50 mm of lagging fits NPS 8), so a person must decide. Steps, not a ratio of ODs: the
+#: neighbouring sizes of ASME B36.10M are 25-33 % apart at NPS 1/8-1 1/4 but 4-25 % apart from
+#: NPS 8 up, so no one ratio separates a misread size from a lagged pipe across the catalog.
+_HINT_MISREAD_STEPS = 1
+
+
+def _size_steps(table: SizeTable, od_a: float, od_b: float) -> int:
+    """How many catalog size steps lie between two ODs (metres): the number of the table's
+    sizes above the smaller OD and up to the larger, each within 0.05 mm (0: the same size)."""
+    low, high = sorted((od_a, od_b))
+    return sum(1 for _, _, s in table.sizes if low + 5e-5 < s <= high + 5e-5)
+
+
 def check_hint(ctx: Context, table: SizeTable | None) -> None:
     slug = "hint-mismatch"
     for comp in ctx.pipes:
@@ -286,8 +303,10 @@ def check_hint(ctx: Context, table: SizeTable | None) -> None:
             continue  # a hint is given because fits can be weak: only a clear disagreement counts
         fitted = table.within(od, _window(ctx, se)) if table is not None else []
         suggestions = [Suggestion(f"check the hint {hint!r} on the object, or rescan it")]
+        steps = None if table is None else _size_steps(table, float(hint_od), od)
         if len(fitted) == 1:
             n, s = fitted[0]
+            steps = _size_steps(table, float(hint_od), s)
             suggestions.insert(
                 0,
                 Suggestion(
@@ -299,13 +318,23 @@ def check_hint(ctx: Context, table: SizeTable | None) -> None:
                         "od": s,
                         "reject_hint": True,
                     },
-                    unambiguous=True,
+                    # the neighbouring size is a plausible misread hint; a size further off is
+                    # not: the operator said what the pipe is, and lagging, a clamp or a
+                    # coating make a fit larger (a person decides, --fix does not)
+                    unambiguous=steps <= _HINT_MISREAD_STEPS,
                 ),
+            )
+        cause = ""
+        if steps is not None and steps > _HINT_MISREAD_STEPS and od > float(hint_od):
+            cause = (
+                f"; the fit is {steps} catalog sizes above the hint: lagging or insulation about "
+                f"{mm((od - float(hint_od)) / 2)} thick, a coating or a clamp may cover the pipe"
             )
         ctx.emit(
             slug,
             [comp.id],
-            f"the hint {hint} ({mm(hint_od)}) disagrees with the fitted OD {mm(od)} by {mm(off)}",
+            f"the hint {hint} ({mm(hint_od)}) disagrees with the fitted OD {mm(od)} by {mm(off)}"
+            + cause,
             location=centre_of(comp.geometry),
             measured=off,
             allowed=tol,

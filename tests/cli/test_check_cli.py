@@ -239,6 +239,22 @@ def test_fix_writes_model_and_recheck_is_clean(tmp_path, capsys):
     assert code == 0 and out.splitlines()[-1].startswith("0 errors, 0 warnings")
 
 
+def test_fix_keeps_the_hint_of_an_insulated_pipe(tmp_path, capsys):
+    """A 4" pipe under 50 mm of lagging (OD 214.3 mm) snaps NPS 8; its hint is right, so --fix
+    must not re-size it: the warning stays, naming lagging as a possible cause."""
+    lagged = {**PIPE, "geometry": {**PIPE["geometry"], "od": 0.1143 + 2 * 0.050}}
+    path = scan_file(tmp_path, lagged)
+    fixed = tmp_path / "fixed.json"
+    code, out, _ = run([path, "--select", "hint-mismatch", "--fix", fixed], capsys)
+    assert code == 0
+    assert 'P1: warning hint-mismatch: the hint 4" (114.3 mm) disagrees' in out
+    assert "catalog sizes above the hint: lagging or insulation about" in out
+    assert "fixed:" not in out and "0 fixes written" in out
+    document = json.loads(fixed.read_text(encoding="utf-8"))
+    (p1,) = [c for c in document["components"] if c["id"] == "P1"]
+    assert not p1["snap"].get("hint_rejected")  # the hint still stands, and is reported again
+
+
 def test_subprocess_exit_code(tmp_path):
     path = scan_file(tmp_path, PIPE, CROSSING)
     proc = subprocess.run(
@@ -265,6 +281,32 @@ def test_list_rules_shows_the_rules_files_view(tmp_path, capsys):
     # the pipeline's own finding for a refused fit is listed too, always on, not configurable
     refused = next(line for line in out.splitlines() if "AB001" in line)
     assert "fit-refused" in refused and "error" in refused and "always" in refused
+
+
+def _runs(out, code):
+    """The runs column of a rule's row in --list-rules' table."""
+    row = next(line for line in out.splitlines() if f" {code} " in line)
+    return [cell.strip() for cell in row.split("\u2502")][4]
+
+
+@pytest.mark.parametrize(
+    "options, runs",
+    [
+        (["--ignore", "slope"], {"AB203": "no", "AB202": "yes", "AB501": "yes"}),
+        (["--select", "AB2"], {"AB203": "yes", "AB202": "yes", "AB501": "no"}),
+        (["--select", "AB2", "--ignore", "AB203"], {"AB203": "no", "AB202": "yes", "AB501": "no"}),
+    ],
+)
+def test_list_rules_honours_select_and_ignore(tmp_path, capsys, options, runs):
+    code, out, _ = run(["--list-rules", *options], capsys)
+    assert code == 0
+    assert {c: _runs(out, c) for c in runs} == runs
+    assert _runs(out, "AB001") == "always"  # no selection drops a refused fit
+
+
+def test_list_rules_refuses_an_unknown_selector(capsys):
+    code, _, err = run(["--list-rules", "--ignore", "no-such-rule"], capsys)
+    assert code == 2 and "no-such-rule" in err
 
 
 def test_no_scan_is_bad_input(capsys):

@@ -38,6 +38,58 @@ def test_three_reports_in_one_run(tmp_path, capsys):
     assert "<svg" in outs[0].read_text(encoding="utf-8")
 
 
+@pytest.fixture
+def one_pipe(tmp_path):
+    """A scan of one pipe: every count in the summaries is 1 or 0."""
+    scene = {
+        "format": "asbuilt-scene",
+        "version": 1,
+        "units": "m",
+        "stations": [{"id": "S1", "position": [0, 0, 1.5], "range_sigma": 0.002}],
+        "objects": [
+            {
+                "id": "P1",
+                "kind": "cylinder",
+                "points": 30,
+                "geometry": {
+                    "type": "cylinder",
+                    "start": [-1.5, 4, 1.0],
+                    "end": [1.5, 4, 1.0],
+                    "od": 0.1143,
+                },
+            }
+        ],
+    }
+    (tmp_path / "scene.json").write_text(json.dumps(scene), encoding="utf-8")
+    assert (
+        main(["simulate", str(tmp_path / "scene.json"), "--out", str(tmp_path / "one.json")]) == 0
+    )
+    return tmp_path / "one.json"
+
+
+def test_counts_of_one_are_singular(one_pipe, tmp_path, capsys):
+    code, out, _ = run(["report", one_pipe, "--out", tmp_path / "qa.json"], capsys)
+    assert code == 0
+    assert out.splitlines()[-1] == "1 component; findings: 0 errors, 0 warnings, 0 info"
+    code, out, _ = run(["model", one_pipe, "--out", tmp_path / "one.step"], capsys)
+    assert code == 0
+    assert out.splitlines()[0].endswith(" 1 object)")
+    assert out.splitlines()[-1] == "1 component, 1 spool; findings: 0 errors, 0 warnings, 0 info"
+    code, out, _ = run(["fit", one_pipe], capsys)
+    assert code == 0 and ": 1 object" in out and "1 objects" not in out
+
+
+def test_the_cli_plural_helper():
+    from asbuilt.cli._text import plural
+
+    assert [plural(n, "component") for n in (0, 1, 2)] == [
+        "0 components",
+        "1 component",
+        "2 components",
+    ]
+    assert [plural(n, "fix") for n in (1, 3)] == ["1 fix", "3 fixes"]
+
+
 def test_options(tmp_path, capsys):
     out = tmp_path / "qa.json"
     code, stdout, _ = run(

@@ -48,7 +48,7 @@ def test_in_process_writes_a_loadable_scan(scene_file, tmp_path, capsys):
     assert scan.units == "mm" and [o.id for o in scan.objects] == ["P1"]
     assert 20 <= len(scan.objects[0].points) <= 32
     err = capsys.readouterr().err
-    assert "simulated 1 objects" in err and "seed 7" in err
+    assert "simulated 1 object, " in err and " points (seed 7)" in err
     again = tmp_path / "again.json"
     main(["simulate", str(scene_file), "--out", str(again), "--seed", "7"])
     assert again.read_bytes() == out.read_bytes()

@@ -218,7 +218,7 @@ def test_trimesh_log_stays_off_stderr(tmp_path):
         timeout=120,
     )
     assert result.returncode == 0, result.stderr
-    assert result.stderr.startswith("simulated 1 objects, 30 points")
+    assert result.stderr.startswith("simulated 1 object, 30 points")
     assert "Traceback" not in result.stderr and "face_normals" not in result.stderr
 
 

@@ -114,6 +114,15 @@ def test_hint_mismatch_fix_keeps_the_fitted_size():
     assert fixed.component("P1").snap["hint_rejected"] is True
 
 
+def test_hint_mismatch_fix_leaves_an_insulated_pipe_alone():
+    """A 4" pipe under 50 mm of lagging fits NPS 8: the hint stays, and so does the warning."""
+    built = model(pipe("P1", [0, 0, 1], [2, 0, 1], 0.2191), scan=scan_with_hint("P1", '4"'))
+    before, fixed, changes, after = fix_and_recheck(built)
+    assert "hint-mismatch" in slugs(before) and "hint-mismatch" in slugs(after)
+    assert changes == []
+    assert not (fixed.component("P1").snap or {}).get("hint_rejected")
+
+
 def test_ambiguous_suggestions_are_not_applied():
     built = model(pipe("P3", [0, 0, 1], [2, 0, 1], 0.1182, status="no-size"))
     before, fixed, changes, after = fix_and_recheck(built)

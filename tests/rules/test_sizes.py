@@ -154,6 +154,52 @@ def test_hint_mismatch_is_found_and_fix_is_unambiguous():
     assert f.measured == pytest.approx(0.1143 - 0.0889)
     fix = f.suggestions[0]
     assert fix.unambiguous and fix.change["value"] == "4" and fix.change["reject_hint"]
+    assert "lagging" not in f.message  # one size up: a misread hint, not lagging
+
+
+def run_shipped(*components, scan=None):
+    """Checked against the shipped ASME B36.10M catalog: every size, for counting size steps
+    (B36 above leaves NPS 5 and others out)."""
+    return check_model(model(*components, scan=scan), load_rules(), catalog="asme-b36.10m")
+
+
+@pytest.mark.parametrize(
+    "hint, od, fitted, steps, lagging",
+    [
+        # a 4" pipe under 50 mm of lagging (OD 214.3 mm) snaps NPS 8
+        ('4"', 0.2191, "8", 3, "52.4 mm"),
+        # a 2" pipe under 40 mm of lagging (OD 140.3 mm) snaps NPS 5
+        ('2"', 0.1413, "5", 5, "40.5 mm"),
+        ('4"', 0.1683, "6", 2, "27.0 mm"),  # two sizes up is no misread neighbour either
+        # steps are the catalog's: NPS 3 1/2 lies between 3 and 4 in ASME B36.10M
+        ('3"', 0.1143, "4", 2, "12.7 mm"),
+    ],
+)
+def test_a_fit_sizes_above_the_hint_is_no_unambiguous_fix(hint, od, fitted, steps, lagging):
+    """The operator said what the pipe is; lagging, a clamp or a coating make the fit larger, so
+    the fitted size is suggested but not applied by --fix, and the message names the cause."""
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], od)
+    (f,) = only(run_shipped(comp, scan=scan_with_hint("P1", hint)), "hint-mismatch")
+    fix = f.suggestions[0]
+    assert fix.change["value"] == fitted and not fix.unambiguous
+    assert not any(s.unambiguous for s in f.suggestions)
+    assert f"the fit is {steps} catalog sizes above the hint" in f.message
+    assert f"lagging or insulation about {lagging} thick" in f.message
+
+
+def test_a_fit_sizes_below_the_hint_is_no_unambiguous_fix_nor_lagging():
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.0603)
+    (f,) = only(run_shipped(comp, scan=scan_with_hint("P1", '4"')), "hint-mismatch")
+    assert f.suggestions[0].change["value"] == "2" and not f.suggestions[0].unambiguous
+    assert "lagging" not in f.message
+
+
+@pytest.mark.parametrize("hint, od, fitted", [('4"', 0.1016, "3 1/2"), ('6"', 0.2191, "8")])
+def test_a_fit_one_catalog_size_off_the_hint_is_still_an_unambiguous_fix(hint, od, fitted):
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], od)
+    (f,) = only(run_shipped(comp, scan=scan_with_hint("P1", hint)), "hint-mismatch")
+    assert f.suggestions[0].unambiguous and f.suggestions[0].change["value"] == fitted
+    assert "lagging" not in f.message
 
 
 @pytest.mark.parametrize("hint", ['4"', "NPS 4", "DN100", "4"])
