@@ -216,9 +216,6 @@ def _list_rules(config) -> None:
     Console(file=sys.stdout, soft_wrap=False, width=160, markup=False).print(table)
 
 
-_plural = plural  # the CLI's one plural helper (asbuilt.cli._text), under its older name here
-
-
 def run(args: argparse.Namespace) -> int:
     """Check the scan; print the findings; return 1 if any is an error, else 0."""
     import json
@@ -291,7 +288,7 @@ def run(args: argparse.Namespace) -> int:
         for change in changes:
             err.print(f"fixed: {escape(change)}")
         if args.fix:
-            err.print(f"wrote {escape(str(args.fix))} ({_plural(len(changes), 'fix')})")
+            err.print(f"wrote {escape(str(args.fix))} ({plural(len(changes), 'fix')})")
     else:
         colours = {"error": "red", "warning": "yellow", "info": "blue"}
         for f in findings:
@@ -305,11 +302,11 @@ def run(args: argparse.Namespace) -> int:
         counts = {s: sum(1 for f in findings if f.severity == s) for s in colours}
         unverifiable = sum(1 for f in findings if f.unverifiable)
         summary = (
-            f"{_plural(counts['error'], 'error')}, {_plural(counts['warning'], 'warning')}"
+            f"{plural(counts['error'], 'error')}, {plural(counts['warning'], 'warning')}"
             f" ({unverifiable} unverifiable), {counts['info']} info in "
-            f"{_plural(len(model.components), 'component')}"
+            f"{plural(len(model.components), 'component')}"
         )
         if args.fix:
-            summary += f"; {_plural(len(changes), 'fix')} written to {args.fix}"
+            summary += f"; {plural(len(changes), 'fix')} written to {args.fix}"
         out.print(escape(summary))
     return 1 if any(f.severity == "error" for f in findings) else 0

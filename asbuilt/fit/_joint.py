@@ -51,12 +51,17 @@ class FaceModel:
         self.face_sign = face_sign
         self.offset = np.array(face_offset, dtype=np.float64)
         self.rot_basis = rot_basis  # (3, q): free rotation directions, world frame
-        # A face every inlier of which sees at grazing incidence from the trusted viewpoint
-        # (set by the fit: :func:`_grazing_face`); such a frame ranks below the others.
-        self.grazing = False
+        # The faces every inlier of which sees at grazing incidence from the trusted viewpoint
+        # (set by the fit: :func:`_grazing_faces`); a frame with any ranks below the others.
+        self.edge_on: tuple[int, ...] = ()
         # From few shots: how far (degrees) a frame that fits them as well lies, else None
         # (set by :func:`best_fit`; the fit is then refused).
         self.rival = None
+
+    @property
+    def grazing(self) -> bool:
+        """Whether a face is seen edge-on by every one of its inliers (:attr:`edge_on`)."""
+        return bool(self.edge_on)
 
     def normals(self) -> np.ndarray:
         return self.face_sign[:, None] * self.axes[self.face_axis]
@@ -308,7 +313,7 @@ def fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted, raster=No
             )
     if fans:
         width = cutoff * max(scale, noise)
-        model.grazing = bool(_grazing_faces(model, x, label, inliers, viewpoint, width))
+        model.edge_on = tuple(_grazing_faces(model, x, label, inliers, viewpoint, width))
     return model, label, residual, inliers, scale, steps, one_face
 
 
@@ -426,10 +431,9 @@ def _edge_on_side_face(best, trials, x, view, noise, cutoff, cap, lines):
         if not trial_cost < cost:
             continue
         width = cutoff * max(scale, noise)
-        edge_on = _grazing_faces(model, x, label, inliers, view, width)
         held = 0
         for f in range(model.offset.shape[0]):
-            if f in edge_on:
+            if f in model.edge_on:
                 continue
             on_face = inliers & (label == f)
             for column in np.unique(columns[on_face & rejected]).tolist():

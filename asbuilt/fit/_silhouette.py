@@ -35,7 +35,14 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["raster_grid", "raster_window", "edge_shots", "shot_angles", "solve_bounds"]
+__all__ = [
+    "edge_shots",
+    "on_raster_lines",
+    "raster_grid",
+    "raster_window",
+    "shot_angles",
+    "solve_bounds",
+]
 
 #: Samples per box edge when measuring the box's angular extent (the tilt extreme of a convex
 #: box can lie inside an edge).
@@ -160,6 +167,14 @@ def _line_blur(points: np.ndarray, viewpoint: np.ndarray, ang: np.ndarray) -> fl
         if small.size >= 3:
             blur = max(blur, _BLUR_GAPS * float(np.median(small)))
     return blur
+
+
+def on_raster_lines(seen) -> bool:
+    """Whether shots' pan or tilt alone falls on evenly spaced lines (``seen``:
+    :func:`shot_angles`' result, or None): a raster with a few columns occluded by something in
+    front reads no grid (:func:`raster_grid`) but keeps its rows; shots aimed by hand have
+    neither."""
+    return seen is not None and any(_grid_step(seen[1][:, j], seen[2]) is not None for j in (0, 1))
 
 
 def _grid_step(values: np.ndarray, rounding: float = 0.0) -> float | None:

@@ -735,12 +735,7 @@ def _fit_cuboid_shots(
     short = np.zeros(3, bool)
     if seed is None:
         bisected = pinned & bool(np.any(edges_b[0] >= 0))
-        # A raster with a gap (a few columns occluded by something in front) has no grid,
-        # yet its shots lie on evenly spaced lines in pan or tilt; hand-aimed shots do not.
-        lattice = grid is not None or (
-            seen is not None
-            and any(_silhouette._grid_step(seen[1][:, j], seen[2]) is not None for j in (0, 1))
-        )
+        lattice = grid is not None or _silhouette.on_raster_lines(seen)
         short = unreached(lo_face, hi_face, bisected, lattice, int(np.count_nonzero(inliers)))
     used_window = False
     gaps = None

@@ -378,7 +378,7 @@ def test_the_same_user_catalog_by_a_relative_path_is_its_own(tmp_path, capsys, m
 
 
 def test_plural_of_fix_and_the_others():
-    from asbuilt.cli.check import _plural
+    from asbuilt.cli._text import plural as _plural
 
     assert [_plural(n, "fix") for n in (0, 1, 2)] == ["0 fixes", "1 fix", "2 fixes"]
     assert [_plural(n, "error") for n in (0, 1, 2)] == ["0 errors", "1 error", "2 errors"]
