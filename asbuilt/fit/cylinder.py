@@ -30,6 +30,12 @@ Method
    with weights from a fitted incidence noise model (range noise along the beam makes grazing
    shots more precise than square-on ones).
 
+6. When more than a quarter of the shots lie off that fit, or it was refused or ignored the
+   viewpoint, a plane across the pipe's end holding many of them (a flange face, the wall the
+   pipe enters) is looked for by RANSAC and the pipe fitted again without its shots
+   (:mod:`asbuilt.fit._cylinder_end_plane`); that fit replaces the first when the geometry
+   says the plane bounds the pipe and it explains the other shots better (MSAC).
+
 The geometric estimate is the final one: algebraic circle fits alone are biased on partial arcs.
 
 Scans of 35 points or more with a known sigma first try the quick path
@@ -77,6 +83,7 @@ from asbuilt.fit._cylinder_checks import (
     unhidden_starts,
     unseen,
 )
+from asbuilt.fit._cylinder_end_plane import fit_without_end_plane
 from asbuilt.fit._cylinder_finish import (
     METHOD,
     VIEW_IGNORED,
@@ -242,6 +249,38 @@ def fit_cylinder(
     FitError
         Too few points, identical, collinear or coplanar points, or too many outliers.
     """
+    try:
+        result = _fit_with_rescues(points, sigma, tolerances, viewpoint)
+    except FitError as exc:
+        result, error = None, exc
+    if len(np.asarray(points)) <= DENSE_POINTS:
+        # Shots on a flange face or the wall the pipe enters lie on one plane across its end.
+        pts = validate_points(points, "cylinder")
+        view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64)
+        first = None if result is None or _view_ignored(result) else result
+        reference = result
+        if result is None and view is not None:
+            reference = _fit_or_none(pts, sigma, tolerances)  # refused only for the viewpoint?
+        fit = _fit_cylinder if view is None else _fit_seen_from
+        across = fit_without_end_plane(fit, pts, sigma, tolerances, view, first, reference)
+        if across is not None:
+            return across
+    if result is None:
+        raise error
+    return result
+
+
+def _fit_or_none(points, sigma, tolerances) -> FitResult | None:
+    """The fit of the shots alone (no viewpoint), or None when refused."""
+    try:
+        return _fit_cylinder(points, sigma, tolerances, None)
+    except FitError:
+        return None
+
+
+def _fit_with_rescues(points, sigma, tolerances, viewpoint) -> FitResult:
+    """:func:`fit_cylinder` before the surface across the pipe's end is looked for: the fit of
+    the shots as they are, else with the background behind the pipe left out."""
     result = error = None
     try:
         result = _fit_cylinder(points, sigma, tolerances, viewpoint)
