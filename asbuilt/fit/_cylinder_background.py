@@ -46,6 +46,7 @@ __all__ = [
     "PLANE_SAMPLES",
     "MOST_PLANES",
     "behind_the_pipe",
+    "near_random_planes",
     "fit_without_background_plane",
 ]
 
@@ -270,19 +271,26 @@ PLANE_SAMPLES = 300
 MOST_PLANES = 4
 
 
-def _fullest_planes(points: np.ndarray, cutoff: float, rng) -> list[np.ndarray]:
-    """Masks (n,) bool of the shots within ``cutoff`` metres of the fullest planes through
-    random triples of ``points`` (n, 3) metres, at least ``PLANE_SHOTS`` each, fullest first,
-    none the same set twice (at most ``MOST_PLANES``)."""
+def near_random_planes(points: np.ndarray, cutoff: float, samples: int, rng) -> np.ndarray:
+    """Which of ``points`` (n, 3) metres lie within ``cutoff`` metres of the planes through
+    ``samples`` random triples of them (RANSAC hypotheses, Fischler & Bolles 1981; degenerate
+    triples dropped): bool array (n, planes)."""
     n = len(points)
-    triples = rng.integers(0, n, (PLANE_SAMPLES, 3))
+    triples = rng.integers(0, n, (samples, 3))
     first = points[triples[:, 0]]
     normals = np.cross(points[triples[:, 1]] - first, points[triples[:, 2]] - first)
     lengths = np.linalg.norm(normals, axis=1)
     good = lengths > 1e-12
     normals = normals[good] / lengths[good, None]
     offsets = np.einsum("ij,ij->i", normals, first[good])
-    near = np.abs(points @ normals.T - offsets) <= cutoff  # (n, planes)
+    return np.abs(points @ normals.T - offsets) <= cutoff
+
+
+def _fullest_planes(points: np.ndarray, cutoff: float, rng) -> list[np.ndarray]:
+    """Masks (n,) bool of the shots within ``cutoff`` metres of the fullest planes through
+    random triples of ``points`` (n, 3) metres, at least ``PLANE_SHOTS`` each, fullest first,
+    none the same set twice (at most ``MOST_PLANES``)."""
+    near = near_random_planes(points, cutoff, PLANE_SAMPLES, rng)
     counts = near.sum(axis=0)
     masks: list[np.ndarray] = []
     for k in np.argsort(-counts, kind="stable"):
