@@ -35,7 +35,14 @@ from asbuilt.fit._cylinder_background import (
 )
 from asbuilt.fit._visibility import excess_and_beyond
 
-__all__ = ["ACROSS_DEG", "DOUBT_SHARE", "END_SHOTS", "MORE_EXPLAINED", "fit_without_end_plane"]
+__all__ = [
+    "ACROSS_DEG",
+    "DOUBT_SHARE",
+    "END_SHOTS",
+    "MORE_EXPLAINED",
+    "fit_without_end_plane",
+    "worth_a_look",
+]
 
 #: A plane counts as across the pipe when its normal lies within this angle of the pipe's axis:
 #: flange faces are square to the pipe, and pipes enter walls square or at a slant (the
@@ -96,8 +103,9 @@ def _across_the_end(cylinder, points, kept, left_out, cutoff: float, view) -> bo
     """Whether the shots ``left_out`` (n,) bool lie on a surface across an end of ``cylinder``
     (its shots ``kept`` (n,) bool): a plane whose normal is within :data:`ACROSS_DEG` of the
     axis, meeting it at an end of the pipe (:func:`_at_an_end`), with every one of its shots
-    outside the pipe by more than ``cutoff`` metres and every kept shot on one side of it; seen from ``view`` ((3,) metres, or None) no beam to them ran
-    deeper than ``cutoff`` into the pipe."""
+    outside the pipe by more than ``cutoff`` metres and every kept shot on one side of it;
+    seen from ``view`` ((3,) metres, or None) no beam to them ran deeper than ``cutoff`` into
+    the pipe."""
     on_plane = points[left_out]
     if len(on_plane) < 3:
         return False
@@ -182,6 +190,23 @@ def _at_an_end(cylinder, normal, centroid, cutoff: float) -> bool:
     return half - inside <= crossing <= half + END_REACH * 2.0 * cylinder.radius + cutoff
 
 
+def _cutoff(sigma, tolerances) -> float:
+    """The outlier cutoff, metres, at the sensor's ``sigma`` (metres), else the prior noise."""
+    noise = float(sigma) if sigma is not None else float(tolerances.prior_range_sigma)
+    return tolerances.outlier_cutoff_sigma * noise
+
+
+def worth_a_look(first, sigma, tolerances) -> bool:
+    """Whether to look for a surface across the pipe's end after the ``first`` fit (a
+    FitResult, or None when it was refused or ignored the viewpoint: always): at least
+    :data:`END_SHOTS` and more than :data:`DOUBT_SHARE` of its shots lie beyond the outlier
+    cutoff (``sigma``: the sensor's, metres, or None)."""
+    if first is None:
+        return True
+    off = np.count_nonzero(np.abs(first.residuals) > _cutoff(sigma, tolerances))
+    return off >= END_SHOTS and off > DOUBT_SHARE * len(first.residuals)
+
+
 def fit_without_end_plane(fit, points: np.ndarray, sigma, tolerances, view, first, reference):
     """The cylinder fit with the shots on a surface across the pipe's end left out (a flange
     face, the wall it enters), when pipe and surface explain more shots than the ``first`` fit
@@ -191,19 +216,12 @@ def fit_without_end_plane(fit, points: np.ndarray, sigma, tolerances, view, firs
 
     ``fit(points, sigma, tolerances, viewpoint)`` fits a subset of ``points`` (n, 3) metres as
     seen from ``view`` ((3,) metres, or None), honouring the viewpoint when given; ``sigma``
-    metres, the sensor's, or None (then the prior noise, or the subset fit's noise when larger).
-    The module docstring gives the rule. The result's residuals and inliers are over every
+    metres, the sensor's, or None (then the prior noise). The caller asks
+    :func:`worth_a_look` first. The module docstring gives the rule. The result's residuals and inliers are over every
     shot, with a note; the surface's shots are outliers.
     """
     n = len(points)
-    noise = float(sigma) if sigma is not None else float(tolerances.prior_range_sigma)
-    cutoff = tolerances.outlier_cutoff_sigma * noise
-    off_first = None
-    if first is not None:
-        off_first = np.abs(first.residuals) > cutoff
-        off = np.count_nonzero(off_first)
-        if off < END_SHOTS or off <= DOUBT_SHARE * n:
-            return None
+    cutoff = _cutoff(sigma, tolerances)
     rng = np.random.default_rng(n)
     most = n - int(np.ceil(NEAR_SHARE * n))  # the rest must keep NEAR_SHARE of the shots
     planes = _candidate_planes(points, cutoff, END_SHOTS, most, rng)

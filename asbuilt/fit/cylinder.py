@@ -83,7 +83,7 @@ from asbuilt.fit._cylinder_checks import (
     unhidden_starts,
     unseen,
 )
-from asbuilt.fit._cylinder_end_plane import fit_without_end_plane
+from asbuilt.fit._cylinder_end_plane import fit_without_end_plane, worth_a_look
 from asbuilt.fit._cylinder_finish import (
     METHOD,
     VIEW_IGNORED,
@@ -253,11 +253,11 @@ def fit_cylinder(
         result = _fit_with_rescues(points, sigma, tolerances, viewpoint)
     except FitError as exc:
         result, error = None, exc
-    if len(np.asarray(points)) <= DENSE_POINTS:
+    first = None if result is None or _view_ignored(result) else result
+    if worth_a_look(first, sigma, tolerances) and len(np.asarray(points)) <= DENSE_POINTS:
         # Shots on a flange face or the wall the pipe enters lie on one plane across its end.
         pts = validate_points(points, "cylinder")
         view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64)
-        first = None if result is None or _view_ignored(result) else result
         reference = result
         if result is None and view is not None:
             reference = _fit_or_none(pts, sigma, tolerances)  # refused only for the viewpoint?
