@@ -22,6 +22,8 @@ fit rejected whole changes nothing). Lengths in metres.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from asbuilt.errors import FitError
@@ -38,6 +40,7 @@ from asbuilt.fit._visibility import excess_and_beyond
 __all__ = [
     "ACROSS_DEG",
     "DOUBT_SHARE",
+    "END_PLANE_SHOTS",
     "END_SHOTS",
     "MORE_EXPLAINED",
     "fit_without_end_plane",
@@ -79,6 +82,8 @@ MORE_EXPLAINED = 1.0
 #: tried in turn (each costs a cylinder fit).
 PLANE_SAMPLES = 600
 MOST_PLANES = 3
+#: The fit's diagnostics key counting the shots left out on the surface across the pipe's end.
+END_PLANE_SHOTS = "end_plane_shots"
 
 
 def _candidate_planes(points: np.ndarray, cutoff: float, least: int, most: int, rng):
@@ -261,9 +266,13 @@ def fit_without_end_plane(fit, points: np.ndarray, sigma, tolerances, view, firs
             before = np.minimum(first.residuals[~plane] ** 2, cutoff**2).sum()
             if cost > before - MORE_EXPLAINED * cutoff**2:
                 continue
+        on_plane = int(np.count_nonzero(~rest))
         note = (
-            f"{int(np.count_nonzero(~rest))} shot(s) on a plane across the pipe's end (a flange"
+            f"{on_plane} shot(s) on a plane across the pipe's end (a flange"
             " face, or the wall it enters) were left out before the fit."
         )
-        return rescued(found, points, inliers, note)
+        result = rescued(found, points, inliers, note)
+        # Named for the outliers rule (AB404), which counts these shots as explained.
+        diagnostics = {**result.diagnostics, END_PLANE_SHOTS: float(on_plane)}
+        return dataclasses.replace(result, diagnostics=diagnostics)
     return None

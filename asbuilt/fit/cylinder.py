@@ -83,7 +83,7 @@ from asbuilt.fit._cylinder_checks import (
     unhidden_starts,
     unseen,
 )
-from asbuilt.fit._cylinder_end_plane import fit_without_end_plane, worth_a_look
+from asbuilt.fit._cylinder_end_plane import END_PLANE_SHOTS, fit_without_end_plane, worth_a_look
 from asbuilt.fit._cylinder_finish import (
     METHOD,
     VIEW_IGNORED,
@@ -119,7 +119,7 @@ from asbuilt.fit._visibility import (
 from asbuilt.fit.result import FitResult
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["fit_cylinder", "METHOD"]
+__all__ = ["END_PLANE_SHOTS", "fit_cylinder", "METHOD"]
 
 
 #: How many of the best starts are settled again and judged by their beams when the viewpoint

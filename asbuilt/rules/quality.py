@@ -12,6 +12,7 @@ import numpy as np
 
 from asbuilt.findings import Suggestion
 from asbuilt.fit.auto import RIVAL_PREFIX
+from asbuilt.fit.cylinder import END_PLANE_SHOTS
 
 from ._context import Context, centre_of, stderr_value, verdict
 
@@ -176,15 +177,25 @@ def check_outliers(ctx: Context) -> None:
         if n == 0:
             continue
         rejected = n - fit.n_inliers
-        share = rejected / n
+        # Shots the cylinder fit found on a surface across the pipe's end (a flange face, the
+        # wall it enters) are explained, not background the fit may have taken for the pipe.
+        on_end = _count(fit.diagnostics.get(END_PLANE_SHOTS))
+        share = (rejected - on_end) / n
         se = float(np.sqrt(max(share * (1 - share), 1.0 / n) / n))
         if share <= allowed:
             continue
         outcome = verdict(share, allowed, se, ctx.k)
+        explained = (
+            f" ({on_end} more lie on a plane across the pipe's end: a flange face, or the wall"
+            " it enters)"
+            if on_end
+            else ""
+        )
         ctx.emit(
             slug,
             [comp.id],
-            f"{rejected} of {n} points ({share * 100:.0f}%) were rejected as outliers",
+            f"{rejected - on_end} of {n} points ({share * 100:.0f}%) were rejected as outliers"
+            + explained,
             location=centre_of(comp.geometry),
             measured=share,
             allowed=allowed,
@@ -195,6 +206,11 @@ def check_outliers(ctx: Context) -> None:
                 Suggestion(f"rescan {comp.id} aiming away from its edges and the background"),
             ),
         )
+
+
+def _count(value) -> int:
+    """A diagnostics count (a float, or None / NaN from a model file) as an int, 0 if unknown."""
+    return int(value) if value is not None and np.isfinite(value) else 0
 
 
 def check_ambiguous_kind(ctx: Context) -> None:

@@ -18,7 +18,8 @@ import asbuilt
 import asbuilt.fit.cylinder as cylinder_module
 from asbuilt.errors import FitError
 from asbuilt.fit import fit_points
-from asbuilt.fit._cylinder_end_plane import fit_without_end_plane
+from asbuilt.fit._cylinder_end_plane import END_PLANE_SHOTS, fit_without_end_plane
+from asbuilt.pipeline import build_model
 from asbuilt.tolerances import DEFAULT_TOLERANCES
 
 SIGMA = 0.002
@@ -163,6 +164,22 @@ def test_review_scans_with_a_surface_across_the_pipe(name):
     assert abs(cylinder.radius - truth["radius"]) <= 3 * result.stderr["radius"]
     assert _axis_error_deg(cylinder.axis, np.array(truth["axis"])) <= REVIEW_SCANS[name]
     assert any(NOTE in note for note in result.notes)
+
+
+@pytest.mark.parametrize("name", sorted(REVIEW_SCANS))
+def test_the_surface_shots_are_counted_and_not_reported_as_outliers(name):
+    """The fit counts the shots it left out on the surface (``end_plane_shots``), as its note
+    says, and ``check`` does not count them as outliers (AB404): before, the flange scan
+    warned "8 of 26 points (31%) were rejected as outliers"."""
+    path = Path(__file__).with_name(name)
+    model = build_model(asbuilt.load_scan(path))
+    (component,) = model.components
+    result = component.fit
+    (note,) = [note for note in result.notes if NOTE in note]
+    on_end = result.diagnostics[END_PLANE_SHOTS]
+    assert note.startswith(f"{on_end:.0f} shot(s)") and on_end >= 4
+    assert result.n_points - result.n_inliers >= on_end
+    assert "outliers" not in [f.slug for f in model.findings]
 
 
 def test_clean_pipe_is_left_alone():

@@ -88,6 +88,26 @@ def test_outliers(rejected, flagged):
         assert "10 of 25 points (40%)" in found[0].message
 
 
+@pytest.mark.parametrize(
+    "on_end, expected",
+    [
+        (8, None),  # 2 of 25 unexplained: 8%
+        (3, "7 of 25 points (28%) were rejected as outliers (3 more lie on a plane across the"),
+        (float("nan"), "10 of 25 points (40%) were rejected as outliers"),  # null in a model file
+    ],
+)
+def test_shots_on_a_plane_across_the_pipe_end_are_not_counted_as_outliers(on_end, expected):
+    """The cylinder fit names the shots it left out on a flange face or the wall the pipe
+    enters (``diagnostics["end_plane_shots"]``): explained, so not the background AB404 warns
+    of."""
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, n=25, rejected=10)
+    fit = dataclasses.replace(
+        comp.fit, diagnostics={**comp.fit.diagnostics, "end_plane_shots": on_end}
+    )
+    found = only(dataclasses.replace(comp, fit=fit), "outliers")
+    assert [f.message[: len(expected)] for f in found] == ([expected] if expected else [])
+
+
 def test_components_without_fits_are_skipped():
     fit = cuboid_fit([0, 0, 1], [0, 0, 1], (0.3, 0.3, 2.0), n=5)
     comp = Component(id="X", type="cuboid", geometry=fit.primitive)
