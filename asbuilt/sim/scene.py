@@ -402,7 +402,9 @@ def _geometry(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
         size = reader.vector(geo, "size", where, size=2)
         if np.any(size <= 0):
             reader.fail(f"{where}.size", "width and height must be positive")
-        thickness = reader.length(geo, "thickness", where, positive=True, default=0.01)
+        thickness = reader.length(
+            geo, "thickness", where, positive=True, default=0.01 / reader.scale
+        )
         try:
             axes = plate_axes(normal, up)
         except ValueError as exc:
@@ -479,7 +481,9 @@ def _pipe_run(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
         reader.fail(f"{where}.path", "must be a list of at least 2 points")
     path = np.array([reader.vector({"p": p}, "p", f"{where}.path[{i}]") for i, p in enumerate(raw)])
     radius = reader.radius(geo, where)
-    bend = reader.length(geo, "bend_radius", where, positive=True, default=3.0 * radius)
+    bend = reader.length(
+        geo, "bend_radius", where, positive=True, default=3.0 * radius / reader.scale
+    )
     ids = geo.get("ids")
     count = len(path) - 1
     if ids is None:
@@ -703,8 +707,11 @@ def scene_from_dict(doc, *, source: str | None = None, base_dir=None) -> Scene:
     if not isinstance(links_doc, list):
         reader.fail("links", "must be a list of [id, id] pairs")
     for k, pair in enumerate(links_doc):
-        if not (isinstance(pair, list) and len(pair) == 2 and all(p in ids for p in pair)):
+        if not (isinstance(pair, list) and len(pair) == 2):
             reader.fail(f"links[{k}]", f"must be a pair of object ids, not {pair!r}")
+        for p in pair:
+            if p not in ids:
+                reader.fail(f"links[{k}]", f"{p!r} is not the id of an object in the scene")
         links.append((pair[0], pair[1]))
     known = {"format", "version", "units", "name", "seed", "points", "stations", "objects", "links"}
     return Scene(

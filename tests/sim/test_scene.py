@@ -144,7 +144,11 @@ BAD = [
         "an unbounded ground plane cannot be scanned",
     ),
     (lambda d: d["objects"][1].update(id="P1"), "object ids must be unique"),
-    (lambda d: d.update(links=[["P1", "nope"]]), "links[0]: must be a pair of object ids"),
+    (
+        lambda d: d.update(links=[["P1", "nope"]]),
+        "links[0]: 'nope' is not the id of an object in the scene",
+    ),
+    (lambda d: d.update(links=[["P1"]]), "links[0]: must be a pair of object ids, not ['P1']"),
     (lambda d: d["stations"][0].update(dropout=1.5), "stations[0].dropout: must be at most 0.9"),
     (
         lambda d: d["stations"][0].update(beam_divergence_mrad=3000),
@@ -152,6 +156,62 @@ BAD = [
     ),
     (lambda d: d.update(format="asbuilt-scan"), "format: format is 'asbuilt-scan'"),
 ]
+
+
+def _plate_and_run(units: str, scale: float) -> dict:
+    """A plate without a thickness and a pipe run without a bend radius, lengths in ``units``
+    (``scale`` of them to the metre)."""
+    return {
+        "format": "asbuilt-scene",
+        "version": 1,
+        "units": units,
+        "stations": [{"id": "S1", "position": [0, 0, 1.5 * scale]}],
+        "objects": [
+            {
+                "id": "W",
+                "kind": "plane",
+                "geometry": {
+                    "type": "plate",
+                    "center": [0, 5 * scale, 1 * scale],
+                    "normal": [0, -1, 0],
+                    "size": [2 * scale, 2 * scale],
+                },
+            },
+            {
+                "id": "R",
+                "kind": "cylinder",
+                "geometry": {
+                    "type": "pipe_run",
+                    "path": [
+                        [-2 * scale, 3 * scale, 0.5 * scale],
+                        [0, 3 * scale, 0.5 * scale],
+                        [0, 3 * scale, 2.5 * scale],
+                    ],
+                    "od": 0.1143 * scale,
+                },
+            },
+        ],
+    }
+
+
+@pytest.mark.parametrize(
+    ("units", "scale"), [("mm", 1000.0), ("in", 1 / 0.0254), ("ft", 1 / 0.3048)]
+)
+def test_default_lengths_do_not_depend_on_the_units(units, scale):
+    """A plate's default 10 mm thickness and a pipe run's default bend radius (3 pipe radii)
+    came out 10 um and 0.35 mm in a millimetre scene: the defaults were scaled a second time."""
+    metres = scene_from_dict(_plate_and_run("m", 1.0))
+    other = scene_from_dict(_plate_and_run(units, scale))
+    assert len(metres.objects) == len(other.objects)
+    for a, b in zip(metres.objects, other.objects):
+        assert a.id == b.id
+        if isinstance(a.truth, Cylinder):
+            assert b.truth.length == pytest.approx(a.truth.length, rel=1e-9)
+            assert a.truth.length == pytest.approx(
+                2 - 3 * 0.1143 / 2, rel=1e-9
+            )  # cut back by the bend radius
+    (plate,) = [o for o in other.objects if o.id == "W"]
+    assert min(plate.shape.size) == pytest.approx(0.01)
 
 
 @pytest.mark.parametrize("mutate, message", BAD)
