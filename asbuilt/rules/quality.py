@@ -111,6 +111,15 @@ def check_weak(ctx: Context) -> None:
             what = "its length" if fit.kind == "cylinder" else "a size"
             reasons.append(f"{what} runs on past the scan window (a lower bound, not measured)")
             advice.append("a window over its ends")
+        unreached = _count(diag.get("unreached_sizes"))
+        if unreached:
+            # Hand-aimed shots kept off the edges (asbuilt.fit._cuboid_reach): the size is the
+            # shots' span, short by however far the operator stayed from the edges.
+            sizes = "a size is" if unreached == 1 else f"{unreached} sizes are"
+            reasons.append(
+                f"{sizes} only a lower bound (the shots, not a raster, stop short of edges)"
+            )
+            advice.append("shots near both edges of each face, or a raster from the station")
         if worst is not None and np.isfinite(worst) and worst > max_rel:
             reasons.append(f"size known to +-{worst * 100:.1f}% > {max_rel * 100:.0f}%")
             advice.append("more points")

@@ -66,6 +66,32 @@ def test_one_face_cuboid_is_weak():
     assert "1 face seen" in f.message and "second face" in f.suggestions[0].description
 
 
+@pytest.mark.parametrize(
+    "unreached, expected",
+    [
+        (0, None),
+        (1, "a size is only a lower bound (the shots, not a raster, stop short of edges)"),
+        (2, "2 sizes are only a lower bound"),
+        (float("nan"), None),  # null in a model file
+    ],
+)
+def test_hand_aimed_box_sizes_that_are_lower_bounds_are_weak(unreached, expected):
+    """A cuboid size the fit could only bound from below (hand-aimed shots stop short of the
+    edges: ``diagnostics["unreached_sizes"]``, standard error infinite) was reported by no
+    rule: the fit stood silent on a column fitted 242 mm wide for 300."""
+    comp = column("C1", [0, 0, 0])
+    fit = dataclasses.replace(
+        comp.fit, diagnostics={**comp.fit.diagnostics, "unreached_sizes": unreached}
+    )
+    found = only(dataclasses.replace(comp, fit=fit), "weak-geometry")
+    if expected is None:
+        assert not found
+    else:
+        (f,) = found
+        assert expected in f.message
+        assert "shots near both edges of each face" in f.suggestions[0].description
+
+
 @pytest.mark.parametrize("rms_sigmas, flagged", [(1.0, False), (2.0, False), (4.0, True)])
 def test_poor_fit(rms_sigmas, flagged):
     comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, n=30, rms=0.002 * rms_sigmas)
