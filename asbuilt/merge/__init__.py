@@ -15,8 +15,8 @@
    joined axes meet exactly;
 5. **fittings and spools** (:mod:`.spool`): elbows/bends, tees, reducers (concentric, or
    eccentric where the axes are offset by the radii's difference, :mod:`.eccentric`, decided
-   before step 4's alignment) and couplings, pipes trimmed to them, everything grouped into
-   spools.
+   before step 4's alignment), butt welds between pipes of one size in line, pipes trimmed or
+   extended to them, everything grouped into spools.
 
 Every change to a fitted value is recorded on the component as a
 :class:`~asbuilt.model.Correction` (diameter snapped, axis regularised, made coaxial or placed
@@ -246,7 +246,7 @@ def merge_model(
     -------
     Model
         ``components``: pipes (``Straight``), elbows (``Bend``), tees (``Tee``), reducers
-        (``Reducer``), couplings (``Straight``) and the unchanged non-pipe components; each
+        (``Reducer``) and the unchanged non-pipe components; each
         pipe's ``snap`` says how its size was chosen and ``corrections`` what merging changed.
         ``spools`` lists the connected groups. All in metres.
 

@@ -6,7 +6,7 @@ Pipes are lines with two ends. Two pipe ends are a joint when
   (lateral offset within the skew tolerance of 0, or of the difference of the two fitted radii:
   an eccentric reducer's offset) and the ends face each other with a gap no larger
   than twice ``joint_distance`` plus twice the larger OD (room for a reducer or the run of a tee): an
-  **inline** joint (butt weld, coupling, reducer or the run of a tee);
+  **inline** joint (butt weld, reducer or the run of a tee);
 * or their axes are nearly coplanar (closest distance within the skew tolerance) and meet at a
   point that lies ahead of both ends by no more than the bend's centre-to-end plus
   ``joint_distance``: an **elbow** (the bend's centre-to-end is estimated with a long-radius bend,
@@ -41,7 +41,7 @@ built however far apart the pipes' segments are).
 ASME B16.9 elbows turn 45 or 90 degrees: two ends whose bend would exceed 90 degrees plus
 ``intended_angle_deg`` are never an elbow. An inline pair with a third end meeting it at an
 oblique angle (a **lateral** or wye, which the catalog does not have) becomes one ``lateral``
-joint of the three ends (one spool; no coupling across the lateral's gap), built from the
+joint of the three ends (one spool; no butt weld across the lateral's gap), built from the
 measured pipe ends (:mod:`.laterals`), with a note; no elbow may take one of their ends.
 """
 
@@ -447,7 +447,7 @@ def find_joints(
         trio = (run_a[0], run_b[0], branch[0])
         teed.update((min(p, q), max(p, q)) for p in trio for q in trio if p != q)
     # 1c. a linked run with a third end meeting its joint obliquely is a lateral, as unlinked:
-    # a straight coupling across the wye's gap would be a fitting nobody built
+    # a straight joint across the wye's gap would be pipe nobody laid
     linked_inline = [
         c for key, c in link_candidates.items() if key not in teed and c and c.kind == "inline"
     ]
@@ -645,7 +645,7 @@ def _tee_around_elbow(cand, claimed, used, tree, radius, pts, out, axes, ods, to
 
 def _laterals(candidates, used, tree, radius, pts, out, axes, ods, tol, slack, notes, names):
     """Inline candidates with an oblique third end (a lateral): one ``"lateral"`` joint of the
-    run ends and the branch end (the lateral fills the gap, so no coupling is built); return
+    run ends and the branch end (the lateral fills the gap, so no butt weld is built); return
     the joints."""
     found = []
     for cand in candidates:
@@ -661,7 +661,7 @@ def _laterals(candidates, used, tree, radius, pts, out, axes, ods, tol, slack, n
         if cand.a in used or cand.b in used or b in used:
             continue
         used.update((cand.a, cand.b, b))
-        # the lateral fills the gap between the run ends: no coupling or butt weld there
+        # the lateral fills the gap between the run ends: no butt weld there
         joints.append(Joint("lateral", (cand.a, cand.b, b), explicit=cand.explicit))
         i, j, k = cand.a[0], cand.b[0], b[0]
         cos = abs(float(axes[k] @ axes[i]))

@@ -1,6 +1,6 @@
 """Straight joints that would pass through another pipe or another straight joint: a cross.
 
-Contiguity builds an inline joint (a coupling, a reducer, a butt weld) as the straight piece
+Contiguity builds an inline joint (a butt weld, a reducer) as the straight piece
 between two facing pipe ends. Where four pipes meet at one point as a cross (P1 and P2 on one
 line, P3 and P4 on a perpendicular one) and the scan links the opposite pairs, it built two
 couplings through each other; where two pipes end on either side of a third that runs straight

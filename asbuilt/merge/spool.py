@@ -1,4 +1,4 @@
-"""Spools with real fittings: elbows, tees, reducers and couplings placed at the joints.
+"""Spools with real fittings: elbows, tees and reducers placed at the joints.
 
 Input: pipes as lines already regularised and aligned (:mod:`asbuilt.merge.regularize`), their
 sizes and fitting dimensions, and the joints (:mod:`asbuilt.merge.contiguity`). Output: the pipe
@@ -14,10 +14,9 @@ axes):
   vector perpendicular to ``o_1`` towards ``-o_2``. Both pipes are trimmed (or extended) to
   ``T_k``. Between two sizes (a reducing elbow) a listed 90 degree pair takes its B16.9 A
   (:func:`.reducers.reducing_elbow_end`); another angle or pair is said to be non-standard.
-* **inline**, one size: ends within 5 mm (or overlapping) meet at their midpoint (a butt weld);
-  a larger gap is filled by a **coupling** (a straight of the pipe size) up to
-  :func:`coupling_limit`; a longer gap by pipe (both pipes extended to meet in its middle,
-  with a note: pipe the scan did not measure).
+* **inline**, one size: the ends meet at their midpoint (a butt weld); a gap is pipe the scan
+  did not measure (both pipes extended to meet in its middle), with a note when longer than
+  :func:`fitting_fill_limit`.
 * **inline**, two sizes: a **reducer** of the catalog length (by its large end) centred on the
   gap; both pipes end at its ends. It is concentric when the aligned axes coincide, eccentric
   (``Reducer.offset`` the sideways step between them) when merging placed them apart
@@ -75,12 +74,9 @@ __all__ = [
     "build_spools",
     "ports",
     "connection_mismatches",
-    "BUTT_GAP",
     "MIN_PIPE_LENGTH",
 ]
 
-#: Inline ends closer than this (metres) meet at their midpoint rather than get a coupling.
-BUTT_GAP = 0.005
 #: Shortest pipe piece left after trimming, metres.
 MIN_PIPE_LENGTH = 0.001
 #: Largest elbow bend built by default (degrees): ASME B16.9 elbows turn 45 or 90 degrees, plus
@@ -156,12 +152,12 @@ def _unit(v):
     return v / np.linalg.norm(v)
 
 
-def coupling_limit(joint_distance: float, od: float) -> float:
-    """Longest gap (metres) between collinear pipes of one size a coupling may fill.
+def fitting_fill_limit(joint_distance: float, od: float) -> float:
+    """Longest gap (metres) between collinear pipes of one size that a fitting could fill.
 
     ``2 joint_distance + 2 od``: the gap an inline joint takes without a link or shot slack
-    (:mod:`.contiguity`: room for a reducer or a tee's run), so what a fitting may plausibly
-    fill. A longer gap was bridged only by a link's margin or sparse shots: it is pipe.
+    (:mod:`.contiguity`: room for a reducer or a tee's run). A longer one was bridged only by a
+    link's margin or sparse shots: the pipe filling it gets a note saying so.
     """
     return 2.0 * joint_distance + 2.0 * od
 
@@ -184,7 +180,7 @@ class _Builder:
         # How far a pipe end may be cut back into its fitting with its shots still on the
         # fitting's surface (metres; set by _elbow, _inline and _tee).
         self.allowance: dict[tuple[int, int], float] = {}
-        # Pipe ends extended to fill a gap longer than a coupling: the note for them.
+        # Pipe ends extended to fill a gap longer than a fitting would: the note for them.
         self.filled: dict[tuple[int, int], str] = {}
         # Notes for pipes' merge_notes from the fittings built at them (non-standard ones).
         self.pipe_notes: dict[int, list[str]] = {}
@@ -303,22 +299,18 @@ def _inline(b: _Builder, joint: Joint):
     oi = b.out[i, ki]
     gap = float(oi @ (ej - ei))
     if same_size(pi, pj):
-        if gap <= BUTT_GAP:
-            mid = 0.5 * (ei + ej)
-            b.ends[i, ki] = mid
-            b.ends[j, kj] = mid
-            b.fitting_at[i, ki] = f"butt weld with {pj.id}"
-            b.fitting_at[j, kj] = f"butt weld with {pi.id}"
-            return []
-        longest = coupling_limit(b.joint_distance, max(pi.od, pj.od))
+        # One size in line: a butt weld, the two pipes meeting at the gap's middle. A gap is
+        # pipe the scan did not measure (operators keep the beam off welds, so the shots stop
+        # short of one on both sides); before, gaps up to fitting_fill_limit were filled by a
+        # "coupling" no butt-welded line has, which the take-off counted as a fitting.
+        mid = 0.5 * (ei + ej)
+        b.ends[i, ki] = b.ends[j, kj] = mid
+        b.fitting_at[i, ki] = f"butt weld with {pj.id}"
+        b.fitting_at[j, kj] = f"butt weld with {pi.id}"
+        longest = fitting_fill_limit(b.joint_distance, max(pi.od, pj.od))
         if gap > longest:
-            # more than a fitting fills: the gap is pipe nobody measured (a link or sparse
-            # shots made the joint), counted as pipe in the take-off and said, not hidden in a
-            # "coupling" counted as one fitting without length or weight
-            mid = 0.5 * (ei + ej)
-            b.ends[i, ki] = b.ends[j, kj] = mid
-            b.fitting_at[i, ki] = f"butt weld with {pj.id}"
-            b.fitting_at[j, kj] = f"butt weld with {pi.id}"
+            # more than a fitting would fill: a link or sparse shots made the joint; said, as
+            # the extensions' own notes would not name the pair
             size = f"NPS {pi.nominal}" if pi.nominal else f"OD {pi.od * 1000:.1f} mm"
             b.filled[i, ki] = b.filled[j, kj] = (
                 f"{pi.id} and {pj.id} are {gap * 1000:.0f} mm apart in line, longer than a "
@@ -326,15 +318,7 @@ def _inline(b: _Builder, joint: Joint):
                 "the scan did not measure (both pipes extended to meet in its middle); scan "
                 "the hidden section or check the link"
             )
-            return []
-        geometry = Straight(start=ei, end=ej, outer_radius=0.5 * pi.od, wall=pi.wall)
-        snap = {
-            "status": "fitting",
-            "dimensions": "gap",
-            "connects": [pi.id, pj.id],
-            "notes": [f"fills a {gap * 1000:.0f} mm gap between collinear pipes"],
-        }
-        return [("coupling", f"{pi.id}-{pj.id}", geometry, pi, snap)]
+        return []
     large = pi if pi.od > pj.od else pj
     length = large.dims.reducer_length
     mid = 0.5 * (ei + ej)
@@ -568,8 +552,7 @@ def build_spools(
         never mistaken for an object (a column "S1" and spool "S1").
     joint_distance : float
         ``Tolerances.joint_distance`` (metres): a gap between collinear pipes of one size
-        longer than :func:`coupling_limit` is filled with pipe (both pipes extended, with a
-        note), not a coupling.
+        longer than :func:`fitting_fill_limit` gets a note (pipe the scan did not measure).
 
     Returns
     -------
@@ -757,7 +740,7 @@ def build_spools(
                 geometry=geometry,
                 sources=(),
                 spool=spool,
-                group=base.group if kind != "coupling" else base.group,
+                group=base.group,
                 nominal=size_of.nominal,
                 schedule=size_of.schedule,
                 snap=snap,

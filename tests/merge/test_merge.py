@@ -112,7 +112,7 @@ def test_tee_at_a_joint_and_in_the_middle_of_a_pipe():
     assert_consistent(middle, 3)
 
 
-def test_reducer_and_coupling():
+def test_reducer_and_butt_weld():
     model = merge_model(
         report_of(
             [
@@ -129,13 +129,14 @@ def test_reducer_and_coupling():
     assert np.linalg.norm(g.end - g.start) == pytest.approx(0.102)  # B16.9 NPS 4 reducer H
     assert (g.outer_radius_start, g.outer_radius_end) == pytest.approx((NPS4 / 2, 0.0889 / 2))
     assert g.start == pytest.approx([2 - 0.051, 0, 0], abs=1e-9)
-    coupling = comps["P2-P3"]
-    assert coupling.type == "coupling" and isinstance(coupling.geometry, Straight)
-    assert coupling.geometry.length == pytest.approx(0.2)
+    # one size in line 0.2 m apart: a butt weld in the gap's middle, no "coupling"
+    assert "P2-P3" not in comps
+    assert comps["P2"].geometry.end == pytest.approx([4.1, 0, 0], abs=1e-9)
+    assert comps["P3"].geometry.start == pytest.approx([4.1, 0, 0], abs=1e-9)
     assert model.spools[0].pipe_length == pytest.approx(
         sum(c.geometry.length for c in model.components if c.type == "pipe")
     )
-    assert_consistent(model, 4)
+    assert_consistent(model, 3)  # reducer (2 ends) and the butt weld
 
 
 def test_butt_joint_meets_at_the_midpoint_without_a_fitting():
