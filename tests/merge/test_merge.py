@@ -13,7 +13,7 @@ from synthetic_pipes import Pipe, box_fit, cylinder_fit, report_of
 from asbuilt.errors import CatalogError
 from asbuilt.merge import merge_model
 from asbuilt.merge.spool import connection_mismatches, ports
-from asbuilt.model import Bend, Reducer, Straight, Tee
+from asbuilt.model import Bend, Reducer, Tee
 from asbuilt.scan.model import ScanObject
 from asbuilt.tolerances import DEFAULT_TOLERANCES
 
