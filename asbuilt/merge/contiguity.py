@@ -20,7 +20,8 @@ The skew tolerance is ``max(0.5 x the smaller outer radius, 10 mm)``: sparse fit
 to a few millimetres, and pipes that miss each other by more than half a radius do not meet.
 
 Candidates come from a k-d tree on the end points (so 1,000 pipes merge in about a second),
-best first; each end joins at most one other end. An inline pair with a third end whose axis
+best first (an inline pair by its gap, an elbow by its ends' distances from where the elbow
+would end); each end joins at most one other end. An inline pair with a third end whose axis
 meets it square-on is taken first, as a **tee** (stronger evidence than an elbow between two of
 those ends); then the other pairs. A pipe end left over whose axis meets an inline joint
 square-on becomes the branch of a **tee** there; one whose axis meets the inside
@@ -239,7 +240,15 @@ def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: 
     if not (-jd - extra <= s <= reach + si + extra and -jd - extra <= t <= reach + sj + extra):
         return None
     kind = "elbow" if bend <= elbow_bend_limit(tol) else "oblique"
-    return _Candidate(abs(s) + abs(t) + skew, kind, (i, ki), (j, kj), relaxed)
+    # Each end's distance from where the elbow would end (its centre-to-end from the corner,
+    # long radius ~ 1.5 OD): the pipe the fitting leaves unmeasured or cuts off, as an inline
+    # pair's cost is its gap. Measured from the corner instead, an end that ran past the corner
+    # (shots where the elbow would be) looked closest: an NPS 6 pipe's end 40 mm past another
+    # spool's NPS 4 riser took it for a reducing elbow before its own elbow, 0.36 m short of its
+    # corner (an independent review's rack, 3 of 21 scans).
+    to_end = 1.5 * max(ods[i], ods[j]) * np.tan(np.radians(min(bend, ELBOW_MAX_DEG)) / 2)
+    cost = abs(s - to_end) + abs(t - to_end) + skew
+    return _Candidate(cost, kind, (i, ki), (j, kj), relaxed)
 
 
 def _best_for_link(i, j, pts, out, axes, ods, tol, slack):

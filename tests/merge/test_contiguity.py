@@ -25,10 +25,10 @@ def segments(*pairs):
     return (starts + ends) / 2, vec / lengths[:, None], lengths
 
 
-def joints_of(*pairs, links=(), ods=None):
+def joints_of(*pairs, links=(), ods=None, slack=None):
     c, a, l = segments(*pairs)  # noqa: E741
     ods = np.full(len(c), OD) if ods is None else np.asarray(ods)
-    return find_joints(c, a, l, ods, links=links)
+    return find_joints(c, a, l, ods, links=links, slack=slack)
 
 
 def test_pipe_ends():
@@ -148,6 +148,24 @@ def test_many_pipes_are_paired_locally():
     joints = joints_of(*pairs)
     assert len(joints) == 200
     assert all(j.kind == "elbow" and j.pipes[1] - j.pipes[0] == 1 for j in joints)
+
+
+def test_an_end_past_another_pipe_s_corner_is_not_its_elbow():
+    """An independent review's rack (fitted ends, metres): NPS 6 P1 and P2 turn at (3, 0),
+    NPS 4 Q1 and Q2 at (2.6, 0.4); P1's shots run 40 mm past Q2's axis. Ranked by the ends'
+    distance to the corner, P1-Q2 (0.63 m) came before Q1-Q2 (0.64 m) and P1-P2 (0.74 m): a
+    6 x 4 reducing elbow cutting 270 mm of measured pipe off P1, and neither true elbow. Ranked
+    by the distance to where each elbow would end (its centre-to-end from the corner), the two
+    true elbows are the cheapest."""
+    joints = joints_of(
+        ((0.201, 0, 2), (2.64, 0, 2)),
+        ((3.0, 0.375, 2), (3.0, 2.265, 2)),
+        ((0.247, 0.398, 2), (2.153, 0.398, 2)),
+        ((2.599, 0.59, 2), (2.6, 2.291, 2)),
+        ods=[0.1685, 0.1678, 0.1122, 0.1127],
+        slack=[0.25, 0.25, 0.25, 0.25],  # the shots' spacing along the pipes, about a raster row
+    )
+    assert sorted((j.kind, j.pipes) for j in joints) == [("elbow", (0, 1)), ("elbow", (2, 3))]
 
 
 def test_a_tee_wins_over_an_elbow_when_the_branch_ends_nearer():
