@@ -47,6 +47,7 @@ __all__ = [
     "MOST_PLANES",
     "behind_the_pipe",
     "near_random_planes",
+    "refit_without",
     "fit_without_background_plane",
 ]
 
@@ -204,6 +205,31 @@ def within(points: np.ndarray, cutoff: float):
     return lambda found, _mask: np.abs(found.primitive.distance(points)) <= cutoff
 
 
+def refit_without(fit, points: np.ndarray, left_out: np.ndarray, sigma, tolerances, view, cutoff):
+    """The pipe fitted without the ``left_out`` shots ((n,) bool), those within ``cutoff``
+    metres of it taken back (:func:`taken_back`, :func:`within`), as ``(found, rest, inliers)``:
+    the fit, the (n,) bool mask of the shots it fitted and its inliers among all ``points`` (n,
+    3) metres; None when the fit is refused, keeps under ``NEAR_SHARE`` of the shots or leaves
+    its radius undetermined (standard error over ``DETERMINED_RADIUS`` of it). ``fit``,
+    ``sigma`` (metres), ``view`` as in :func:`taken_back`."""
+    n = len(points)
+    try:
+        found = fit(points[~left_out], sigma, tolerances, view)
+    except FitError:
+        return None
+    found, rest = taken_back(
+        fit, found, points, ~left_out, sigma, tolerances, view, within(points, cutoff)
+    )
+    inliers = np.zeros(n, dtype=bool)
+    inliers[rest] = found.inliers
+    if (
+        inliers.sum() < NEAR_SHARE * n
+        or not found.stderr["radius"] <= DETERMINED_RADIUS * found.primitive.radius
+    ):
+        return None
+    return found, rest, inliers
+
+
 def subset_fits(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances, masks):
     """``(fit, mask, cutoff)`` for each of ``masks`` ((n,) bool) whose shots ``fit(points[mask],
     sigma, tolerances, view)`` fits (the rest are skipped), with the fit's inlier cutoff in
@@ -338,23 +364,13 @@ def fit_without_background_plane(fit, points: np.ndarray, sigma: float, toleranc
     cutoff = tolerances.outlier_cutoff_sigma * sigma
     rng = np.random.default_rng(n)
     for plane in _fullest_planes(points, cutoff, rng):
-        rest = ~plane
-        if rest.sum() < NEAR_SHARE * n:
+        if (~plane).sum() < NEAR_SHARE * n:
             continue
-        try:
-            found = fit(points[rest], sigma, tolerances, None)
-        except FitError:
+        refit = refit_without(fit, points, plane, sigma, tolerances, None, cutoff)
+        if refit is None:
             continue
-        found, rest = taken_back(
-            fit, found, points, rest, sigma, tolerances, None, within(points, cutoff)
-        )
-        inliers = np.zeros(n, dtype=bool)
-        inliers[rest] = found.inliers
-        if (
-            inliers.sum() < NEAR_SHARE * n
-            or not found.stderr["radius"] <= DETERMINED_RADIUS * found.primitive.radius
-            or not behind_the_pipe(found.primitive, points, inliers, ~rest, cutoff)
-        ):
+        found, rest, inliers = refit
+        if not behind_the_pipe(found.primitive, points, inliers, ~rest, cutoff):
             continue
         note = (
             f"{int(np.count_nonzero(~rest))} shot(s) on one plane behind the pipe (raster lines"

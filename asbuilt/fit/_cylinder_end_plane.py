@@ -26,14 +26,11 @@ import dataclasses
 
 import numpy as np
 
-from asbuilt.errors import FitError
 from asbuilt.fit._cylinder_background import (
-    DETERMINED_RADIUS,
     NEAR_SHARE,
     near_random_planes,
+    refit_without,
     rescued,
-    taken_back,
-    within,
 )
 from asbuilt.fit._visibility import excess_and_beyond
 
@@ -240,22 +237,12 @@ def fit_without_end_plane(fit, points: np.ndarray, sigma, tolerances, view, firs
         ):
             continue
         tried += 1
-        rest = ~plane
-        try:
-            found = fit(points[rest], sigma, tolerances, view)
-        except FitError:
+        refit = refit_without(fit, points, plane, sigma, tolerances, view, cutoff)
+        if refit is None:
             continue
-        found, rest = taken_back(
-            fit, found, points, rest, sigma, tolerances, view, within(points, cutoff)
-        )
-        inliers = np.zeros(n, dtype=bool)
-        inliers[rest] = found.inliers
+        found, rest, inliers = refit
         cylinder = found.primitive
-        if (
-            inliers.sum() < NEAR_SHARE * n
-            or not found.stderr["radius"] <= DETERMINED_RADIUS * cylinder.radius
-            or not _across_the_end(cylinder, points, inliers, ~rest, cutoff, view)
-        ):
+        if not _across_the_end(cylinder, points, inliers, ~rest, cutoff, view):
             continue
         # MSAC costs (Torr & Zisserman 2000) of the shots off the plane, the first fit's and
         # the new one's: both are credited with the plane, and a shot beyond the cutoff costs

@@ -194,7 +194,7 @@ def apply_fixes(model: Model, findings, *, catalog=None) -> tuple[Model, list[st
     """
     from asbuilt.catalog import Catalog, model_catalog
 
-    if catalog is None or isinstance(catalog, Catalog) or isinstance(catalog, (str, Path)):
+    if catalog is None or isinstance(catalog, (Catalog, str, Path)):
         catalog = model_catalog(model, catalog)[0]
     else:  # e.g. the rules' SizeTable, which has no walls
         catalog = None
