@@ -74,7 +74,9 @@ class Tolerances:
     angle_snap_deg: float = _why(
         2.0,
         "Orientation regularisation (GlobFit, Li et al. 2011): axes within 2 degrees of parallel, "
-        "perpendicular, vertical or horizontal are made exact; sparse fits are good to ~0.5 degree.",
+        "perpendicular, vertical or horizontal are made exact; sparse fits are good to ~0.5 degree. "
+        "An axis known worse (a short stub) is regularised within 3 standard errors, up to "
+        "intended_angle_deg.",
     )
     intended_angle_deg: float = _why(
         10.0,

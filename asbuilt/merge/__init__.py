@@ -391,6 +391,10 @@ def merge_model(
         parallel_groups=parallel_groups,
         names=ids,
         stderr_deg=axis_se,
+        max_deg=tol.intended_angle_deg,
+        elbow_pairs=[
+            (joint.ends[0][0], joint.ends[1][0]) for joint in joints if joint.kind == "elbow"
+        ],
     )
     new_axes = directions.axes
     build_ods = np.array([float(s.od) for s in snaps])

@@ -18,7 +18,11 @@ exactly. Here, for pipe axes:
 Given the axes' standard errors, every relation must also be *insignificant*: the angle it
 removes at most :data:`SNAP_SIGMA` combined standard errors. A well-measured 1% drain slope
 (0.57 degrees, known to 0.02) is real and kept; a short, noisy axis 1 degree off level (known
-to 0.5) is made level. Without standard errors the tolerance alone decides.
+to 0.5) is made level. Without standard errors the tolerance alone decides. The tolerance caps
+the relations of well-measured axes; an axis known worse (a short stub, to 3 degrees) is
+regularised within its :data:`SNAP_SIGMA` standard errors up to ``max_deg``
+(``intended_angle_deg``), and pipes joined by an elbow within that of 45 degrees are made exactly
+45 degrees apart (ASME B16.9 elbows turn 45 or 90).
 
 Then :func:`align_lines` moves each pipe's line sideways (never rotating it again) by the
 smallest weighted amount that makes joined lines meet exactly: elbows and tee branches
@@ -101,6 +105,8 @@ def regularize_directions(
     names: Sequence[str] | None = None,
     stderr_deg=None,
     k_sigma: float = SNAP_SIGMA,
+    max_deg: float | None = None,
+    elbow_pairs: Sequence[tuple[int, int]] = (),
 ) -> DirectionResult:
     """Make near-parallel, near-vertical, near-horizontal and near-perpendicular axes exact.
 
@@ -122,6 +128,17 @@ def regularize_directions(
         :data:`AXIS_SE_FLOOR_DEG`); unknown errors leave the tolerance alone to decide.
     k_sigma : float
         See ``stderr_deg``; default :data:`SNAP_SIGMA`.
+    max_deg : float, optional
+        Largest angle a relation may remove between axes whose standard errors allow more than
+        ``tol_deg`` (``Tolerances.intended_angle_deg``): a short stub's axis, known to 3
+        degrees, 2.2 degrees off vertical is built vertical; one with a well-measured axis stays
+        within ``tol_deg`` and its standard errors. Default ``tol_deg`` (the tolerance caps
+        every relation).
+    elbow_pairs : sequence of (int, int)
+        Pipes joined by an elbow. Besides the relations above, such a pair within the allowed
+        angle of 45 degrees is made exactly 45 degrees apart (ASME B16.9 elbows turn 45 or 90
+        degrees; 90 is the perpendicular relation), turning the later (lighter) cluster in the
+        plane of the two axes, and keeping the perpendiculars it was given.
 
     Returns
     -------
@@ -148,9 +165,19 @@ def regularize_directions(
     # else by the given weights
     dir_weight = 1.0 / se**2 if np.all(np.isfinite(se)) else weights
 
+    cap_deg = tol_deg if max_deg is None else max(tol_deg, float(max_deg))
+
     def allowed(*errors: float) -> float:
-        """The largest angle (degrees) a relation may remove between axes of these errors."""
-        return min(tol_deg, k_sigma * float(np.hypot.reduce(errors)))
+        """The largest angle (degrees) a relation may remove between axes of these errors:
+        ``k_sigma`` combined standard errors, at most ``cap_deg``; ``tol_deg`` when an error
+        is unknown."""
+        spread = k_sigma * float(np.hypot.reduce(errors))
+        return min(spread, cap_deg) if np.isfinite(spread) else tol_deg
+
+    elbow_partners: dict[int, set[int]] = {}
+    for a, b in elbow_pairs:
+        elbow_partners.setdefault(int(a), set()).add(int(b))
+        elbow_partners.setdefault(int(b), set()).add(int(a))
 
     # clusters: forced groups first, then greedy merge of near-parallel clusters
     parent = list(range(n))
@@ -208,7 +235,9 @@ def regularize_directions(
     # Fixed directions as (regular direction, label, measured direction). Relations are found
     # between measured directions, so snaps cannot chain: a pipe 2.1 degrees off square to
     # another is not made square because the other was first made horizontal.
-    fixed: list[tuple[np.ndarray, str, np.ndarray, float]] = [(_Z, "vertical", _Z, 0.0)]
+    fixed: list[tuple[np.ndarray, str, np.ndarray, float, list[int]]] = [
+        (_Z, "vertical", _Z, 0.0, [])
+    ]
     final_dirs = []
     for index, (group, d) in enumerate(zip(merged, merged_dirs)):
         cluster_of[group] = index
@@ -224,7 +253,7 @@ def regularize_directions(
                     relations[member].append(f"parallel to {lead}")
         # parallel to a fixed direction (vertical, or an earlier cluster)?
         snapped = False
-        for f, label, seen, f_se in fixed:
+        for f, label, seen, f_se, _ in fixed:
             limit = allowed(d_se, f_se)
             if _angle(measured, seen) <= limit and _angle(measured, f) <= limit:
                 d = f * np.sign(float(d @ f) or 1.0)
@@ -234,16 +263,28 @@ def regularize_directions(
         if not snapped:
             near_perp = [
                 (f, label, f_se)
-                for f, label, seen, f_se in fixed
+                for f, label, seen, f_se, _ in fixed
                 if abs(90.0 - _angle(measured, seen)) <= allowed(d_se, f_se)
             ]
+            kept: list[str] = []
             if near_perp:
                 limit = allowed(d_se, max(f_se for _, _, f_se in near_perp))
                 d, kept = _make_perpendicular(d, [(f, lab) for f, lab, _ in near_perp], limit)
                 for label in kept:
                     rel.append("horizontal" if label == "vertical" else f"perpendicular to {label}")
+            partners = set().union(*(elbow_partners.get(m, set()) for m in group))
+            for f, label, seen, f_se, f_group in fixed:
+                limit = allowed(d_se, f_se)
+                if not partners.intersection(f_group) or abs(45.0 - _angle(measured, seen)) > limit:
+                    continue
+                square_to = [g for g, lab, _ in near_perp if lab in kept]
+                new = _at_45_degrees(d, f, square_to)
+                if new is not None and _angle(new, measured) <= limit + 1e-9:
+                    d = new
+                    rel.append(f"45 degrees to {label}")
+                    break
         lead_name = names[max(group, key=lambda m: weights[m])]
-        fixed.append((d, lead_name, measured, d_se))
+        fixed.append((d, lead_name, measured, d_se, list(group)))
         final_dirs.append(d)
         for member in group:
             relations[member].extend(rel)
@@ -268,6 +309,20 @@ def _project_out(d: np.ndarray, directions: list[np.ndarray]) -> np.ndarray | No
     projected = d - sum((d @ b) * b for b in basis)
     norm = np.linalg.norm(projected)
     return projected / norm if norm > 1e-9 else None
+
+
+def _at_45_degrees(d: np.ndarray, f: np.ndarray, square_to: list[np.ndarray]):
+    """The direction nearest ``d`` (3,) at exactly 45 degrees to the line ``f`` (3,) and still
+    perpendicular to every direction in ``square_to``: ``d`` turned in the plane of ``d`` and
+    ``f`` (None when ``f`` is not itself perpendicular to ``square_to``, or ``d`` lies along
+    ``f``)."""
+    if any(abs(float(f @ g)) > 1e-6 for g in square_to):
+        return None
+    across = _project_out(d, [f, *square_to])
+    if across is None:
+        return None
+    along = f if float(d @ f) >= 0.0 else -f
+    return (along + across) / np.sqrt(2.0)
 
 
 def _make_perpendicular(d, near_perp, tol_deg):

@@ -18,6 +18,7 @@ import re
 import numpy as np
 
 from asbuilt.findings import Suggestion
+from asbuilt.merge.regularize import SNAP_SIGMA
 from asbuilt.model import Component
 from asbuilt.primitives import Cuboid
 
@@ -125,10 +126,12 @@ def _plan_azimuth(component: Component) -> float | None:
     return None
 
 
-def _fixes(cid, touching, dev, snap, description, rotation, centre) -> tuple:
+def _fixes(cid, touching, dev, snap, se, description, rotation, centre) -> tuple:
     """The rotation fix: unambiguous for a free component; for one joined to others (a pipe
     in a spool) rotating it would open its joints, so the advice is to merge again with a larger
-    snap angle instead."""
+    snap angle instead, when that would change the model: merging regularises an axis only
+    within :data:`~asbuilt.merge.regularize.SNAP_SIGMA` of its standard errors ``se``
+    (degrees; None: unknown), whatever the snap angle."""
     change = {
         "object": cid,
         "field": "rotation",
@@ -137,6 +140,8 @@ def _fixes(cid, touching, dev, snap, description, rotation, centre) -> tuple:
     }
     if not touching.get(cid):
         return (Suggestion(description, change, unambiguous=True),)
+    if se is not None and dev > SNAP_SIGMA * se:
+        return (Suggestion(description, change, unambiguous=False),)
     return (
         Suggestion(
             f"if it is meant to be regular, merge again with [general] angle_snap_deg = "
@@ -186,6 +191,7 @@ def check_misaligned(ctx: Context) -> None:
                 touching,
                 dev,
                 snap,
+                se,
                 f"make {comp.id}'s axis {direction} (rotate it {deg(dev)} about its centre)",
                 rot,
                 centre,
@@ -231,6 +237,7 @@ def check_misaligned(ctx: Context) -> None:
                 touching,
                 dev,
                 snap,
+                se,
                 f"turn {pair[1]} {deg(abs(turn))} about the vertical to line up with {pair[0]}",
                 _rot_z(turn),
                 centre,

@@ -96,6 +96,122 @@ def test_parallel_groups_are_forced_together_beyond_the_tolerance():
     assert forced.cluster[0] == forced.cluster[1]
 
 
+@pytest.mark.parametrize(
+    ("stderr", "expected_vertical"),
+    [
+        (0.2, False),  # 3 x 0.2 = 0.6 degree: a 2.2 degree lean is measured, kept
+        (0.9, False),  # 2.7 degrees allowed by the errors, but no more than the 2 degree tolerance
+        (3.0, True),  # a stub known to 3 degrees: 2.2 is noise, built vertical (up to 10)
+    ],
+)
+def test_a_poorly_measured_axis_is_regularised_beyond_the_tolerance(stderr, expected_vertical):
+    axis = tilted(Z, X, 2.2)
+    capped = regularize_directions([axis], [0.1], tol_deg=2.0, stderr_deg=[stderr])
+    assert capped.axes[0] == pytest.approx(axis)  # without max_deg the tolerance caps it
+    result = regularize_directions(
+        [axis], [0.1], tol_deg=2.0, stderr_deg=[stderr], max_deg=10.0 if stderr > 1 else 2.0
+    )
+    assert (result.axes[0] == pytest.approx(Z)) is expected_vertical
+
+
+def test_no_relation_beyond_max_deg_whatever_the_errors():
+    axis = tilted(Z, X, 12.0)
+    result = regularize_directions([axis], [0.1], tol_deg=2.0, stderr_deg=[8.0], max_deg=10.0)
+    assert result.axes[0] == pytest.approx(axis)
+    assert not result.relations[0]
+
+
+@pytest.mark.parametrize("measured", [41.0, 45.0, 47.7, 49.5])
+def test_a_stub_at_about_45_degrees_to_its_elbow_partner_is_made_45(measured):
+    # a jog: P1 and P3 level along x, the stub P2 between them turned ~45 degrees in plan and
+    # 1 degree off level, its axis known to 3.5 degrees (a 60 mm stub)
+    p1, p3 = X, tilted(X, Y, 0.1)
+    stub = tilted(tilted(X, Y, measured), Z, 1.0)
+    result = regularize_directions(
+        [p1, stub, p3],
+        [2.0, 0.06, 1.5],
+        tol_deg=2.0,
+        names=["P1", "P2", "P3"],
+        stderr_deg=[0.05, 3.5, 0.05],
+        max_deg=10.0,
+        elbow_pairs=[(0, 1), (1, 2)],
+    )
+    p1_new, stub_new, p3_new = result.axes
+    assert np.degrees(np.arccos(stub_new @ p1_new)) == pytest.approx(45.0, abs=1e-9)
+    assert np.degrees(np.arccos(stub_new @ p3_new)) == pytest.approx(45.0, abs=1e-9)
+    assert stub_new[2] == pytest.approx(0.0, abs=1e-12)  # still level
+    assert any("45 degrees to" in r for r in result.relations[1])
+    assert "horizontal" in result.relations[1]
+
+
+def test_45_degrees_only_between_elbow_partners_and_within_the_errors():
+    p1, stub = X, tilted(X, Y, 47.7)
+    common = dict(tol_deg=2.0, names=["P1", "P2"], max_deg=10.0)
+    unjoined = regularize_directions([p1, stub], [2, 0.06], stderr_deg=[0.05, 3.5], **common)
+    assert unjoined.axes[1] == pytest.approx(stub)
+    precise = regularize_directions(
+        [p1, stub], [2, 0.06], stderr_deg=[0.05, 0.3], elbow_pairs=[(0, 1)], **common
+    )
+    assert precise.axes[1] == pytest.approx(stub)  # 2.7 degrees off 45 at 0.3: measured
+    joined = regularize_directions(
+        [p1, stub], [2, 0.06], stderr_deg=[0.05, 3.5], elbow_pairs=[(0, 1)], **common
+    )
+    assert np.degrees(np.arccos(joined.axes[1] @ X)) == pytest.approx(45.0)
+    assert joined.angles_deg[1] == pytest.approx(2.7)
+
+
+def test_a_riser_offset_is_made_45_degrees_to_the_vertical_riser():
+    riser, offset = Z, tilted(tilted(Z, X, 43.0), Y, 1.5)
+    result = regularize_directions(
+        [riser, offset],
+        [3.0, 0.3],
+        tol_deg=2.0,
+        names=["R1", "R2"],
+        stderr_deg=[0.05, 1.5],
+        max_deg=10.0,
+        elbow_pairs=[(0, 1)],
+    )
+    assert np.degrees(np.arccos(result.axes[1] @ Z)) == pytest.approx(45.0)
+    assert "45 degrees to R1" in result.relations[1]
+
+
+@pytest.mark.parametrize("turn", [-2.7, 2.7])
+def test_a_jog_with_a_short_stub_is_built_with_two_standard_45_degree_elbows(turn):
+    # an NPS 4 jog (ASME B16.9 45 degree elbows, 63.5 mm centre to end, corners at x = 2 m and
+    # one elbow's diagonal on): the 60 mm stub's axis fitted 2.7 degrees off, known to 3.5
+    corner = np.array([2.0, 0.0, 1.3])
+    diagonal = tilted(X, Y, 45.0)
+    stub_mid = corner + (0.0635 + 0.03) * diagonal
+    stub_axis = tilted(diagonal, tilted(Y, X, 45.0) * [-1, 1, 1], turn)
+    second = corner + 2 * (0.0635 + 0.03) * diagonal
+    pipes = [
+        Pipe("P1", (0.0, 0.0, 1.3), tuple(corner - [0.0635, 0, 0]), 0.1143, se_axis_deg=0.05),
+        Pipe(
+            "P2",
+            tuple(stub_mid - 0.03 * stub_axis),
+            tuple(stub_mid + 0.03 * stub_axis),
+            0.1143,
+            se_axis_deg=3.5,
+        ),
+        Pipe(
+            "P3",
+            tuple(second + [0.0635, 0, 0]),
+            tuple(second + [2.0, 0, 0]),
+            0.1143,
+            se_axis_deg=0.05,
+        ),
+    ]
+    model = merge_model(report_of(pipes))
+    elbows = [c for c in model.components if c.type == "elbow"]
+    assert len(elbows) == 2
+    for elbow in elbows:
+        assert elbow.snap["angle_deg"] == pytest.approx(45.0, abs=1e-6)
+        assert elbow.snap["standard"] is True
+    stub = next(c for c in model.components if c.id == "P2")
+    assert any("45 degrees to" in c.what for c in stub.corrections)
+    assert not [f for f in check_model(model) if f.code == "AB302"]
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     st.lists(
