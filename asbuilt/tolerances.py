@@ -75,8 +75,15 @@ class Tolerances:
         2.0,
         "Orientation regularisation (GlobFit, Li et al. 2011): axes within 2 degrees of parallel, "
         "perpendicular, vertical or horizontal are made exact; sparse fits are good to ~0.5 degree. "
-        "An axis known worse (a short stub) is regularised within 3 standard errors, up to "
-        "intended_angle_deg.",
+        "An axis known worse (a short stub) is regularised up to angle_snap_max_deg.",
+    )
+    angle_snap_max_deg: float = _why(
+        10.0,
+        "An axis known worse than angle_snap_deg allows (3 standard errors above it: a 60 mm stub "
+        "between two elbows, known to 3-4 degrees) is regularised within its 3 standard errors "
+        "up to this (and never beyond intended_angle_deg): 45 and 90 degree elbows are what is "
+        "built, and no scan of such a stub can tell 47 degrees from 45. Set it to "
+        "angle_snap_deg for one cap on every axis.",
     )
     intended_angle_deg: float = _why(
         10.0,

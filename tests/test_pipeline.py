@@ -67,7 +67,7 @@ def test_progress_is_passed_to_the_fit(spool_scan):
 
 def test_the_rules_file_tolerances_drive_the_merge(spool_scan, tmp_path):
     rules = tmp_path / "rules.toml"
-    rules.write_text("[general]\nangle_snap_deg = 0.001\n")
+    rules.write_text("[general]\nangle_snap_deg = 0.001\nangle_snap_max_deg = 0.001\n")
     default = build_model(spool_scan, check=False)
     strict = build_model(spool_scan, rules=rules, check=False)
 

@@ -391,7 +391,7 @@ def merge_model(
         parallel_groups=parallel_groups,
         names=ids,
         stderr_deg=axis_se,
-        max_deg=tol.intended_angle_deg,
+        max_deg=min(tol.angle_snap_max_deg, tol.intended_angle_deg),
         elbow_pairs=[
             (joint.ends[0][0], joint.ends[1][0]) for joint in joints if joint.kind == "elbow"
         ],

@@ -111,6 +111,9 @@ RANGES: dict[tuple[str, str], Range] = {
     ("general", "recommended_points_cylinder"): _count("points wanted on a cylinder"),
     ("general", "recommended_points_cuboid"): _count("points wanted on a cuboid"),
     ("general", "angle_snap_deg"): Range(0.0, 45.0, high_open=True, meaning="degrees regularised"),
+    ("general", "angle_snap_max_deg"): Range(
+        0.0, 45.0, high_open=True, meaning="degrees regularised on a poorly measured axis"
+    ),
     ("general", "intended_angle_deg"): _AXIS_BAND,
     ("general", "diameter_tolerance"): _non_negative("metres"),
     ("general", "joint_distance"): _non_negative("metres"),

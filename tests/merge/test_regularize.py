@@ -12,6 +12,7 @@ from asbuilt.merge import merge_model
 from asbuilt.merge.contiguity import line_closest_points
 from asbuilt.merge.regularize import align_lines, perpendicular_basis, regularize_directions
 from asbuilt.rules import check_model
+from asbuilt.tolerances import Tolerances
 
 
 def tilted(base, towards, degrees):
@@ -201,6 +202,10 @@ def test_a_jog_with_a_short_stub_is_built_with_two_standard_45_degree_elbows(tur
             se_axis_deg=0.05,
         ),
     ]
+    capped = merge_model(report_of(pipes), tolerances=Tolerances(angle_snap_max_deg=2.0))
+    assert {round(c.snap["angle_deg"], 6) for c in capped.components if c.type == "elbow"} == {
+        round(45.0 + turn, 6)
+    }
     model = merge_model(report_of(pipes))
     elbows = [c for c in model.components if c.type == "elbow"]
     assert len(elbows) == 2

@@ -35,6 +35,7 @@ CASES = {
     ("general", "recommended_points_cylinder"): (["0", "-20"], ["1", "40"]),
     ("general", "recommended_points_cuboid"): (["0", "-30"], ["1", "40"]),
     ("general", "angle_snap_deg"): (["-1", "45"], ["0", "1.5"]),
+    ("general", "angle_snap_max_deg"): (["-1", "45"], ["0", "5"]),
     ("general", "intended_angle_deg"): (["0", "-10", "45", "90"], ["5", "30"]),
     ("general", "diameter_tolerance"): (["-0.002"], ["0", "0.003"]),
     ("general", "joint_distance"): (["-0.15"], ["0", "0.3"]),
