@@ -671,6 +671,7 @@ def _mark_loose_ends(components, joints, joint_notes, ids, slack, tol):
         slack=dict(zip(ids, (float(s) for s in slack))),
         joined=joined,
         noted=noted,
+        bend_limit_deg=elbow_bend_limit(tol),
     )
     return [
         dataclasses.replace(comp, snap={**comp.snap, "loose_ends": found[comp.id]})

@@ -16,6 +16,15 @@ other, or runs alongside it, does not. Pipes merging joined (a lateral's three p
 could not build) are not loose to each other; a pair contiguity's notes already name (a link it
 could not make) is recorded with ``noted`` true, so the rules report it once.
 
+An open end that runs into nothing within that reach may still point at another pipe's open end
+further on: the two axes meet ahead of both ends (an elbow the scan did not reach: one pipe's
+shots stopped short where the station could not see it), or the other pipe continues its line
+(an unscanned stretch or a valve). Merging does not join such ends (beyond ``reach`` a meeting
+is as likely a coincidence as a joint, and a scan link joins them), but the pair is recorded,
+with the ``corner`` where the axes meet, so the rule can ask. Both ends must be open, their axes
+meet within the larger pipe's outer radius, and the meeting lie at most :data:`FACING_REACH`
+past either end.
+
 Each loose end becomes a record on its pipe's ``snap["loose_ends"]`` (docs/merging.md), read by
 the rule ``unjoined-end`` (AB304).
 """
@@ -29,10 +38,18 @@ from scipy.spatial import cKDTree
 
 from asbuilt.model import Bend, Component, Reducer, Straight, Tee
 
-from .contiguity import segment_distance
+from .contiguity import ELBOW_MAX_DEG, line_closest_points, segment_distance
 from .ports import ports
 
-__all__ = ["PORT_TOUCH", "loose_ends", "bodies"]
+__all__ = ["FACING_REACH", "PORT_TOUCH", "loose_ends", "bodies"]
+
+#: Farthest (m) past an open end that another open end's axis may meet it and be recorded: an
+#: operator's missed stretch of a pipe (a riser's hidden foot, a run behind a column) is
+#: seldom longer; two unrelated lines meeting within a pipe's radius are rarer the nearer.
+FACING_REACH = 2.0
+
+#: Bends (degrees) below this are in line (the other pipe continues this one's line).
+_IN_LINE_DEG = 10.0
 
 #: Two ports closer than this (metres) are joined (merging makes them equal to rounding).
 PORT_TOUCH = 1e-3
@@ -100,6 +117,7 @@ def loose_ends(
     slack: Mapping[str, float] | None = None,
     joined: Iterable[frozenset] = (),
     noted: Iterable[frozenset] = (),
+    bend_limit_deg: float = ELBOW_MAX_DEG + _IN_LINE_DEG,
 ) -> dict[str, list[dict]]:
     """Open pipe ends that run into another pipe or fitting within ``reach`` (+ slack).
 
@@ -113,6 +131,9 @@ def loose_ends(
         Scan object id to how far (m) its fitted ends may fall short of the real ones.
     joined, noted : iterables of frozenset of scan object ids
         Pairs merging joined (never loose to each other) and pairs contiguity's notes name.
+    bend_limit_deg : float
+        Largest bend (degrees) of an elbow between two ends that face each other from afar
+        (contiguity's ``elbow_bend_limit``).
 
     Returns
     -------
@@ -121,7 +142,10 @@ def loose_ends(
         [x, y, z] m), ``touches`` (the component's id), ``touches_type``, ``touches_pipes``
         (the scan pipes it is or joins), ``gap`` (m from the end to its surface, 0 touching or
         inside), ``angle_deg`` (between the pipe and the nearest axis of it, 0-90) and
-        ``noted``.
+        ``noted``. An end meeting another open end beyond the reach (see the module) has
+        ``gap`` the distance (m) from the end to where the axes meet, ``corner`` that point
+        ([x, y, z] m), ``beyond`` how far (m) past the other pipe's end it lies, and
+        ``bend_deg`` (0: the other pipe continues this one's line).
     """
     slack = dict(slack or {})
     joined, noted = set(joined), set(noted)
@@ -149,6 +173,15 @@ def loose_ends(
             owners += [n] * count
             widest = max(widest, rad)
     sample_tree = cKDTree(np.concatenate(samples))
+    # open pipe ends (no other component's port at them), for the ends facing from afar
+    open_ends = [
+        (comp, np.asarray(point, float), np.asarray(out, float))
+        for comp in piping
+        if comp.type == "pipe"
+        for point, out in ports(comp)
+        if not any(port_owner[q] != comp.id for q in port_tree.query_ball_point(point, PORT_TOUCH))
+    ]
+    open_tree = cKDTree(np.array([p for _, p, _ in open_ends]).reshape(-1, 3))
     found: dict[str, list[dict]] = {}
     for comp in piping:
         if comp.type != "pipe":
@@ -181,6 +214,16 @@ def loose_ends(
                 if best is None or rank < best[0]:
                     best = (rank, other, theirs)
             if best is None:
+                record = _facing_end(
+                    comp, own, point, np.asarray(out, float), open_ends, open_tree,
+                    scan_pipes, joined, reach, bend_limit_deg,
+                )  # fmt: skip
+                if record is not None:
+                    record["end"] = ("start", "end")[k]
+                    record["noted"] = any(
+                        frozenset((own, q)) in noted for q in record["touches_pipes"]
+                    )
+                    found.setdefault(comp.id, []).append(record)
                 continue
             (gap, _), other, theirs = best
             found.setdefault(comp.id, []).append(
@@ -196,3 +239,54 @@ def loose_ends(
                 }
             )
     return found
+
+
+def _facing_end(comp, own, point, out, open_ends, open_tree, scan_pipes, joined, reach, limit):
+    """The record of the open end (of another pipe, not joined to this one) whose axis meets
+    this open end's ``point`` (3,) m, ``out`` (3,) unit, ahead of both ends within
+    :data:`FACING_REACH`, or that continues its line: the nearest such meeting, or None."""
+    radius = float(comp.geometry.outer_radius)
+    best = None
+    for q in open_tree.query_ball_point(point, 2.0 * FACING_REACH):
+        other, there, their_out = open_ends[q]
+        if other.id == comp.id:
+            continue
+        theirs = scan_pipes(other)
+        if own in theirs or any(frozenset((own, p)) in joined for p in theirs):
+            continue
+        within = max(radius, float(other.geometry.outer_radius))
+        bend = float(np.degrees(np.arccos(np.clip(-float(out @ their_out), -1.0, 1.0))))
+        if bend < _IN_LINE_DEG:
+            rel = there - point
+            ahead = float(rel @ out)
+            lateral = float(np.linalg.norm(rel - ahead * out))
+            if not (reach < ahead <= FACING_REACH and lateral <= within):
+                continue
+            distance, beyond, corner = ahead, 0.0, there
+        elif bend <= limit:
+            s, t, qa, qb = line_closest_points(point, out, there, their_out)
+            if float(np.linalg.norm(qa - qb)) > within:
+                continue
+            if not (-reach <= s <= FACING_REACH and -reach <= t <= FACING_REACH):
+                continue
+            if max(s, t) <= reach:
+                continue  # within contiguity's reach: its joint, or its note
+            distance, beyond, corner = s, t, 0.5 * (qa + qb)
+        else:
+            continue
+        if best is None or max(distance, beyond) < best[0]:
+            best = (max(distance, beyond), other, theirs, distance, beyond, corner, bend)
+    if best is None:
+        return None
+    _, other, theirs, distance, beyond, corner, bend = best
+    return {
+        "at": [float(x) for x in point],
+        "touches": other.id,
+        "touches_type": other.type,
+        "touches_pipes": theirs,
+        "gap": float(max(distance, 0.0)),
+        "angle_deg": float(min(bend, 180.0 - bend)),
+        "corner": [float(x) for x in corner],
+        "beyond": float(max(beyond, 0.0)),
+        "bend_deg": float(bend),
+    }

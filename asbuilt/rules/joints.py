@@ -349,6 +349,8 @@ def _unjoined_reason(record: dict, comp, other, names: str) -> tuple[str, str]:
     """Why merging left the end loose, and what to do: ``(clause, suggestion)``."""
     pipe, kind, target = comp.id, record.get("touches_type"), str(record["touches"])
     angle = float(record.get("angle_deg", 90.0))
+    if record.get("corner") is not None:
+        return _facing_reason(record, pipe, target)
     if kind == "tee":
         geo = other.geometry if other is not None else None
         outlet = None
@@ -393,6 +395,27 @@ def _unjoined_reason(record: dict, comp, other, names: str) -> tuple[str, str]:
     )
 
 
+def _facing_reason(record: dict, pipe: str, target: str) -> tuple[str, str]:
+    """Why an open end facing another pipe's open end from beyond merging's reach was not
+    joined, and what to do (:func:`asbuilt.merge.loose.loose_ends`'s ``corner`` records)."""
+    link = f"link {pipe} and {target} in the scan (links) and model again"
+    bend = float(record.get("bend_deg", 90.0))
+    if bend < 10.0:
+        return (
+            f"{target} continues its line {mm(float(record['gap']))} past its end, beyond "
+            "merging's reach (joint_distance plus the shot spacing)",
+            f"if one pipe runs on between them (a stretch or a valve the scan did not reach), "
+            f"{link}, or model the part by hand; otherwise scan both up to their ends",
+        )
+    return (
+        f"their axes meet {mm(float(record['gap']))} past its end and "
+        f"{mm(float(record.get('beyond', 0.0)))} past {target}'s, where a {bend:.0f} degree "
+        "elbow would join them, beyond merging's reach (joint_distance plus the shot spacing)",
+        f"if an elbow joins them (the scan stopped short of it), {link}; otherwise scan "
+        f"{pipe} and {target} up to their ends",
+    )
+
+
 def check_unjoined_ends(ctx: Context, table: SizeTable | None = None) -> None:
     """One finding per pipe end merging left loose at a fitting or another pipe
     (``snap["loose_ends"]``, :func:`asbuilt.merge.loose.loose_ends`): a fourth pipe at a tee,
@@ -425,6 +448,9 @@ def check_unjoined_ends(ctx: Context, table: SizeTable | None = None) -> None:
             where = f"ends on the {kind}" if gap < 5e-4 else f"ends {mm(gap)} from the {kind}"
             if kind == "pipe":
                 where = "ends on" if gap < 5e-4 else f"ends {mm(gap)} from"
+            if record.get("corner") is not None:
+                in_line = float(record.get("bend_deg", 90.0)) < 10.0
+                where = f"ends {mm(gap)} short of" + ("" if in_line else " a corner with")
             why, suggestion = _unjoined_reason(record, comp, other, names)
             ctx.emit(
                 slug,

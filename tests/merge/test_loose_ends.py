@@ -186,3 +186,60 @@ def test_the_model_document_carries_the_loose_end(tmp_path):
     path.write_text(text)
     (f,) = _unjoined(load_model(path))
     assert f.objects == ("P4", "P1-P2-P3")
+
+
+#: an NPS 4 90 degree elbow at (2, 0, 0): P1's shots reach its weld (B16.9 long radius, 152 mm
+#: centre to end); the riser P2's stop 0.75 m from the corner, beyond joint_distance (its foot
+#: hidden from the station)
+HIDDEN_ELBOW = [
+    Pipe("P1", (0, 0, 0), (1.848, 0, 0), OD),
+    Pipe("P2", (2, 0.75, 0), (2, 3, 0), OD),
+]
+
+
+def test_ends_whose_axes_meet_beyond_the_reach_are_one_finding_that_a_link_settles():
+    model = merge_model(report_of(HIDDEN_ELBOW))
+    assert not [c for c in model.components if c.type == "elbow"]
+    records = {c.id: r for c in model.components for r in c.snap.get("loose_ends", ())}
+    assert set(records) == {"P1", "P2"}
+    first = records["P1"]
+    assert first["touches"] == "P2" and first["corner"] == pytest.approx([2, 0, 0], abs=1e-9)
+    assert (first["gap"], first["beyond"]) == pytest.approx((0.152, 0.75))
+    assert first["bend_deg"] == pytest.approx(90.0)
+    (f,) = _unjoined(model)
+    assert f.message == (
+        "P1 ends 152.0 mm short of a corner with P2 but is not joined to it: their axes meet "
+        "152.0 mm past its end and 750.0 mm past P2's, where a 90 degree elbow would join "
+        "them, beyond merging's reach (joint_distance plus the shot spacing)"
+    )
+    assert "link P1 and P2 in the scan" in f.suggestions[0].description
+    linked = merge_model(report_of(HIDDEN_ELBOW, links=[("P1", "P2")]))
+    assert [c.type for c in linked.components].count("elbow") == 1
+    assert not _unjoined(linked)
+
+
+def test_a_pipe_continuing_another_s_line_beyond_the_reach_is_a_finding():
+    pipes = [Pipe("P1", (0, 0, 0), (1.9, 0, 0), OD), Pipe("P2", (2.6, 0.01, 0), (4, 0.01, 0), OD)]
+    model = merge_model(report_of(pipes))
+    (f,) = _unjoined(model)
+    assert f.message.startswith("P1 ends 700.0 mm short of P2 but is not joined to it: P2 ")
+    assert "continues its line 700.0 mm past its end" in f.message
+
+
+@pytest.mark.parametrize(
+    "pipes",
+    [
+        # the corner 2.25 m past P2's end: farther than FACING_REACH
+        [HIDDEN_ELBOW[0], Pipe("P2", (2, 2.25, 0), (2, 4, 0), OD)],
+        # the riser's axis passes 0.2 m beside the corner: no elbow joins them
+        [HIDDEN_ELBOW[0], Pipe("P2", (2, 0.75, 0.2), (2, 3, 0.2), OD)],
+        # the corner behind P1's end: P2 runs past P1's end, not toward it
+        [Pipe("P1", (0, 0, 0), (1.5, 0, 0), OD), Pipe("P2", (1.2, 0.75, 0), (1.2, 3, 0), OD)],
+        # a 120 degree turn: no elbow makes it
+        [HIDDEN_ELBOW[0], Pipe("P2", (2 - 0.375, 0.65, 0), (2 - 1.5, 2.6, 0), OD)],
+    ],
+    ids=["too-far", "beside", "behind", "too-sharp"],
+)
+def test_no_finding_for_ends_that_do_not_face_each_other(pipes):
+    model = merge_model(report_of(pipes))
+    assert not _unjoined(model)
