@@ -158,6 +158,7 @@ SNAP_FIELDS: dict[str, Callable] = {
     "angle_deg": _number_problem,
     "bend_radius": _number_problem,
     "length": _number_problem,
+    "position_range": _number_problem,
     "window": _number_problem,
     "standard": _flag_problem,
     "hint_rejected": _flag_problem,

@@ -292,6 +292,12 @@ def _elbow(b: _Builder, joint: Joint):
     return [("elbow", f"{pi.id}-{pj.id}", geometry, big, snap)]
 
 
+#: A reducer whose place along the line is uncertain by more than this (m, either way) gets a
+#: note saying so: beyond the 10 mm a fit-up survey tolerates, the take-off's lengths of the two
+#: sizes move with it.
+POSITION_NOTE = 0.010
+
+
 def _inline(b: _Builder, joint: Joint):
     (i, ki), (j, kj) = joint.ends
     pi, pj = b.pipes[i], b.pipes[j]
@@ -339,6 +345,15 @@ def _inline(b: _Builder, joint: Joint):
         notes.insert(0, note)
     small = pj if large is pi else pi
     source, standard = _reducer_source(b, large, small, (i, j))
+    # The shots bound the pipes' ends from inside only: a reducer shorter than the gap between
+    # them may lie anywhere in it; built in the middle, it is within half the spare either way.
+    spare = max(gap - float(length), 0.0)
+    if 0.5 * spare > POSITION_NOTE:
+        notes.append(
+            f"the reducer fills {float(length) * 1000:.0f} of the {gap * 1000:.0f} mm between "
+            f"{pi.id}'s and {pj.id}'s shots: built in the middle, it may lie up to "
+            f"{0.5 * spare * 1000:.0f} mm either way along the line; scan up to it to place it"
+        )
     snap = {
         "status": "fitting",
         "dimensions": source,
@@ -347,6 +362,7 @@ def _inline(b: _Builder, joint: Joint):
         "sizes": [pi.nominal, pj.nominal],
         "connects": [pi.id, pj.id],
         "notes": notes,
+        "position_range": 0.5 * spare,
     }
     if geometry.eccentric:
         snap["eccentric"] = {

@@ -68,3 +68,29 @@ def test_a_reducer_the_standard_does_not_make_is_said_so(large_od, small_od, len
     assert finding.objects == ("P1", "P2")
     assert finding.message.startswith("no NPS 12 x 4 reducer in asme-b16.9")
     assert "10, 8, 6, 5 only" in finding.message
+
+
+@pytest.mark.parametrize(
+    ("gap", "either_way", "noted"),
+    [(0.140, 0.0, False), (0.156, 0.008, False), (0.400, 0.130, True)],
+    ids=["exact", "within-10-mm", "long-gap"],
+)
+def test_a_reducer_in_a_longer_gap_says_how_far_it_may_lie_either_way(gap, either_way, noted):
+    """The shots bound each pipe's end from inside: a 6 x 4 reducer (H 140 mm) in a 400 mm gap
+    may lie anywhere in it, 130 mm either way of the middle where it is built."""
+    pipes = [
+        Pipe("P1", (-1.5, 0, 1), (0, 0, 1), 0.1683),
+        Pipe("P2", (gap, 0, 1), (gap + 1.5, 0, 1), 0.1143),
+    ]
+    model = merge_model(report_of(pipes, links=[("P1", "P2")]))
+    reducer = next(c for c in model.components if c.type == "reducer")
+    assert reducer.snap["position_range"] == pytest.approx(either_way, abs=1e-9)
+    said = [n for n in reducer.snap["notes"] if "either way" in n]
+    assert said == (
+        [
+            "the reducer fills 140 of the 400 mm between P1's and P2's shots: built in the "
+            "middle, it may lie up to 130 mm either way along the line; scan up to it to place it"
+        ]
+        if noted
+        else []
+    )
