@@ -283,13 +283,20 @@ def _elbow(b: _Builder, joint: Joint):
     snap = {
         "status": "fitting",
         "dimensions": source,
-        "standard": standard,
+        "standard": _verdict(standard, big.dims),
         "bend_radius": radius,
         "angle_deg": float(np.degrees(theta)),
         "connects": [pi.id, pj.id],
         "notes": notes,
     }
     return [("elbow", f"{pi.id}-{pj.id}", geometry, big, snap)]
+
+
+def _verdict(standard: bool, dims: FittingDims) -> bool | None:
+    """A fitting's ``standard`` record: None (no verdict) for one built from a rule of thumb
+    (no fittings row for its size: an unsized pipe's elbow is no catalog fitting), unless its
+    form is non-standard whatever its size."""
+    return None if standard and dims.source == "rule" else standard
 
 
 #: A reducer whose place along the line is uncertain by more than this (m, either way) gets a
@@ -357,7 +364,7 @@ def _inline(b: _Builder, joint: Joint):
     snap = {
         "status": "fitting",
         "dimensions": source,
-        "standard": standard,
+        "standard": _verdict(standard, large.dims),
         "length": length,
         "sizes": [pi.nominal, pj.nominal],
         "connects": [pi.id, pj.id],
@@ -474,7 +481,7 @@ def _tee(b: _Builder, joint: Joint):
     snap = {
         "status": "fitting",
         "dimensions": source,
-        "standard": standard,
+        "standard": _verdict(standard, run.dims),
         "connects": connects,
         "notes": notes,
     }
@@ -507,7 +514,7 @@ def _run_reducer(b: _Builder, tee: str, run: PipeSpec, small: PipeSpec, end, por
     snap = {
         "status": "fitting",
         "dimensions": run.dims.source,
-        "standard": True,
+        "standard": _verdict(True, run.dims),
         "length": length,
         "sizes": [run.nominal, small.nominal],
         "connects": [tee, small.id],

@@ -4,6 +4,7 @@ extensions and trims (the audit's findings; ASME B16.9 values from the standards
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -532,3 +533,24 @@ def test_a_smaller_outlet_is_still_a_reducing_tee_without_findings():
     assert tee.snap["standard"] is True
     assert any("reducing outlet" in n for n in tee.snap["notes"])
     assert [f.code for f in check_model(model)] == []
+
+
+@pytest.mark.parametrize(("angle", "standard"), [(90, None), (45, None), (60, False)])
+def test_an_elbow_of_no_catalog_size_gets_no_verdict(angle, standard):
+    """An OD of 150 mm is no ASME B36.10M size (NPS 5 is 141.3, NPS 6 168.3): the elbow is built
+    from a rule of thumb and is no catalog fitting, so it is not called standard (it was);
+    a form B16.9 does not make is still said to be non-standard."""
+    od = 0.150
+    reach = 1.5 * od * math.tan(math.radians(angle) / 2)
+    pipes = [replace(p, od=od) for p in _bend(angle, reach)]
+    model = merge_model(report_of(pipes, links=[("P1", "P2")]))
+    elbow = by_id(model)["P1-P2"]
+    assert elbow.snap["dimensions"].startswith("rule")
+    assert elbow.snap["standard"] is standard
+
+
+def test_a_tee_of_no_catalog_size_gets_no_verdict():
+    pipes = [replace(p, od=0.150) for p in _junction(90)]
+    model = merge_model(report_of(pipes, links=[("P1", "P3"), ("P1", "P2")]))
+    tee = by_id(model)["P1-P3-P2"]
+    assert tee.snap["dimensions"] == "rule" and tee.snap["standard"] is None
