@@ -117,7 +117,7 @@ def loose_ends(
     slack: Mapping[str, float] | None = None,
     joined: Iterable[frozenset] = (),
     noted: Iterable[frozenset] = (),
-    bend_limit_deg: float = ELBOW_MAX_DEG + _IN_LINE_DEG,
+    bend_limit_deg: float = ELBOW_MAX_DEG + 10.0,
 ) -> dict[str, list[dict]]:
     """Open pipe ends that run into another pipe or fitting within ``reach`` (+ slack).
 
@@ -133,7 +133,8 @@ def loose_ends(
         Pairs merging joined (never loose to each other) and pairs contiguity's notes name.
     bend_limit_deg : float
         Largest bend (degrees) of an elbow between two ends that face each other from afar
-        (contiguity's ``elbow_bend_limit``).
+        (contiguity's ``elbow_bend_limit``; the default is its value at the default
+        ``intended_angle_deg``, 10).
 
     Returns
     -------

@@ -21,7 +21,7 @@ removes at most :data:`SNAP_SIGMA` combined standard errors. A well-measured 1% 
 to 0.5) is made level. Without standard errors the tolerance alone decides. The tolerance caps
 the relations of well-measured axes; an axis known worse (a short stub, to 3 degrees) is
 regularised within its :data:`SNAP_SIGMA` standard errors up to ``max_deg``
-(``intended_angle_deg``), and pipes joined by an elbow within that of 45 degrees are made exactly
+(``Tolerances.angle_snap_max_deg``), and pipes joined by an elbow within that of 45 degrees are made exactly
 45 degrees apart (ASME B16.9 elbows turn 45 or 90).
 
 Then :func:`align_lines` moves each pipe's line sideways (never rotating it again) by the
@@ -130,10 +130,10 @@ def regularize_directions(
         See ``stderr_deg``; default :data:`SNAP_SIGMA`.
     max_deg : float, optional
         Largest angle a relation may remove between axes whose standard errors allow more than
-        ``tol_deg`` (``Tolerances.intended_angle_deg``): a short stub's axis, known to 3
-        degrees, 2.2 degrees off vertical is built vertical; one with a well-measured axis stays
-        within ``tol_deg`` and its standard errors. Default ``tol_deg`` (the tolerance caps
-        every relation).
+        ``tol_deg`` (``Tolerances.angle_snap_max_deg``, at most ``intended_angle_deg``): a
+        short stub's axis, known to 3 degrees, 2.2 degrees off vertical is built vertical; one
+        with a well-measured axis stays within ``tol_deg`` and its standard errors. Default
+        ``tol_deg`` (the tolerance caps every relation).
     elbow_pairs : sequence of (int, int)
         Pipes joined by an elbow. Besides the relations above, such a pair within the allowed
         angle of 45 degrees is made exactly 45 degrees apart (ASME B16.9 elbows turn 45 or 90
