@@ -41,7 +41,7 @@ from asbuilt.model import Bend, Component, Reducer, Straight, Tee
 from .contiguity import ELBOW_MAX_DEG, line_closest_points, segment_distance
 from .ports import ports
 
-__all__ = ["FACING_REACH", "PORT_TOUCH", "loose_ends", "bodies"]
+__all__ = ["FACING_REACH", "IN_LINE_DEG", "PORT_TOUCH", "loose_ends", "bodies"]
 
 #: Farthest (m) past an open end that another open end's axis may meet it and be recorded: an
 #: operator's missed stretch of a pipe (a riser's hidden foot, a run behind a column) is
@@ -49,7 +49,7 @@ __all__ = ["FACING_REACH", "PORT_TOUCH", "loose_ends", "bodies"]
 FACING_REACH = 2.0
 
 #: Bends (degrees) below this are in line (the other pipe continues this one's line).
-_IN_LINE_DEG = 10.0
+IN_LINE_DEG = 10.0
 
 #: Two ports closer than this (metres) are joined (merging makes them equal to rounding).
 PORT_TOUCH = 1e-3
@@ -174,71 +174,71 @@ def loose_ends(
             owners += [n] * count
             widest = max(widest, rad)
     sample_tree = cKDTree(np.concatenate(samples))
-    # open pipe ends (no other component's port at them), for the ends facing from afar
+    # open pipe ends (no other component's port at them): (pipe, which end, point, outward)
     open_ends = [
-        (comp, np.asarray(point, float), np.asarray(out, float))
+        (comp, k, np.asarray(point, float), np.asarray(out, float))
         for comp in piping
         if comp.type == "pipe"
-        for point, out in ports(comp)
+        for k, (point, out) in enumerate(ports(comp))
         if not any(port_owner[q] != comp.id for q in port_tree.query_ball_point(point, PORT_TOUCH))
     ]
-    open_tree = cKDTree(np.array([p for _, p, _ in open_ends]).reshape(-1, 3))
+    open_tree = cKDTree(np.array([end[2] for end in open_ends]).reshape(-1, 3))
     found: dict[str, list[dict]] = {}
-    for comp in piping:
-        if comp.type != "pipe":
-            continue
+    for comp, k, point, out in open_ends:
         own = source_of[comp.id]
         radius = float(comp.geometry.outer_radius)
-        for k, (point, out) in enumerate(ports(comp)):
-            point = np.asarray(point, float)
-            if any(port_owner[q] != comp.id for q in port_tree.query_ball_point(point, PORT_TOUCH)):
-                continue  # joined here
-            length = reach + float(slack.get(own, 0.0))
-            tip = point + length * np.asarray(out, float)
-            near = sample_tree.query_ball_point(
-                0.5 * (point + tip), 0.5 * length + radius + widest + _SAMPLE_STEP
-            )
-            best = None
-            for other in (piping[n] for n in sorted({owners[q] for q in near})):
-                if other.id == comp.id:
-                    continue
-                theirs = scan_pipes(other)
-                if own in theirs or any(frozenset((own, q)) in joined for q in theirs):
-                    continue  # a piece of the same pipe, or joined to this pipe by merging
-                if not any(
-                    segment_distance(point, tip, a, b) <= radius + rad
-                    for a, b, rad in capsules[other.id]
-                ):
-                    continue
-                gap = _surface_gap(point, capsules[other.id])
-                rank = (gap, other.type == "pipe")  # a fitting before the pipe it joins
-                if best is None or rank < best[0]:
-                    best = (rank, other, theirs)
-            if best is None:
-                record = _facing_end(
-                    comp, own, point, np.asarray(out, float), open_ends, open_tree,
-                    scan_pipes, joined, reach, bend_limit_deg,
-                )  # fmt: skip
-                if record is not None:
-                    record["end"] = ("start", "end")[k]
-                    record["noted"] = any(
-                        frozenset((own, q)) in noted for q in record["touches_pipes"]
-                    )
-                    found.setdefault(comp.id, []).append(record)
+        length = reach + float(slack.get(own, 0.0))
+        tip = point + length * out
+        near = sample_tree.query_ball_point(
+            0.5 * (point + tip), 0.5 * length + radius + widest + _SAMPLE_STEP
+        )
+        best = None
+        for other in (piping[n] for n in sorted({owners[q] for q in near})):
+            if other.id == comp.id:
                 continue
-            (gap, _), other, theirs = best
-            found.setdefault(comp.id, []).append(
-                {
-                    "end": ("start", "end")[k],
-                    "at": [float(x) for x in point],
-                    "touches": other.id,
-                    "touches_type": other.type,
-                    "touches_pipes": theirs,
-                    "gap": float(gap),
-                    "angle_deg": _angle_deg(np.asarray(out, float), capsules[other.id], point),
-                    "noted": any(frozenset((own, q)) in noted for q in theirs),
-                }
+            theirs = scan_pipes(other)
+            if own in theirs or any(frozenset((own, q)) in joined for q in theirs):
+                continue  # a piece of the same pipe, or joined to this pipe by merging
+            if not any(
+                segment_distance(point, tip, a, b) <= radius + rad
+                for a, b, rad in capsules[other.id]
+            ):
+                continue
+            gap = _surface_gap(point, capsules[other.id])
+            rank = (gap, other.type == "pipe")  # a fitting before the pipe it joins
+            if best is None or rank < best[0]:
+                best = (rank, other, theirs)
+        if best is None:
+            record = _facing_end(
+                comp,
+                own,
+                point,
+                out,
+                open_ends,
+                open_tree,
+                scan_pipes,
+                joined,
+                reach,
+                bend_limit_deg,
             )
+            if record is not None:
+                record["end"] = ("start", "end")[k]
+                record["noted"] = any(frozenset((own, q)) in noted for q in record["touches_pipes"])
+                found.setdefault(comp.id, []).append(record)
+            continue
+        (gap, _), other, theirs = best
+        found.setdefault(comp.id, []).append(
+            {
+                "end": ("start", "end")[k],
+                "at": [float(x) for x in point],
+                "touches": other.id,
+                "touches_type": other.type,
+                "touches_pipes": theirs,
+                "gap": float(gap),
+                "angle_deg": _angle_deg(out, capsules[other.id], point),
+                "noted": any(frozenset((own, q)) in noted for q in theirs),
+            }
+        )
     return found
 
 
@@ -249,7 +249,7 @@ def _facing_end(comp, own, point, out, open_ends, open_tree, scan_pipes, joined,
     radius = float(comp.geometry.outer_radius)
     best = None
     for q in open_tree.query_ball_point(point, 2.0 * FACING_REACH):
-        other, there, their_out = open_ends[q]
+        other, _, there, their_out = open_ends[q]
         if other.id == comp.id:
             continue
         theirs = scan_pipes(other)
@@ -257,7 +257,7 @@ def _facing_end(comp, own, point, out, open_ends, open_tree, scan_pipes, joined,
             continue
         within = max(radius, float(other.geometry.outer_radius))
         bend = float(np.degrees(np.arccos(np.clip(-float(out @ their_out), -1.0, 1.0))))
-        if bend < _IN_LINE_DEG:
+        if bend < IN_LINE_DEG:
             rel = there - point
             ahead = float(rel @ out)
             lateral = float(np.linalg.norm(rel - ahead * out))

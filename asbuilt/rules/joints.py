@@ -18,6 +18,7 @@ import numpy as np
 
 from asbuilt.catalog import DEFAULT_CATALOG
 from asbuilt.findings import SEVERITIES, Suggestion
+from asbuilt.merge.loose import IN_LINE_DEG
 
 from ._catalog import SizeTable, nps_value, size_table
 from ._context import Context, centre_of, mm, stderr_value, verdict
@@ -400,7 +401,7 @@ def _facing_reason(record: dict, pipe: str, target: str) -> tuple[str, str]:
     joined, and what to do (:func:`asbuilt.merge.loose.loose_ends`'s ``corner`` records)."""
     link = f"link {pipe} and {target} in the scan (links) and model again"
     bend = float(record.get("bend_deg", 90.0))
-    if bend < 10.0:
+    if bend < IN_LINE_DEG:
         return (
             f"{target} continues its line {mm(float(record['gap']))} past its end, beyond "
             "merging's reach (joint_distance plus the shot spacing)",
@@ -449,7 +450,7 @@ def check_unjoined_ends(ctx: Context, table: SizeTable | None = None) -> None:
             if kind == "pipe":
                 where = "ends on" if gap < 5e-4 else f"ends {mm(gap)} from"
             if record.get("corner") is not None:
-                in_line = float(record.get("bend_deg", 90.0)) < 10.0
+                in_line = float(record.get("bend_deg", 90.0)) < IN_LINE_DEG
                 where = f"ends {mm(gap)} short of" + ("" if in_line else " a corner with")
             why, suggestion = _unjoined_reason(record, comp, other, names)
             ctx.emit(
