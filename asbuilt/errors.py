@@ -25,6 +25,7 @@ __all__ = [
     "DeviceProtocolError",
     "CalibrationError",
     "SceneError",
+    "SuggestionError",
 ]
 
 
@@ -101,6 +102,11 @@ class DesignError(_LocatedError, ValueError):
 
 class SceneError(_LocatedError, ValueError):
     """A scene description (for the simulator) is malformed."""
+
+
+class SuggestionError(AsbuiltError, ValueError):
+    """A suggestion chosen to accept (``check --accept``) is not in the check's findings, is
+    advice rather than a change, or is not told apart from the others offered."""
 
 
 class ExportError(_LocatedError, ValueError):

@@ -3,7 +3,9 @@
 Fits and merges the scan (as ``asbuilt model`` does), runs the rules and prints the findings like
 a linter, one per line, sorted by severity then position, then a summary line. Exit code 0 when
 no finding is an error, 1 when one is, 2 for bad input, so it runs in a QA pipeline.
-``--fix OUT`` accepts every unambiguous suggestion, writes the corrected model (any export
+Each finding's suggestions are numbered beneath it, with the ``--accept`` choice that accepts
+one (:mod:`asbuilt.rules.accept`). ``--fix OUT`` accepts every unambiguous suggestion, or with
+``--accept`` only the chosen ones (ambiguous ones too), writes the corrected model (any export
 format) and lists what it changed; the findings printed are then those left after the fixes.
 An object whose fit was refused is an error finding ``AB001 fit-refused`` that no selection
 drops and re-checks keep. A model document takes ``--catalog`` only where it decides something
@@ -28,6 +30,21 @@ def _selectors(text: str) -> list[str]:
     if not items:
         raise argparse.ArgumentTypeError("give rule codes or slugs, e.g. AB202,too-few-points")
     return items
+
+
+def suggestion_lines(finding) -> list[str]:
+    """The numbered suggestions of ``finding``, one indented line each; a change names the
+    ``--accept`` choice that accepts it (and ``--fix`` where ``--fix`` alone accepts it)."""
+    from asbuilt.rules.accept import accept_choice
+
+    lines = []
+    for number, suggestion in enumerate(finding.suggestions, 1):
+        line = f"    {number}. {suggestion.description}"
+        choice = accept_choice(finding, number)
+        if choice is not None:
+            line += f"  [{'--fix, or ' if suggestion.unambiguous else ''}--accept {choice}]"
+        lines.append(line)
+    return lines
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -83,17 +100,26 @@ def register(subparsers) -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--format",
-        choices=("text", "json"),
+        choices=("text", "concise", "json"),
         default="text",
-        help="text: one finding per line and a summary (default); json: the list of findings",
+        help="text: one finding per line, its numbered suggestions beneath, and a summary "
+        "(default); concise: the finding lines and the summary only; json: the list of findings",
     )
     parser.add_argument(
         "--fix",
         metavar="OUT",
         default=None,
-        help="accept every unambiguous suggestion and write the corrected model to OUT ("
-        + ", ".join(SUFFIXES)
-        + ")",
+        help="accept every unambiguous suggestion (or only those --accept names) and write the "
+        "corrected model to OUT (" + ", ".join(SUFFIXES) + ")",
+    )
+    parser.add_argument(
+        "--accept",
+        metavar="RULE@OBJECTS[:N]",
+        action="append",
+        default=None,
+        help="with --fix: accept this suggestion instead of every unambiguous one, as the text "
+        "output names it, e.g. AB101@P5:2 (rule code or slug, the finding's objects, the "
+        "suggestion's number); repeat for several",
     )
     parser.add_argument(
         "--catalog",
@@ -247,6 +273,14 @@ def run(args: argparse.Namespace) -> int:
         from asbuilt.design import load_design
 
         design = load_design(args.design)
+    if args.accept and args.fix is None:
+        from asbuilt.errors import SuggestionError
+
+        raise SuggestionError("--accept needs --fix OUT: the file to write the corrected model to")
+    if args.accept:
+        from asbuilt.rules.accept import parse_choice
+
+        choices = [parse_choice(text) for text in args.accept]  # malformed: before any work
     if args.fix is not None:
         from asbuilt.atomic import check_target
         from asbuilt.export import exporter_for
@@ -274,7 +308,12 @@ def run(args: argparse.Namespace) -> int:
     if args.fix:
         from asbuilt.export import export_model
 
-        fixed, changes = apply_fixes(model, findings)
+        if args.accept:
+            from asbuilt.rules import apply_suggestions, choose_suggestions
+
+            fixed, changes = apply_suggestions(model, choose_suggestions(findings, choices))
+        else:
+            fixed, changes = apply_fixes(model, findings)
         fixed = fixed.replace(findings=refused_findings(model))  # objects still not in it
         findings = recheck(fixed, config, design, catalog=args.catalog or None)
         export_model(fixed.replace(findings=findings), Path(args.fix))
@@ -297,6 +336,9 @@ def run(args: argparse.Namespace) -> int:
                 f"{escape(source.name)}: {escape(where)}: [{colours[f.severity]}]{f.severity}"
                 f"[/] {f.slug}: {escape(f.message)}"
             )
+            if args.format == "text":
+                for line in suggestion_lines(f):
+                    out.print(escape(line))
         for change in changes:
             out.print(f"fixed: {escape(change)}")
         counts = {s: sum(1 for f in findings if f.severity == s) for s in colours}

@@ -590,6 +590,16 @@ def _quality(data: ReportData, links) -> str:
     )
 
 
+def _accept_note(finding, number: int, suggestion) -> str:
+    """How ``asbuilt check`` accepts suggestion ``number`` of ``finding`` (HTML), or ``""``."""
+    from asbuilt.rules.accept import accept_choice
+
+    if (choice := accept_choice(finding, number)) is None:
+        return ""
+    alone = "--fix applies it, or " if suggestion.unambiguous else "accept with "
+    return f' <span class="muted">({alone}<code>--accept {_e(choice)}</code>)</span>'
+
+
 def _findings(data: ReportData) -> str:
     if not data.findings:
         return (
@@ -612,8 +622,8 @@ def _findings(data: ReportData) -> str:
             if value is not None and np.isfinite(value):
                 values.append(f"{name} {value:.4g} {_e(f.unit)}")
         suggestions = "".join(
-            f"<li>{_e(s.description)}{' (unambiguous: --fix applies it)' if s.unambiguous else ''}</li>"
-            for s in f.suggestions
+            f"<li>{_e(s.description)}{_accept_note(f, number, s)}</li>"
+            for number, s in enumerate(f.suggestions, 1)
         )
         items.append(
             f'<li id="finding-{index}"><span class="sev {f.severity}">{_e(f.severity)}</span> '
@@ -621,7 +631,7 @@ def _findings(data: ReportData) -> str:
             f"{' (unverifiable)' if f.unverifiable else ''} &mdash; "
             f"{', '.join(named(o) for o in f.objects)}<br>{_e(f.message)}"
             + (f'<br><span class="muted">{"; ".join(values)}</span>' if values else "")
-            + (f"<ul>{suggestions}</ul>" if suggestions else "")
+            + (f"<ol>{suggestions}</ol>" if suggestions else "")
             + "</li>"
         )
     return (

@@ -6,6 +6,8 @@
     findings = check_model(model)                    # shipped rules (asbuilt/data/rules.toml)
     findings = check_model(model, load_rules("project-rules.toml"), design="design.json")
     fixed, changes = apply_fixes(model, findings)    # accept every unambiguous suggestion
+    chosen = choose_suggestions(findings, ["AB101@P5:2"])  # or the ones the user picks
+    fixed, changes = apply_suggestions(model, chosen)
 
 Findings are data (:class:`asbuilt.findings.Finding`), sorted by severity then position. Each
 rule is uncertainty-aware: a violation is an error only when it exceeds the allowed value by more
@@ -26,8 +28,9 @@ from . import alignment, clash, joints, quality, sizes
 from . import design as design_rules
 from ._catalog import SizeTable, size_table
 from ._context import Context
+from .accept import choose_suggestions, finding_key
 from .config import RulesConfig, load_rules, loads_rules
-from .fixes import apply_fixes
+from .fixes import apply_fixes, apply_suggestions
 from .registry import RULES, Rule, match_rules, rule
 
 __all__ = [
@@ -39,6 +42,9 @@ __all__ = [
     "loads_rules",
     "check_model",
     "apply_fixes",
+    "apply_suggestions",
+    "choose_suggestions",
+    "finding_key",
     "sort_findings",
     "rule",
     "match_rules",

@@ -1,4 +1,4 @@
-"""Accept every unambiguous suggestion, like a spell checker's "accept all".
+"""Apply suggestions: every unambiguous one (a spell checker's "accept all"), or those chosen.
 
 A suggestion's ``change`` is data; two kinds are understood:
 
@@ -23,7 +23,26 @@ import numpy as np
 from asbuilt.model import Bend, Component, Correction, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
-__all__ = ["apply_fixes", "rotate_geometry", "resize_geometry"]
+__all__ = [
+    "APPLIED_FIELDS",
+    "applicable",
+    "apply_fixes",
+    "apply_suggestions",
+    "rotate_geometry",
+    "resize_geometry",
+]
+
+#: The ``change`` fields :func:`apply_suggestions` can make to a model. Other changes are data
+#: for a person or another step: ``units`` means reading the scan again in other units, and a
+#: refused fit's suggestion keeps the measured points to rescan.
+APPLIED_FIELDS = ("nominal", "rotation")
+
+
+def applicable(suggestion) -> bool:
+    """Whether ``suggestion`` is a change to a model's components that can be applied."""
+    change = suggestion.change
+    targets = change.get("objects") or change.get("object")
+    return bool(targets) and change.get("field") in APPLIED_FIELDS
 
 
 def rotate_geometry(geometry, rotation, about):
@@ -176,7 +195,7 @@ def _apply(component: Component, change, catalog=None) -> Component:
 
 
 def apply_fixes(model: Model, findings, *, catalog=None) -> tuple[Model, list[str]]:
-    """Apply the first unambiguous suggestion of every finding.
+    """Apply the first unambiguous suggestion of every finding (a spell checker's "accept all").
 
     Parameters
     ----------
@@ -192,6 +211,31 @@ def apply_fixes(model: Model, findings, *, catalog=None) -> tuple[Model, list[st
         The corrected model (its findings cleared: run :func:`check_model` again) and one line
         per applied change, e.g. ``"P3: make P3's axis vertical (rotate it 3.1 deg ...)"``.
     """
+    chosen = []
+    for finding in findings:
+        suggestion = next((s for s in finding.suggestions if s.unambiguous and applicable(s)), None)
+        if suggestion is not None:
+            chosen.append((finding, suggestion))
+    return apply_suggestions(model, chosen, catalog=catalog)
+
+
+def apply_suggestions(model: Model, chosen, *, catalog=None) -> tuple[Model, list[str]]:
+    """Apply the given suggestions, ambiguous or not (a spell checker's "accept this one").
+
+    Parameters
+    ----------
+    model : Model
+    chosen : iterable of (Finding, Suggestion)
+        E.g. from :func:`asbuilt.rules.accept.choose_suggestions`; a suggestion without a
+        ``change`` it can make (advice, see :func:`applicable`) changes nothing.
+    catalog : Catalog, str or Path, optional
+        As for :func:`apply_fixes`.
+
+    Returns
+    -------
+    (Model, list of str)
+        As :func:`apply_fixes`.
+    """
     from asbuilt.catalog import Catalog, model_catalog
 
     if catalog is None or isinstance(catalog, (Catalog, str, Path)):
@@ -200,16 +244,15 @@ def apply_fixes(model: Model, findings, *, catalog=None) -> tuple[Model, list[st
         catalog = None
     components = {c.id: c for c in model.components}
     changes: list[str] = []
-    for finding in findings:
-        chosen = next((s for s in finding.suggestions if s.unambiguous and s.change), None)
-        if chosen is None:
+    for finding, suggestion in chosen:
+        if not applicable(suggestion):
             continue
-        change = dict(chosen.change)
+        change = dict(suggestion.change)
         targets = change.get("objects") or [change.get("object")]
         applied = [t for t in targets if t in components]
         for target in applied:
             components[target] = _apply(components[target], change, catalog)
         if applied:
-            changes.append(f"{', '.join(applied)}: {chosen.description} ({finding.slug})")
+            changes.append(f"{', '.join(applied)}: {suggestion.description} ({finding.slug})")
     fixed = tuple(components[c.id] for c in model.components)
     return model.replace(components=fixed, findings=()), changes

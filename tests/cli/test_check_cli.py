@@ -77,7 +77,7 @@ def test_clean_scan_exits_0_with_a_summary(tmp_path, capsys):
 
 def test_clash_exits_1_and_reads_like_a_linter(tmp_path, capsys):
     path = scan_file(tmp_path, PIPE, CROSSING)
-    code, out, _ = run([path], capsys)
+    code, out, _ = run([path, "--format", "concise"], capsys)
     assert code == 1
     lines = out.splitlines()
     assert any(
@@ -152,7 +152,8 @@ def test_select_and_ignore(tmp_path, capsys, option):
 def test_clash_alone_selected(tmp_path, capsys):
     path = scan_file(tmp_path, PIPE, CROSSING)
     code, out, _ = run([path, "--select", "clash"], capsys)
-    assert code == 1 and all(" clash: " in line for line in out.splitlines()[:-1])
+    findings = [line for line in out.splitlines()[:-1] if not line.startswith("    ")]
+    assert code == 1 and findings and all(" clash: " in line for line in findings)
 
 
 def test_rules_file_changes_severity(tmp_path, capsys):
@@ -402,7 +403,7 @@ def test_a_refused_object_is_an_error_finding_that_no_selection_drops(refused, c
     scan, model, _ = refused
     capsys.readouterr()
     for source, extra in ((scan, []), (scan, ["--select", "clash"]), (model, [])):
-        code, out, _ = run([source, *extra], capsys)
+        code, out, _ = run([source, *extra, "--format", "concise"], capsys)
         lines = out.splitlines()
         assert code == 1 and len(lines) == 2
         assert lines[0].startswith(
@@ -540,3 +541,72 @@ def test_findings_on_ids_the_output_encoding_lacks_do_not_stop_check(tmp_path):
     assert b"Traceback" not in done.stderr, done.stderr.decode("latin-1")
     assert done.returncode == 0
     assert "scan.json: \\u7ba1 5: warning too-few-points" in done.stdout.decode("latin-1")
+
+
+ODD = {
+    "id": "P5",
+    "kind": "cylinder",
+    "points": 30,
+    "geometry": {"type": "cylinder", "start": [-1.5, 8, 2.0], "end": [1.5, 8, 2.0], "od": 0.125},
+}
+
+
+@pytest.fixture(scope="module")
+def odd_scan(tmp_path_factory):
+    """A pipe fitted between NPS 4 and NPS 5 (no hint) beside a pipe 5 degrees off level."""
+    return scan_file(tmp_path_factory.mktemp("odd"), ODD, TILTED)
+
+
+def test_text_numbers_each_findings_suggestions_with_the_choice_that_accepts_it(odd_scan, capsys):
+    code, out, _ = run([odd_scan], capsys)
+    assert code == 1
+    lines = out.splitlines()
+    at = next(i for i, line in enumerate(lines) if "P5: error nonstandard-diameter:" in line)
+    assert lines[at + 1].startswith("    1. use NPS 4 (114.3 mm")
+    assert lines[at + 1].endswith("[--accept AB101@P5:1]")
+    assert lines[at + 2].startswith("    2. use NPS 5 (141.3 mm")
+    assert lines[at + 2].endswith("[--accept AB101@P5:2]")
+    assert lines[at + 3].startswith("    3. check the material") and "[" not in lines[at + 3]
+    # an unambiguous change: --fix alone accepts it, and one change needs no number
+    assert "  [--fix, or --accept AB201@P9]" in out
+    # concise: the finding lines and the summary only
+    _, concise, _ = run([odd_scan, "--format", "concise"], capsys)
+    assert concise.splitlines() == [line for line in lines if not line.startswith("    ")]
+
+
+def test_accept_applies_the_chosen_size_only(odd_scan, tmp_path, capsys):
+    fixed = tmp_path / "fixed.json"
+    code, out, _ = run([odd_scan, "--accept", "AB101@P5:2", "--fix", fixed], capsys)
+    assert code == 0
+    assert "fixed: P5: use NPS 5 (141.3 mm" in out
+    assert "P5: error nonstandard-diameter" not in out  # the re-check after the fix
+    assert "P9: warning misaligned-axis" in out  # not chosen, so not fixed
+    document = json.loads(fixed.read_text(encoding="utf-8"))
+    (p5,) = [c for c in document["components"] if c["id"] == "P5"]
+    assert p5["nominal"] == "5"
+    # --fix alone accepts the unambiguous levelling and leaves the size to a person
+    code, out, _ = run([odd_scan, "--fix", tmp_path / "all.json"], capsys)
+    assert "fixed: P9: make P9's axis horizontal" in out and "fixed: P5" not in out
+
+
+@pytest.mark.parametrize(
+    "accept, message",
+    [
+        ("AB101@P5", "AB101@P5 has 2 suggestions to choose from: add :1 (use NPS 4"),
+        ("AB101@P5:3", "suggestion 3 of AB101@P5 is advice, not a change to accept"),
+        ("AB101@P7", "no AB101 finding on P7 in this check; findings with a change to accept: "),
+        ("P5", "give a finding as RULE@OBJECTS[:N]"),
+    ],
+)
+def test_a_bad_choice_is_one_line_and_writes_nothing(odd_scan, tmp_path, capsys, accept, message):
+    fixed = tmp_path / "fixed.step"
+    code, out, err = run([odd_scan, "--accept", accept, "--fix", fixed], capsys)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and message in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_accept_needs_fix(odd_scan, capsys):
+    code, out, err = run([odd_scan, "--accept", "AB101@P5:2"], capsys)
+    assert code == 2 and out == ""
+    assert "--accept needs --fix OUT" in err and err.count("\n") == 1

@@ -276,3 +276,32 @@ def test_html5lib_parses_without_errors(plant_model):
         parser = html5lib.HTMLParser(strict=False, namespaceHTMLElements=False)
         parser.parse(text)
         assert parser.errors == []
+
+
+def test_suggestions_are_numbered_with_the_check_choice_that_accepts_them():
+    """A finding's suggestions are an ordered list (the numbers check --accept takes); a change
+    names its choice, advice none."""
+    from asbuilt.findings import Finding, Suggestion
+
+    between = Finding(
+        "AB101",
+        "nonstandard-diameter",
+        "error",
+        ("P1",),
+        "OD 126.0 mm is no size",
+        suggestions=(
+            Suggestion("use NPS 4", {"object": "P1", "field": "nominal", "value": "4"}),
+            Suggestion("use NPS 5", {"object": "P1", "field": "nominal", "value": "5"}),
+            Suggestion("rescan the pipe"),
+        ),
+    )
+    model = known_model()
+    text = html_text(report_data(model.replace(findings=(between,)), generated=STAMP))
+    check_html(text)
+    item = text.split('<li id="finding-1">', 1)[1].split("</ol>", 1)[0]
+    choices = re.findall(r"<li>([^<]*)(?:<span[^>]*>\(accept with <code>--accept ([^<]*))?", item)
+    assert choices == [
+        ("use NPS 4 ", "AB101@P1:1"),
+        ("use NPS 5 ", "AB101@P1:2"),
+        ("rescan the pipe", ""),
+    ]
