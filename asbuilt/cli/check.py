@@ -219,6 +219,7 @@ def _list_rules(config) -> None:
 
     from asbuilt.findings import FIT_REFUSED_CODE, FIT_REFUSED_SLUG
     from asbuilt.rules import RULES
+    from asbuilt.rules.waivers import UNUSED_WAIVER_CODE, UNUSED_WAIVER_SLUG
 
     table = Table("code", "slug", "severity", "runs", "source or reason", show_lines=False)
     # Not a rule of the registry (no rules-file options): the pipeline's own finding for an
@@ -229,6 +230,14 @@ def _list_rules(config) -> None:
         "error",
         "always",
         "The fit: a scan object whose fit was refused is missing from the model; rescan it "
+        "(docs/rules.md). Not configurable.",
+    )
+    table.add_row(
+        UNUSED_WAIVER_CODE,
+        UNUSED_WAIVER_SLUG,
+        "info",
+        "with waivers",
+        "The rules file: a [[waive]] entry that matches no finding of a rule that ran; remove it "
         "(docs/rules.md). Not configurable.",
     )
     for r in RULES:

@@ -32,6 +32,7 @@ from .accept import choose_suggestions, finding_key
 from .config import RulesConfig, load_rules, loads_rules
 from .fixes import apply_fixes, apply_suggestions
 from .registry import RULES, Rule, match_rules, rule
+from .waivers import apply_waivers
 
 __all__ = [
     "RULES",
@@ -143,4 +144,10 @@ def check_model(
             check(ctx)
     if design is not None and any(config.is_active(s) for s in _DESIGN_SLUGS):
         design_rules.CHECKS["design-deviation"](ctx)
-    return sort_findings(ctx.findings)
+    if not config.waivers:
+        return sort_findings(ctx.findings)
+    ran = [
+        r.slug for r in config.active_rules() if design is not None or r.slug not in _DESIGN_SLUGS
+    ]
+    ids = [c.id for c in model.components]
+    return sort_findings(apply_waivers(ctx.findings, config.waivers, ran, ids))

@@ -23,6 +23,7 @@ from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
 from ._ranges import check_range, check_rows, describe
 from .registry import RULES, Rule, match_rules
+from .waivers import Waiver, parse_waivers
 
 try:  # Python 3.11+
     import tomllib
@@ -56,6 +57,8 @@ class RulesConfig:
         Selectors (code, code prefix, slug or ``"ALL"``); ignore wins.
     source : str or None
         The user rules file, None for the shipped defaults.
+    waivers : tuple of Waiver
+        The findings the file's ``[[waive]]`` tables accept (:mod:`asbuilt.rules.waivers`).
     """
 
     options: Mapping[str, Mapping[str, object]]
@@ -63,6 +66,7 @@ class RulesConfig:
     select: tuple[str, ...] = ("ALL",)
     ignore: tuple[str, ...] = ()
     source: str | None = None
+    waivers: tuple[Waiver, ...] = ()
     _active: frozenset = field(default=frozenset(), repr=False, compare=False)
 
     def __post_init__(self):
@@ -233,7 +237,11 @@ def _resolve(user: Mapping, source: str | None) -> RulesConfig:
     options = {r.slug: dict(shipped[r.slug]) for r in RULES}
     select = list(shipped["select"])
     ignore = list(shipped["ignore"])
+    waivers: tuple[Waiver, ...] = ()
     for key, value in user.items():
+        if key == "waive":
+            waivers = parse_waivers(value, source)
+            continue
         if key in ("select", "ignore"):
             chosen = _selectors(value, key, source)
             if key == "select":
@@ -303,6 +311,7 @@ def _resolve(user: Mapping, source: str | None) -> RulesConfig:
         select=tuple(select),
         ignore=tuple(ignore),
         source=source,
+        waivers=waivers,
     )
 
 

@@ -610,3 +610,21 @@ def test_accept_needs_fix(odd_scan, capsys):
     code, out, err = run([odd_scan, "--accept", "AB101@P5:2"], capsys)
     assert code == 2 and out == ""
     assert "--accept needs --fix OUT" in err and err.count("\n") == 1
+
+
+def test_a_waiver_in_the_rules_file_turns_an_error_into_info_and_exit_0(tmp_path, capsys):
+    path = scan_file(tmp_path, PIPE, CROSSING)
+    code, out, _ = run([path, "--select", "clash"], capsys)
+    assert code == 1 and "P1,P2: error clash:" in out
+    waivers = tmp_path / "project.toml"
+    waivers.write_text(
+        '[[waive]]\nfinding = "clash@P1,P2"\nreason = "P2 passes through a sleeve in P1, M-201"\n',
+        encoding="utf-8",
+    )
+    code, out, _ = run([path, "--select", "clash", "--rules", waivers], capsys)
+    assert code == 0
+    assert (
+        "P1,P2: info clash: waived (P2 passes through a sleeve in P1, M-201); as an error: " in out
+    )
+    code, out, _ = run(["--list-rules"], capsys)
+    assert "AB002" in out and "unused-waiver" in out
