@@ -22,8 +22,8 @@ it (outlets, or the run pair taken as outlets, offset by more than the skew tole
 free, with a note saying why; the tee is kept (the behaviour before crosses were built).
 
 Sizes (:func:`settle_crosses`, once the pipes' sizes are snapped): the run is the pair with the
-largest pipe (the pair contiguity found first when both are equal); the outlets must be of one
-size, no larger than the run's. Otherwise the cross falls back to a tee of the run and the
+largest pipe (of equal pairs, the one with the first pipe in scan order); the outlets must be
+of one size, no larger than the run's. Otherwise the cross falls back to a tee of the run and the
 larger outlet, and the other outlet stays free with a note: ASME B16.9 crosses have two outlets
 of one size.
 """
@@ -195,7 +195,8 @@ def settle_crosses(joints: Sequence[Joint], od: Sequence[float], names: Sequence
     Returns
     -------
     list of contiguity.Joint
-        The run is the pair with the largest pipe (ties keep contiguity's order); a cross whose
+        The run is the pair with the largest pipe (of equal pairs, the one with the first
+        pipe); a cross whose
         outlets differ in size, or (through a pipe) are larger than the pipe running through, is
         a tee of the run and the larger outlet.
     """
@@ -207,9 +208,12 @@ def settle_crosses(joints: Sequence[Joint], od: Sequence[float], names: Sequence
             result.append(jt)
             continue
         if jt.through is None:
-            pairs = [jt.ends[:2], jt.ends[2:]]
-            if max(od[e[0]] for e in pairs[1]) > max(od[e[0]] for e in pairs[0]) + 1e-9:
-                pairs.reverse()
+            # the larger pair is the run; of equal pairs, the one with the first pipe (scan
+            # order), so that an equal cross is named the same whichever tee was found first
+            pairs = sorted(
+                [jt.ends[:2], jt.ends[2:]],
+                key=lambda pair: (-round(max(od[e[0]] for e in pair), 9), min(e[0] for e in pair)),
+            )
             run, outlets = pairs
             run_od = max(od[e[0]] for e in run)
         else:
