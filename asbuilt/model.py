@@ -24,6 +24,7 @@ __all__ = [
     "Bend",
     "Reducer",
     "Tee",
+    "Cross",
     "Geometry",
     "Correction",
     "Component",
@@ -38,6 +39,7 @@ COMPONENT_TYPES = (
     "pipe",
     "elbow",
     "tee",
+    "cross",
     "reducer",
     "coupling",
     "cylinder",
@@ -319,8 +321,64 @@ class Tee:
         )
         _hollow_or_solid("tee", self.wall, self.branch_wall)
 
+    @property
+    def outlets(self) -> tuple[np.ndarray, ...]:
+        """The outlet ends, each (3,) metres: the branch end (a cross has two)."""
+        return (self.branch_end,)
 
-Geometry = Straight | Bend | Reducer | Tee | Cylinder | Cuboid | Sphere | Plane | Hull
+
+@dataclass(frozen=True, eq=False)
+class Cross:
+    """A straight (or reducing-outlet) cross: a run from ``run_start`` to ``run_end`` through
+    ``center`` and an outlet line from ``branch_start`` through ``center`` to ``branch_end``
+    (two outlets of one size on one line, square to the run); points (3,) metres.
+
+    ASME B16.9 tabulates crosses with tees: a cross of a run and outlet size has the tee's
+    centre-to-end C (run) and M (outlet) for that pair. ``outer_radius`` and ``wall`` (metres)
+    are the run's, ``branch_outer_radius`` and ``branch_wall`` both outlets' (each bore its
+    pipe's, as tees are made); ``branch_wall`` None takes ``wall``. 0 for solid.
+
+    Raises
+    ------
+    ValueError
+        A wall not thinner than its own outer radius, or one of the two 0 (solid) and the
+        other not.
+    """
+
+    kind: ClassVar[str] = "cross"
+    center: np.ndarray
+    run_start: np.ndarray
+    run_end: np.ndarray
+    branch_start: np.ndarray
+    branch_end: np.ndarray
+    outer_radius: float
+    branch_outer_radius: float
+    wall: float = 0.0
+    branch_wall: float | None = None
+
+    def __post_init__(self):
+        for name in ("center", "run_start", "run_end", "branch_start", "branch_end"):
+            object.__setattr__(self, name, as_vector(getattr(self, name), name))
+        object.__setattr__(self, "outer_radius", _nonneg(self.outer_radius, "outer radius"))
+        object.__setattr__(
+            self, "branch_outer_radius", _nonneg(self.branch_outer_radius, "branch outer radius")
+        )
+        branch_wall = self.wall if self.branch_wall is None else self.branch_wall
+        object.__setattr__(self, "wall", _wall(self.outer_radius, self.wall))
+        object.__setattr__(
+            self,
+            "branch_wall",
+            _wall(self.branch_outer_radius, branch_wall, "branch wall", "branch outer radius"),
+        )
+        _hollow_or_solid("cross", self.wall, self.branch_wall)
+
+    @property
+    def outlets(self) -> tuple[np.ndarray, ...]:
+        """The two outlet ends, each (3,) metres: ``branch_start`` and ``branch_end``."""
+        return (self.branch_start, self.branch_end)
+
+
+Geometry = Straight | Bend | Reducer | Tee | Cross | Cylinder | Cuboid | Sphere | Plane | Hull
 
 
 @dataclass(frozen=True)

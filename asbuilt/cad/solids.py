@@ -29,7 +29,7 @@ from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt, gp_Trsf
 from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
 
 from asbuilt.errors import SolidBuildError
-from asbuilt.model import Bend, Component, Reducer, Straight, Tee
+from asbuilt.model import Bend, Component, Cross, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 from asbuilt.tolerances import DEFAULT_TOLERANCES
 
@@ -48,7 +48,18 @@ __all__ = [
 #: Geometry fields that are positions (shape (3,) or (k, 3) metres), shifted to the local origin;
 #: the others (axes, normals, sizes, radii, faces) do not change under a translation.
 _POSITION_FIELDS = frozenset(
-    ("start", "end", "center", "run_start", "run_end", "branch_end", "point", "outline", "vertices")
+    (
+        "start",
+        "end",
+        "center",
+        "run_start",
+        "run_end",
+        "branch_start",
+        "branch_end",
+        "point",
+        "outline",
+        "vertices",
+    )
 )
 
 #: Points of an outline closer than this (metres) are merged before building a plate.
@@ -253,6 +264,33 @@ def _tee(geometry: Tee) -> cq.Shape:
     return shape.clean()
 
 
+def _cross(geometry: Cross) -> cq.Shape:
+    """A cross as :func:`_tee` builds a tee: the run cylinder fused with the outlet cylinder
+    through both sides (``branch_start`` to ``branch_end``), then both bores (each of its own
+    wall) cut when the walls are known; the seams placed as the tee's (the run's through the
+    middle of one outlet hole, so the split opposite goes through the middle of the other)."""
+    run_axis = geometry.run_end - geometry.run_start
+    outlet_axis = geometry.branch_end - geometry.branch_start
+    if np.linalg.norm(np.cross(run_axis, outlet_axis)) <= 1e-9 * (
+        np.linalg.norm(run_axis) * np.linalg.norm(outlet_axis)
+    ):
+        raise ValueError("its outlets are parallel to its run")
+
+    def run(radius: float) -> cq.Solid:
+        return _seamed_cylinder(geometry.run_start, geometry.run_end, radius, outlet_axis)
+
+    def outlets(radius: float) -> cq.Solid:
+        return _seamed_cylinder(geometry.branch_start, geometry.branch_end, radius, run_axis)
+
+    shape = run(geometry.outer_radius).fuse(outlets(geometry.branch_outer_radius))
+    if geometry.wall > 0 or geometry.branch_wall > 0:
+        bores = run(geometry.outer_radius - geometry.wall).fuse(
+            outlets(geometry.branch_outer_radius - geometry.branch_wall)
+        )
+        shape = shape.cut(bores)
+    return shape.clean()
+
+
 def split_closed_faces(shape: cq.Shape) -> cq.Shape:
     """``shape`` with every closed (periodic) face cut in two, for writing to files.
 
@@ -429,6 +467,7 @@ _BUILDERS = {
     Bend: _bend,
     Reducer: _reducer,
     Tee: _tee,
+    Cross: _cross,
     Cuboid: _cuboid,
     Sphere: _sphere,
     Hull: _hull,

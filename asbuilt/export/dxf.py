@@ -31,7 +31,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from asbuilt import __version__
 from asbuilt.cad.colours import KIND_COLOURS, rgb255
-from asbuilt.model import Bend, Reducer, Straight, Tee
+from asbuilt.model import Bend, Cross, Reducer, Straight, Tee
 from asbuilt.primitives import Cylinder, Sphere
 
 __all__ = [
@@ -45,7 +45,7 @@ __all__ = [
 ]
 
 #: Component types drawn on ``P-`` (piping) layers; the others go on ``ASBUILT-`` layers.
-PIPING_TYPES = ("pipe", "elbow", "tee", "reducer", "coupling")
+PIPING_TYPES = ("pipe", "elbow", "tee", "cross", "reducer", "coupling")
 
 #: The 2D view layers with their ACI colour and linetype.
 VIEW_LAYERS = {
@@ -167,6 +167,11 @@ def _centrelines(geometry) -> list[np.ndarray]:
         return [
             np.array([geometry.run_start, geometry.run_end]),
             np.array([geometry.center, geometry.branch_end]),
+        ]
+    if isinstance(geometry, Cross):
+        return [
+            np.array([geometry.run_start, geometry.run_end]),
+            np.array([geometry.branch_start, geometry.branch_end]),
         ]
     if isinstance(geometry, Bend):
         a = geometry.start - geometry.center

@@ -9,6 +9,9 @@ placed at its own anchor point (so coordinates stay precise far from the origin)
   circle-hollow when the wall is known) profile extruded along the centreline;
 * elbows -> IfcPipeFitting BEND: the profile revolved about the bend axis;
 * tees -> IfcPipeFitting JUNCTION: run and branch cylinders united, bores cut (a CSG tree);
+* crosses -> IfcPipeFitting JUNCTION too (IFC4's IfcPipeFittingTypeEnum: a junction is a
+  fitting where two or more flow paths meet, a tee or a cross): run and outlet cylinders (the
+  outlet through both sides) united, bores cut, with four ports;
 * reducers -> IfcPipeFitting TRANSITION: a closed triangulated face set (concentric or
   eccentric, from :func:`asbuilt.cad.meshgen.tube_mesh`);
 * fitted primitives -> by the words of their label: tank/vessel IfcTank, column IfcColumn, beam
@@ -41,7 +44,7 @@ import numpy as np
 from asbuilt import __version__
 from asbuilt.cad.colours import colour_for, component_status
 from asbuilt.errors import ExportError
-from asbuilt.model import Bend, Component, Model, Reducer, Straight, Tee
+from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
 __all__ = [
@@ -72,6 +75,7 @@ _PIPING = {
     "coupling": ("IfcPipeFitting", "CONNECTOR"),
     "elbow": ("IfcPipeFitting", "BEND"),
     "tee": ("IfcPipeFitting", "JUNCTION"),
+    "cross": ("IfcPipeFitting", "JUNCTION"),
     "reducer": ("IfcPipeFitting", "TRANSITION"),
 }
 
@@ -251,7 +255,7 @@ class _Writer:
             return g.center, "Tessellation", [self.face_set(mesh, g.center)]
         if isinstance(g, Bend):
             return g.center, "SweptSolid", [self.bend(g)]
-        if isinstance(g, Tee):
+        if isinstance(g, Tee | Cross):
             return g.center, "CSG", [self.tee(g)]
         if isinstance(g, Reducer):
             return g.start, "Tessellation", [self.face_set(self.reducer_mesh(g), g.start)]
@@ -304,18 +308,22 @@ class _Writer:
             float(np.radians(g.angle_deg)),
         )
 
-    def tee(self, g: Tee) -> object:
+    def tee(self, g: Tee | Cross) -> object:
         """Run and branch cylinders united, their bores (when the wall is known) cut out;
-        coordinates relative to the tee's centre."""
+        coordinates relative to the tee's centre. A cross's outlet cylinder runs from one
+        outlet end through the centre to the other."""
         start, end, branch = g.run_start - g.center, g.run_end - g.center, g.branch_end - g.center
         run_length = float(np.linalg.norm(end - start))
         run_dir = (end - start) / run_length
-        branch_length = float(np.linalg.norm(branch))
-        branch_dir = branch / branch_length
+        # the outlet cylinder starts at the centre (a tee) or at the first outlet end (a cross)
+        origin = g.branch_start - g.center if isinstance(g, Cross) else np.zeros(3)
+        overrun = BORE_OVERRUN if isinstance(g, Cross) else 0.0
+        branch_length = float(np.linalg.norm(branch - origin))
+        branch_dir = (branch - origin) / branch_length
         outer = self.f.createIfcBooleanResult(
             "UNION",
             self.extruded_tube(start, run_dir, run_length, g.outer_radius, 0.0),
-            self.extruded_tube(np.zeros(3), branch_dir, branch_length, g.branch_outer_radius, 0.0),
+            self.extruded_tube(origin, branch_dir, branch_length, g.branch_outer_radius, 0.0),
         )
         if g.wall <= 0:
             return outer
@@ -329,9 +337,9 @@ class _Writer:
                 0.0,
             ),
             self.extruded_tube(
-                np.zeros(3),
+                origin - overrun * branch_dir,
                 branch_dir,
-                branch_length + BORE_OVERRUN,
+                branch_length + BORE_OVERRUN + overrun,
                 g.branch_outer_radius - g.branch_wall,
                 0.0,
             ),
@@ -407,7 +415,7 @@ class _Writer:
             if g.wall_end:
                 props["WallThicknessEnd"] = self.f.createIfcPositiveLengthMeasure(g.wall_end)
             props["Eccentric"] = g.eccentric
-        if isinstance(g, Tee):
+        if isinstance(g, Tee | Cross):
             props["BranchOuterDiameter"] = self.f.createIfcPositiveLengthMeasure(
                 2 * g.branch_outer_radius
             )
@@ -634,7 +642,7 @@ def _owner(port):
 
 
 def _outer_radius(g) -> float | None:
-    if isinstance(g, Straight | Bend | Tee):
+    if isinstance(g, Straight | Bend | Tee | Cross):
         return g.outer_radius
     if isinstance(g, Reducer):
         return g.outer_radius_start
@@ -657,7 +665,7 @@ def _centreline_length(g) -> float | None:
         return g.length
     if isinstance(g, Bend):
         return g.bend_radius * float(np.radians(g.angle_deg))
-    if isinstance(g, Tee):
+    if isinstance(g, Tee | Cross):
         return float(np.linalg.norm(g.run_end - g.run_start))
     if isinstance(g, Cylinder):
         return g.length
@@ -679,10 +687,10 @@ def _piping_ends(g) -> list[tuple[np.ndarray, np.ndarray]]:
             (g.start, out_start / np.linalg.norm(out_start)),
             (g.end, out_end / np.linalg.norm(out_end)),
         ]
-    if isinstance(g, Tee):
+    if isinstance(g, Tee | Cross):
         run = (g.run_end - g.run_start) / np.linalg.norm(g.run_end - g.run_start)
-        branch = (g.branch_end - g.center) / np.linalg.norm(g.branch_end - g.center)
-        return [(g.run_start, -run), (g.run_end, run), (g.branch_end, branch)]
+        outlets = [(end, (end - g.center) / np.linalg.norm(end - g.center)) for end in g.outlets]
+        return [(g.run_start, -run), (g.run_end, run), *outlets]
     if isinstance(g, Cylinder):
         start, end = g.ends
         axis = (end - start) / np.linalg.norm(end - start)

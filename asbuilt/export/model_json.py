@@ -41,7 +41,17 @@ from asbuilt.export.stored_fit import (
 from asbuilt.export.stored_fit import describe_value as _describe
 from asbuilt.export.stored_scan import scan_from_section, scan_section
 from asbuilt.findings import Finding, Suggestion
-from asbuilt.model import Bend, Component, Correction, Model, Reducer, Spool, Straight, Tee
+from asbuilt.model import (
+    Bend,
+    Component,
+    Correction,
+    Cross,
+    Model,
+    Reducer,
+    Spool,
+    Straight,
+    Tee,
+)
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 from asbuilt.scan.model import Scan
 from asbuilt.units import UNITS
@@ -143,6 +153,17 @@ def _geometry_fields(geometry) -> dict:
             "center": geometry.center,
             "run": [geometry.run_start, geometry.run_end],
             "branch_end": geometry.branch_end,
+            "od": 2 * geometry.outer_radius,
+            "branch_od": 2 * geometry.branch_outer_radius,
+            "wall": geometry.wall,
+            "branch_wall": geometry.branch_wall,
+        }
+    if isinstance(geometry, Cross):
+        return {
+            "shape": "cross",
+            "center": geometry.center,
+            "run": [geometry.run_start, geometry.run_end],
+            "outlets": [geometry.branch_start, geometry.branch_end],
             "od": 2 * geometry.outer_radius,
             "branch_od": 2 * geometry.branch_outer_radius,
             "wall": geometry.wall,
@@ -474,6 +495,20 @@ def _geometry(entry: dict):
             wall_field(entry),
             wall_field(entry, "branch_wall"),
         )
+    if shape == "cross":
+        run_start, run_end = points_field(entry, "run", 2)
+        branch_start, branch_end = points_field(entry, "outlets", 2)
+        return Cross(
+            point_field(entry, "center"),
+            run_start,
+            run_end,
+            branch_start,
+            branch_end,
+            positive_field(entry, "od") / 2,
+            number_field(entry, "branch_od") / 2,
+            wall_field(entry),
+            wall_field(entry, "branch_wall"),
+        )
     if shape == "cylinder":
         return Cylinder(
             point_field(entry, "center"),
@@ -494,7 +529,8 @@ def _geometry(entry: dict):
         return Hull(points_field(entry, "vertices"), faces_field(entry))
     raise _BadField(
         "shape",
-        f"unknown shape {_describe(shape)}; use one of straight, bend, reducer, tee, cylinder, "
+        f"unknown shape {_describe(shape)}; use one of straight, bend, reducer, tee, cross, "
+        "cylinder, "
         "cuboid, sphere, plane, hull",
     )
 

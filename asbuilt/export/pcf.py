@@ -41,7 +41,7 @@ import numpy as np
 
 from asbuilt.catalog import PipeSize, model_catalog
 from asbuilt.errors import ExportError
-from asbuilt.model import Bend, Component, Model, Reducer, Straight, Tee
+from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 
 __all__ = ["pcf_text", "write_pcf", "PCF_COMPONENTS"]
 
@@ -51,6 +51,7 @@ PCF_COMPONENTS = {
     "coupling": "PIPE",
     "elbow": "ELBOW",
     "tee": "TEE",
+    "cross": "CROSS",
     "reducer": "REDUCER-CONCENTRIC",
 }
 
@@ -58,6 +59,7 @@ PCF_COMPONENTS = {
 _SKEY = {
     "ELBOW": "ELBW",
     "TEE": "TEBW",
+    "CROSS": "CRBW",
     "REDUCER-CONCENTRIC": "RCBW",
     "REDUCER-ECCENTRIC": "REBW",
 }
@@ -228,6 +230,19 @@ def _records(component: Component, bores: _Bores) -> tuple[str, list[str], list[
             f"END-POINT {_mm(g.run_end)} {run}",
             f"CENTRE-POINT {_mm(g.center)}",
             f"BRANCH1-POINT {_mm(g.branch_end)} {branch}",
+            f"SKEY {_SKEY[identifier]}",
+        ]
+        return identifier, lines, [run] if branch == run else [run, branch]
+    if isinstance(g, Cross):
+        # the TEE record with a second outlet: BRANCH2-POINT (see the module docstring)
+        run = bores.bore(component, 2 * g.outer_radius)
+        branch = bores.bore(component, 2 * g.branch_outer_radius)
+        lines = [
+            f"END-POINT {_mm(g.run_start)} {run}",
+            f"END-POINT {_mm(g.run_end)} {run}",
+            f"CENTRE-POINT {_mm(g.center)}",
+            f"BRANCH1-POINT {_mm(g.branch_start)} {branch}",
+            f"BRANCH2-POINT {_mm(g.branch_end)} {branch}",
             f"SKEY {_SKEY[identifier]}",
         ]
         return identifier, lines, [run] if branch == run else [run, branch]

@@ -46,6 +46,7 @@ from .contiguity import (
     find_joints,
     joint_pairs,
 )
+from .crosses import settle_crosses
 from .eccentric import eccentric_joints
 from .joint import find_runs, joint_estimate
 from .loose import loose_ends
@@ -376,13 +377,23 @@ def merge_model(
                 "od_joint_stderr": se_run,
             }
 
+    # a cross's run is its larger pair; outlets of two sizes make it a tee (merge.crosses)
+    cross_notes: list[tuple[tuple[int, ...], str]] = []
+    joints = tuple(settle_crosses(joints, [float(s.od) for s in snaps], ids, cross_notes))
+    joint_notes.extend(cross_notes)
+    for pipes, text in cross_notes:
+        for m in pipes:
+            notes_of.setdefault(m, []).append(text)
+
     # 4. orientation regularisation and alignment
     parallel_groups = []
     for joint in joints:
         if joint.kind == "inline":
             parallel_groups.append([joint.ends[0][0], joint.ends[1][0]])
-        elif joint.kind in ("tee", "lateral") and joint.through is None:
+        elif joint.kind in ("tee", "lateral", "cross") and joint.through is None:
             parallel_groups.append([joint.ends[0][0], joint.ends[1][0]])
+        if joint.kind == "cross":
+            parallel_groups.append([joint.ends[-2][0], joint.ends[-1][0]])
     axis_se = np.array([_stderr_value(item.result, "axis_deg") for item in items])
     directions = regularize_directions(
         axes,
@@ -748,6 +759,17 @@ def _constraints(joints: tuple[Joint, ...], eccentric=None):
             coaxial.append((joint.ends[0][0], joint.ends[1][0]))
             found = eccentric.get(index)
             offsets.append(None if found is None else found.offset)
+        elif joint.kind == "cross":
+            # both outlets on one line, meeting the run (or the pipe running through)
+            (a, _), (b, _) = joint.ends[-2:]
+            coaxial.append((a, b))
+            offsets.append(None)
+            if joint.through is None:
+                coaxial.append((joint.ends[0][0], joint.ends[1][0]))
+                offsets.append(None)
+                meets.append((a, joint.ends[0][0]))
+            else:
+                meets.append((a, joint.through))
         elif joint.kind in ("tee", "lateral"):
             branch = joint.ends[-1][0]
             if joint.through is None:

@@ -44,6 +44,9 @@ ASME B16.9 elbows turn 45 or 90 degrees: two ends whose bend would exceed 90 deg
 oblique angle (a **lateral** or wye, which the catalog does not have) becomes one ``lateral``
 joint of the three ends (one spool; no butt weld across the lateral's gap), built from the
 measured pipe ends (:mod:`.laterals`), with a note; no elbow may take one of their ends.
+
+Last, a tee with a free end opposite its outlet, on the outlet's line and meeting the tee's
+centre square-on, becomes a **cross** of the four ends (:mod:`.crosses`).
 """
 
 from __future__ import annotations
@@ -56,6 +59,7 @@ from scipy.spatial import cKDTree
 
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
+from .crosses import find_crosses
 from .crossing import JOINED_BY as _JOINED_BY
 from .crossing import (
     End,
@@ -101,14 +105,16 @@ class Joint:
     Attributes
     ----------
     kind : str
-        ``"elbow"``, ``"inline"``, ``"tee"``, ``"lateral"`` (an inline pair with a branch
+        ``"elbow"``, ``"inline"``, ``"tee"``, ``"cross"`` (a tee with a fourth end opposite its
+        outlet, :mod:`.crosses`), ``"lateral"`` (an inline pair with a branch
         meeting it obliquely: a wye, built from the measured ends), ``"contact"`` (joined
         without a fitting) or ``"link"`` (the scan links the pair but nothing
         joins them: no fitting and no spool together, only one size estimate; a note says why).
     ends : tuple of End
         elbow/inline/contact: the two joined ends; tee: the run ends (two for a tee at an inline
         joint, none for a tee in the middle of a pipe) followed by the branch end; lateral: the
-        two run ends followed by the branch end.
+        two run ends followed by the branch end; cross: the run ends (none through a pipe)
+        followed by the two outlet ends.
     through : int or None
         Tee in the middle of a pipe: that pipe's index.
     explicit : bool
@@ -505,7 +511,7 @@ def find_joints(
             why = (
                 f"the scan links {names[i]} and {names[j]}, but that end of {names[end[0]]} is "
                 f"already joined to {partners} by {_JOINED_BY[taken.kind]} (no fitting joins "
-                "more pipes at one end; no cross is built): not joined"
+                "more pipes at one end): not joined"
             )
         else:
             across = crossed_by(cand, joints, pts, ods, tol.intended_angle_deg)
@@ -573,6 +579,12 @@ def find_joints(
     free = [(i, k) for i in range(n) for k in (0, 1) if (i, k) not in used]
     if free:
         joints = _find_tees(joints, free, used, pts, out, centers, axes, lengths, ods, tol, slack)
+    # 4. crosses: a tee with a free end opposite its outlet, on the outlet's line
+    cross_noted: set = set()
+    joints = find_crosses(
+        *(joints, used, pts, out, centers, axes, ods, tol, slack, linked_pairs, notes, names),
+        noted=cross_noted,
+    )
     for i, j, across in crossing:
         taken = {}
         for end in (link_candidates[i, j].a, link_candidates[i, j].b):
@@ -583,7 +595,8 @@ def find_joints(
     for i, j, why in unrealised:
         if any(i in jt.pipes and j in jt.pipes for jt in joints):
             continue  # joined after all (a tee through one of them)
-        notes.append(((i, j), why))
+        if frozenset((i, j)) not in cross_noted:  # else the cross's note says it
+            notes.append(((i, j), why))
         # kept for the joint size estimate (the scan says they are contiguous), but not
         # joined: no fitting, no spool together
         joints.append(Joint("link", ((i, 0), (j, 0)), explicit=True))

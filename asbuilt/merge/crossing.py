@@ -5,14 +5,15 @@ between two facing pipe ends. Where four pipes meet at one point as a cross (P1 
 line, P3 and P4 on a perpendicular one) and the scan links the opposite pairs, it built two
 couplings through each other; where two pipes end on either side of a third that runs straight
 through, it built a coupling through that pipe. Neither is a fitting anybody could weld: the
-part there is a cross, which merging does not build (ASME B16.9 makes straight crosses, but
-neither the shipped catalog nor the standards reference gives their dimensions).
+part there is a cross.
 
 :func:`crossed_by` tells contiguity that the straight piece between two ends would pass through
 another pipe or an accepted straight joint; contiguity then leaves the pair to the tee search
-(one end becomes the branch of a tee at the other joint, or on the pipe it would cross) and
-the other end joined to nothing. When the scan linked the pair, :func:`cross_note` words the
-note merging leaves on both pipes (reported as AB302 ``merge-note``).
+(one end becomes the branch of a tee at the other joint, or on the pipe it would cross), and
+the cross search (:mod:`.crosses`) makes that tee a cross with the other end when the two lie
+on one line. When it cannot (the ends off one line) and the scan linked the pair,
+:func:`cross_note` words the note merging leaves on both pipes (reported as AB302
+``merge-note``), unless the cross search's own note already names them.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ JOINED_BY = {
     "inline": "an inline joint",
     "contact": "a contact",
     "lateral": "a lateral",
+    "cross": "a cross",
 }
 
 
@@ -191,10 +193,10 @@ def cross_note(
     advice = " or ".join(loose) if loose else f"{names[i]} and {names[j]}"
     return (
         f"the scan links {names[i]} and {names[j]}, but a straight joint between them would "
-        f"pass through {across}: the pipes meet there as a cross, and merging builds no cross "
-        "(ASME B16.9 makes straight crosses, but the catalog has no cross dimensions), so the "
+        f"pass through {across}: the pipes meet there as a cross, but not as one merging "
+        "builds (four pipe ends, two on each line, meeting at one point), so the "
         f"link is not joined ({state}); if {advice} is welded there on site, the fitting is a "
-        "cross: model it by hand; if not, check the link"
+        "cross: check the pipes' positions or model it by hand; if not, check the link"
     )
 
 
@@ -239,6 +241,6 @@ def crossing_note(names: Sequence[str], i: int, j: int, axes_apart: float) -> st
     return (
         f"the scan links {names[i]} and {names[j]}, but they pass through each other (their "
         f"axes {axes_apart * 1000:.0f} mm apart, inside both pipes) and no fitting joins them: "
-        "not joined; if they meet at a cross, it joins four pipe ends (model it by hand, the "
-        "catalog has no cross dimensions); if one passes the other, reroute it or check the link"
+        "not joined; if they meet at a cross, it joins four pipe ends (two pipes running "
+        "through each other are no cross); if one passes the other, reroute it or check the link"
     )

@@ -1,8 +1,7 @@
 """Pipe ends left loose at a fitting or another pipe: found after the fittings are built.
 
 Merging joins each pipe end to at most one other (:mod:`.contiguity`): a fourth pipe at a tee
-(no cross is built: ASME B16.9 makes straight crosses, but neither the shipped fittings tables
-nor the project's standards reference give their dimensions), a pipe ending on another's side at
+that does not meet it as a cross (:mod:`.crosses`: outlets off one line or of two sizes), a pipe ending on another's side at
 an angle no tee makes, or near a pipe end another joint already took, is left unjoined. A
 linked pair gets a note from contiguity; an unlinked one was silent.
 
@@ -36,7 +35,7 @@ from collections.abc import Iterable, Mapping, Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from asbuilt.model import Bend, Component, Reducer, Straight, Tee
+from asbuilt.model import Bend, Component, Cross, Reducer, Straight, Tee
 
 from .contiguity import ELBOW_MAX_DEG, line_closest_points, segment_distance
 from .ports import ports
@@ -61,16 +60,16 @@ _ARC_CHORDS = 8
 #: Spacing (m) of the points sampled along components to find those near an end.
 _SAMPLE_STEP = 0.25
 
-_PIPING = ("pipe", "coupling", "elbow", "tee", "reducer")
+_PIPING = ("pipe", "coupling", "elbow", "tee", "cross", "reducer")
 
 
 def bodies(component: Component) -> list[tuple[np.ndarray, np.ndarray, float]]:
     """Capsules ``(a, b, radius)`` (metres) around a piping component's centreline."""
     g = component.geometry
-    if isinstance(g, Tee):
+    if isinstance(g, Tee | Cross):
         return [
             (g.run_start, g.run_end, float(g.outer_radius)),
-            (g.center, g.branch_end, float(g.branch_outer_radius)),
+            *((g.center, end, float(g.branch_outer_radius)) for end in g.outlets),
         ]
     if isinstance(g, Reducer):
         return [(g.start, g.end, float(max(g.outer_radius_start, g.outer_radius_end)))]

@@ -13,7 +13,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from asbuilt.model import Bend, Component, Reducer, Straight, Tee
+from asbuilt.model import Bend, Component, Cross, Reducer, Straight, Tee
 
 __all__ = ["connection_mismatches", "ports"]
 
@@ -31,7 +31,7 @@ def ports(component: Component) -> list[tuple[np.ndarray, np.ndarray]]:
         Each ``point`` (3,) metres is an open end; ``direction`` (3,) the unit vector pointing
         out of the component there. Pipes and couplings (``Straight``), reducers: start and end;
         elbows (``Bend``): the two ends with their tangents; tees: run start, run end and branch
-        end. Other components have no ports (empty list).
+        end (crosses: both outlet ends). Other components have no ports (empty list).
     """
     g = component.geometry
     if isinstance(g, Reducer):
@@ -46,11 +46,11 @@ def ports(component: Component) -> list[tuple[np.ndarray, np.ndarray]]:
         travel_start = _unit(e - (e @ us) * us)
         travel_end = _unit(-(s - (s @ ue) * ue))
         return [(g.start, -travel_start), (g.end, travel_end)]
-    if isinstance(g, Tee):
+    if isinstance(g, Tee | Cross):
         return [
             (g.run_start, _unit(g.run_start - g.center)),
             (g.run_end, _unit(g.run_end - g.center)),
-            (g.branch_end, _unit(g.branch_end - g.center)),
+            *((end, _unit(end - g.center)) for end in g.outlets),
         ]
     return []
 

@@ -22,6 +22,8 @@ axes):
   (``Reducer.offset`` the sideways step between them) when merging placed them apart
   (:mod:`asbuilt.merge.eccentric`); ASME B16.9 gives both the same length H.
 * **lateral** (oblique branch; in no catalog): a tee-shaped fitting, :mod:`.laterals`.
+* **cross** (:mod:`.crosses`): a tee with a second outlet opposite the first, both of the
+  tee's ``M`` from ``J`` (ASME B16.9 tabulates crosses with tees); through a pipe, it splits it.
 * **tee**: centre ``J`` where the branch axis meets the run axis; run ends ``J -+ C d``,
   branch end ``J + M b`` (``C``, ``M``: catalog centre-to-end of run and outlet; a reducing
   outlet's pair's own from ASME B16.9 Table 8 when listed, :func:`.reducers.reducing_tee_dims`).
@@ -60,6 +62,7 @@ from ._fitting_shapes import (
     tee_geometry,
 )
 from .contiguity import Joint, connected_groups, line_closest_points
+from .crosses import build_cross
 from .laterals import build_lateral
 from .ports import connection_mismatches, ports
 from .reducers import (
@@ -614,6 +617,8 @@ def build_spools(
                 built.extend((joint, item) for item in _tee(b, joint))
             elif joint.kind == "lateral":
                 built.extend((joint, item) for item in build_lateral(b, joint))
+            elif joint.kind == "cross":
+                built.extend((joint, item) for item in build_cross(b, joint))
         bad = [i for i in range(len(pipes)) if not _piece_ok(b, i)]
         if not bad:
             break
@@ -645,14 +650,14 @@ def build_spools(
     fittings_after: dict[int, list[tuple[str, str, object, PipeSpec, dict]]] = {}
     for joint, item in built:
         kind, name, geometry, size_of, snap = item[:5]
-        if kind == "tee" and joint.through is not None:
+        if kind in ("tee", "cross") and joint.through is not None:
             i = joint.through
             at = item[6]
             cuts = sorted(b.splits[i])
             k = next(n for n, (pos, _) in enumerate(cuts) if abs(pos - at) < 1e-9)
-            branch = pipes[joint.ends[-1][0]]
-            name = f"{piece_ids[i][k]}-{piece_ids[i][k + 1]}-{branch.id}"
-            snap = {**snap, "connects": [piece_ids[i][k], piece_ids[i][k + 1], branch.id]}
+            outlets = [pipes[end[0]].id for end in joint.ends]  # a tee's branch, or two
+            name = "-".join([piece_ids[i][k], piece_ids[i][k + 1], *outlets])
+            snap = {**snap, "connects": [piece_ids[i][k], piece_ids[i][k + 1], *outlets]}
         first = min(joint.pipes)
         fittings_after.setdefault(first, []).append((kind, name, geometry, size_of, snap))
 

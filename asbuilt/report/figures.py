@@ -26,7 +26,7 @@ import warnings
 
 import numpy as np
 
-from asbuilt.model import Bend, Component, Model, Reducer, Straight, Tee
+from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
 from .takeoff import severity_rank
@@ -130,6 +130,19 @@ def component_pieces(component: Component) -> list[np.ndarray]:
         ]
     if isinstance(g, Bend):
         return _bend_pieces(g)
+    if isinstance(g, Cross):
+        run, outlet = g.run_end - g.run_start, g.branch_end - g.branch_start
+        return [
+            np.vstack(
+                [_ring(g.run_start, run, g.outer_radius), _ring(g.run_end, run, g.outer_radius)]
+            ),
+            np.vstack(
+                [
+                    _ring(g.branch_start, outlet, g.branch_outer_radius),
+                    _ring(g.branch_end, outlet, g.branch_outer_radius),
+                ]
+            ),
+        ]
     if isinstance(g, Tee):
         run = g.run_end - g.run_start
         branch = g.branch_end - g.center

@@ -267,7 +267,14 @@ def _takeoff(data: ReportData) -> str:
         out.append("<h3>Spools</h3>")
         # a lateral column only where a spool has one: most plants have none
         has_laterals = any(sp.fittings.get("lateral") for sp in t.spools)
-        kinds = ("elbow", "tee") + (("lateral",) if has_laterals else ()) + ("reducer", "coupling")
+        # a cross column only where a spool has one, as laterals
+        has_crosses = any(sp.fittings.get("cross") for sp in t.spools)
+        kinds = (
+            ("elbow", "tee")
+            + (("cross",) if has_crosses else ())
+            + (("lateral",) if has_laterals else ())
+            + ("reducer", "coupling")
+        )
         rows = [
             f'<tr id="spool-{anchor(sp.id)[4:]}">'
             + _td(_e(sp.id))
@@ -292,6 +299,7 @@ def _takeoff(data: ReportData) -> str:
                     ("Weight (kg)", True),
                     ("Elbows", True),
                     ("Tees", True),
+                    *((("Crosses", True),) if has_crosses else ()),
                     *((("Laterals", True),) if has_laterals else ()),
                     ("Reducers", True),
                     ("Couplings", True),

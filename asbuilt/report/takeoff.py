@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from asbuilt.catalog import model_catalog
-from asbuilt.model import Bend, Component, Model, Reducer, Straight, Tee
+from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 from asbuilt.units import UNITS
 
@@ -63,12 +63,20 @@ DENSITIES: Mapping[str, float] = {
 FOOT = UNITS["ft"]
 
 #: Component types counted as fittings (by size and angle).
-FITTING_TYPES = ("elbow", "tee", "reducer", "coupling")
+FITTING_TYPES = ("elbow", "tee", "cross", "reducer", "coupling")
 
 #: The fitting kinds of the take-off, in its order: reducers are bought as concentric or
 #: eccentric (ASME B16.9 makes both, of the same length H), so they are counted apart; a lateral
 #: (wye) is built as a tee-shaped component but bought as a lateral, at its angle.
-FITTING_KINDS = ("elbow", "tee", "lateral", "concentric reducer", "eccentric reducer", "coupling")
+FITTING_KINDS = (
+    "elbow",
+    "tee",
+    "cross",
+    "lateral",
+    "concentric reducer",
+    "eccentric reducer",
+    "coupling",
+)
 
 
 def lateral_angle(component: Component) -> float | None:
@@ -299,7 +307,7 @@ def _straight_length(g) -> float | None:
 
 
 def _outer_diameter(g) -> float | None:
-    if isinstance(g, (Straight, Bend, Tee)):
+    if isinstance(g, (Straight, Bend, Tee, Cross)):
         return 2.0 * float(g.outer_radius)
     if isinstance(g, Cylinder):
         return 2.0 * float(g.radius)
@@ -352,7 +360,7 @@ def _fitting_size(component: Component, sizes: _Sizes) -> str:
             ods = sorted((2 * g.outer_radius_start, 2 * g.outer_radius_end), reverse=True)
             big, small = (sizes.nominal_for_od(od) or f"{od * 1000:.1f} mm" for od in ods)
         return f"{sizes.label(big, None)} x {small}"
-    if isinstance(g, Tee):
+    if isinstance(g, Tee | Cross):
         run = sizes.label(component.nominal, 2 * g.outer_radius)
         if abs(g.branch_outer_radius - g.outer_radius) < 2.5e-4:
             return run

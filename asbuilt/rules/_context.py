@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from asbuilt.findings import Finding, Suggestion
-from asbuilt.model import Bend, Component, Model, Reducer, Straight, Tee
+from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
 from .config import RulesConfig
@@ -110,11 +110,11 @@ def ends_of(geometry) -> list[np.ndarray]:
     """Connection points of a piping geometry, each (3,) metres (empty for other kinds)."""
     if isinstance(geometry, (Straight, Reducer, Bend)):
         return [np.array(geometry.start), np.array(geometry.end)]
-    if isinstance(geometry, Tee):
+    if isinstance(geometry, Tee | Cross):
         return [
             np.array(geometry.run_start),
             np.array(geometry.run_end),
-            np.array(geometry.branch_end),
+            *(np.array(end) for end in geometry.outlets),
         ]
     if isinstance(geometry, Cylinder):
         return [np.array(e) for e in geometry.ends]
@@ -131,7 +131,7 @@ def centre_of(geometry) -> np.ndarray:
         if norm == 0:
             return np.array(geometry.center)
         return geometry.center + mid / norm * geometry.bend_radius
-    if isinstance(geometry, Tee):
+    if isinstance(geometry, Tee | Cross):
         return np.array(geometry.center)
     if isinstance(geometry, (Cylinder, Cuboid, Sphere)):
         return np.array(geometry.center)

@@ -227,6 +227,6 @@ def fittings_between(model: Model, graph: dict[str, set[str]], a: str, b: str) -
                     path.append(step)
                     step = previous[step]
                 return path[::-1]
-            if kinds.get(nxt) in ("elbow", "tee", "reducer", "coupling"):
+            if kinds.get(nxt) in ("elbow", "tee", "cross", "reducer", "coupling"):
                 queue.append(nxt)
     return None

@@ -25,7 +25,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from asbuilt.findings import Suggestion
-from asbuilt.model import Bend, Reducer, Straight, Tee
+from asbuilt.model import Bend, Cross, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
 from ._context import Context, axis_of, ends_of, mm, stderr_value
@@ -37,7 +37,7 @@ __all__ = ["CHECKS", "FITTINGS", "inside", "bounds", "candidate_pairs", "overlap
 #: joint, never a clash); a fitting's end inside anything else is not a connection (a coupling
 #: through another at a cross, a pipe through a tee), so ``end_connections`` spares no fitting.
 #: (A lateral is built as a tee-shaped fitting of type ``"tee"``.)
-FITTINGS = ("coupling", "elbow", "tee", "reducer")
+FITTINGS = ("coupling", "elbow", "tee", "cross", "reducer")
 
 
 def _in_segment(
@@ -111,6 +111,10 @@ def inside(geometry, points, plate_thickness: float = 0.01, erode: float = 0.0) 
         return _in_segment(points, g.run_start, g.run_end, g.outer_radius, erode=e) | (
             _in_segment(points, g.center, g.branch_end, g.branch_outer_radius, erode=e)
         )
+    if isinstance(g, Cross):
+        return _in_segment(points, g.run_start, g.run_end, g.outer_radius, erode=e) | (
+            _in_segment(points, g.branch_start, g.branch_end, g.branch_outer_radius, erode=e)
+        )
     if isinstance(g, Bend):
         return _in_bend(points, g, e)
     if isinstance(g, Cylinder):
@@ -140,9 +144,9 @@ def bounds(geometry, plate_thickness: float = 0.01) -> np.ndarray | None:
         return around([g.start, g.end], g.outer_radius)
     if isinstance(g, Reducer):
         return around([g.start, g.end], max(g.outer_radius_start, g.outer_radius_end))
-    if isinstance(g, Tee):
+    if isinstance(g, Tee | Cross):
         return around(
-            [g.run_start, g.run_end, g.branch_end, g.center],
+            [g.run_start, g.run_end, *g.outlets, g.center],
             max(g.outer_radius, g.branch_outer_radius),
         )
     if isinstance(g, Bend):
@@ -239,7 +243,7 @@ def surface_stderr(component) -> float:
 
 def member_ends(geometry) -> np.ndarray:
     """Where a member ends, shape (k, 3) metres: the axis end points of pipes, cylinders, cuboids
-    (long axis) and reducers, a bend's ends and a tee's three ends; empty for the rest."""
+    (long axis) and reducers, a bend's ends, a tee's three ends and a cross's four; empty for the rest."""
     if isinstance(geometry, Reducer):  # its end centres (an eccentric one's are offset)
         return np.array([geometry.start, geometry.end])
     found = axis_of(geometry)
@@ -256,7 +260,7 @@ def _half_section(geometry) -> float:
         return float(geometry.outer_radius)
     if isinstance(geometry, Reducer):
         return float(max(geometry.outer_radius_start, geometry.outer_radius_end))
-    if isinstance(geometry, Tee):
+    if isinstance(geometry, Tee | Cross):
         return float(geometry.outer_radius)
     if isinstance(geometry, Cylinder):
         return float(geometry.radius)

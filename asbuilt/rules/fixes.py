@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from asbuilt.model import Bend, Component, Correction, Model, Reducer, Straight, Tee
+from asbuilt.model import Bend, Component, Correction, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
 __all__ = [
@@ -74,6 +74,15 @@ def rotate_geometry(geometry, rotation, about):
             center=point(g.center),
             run_start=point(g.run_start),
             run_end=point(g.run_end),
+            branch_end=point(g.branch_end),
+        )
+    if isinstance(g, Cross):
+        return dataclasses.replace(
+            g,
+            center=point(g.center),
+            run_start=point(g.run_start),
+            run_end=point(g.run_end),
+            branch_start=point(g.branch_start),
             branch_end=point(g.branch_end),
         )
     if isinstance(g, Cylinder):

@@ -361,10 +361,12 @@ def _unjoined_reason(record: dict, comp, other, names: str) -> tuple[str, str]:
         out = _outward_at(comp, str(record.get("end")))
         if outlet is not None and float(out @ outlet) >= np.cos(np.radians(_CROSS_DEG)):
             return (
-                f"the tee already joins {names}, and merging builds no cross (ASME B16.9 makes "
-                "straight crosses, but the catalog has no cross dimensions)",
-                f"if {pipe} is welded to {target} on site, the fitting is a cross: model it by "
-                f"hand (no cross in the catalog); if not, scan {pipe} up to its end",
+                f"the tee already joins {names}, and {pipe} does not meet it as a cross's "
+                "fourth pipe (merging builds a cross where both outlets are of one size on one "
+                "line; its notes say what is off)",
+                f"if {pipe} is welded to {target} on site, the fitting is a cross: check the "
+                f"pipes' positions and sizes (a cross's outlets are on one line, of one size) "
+                f"or model it by hand; if not, scan {pipe} up to its end",
             )
         return (
             f"the tee already joins {names}, and no ASME B16.9 fitting joins a fourth pipe "

@@ -88,7 +88,7 @@ RULES: tuple[Rule, ...] = (
         "not make ({run} reduces on the outlet to {outlets} only)",
         "ASME B16.9 Table 8 makes reducing-outlet tees for listed run x outlet pairs only (NPS 6 "
         "reduces to 5 down to 2 1/2); a larger reduction is a branch outlet fitting (MSS SP-97) "
-        "or a tee with a reducer on its outlet.",
+        "or a tee with a reducer on its outlet. A reducing cross is made of the same pairs.",
         "sizes",
     ),
     Rule(
@@ -153,8 +153,8 @@ RULES: tuple[Rule, ...] = (
         "unjoined-end",
         "warning",
         "{pipe} ends {gap} from {target} but is not joined to it: {why}",
-        "Merging joins each pipe end to one other, at most three pipes at a tee (the catalog "
-        "has no crosses); a pipe end that runs into a fitting or another pipe within "
+        "Merging joins each pipe end to one other, at most three pipes at a tee and four at a "
+        "cross (two outlets of one size on one line); a pipe end that runs into a fitting or another pipe within "
         "joint_distance (plus its shot spacing) and is joined to nothing is a fitting the "
         "model lacks, a part the scan missed, or a pipe that stops short.",
         "joints",

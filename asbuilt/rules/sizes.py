@@ -12,7 +12,7 @@ import numpy as np
 
 from asbuilt.catalog import parse_nominal
 from asbuilt.findings import Suggestion
-from asbuilt.model import Component, Tee
+from asbuilt.model import Component, Cross, Tee
 from asbuilt.units import UNITS
 
 from ._catalog import SizeTable, reducing_tee_made, tee_outlets
@@ -347,7 +347,7 @@ def check_hint(ctx: Context, table: SizeTable | None) -> None:
 def is_merged(model) -> bool:
     """Whether merging ran on a model: it has spools or fittings."""
     return bool(model.spools) or any(
-        c.type in ("elbow", "tee", "reducer", "coupling") for c in model.components
+        c.type in ("elbow", "tee", "cross", "reducer", "coupling") for c in model.components
     )
 
 
@@ -368,12 +368,15 @@ def _size_change_explained(comps, between, ca, cb) -> bool:
     reducer)."""
     if any(f.type == "reducer" for f in between):
         return True
-    for tee in (f for f in between if f.type == "tee"):
+    for tee in (f for f in between if f.type in ("tee", "cross")):
         g = tee.geometry
+        if not isinstance(g, Tee | Cross):
+            continue
         for branch in (ca, cb):
             at_outlet = any(
-                float(np.linalg.norm(np.asarray(end) - g.branch_end)) < 1e-3
+                float(np.linalg.norm(np.asarray(end) - outlet)) < 1e-3
                 for end in ends_of(branch.geometry)
+                for outlet in g.outlets
             )
             if at_outlet and g.branch_outer_radius <= g.outer_radius + 1e-9:
                 return True
@@ -392,7 +395,8 @@ def check_contiguous(ctx: Context, table: SizeTable | None) -> None:
     tol = float(ctx.general("diameter_tolerance"))
     touching = adjacency(ctx.model, float(ctx.opt("clash", "touch_distance")), links=False)
     # through tees too: a tee passes its run's size on (B16.9 tees reduce on the outlet only)
-    for a, b, path in contiguous_pipes(ctx.model, graph, pipes, (*FITTING_PASS, "tee")):
+    passing = (*FITTING_PASS, "tee", "cross")
+    for a, b, path in contiguous_pipes(ctx.model, graph, pipes, passing):
         between = fittings_between(ctx.model, touching, a, b) or []
         if _size_change_explained(comps, [comps[x] for x in between], comps[a], comps[b]):
             continue  # a reducer, or a tee's smaller outlet, joins them: sizes may differ
@@ -495,7 +499,7 @@ def _spoken_list(items) -> str:
     return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} and {items[-1]}"
 
 
-def _branch_off_square_deg(tee: Tee) -> float:
+def _branch_off_square_deg(tee: Tee | Cross) -> float:
     """How far (degrees) a tee's branch axis is from square to its run."""
     run = np.asarray(tee.run_end, dtype=np.float64) - np.asarray(tee.run_start, dtype=np.float64)
     branch = np.asarray(tee.branch_end, dtype=np.float64) - np.asarray(tee.center, np.float64)
@@ -516,8 +520,9 @@ def check_tee_sizes(ctx: Context, table: SizeTable | None) -> None:
         return
     for tee in ctx.model.components:
         g = tee.geometry
-        if tee.type != "tee" or not isinstance(g, Tee):
+        if (tee.type, type(g)) not in (("tee", Tee), ("cross", Cross)):
             continue
+        word = tee.type  # a reducing cross is made of the reducing tee's pairs (Table 8)
         if g.branch_outer_radius >= g.outer_radius - 1e-9:
             continue  # an equal tee, or an outlet larger than the run (AB104)
         if _branch_off_square_deg(g) > float(ctx.general("intended_angle_deg")):
@@ -528,22 +533,24 @@ def check_tee_sizes(ctx: Context, table: SizeTable | None) -> None:
             continue
         made = sorted(tee_outlets(table.fittings)[run], key=_nps_key, reverse=True)
         connects = [str(c) for c in (tee.snap or {}).get("connects") or ()]
-        branch = connects[-1] if connects else "the outlet pipe"
-        run_pipes = ", ".join(connects[:-1]) or "the run"
+        outlets = 2 if word == "cross" else 1
+        branch = " and ".join(connects[-outlets:]) if connects else "the outlet pipe"
+        run_pipes = ", ".join(connects[:-outlets]) or "the run"
+        two = ("two", "s") if word == "cross" else ("an", "")
         fittings = table.fittings_standard or table.fittings
         ctx.emit(
             slug,
             [tee.id, *connects],
-            f"the tee {tee.id} joins an {_label(table, run)} run to an {_label(table, outlet)} "
-            f"outlet, a reducing tee {fittings} does not make ({_label(table, run)} reduces on "
-            f"the outlet to {_spoken_list(made)} only)",
+            f"the {word} {tee.id} joins an {_label(table, run)} run to {two[0]} "
+            f"{_label(table, outlet)} outlet{two[1]}, a reducing {word} {fittings} does not "
+            f"make ({_label(table, run)} reduces on the outlet to {_spoken_list(made)} only)",
             location=np.asarray(g.center, dtype=np.float64),
             suggestions=(
                 Suggestion(
                     f"check on site how {branch} joins {run_pipes}: a reduction this large is "
-                    "usually a branch outlet fitting (MSS SP-97, e.g. a weldolet), or a tee "
-                    f"of a listed outlet ({_spoken_list(made)}) with a reducer on it; the model "
-                    "shows a reducing tee"
+                    "usually a branch outlet fitting (MSS SP-97, e.g. a weldolet), or a "
+                    f"{word} of a listed outlet ({_spoken_list(made)}) with a reducer on it; "
+                    f"the model shows a reducing {word}"
                 ),
                 Suggestion(f"check the sizes of {run_pipes} and {branch}"),
             ),

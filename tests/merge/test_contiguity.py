@@ -176,16 +176,16 @@ def test_a_tee_wins_over_an_elbow_when_the_branch_ends_nearer():
     assert [(j.kind, j.ends) for j in joints] == [("tee", ((0, 1), (1, 0), (2, 0)))]
 
 
-def test_a_four_way_cross_is_a_tee_and_one_unjoined_pipe():
-    """No cross fitting is built: one straight pair and one branch make a tee."""
+def test_a_four_way_cross_is_one_cross_joint_of_the_four_ends():
+    """A tee with a fourth end opposite its outlet, on its line: a cross (merge.crosses)."""
     joints = joints_of(
         ((0, 0, 0), (1.8, 0, 0)),
         ((2.2, 0, 0), (4, 0, 0)),
         ((2, 0.2, 0), (2, 2, 0)),
         ((2, -0.2, 0), (2, -2, 0)),
     )
-    assert [j.kind for j in joints] == ["tee"]
-    assert len(joints[0].pipes) == 3
+    assert [j.kind for j in joints] == ["cross"]
+    assert sorted(joints[0].pipes) == [0, 1, 2, 3]
 
 
 class _Link:

@@ -154,7 +154,8 @@ def _bend(angle_deg, reach):
 
 def _junction(branch_deg, fourth=False):
     """Run P1-P3 along x with a tee's gap at x = 0, branch P2 at ``branch_deg`` to the run (end
-    M from the junction), and with ``fourth`` a P4 opposite the branch (a cross)."""
+    M from the junction), and with ``fourth`` a P4 opposite the branch but 0.1 m along the run
+    (off the branch's line: no cross, merge.crosses)."""
     d = np.array([math.cos(math.radians(branch_deg)), math.sin(math.radians(branch_deg)), 0.0])
     pipes = [
         Pipe("P1", (-_C6 - 1.2, 0, 1), (-_C6, 0, 1), NPS6),
@@ -162,17 +163,19 @@ def _junction(branch_deg, fourth=False):
         Pipe("P2", tuple(_C6 * d + [0, 0, 1]), tuple((_C6 + 1.2) * d + [0, 0, 1]), NPS6),
     ]
     if fourth:
-        pipes.append(Pipe("P4", (0, -_C6, 1), (0, -_C6 - 1.2, 1), NPS6))
+        pipes.append(Pipe("P4", (0.1, -_C6, 1), (0.1, -_C6 - 1.2, 1), NPS6))
     return pipes
 
 
 UNREALISED_LINKS = [
-    # a cross: the tee P1-P3-P2 takes P1's end; the link to P4 cannot be made at that end
+    # a fourth pipe off the branch's line: the tee P1-P3-P2 takes P1's end; the link to P4
+    # cannot be made at that end
     pytest.param(
         _junction(90, fourth=True),
         [("P1", "P3"), ("P1", "P2"), ("P1", "P4")],
         ("P1", "P4"),
-        "already joined to P3, P2 by a tee",
+        # the cross search's note, not a second one from the link
+        "no cross is built; the tee P1-P3-P2 is kept and P4 is not joined there",
         id="fourth-pipe-at-a-tee",
     ),
     # a 120 degree bend: no B16.9 elbow turns it, linked or not (the unlinked note's words)

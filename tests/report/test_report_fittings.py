@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from asbuilt.export.model_json import model_from_document
-from asbuilt.model import Bend, Component, Model, Reducer, Straight, Tee
+from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.report import report_data
 from asbuilt.report.json_report import dumps_report, report_schema
 from asbuilt.report.takeoff import FITTING_KINDS, take_off
@@ -22,7 +22,7 @@ LR6, H64 = 0.229, 0.140
 
 
 def every_fitting_model() -> Model:
-    """NPS 6 elbow, tee, 45 degree lateral and coupling, a concentric and an eccentric 6 x 4
+    """NPS 6 elbow, tee, cross, 45 degree lateral and coupling, a concentric and an eccentric 6 x 4
     reducer."""
     r6, r4 = OD6 / 2, OD4 / 2
     six = {"nominal": "6", "schedule": "STD"}
@@ -42,6 +42,14 @@ def every_fitting_model() -> Model:
                 Tee([2, 1, 0], [1.7, 1, 0], [2.3, 1, 0], [2.2, 1.2, 0], r6, r6, WALL6),
                 **six,
                 snap={"standard": False, "angle_deg": 45.0, "status": "fitting"},
+            ),
+            Component(
+                "X1",
+                "cross",
+                Cross(
+                    [2, 3, 0], [1.85, 3, 0], [2.15, 3, 0], [2, 2.85, 0], [2, 3.15, 0], r6, r6, WALL6
+                ),
+                **six,
             ),
             Component("K1", "coupling", Straight([3, 0, 0], [3.1, 0, 0], r6, WALL6), **six),
             Component(
@@ -74,6 +82,7 @@ def test_every_fitting_kind_validates_against_the_schema():
     assert {f["type"] for f in document["takeoff"]["fittings"]} == {
         "elbow",
         "tee",
+        "cross",
         "lateral",
         "coupling",
         "concentric reducer",
