@@ -17,19 +17,14 @@ the network.
 
 from __future__ import annotations
 
-import base64
 import html as _html
-import json
-import os
 from collections.abc import Iterable
-from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from asbuilt.atomic import atomic_write
-from asbuilt.errors import ExportError
 
+from ._html_gltf import GLTF_EMBED_LIMIT, StagedGltf, gltf_source
 from .data import ReportData
 from .figures import VIEWS, anchor, histogram_svg, render_view
 from .takeoff import FOOT
@@ -46,10 +41,6 @@ __all__ = [
 #: Where the optional 3-D viewer's script comes from (only fetched on the reader's request).
 MODEL_VIEWER_URL = "https://ajax.googleapis.com/ajax/libs/model-viewer/3.5.0/model-viewer.min.js"
 
-#: Largest glTF/GLB file (bytes) embedded in the page for the 3-D view. Base64 makes it a third
-#: larger (10 MB -> 13.3 MB of page), still under the 20-25 MB attachment limit of common mail
-#: services; the 60-component plant sample's GLB is about 100 kB. Larger files are linked.
-GLTF_EMBED_LIMIT = 10_000_000
 
 _CSS = """
 :root { --err:#d62728; --warn:#ff7f0e; --info:#1f77b4; --ok:#2ca02c; --line:#ddd; }
@@ -719,73 +710,6 @@ def html_text(
         f"<title>{_e(data.title)} &mdash; as-built QA report</title>\n"
         f"<style>{_CSS}</style>\n{script}</head>\n<body>\n{body}\n</body>\n</html>\n"
     )
-
-
-def _self_contained_gltf(content: bytes) -> bool:
-    """True when a ``.gltf`` (JSON) file refers to no other file (buffers and images are data
-    URIs), so that it can be embedded on its own."""
-    try:
-        document = json.loads(content.decode("utf-8"))
-    except (UnicodeDecodeError, ValueError):
-        return False
-    if not isinstance(document, dict):
-        return False
-    for key in ("buffers", "images"):
-        for entry in document.get(key) or ():
-            uri = entry.get("uri") if isinstance(entry, dict) else None
-            if uri is not None and not str(uri).startswith("data:"):
-                return False
-    return True
-
-
-@dataclass(frozen=True)
-class StagedGltf:
-    """A glTF/GLB written in the same run as the report but not published yet: its content is
-    read from ``content`` (the staged temporary file) and a link points at ``published``."""
-
-    content: Path
-    published: Path
-
-
-def gltf_source(gltf, report_path) -> str:
-    """What the HTML's 3-D view loads: the glTF file embedded as a ``data:`` URI when it is at
-    most :data:`GLTF_EMBED_LIMIT` bytes (a ``.glb``, or a ``.gltf`` that refers to no other
-    file), else its path relative to the report. ``http(s):`` and ``data:`` URLs are kept.
-
-    Raises
-    ------
-    ExportError
-        The file does not exist or cannot be read.
-    """
-    published = None
-    if isinstance(gltf, StagedGltf):
-        gltf, published = gltf.content, gltf.published
-    text = str(gltf)
-    if text.startswith(("http://", "https://", "data:")):
-        return text
-    target = Path(gltf)
-    try:
-        size = target.stat().st_size
-        if not target.is_file():
-            raise FileNotFoundError
-    except OSError:
-        raise ExportError(
-            "glTF file for the 3-D view not found; give a .glb or .gltf file that exists "
-            "(e.g. written by 'asbuilt model --out model.glb')",
-            source=text,
-        ) from None
-    if size <= GLTF_EMBED_LIMIT:
-        try:
-            content = target.read_bytes()
-        except OSError as exc:
-            raise ExportError(f"cannot read the glTF file ({exc.strerror})", source=text) from None
-        suffix = Path(published or target).suffix.lower()
-        if suffix == ".glb":
-            return "data:model/gltf-binary;base64," + base64.b64encode(content).decode("ascii")
-        if suffix == ".gltf" and _self_contained_gltf(content):
-            return "data:model/gltf+json;base64," + base64.b64encode(content).decode("ascii")
-    base = Path(report_path).resolve().parent
-    return Path(os.path.relpath(Path(published or target).resolve(), base)).as_posix()
 
 
 def write_html(

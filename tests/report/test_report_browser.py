@@ -165,7 +165,7 @@ def _fetch_model(page) -> str:
 def test_3d_model_is_readable_from_a_page_opened_from_disk(browser, tmp_path, monkeypatch):
     """The embedded model loads in a file:// page; a linked one does not (audit D5: browsers
     refuse a file:// page's fetch of another file, so the page says it needs HTTP)."""
-    import asbuilt.report.html as html_module
+    import asbuilt.report._html_gltf as html_module
 
     glb = tiny_glb(tmp_path / "plant.glb")
     embedded = tmp_path / "embedded.html"

@@ -144,7 +144,7 @@ def test_a_self_contained_gltf_is_embedded_and_one_with_files_is_linked(tmp_path
 
 
 def test_a_large_model_is_linked_and_the_page_says_it_needs_http(tmp_path, monkeypatch):
-    import asbuilt.report.html as html_module
+    import asbuilt.report._html_gltf as html_module
 
     (tmp_path / "models").mkdir()
     glb = tiny_glb(tmp_path / "models" / "plant.glb")
