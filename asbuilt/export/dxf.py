@@ -157,16 +157,20 @@ def _nearest_aci(rgb: tuple[int, int, int]) -> int:
     return int(np.argmin(((table - np.array(rgb)) ** 2).sum(axis=1))) + 1
 
 
-def _centrelines(geometry) -> list[np.ndarray]:
-    """Centreline polylines of a piping geometry, each (k, 3) metres; [] for other shapes."""
-    if isinstance(geometry, (Straight, Reducer)):
-        return [np.array([geometry.start, geometry.end])]
+def _centrelines(geometry) -> list[tuple[np.ndarray, float]]:
+    """Centreline polylines of a piping geometry or fitted cylinder, each (k, 3) metres with the
+    outside diameter (metres) of the part it runs in; [] for other shapes."""
+    if isinstance(geometry, Straight):
+        return [(np.array([geometry.start, geometry.end]), 2 * geometry.outer_radius)]
+    if isinstance(geometry, Reducer):
+        diameter = 2 * max(geometry.outer_radius_start, geometry.outer_radius_end)
+        return [(np.array([geometry.start, geometry.end]), diameter)]
     if isinstance(geometry, Cylinder):
-        return [np.array(geometry.ends)]
+        return [(np.array(geometry.ends), 2 * geometry.radius)]
     if isinstance(geometry, Tee):
         return [
-            np.array([geometry.run_start, geometry.run_end]),
-            np.array([geometry.center, geometry.branch_end]),
+            (np.array([geometry.run_start, geometry.run_end]), 2 * geometry.outer_radius),
+            (np.array([geometry.center, geometry.branch_end]), 2 * geometry.branch_outer_radius),
         ]
     if isinstance(geometry, Cross):
         return [
@@ -174,6 +178,7 @@ def _centrelines(geometry) -> list[np.ndarray]:
             np.array([geometry.branch_start, geometry.branch_end]),
         ]
     if isinstance(geometry, Bend):
+        diameter = 2 * geometry.outer_radius
         a = geometry.start - geometry.center
         b = geometry.end - geometry.center
         angle = np.radians(geometry.angle_deg)
@@ -182,10 +187,23 @@ def _centrelines(geometry) -> list[np.ndarray]:
         # Slerp between the two radius vectors (both of length bend_radius).
         sin = np.sin(angle)
         if sin < 1e-12:
-            return [np.array([geometry.start, geometry.end])]
+            return [(np.array([geometry.start, geometry.end]), diameter)]
         points = (np.sin(angle - t) * a + np.sin(t) * b) / sin
-        return [geometry.center + points]
+        return [(geometry.center + points, diameter)]
     return []
+
+
+def _seen_end_on(flat: np.ndarray, line: np.ndarray, diameter: float) -> bool:
+    """Whether a straight centreline ``line`` (2, 3) mm, projected to ``flat`` (2, 2) mm, is
+    seen (nearly) end-on: its projection is under 1 mm, or shorter than both the part's
+    ``diameter`` (mm) and half its true length (it runs steeper than 60 degrees to the view
+    and lies inside its own outline). A fitted vertical tank is never exactly vertical: its
+    plan centreline was a 2 mm dash where the 3 m circle belongs."""
+    if len(flat) > 2:
+        return False
+    seen = float(np.linalg.norm(flat[-1] - flat[0]))
+    true = float(np.linalg.norm(line[-1] - line[0]))
+    return seen <= 1.0 or seen < min(diameter, 0.5 * true)
 
 
 def _outline(points2d: np.ndarray) -> np.ndarray:
@@ -250,7 +268,7 @@ def _drawing(cad) -> tuple[ezdxf.document.Drawing, dict]:
         vertices, faces = mesh.merged()
         records.update(_add_polyfaces(msp, vertices * _MM, faces, attribs))
 
-        lines = [line * _MM for line in _centrelines(part.component.geometry)]
+        lines = [(line * _MM, d * _MM) for line, d in _centrelines(part.component.geometry)]
         points = mesh.vertices * _MM
         for project, prefix in ((plan, "PLAN"), (elevation, "ELEV")):
             view_attribs = {"layer": f"{prefix}-CENTRELINE"}
@@ -259,9 +277,9 @@ def _drawing(cad) -> tuple[ezdxf.document.Drawing, dict]:
                 view_attribs["true_color"] = attribs["true_color"]
                 outline_attribs["true_color"] = attribs["true_color"]
             drawn = False
-            for line in lines:
+            for line, diameter in lines:
                 flat = project(line)
-                if np.linalg.norm(flat[-1] - flat[0]) > 1.0 or len(flat) > 2:
+                if not _seen_end_on(flat, line, diameter):
                     msp.add_lwpolyline(flat.tolist(), dxfattribs=view_attribs)
                     drawn = True
             geometry = part.component.geometry
