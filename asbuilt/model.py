@@ -278,6 +278,25 @@ class Reducer:
         return towards if self.outer_radius_start >= self.outer_radius_end else -towards
 
 
+def _check_junction(fitting, points: tuple[str, ...]) -> None:
+    """Validate a tee's or cross's ``points`` (each (3,) metres), radii and walls in place
+    (``branch_wall`` None takes ``wall``)."""
+    for name in points:
+        object.__setattr__(fitting, name, as_vector(getattr(fitting, name), name))
+    outer = _nonneg(fitting.outer_radius, "outer radius")
+    branch_outer = _nonneg(fitting.branch_outer_radius, "branch outer radius")
+    branch_wall = fitting.wall if fitting.branch_wall is None else fitting.branch_wall
+    object.__setattr__(fitting, "outer_radius", outer)
+    object.__setattr__(fitting, "branch_outer_radius", branch_outer)
+    object.__setattr__(fitting, "wall", _wall(outer, fitting.wall))
+    object.__setattr__(
+        fitting,
+        "branch_wall",
+        _wall(branch_outer, branch_wall, "branch wall", "branch outer radius"),
+    )
+    _hollow_or_solid(fitting.kind, fitting.wall, fitting.branch_wall)
+
+
 @dataclass(frozen=True, eq=False)
 class Tee:
     """An equal (or reducing-outlet) tee: a run from ``run_start`` to ``run_end`` through
@@ -306,20 +325,7 @@ class Tee:
     branch_wall: float | None = None
 
     def __post_init__(self):
-        for name in ("center", "run_start", "run_end", "branch_end"):
-            object.__setattr__(self, name, as_vector(getattr(self, name), name))
-        object.__setattr__(self, "outer_radius", _nonneg(self.outer_radius, "outer radius"))
-        object.__setattr__(
-            self, "branch_outer_radius", _nonneg(self.branch_outer_radius, "branch outer radius")
-        )
-        branch_wall = self.wall if self.branch_wall is None else self.branch_wall
-        object.__setattr__(self, "wall", _wall(self.outer_radius, self.wall))
-        object.__setattr__(
-            self,
-            "branch_wall",
-            _wall(self.branch_outer_radius, branch_wall, "branch wall", "branch outer radius"),
-        )
-        _hollow_or_solid("tee", self.wall, self.branch_wall)
+        _check_junction(self, ("center", "run_start", "run_end", "branch_end"))
 
     @property
     def outlets(self) -> tuple[np.ndarray, ...]:
@@ -357,20 +363,7 @@ class Cross:
     branch_wall: float | None = None
 
     def __post_init__(self):
-        for name in ("center", "run_start", "run_end", "branch_start", "branch_end"):
-            object.__setattr__(self, name, as_vector(getattr(self, name), name))
-        object.__setattr__(self, "outer_radius", _nonneg(self.outer_radius, "outer radius"))
-        object.__setattr__(
-            self, "branch_outer_radius", _nonneg(self.branch_outer_radius, "branch outer radius")
-        )
-        branch_wall = self.wall if self.branch_wall is None else self.branch_wall
-        object.__setattr__(self, "wall", _wall(self.outer_radius, self.wall))
-        object.__setattr__(
-            self,
-            "branch_wall",
-            _wall(self.branch_outer_radius, branch_wall, "branch wall", "branch outer radius"),
-        )
-        _hollow_or_solid("cross", self.wall, self.branch_wall)
+        _check_junction(self, ("center", "run_start", "run_end", "branch_start", "branch_end"))
 
     @property
     def outlets(self) -> tuple[np.ndarray, ...]:

@@ -241,27 +241,7 @@ def _tee(geometry: Tee) -> cq.Shape:
     opposite the branch fails the same way for small branches, as the split then crosses the
     hole.
     """
-    run_axis = geometry.run_end - geometry.run_start
-    branch_axis = geometry.branch_end - geometry.center
-    if np.linalg.norm(np.cross(run_axis, branch_axis)) <= 1e-9 * (
-        np.linalg.norm(run_axis) * np.linalg.norm(branch_axis)
-    ):
-        raise ValueError("its branch is parallel to its run")
-
-    def run(radius: float) -> cq.Solid:
-        return _seamed_cylinder(geometry.run_start, geometry.run_end, radius, branch_axis)
-
-    def branch(radius: float) -> cq.Solid:
-        return _seamed_cylinder(geometry.center, geometry.branch_end, radius, run_axis)
-
-    shape = run(geometry.outer_radius).fuse(branch(geometry.branch_outer_radius))
-    if geometry.wall > 0 or geometry.branch_wall > 0:
-        # each bore is its own pipe's: the run's wall on the run, the outlet's on the outlet
-        bores = run(geometry.outer_radius - geometry.wall).fuse(
-            branch(geometry.branch_outer_radius - geometry.branch_wall)
-        )
-        shape = shape.cut(bores)
-    return shape.clean()
+    return _junction(geometry, geometry.center, "branch is")
 
 
 def _cross(geometry: Cross) -> cq.Shape:
@@ -269,23 +249,32 @@ def _cross(geometry: Cross) -> cq.Shape:
     through both sides (``branch_start`` to ``branch_end``), then both bores (each of its own
     wall) cut when the walls are known; the seams placed as the tee's (the run's through the
     middle of one outlet hole, so the split opposite goes through the middle of the other)."""
+    return _junction(geometry, geometry.branch_start, "outlets are")
+
+
+def _junction(geometry: Tee | Cross, outlet_start: np.ndarray, parallel: str) -> cq.Shape:
+    """A tee's or cross's solid: the run cylinder fused with the outlet cylinder from
+    ``outlet_start`` ((3,) metres: the tee's centre, or a cross's far outlet end) to
+    ``branch_end``, then both bores (each of its own wall) cut when the walls are known; the
+    run's seam through the middle of the (first) outlet hole (see :func:`_tee`)."""
     run_axis = geometry.run_end - geometry.run_start
-    outlet_axis = geometry.branch_end - geometry.branch_start
+    outlet_axis = geometry.branch_end - outlet_start
     if np.linalg.norm(np.cross(run_axis, outlet_axis)) <= 1e-9 * (
         np.linalg.norm(run_axis) * np.linalg.norm(outlet_axis)
     ):
-        raise ValueError("its outlets are parallel to its run")
+        raise ValueError(f"its {parallel} parallel to its run")
 
     def run(radius: float) -> cq.Solid:
         return _seamed_cylinder(geometry.run_start, geometry.run_end, radius, outlet_axis)
 
-    def outlets(radius: float) -> cq.Solid:
-        return _seamed_cylinder(geometry.branch_start, geometry.branch_end, radius, run_axis)
+    def outlet(radius: float) -> cq.Solid:
+        return _seamed_cylinder(outlet_start, geometry.branch_end, radius, run_axis)
 
-    shape = run(geometry.outer_radius).fuse(outlets(geometry.branch_outer_radius))
+    shape = run(geometry.outer_radius).fuse(outlet(geometry.branch_outer_radius))
     if geometry.wall > 0 or geometry.branch_wall > 0:
+        # each bore is its own pipe's: the run's wall on the run, the outlet's on the outlet
         bores = run(geometry.outer_radius - geometry.wall).fuse(
-            outlets(geometry.branch_outer_radius - geometry.branch_wall)
+            outlet(geometry.branch_outer_radius - geometry.branch_wall)
         )
         shape = shape.cut(bores)
     return shape.clean()

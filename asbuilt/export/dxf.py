@@ -174,8 +174,11 @@ def _centrelines(geometry) -> list[tuple[np.ndarray, float]]:
         ]
     if isinstance(geometry, Cross):
         return [
-            np.array([geometry.run_start, geometry.run_end]),
-            np.array([geometry.branch_start, geometry.branch_end]),
+            (np.array([geometry.run_start, geometry.run_end]), 2 * geometry.outer_radius),
+            (
+                np.array([geometry.branch_start, geometry.branch_end]),
+                2 * geometry.branch_outer_radius,
+            ),
         ]
     if isinstance(geometry, Bend):
         diameter = 2 * geometry.outer_radius

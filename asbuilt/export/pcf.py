@@ -222,27 +222,15 @@ def _records(component: Component, bores: _Bores) -> tuple[str, list[str], list[
             f"ANGLE {round(100 * g.angle_deg):d}",
         ]
         return identifier, lines, [first] if first == second else [first, second]
-    if isinstance(g, Tee):
+    if isinstance(g, (Tee, Cross)):
+        # a cross is the TEE record with a second outlet, BRANCH2-POINT (see the module docstring)
         run = bores.bore(component, 2 * g.outer_radius)
         branch = bores.bore(component, 2 * g.branch_outer_radius)
         lines = [
             f"END-POINT {_mm(g.run_start)} {run}",
             f"END-POINT {_mm(g.run_end)} {run}",
             f"CENTRE-POINT {_mm(g.center)}",
-            f"BRANCH1-POINT {_mm(g.branch_end)} {branch}",
-            f"SKEY {_SKEY[identifier]}",
-        ]
-        return identifier, lines, [run] if branch == run else [run, branch]
-    if isinstance(g, Cross):
-        # the TEE record with a second outlet: BRANCH2-POINT (see the module docstring)
-        run = bores.bore(component, 2 * g.outer_radius)
-        branch = bores.bore(component, 2 * g.branch_outer_radius)
-        lines = [
-            f"END-POINT {_mm(g.run_start)} {run}",
-            f"END-POINT {_mm(g.run_end)} {run}",
-            f"CENTRE-POINT {_mm(g.center)}",
-            f"BRANCH1-POINT {_mm(g.branch_start)} {branch}",
-            f"BRANCH2-POINT {_mm(g.branch_end)} {branch}",
+            *(f"BRANCH{k}-POINT {_mm(end)} {branch}" for k, end in enumerate(g.outlets, 1)),
             f"SKEY {_SKEY[identifier]}",
         ]
         return identifier, lines, [run] if branch == run else [run, branch]

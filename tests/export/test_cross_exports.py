@@ -91,10 +91,11 @@ def test_pcf_writes_a_cross_block_with_two_branch_points(model):
 
 def test_dxf_draws_the_run_and_the_outlet_line(model):
     g = _cross(model).geometry
-    run, outlets = _centrelines(g)
+    (run, run_od), (outlets, outlet_od) = _centrelines(g)
     assert np.allclose(run, [g.run_start, g.run_end]) and np.allclose(
         outlets, [g.branch_start, g.branch_end]
     )
+    assert (run_od, outlet_od) == (2 * g.outer_radius, 2 * g.branch_outer_radius)
 
 
 @pytest.mark.skipif(find_spec("ifcopenshell") is None, reason="ifcopenshell is not installed")
