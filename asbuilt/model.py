@@ -278,10 +278,10 @@ class Reducer:
         return towards if self.outer_radius_start >= self.outer_radius_end else -towards
 
 
-def _check_junction(fitting, points: tuple[str, ...]) -> None:
-    """Validate a tee's or cross's ``points`` (each (3,) metres), radii and walls in place
-    (``branch_wall`` None takes ``wall``)."""
-    for name in points:
+def _check_junction(fitting) -> None:
+    """Validate a tee's or cross's points (its ``point_fields``, each (3,) metres), radii and
+    walls in place (``branch_wall`` None takes ``wall``)."""
+    for name in fitting.point_fields:
         object.__setattr__(fitting, name, as_vector(getattr(fitting, name), name))
     outer = _nonneg(fitting.outer_radius, "outer radius")
     branch_outer = _nonneg(fitting.branch_outer_radius, "branch outer radius")
@@ -315,6 +315,8 @@ class Tee:
     """
 
     kind: ClassVar[str] = "tee"
+    #: Its points, each (3,) metres (validated, moved and turned together).
+    point_fields: ClassVar[tuple[str, ...]] = ("center", "run_start", "run_end", "branch_end")
     center: np.ndarray
     run_start: np.ndarray
     run_end: np.ndarray
@@ -325,12 +327,18 @@ class Tee:
     branch_wall: float | None = None
 
     def __post_init__(self):
-        _check_junction(self, ("center", "run_start", "run_end", "branch_end"))
+        _check_junction(self)
 
     @property
     def outlets(self) -> tuple[np.ndarray, ...]:
         """The outlet ends, each (3,) metres: the branch end (a cross has two)."""
         return (self.branch_end,)
+
+    @property
+    def outlet_start(self) -> np.ndarray:
+        """Where the outlet's cylinder starts, (3,) metres: the centre (it ends at
+        ``branch_end``)."""
+        return self.center
 
 
 @dataclass(frozen=True, eq=False)
@@ -352,6 +360,14 @@ class Cross:
     """
 
     kind: ClassVar[str] = "cross"
+    #: Its points, each (3,) metres (validated, moved and turned together).
+    point_fields: ClassVar[tuple[str, ...]] = (
+        "center",
+        "run_start",
+        "run_end",
+        "branch_start",
+        "branch_end",
+    )
     center: np.ndarray
     run_start: np.ndarray
     run_end: np.ndarray
@@ -363,12 +379,18 @@ class Cross:
     branch_wall: float | None = None
 
     def __post_init__(self):
-        _check_junction(self, ("center", "run_start", "run_end", "branch_start", "branch_end"))
+        _check_junction(self)
 
     @property
     def outlets(self) -> tuple[np.ndarray, ...]:
         """The two outlet ends, each (3,) metres: ``branch_start`` and ``branch_end``."""
         return (self.branch_start, self.branch_end)
+
+    @property
+    def outlet_start(self) -> np.ndarray:
+        """Where the outlets' cylinder starts, (3,) metres: the far outlet end, ``branch_start``
+        (it runs through the centre to ``branch_end``)."""
+        return self.branch_start
 
 
 Geometry = Straight | Bend | Reducer | Tee | Cross | Cylinder | Cuboid | Sphere | Plane | Hull

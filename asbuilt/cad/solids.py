@@ -241,7 +241,7 @@ def _tee(geometry: Tee) -> cq.Shape:
     opposite the branch fails the same way for small branches, as the split then crosses the
     hole.
     """
-    return _junction(geometry, geometry.center, "branch is")
+    return _junction(geometry, "branch is")
 
 
 def _cross(geometry: Cross) -> cq.Shape:
@@ -249,14 +249,15 @@ def _cross(geometry: Cross) -> cq.Shape:
     through both sides (``branch_start`` to ``branch_end``), then both bores (each of its own
     wall) cut when the walls are known; the seams placed as the tee's (the run's through the
     middle of one outlet hole, so the split opposite goes through the middle of the other)."""
-    return _junction(geometry, geometry.branch_start, "outlets are")
+    return _junction(geometry, "outlets are")
 
 
-def _junction(geometry: Tee | Cross, outlet_start: np.ndarray, parallel: str) -> cq.Shape:
-    """A tee's or cross's solid: the run cylinder fused with the outlet cylinder from
-    ``outlet_start`` ((3,) metres: the tee's centre, or a cross's far outlet end) to
-    ``branch_end``, then both bores (each of its own wall) cut when the walls are known; the
-    run's seam through the middle of the (first) outlet hole (see :func:`_tee`)."""
+def _junction(geometry: Tee | Cross, parallel: str) -> cq.Shape:
+    """A tee's or cross's solid: the run cylinder fused with the outlet cylinder from its
+    ``outlet_start`` (the tee's centre, or a cross's far outlet end) to ``branch_end``, then
+    both bores (each of its own wall) cut when the walls are known; the run's seam through the
+    middle of the (first) outlet hole (see :func:`_tee`)."""
+    outlet_start = geometry.outlet_start
     run_axis = geometry.run_end - geometry.run_start
     outlet_axis = geometry.branch_end - outlet_start
     if np.linalg.norm(np.cross(run_axis, outlet_axis)) <= 1e-9 * (

@@ -130,30 +130,16 @@ def component_pieces(component: Component) -> list[np.ndarray]:
         ]
     if isinstance(g, Bend):
         return _bend_pieces(g)
-    if isinstance(g, Cross):
-        run, outlet = g.run_end - g.run_start, g.branch_end - g.branch_start
+    if isinstance(g, (Tee, Cross)):
+        run, outlet = g.run_end - g.run_start, g.branch_end - g.outlet_start
         return [
             np.vstack(
                 [_ring(g.run_start, run, g.outer_radius), _ring(g.run_end, run, g.outer_radius)]
             ),
             np.vstack(
                 [
-                    _ring(g.branch_start, outlet, g.branch_outer_radius),
+                    _ring(g.outlet_start, outlet, g.branch_outer_radius),
                     _ring(g.branch_end, outlet, g.branch_outer_radius),
-                ]
-            ),
-        ]
-    if isinstance(g, Tee):
-        run = g.run_end - g.run_start
-        branch = g.branch_end - g.center
-        return [
-            np.vstack(
-                [_ring(g.run_start, run, g.outer_radius), _ring(g.run_end, run, g.outer_radius)]
-            ),
-            np.vstack(
-                [
-                    _ring(g.center, branch, g.branch_outer_radius),
-                    _ring(g.branch_end, branch, g.branch_outer_radius),
                 ]
             ),
         ]

@@ -68,23 +68,8 @@ def rotate_geometry(geometry, rotation, about):
         return dataclasses.replace(
             g, start=point(g.start), end=point(g.end), center=point(g.center)
         )
-    if isinstance(g, Tee):
-        return dataclasses.replace(
-            g,
-            center=point(g.center),
-            run_start=point(g.run_start),
-            run_end=point(g.run_end),
-            branch_end=point(g.branch_end),
-        )
-    if isinstance(g, Cross):
-        return dataclasses.replace(
-            g,
-            center=point(g.center),
-            run_start=point(g.run_start),
-            run_end=point(g.run_end),
-            branch_start=point(g.branch_start),
-            branch_end=point(g.branch_end),
-        )
+    if isinstance(g, (Tee, Cross)):
+        return dataclasses.replace(g, **{name: point(getattr(g, name)) for name in g.point_fields})
     if isinstance(g, Cylinder):
         return dataclasses.replace(g, center=point(g.center), axis=vector(g.axis))
     if isinstance(g, Cuboid):
