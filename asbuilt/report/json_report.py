@@ -3,7 +3,7 @@
 Top level (``"format": "asbuilt-report"``, ``"version": 1``, ``"units": "m"``): ``title``,
 ``source``, ``scan_date``, ``scan_file_modified``, ``generated``, ``catalog``,
 ``catalog_title``, ``catalog_file``, ``catalog_problem``, ``display_units``, ``counts``, ``findings_summary`` (by severity),
-``takeoff`` (``spools``, ``pipes``, ``fittings``, ``solids``, ``totals``), ``components`` (the
+``takeoff`` (``spools``, ``pipes``, ``fittings``, ``welds``, ``solids``, ``totals``), ``components`` (the
 CSV rows, same names without unit suffixes: lengths m, areas m2, volumes m3, weights kg),
 ``quality`` (per fitted object; residuals in metres) and ``findings`` (as in the
 ``asbuilt-model`` document). Non-finite numbers are written as null. The JSON Schema is
@@ -70,12 +70,16 @@ def report_document(data: ReportData) -> dict:
             "spools": [_plain(sp) for sp in t.spools],
             "pipes": [_plain(p) for p in t.pipes],
             "fittings": [_plain(f) for f in t.fittings],
+            "welds": [_plain(w) for w in t.welds],
             "solids": [_plain(s) for s in t.solids],
             "totals": {
                 "pipe_length": t.pipe_length,
                 "pipe_length_ft": t.pipe_length / FOOT,
                 "pipe_weight": t.pipe_weight,
                 "pipes_without_weight": t.pipes_without_weight,
+                "weld_count": t.weld_count,
+                "diameter_inches": t.diameter_inches,
+                "welds_without_nps": t.welds_without_nps,
                 "density": t.density,
                 "material": t.material,
                 "volumes": dict(t.volumes),

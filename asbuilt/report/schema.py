@@ -59,6 +59,20 @@ def build_report_schema() -> dict:
             "sizes": _IDS,
             "findings": _IDS,
             "components": _IDS,
+            "welds": _COUNT,
+            "diameter_inches": {"anyOf": [_NONNEG, {"type": "null"}]},
+            "open_ends": _COUNT,
+        }
+    )
+    weld = _object(
+        {
+            "size": {"type": "string"},
+            "nominal": _STRING_OR_NULL,
+            "od": {"type": "number", "exclusiveMinimum": 0},
+            "nps": {"anyOf": [{"type": "number", "exclusiveMinimum": 0}, {"type": "null"}]},
+            "count": {"type": "integer", "minimum": 1},
+            "diameter_inches": {"anyOf": [_NONNEG, {"type": "null"}]},
+            "joints": _IDS,
         }
     )
     pipe = _object(
@@ -171,6 +185,9 @@ def build_report_schema() -> dict:
             "pipe_length_ft": _NONNEG,
             "pipe_weight": {"anyOf": [_NONNEG, {"type": "null"}]},
             "pipes_without_weight": _COUNT,
+            "weld_count": _COUNT,
+            "diameter_inches": {"anyOf": [_NONNEG, {"type": "null"}]},
+            "welds_without_nps": _COUNT,
             "density": _NUMBER_OR_NULL,
             "material": _STRING_OR_NULL,
             "volumes": {"type": "object", "additionalProperties": _NUMBER},
@@ -206,6 +223,7 @@ def build_report_schema() -> dict:
                     "spools": {"type": "array", "items": spool},
                     "pipes": {"type": "array", "items": pipe},
                     "fittings": {"type": "array", "items": fitting},
+                    "welds": {"type": "array", "items": weld},
                     "solids": {"type": "array", "items": solid},
                     "totals": totals,
                 }

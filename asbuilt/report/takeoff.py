@@ -34,6 +34,8 @@ from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 from asbuilt.units import UNITS
 
+from .welds import WeldCount, WeldSummary, summarise_welds
+
 __all__ = [
     "DENSITIES",
     "FOOT",
@@ -218,7 +220,9 @@ class SpoolQuantity:
     otherwise), the number of ``pipes``, how many of them have no weight
     (``pipes_without_weight``: no wall or no density known), the number of each fitting type
     (``fittings``: component type -> count, a lateral as ``"lateral"``, not ``"tee"``), its ``sizes`` (display labels) and ``findings`` (codes on its
-    components, worst first)."""
+    components, worst first); its butt ``welds``, their ``diameter_inches`` (None when no weld
+    has an NPS size) and its ``open_ends`` (piping ends meeting nothing: flanges, equipment,
+    where the scan stopped; :mod:`asbuilt.report.welds`)."""
 
     id: str
     pipe_length: float
@@ -229,6 +233,9 @@ class SpoolQuantity:
     findings: tuple[str, ...]
     components: tuple[str, ...]
     pipes_without_weight: int = 0
+    welds: int = 0
+    diameter_inches: float | None = None
+    open_ends: int = 0
 
 
 @dataclass(frozen=True)
@@ -236,7 +243,10 @@ class TakeOff:
     """The whole take-off. Totals: ``pipe_length`` metres, ``pipe_weight`` kg (the sum over the
     pipes that have a weight; None when none has one), ``pipes_without_weight`` (pipe pieces
     left out of ``pipe_weight``: no wall or no density known), ``volumes`` m3 and ``areas`` m2 by solid category, ``density`` kg/m3 used
-    (None: no weight) and ``material``; ``spools`` per spool in the model's order."""
+    (None: no weight) and ``material``; ``spools`` per spool in the model's order. Butt welds
+    (:mod:`asbuilt.report.welds`): ``welds`` by size, largest first, ``weld_count``,
+    ``diameter_inches`` (None when no weld has an NPS size) and ``welds_without_nps`` (welds
+    left out of it)."""
 
     pipes: tuple[PipeLine, ...]
     fittings: tuple[FittingCount, ...]
@@ -251,6 +261,10 @@ class TakeOff:
     counts: Mapping[str, int] = field(default_factory=dict)
     spools: tuple[SpoolQuantity, ...] = ()
     pipes_without_weight: int = 0
+    welds: tuple[WeldCount, ...] = ()
+    weld_count: int = 0
+    diameter_inches: float | None = None
+    welds_without_nps: int = 0
 
 
 # ----------------------------------------------------------------------------------------------
@@ -391,7 +405,9 @@ def _findings_by_object(model: Model) -> dict[str, list]:
     return by_object
 
 
-def _spools(model: Model, rows: list[ComponentRow]) -> tuple[SpoolQuantity, ...]:
+def _spools(
+    model: Model, rows: list[ComponentRow], welds: WeldSummary
+) -> tuple[SpoolQuantity, ...]:
     by_id = {row.id: row for row in rows}
     # bought as laterals, not tees (see FITTING_KINDS), so counted apart here too
     laterals = {c.id for c in model.components if lateral_angle(c) is not None}
@@ -424,6 +440,9 @@ def _spools(model: Model, rows: list[ComponentRow]) -> tuple[SpoolQuantity, ...]
                 findings=tuple(dict.fromkeys(code for _, code in codes)),
                 components=tuple(r.id for r in parts),
                 pipes_without_weight=len(pipes) - len(weights),
+                welds=welds.spool_welds.get(spool_id, 0),
+                diameter_inches=welds.spool_diameter_inches.get(spool_id),
+                open_ends=welds.spool_open_ends.get(spool_id, 0),
             )
         )
     return tuple(result)
@@ -450,6 +469,7 @@ def take_off(model: Model, *, density: float | None = None, catalog=None) -> Tak
         solids and rows in the model's order.
     """
     sizes = _Sizes(model_catalog(model, catalog)[0])
+    welds = summarise_welds(model, sizes.catalog, sizes.label)
     material = sizes.material
     if density is None and material is not None:
         density = DENSITIES.get(material.lower())
@@ -564,7 +584,7 @@ def take_off(model: Model, *, density: float | None = None, catalog=None) -> Tak
         if solid.volume is not None:
             volumes[solid.category] = volumes.get(solid.category, 0.0) + solid.volume
     return TakeOff(
-        spools=_spools(model, rows),
+        spools=_spools(model, rows, welds),
         pipes=pipes,
         fittings=fitting_rows,
         solids=tuple(solids),
@@ -581,4 +601,8 @@ def take_off(model: Model, *, density: float | None = None, catalog=None) -> Tak
         density=density,
         material=material,
         counts=counts,
+        welds=welds.by_size,
+        weld_count=welds.count,
+        diameter_inches=welds.diameter_inches,
+        welds_without_nps=welds.without_nps,
     )

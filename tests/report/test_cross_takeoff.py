@@ -42,7 +42,7 @@ def test_a_cross_is_counted_as_a_cross_of_its_sizes(run, outlet, size):
 
 
 def test_the_html_spool_table_has_a_crosses_column_only_where_one_is():
-    from asbuilt.report.html import _takeoff
+    from asbuilt.report._html_takeoff import _takeoff
 
     class Data:
         takeoff = take_off(_model("6", "4"))
