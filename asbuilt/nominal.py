@@ -91,7 +91,8 @@ def parse_nominal(text: str | None) -> NominalHint | None:
     match = re.match(r"^dn\s*(\d+(?:\.\d+)?)$", lowered) or re.match(r"^(\d+)\s*a$", lowered)
     if match:
         return NominalHint("dn", float(match.group(1)), raw)
-    match = re.match(r"^nps\s*(.+)$", lowered)
+    # "NPS 4", and "NPS 4\"" or "NPS 1-1/2 in" with the inch unit said twice
+    match = re.match(r'^nps\s*(.+?)(?:\s*-?\s*(?:"|in\.?|inch|inches))?$', lowered)
     if match:
         value = parse_number(match.group(1))
         return NominalHint("nps", value, raw) if value else None

@@ -239,6 +239,11 @@ def test_fitting_dims_from_table_and_by_rule():
         ("4 in, Schedule 80", "nps", 4.0, "4", "100"),
         ('6" 150#', "nps", 6.0, "6", "150"),
         ("DN100 PN16", "dn", 100.0, "4", "100"),
+        # "NPS" and an inch unit together (the unit said twice), as line lists write them
+        ('NPS 4"', "nps", 4.0, "4", "100"),
+        ('NPS 1-1/2"', "nps", 1.5, "1 1/2", "40"),
+        ("NPS 4 in", "nps", 4.0, "4", "100"),
+        ('nps6"', "nps", 6.0, "6", "150"),
     ],
 )
 def test_nominal_hints(text, system, value, steel, metric):
