@@ -25,8 +25,20 @@ class NominalHint:
     text: str
 
 
-#: Unicode fraction glyphs operators may type (``1½"``).
-_VULGAR = {"\u00bd": "1/2", "\u00bc": "1/4", "\u00be": "3/4", "\u215b": "1/8", "\u215c": "3/8"}
+#: Unicode fraction glyphs operators may type (``1½"``; ``⅝"`` is a copper tube size).
+_VULGAR = {
+    "\u00bd": "1/2",
+    "\u00bc": "1/4",
+    "\u00be": "3/4",
+    "\u215b": "1/8",
+    "\u215c": "3/8",
+    "\u215d": "5/8",
+    "\u215e": "7/8",
+}
+
+#: Inch marks word processors and spreadsheets put in place of ``"``: right and left double
+#: quotation marks, the double prime, and two single quotes or primes.
+_INCH_MARKS = ("\u201d", "\u201c", "\u2033", "''", "\u2032\u2032", "\u2019\u2019")
 
 _FRACTION = re.compile(r"^(?:(\d+)[\s-]+)?(\d+)/(\d+)$")
 
@@ -82,7 +94,9 @@ def parse_nominal(text: str | None) -> NominalHint | None:
     if text is None:
         return None
     raw = str(text).strip()
-    lowered = raw.lower().replace("\u201d", '"').replace("''", '"')
+    lowered = raw.lower().replace("\u2044", "/")  # the fraction slash of "1⁄2"
+    for mark in _INCH_MARKS:
+        lowered = lowered.replace(mark, '"')
     for glyph, text in _VULGAR.items():
         lowered = lowered.replace(glyph, f" {text}")
     lowered = " ".join(lowered.split())

@@ -254,6 +254,30 @@ def test_nominal_hints(text, system, value, steel, metric):
 
 
 @pytest.mark.parametrize(
+    ("text", "value"),
+    [
+        ("4\u2033", 4.0),  # double prime
+        ("4\u201c", 4.0),  # left double quotation mark (autocorrect)
+        ("4\u201d", 4.0),  # right double quotation mark
+        ("4\u2032\u2032", 4.0),  # two primes
+        ('1\u20442"', 0.5),  # fraction slash
+        ('1 1\u20442"', 1.5),
+        ('\u215d"', 0.625),  # vulgar fraction five eighths
+        ('\u215e"', 0.875),
+    ],
+)
+def test_nominal_hints_typed_with_typographic_marks(text, value):
+    hint = parse_nominal(text)
+    assert (hint.system, hint.value) == ("nps", value)
+
+
+def test_five_eighths_copper_hint_names_the_five_eighths_tube():
+    """ASTM B88 has a 5/8 tube, OD = nominal + 1/8 in = 0.750 in (standards reference)."""
+    tube = load_catalog("astm-b88").match_hint(parse_nominal('\u215d"'))
+    assert tube.nominal == "5/8" and tube.od == pytest.approx(0.750 * INCH / 1000)
+
+
+@pytest.mark.parametrize(
     "text", ["", "abc", "DN", "NPS", "-4", "4/0", None, "sch 40", "PN16", "3000 ID", "100 mm"]
 )
 def test_nominal_hints_not_understood(text):
