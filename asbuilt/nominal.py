@@ -104,7 +104,8 @@ def parse_nominal(text: str | None) -> NominalHint | None:
         lowered = _TRAILING_RATING.sub("", lowered).strip()
     match = re.match(r"^dn\s*(\d+(?:\.\d+)?)$", lowered) or re.match(r"^(\d+)\s*a$", lowered)
     if match:
-        return NominalHint("dn", float(match.group(1)), raw)
+        value = float(match.group(1))  # "DN 0" and "0A" name no size
+        return NominalHint("dn", value, raw) if value > 0 else None
     # "NPS 4", and "NPS 4\"" or "NPS 1-1/2 in" with the inch unit said twice
     match = re.match(r'^nps\s*(.+?)(?:\s*-?\s*(?:"|in\.?|inch|inches))?$', lowered)
     if match:

@@ -278,7 +278,26 @@ def test_five_eighths_copper_hint_names_the_five_eighths_tube():
 
 
 @pytest.mark.parametrize(
-    "text", ["", "abc", "DN", "NPS", "-4", "4/0", None, "sch 40", "PN16", "3000 ID", "100 mm"]
+    "text",
+    [
+        "",
+        "abc",
+        "DN",
+        "NPS",
+        "-4",
+        "4/0",
+        None,
+        "sch 40",
+        "PN16",
+        "3000 ID",
+        "100 mm",
+        # no size is zero: a DN or JIS A hint of 0 is as unreadable as "4/0" or "NPS 0"
+        "DN 0",
+        "DN0.0",
+        "0A",
+        "NPS 0",
+        '0"',
+    ],
 )
 def test_nominal_hints_not_understood(text):
     assert parse_nominal(text) is None
