@@ -85,7 +85,7 @@ def parse_nominal(text: str | None) -> NominalHint | None:
     """Parse an operator's nominal size hint.
 
     Understood forms: ``4"``, ``4 in``, ``4in``, ``4 in.``, ``4 inch``, ``4-inch``, ``NPS 4``,
-    ``1 1/2"``, ``1-1/2"``, ``1½"``, ``3/4``, ``DN100``, ``DN 100``, the JIS designations
+    ``1 1/2"``, ``1-1/2"``, ``1½"``, ``3/4``, ``DN100``, ``DN 100``, ``DN-100``, the JIS designations
     ``100A`` (millimetres, as DN) and ``4B`` (inches), and a bare number such as ``4`` or
     ``100`` (read as the catalog's own designation first: NPS for ASME catalogs, DN for
     EN 10220). A schedule, weight class or rating after the size (``4" sch 40``, ``4" STD``,
@@ -102,12 +102,12 @@ def parse_nominal(text: str | None) -> NominalHint | None:
     lowered = " ".join(lowered.split())
     for _ in range(2):  # "4\" sch 40 150#": a schedule and a rating
         lowered = _TRAILING_RATING.sub("", lowered).strip()
-    match = re.match(r"^dn\s*(\d+(?:\.\d+)?)$", lowered) or re.match(r"^(\d+)\s*a$", lowered)
+    match = re.match(r"^dn\s*-?\s*(\d+(?:\.\d+)?)$", lowered) or re.match(r"^(\d+)\s*a$", lowered)
     if match:
         value = float(match.group(1))  # "DN 0" and "0A" name no size
         return NominalHint("dn", value, raw) if value > 0 else None
     # "NPS 4", and "NPS 4\"" or "NPS 1-1/2 in" with the inch unit said twice
-    match = re.match(r'^nps\s*(.+?)(?:\s*-?\s*(?:"|in\.?|inch|inches))?$', lowered)
+    match = re.match(r'^nps\s*-?\s*(.+?)(?:\s*-?\s*(?:"|in\.?|inch|inches))?$', lowered)
     if match:
         value = parse_number(match.group(1))
         return NominalHint("nps", value, raw) if value else None

@@ -244,6 +244,9 @@ def test_fitting_dims_from_table_and_by_rule():
         ('NPS 1-1/2"', "nps", 1.5, "1 1/2", "40"),
         ("NPS 4 in", "nps", 4.0, "4", "100"),
         ('nps6"', "nps", 6.0, "6", "150"),
+        # a hyphen after DN or NPS, as in tag numbers ("DN-100", "NPS-4")
+        ("DN-100", "dn", 100.0, "4", "100"),
+        ("NPS-4", "nps", 4.0, "4", "100"),
     ],
 )
 def test_nominal_hints(text, system, value, steel, metric):
