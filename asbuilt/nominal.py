@@ -85,11 +85,13 @@ def parse_nominal(text: str | None) -> NominalHint | None:
     """Parse an operator's nominal size hint.
 
     Understood forms: ``4"``, ``4 in``, ``4in``, ``4 in.``, ``4 inch``, ``4-inch``, ``NPS 4``,
-    ``1 1/2"``, ``1-1/2"``, ``1½"``, ``3/4``, ``DN100``, ``DN 100``, ``DN-100``, the JIS designations
-    ``100A`` (millimetres, as DN) and ``4B`` (inches), and a bare number such as ``4`` or
-    ``100`` (read as the catalog's own designation first: NPS for ASME catalogs, DN for
-    EN 10220). A schedule, weight class or rating after the size (``4" sch 40``, ``4" STD``,
-    ``DN100 PN16``, ``6" 150#``) is ignored. Returns None for anything else.
+    ``NPS-4``, ``NPS 4"``, ``1 1/2"``, ``1-1/2"``, ``1½"``, ``3/4``, ``DN100``, ``DN 100``,
+    ``DN-100``, the JIS designations ``100A`` (millimetres, as DN) and ``4B`` (inches), and a
+    bare number such as ``4`` or ``100`` (read as the catalog's own designation first: NPS for
+    ASME catalogs, DN for EN 10220). Typographic inch marks (``4″``, ``4“``), the fraction slash
+    (``1⁄2"``) and the fraction glyphs ``⅛ ¼ ⅜ ½ ⅝ ¾ ⅞`` are read as typed on a keyboard. A
+    schedule, weight class or rating after the size (``4" sch 40``, ``4" STD``, ``DN100 PN16``,
+    ``6" 150#``) is ignored. A size of zero (``DN 0``, ``0A``) and anything else give None.
     """
     if text is None:
         return None
