@@ -174,6 +174,44 @@ def test_b16_9_spot_checks(nps, lr, sr, l45, tee, red):
     assert row.dims["reducer"] == pytest.approx(red / 1000)
 
 
+# Straight tees, centre-to-end C (run) and M (outlet), mm, every row NPS 1/2 to 24, hand-copied
+# from wermac.org's "Dimensions butt welded Straight Tees ASME B16.9 NPS 1/2 - 48" (mirrored at
+# https://alloysteelfittings.com/dim_tees_eq.html); C = M for all of them.
+B16_9_TEES = {
+    "1/2": 25,
+    "3/4": 29,
+    "1": 38,
+    "1 1/4": 48,
+    "1 1/2": 57,
+    "2": 64,
+    "2 1/2": 76,
+    "3": 86,
+    "3 1/2": 95,
+    "4": 105,
+    "5": 124,
+    "6": 143,
+    "8": 178,
+    "10": 216,
+    "12": 254,
+    "14": 279,
+    "16": 305,
+    "18": 343,
+    "20": 381,
+    "22": 419,
+    "24": 432,
+}
+
+
+def test_b16_9_straight_tees_every_row():
+    table = load_catalog("asme-b16.9")
+    rows = {row.nominal: row for row in table.fittings}
+    assert set(rows) == set(B16_9_TEES)
+    for nps, c in B16_9_TEES.items():
+        assert rows[nps].dims["tee_run"] == pytest.approx(c / 1000), nps
+        assert rows[nps].dims["tee_outlet"] == pytest.approx(c / 1000), nps
+        assert "dim_tees_eq" in rows[nps].source, nps
+
+
 def test_b16_9_rows_follow_the_elbow_rules():
     """LR = 1.5 x NPS and SR = 1.0 x NPS (NPS 1 up); the 45 degree centre-to-end B is within
     5 mm of R tan(22.5 deg) or longer (small 45 degree elbows have longer ends), and within 3 mm
