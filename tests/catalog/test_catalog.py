@@ -351,6 +351,17 @@ def test_bare_number_reads_the_catalogs_own_designation_first():
     assert load_catalog("en-10220").match_hint(hint).od == pytest.approx(0.0102)
 
 
+def test_bare_number_falls_back_to_the_other_designation_only_when_the_catalog_lacks_it():
+    """docs/catalogs.md: "40" is NPS 40 (OD 40 in = 1016 mm, B36.10M) where the catalog has NPS 40,
+    else DN 40 (NPS 1 1/2, 48.3 mm); "25" is DN 25 (NPS 1, 33.4 mm) in an NPS catalog."""
+    forty, twenty_five = parse_nominal("40"), parse_nominal("25")
+    steel = load_catalog("asme-b36.10m")
+    assert steel.match_hint(forty).od == pytest.approx(1.016)
+    assert steel.match_hint(twenty_five).od == pytest.approx(0.0334)
+    assert load_catalog("asme-b36.19m").match_hint(forty).od == pytest.approx(0.0483)
+    assert steel.match_hint(parse_nominal("DN40")).od == pytest.approx(0.0483)
+
+
 GOOD = """# name: mine
 # title: Test pipe
 # standard: none
