@@ -25,8 +25,20 @@ class NominalHint:
     text: str
 
 
-#: Unicode fraction glyphs operators may type (``1½"``).
-_VULGAR = {"\u00bd": "1/2", "\u00bc": "1/4", "\u00be": "3/4", "\u215b": "1/8", "\u215c": "3/8"}
+#: Unicode fraction glyphs operators may type (``1½"``; ``⅝"`` is a copper tube size).
+_VULGAR = {
+    "\u00bd": "1/2",
+    "\u00bc": "1/4",
+    "\u00be": "3/4",
+    "\u215b": "1/8",
+    "\u215c": "3/8",
+    "\u215d": "5/8",
+    "\u215e": "7/8",
+}
+
+#: Inch marks word processors and spreadsheets put in place of ``"``: right and left double
+#: quotation marks, the double prime, and two single quotes or primes.
+_INCH_MARKS = ("\u201d", "\u201c", "\u2033", "''", "\u2032\u2032", "\u2019\u2019")
 
 _FRACTION = re.compile(r"^(?:(\d+)[\s-]+)?(\d+)/(\d+)$")
 
@@ -73,25 +85,31 @@ def parse_nominal(text: str | None) -> NominalHint | None:
     """Parse an operator's nominal size hint.
 
     Understood forms: ``4"``, ``4 in``, ``4in``, ``4 in.``, ``4 inch``, ``4-inch``, ``NPS 4``,
-    ``1 1/2"``, ``1-1/2"``, ``1½"``, ``3/4``, ``DN100``, ``DN 100``, the JIS designations
-    ``100A`` (millimetres, as DN) and ``4B`` (inches), and a bare number such as ``4`` or
-    ``100`` (read as the catalog's own designation first: NPS for ASME catalogs, DN for
-    EN 10220). A schedule, weight class or rating after the size (``4" sch 40``, ``4" STD``,
-    ``DN100 PN16``, ``6" 150#``) is ignored. Returns None for anything else.
+    ``NPS-4``, ``NPS 4"``, ``1 1/2"``, ``1-1/2"``, ``1½"``, ``3/4``, ``DN100``, ``DN 100``,
+    ``DN-100``, the JIS designations ``100A`` (millimetres, as DN) and ``4B`` (inches), and a
+    bare number such as ``4`` or ``100`` (read as the catalog's own designation first: NPS for
+    ASME catalogs, DN for EN 10220). Typographic inch marks (``4″``, ``4“``), the fraction slash
+    (``1⁄2"``) and the fraction glyphs ``⅛ ¼ ⅜ ½ ⅝ ¾ ⅞`` are read as typed on a keyboard. A
+    schedule, weight class or rating after the size (``4" sch 40``, ``4" STD``, ``DN100 PN16``,
+    ``6" 150#``) is ignored. A size of zero (``DN 0``, ``0A``) and anything else give None.
     """
     if text is None:
         return None
     raw = str(text).strip()
-    lowered = raw.lower().replace("\u201d", '"').replace("''", '"')
+    lowered = raw.lower().replace("\u2044", "/")  # the fraction slash of "1⁄2"
+    for mark in _INCH_MARKS:
+        lowered = lowered.replace(mark, '"')
     for glyph, text in _VULGAR.items():
         lowered = lowered.replace(glyph, f" {text}")
     lowered = " ".join(lowered.split())
     for _ in range(2):  # "4\" sch 40 150#": a schedule and a rating
         lowered = _TRAILING_RATING.sub("", lowered).strip()
-    match = re.match(r"^dn\s*(\d+(?:\.\d+)?)$", lowered) or re.match(r"^(\d+)\s*a$", lowered)
+    match = re.match(r"^dn\s*-?\s*(\d+(?:\.\d+)?)$", lowered) or re.match(r"^(\d+)\s*a$", lowered)
     if match:
-        return NominalHint("dn", float(match.group(1)), raw)
-    match = re.match(r"^nps\s*(.+)$", lowered)
+        value = float(match.group(1))  # "DN 0" and "0A" name no size
+        return NominalHint("dn", value, raw) if value > 0 else None
+    # "NPS 4", and "NPS 4\"" or "NPS 1-1/2 in" with the inch unit said twice
+    match = re.match(r'^nps\s*-?\s*(.+?)(?:\s*-?\s*(?:"|in\.?|inch|inches))?$', lowered)
     if match:
         value = parse_number(match.group(1))
         return NominalHint("nps", value, raw) if value else None

@@ -174,6 +174,44 @@ def test_b16_9_spot_checks(nps, lr, sr, l45, tee, red):
     assert row.dims["reducer"] == pytest.approx(red / 1000)
 
 
+# Straight tees, centre-to-end C (run) and M (outlet), mm, every row NPS 1/2 to 24, hand-copied
+# from wermac.org's "Dimensions butt welded Straight Tees ASME B16.9 NPS 1/2 - 48" (mirrored at
+# https://alloysteelfittings.com/dim_tees_eq.html); C = M for all of them.
+B16_9_TEES = {
+    "1/2": 25,
+    "3/4": 29,
+    "1": 38,
+    "1 1/4": 48,
+    "1 1/2": 57,
+    "2": 64,
+    "2 1/2": 76,
+    "3": 86,
+    "3 1/2": 95,
+    "4": 105,
+    "5": 124,
+    "6": 143,
+    "8": 178,
+    "10": 216,
+    "12": 254,
+    "14": 279,
+    "16": 305,
+    "18": 343,
+    "20": 381,
+    "22": 419,
+    "24": 432,
+}
+
+
+def test_b16_9_straight_tees_every_row():
+    table = load_catalog("asme-b16.9")
+    rows = {row.nominal: row for row in table.fittings}
+    assert set(rows) == set(B16_9_TEES)
+    for nps, c in B16_9_TEES.items():
+        assert rows[nps].dims["tee_run"] == pytest.approx(c / 1000), nps
+        assert rows[nps].dims["tee_outlet"] == pytest.approx(c / 1000), nps
+        assert "dim_tees_eq" in rows[nps].source, nps
+
+
 def test_b16_9_rows_follow_the_elbow_rules():
     """LR = 1.5 x NPS and SR = 1.0 x NPS (NPS 1 up); the 45 degree centre-to-end B is within
     5 mm of R tan(22.5 deg) or longer (small 45 degree elbows have longer ends), and within 3 mm
@@ -239,6 +277,14 @@ def test_fitting_dims_from_table_and_by_rule():
         ("4 in, Schedule 80", "nps", 4.0, "4", "100"),
         ('6" 150#', "nps", 6.0, "6", "150"),
         ("DN100 PN16", "dn", 100.0, "4", "100"),
+        # "NPS" and an inch unit together (the unit said twice), as line lists write them
+        ('NPS 4"', "nps", 4.0, "4", "100"),
+        ('NPS 1-1/2"', "nps", 1.5, "1 1/2", "40"),
+        ("NPS 4 in", "nps", 4.0, "4", "100"),
+        ('nps6"', "nps", 6.0, "6", "150"),
+        # a hyphen after DN or NPS, as in tag numbers ("DN-100", "NPS-4")
+        ("DN-100", "dn", 100.0, "4", "100"),
+        ("NPS-4", "nps", 4.0, "4", "100"),
     ],
 )
 def test_nominal_hints(text, system, value, steel, metric):
@@ -249,7 +295,50 @@ def test_nominal_hints(text, system, value, steel, metric):
 
 
 @pytest.mark.parametrize(
-    "text", ["", "abc", "DN", "NPS", "-4", "4/0", None, "sch 40", "PN16", "3000 ID", "100 mm"]
+    ("text", "value"),
+    [
+        ("4\u2033", 4.0),  # double prime
+        ("4\u201c", 4.0),  # left double quotation mark (autocorrect)
+        ("4\u201d", 4.0),  # right double quotation mark
+        ("4\u2032\u2032", 4.0),  # two primes
+        ('1\u20442"', 0.5),  # fraction slash
+        ('1 1\u20442"', 1.5),
+        ('\u215d"', 0.625),  # vulgar fraction five eighths
+        ('\u215e"', 0.875),
+    ],
+)
+def test_nominal_hints_typed_with_typographic_marks(text, value):
+    hint = parse_nominal(text)
+    assert (hint.system, hint.value) == ("nps", value)
+
+
+def test_five_eighths_copper_hint_names_the_five_eighths_tube():
+    """ASTM B88 has a 5/8 tube, OD = nominal + 1/8 in = 0.750 in (standards reference)."""
+    tube = load_catalog("astm-b88").match_hint(parse_nominal('\u215d"'))
+    assert tube.nominal == "5/8" and tube.od == pytest.approx(0.750 * INCH / 1000)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "",
+        "abc",
+        "DN",
+        "NPS",
+        "-4",
+        "4/0",
+        None,
+        "sch 40",
+        "PN16",
+        "3000 ID",
+        "100 mm",
+        # no size is zero: a DN or JIS A hint of 0 is as unreadable as "4/0" or "NPS 0"
+        "DN 0",
+        "DN0.0",
+        "0A",
+        "NPS 0",
+        '0"',
+    ],
 )
 def test_nominal_hints_not_understood(text):
     assert parse_nominal(text) is None
@@ -260,6 +349,17 @@ def test_bare_number_reads_the_catalogs_own_designation_first():
     hint = parse_nominal("6")
     assert load_catalog("asme-b36.10m").match_hint(hint).od == pytest.approx(0.1683)
     assert load_catalog("en-10220").match_hint(hint).od == pytest.approx(0.0102)
+
+
+def test_bare_number_falls_back_to_the_other_designation_only_when_the_catalog_lacks_it():
+    """docs/catalogs.md: "40" is NPS 40 (OD 40 in = 1016 mm, B36.10M) where the catalog has NPS 40,
+    else DN 40 (NPS 1 1/2, 48.3 mm); "25" is DN 25 (NPS 1, 33.4 mm) in an NPS catalog."""
+    forty, twenty_five = parse_nominal("40"), parse_nominal("25")
+    steel = load_catalog("asme-b36.10m")
+    assert steel.match_hint(forty).od == pytest.approx(1.016)
+    assert steel.match_hint(twenty_five).od == pytest.approx(0.0334)
+    assert load_catalog("asme-b36.19m").match_hint(forty).od == pytest.approx(0.0483)
+    assert steel.match_hint(parse_nominal("DN40")).od == pytest.approx(0.0483)
 
 
 GOOD = """# name: mine
