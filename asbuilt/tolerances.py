@@ -92,8 +92,10 @@ class Tolerances:
     )
     diameter_tolerance: float = _why(
         0.002,
-        "2 mm: a fitted OD within max(3 standard errors, 2 mm) of a catalog OD may snap to it; the "
-        "smallest gap between neighbouring steel pipe ODs is 5.4 mm (NPS 1/2 to 3/4).",
+        "2 mm: a fitted OD within max(3 standard errors, 2 mm) of a catalog OD may snap to it; "
+        "from NPS 1/2 up the smallest gap between neighbouring steel pipe ODs is 5.4 mm (NPS 1/2 "
+        "to 3/4); below it 3.4-4.2 mm (NPS 1/8 to 1/2), where an OD between two sizes is within "
+        "2 mm of both and is reported ambiguous, not snapped.",
     )
     joint_distance: float = _why(
         0.15,
