@@ -8,8 +8,9 @@ estimated by quasi-Monte Carlo inside the intersection of the two boxes: scrambl
 and a hit share ``p`` the volume's standard error is bounded by the Monte Carlo one,
 ``V_box * sqrt(p (1 - p) / N)`` (Sobol points converge faster; the bound is conservative).
 An overlap is an error only when it survives shrinking both solids by ``k_sigma`` standard
-errors of the gap between their surfaces (the fits' centre and radius or size standard errors in
-quadrature, split between the two); a shallower overlap (a pipe resting on a support, fitted a
+errors of the gap between their surfaces (the fits' centre and radius standard errors in
+quadrature, a box's per local axis, split between the two: :func:`surface_stderr`,
+:func:`erosions`); a shallower overlap (a pipe resting on a support, fitted a
 millimetre into it) is an unverifiable warning. Components joined end to end (ends within ``touch_distance``) or linked in the scan are never
 a clash; nor, with ``end_connections`` (the default), is a member whose axis *ends* inside the
 other solid: a beam framing into a column or a nozzle into a tank is a connection (a fitting
@@ -100,7 +101,11 @@ def inside(geometry, points, plate_thickness: float = 0.01, erode: float = 0.0) 
     still a clash). ``erode`` (metres) shrinks the solid by that much on every side first.
     """
     points = np.asarray(points, dtype=np.float64)
-    g, e = geometry, float(erode)
+    g = geometry
+    if isinstance(g, Cuboid):  # one erosion per local axis allowed
+        local = (points - g.center) @ g.axes.T
+        return np.all(np.abs(local) <= 0.5 * g.size - np.asarray(erode, dtype=np.float64), axis=1)
+    e = float(np.max(erode))
     if isinstance(g, Straight):
         return _in_segment(points, g.start, g.end, g.outer_radius, erode=e)
     if isinstance(g, Reducer):
@@ -120,9 +125,6 @@ def inside(geometry, points, plate_thickness: float = 0.01, erode: float = 0.0) 
     if isinstance(g, Cylinder):
         s, end = g.ends
         return _in_segment(points, s, end, g.radius, erode=e)
-    if isinstance(g, Cuboid):
-        local = (points - g.center) @ g.axes.T
-        return np.all(np.abs(local) <= 0.5 * g.size - e, axis=1)
     if isinstance(g, Sphere):
         return np.linalg.norm(points - g.center, axis=1) <= g.radius - e
     if isinstance(g, Hull):
@@ -201,12 +203,15 @@ def overlap_volume(
     samples: int = 4096,
     seed: int = 0,
     plate_thickness: float = 0.01,
-    erode: float = 0.0,
+    erode=0.0,
+    erode_b=None,
 ):
     """Overlap volume of two solids by quasi-Monte Carlo.
 
     With ``erode`` > 0 both solids are first shrunk by that many metres on every side (the
-    overlap that is left is beyond that much uncertainty in where their surfaces are).
+    overlap that is left is beyond that much uncertainty in where their surfaces are);
+    ``erode_b``, when given, is ``gb``'s own (``erode`` then ``ga``'s). A cuboid's may be one
+    value per local axis, shape (3,) (see :func:`erosions`).
 
     Returns ``(volume m^3, standard error m^3, centroid (3,) m or None)``.
     """
@@ -218,7 +223,8 @@ def overlap_volume(
     exponent = max(int(np.ceil(np.log2(max(samples, 2)))), 1)
     unit = qmc.Sobol(d=3, scramble=True, seed=seed).random_base2(exponent)
     points = lo + unit * (hi - lo)
-    hit = inside(ga, points, plate_thickness, erode) & inside(gb, points, plate_thickness, erode)
+    erode_b = erode if erode_b is None else erode_b
+    hit = inside(ga, points, plate_thickness, erode) & inside(gb, points, plate_thickness, erode_b)
     n = len(points)
     share = float(hit.mean())
     volume = box_volume * share
@@ -227,18 +233,70 @@ def overlap_volume(
     return volume, stderr, centroid
 
 
-def surface_stderr(component) -> float:
-    """Standard error (metres) of where a component's surface is: its fit's centre and radius
-    (or half size) standard errors in quadrature; 0 without a fit (fittings placed by merging)."""
+def surface_stderr(component):
+    """Standard error (metres) of where a component's surface is; 0 without a fit (fittings
+    placed by merging).
+
+    Cylinders and other round or single-surface fits: their centre and radius standard errors in
+    quadrature. Cuboids: one value per local axis, shape (3,), for the faces across that axis:
+    a face is where the box's centre along the axis lies plus or minus half its size there, and
+    the box's centre along an axis, the mid-point of its two faces, is known to half its size's
+    standard error ``S_k`` when the faces are measured independently (never worse than the
+    fit's 3-D centre error ``C``), so ``hypot(min(C, S_k / 2), S_k / 2)``. Not ``C`` and the
+    largest ``S_k`` for every face: both are dominated by the long axis of a column or a beam,
+    whose ends the scan window leaves uncertain by decimetres, which says nothing of where the
+    faces a pipe passes through lie. A size known only as a lower bound (infinite standard error:
+    the shots ran on past the scan window or stopped short of the edges) gives 0 there: the box
+    is at least as long as drawn.
+    """
     fit = component.fit
     if fit is None:
         return 0.0
-    centre = stderr_value(fit.stderr, "center") or 0.0
-    radius = stderr_value(fit.stderr, "radius")
+    stderr = fit.stderr or {}
+    centre = stderr_value(stderr, "center")
+    centre = 0.0 if centre is None else centre
+    radius = stderr_value(stderr, "radius")
+    size = stderr.get("size")
+    if radius is None and isinstance(fit.primitive, Cuboid) and size is not None:
+        size = np.asarray(size, dtype=np.float64).ravel()
+        if size.size == 1:
+            size = np.repeat(size, 3)
+        if size.size == 3 and isinstance(component.geometry, Cuboid):
+            half = np.where(np.isfinite(size), 0.5 * size, 0.0)
+            return np.hypot(np.minimum(centre if np.isfinite(centre) else np.inf, half), half)
     if radius is None:
-        size = stderr_value(fit.stderr, "size")
+        size = stderr_value(stderr, "size")
         radius = 0.5 * size if size is not None else 0.0
     return float(np.hypot(centre, radius))
+
+
+def erosions(se_a, se_b, k: float):
+    """How far (metres) to shrink each of two solids so that the overlap left is beyond ``k``
+    standard errors of the gap between their surfaces: ``k s_a^2 / hypot(s_a, s_b)`` and
+    ``k s_b^2 / hypot(s_a, s_b)``, which add up to ``k hypot(s_a, s_b)`` and leave an exact solid
+    (a fitting merging placed, ``s = 0``) unshrunk. A per-axis ``s`` (a cuboid's, (3,)) meets the
+    other solid's smallest, its erosion then being per axis too.
+    """
+
+    def shrink(own, other):
+        own = np.asarray(own, dtype=np.float64)
+        other = float(np.min(other))
+        total = np.hypot(own, other)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out = np.where(total > 0, k * own**2 / np.where(total > 0, total, 1.0), 0.0)
+        return float(out) if out.ndim == 0 else out
+
+    return shrink(se_a, se_b), shrink(se_b, se_a)
+
+
+def _across(erode, geometry, point) -> float:
+    """The erosion (metres) across the face of ``geometry`` nearest ``point`` (the overlap's
+    centroid): a cuboid's per-axis value there, else the one value."""
+    values = np.asarray(erode, dtype=np.float64)
+    if values.ndim == 0 or not isinstance(geometry, Cuboid) or point is None:
+        return float(np.max(values))
+    local = np.abs((np.asarray(point, dtype=np.float64) - geometry.center) @ geometry.axes.T)
+    return float(values[int(np.argmin(0.5 * geometry.size - local))])
 
 
 def member_ends(geometry) -> np.ndarray:
@@ -470,7 +528,8 @@ def check_clash(ctx: Context) -> None:
         # the overlap that survives shrinking both solids by k standard errors of the gap between
         # their surfaces is certain; an overlap within that band may be fit noise (a pipe resting
         # on a support)
-        margin = 0.5 * ctx.k * float(np.hypot(surface_stderr(a), surface_stderr(b)))
+        erode_a, erode_b = erosions(surface_stderr(a), surface_stderr(b), ctx.k)
+        margin = _across(erode_a, a.geometry, centroid) + _across(erode_b, b.geometry, centroid)
         certain = volume - ctx.k * se > min_volume
         if certain and margin > 0:
             kept, kept_se, _ = overlap_volume(
@@ -481,7 +540,8 @@ def check_clash(ctx: Context) -> None:
                 samples,
                 seed=i * 7919 + j,
                 plate_thickness=thickness,
-                erode=margin,
+                erode=erode_a,
+                erode_b=erode_b,
             )
             certain = kept - ctx.k * kept_se > min_volume
         first, second = sorted((a.id, b.id))
@@ -489,7 +549,13 @@ def check_clash(ctx: Context) -> None:
             slug,
             [first, second],
             f"{first} and {second} intersect: {volume * 1e6:.0f} cm3 (+- {se * 1e6:.0f}) of overlap"
-            + ("" if certain else f", within the fits' uncertainty (+- {margin * 1000:.1f} mm)"),
+            + (
+                ""
+                if certain
+                else f", within the fits' uncertainty (the gap between their surfaces known to +- "
+                f"{mm(margin / ctx.k) if ctx.k > 0 else mm(0.0)}, {ctx.k:g} standard errors "
+                f"{mm(margin)})"
+            ),
             location=centroid,
             measured=volume,
             allowed=min_volume,

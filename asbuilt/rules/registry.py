@@ -51,7 +51,8 @@ RULES: tuple[Rule, ...] = (
         "AB101",
         "nonstandard-diameter",
         "error",
-        "OD {od} is no {catalog} size (nearest {nearest} = {nearest_od}, {off} off)",
+        "OD {od} +- {s} is no {catalog} size (nearest {nearest} = {nearest_od}, {off} off; a size is "
+        "taken within {window})",
         "The catalog's standard (e.g. ASME B36.10M): a pipe is made in catalog sizes only; the "
         "tolerance is Tolerances.diameter_tolerance (2 mm, under half the 5.4 mm smallest gap).",
         "sizes",

@@ -196,11 +196,20 @@ def check_nonstandard(ctx: Context, table: SizeTable | None) -> None:
             )
             for n, s, d in nearest
         ) + (Suggestion("check the material and catalog (--catalog), or rescan the pipe"),)
+        # What was measured, how well, and against which limit: the tolerance the verdict judges
+        # the distance to the nearest size by, and the window a size would have been taken in.
+        known = f" +- {mm(se)}" if se else ""
+        window = _window(ctx, se)
+        within = (
+            f"within {mm(window)}: 3 standard errors, at least the {mm(tol)} diameter tolerance"
+            if window > tol
+            else f"within the {mm(tol)} diameter tolerance"
+        )
         ctx.emit(
             slug,
             [comp.id],
-            f"OD {mm(od)} is no {catalog} size (nearest {_label(table, name)} = {mm(size_od)}, "
-            f"{mm(abs(off))} off){together}",
+            f"OD {mm(od)}{known} is no {catalog} size (nearest {_label(table, name)} = "
+            f"{mm(size_od)}, {mm(abs(off))} off; a size is taken {within}){together}",
             location=where,
             measured=abs(off),
             allowed=tol,

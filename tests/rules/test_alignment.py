@@ -369,3 +369,27 @@ def test_a_lean_just_over_the_limit_never_reads_as_equal_to_it():
     (f,) = only(run(comp), "out-of-plumb")
     assert f.severity == "error"
     assert f.message.startswith("leans 6.01 mm over 3.00 m (1:499), allowed 6.00 mm (1:500")
+
+
+@pytest.mark.parametrize(
+    "lean_mm, se_mm, default, silenced",
+    [
+        # a steel column 3 m high, allowed 3000 / 500 = 6 mm (AISC 303-16 7.13.1.1)
+        (7.0, 2.0, ("warning", True), None),  # over the limit, but within 2 s of it
+        (1.0, 4.0, ("warning", True), None),  # 2 s = 8 mm: the scan cannot resolve 6 mm
+        (20.0, 1.0, ("error", False), ("error", False)),  # a violation is never silenced
+        (2.0, 1.0, None, None),  # a pass
+    ],
+)
+def test_report_unverifiable_false_silences_every_unverifiable_finding(
+    lean_mm, se_mm, default, silenced
+):
+    angle = float(np.degrees(np.arctan(lean_mm / 3000.0)))
+    built = model(column("C1", [0, 0, 0], angle, 3.0, axes_deg=np.degrees(se_mm / 3000.0)))
+
+    def plumb(config):
+        found = [f for f in check_model(built, config) if f.slug == "out-of-plumb"]
+        return (found[0].severity, found[0].unverifiable) if found else None
+
+    assert plumb(load_rules()) == default
+    assert plumb(loads_rules("[general]\nreport_unverifiable = false")) == silenced

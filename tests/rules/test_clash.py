@@ -341,3 +341,42 @@ def test_a_fitting_ending_inside_a_pipe_is_a_clash(kind):
     # the same solid as a pipe ending there is a branch framing in: a connection
     stub = pipe("P2", [0, -0.3, 1], [0, 0.01, 1], OD4)
     assert not clashes(run, stub)
+
+
+@pytest.mark.parametrize(
+    "length_se, centre_se, severity",
+    [
+        # the column's height known to 2 mm: a clash either way
+        (0.002, 0.002, "error"),
+        # its height (and so its 3-D centre) known to decimetres only, as when the scan window
+        # stops short of its top: the faces the pipe passes through are still known to 2 mm
+        (0.5, 0.25, "error"),
+        # its height a lower bound (shots ran on past the window): infinite standard errors
+        (np.inf, np.inf, "error"),
+    ],
+)
+def test_a_pipe_through_a_column_is_a_clash_however_well_its_height_is_known(
+    length_se, centre_se, severity
+):
+    import dataclasses
+
+    from rules_builders import cuboid_fit
+
+    # a 350 x 350 column 4 m high; an NPS 4 pipe straight through its middle
+    fit = cuboid_fit([0, 0, 2.0], [0, 0, 1], (0.35, 0.35, 4.0))
+    fit = dataclasses.replace(
+        fit, stderr={**fit.stderr, "size": (0.002, 0.002, length_se), "center": centre_se}
+    )
+    col = Component(id="C1", type="cuboid", geometry=fit.primitive, fit=fit)
+    through = pipe("P1", [-1.5, 0, 1.5], [1.5, 0, 1.5], 0.1143, center_se=0.002, radius_se=0.001)
+    (f,) = [f for f in check_model(model(col, through)) if f.slug == "clash"]
+    assert (f.severity, f.unverifiable) == (severity, False), f.message
+    # the overlap is the pipe's section over the column's width: pi r^2 x 0.35 m
+    assert f.measured == pytest.approx(np.pi * (0.1143 / 2) ** 2 * 0.35, rel=0.03)
+
+
+def test_the_eroded_faces_of_a_box_are_per_axis():
+    box = Cuboid([0, 0, 0], np.eye(3), [1.0, 1.0, 4.0])
+    points = np.array([[0.45, 0, 0], [0, 0, 1.9], [0, 0, 1.7]])
+    # shrunk 0.1 m across x and y, 0.25 m along z
+    assert inside(box, points, erode=np.array([0.1, 0.1, 0.25])).tolist() == [False, False, True]

@@ -28,7 +28,8 @@ def test_nonstandard_diameter_message_names_nearest_size():
     )
     assert f.severity == "error" and f.code == "AB101" and f.objects == ("P3",)
     assert f.message == (
-        "OD 118.2 mm is no ASME B36.10M size (nearest NPS 4 = 114.3 mm, 3.9 mm off)"
+        "OD 118.2 mm +- 0.5 mm is no ASME B36.10M size (nearest NPS 4 = 114.3 mm, 3.9 mm off; "
+        "a size is taken within the 2.0 mm diameter tolerance)"
     )
     assert f.measured == pytest.approx(0.0039)
     assert f.allowed == pytest.approx(0.002)
@@ -403,8 +404,8 @@ def test_a_pipe_sized_with_its_run_is_judged_and_described_by_the_run():
     snap = {**comp.snap, "run": ["P1", "P2", "P3"], "od_joint": 0.1165, "od_joint_stderr": 0.00029}
     (f,) = only(run(dataclasses.replace(comp, snap=snap)), "nonstandard-diameter")
     assert (
-        "OD 116.5 mm is no ASME B36.10M size (nearest NPS 4 = 114.3 mm, 2.2 mm off) (the run "
-        in f.message
+        "OD 116.5 mm +- 0.3 mm is no ASME B36.10M size (nearest NPS 4 = 114.3 mm, 2.2 mm off; "
+        "a size is taken within the 2.0 mm diameter tolerance) (the run " in f.message
     )
     assert f.message.endswith("(the run P1, P2, P3 measured together; this pipe alone 116.1 mm)")
     assert f.measured == pytest.approx(0.0022)
@@ -445,3 +446,31 @@ def test_a_tee_explains_a_smaller_outlet_only(run_od, left, right, branch, repor
     assert all(
         f.severity == "error" and "tees reduce on the outlet only" in f.message for f in found
     )
+
+
+@pytest.mark.parametrize(
+    "od, od_se, expected",
+    [
+        # a well measured OD: judged against the 2 mm diameter tolerance (ASME B36.10M NPS 4 is
+        # 114.3 mm, NPS 5 141.3 mm)
+        (
+            0.1213,
+            0.0005,
+            "OD 121.3 mm +- 0.5 mm is no ASME B36.10M size (nearest NPS 4 = 114.3 "
+            "mm, 7.0 mm off; a size is taken within the 2.0 mm diameter tolerance)",
+        ),
+        # a sparse scan's OD known to 2.5 mm: a size would have been taken within 3 x 2.5 mm
+        (
+            0.1260,
+            0.0025,
+            "OD 126.0 mm +- 2.5 mm is no ASME B36.10M size (nearest NPS 4 = 114.3 "
+            "mm, 11.7 mm off; a size is taken within 7.5 mm: 3 standard errors, at least the 2.0 mm "
+            "diameter tolerance)",
+        ),
+    ],
+)
+def test_nonstandard_diameter_says_how_well_the_od_is_known_and_the_limit(od, od_se, expected):
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], od, status="no-size", od_fit=od, od_stderr=od_se)
+    (f,) = only(run(comp), "nonstandard-diameter")
+    assert f.message == expected
+    assert f.stderr == pytest.approx(od_se)
