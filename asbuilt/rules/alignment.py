@@ -127,21 +127,24 @@ def _plan_azimuth(component: Component) -> float | None:
 
 
 def _fixes(cid, touching, dev, snap, se, description, rotation, centre) -> tuple:
-    """The rotation fix: unambiguous for a free component; for one joined to others (a pipe
-    in a spool) rotating it would open its joints, so the advice is to merge again with a larger
-    snap angle instead, when that would change the model: merging regularises an axis only
-    within :data:`~asbuilt.merge.regularize.SNAP_SIGMA` of its standard errors ``se``
-    (degrees; None: unknown), whatever the snap angle."""
+    """The rotation fix. A deviation beyond :data:`~asbuilt.merge.regularize.SNAP_SIGMA` of
+    the axes' standard errors ``se`` (degrees; None: unknown) is measured, not noise (a column
+    built leaning, a line laid askew): making it regular would draw what was not built, so the
+    fix is offered for a person to accept (``--accept``), never applied by ``--fix`` alone.
+    Otherwise it is unambiguous for a free component; for one joined to others (a pipe in a
+    spool) rotating it would open its joints, so the advice is to merge again with a larger
+    snap angle instead (merging regularises an axis only within ``SNAP_SIGMA`` standard
+    errors, whatever the snap angle)."""
     change = {
         "object": cid,
         "field": "rotation",
         "value": np.asarray(rotation).tolist(),
         "about": [float(x) for x in centre],
     }
-    if not touching.get(cid):
-        return (Suggestion(description, change, unambiguous=True),)
     if se is not None and dev > SNAP_SIGMA * se:
         return (Suggestion(description, change, unambiguous=False),)
+    if not touching.get(cid):
+        return (Suggestion(description, change, unambiguous=True),)
     return (
         Suggestion(
             f"if it is meant to be regular, merge again with [general] angle_snap_deg = "

@@ -121,7 +121,23 @@ def test_misaligned_off_vertical(angle, expected):
         (f,) = found
         assert f.measured == pytest.approx(angle)
         assert "off vertical" in f.message
-        assert f.suggestions[0].unambiguous
+        # measured to 0.05 degree: a lean that was built, which --fix alone must not undo
+        assert not f.suggestions[0].unambiguous
+        assert f.suggestions[0].change["field"] == "rotation"
+
+
+@pytest.mark.parametrize(
+    "angle, axes_deg, unambiguous",
+    [(3.0, 0.05, False), (3.0, 0.9, False), (3.0, 1.1, True), (6.0, 1.9, False), (6.0, 2.1, True)],
+)
+def test_a_free_components_rotation_is_automatic_only_within_three_standard_errors(
+    angle, axes_deg, unambiguous
+):
+    # merging's rule (asbuilt.merge.regularize.SNAP_SIGMA = 3): beyond three standard errors
+    # the deviation is measured, not noise
+    (f,) = only(run(column("C1", [0, 0, 0], angle, H, axes_deg=axes_deg)), "misaligned-axis")
+    assert f.suggestions[-1].change["field"] == "rotation"
+    assert f.suggestions[-1].unambiguous is unambiguous
 
 
 def test_misaligned_uncertain_angle_is_unverifiable():

@@ -5,7 +5,7 @@ import pytest
 from rules_builders import B36, column, model, pipe
 from test_sizes import scan_with_hint
 
-from asbuilt.rules import apply_fixes, check_model
+from asbuilt.rules import apply_fixes, apply_suggestions, check_model, choose_suggestions
 from asbuilt.rules.fixes import rotate_geometry
 
 
@@ -20,10 +20,20 @@ def fix_and_recheck(built):
     return before, fixed, changes, after
 
 
+def accept_and_recheck(built, *choices):
+    """As --accept CHOICE --fix: apply exactly the suggestions chosen."""
+    before = check_model(built, catalog=B36)
+    fixed, changes = apply_suggestions(built, choose_suggestions(before, choices))
+    after = check_model(fixed, catalog=B36)
+    return before, fixed, changes, after
+
+
 @pytest.mark.parametrize("angle", [3.0, 6.0, 9.0])
 def test_misaligned_column_is_made_vertical(angle):
     built = model(column("C1", [0, 0, 0], angle, 3.0, axes_deg=0.05))
-    before, fixed, changes, after = fix_and_recheck(built)
+    # a measured lean (60-180 standard errors) is not undone by accepting everything
+    assert fix_and_recheck(built)[2] == []
+    before, fixed, changes, after = accept_and_recheck(built, "misaligned-axis@C1")
     assert "misaligned-axis" in slugs(before)
     assert "misaligned-axis" not in slugs(after)
     geom = fixed.component("C1").geometry
@@ -49,7 +59,8 @@ def test_misaligned_horizontal_pipe_is_levelled():
             axis_deg=0.1,
         )
     )
-    before, fixed, _, after = fix_and_recheck(built)
+    assert fix_and_recheck(built)[2] == []  # 5 degrees measured to 0.1: as built
+    before, fixed, _, after = accept_and_recheck(built, "AB201@P1")
     assert "misaligned-axis" in slugs(before) and "misaligned-axis" not in slugs(after)
     geom = fixed.component("P1").geometry
     assert geom.start[2] == pytest.approx(geom.end[2])
@@ -69,7 +80,7 @@ def test_plan_misalignment_is_fixed():
             axis_deg=0.1,
         ),
     )
-    before, fixed, _, after = fix_and_recheck(built)
+    before, fixed, _, after = accept_and_recheck(built, "AB201@P1,P2")
     assert "misaligned-axis" in slugs(before) and "misaligned-axis" not in slugs(after)
     np.testing.assert_allclose(fixed.component("P2").geometry.direction, [0, 1, 0], atol=1e-9)
 

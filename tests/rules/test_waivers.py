@@ -4,8 +4,14 @@ import numpy as np
 import pytest
 from rules_builders import B36, column, model, pipe
 
-from asbuilt.errors import RulesConfigError
-from asbuilt.rules import apply_fixes, check_model, loads_rules
+from asbuilt.errors import RulesConfigError, SuggestionError
+from asbuilt.rules import (
+    apply_fixes,
+    apply_suggestions,
+    check_model,
+    choose_suggestions,
+    loads_rules,
+)
 
 LEANING = model(column("C4", [0, 0, 0], 0.3, 4.0, axes_deg=0.01))  # 21 mm over 4 m: an error
 T = np.radians(5)
@@ -47,8 +53,11 @@ def test_fix_changes_nothing_a_waiver_accepts():
     assert tilt.severity == "info"
     fixed, changes = apply_fixes(built, found)
     assert changes == [] and fixed.components == built.components
-    # without the waiver --fix levels it
-    assert apply_fixes(built, check_model(built, catalog=B36))[1]
+    # a waived finding has nothing to accept; without the waiver its rotation can be accepted
+    with pytest.raises(SuggestionError):
+        choose_suggestions(found, ["misaligned-axis@P9"])
+    chosen = choose_suggestions(check_model(built, catalog=B36), ["misaligned-axis@P9"])
+    assert apply_suggestions(built, chosen)[1]
 
 
 def test_an_unused_waiver_is_reported_when_its_rule_ran_on_its_objects():
