@@ -54,7 +54,7 @@ RULES: tuple[Rule, ...] = (
         "OD {od} +- {s} is no {catalog} size (nearest {nearest} = {nearest_od}, {off} off; a size is "
         "taken within {window})",
         "The catalog's standard (e.g. ASME B36.10M): a pipe is made in catalog sizes only; the "
-        "tolerance is Tolerances.diameter_tolerance (2 mm, under half the 5.4 mm smallest gap).",
+        "tolerance is Tolerances.diameter_tolerance (2 mm, under half the 5.4 mm smallest gap from NPS 1/2 up).",
         "sizes",
     ),
     Rule(
