@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["SEVERITIES", "Suggestion", "Finding", "FIT_REFUSED_CODE", "FIT_REFUSED_SLUG"]
+__all__ = ["SEVERITIES", "Suggestion", "Waived", "Finding", "FIT_REFUSED_CODE", "FIT_REFUSED_SLUG"]
 
 #: Severities from the most to the least serious; ``unverifiable`` findings are warnings.
 SEVERITIES = ("error", "warning", "info")
@@ -38,6 +38,19 @@ class Suggestion:
     unambiguous: bool = False
 
 
+@dataclass(frozen=True)
+class Waived:
+    """Why a finding was waived: the rules file's ``reason`` and the ``severity`` the finding
+    had before (``"error"``, ``"warning"`` or ``"info"``)."""
+
+    reason: str
+    severity: str
+
+    def __post_init__(self):
+        if self.severity not in SEVERITIES:
+            raise ValueError(f"severity must be one of {SEVERITIES}, not {self.severity!r}")
+
+
 @dataclass(frozen=True, eq=False)
 class Finding:
     """One problem found in a model.
@@ -60,6 +73,9 @@ class Finding:
     suggestions : tuple of Suggestion
     unverifiable : bool
         True when the uncertainty is too large to decide either way.
+    waived : Waived or None
+        Set when a rules file's ``[[waive]]`` accepted the finding: its reason and the severity
+        it had (the finding itself is then ``info``, without suggestions).
     """
 
     code: str
@@ -74,6 +90,7 @@ class Finding:
     unit: str = ""
     suggestions: tuple[Suggestion, ...] = ()
     unverifiable: bool = False
+    waived: Waived | None = None
 
     def __post_init__(self):
         if self.severity not in SEVERITIES:

@@ -40,7 +40,7 @@ from asbuilt.export.stored_fit import (
 )
 from asbuilt.export.stored_fit import describe_value as _describe
 from asbuilt.export.stored_scan import scan_from_section, scan_section
-from asbuilt.findings import Finding, Suggestion
+from asbuilt.findings import Finding, Suggestion, Waived
 from asbuilt.model import (
     Bend,
     Component,
@@ -256,6 +256,15 @@ def _component(component: Component) -> dict:
     return entry
 
 
+def _waived(entry) -> Waived | None:
+    """A finding's ``waived`` entry (null, or ``{"reason", "severity"}``) read back."""
+    if entry is None:
+        return None
+    if not isinstance(entry, Mapping):
+        raise ValueError(f"waived must be null or an object, not {entry!r}")
+    return Waived(str(entry["reason"]), str(entry["severity"]))
+
+
 def finding_to_dict(finding: Finding) -> dict:
     """A finding as JSON-ready data (the shape of the model document's ``findings``)."""
     return json_ready(
@@ -279,6 +288,11 @@ def finding_to_dict(finding: Finding) -> dict:
                 for s in finding.suggestions
             ],
             "unverifiable": finding.unverifiable,
+            "waived": (
+                None
+                if finding.waived is None
+                else {"reason": finding.waived.reason, "severity": finding.waived.severity}
+            ),
         }
     )
 
@@ -726,6 +740,7 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
                         for s in entry.get("suggestions") or ()
                     ),
                     unverifiable=bool(entry.get("unverifiable", False)),
+                    waived=_waived(entry.get("waived")),
                 )
             )
         except KeyError as exc:

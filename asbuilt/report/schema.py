@@ -177,6 +177,12 @@ def build_report_schema() -> dict:
                 "items": {"type": "object", "required": ["description"]},
             },
             "unverifiable": {"type": "boolean"},
+            "waived": {
+                "anyOf": [
+                    {"type": "null"},
+                    _object({"reason": {"type": "string"}, "severity": _SEVERITY}),
+                ]
+            },
         },
     }
     totals = _object(

@@ -23,7 +23,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from asbuilt.errors import RulesConfigError, quoted
-from asbuilt.findings import FIT_REFUSED_CODE, Finding
+from asbuilt.findings import FIT_REFUSED_CODE, Finding, Waived
 
 from .registry import match_rules
 
@@ -181,6 +181,7 @@ def apply_waivers(
                 message=f"waived ({waiver.reason}); as {_WAS[finding.severity]}: {finding.message}",
                 suggestions=(),
                 unverifiable=False,
+                waived=Waived(waiver.reason, finding.severity),
             )
         )
     ran, ids = set(ran), set(ids)

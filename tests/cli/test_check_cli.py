@@ -109,6 +109,7 @@ def test_json_is_the_model_document_shape(tmp_path, capsys):
         "unit",
         "suggestions",
         "unverifiable",
+        "waived",
     }
     assert clash["code"] == "AB501" and clash["unit"] == "m3" and len(clash["location"]) == 3
     assert all(set(f) == set(clash) for f in findings)

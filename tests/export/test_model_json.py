@@ -57,7 +57,9 @@ def test_findings_have_the_documented_shape(zoo):
         "unit",
         "suggestions",
         "unverifiable",
+        "waived",
     }
+    assert findings[0]["waived"] is None  # set only by a rules file's [[waive]]
     assert findings[0]["location"] == [6, 2, 1]
     assert findings[1]["measured"] == 1.5 and findings[1]["unit"] == "deg"
 

@@ -5,6 +5,7 @@ import pytest
 from rules_builders import B36, column, model, pipe
 
 from asbuilt.errors import RulesConfigError, SuggestionError
+from asbuilt.findings import Waived
 from asbuilt.rules import (
     apply_fixes,
     apply_suggestions,
@@ -42,7 +43,38 @@ def test_a_waived_finding_is_info_with_its_reason_and_no_suggestions(key):
         "waived (accepted by the structural engineer, RFI-0123); as an error: leans"
     )
     assert lean.measured is not None  # the measurement stays on record
+    assert lean.waived == Waived("accepted by the structural engineer, RFI-0123", "error")
     assert not by_slug(found, "unused-waiver")
+
+
+def test_a_waived_finding_says_so_in_the_model_document_and_reads_back():
+    import jsonschema
+
+    from asbuilt.export.model_json import (
+        finding_to_dict,
+        model_document,
+        model_from_document,
+        model_schema,
+    )
+
+    config = rules(("AB202@C4", "RFI-0123"))
+    found = check_model(LEANING, config, catalog=B36)
+    (lean,) = by_slug(found, "out-of-plumb")
+    entry = finding_to_dict(lean)
+    assert entry["waived"] == {"reason": "RFI-0123", "severity": "error"}
+    assert (
+        finding_to_dict(by_slug(check_model(LEANING, catalog=B36), "out-of-plumb")[0])["waived"]
+        is None
+    )
+    schema = model_schema()
+    validator = jsonschema.Draft202012Validator(
+        {**schema["$defs"]["finding"], "$defs": schema["$defs"]}
+    )
+    assert list(validator.iter_errors(entry)) == []
+    document = model_document(LEANING.replace(findings=tuple(found)))
+    read = model_from_document(document)
+    (back,) = by_slug(read.findings, "out-of-plumb")
+    assert back.waived == lean.waived and back.severity == "info"
 
 
 def test_fix_changes_nothing_a_waiver_accepts():
