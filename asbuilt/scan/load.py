@@ -42,6 +42,8 @@ __all__ = [
     "OBJECT_KEYS",
     "load_scan",
     "loads_scan",
+    "check_object_id",
+    "check_text",
 ]
 
 #: The ``format`` value every scan file carries.
@@ -431,6 +433,57 @@ def _checked_text(value: str, where: str, ctx: _Context) -> str:
     return value
 
 
+def _checked_id(object_id, where: str, ctx: _Context) -> str:
+    """``object_id`` unless an object's ``id`` may not be it (see :func:`check_object_id`)."""
+    if not isinstance(object_id, str) or not object_id:
+        raise ctx.error(
+            where,
+            f'must be non-empty text, not {_describe(object_id)}; give the object an id such as "P1"',
+        )
+    _checked_text(object_id, where, ctx)
+    if len(object_id) > MAX_ID_CHARACTERS:
+        raise ctx.error(
+            where,
+            f"is {len(object_id):,} characters long; use at most {MAX_ID_CHARACTERS} (CAD names "
+            "hold no more)",
+        )
+    if object_id != object_id.strip():
+        # CAD files drop or keep the spaces differently (STEP trims them), so the object could
+        # not be matched across formats by its id.
+        raise ctx.error(
+            where,
+            f"{json.dumps(object_id, ensure_ascii=False)} starts or ends with white space (or is "
+            "only white space); remove it",
+        )
+    return object_id
+
+
+def check_object_id(object_id, where: str, source: str | None = None) -> str:
+    """Return ``object_id`` if a scan may carry it as an object's ``id``, as the loader checks:
+    non-empty text of at most :data:`MAX_ID_CHARACTERS` characters, without control characters
+    or white space at either end. For the tools that write scans (``asbuilt scan`` checks its
+    plan's and its operator's ids before the session, which must not end in a refused file).
+
+    Raises
+    ------
+    ScanError
+        One line naming ``source`` and ``where`` (e.g. ``targets[0].id``).
+    """
+    return _checked_id(object_id, where, _Context(source, may_hold_bools=False))
+
+
+def check_text(value: str, where: str, source: str | None = None) -> str:
+    """Return ``value`` if a scan may carry it as a name, group, label or nominal size, as the
+    loader checks: no control character nor unpaired surrogate.
+
+    Raises
+    ------
+    ScanError
+        One line naming ``source`` and ``where`` (e.g. ``--name``).
+    """
+    return _checked_text(value, where, _Context(source, may_hold_bools=False))
+
+
 def _position(raw, factor: float, where: str, ctx: _Context) -> np.ndarray | None:
     """An optional station position [x, y, z] in file units, as (3,) metres."""
     if raw is None:
@@ -515,26 +568,9 @@ def _object(index: int, raw, factor: float, ctx: _Context) -> ScanObject:
             f"not {_describe(raw)}",
         )
     object_id = raw.get("id")
-    if not isinstance(object_id, str) or not object_id:
-        what = (
-            "missing" if "id" not in raw else f"must be non-empty text, not {_describe(object_id)}"
-        )
-        raise ctx.error(f"{where}.id", f'{what}; give the object an id such as "P1"')
-    _checked_text(object_id, f"{where}.id", ctx)
-    if len(object_id) > MAX_ID_CHARACTERS:
-        raise ctx.error(
-            f"{where}.id",
-            f"is {len(object_id):,} characters long; use at most {MAX_ID_CHARACTERS} (CAD names "
-            "hold no more)",
-        )
-    if object_id != object_id.strip():
-        # CAD files drop or keep the spaces differently (STEP trims them), so the object could
-        # not be matched across formats by its id.
-        raise ctx.error(
-            f"{where}.id",
-            f"{json.dumps(object_id, ensure_ascii=False)} starts or ends with white space (or is "
-            "only white space); remove it",
-        )
+    if "id" not in raw:
+        raise ctx.error(f"{where}.id", 'missing; give the object an id such as "P1"')
+    _checked_id(object_id, f"{where}.id", ctx)
     where = f"{where} ({object_id})"
     kind = raw.get("kind")
     if "kind" not in raw:
