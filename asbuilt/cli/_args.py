@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["positive_number"]
+__all__ = ["positive_number", "refuse_standard_output"]
 
 
 def positive_number(what: str, upper: float = 1e5):
@@ -23,3 +23,24 @@ def positive_number(what: str, upper: float = 1e5):
         return value
 
     return parse
+
+
+def refuse_standard_output(path, option: str, what: str, example: str) -> None:
+    """Refuse ``-`` as the output ``path`` of a command that cannot write to standard output.
+
+    ``-`` means standard output where a command can write there (``fit --output``, ``simulate
+    --out``); elsewhere it made a file named ``-`` (``scan``, ``calibrate``) or was called a file
+    without a suffix. ``what`` is what the command writes, ``example`` a file name to suggest.
+
+    Raises
+    ------
+    ExportError
+        ``path`` is ``-`` (one line naming ``option``).
+    """
+    from asbuilt.errors import ExportError
+
+    if str(path) == "-":
+        raise ExportError(
+            f"standard output cannot take {what}; give a file name such as {example}",
+            where=f"{option} -",
+        )

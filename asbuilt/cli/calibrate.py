@@ -72,6 +72,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.table import Table
 
     from asbuilt.atomic import check_target
+    from asbuilt.cli._args import refuse_standard_output
     from asbuilt.cli._input import input_files, scan_input
     from asbuilt.drivers.calibration import (
         TargetShots,
@@ -85,6 +86,9 @@ def run(args: argparse.Namespace) -> int:
 
     # Before any work: the calibration must not replace the scan's measurements, the targets or
     # the initial calibration, and its directory must exist.
+    refuse_standard_output(
+        args.out, "--out", "the calibration (its table is printed there)", "rig.cal.json"
+    )
     check_target(
         args.out,
         "--out",

@@ -418,6 +418,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from asbuilt.atomic import check_target
+    from asbuilt.cli._args import refuse_standard_output
     from asbuilt.drivers.calibration import load_calibration
     from asbuilt.drivers.kinematics import Calibration
     from asbuilt.drivers.plan import load_plan
@@ -434,7 +435,13 @@ def run(args: argparse.Namespace) -> int:
 
         raise ScanError(str(exc), where="--units") from None
     # The scan (and its journal beside it) must not replace the plan or the calibration it reads.
-    check_target(args.out, "--out", inputs=[p for p in (args.plan, args.calibration) if p])
+    refuse_standard_output(args.out, "--out", "the scan and its journal", "site.json")
+    check_target(
+        args.out,
+        "--out",
+        inputs=[p for p in (args.plan, args.calibration) if p],
+        example="site.json",
+    )
     if args.name is not None:
         check_text(args.name, "--name")
     plan = load_plan(args.plan) if args.plan else None
