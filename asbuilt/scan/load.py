@@ -38,6 +38,7 @@ __all__ = [
     "IDENTICAL_RTOL",
     "COLLINEAR_RTOL",
     "MAX_INTEGER_DIGITS",
+    "MAX_ANGLE_DEGREES",
     "TOP_LEVEL_KEYS",
     "OBJECT_KEYS",
     "load_scan",
@@ -78,6 +79,9 @@ MAX_COORDINATE_M = 1e8
 
 #: Longest id accepted, in characters: DXF names (layers, blocks) hold at most 255.
 MAX_ID_CHARACTERS = 255
+#: Largest pan or tilt angle a measurement may hold, in degrees (a full turn either way): more
+#: is a count of steps or a corrupted number, which would make a calibration's shot anywhere.
+MAX_ANGLE_DEGREES = 360.0
 
 #: Top-level keys the format defines; any other key is kept in ``Scan.extra`` and ignored.
 TOP_LEVEL_KEYS = ("format", "version", "units", "name", "sensor", "objects", "links")
@@ -750,6 +754,15 @@ def _measurements(raw, n_points: int, factor: float, where: str, ctx: _Context) 
     bad = np.flatnonzero(values[:, 2] <= 0)
     if bad.size:
         raise ctx.error(f"{here}[{bad[0]}]", "range must be positive (in the file's units)")
+    beyond = np.flatnonzero(np.abs(values[:, :2]).max(axis=1) > MAX_ANGLE_DEGREES)
+    if beyond.size:
+        row = values[beyond[0]]
+        axis = "pan" if abs(row[0]) > MAX_ANGLE_DEGREES else "tilt"
+        raise ctx.error(
+            f"{here}[{beyond[0]}]",
+            f"a {axis} angle of {row[0 if axis == 'pan' else 1]:g} degrees is beyond a full turn "
+            f"(at most {MAX_ANGLE_DEGREES:g}); give the pan-tilt unit's angles in degrees",
+        )
     result = np.column_stack(
         [np.radians(values[:, 0]), np.radians(values[:, 1]), values[:, 2] * factor]
     )
