@@ -15,6 +15,7 @@ import io
 import signal
 import sys
 import threading
+import warnings
 from importlib import import_module
 
 from .. import __version__
@@ -177,7 +178,12 @@ def _run(handler, args) -> int:
         # numpy is imported here, not with the module: --help and --version do without it.
         import numpy as np
 
-        with np.errstate(all="ignore"):
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            if not sys.warnoptions:
+                # Nor the warnings of the libraries below (matplotlib's "constrained_layout not
+                # applied" for a report's figure with a long id): two lines of source location
+                # each, around a clean result. -W or PYTHONWARNINGS shows them again.
+                warnings.simplefilter("ignore")
             code = int(handler(args) or 0)
         sys.stdout.flush()  # a full disk under stdout is reported here, not at exit
         return code
