@@ -451,8 +451,7 @@ def run(args: argparse.Namespace) -> int:
     if args.calibration:
         calibration = load_calibration(args.calibration)
     else:
-        calibration = Calibration()
-        err.print("[yellow]no --calibration: using an ideal chain at the origin[/]")
+        calibration = Calibration()  # said once the devices answer (a refused port: one line)
 
     hang_up = getattr(signal, "SIGHUP", None)  # POSIX: the operator's terminal closed
     previous = None
@@ -538,6 +537,8 @@ def _run(args, err, settings, plan, calibration) -> int:
         probe = getattr(lrf, "probe", None)
         if probe is not None:
             probe()  # wrong line settings, id or cable: one error now, before the head moves
+        if not args.calibration:
+            err.print("[yellow]no --calibration: using an ideal chain at the origin[/]")
         shooter = DeviceShooter(ptu, lrf, settings)
         session = ScanSession(
             shooter,

@@ -74,5 +74,15 @@ def test_an_operators_id_the_scan_file_could_not_carry_is_asked_again(site, monk
     assert main(_args(site, "--edge-pairs", "0")) == 0
     err = capsys.readouterr().err
     assert "holds a control character (\\u001b) at character 2; use printable text; choose" in err
+    assert "no --calibration: using an ideal chain at the origin" in err
     scan = load_scan(site / "scan.json")  # readable
     assert [obj.id for obj in scan.objects] == ["W1"]
+
+
+def test_a_port_that_does_not_open_is_the_only_line(site, capsys):
+    """The notice that no --calibration was given came first: two lines for one error."""
+    argv = ["scan", "--ptu", str(site / "no-such-port"), "--lrf", str(site / "no-such-port")]
+    assert main([*argv, "--out", str(site / "scan.json"), "--plan", str(site / "plan.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"asbuilt: error: {site / 'no-such-port'}: cannot open the port")
+    assert err.count("\n") == 1, err
