@@ -418,7 +418,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from asbuilt.atomic import check_target
-    from asbuilt.cli._args import refuse_standard_output
+    from asbuilt.cli._args import refuse_other_format, refuse_standard_output
     from asbuilt.drivers.calibration import load_calibration
     from asbuilt.drivers.kinematics import Calibration
     from asbuilt.drivers.plan import load_plan
@@ -436,6 +436,7 @@ def run(args: argparse.Namespace) -> int:
         raise ScanError(str(exc), where="--units") from None
     # The scan (and its journal beside it) must not replace the plan or the calibration it reads.
     refuse_standard_output(args.out, "--out", "the scan and its journal", "site.json")
+    refuse_other_format(args.out, "--out", "an asbuilt-scan file", "site.json")
     check_target(
         args.out,
         "--out",

@@ -49,6 +49,20 @@ PORTS = ["--ptu", "/dev/asbuilt-no-such-port", "--lrf", "/dev/asbuilt-no-such-po
             ["scan", *PORTS, "--out", "folder"],
             "folder: is a directory; give a file name to write (e.g. add /site.json)",
         ),
+        (
+            ["simulate", "scene.json", "--out", "site.step"],
+            "site.step: --out writes an "
+            "asbuilt-scan file as JSON, not .step; name it like scan.json",
+        ),
+        (
+            ["scan", *PORTS, "--out", "site.glb"],
+            "site.glb: --out writes an asbuilt-scan file as JSON, not .glb; name it like site.json",
+        ),
+        (
+            ["simulate", "-", "--out", "scan.json"],
+            "SCENE -: simulate reads its scene from a file, "
+            "not standard input; give the scene's file",
+        ),
     ],
 )
 def test_an_output_the_command_cannot_write_is_one_line_and_nothing_written(
@@ -57,9 +71,15 @@ def test_an_output_the_command_cannot_write_is_one_line_and_nothing_written(
     monkeypatch.chdir(tmp_path)
     (tmp_path / "folder").mkdir()
     shutil.copy(ROOT / "samples" / "spool.json", tmp_path / "room.json")
+    shutil.copy(ROOT / "samples" / "scenes" / "spool.scene.json", tmp_path / "scene.json")
     (tmp_path / "t.json").write_text("{}")
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"asbuilt: error: {message}") and err.count("\n") == 1, err
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["folder", "room.json", "t.json"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "folder",
+        "room.json",
+        "scene.json",
+        "t.json",
+    ]
     assert list((tmp_path / "folder").iterdir()) == []
