@@ -15,6 +15,7 @@ import io
 import signal
 import sys
 import threading
+import warnings
 from importlib import import_module
 
 from .. import __version__
@@ -61,12 +62,12 @@ class Terminated(KeyboardInterrupt):
     ``finally`` runs: staged outputs are removed, journals are closed, devices released."""
 
 
-#: Set by the SIGTERM handler (and cleared when :func:`main` returns): whatever exception the
-#: run ends with after it, the command reports "terminated" (exit 143). The handler's own
-#: exception does not always arrive: a signal that lands while an extension module
-#: initialises surfaces as that module's ImportError, and ifcopenshell's bare ``except``
-#: swallows it and fails later with an error of its own. Staged outputs are not published
-#: while it is set (:data:`asbuilt.atomic.TERMINATING`).
+#: Set by the SIGTERM and SIGINT handlers (and cleared when :func:`main` returns): whatever
+#: exception the run ends with after it, the command reports "terminated" (exit 143) or
+#: "interrupted" (exit 130). The handler's own exception does not always arrive: a signal that
+#: lands while an extension module initialises surfaces as that module's ImportError, and
+#: ifcopenshell's bare ``except`` swallows it and fails later with an error of its own. Staged
+#: outputs are not published while it is set (:data:`asbuilt.atomic.TERMINATING`).
 _termination = TERMINATING
 
 #: ``errno`` values of a standard output that cannot take the result: a full disk, a quota, a
@@ -74,9 +75,47 @@ _termination = TERMINATING
 _OUTPUT_FULL = {errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EFBIG}
 
 
+#: The signal that stopped the run (SIGINT or SIGTERM), once one has; what the command then says
+#: and exits with (:func:`_stopped`).
+_STOPS = {signal.SIGINT: ("interrupted", 130), signal.SIGTERM: ("terminated", 143)}
+_stopped_by: list[int] = []
+
+
 def _terminate(signum, frame):
+    _stopped_by.append(signum)
     _termination.set()
     raise Terminated()
+
+
+def _interrupt(signum, frame):
+    """Ctrl-C: as Python's own handler (KeyboardInterrupt), and noted as SIGTERM is. A
+    KeyboardInterrupt raised while an extension module initialises surfaces as an ImportError
+    (OCP's "initialization failed", with a traceback and exit 1); noted, it is reported as the
+    interruption it is, and no staged output is published after it."""
+    _stopped_by.append(signum)
+    _termination.set()
+    raise KeyboardInterrupt()
+
+
+def _stopped() -> int:
+    """Say how the run was stopped (Ctrl-C unless a SIGTERM was noted); return its exit code."""
+    word, code = _STOPS[_stopped_by[0] if _stopped_by else signal.SIGINT]
+    print(f"asbuilt: {word}", file=sys.stderr)
+    return code
+
+
+def _install_stop_handlers() -> dict:
+    """Install the SIGTERM and SIGINT handlers (main thread only); return the ones replaced.
+
+    SIGINT's is replaced only when it is Python's own: a SIGINT the caller ignores (a
+    background job of a script) stays ignored.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    previous = {signal.SIGTERM: signal.signal(signal.SIGTERM, _terminate)}
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        previous[signal.SIGINT] = signal.signal(signal.SIGINT, _interrupt)
+    return previous
 
 
 def _drop_stdout() -> None:
@@ -93,28 +132,29 @@ def _drop_stdout() -> None:
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; return the process exit code (0 ok, 1 error findings or objects whose fit was
     refused, 2 bad input, 130 interrupted, 143 terminated by SIGTERM)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    handler = getattr(args, "handler", None)
-    if handler is None:
-        parser.print_help()
-        return 2
-    _tolerant_stdout()
-    previous = None
     _termination.clear()
-    if threading.current_thread() is threading.main_thread():
-        previous = signal.signal(signal.SIGTERM, _terminate)
+    _stopped_by.clear()
+    previous = _install_stop_handlers()  # first: Ctrl-C while the subcommands import too
     try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        handler = getattr(args, "handler", None)
+        if handler is None:
+            parser.print_help()
+            return 2
+        _tolerant_stdout()
         return _run(handler, args)
+    except KeyboardInterrupt:  # before the handler ran (importing the subcommands)
+        return _stopped()
     except Exception:
         if _termination.is_set():  # whatever the run failed with once it was told to stop
-            print("asbuilt: terminated", file=sys.stderr)
-            return 143
+            return _stopped()
         raise
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
         _termination.clear()
+        _stopped_by.clear()
 
 
 def _tolerant_stdout() -> None:
@@ -138,7 +178,12 @@ def _run(handler, args) -> int:
         # numpy is imported here, not with the module: --help and --version do without it.
         import numpy as np
 
-        with np.errstate(all="ignore"):
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            if not sys.warnoptions:
+                # Nor the warnings of the libraries below (matplotlib's "constrained_layout not
+                # applied" for a report's figure with a long id): two lines of source location
+                # each, around a clean result. -W or PYTHONWARNINGS shows them again.
+                warnings.simplefilter("ignore")
             code = int(handler(args) or 0)
         sys.stdout.flush()  # a full disk under stdout is reported here, not at exit
         return code
@@ -153,11 +198,7 @@ def _run(handler, args) -> int:
                 print(f"asbuilt: error: {failure.error}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:  # Terminated included
-        if _termination.is_set():
-            print("asbuilt: terminated", file=sys.stderr)
-            return 143
-        print("asbuilt: interrupted", file=sys.stderr)
-        return 130
+        return _stopped()
     except BrokenPipeError:
         return 0
     except OSError as exc:

@@ -63,6 +63,41 @@ def register(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
+def _parameter_choices(free_text: str | None, fix_text: str | None):
+    """The ``--free`` names (None: the observable ones) and the ``--fix`` names.
+
+    Raises
+    ------
+    CalibrationError
+        A name that is no parameter, ``--free`` given without a name, or a name given to both
+        (the estimate then said no parameter was observable, or ignored the choice).
+    """
+    from asbuilt.drivers.kinematics import PARAMETERS
+    from asbuilt.errors import CalibrationError
+
+    chosen = {}
+    for option, text in (("--free", free_text), ("--fix", fix_text)):
+        names = [n.strip() for n in (text or "").split(",") if n.strip()]
+        if text and not names:
+            raise CalibrationError(
+                "give parameter names, comma separated (e.g. pan_zero,range_offset)", where=option
+            )
+        for name in names:
+            if name not in PARAMETERS:
+                raise CalibrationError(
+                    f"unknown parameter {name!r}; use names from: {', '.join(PARAMETERS)}",
+                    where=option,
+                )
+        chosen[option] = names
+    both = [n for n in chosen["--free"] if n in chosen["--fix"]]
+    if both:
+        raise CalibrationError(
+            f"{both[0]!r} is given to both --free and --fix; estimate it or hold it, not both",
+            where="--fix",
+        )
+    return (chosen["--free"] if free_text else None), chosen["--fix"]
+
+
 def run(args: argparse.Namespace) -> int:
     """Load, estimate, print, write; return 0."""
     import math
@@ -72,6 +107,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.table import Table
 
     from asbuilt.atomic import check_target
+    from asbuilt.cli._args import refuse_standard_output
     from asbuilt.cli._input import input_files, scan_input
     from asbuilt.drivers.calibration import (
         TargetShots,
@@ -83,8 +119,12 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.drivers.kinematics import Calibration
     from asbuilt.errors import CalibrationError
 
+    _parameter_choices(args.free, args.fix)  # before any work: a typo in a name
     # Before any work: the calibration must not replace the scan's measurements, the targets or
     # the initial calibration, and its directory must exist.
+    refuse_standard_output(
+        args.out, "--out", "the calibration (its table is printed there)", "rig.cal.json"
+    )
     check_target(
         args.out,
         "--out",
@@ -113,8 +153,7 @@ def run(args: argparse.Namespace) -> int:
             )
         m = np.asarray(obj.measurements, float)
         shots.append(TargetShots(name, target, m[:, 0], m[:, 1], m[:, 2]))
-    free = [n.strip() for n in args.free.split(",") if n.strip()] if args.free else None
-    fix = [n.strip() for n in args.fix.split(",") if n.strip()]
+    free, fix = _parameter_choices(args.free, args.fix)
     result = estimate_calibration(
         shots, initial, free=free, fixed=fix, loss="soft_l1" if args.robust else "linear"
     )

@@ -292,14 +292,19 @@ def run(args: argparse.Namespace) -> int:
         choices = [parse_choice(text) for text in args.accept]  # malformed: before any work
     if args.fix is not None:
         from asbuilt.atomic import check_target
+        from asbuilt.cli._args import refuse_standard_output
         from asbuilt.export import exporter_for
 
-        exporter_for(args.fix)  # an unknown suffix, a directory or none fails before any work
+        # All before any work, as typed: '-', a directory or a trailing slash is said as such
+        # (the suffix test would call it a file without a suffix), then an unknown suffix.
+        refuse_standard_output(args.fix, "--fix", "a CAD model", "fixed.step")
         check_target(
             args.fix,
             "--fix",
             inputs=input_files(args.scan, args.rules, args.design, args.catalog),
+            example="fixed.step",
         )
+        exporter_for(args.fix)
 
     source = scan_input(args.scan)
     err = Console(file=sys.stderr, highlight=False, soft_wrap=True)

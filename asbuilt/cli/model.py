@@ -122,6 +122,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from asbuilt.atomic import AtomicBatch, check_target
+    from asbuilt.cli._args import refuse_standard_output
     from asbuilt.cli._input import input_files, scan_input
     from asbuilt.cli._models import say_refused
     from asbuilt.cli._progress import stage_progress
@@ -136,12 +137,14 @@ def run(args: argparse.Namespace) -> int:
         # The name as typed first: a directory or a trailing slash is said as such (Path drops
         # the slash and the suffix test would call it a file without a suffix), then an unknown
         # suffix; all before any work.
+        refuse_standard_output(name, "--out", "a CAD model", "model.step")
         check_target(name, "--out", inputs=inputs)
         exporter_for(name)
     seen = {path.resolve() for path in outputs}
     for name, report_path in zip(args.report or (), reports):
         from asbuilt.report import report_format_for
 
+        refuse_standard_output(name, "--report", "a report", "report.html")
         check_target(
             name, "--report", inputs=inputs, example=f"report{report_path.suffix or '.html'}"
         )

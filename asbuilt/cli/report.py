@@ -177,6 +177,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from asbuilt.atomic import check_target
+    from asbuilt.cli._args import refuse_standard_output
     from asbuilt.cli._input import input_files, scan_input
     from asbuilt.cli._models import say_refused
     from asbuilt.cli._progress import stage_progress
@@ -187,6 +188,7 @@ def run(args: argparse.Namespace) -> int:
     outputs = [Path(p) for p in args.out]
     for name, path in zip(args.out, outputs):
         # As typed: a directory or a trailing slash is said as such before the suffix test.
+        refuse_standard_output(name, "--out", "a report", "report.html")
         check_target(name, "--out", inputs=inputs, example=f"report{path.suffix or '.html'}")
         report_format_for(name)  # an unknown suffix fails before any work
     if args.gltf is not None:

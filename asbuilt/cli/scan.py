@@ -340,6 +340,8 @@ def _laser(lrf, on: bool) -> None:
 def _interactive_targets(ptu, lrf, session, answers: _Input):
     """Prompt for targets until an empty id or end of input (``answers.ended``)."""
     from asbuilt.drivers.plan import Target, Window
+    from asbuilt.errors import ScanError
+    from asbuilt.scan.load import check_object_id, check_text
     from asbuilt.scan.model import KINDS
 
     ask = answers.ask
@@ -347,6 +349,11 @@ def _interactive_targets(ptu, lrf, session, answers: _Input):
         oid = ask("object id (empty to finish): ")
         if not oid:
             return
+        try:
+            check_object_id(oid, "id")
+        except ScanError as exc:  # e.g. an arrow key's escape sequence typed into the id
+            sys.stderr.write(f"  {exc.message}; choose another id\n")
+            continue
         if session.is_done(oid):
             sys.stderr.write(f"  {oid} is already in the scan; choose another id\n")
             continue
@@ -382,7 +389,28 @@ def _interactive_targets(ptu, lrf, session, answers: _Input):
             sys.stderr.write(f"  bad window: {exc}\n")
             continue
         nominal = ask("  nominal size (optional): ")
+        try:
+            check_text(nominal or "", "nominal")
+        except ScanError as exc:
+            sys.stderr.write(f"  nominal size {exc.message}; give the object again\n")
+            continue
         yield Target(oid, kind, window, nominal=nominal or None)
+
+
+def _check_plan_texts(plan, source: str) -> None:
+    """Refuse, before the devices open, a plan whose targets the scan file could not carry: an
+    id or text the scan loader refuses (a control character, white space at either end, more
+    than 255 characters). The session would otherwise end in a scan file that no command
+    reads."""
+    from asbuilt.scan.load import check_object_id, check_text
+
+    for index, target in enumerate(plan.targets):
+        where = f"targets[{index}]"
+        check_object_id(target.id, f"{where}.id", source=source)
+        for field in ("group", "label", "nominal"):
+            value = getattr(target, field, None)
+            if isinstance(value, str):
+                check_text(value, f"{where} ({target.id}).{field}", source=source)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -390,9 +418,11 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from asbuilt.atomic import check_target
+    from asbuilt.cli._args import refuse_other_format, refuse_standard_output
     from asbuilt.drivers.calibration import load_calibration
     from asbuilt.drivers.kinematics import Calibration
     from asbuilt.drivers.plan import load_plan
+    from asbuilt.scan.load import check_text
     from asbuilt.units import unit_factor
 
     err = Console(stderr=True)
@@ -405,14 +435,24 @@ def run(args: argparse.Namespace) -> int:
 
         raise ScanError(str(exc), where="--units") from None
     # The scan (and its journal beside it) must not replace the plan or the calibration it reads.
-    check_target(args.out, "--out", inputs=[p for p in (args.plan, args.calibration) if p])
+    refuse_standard_output(args.out, "--out", "the scan and its journal", "site.json")
+    refuse_other_format(args.out, "--out", "an asbuilt-scan file", "site.json")
+    check_target(
+        args.out,
+        "--out",
+        inputs=[p for p in (args.plan, args.calibration) if p],
+        example="site.json",
+    )
+    if args.name is not None:
+        check_text(args.name, "--name")
     plan = load_plan(args.plan) if args.plan else None
+    if plan is not None:
+        _check_plan_texts(plan, args.plan)
     settings = _settings(args, plan)
     if args.calibration:
         calibration = load_calibration(args.calibration)
     else:
-        calibration = Calibration()
-        err.print("[yellow]no --calibration: using an ideal chain at the origin[/]")
+        calibration = Calibration()  # said once the devices answer (a refused port: one line)
 
     hang_up = getattr(signal, "SIGHUP", None)  # POSIX: the operator's terminal closed
     previous = None
@@ -498,6 +538,8 @@ def _run(args, err, settings, plan, calibration) -> int:
         probe = getattr(lrf, "probe", None)
         if probe is not None:
             probe()  # wrong line settings, id or cable: one error now, before the head moves
+        if not args.calibration:
+            err.print("[yellow]no --calibration: using an ideal chain at the origin[/]")
         shooter = DeviceShooter(ptu, lrf, settings)
         session = ScanSession(
             shooter,

@@ -56,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from asbuilt.atomic import atomic_write, check_target
+    from asbuilt.cli._args import refuse_other_format
     from asbuilt.errors import SceneError
     from asbuilt.scan.load import MAX_POINTS
     from asbuilt.sim.scene import load_scene
@@ -67,7 +68,14 @@ def run(args: argparse.Namespace) -> int:
         raise SceneError(f"--points must be a positive integer, not {args.points}")
     if args.points is not None and args.points > MAX_POINTS:
         raise SceneError(f"--points must be at most {MAX_POINTS:,} (the most a scan holds)")
+    if args.scene == "-":
+        raise SceneError(
+            "simulate reads its scene from a file, not standard input; give the scene's file "
+            "(e.g. samples/scenes/spool.scene.json)",
+            where="SCENE -",
+        )
     if args.out != "-":
+        refuse_other_format(args.out, "--out", "an asbuilt-scan file", "scan.json")
         check_target(args.out, "--out", inputs=[args.scene], example="scan.json")  # before any work
     scene = load_scene(args.scene)
     doc = simulate_scan(scene, seed=args.seed, points=args.points, exact=args.exact)

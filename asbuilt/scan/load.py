@@ -38,10 +38,13 @@ __all__ = [
     "IDENTICAL_RTOL",
     "COLLINEAR_RTOL",
     "MAX_INTEGER_DIGITS",
+    "MAX_ANGLE_DEGREES",
     "TOP_LEVEL_KEYS",
     "OBJECT_KEYS",
     "load_scan",
     "loads_scan",
+    "check_object_id",
+    "check_text",
 ]
 
 #: The ``format`` value every scan file carries.
@@ -76,6 +79,9 @@ MAX_COORDINATE_M = 1e8
 
 #: Longest id accepted, in characters: DXF names (layers, blocks) hold at most 255.
 MAX_ID_CHARACTERS = 255
+#: Largest pan or tilt angle a measurement may hold, in degrees (a full turn either way): more
+#: is a count of steps or a corrupted number, which would make a calibration's shot anywhere.
+MAX_ANGLE_DEGREES = 360.0
 
 #: Top-level keys the format defines; any other key is kept in ``Scan.extra`` and ignored.
 TOP_LEVEL_KEYS = ("format", "version", "units", "name", "sensor", "objects", "links")
@@ -227,6 +233,7 @@ def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
     if len(text) > MAX_FILE_BYTES:
         raise ScanReadError(_too_large(source, len(text)))
     if isinstance(text, (bytes, bytearray)):
+        _refuse_wide_text(bytes(text), source)
         text = decode_text(bytes(text), ScanError, source=source, what="scan")
     repeated: list[bool] = []
     try:
@@ -257,6 +264,19 @@ def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
             REPEATED_KEY,
         )
     return _scan_from_document(document, context)
+
+
+def _refuse_wide_text(data: bytes, source: str | None) -> None:
+    """Refuse UTF-16 or UTF-32 text (Windows tools' "Unicode") by name: without a byte-order
+    mark it decodes as UTF-8 with NULs and was reported as invalid JSON at line 1 column 2."""
+    head = data[:4]
+    if head.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):
+        encoding = "UTF-32"
+    elif head.startswith((b"\xff\xfe", b"\xfe\xff")) or (len(head) >= 2 and b"\x00" in head):
+        encoding = "UTF-32" if head.count(b"\x00") >= 3 else "UTF-16"
+    else:
+        return
+    raise ScanError(f"is {encoding} text, not UTF-8; save the scan as UTF-8 JSON", source=source)
 
 
 class _LongInteger(ValueError):
@@ -431,6 +451,57 @@ def _checked_text(value: str, where: str, ctx: _Context) -> str:
     return value
 
 
+def _checked_id(object_id, where: str, ctx: _Context) -> str:
+    """``object_id`` unless an object's ``id`` may not be it (see :func:`check_object_id`)."""
+    if not isinstance(object_id, str) or not object_id:
+        raise ctx.error(
+            where,
+            f'must be non-empty text, not {_describe(object_id)}; give the object an id such as "P1"',
+        )
+    _checked_text(object_id, where, ctx)
+    if len(object_id) > MAX_ID_CHARACTERS:
+        raise ctx.error(
+            where,
+            f"is {len(object_id):,} characters long; use at most {MAX_ID_CHARACTERS} (CAD names "
+            "hold no more)",
+        )
+    if object_id != object_id.strip():
+        # CAD files drop or keep the spaces differently (STEP trims them), so the object could
+        # not be matched across formats by its id.
+        raise ctx.error(
+            where,
+            f"{json.dumps(object_id, ensure_ascii=False)} starts or ends with white space (or is "
+            "only white space); remove it",
+        )
+    return object_id
+
+
+def check_object_id(object_id, where: str, source: str | None = None) -> str:
+    """Return ``object_id`` if a scan may carry it as an object's ``id``, as the loader checks:
+    non-empty text of at most :data:`MAX_ID_CHARACTERS` characters, without control characters
+    or white space at either end. For the tools that write scans (``asbuilt scan`` checks its
+    plan's and its operator's ids before the session, which must not end in a refused file).
+
+    Raises
+    ------
+    ScanError
+        One line naming ``source`` and ``where`` (e.g. ``targets[0].id``).
+    """
+    return _checked_id(object_id, where, _Context(source, may_hold_bools=False))
+
+
+def check_text(value: str, where: str, source: str | None = None) -> str:
+    """Return ``value`` if a scan may carry it as a name, group, label or nominal size, as the
+    loader checks: no control character nor unpaired surrogate.
+
+    Raises
+    ------
+    ScanError
+        One line naming ``source`` and ``where`` (e.g. ``--name``).
+    """
+    return _checked_text(value, where, _Context(source, may_hold_bools=False))
+
+
 def _position(raw, factor: float, where: str, ctx: _Context) -> np.ndarray | None:
     """An optional station position [x, y, z] in file units, as (3,) metres."""
     if raw is None:
@@ -515,26 +586,9 @@ def _object(index: int, raw, factor: float, ctx: _Context) -> ScanObject:
             f"not {_describe(raw)}",
         )
     object_id = raw.get("id")
-    if not isinstance(object_id, str) or not object_id:
-        what = (
-            "missing" if "id" not in raw else f"must be non-empty text, not {_describe(object_id)}"
-        )
-        raise ctx.error(f"{where}.id", f'{what}; give the object an id such as "P1"')
-    _checked_text(object_id, f"{where}.id", ctx)
-    if len(object_id) > MAX_ID_CHARACTERS:
-        raise ctx.error(
-            f"{where}.id",
-            f"is {len(object_id):,} characters long; use at most {MAX_ID_CHARACTERS} (CAD names "
-            "hold no more)",
-        )
-    if object_id != object_id.strip():
-        # CAD files drop or keep the spaces differently (STEP trims them), so the object could
-        # not be matched across formats by its id.
-        raise ctx.error(
-            f"{where}.id",
-            f"{json.dumps(object_id, ensure_ascii=False)} starts or ends with white space (or is "
-            "only white space); remove it",
-        )
+    if "id" not in raw:
+        raise ctx.error(f"{where}.id", 'missing; give the object an id such as "P1"')
+    _checked_id(object_id, f"{where}.id", ctx)
     where = f"{where} ({object_id})"
     kind = raw.get("kind")
     if "kind" not in raw:
@@ -700,6 +754,15 @@ def _measurements(raw, n_points: int, factor: float, where: str, ctx: _Context) 
     bad = np.flatnonzero(values[:, 2] <= 0)
     if bad.size:
         raise ctx.error(f"{here}[{bad[0]}]", "range must be positive (in the file's units)")
+    beyond = np.flatnonzero(np.abs(values[:, :2]).max(axis=1) > MAX_ANGLE_DEGREES)
+    if beyond.size:
+        row = values[beyond[0]]
+        axis = "pan" if abs(row[0]) > MAX_ANGLE_DEGREES else "tilt"
+        raise ctx.error(
+            f"{here}[{beyond[0]}]",
+            f"a {axis} angle of {row[0 if axis == 'pan' else 1]:g} degrees is beyond a full turn "
+            f"(at most {MAX_ANGLE_DEGREES:g}); give the pan-tilt unit's angles in degrees",
+        )
     result = np.column_stack(
         [np.radians(values[:, 0]), np.radians(values[:, 1]), values[:, 2] * factor]
     )

@@ -208,3 +208,25 @@ def test_calibrate_refuses_objects_without_raw_measurements(room, capsys):
     )
     assert code == 2
     assert "objects[0] (front): has no raw measurements" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "more, message",
+    [
+        (
+            ["--free", "pan_zero", "--fix", "pan_zero"],
+            "--fix: 'pan_zero' is given to both --free and --fix; estimate it or hold it, not both",
+        ),
+        (["--free", "pan_zero,bogus"], "--free: unknown parameter 'bogus'; use names from: "),
+        (["--fix", "bogus"], "--fix: unknown parameter 'bogus'; use names from: "),
+        (["--free", ","], "--free: give parameter names, comma separated"),
+    ],
+)
+def test_calibrate_parameter_choices_are_checked_first_and_named(tmp_path, capsys, more, message):
+    """A name given to both --free and --fix was reported as 'no calibration parameter is
+    observable from these targets' after the work; a misspelt one did not name its option."""
+    argv = ["calibrate", str(tmp_path / "no-scan.json"), "--targets", str(tmp_path / "t.json")]
+    assert main([*argv, "--out", str(tmp_path / "c.json"), *more]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"asbuilt: error: {message}") and err.count("\n") == 1, err
+    assert list(tmp_path.iterdir()) == []

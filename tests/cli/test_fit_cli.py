@@ -476,3 +476,22 @@ def test_subprocess_ids_the_output_encoding_lacks(tmp_path):
     assert done.returncode == 0, done.stderr.decode("latin-1")
     assert b"Traceback" not in done.stderr
     assert "\\u7ba1 2" in done.stdout.decode("latin-1")
+
+
+@pytest.mark.parametrize("options, shown", [([], False), (["-W", "default"], True)])
+def test_library_warnings_stay_off_stderr_unless_asked_for(tmp_path, options, shown):
+    """A library's warning (matplotlib's "constrained_layout not applied" for a report figure
+    with a 255-character id) printed two lines of source location around a clean result;
+    -W (or PYTHONWARNINGS) shows them again for a developer."""
+    code = (
+        "import warnings, asbuilt.cli.fit as fit\n"
+        "fit.run = lambda args: warnings.warn('constrained_layout not applied', UserWarning)\n"
+        "from asbuilt.cli import main\n"
+        "raise SystemExit(main(['fit', 'scan.json']))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONWARNINGS"}
+    done = subprocess.run(
+        [sys.executable, *options, "-c", code], capture_output=True, text=True, env=env
+    )
+    assert done.returncode == 0, done.stderr
+    assert ("constrained_layout not applied" in done.stderr) is shown, done.stderr

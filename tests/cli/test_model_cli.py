@@ -623,3 +623,47 @@ def test_an_output_that_is_one_of_the_inputs_is_refused_and_the_input_kept(
     for name, data in contents.items():
         assert (tmp_path / name).read_bytes() == data
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(contents)
+
+
+class _InterruptOnImport:
+    """A meta path finder that sends this process a SIGINT (Ctrl-C) when ``name`` is imported and
+    turns the KeyboardInterrupt into the ImportError an extension module's initialisation gives
+    (OCP: "initialization failed")."""
+
+    def __init__(self, name: str):
+        self.name = name
+        self.done = False
+
+    def find_spec(self, fullname, path=None, target=None):
+        import os
+        import signal
+        import time
+
+        if fullname == self.name and not self.done:
+            self.done = True
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(5)  # the handler raises before this ends
+            except KeyboardInterrupt:
+                raise ImportError("initialization failed") from None
+        return None
+
+
+def test_ctrl_c_while_the_kernel_loads_is_an_interruption(tmp_path, capsys, monkeypatch):
+    """Ctrl-C while the CAD kernel initialised ended with OCP's ImportError traceback and exit 1;
+    it is reported as the interruption it is (exit 130), with nothing written."""
+    import signal
+
+    for name in [m for m in sys.modules if m == "asbuilt.cad" or m.startswith("asbuilt.cad.")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setattr(sys, "meta_path", [_InterruptOnImport("asbuilt.cad"), *sys.meta_path])
+    before = signal.getsignal(signal.SIGINT)
+    out = tmp_path / "m.step"
+    out.write_text("KEEP")
+    argv = ["model", str(ROOT / "samples" / "spool.json"), "--quiet"]
+    argv += ["--out", str(out), "--out", str(tmp_path / "m.json")]
+    assert main(argv) == 130
+    assert capsys.readouterr().err == "asbuilt: interrupted\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["m.step"]
+    assert out.read_text() == "KEEP"
+    assert signal.getsignal(signal.SIGINT) is before  # restored for the caller

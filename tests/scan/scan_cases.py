@@ -495,6 +495,20 @@ BAD = (
         "objects[3] (K4).measurements[15]: range must be positive (in the file's units)",
     ),
     Bad(
+        "measurement with a pan angle beyond a full turn (steps, not degrees)",
+        _set("objects.3.measurements", [[10.0, 5.0, 2.5]] * 2 + [[5120, 5.0, 2.5]] * 14),
+        "objects[3] (K4).measurements[2]: a pan angle of 5120 degrees is beyond a full turn "
+        "(at most 360); give the pan-tilt unit's angles in degrees",
+        schema_catches=False,
+    ),
+    Bad(
+        "measurement with a tilt angle of 1e300 degrees",
+        _set("objects.3.measurements", [[10.0, 5.0, 2.5]] * 15 + [[10.0, -1e300, 2.5]]),
+        "objects[3] (K4).measurements[15]: a tilt angle of -1e+300 degrees is beyond a full turn "
+        "(at most 360); give the pan-tilt unit's angles in degrees",
+        schema_catches=False,
+    ),
+    Bad(
         "measurement of 2 numbers",
         _set("objects.3.measurements", [[10.0, 5.0]] * 16),
         "objects[3] (K4).measurements[0]: a measurement must be 3 numbers "

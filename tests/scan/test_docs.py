@@ -18,6 +18,7 @@ FILE_LEVEL = (
     "file does not exist;",
     "cannot be read (",
     "is not UTF-8 text",
+    "is UTF-16 text, not UTF-8;",
     "objects[12] (P13): the scan holds more than",
 )
 

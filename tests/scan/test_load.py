@@ -177,6 +177,24 @@ def test_not_utf8(tmp_path, monkeypatch):
     )
 
 
+@pytest.mark.parametrize(
+    "encoding, name",
+    [
+        ("utf-16", "UTF-16"),  # with a byte-order mark
+        ("utf-16-le", "UTF-16"),  # without one: was "line 1 column 2: invalid JSON"
+        ("utf-16-be", "UTF-16"),
+        ("utf-32", "UTF-32"),
+        ("utf-32-le", "UTF-32"),
+    ],
+)
+def test_utf16_and_utf32_are_named(tmp_path, monkeypatch, encoding, name):
+    (tmp_path / "wide.json").write_bytes('{"format": "asbuilt-scan"}'.encode(encoding))
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ScanError) as err:
+        load_scan("wide.json")
+    assert str(err.value) == f"wide.json: is {name} text, not UTF-8; save the scan as UTF-8 JSON"
+
+
 def test_noisy_nearly_collinear_points_are_left_to_the_fit():
     """Collinearity is an exact-geometry check: 1 mm of scatter about a line passes loading."""
     rng = np.random.default_rng(3)
