@@ -175,31 +175,45 @@ def _writer_options(
 
 @contextlib.contextmanager
 def _sigterm_deferred() -> Iterator[None]:
-    """Hold back a SIGTERM until the block ends, then deliver it to the handler there was.
+    """Hold back SIGTERM and SIGINT (Ctrl-C) until the block ends, then deliver each to the
+    handler there was.
 
-    For imports of the CAD kernel (CadQuery, OCP, VTK: seconds): an exception raised by the
-    handler in the middle of an extension module's initialisation left it half made, and the
-    process crashed (exit 139) instead of stopping cleanly.
+    For imports of the CAD kernel (CadQuery, OCP, VTK: seconds): an exception raised by a
+    handler in the middle of an extension module's initialisation left it half made: the
+    process crashed (exit 139) on SIGTERM, and Ctrl-C surfaced as OCP's ImportError
+    ("initialization failed"). A SIGINT the caller ignores stays ignored.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     pending: list[int] = []
-    previous = signal.signal(signal.SIGTERM, lambda signum, frame: pending.append(signum))
+
+    def hold(signum, frame):
+        pending.append(signum)
+
+    held = [signal.SIGTERM]
+    if signal.getsignal(signal.SIGINT) not in (signal.SIG_IGN, None):
+        held.append(signal.SIGINT)
+    previous = {signum: signal.signal(signum, hold) for signum in held}
     try:
         yield
     finally:
         # None: a handler installed outside Python, which cannot be put back; the default then.
-        signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
-        if pending:
-            signal.raise_signal(signal.SIGTERM)
+        for signum, handler in previous.items():
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
+        # SIGTERM first: of the two requests to stop it is the stronger, and the first
+        # delivered may end the run with its exception
+        for signum in held:
+            if signum in pending:
+                signal.raise_signal(signum)
 
 
 def _load_writers(exporters: Sequence[Exporter]) -> None:
     """Import the CAD layer (when a format needs solids) and every writer's module.
 
-    Done before any file is staged, with SIGTERM held back (:func:`_sigterm_deferred`): a kill
-    during these imports then stops the run before it has created anything. An optional
+    Done before any file is staged, with SIGTERM and SIGINT held back
+    (:func:`_sigterm_deferred`): a kill or Ctrl-C during these imports then stops the run
+    cleanly, after them and before it has created anything. An optional
     package a writer lacks (ifcopenshell) is reported by that writer, as before.
     """
     with _sigterm_deferred():

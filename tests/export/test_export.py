@@ -233,3 +233,38 @@ def test_an_eccentric_reducer_reaches_step_gltf_and_dxf(tmp_path):
     (line,) = doc.modelspace().query('LWPOLYLINE[layer=="ELEV-CENTRELINE"]')
     points = np.array([p[:2] for p in line.get_points()])
     assert points[-1] - points[0] == pytest.approx([h * 1000, (r6 - r4) * 1000], abs=1e-6)
+
+
+def test_kernel_import_holds_back_ctrl_c_and_sigterm_until_it_ends():
+    """A signal during the CAD kernel's import is delivered after it (an exception raised inside
+    an extension module's initialisation left it half made)."""
+    import signal
+
+    from asbuilt.export import _sigterm_deferred
+
+    seen = []
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: seen.append(signum))
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with _sigterm_deferred():
+                signal.raise_signal(signal.SIGINT)
+                signal.raise_signal(signal.SIGTERM)
+                seen.append("import finished")
+        assert seen == ["import finished", signal.SIGTERM]
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def test_an_ignored_ctrl_c_stays_ignored_through_the_kernel_import():
+    import signal
+
+    from asbuilt.export import _sigterm_deferred
+
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        with _sigterm_deferred():
+            signal.raise_signal(signal.SIGINT)
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, previous)
