@@ -49,13 +49,31 @@ def loads_json(text: str, error, *, source: str | None):
         raise error(REPEATED_KEY, source=source, where=exc.args[0]) from None
 
 
+def _wide_encoding(data: bytes) -> str | None:
+    """``"UTF-16"`` or ``"UTF-32"`` when ``data`` starts like text in one of them (a byte order
+    mark, or NUL bytes among its first four, which UTF-8 text never has), else None."""
+    head = data[:4]
+    if head.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):
+        return "UTF-32"
+    if head.startswith((b"\xff\xfe", b"\xfe\xff")) or (len(head) >= 2 and b"\x00" in head):
+        return "UTF-32" if head.count(b"\x00") >= 3 else "UTF-16"
+    return None
+
+
 def decode_text(data: bytes, error, *, source: str | None, what: str, kind: str = "JSON") -> str:
     """``data`` as UTF-8 text, a leading byte order mark dropped (editors and spreadsheets on
     Windows write one).
 
     Raises ``error(message, source=source)`` naming the first byte that is not UTF-8 and its
-    offset, e.g. ``is not UTF-8 text (byte 0xe9 at offset 61); save the scene as UTF-8 JSON``.
+    offset, e.g. ``is not UTF-8 text (byte 0xe9 at offset 61); save the scene as UTF-8 JSON``,
+    or naming UTF-16 and UTF-32 text (Windows tools' "Unicode"), which without a byte order
+    mark decodes as UTF-8 with NULs and would be reported as invalid at line 1 column 2.
     """
+    wide = _wide_encoding(data)
+    if wide:
+        raise error(
+            f"is {wide} text, not UTF-8; save the {what} as UTF-8 {kind}".rstrip(), source=source
+        )
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

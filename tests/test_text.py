@@ -100,20 +100,41 @@ def test_a_byte_order_mark_is_accepted_by_every_reader(reader, tmp_path):
 
 
 @pytest.mark.parametrize("reader", sorted(READERS))
-@pytest.mark.parametrize("encoding", ["latin-1", "utf-16"])
-def test_a_file_that_is_not_utf8_is_one_line_naming_it_and_the_byte(reader, encoding, tmp_path):
+def test_a_file_that_is_not_utf8_is_one_line_naming_it_and_the_byte(reader, tmp_path):
+    load, name, text = READERS[reader]
+    data = text.encode("latin-1")
+    path = _write(tmp_path, name, data)
+    with pytest.raises(AsbuiltError) as info:
+        load(path)
+    message = str(info.value)
+    offset = data.index(b"\xe9")
+    assert message.startswith(
+        f"{path}: is not UTF-8 text (byte 0x{data[offset]:02x} at offset {offset}); save the "
+    ), message
+    assert "\n" not in message and "codec" not in message
+    assert path.read_bytes() == data  # never modified
+
+
+@pytest.mark.parametrize("reader", sorted(READERS))
+@pytest.mark.parametrize(
+    "encoding, named",
+    [
+        ("utf-16", "UTF-16"),  # with a byte order mark, as Windows "Unicode" saves
+        ("utf-16-le", "UTF-16"),  # without one: was "invalid JSON at line 1 column 2"
+        ("utf-16-be", "UTF-16"),
+        ("utf-32", "UTF-32"),
+    ],
+)
+def test_utf16_and_utf32_files_are_named_as_such(reader, encoding, named, tmp_path):
     load, name, text = READERS[reader]
     data = text.encode(encoding)
     path = _write(tmp_path, name, data)
     with pytest.raises(AsbuiltError) as info:
         load(path)
     message = str(info.value)
-    offset = data.index(b"\xe9") if encoding == "latin-1" else 0
-    assert message.startswith(
-        f"{path}: is not UTF-8 text (byte 0x{data[offset]:02x} at offset {offset}); save the "
-    ), message
-    assert "\n" not in message and "codec" not in message
-    assert path.read_bytes() == data  # never modified
+    assert message.startswith(f"{path}: is {named} text, not UTF-8; save the "), message
+    assert "\n" not in message
+    assert path.read_bytes() == data
 
 
 @pytest.mark.parametrize("reader", sorted(READERS))

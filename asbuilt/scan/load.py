@@ -233,7 +233,6 @@ def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
     if len(text) > MAX_FILE_BYTES:
         raise ScanReadError(_too_large(source, len(text)))
     if isinstance(text, (bytes, bytearray)):
-        _refuse_wide_text(bytes(text), source)
         text = decode_text(bytes(text), ScanError, source=source, what="scan")
     repeated: list[bool] = []
     try:
@@ -264,19 +263,6 @@ def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
             REPEATED_KEY,
         )
     return _scan_from_document(document, context)
-
-
-def _refuse_wide_text(data: bytes, source: str | None) -> None:
-    """Refuse UTF-16 or UTF-32 text (Windows tools' "Unicode") by name: without a byte-order
-    mark it decodes as UTF-8 with NULs and was reported as invalid JSON at line 1 column 2."""
-    head = data[:4]
-    if head.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):
-        encoding = "UTF-32"
-    elif head.startswith((b"\xff\xfe", b"\xfe\xff")) or (len(head) >= 2 and b"\x00" in head):
-        encoding = "UTF-32" if head.count(b"\x00") >= 3 else "UTF-16"
-    else:
-        return
-    raise ScanError(f"is {encoding} text, not UTF-8; save the scan as UTF-8 JSON", source=source)
 
 
 class _LongInteger(ValueError):
