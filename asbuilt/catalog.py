@@ -281,6 +281,14 @@ def _looks_like_path(name: str) -> bool:
     return name.endswith(".csv") or "/" in name or "\\" in name or _is_file(Path(name))
 
 
+def _is_dir(path: Path) -> bool:
+    """``path.is_dir()``, False for a name the system refuses (too long, NUL byte...)."""
+    try:
+        return path.is_dir()
+    except (OSError, ValueError):
+        return False
+
+
 def _is_file(path: Path) -> bool:
     """``path.is_file()``, False for a name the system refuses (too long, NUL byte...)."""
     try:
@@ -348,6 +356,9 @@ def model_catalog(model, catalog=None):
 @functools.cache
 def _load_packaged(name: str) -> Catalog:
     names = catalog_names()
+    if name not in names and _is_dir(Path(name)):
+        # a folder named without a slash: "unknown catalog" would hide what went wrong
+        return _load_path(str(Path(name).resolve()), name)
     if name not in names:
         raise CatalogError(
             f"unknown catalog {quoted(name)}; use one of {', '.join(names)} or a CSV file path"

@@ -275,7 +275,12 @@ def loads_design(text: str, *, source: str | None = None) -> Design:
     if not isinstance(doc, dict):
         raise DesignError("must be a JSON object", source=source)
     if doc.get("format", "asbuilt-design") != "asbuilt-design":
-        raise DesignError('"format" must be "asbuilt-design"', source=source, where="format")
+        raise DesignError(
+            f'"format" must be "asbuilt-design", not {json.dumps(doc.get("format"))}; --design '
+            "takes the intended layout (docs/design-format.md), not a scan or a model",
+            source=source,
+            where="format",
+        )
     version = doc.get("version", 1)
     if isinstance(version, bool) or version != 1:
         raise DesignError("only version 1 is known", source=source, where="version")

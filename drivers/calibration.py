@@ -620,7 +620,17 @@ def load_targets(path) -> dict[str, object]:
     doc = _read_json(path, "targets file")
     targets = doc.get("targets") if isinstance(doc, dict) else None
     if not isinstance(targets, dict) or not targets:
-        raise CalibrationError("needs a non-empty 'targets' object", source=source)
+        kind = doc.get("format") if isinstance(doc, dict) else None
+        what = (
+            f"is an {kind} file, not targets; "
+            if isinstance(kind, str) and kind != "asbuilt-targets"
+            else ""
+        )
+        raise CalibrationError(
+            f"{what}needs a non-empty 'targets' object naming the known targets (an "
+            "asbuilt-targets file, see docs/calibration.md)",
+            source=source,
+        )
     out: dict[str, object] = {}
     for name, spec in targets.items():
         where = f"targets.{name}"

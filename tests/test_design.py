@@ -43,6 +43,7 @@ def test_round_trip_in_millimetres(tmp_path):
     [
         ({"units": "yards"}, "units", "unknown units"),
         ({"format": "other"}, "format", "asbuilt-design"),
+        ({"format": "asbuilt-scan"}, "format", 'not "asbuilt-scan"; --design takes the intended'),
         (
             {"pipes": [{"id": "D1", "start": [0, 0], "end": [1, 0, 0]}]},
             "pipes[0] (D1).start",

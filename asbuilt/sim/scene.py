@@ -700,7 +700,8 @@ def scene_from_dict(doc, *, source: str | None = None, base_dir=None) -> Scene:
         if obj.id in seen:
             reader.fail(
                 f"objects ({obj.id})",
-                "object ids must be unique (pipe runs add '-1', '-2', ... to their id)",
+                "object ids must be unique (pipe runs add '-1', '-2', ... to their id); "
+                "rename one of them",
             )
         seen.add(obj.id)
     links_doc = doc.get("links", [])

@@ -274,7 +274,10 @@ def angular_window(shape, station) -> tuple[float, float, float, float]:
     lo, hi = float(dpan.min()), float(dpan.max())
     t_lo, t_hi = float(tilt.min()), float(tilt.max())
     if hi - lo > MAX_WINDOW or t_hi - t_lo > MAX_WINDOW:
-        raise ValueError("the object spans more than 170 degrees seen from the station")
+        raise ValueError(
+            "the object spans more than 170 degrees seen from the station; move the station "
+            "away from it or split it into smaller objects"
+        )
     return (float(pan0) + 0.5 * (lo + hi), 0.5 * (t_lo + t_hi), hi - lo, t_hi - t_lo)
 
 

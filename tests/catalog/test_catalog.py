@@ -566,3 +566,14 @@ def test_a_long_catalog_name_is_quoted_shortened():
     with pytest.raises(CatalogError) as info:
         load_catalog("n" * 5000)
     assert str(info.value).startswith("unknown catalog '" + "n" * 40 + "...' (5,000 characters)")
+
+
+def test_a_folder_named_without_a_slash_is_said_to_be_a_folder(tmp_path, monkeypatch):
+    """``--catalog mycat`` where mycat is a folder: "is a directory", not "unknown catalog";
+    a shipped catalog's name still names the shipped catalog when a folder has it too."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mycat").mkdir()
+    (tmp_path / "asme-b36.10m").mkdir()
+    with pytest.raises(CatalogError, match=r"mycat: is a directory; give the catalog itself"):
+        load_catalog("mycat")
+    assert load_catalog("asme-b36.10m").name == "asme-b36.10m"

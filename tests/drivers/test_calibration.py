@@ -257,6 +257,17 @@ def test_bad_targets_files(tmp_path, targets, where):
         load_targets(path)
 
 
+def test_a_scan_given_as_targets_is_named_as_a_scan(tmp_path):
+    path = tmp_path / "scan.json"
+    path.write_text(json.dumps({"format": "asbuilt-scan", "version": 1, "objects": []}))
+    with pytest.raises(CalibrationError) as info:
+        load_targets(path)
+    assert str(info.value) == (
+        f"{path}: is an asbuilt-scan file, not targets; needs a non-empty 'targets' object "
+        "naming the known targets (an asbuilt-targets file, see docs/calibration.md)"
+    )
+
+
 # Found by mutation fuzzing (asbuilt calibrate with 1,000 mutated targets and initial
 # calibrations, asbuilt scan with 300 mutated --calibration files): each was a traceback (or a
 # message naming the file twice) and is now one located line.
