@@ -329,10 +329,17 @@ def label_fonts(labels) -> tuple[list[str], frozenset[int]]:
     return families, frozenset(drawable)
 
 
+#: Longest label drawn in a picture, in characters: a longer id (the scan format allows 255) is
+#: cut to this many with "..." at the end, since a label wider than the plot squeezed the axes
+#: to nothing; the label still links to the component's row, which has the whole id.
+LABEL_MAX_CHARS = 32
+
+
 def drawable_label(component_id: str, drawable=None) -> str:
     """A component id as a picture can draw it: each character that is not printable, or (when
     ``drawable`` is given) that no label font has, written as a Python escape (``\\u7ba1``,
     ``\\U0001f600``, ``\\x07``); ``"管道2"`` with no CJK font installed -> ``"\\u7ba1\\u90532"``.
+    Ids longer than :data:`LABEL_MAX_CHARS` are cut to that length, ending in ``...``.
     """
 
     def shown(c: str) -> str:
@@ -340,6 +347,8 @@ def drawable_label(component_id: str, drawable=None) -> str:
             return c
         return ascii(c)[1:-1]
 
+    if len(component_id) > LABEL_MAX_CHARS:
+        return "".join(shown(c) for c in component_id[: LABEL_MAX_CHARS - 3]) + "..."
     return "".join(shown(c) for c in component_id)
 
 

@@ -243,3 +243,14 @@ def test_eccentric_reducer_elevation_is_a_trapezoid_flat_on_top():
     assert area(elev) == pytest.approx(h * (r6 + r4), rel=1e-9)
     top = elev[np.isclose(elev[:, 1], 1 + r6)]
     assert sorted(top[:, 0]) == pytest.approx([0, h])
+
+
+def test_a_long_id_is_cut_in_the_picture_and_links_to_its_row(recwarn):
+    """A 255-character id made matplotlib warn "constrained_layout not applied" and squeezed
+    the axes to nothing (CLI review)."""
+    long_id = "P" * 250 + "-end"
+    assert drawable_label(long_id) == "P" * 29 + "..."
+    assert drawable_label("P" * 32) == "P" * 32  # at the limit: whole
+    svg = render_view(_with_ids(long_id), "plan")
+    assert ">" + "P" * 29 + "...</text>" in svg and long_id not in svg.replace(anchor(long_id), "")
+    assert not recwarn.list, [str(w.message) for w in recwarn.list]
