@@ -32,6 +32,7 @@ __all__ = [
     "fit_refused_findings",
     "recheck",
     "refused_findings",
+    "relink",
 ]
 
 
@@ -186,7 +187,7 @@ def build_model(
         (:class:`~asbuilt.fit.NothingFittedError`) only when no object could be fitted.
     """
     from asbuilt.fit import fit
-    from asbuilt.merge import merge_model, resolve_catalog
+    from asbuilt.merge import resolve_catalog
     from asbuilt.rules import RulesConfig, load_rules
 
     config = rules if isinstance(rules, RulesConfig) else load_rules(rules)
@@ -196,14 +197,7 @@ def build_model(
         catalog = resolve_catalog(catalog)  # once: the merge, the rules and the model share it
     report = fit(scan, tolerances, progress=progress)
     if merge:
-        model = merge_model(
-            _without_refused_links(report),
-            catalog=catalog,
-            tolerances=tolerances,
-            schedule=schedule,
-            elbow_radius=elbow_radius,
-        )
-        model = model.replace(catalog_file=catalog_file(catalog), scan=scan, fits=report)
+        model = _merged(report, catalog, tolerances, schedule, elbow_radius)
     else:
         model = model_from_fits(report)
         if catalog is not None:  # the size rules judge against it: the model must say which
@@ -212,6 +206,126 @@ def build_model(
     if check:
         model = model.replace(findings=recheck(model, config, design, catalog=catalog))
     return model
+
+
+def _merged(report: FitReport, catalog, tolerances, schedule, elbow_radius) -> Model:
+    """The merged model of ``report`` (its scan and fits attached; no findings yet)."""
+    from asbuilt.merge import merge_model
+
+    model = merge_model(
+        _without_refused_links(report),
+        catalog=catalog,
+        tolerances=tolerances,
+        schedule=schedule,
+        elbow_radius=elbow_radius,
+    )
+    return model.replace(catalog_file=catalog_file(catalog), scan=report.scan, fits=report)
+
+
+def _spool_of(model: Model, object_id: str) -> str | None:
+    for comp in model.components:
+        if object_id in comp.sources and comp.spool:
+            return comp.spool
+    return None
+
+
+def _model_schedule(model: Model) -> str | None:
+    """The one wall schedule of the model's pipes, else None (merging then builds solid pipes)."""
+    schedules = {c.schedule for c in model.components if c.type == "pipe"}
+    return schedules.pop() if len(schedules) == 1 else None
+
+
+def _model_elbow_radius(model: Model) -> str:
+    """``"short"`` when the model's elbows are short radius (bend radius about one OD, ASME
+    B16.9; long radius is 1.5 OD), else ``"long"``."""
+    from asbuilt.model import Bend
+
+    ratios = [
+        c.geometry.bend_radius / (2.0 * c.geometry.outer_radius)
+        for c in model.components
+        if c.type == "elbow" and isinstance(c.geometry, Bend)
+    ]
+    return "short" if ratios and max(ratios) < 1.25 else "long"
+
+
+def relink(
+    model: Model,
+    links,
+    *,
+    catalog=None,
+    tolerances: Tolerances | None = None,
+    rules=None,
+    design=None,
+) -> Model:
+    """``model`` merged again with scan links added: accepting a suggestion to link two pipes
+    (a ``"link"`` change, :data:`asbuilt.rules.fixes.LINK_FIELD`).
+
+    Parameters
+    ----------
+    model : Model
+        A merged model with its scan (``model.scan``; a model document stores it). Its fits are
+        kept when it has them (links do not change a fit), else the scan is fitted again.
+    links : iterable of (str, str)
+        Scan object ids to link.
+    catalog : str, Path or Catalog, optional
+        Default the model's (its user file, else its name). The pipes' schedule and the
+        elbows' radius (long or short) are the model's.
+    tolerances, rules, design
+        As for :func:`build_model`.
+
+    Returns
+    -------
+    Model
+        Merged and checked again.
+
+    Raises
+    ------
+    SuggestionError
+        The model has no scan, a link names an object the scan does not have, or merging does
+        not join a linked pair even so (the finding's suggestion was wrong: its reason is in
+        the model's notes).
+    """
+    from asbuilt.errors import SuggestionError
+    from asbuilt.fit import fit
+    from asbuilt.merge import resolve_catalog
+    from asbuilt.rules import RulesConfig, load_rules
+
+    scan = model.scan
+    if scan is None:
+        raise SuggestionError(
+            "linking objects needs the scan, and this model does not store it; check the scan "
+            "file itself"
+        )
+    links = [tuple(str(x) for x in pair) for pair in links]
+    ids = {obj.id for obj in scan.objects}
+    for a, b in links:
+        for oid in (a, b):
+            if oid not in ids:
+                raise SuggestionError(f"cannot link {a} and {b}: the scan has no object {oid}")
+    new = tuple(p for p in links if p not in scan.links and p[::-1] not in scan.links)
+    scan = dataclasses.replace(scan, links=scan.links + new)
+    config = rules if isinstance(rules, RulesConfig) else load_rules(rules)
+    if tolerances is None:
+        tolerances = config.tolerances
+    catalog = resolve_catalog(
+        catalog if catalog is not None else (model.catalog_file or model.catalog)
+    )
+    if model.fits is not None:
+        report = dataclasses.replace(model.fits, scan=scan)
+    else:
+        report = fit(scan, tolerances)
+    relinked = _merged(
+        report, catalog, tolerances, _model_schedule(model), _model_elbow_radius(model)
+    )
+    relinked = relinked.replace(findings=fit_refused_findings(report))
+    for a, b in links:
+        spool = _spool_of(relinked, a)
+        if spool is None or spool != _spool_of(relinked, b):
+            raise SuggestionError(
+                f"linking {a} and {b} does not join them: merging finds no elbow or in-line "
+                "joint between their ends; scan both up to their ends instead"
+            )
+    return relinked.replace(findings=recheck(relinked, config, design, catalog=catalog))
 
 
 def _without_refused_links(report: FitReport) -> FitReport:

@@ -183,3 +183,57 @@ def test_a_refused_objects_id_is_not_given_to_a_spool(tmp_path):
     model = build_model(load_scan(write(tmp_path / "scan.json", document)))
     assert [f.objects for f in model.findings] == [("S1",)]
     assert [s.id for s in model.spools] == ["S2"]
+
+
+def _facing_model(gap=0.6):
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent / "merge"))
+    from synthetic_pipes import Pipe, report_of
+
+    from asbuilt.merge import merge_model
+
+    od = 0.1143
+    pipes = [
+        Pipe("P1", (0, 0, 1), (2, 0, 1), od),
+        Pipe("P2", (2 + gap, 0.8 * gap, 1), (2 + gap, 3, 1), od),
+    ]
+    report = report_of(pipes)
+    return merge_model(report).replace(scan=report.scan, fits=report)
+
+
+def test_relink_merges_again_with_the_link_and_joins_the_pair():
+    from asbuilt.pipeline import relink
+
+    model = _facing_model()
+    assert {c.type for c in model.components} == {"pipe"}
+    joined = relink(model, [("P1", "P2")])
+    assert [c.type for c in joined.components] == ["pipe", "elbow", "pipe"]
+    assert len({c.spool for c in joined.components}) == 1
+    assert joined.scan.links == (("P1", "P2"),)
+    assert joined.fits is model.fits or joined.fits.fits == model.fits.fits  # fits kept
+    assert not [f for f in joined.findings if f.slug == "unjoined-end"]
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"scan": None}, "linking objects needs the scan, and this model does not store it"),
+        ({}, "cannot link P1 and P7: the scan has no object P7"),
+    ],
+)
+def test_relink_refuses_what_it_cannot_do(change, message):
+    from asbuilt.errors import SuggestionError
+    from asbuilt.pipeline import relink
+
+    model = _facing_model().replace(**change)
+    with pytest.raises(SuggestionError, match=message):
+        relink(model, [("P1", "P7")] if change == {} else [("P1", "P2")])
+
+
+def test_relink_says_when_the_link_does_not_join():
+    from asbuilt.errors import SuggestionError
+    from asbuilt.pipeline import relink
+
+    with pytest.raises(SuggestionError, match="linking P1 and P2 does not join them"):
+        relink(_facing_model(gap=1.2), [("P1", "P2")])

@@ -171,6 +171,36 @@ def _load(args, source, config, design, progress=None):
     )
 
 
+def _accept(model, choices, config, design):
+    """Apply ``--accept``'s choices: scan links first (the model merged again with them,
+    :func:`asbuilt.pipeline.relink`), then the chosen changes, found again among the merged
+    model's findings. Returns ``(the model they apply to, the fixed model, the changes)``."""
+    from asbuilt.errors import SuggestionError
+    from asbuilt.rules import apply_suggestions, choose_suggestions
+    from asbuilt.rules.fixes import is_link
+
+    chosen = choose_suggestions(model.findings, choices)  # every choice checked first
+    links = [(finding, s) for finding, s in chosen if is_link(s)]
+    if not links:
+        return (model, *apply_suggestions(model, chosen))
+    from asbuilt.pipeline import relink
+
+    pairs = [tuple(s.change["objects"]) for _, s in links]
+    rest = [c for c in choices if not is_link(choose_suggestions(model.findings, [c])[0][1])]
+    model = relink(model, pairs, tolerances=config.tolerances, rules=config, design=design)
+    linked = [
+        f"{', '.join(s.change['objects'])}: {s.description} ({finding.slug})"
+        for finding, s in links
+    ]
+    try:
+        chosen = choose_suggestions(model.findings, rest)
+    except SuggestionError as exc:
+        names = " and ".join(" and ".join(pair) for pair in pairs)
+        raise SuggestionError(f"after linking {names}: {exc.message}") from None
+    fixed, changes = apply_suggestions(model, chosen)
+    return model, fixed, linked + changes
+
+
 def _refuse_resizing(args, name: str, model) -> None:
     """Refuse ``--catalog`` for a model document whose pipe sizes were chosen when it was built
     (their snap records decide the size rules, so another catalog would change nothing) and
@@ -323,9 +353,7 @@ def run(args: argparse.Namespace) -> int:
         from asbuilt.export import export_model
 
         if args.accept:
-            from asbuilt.rules import apply_suggestions, choose_suggestions
-
-            fixed, changes = apply_suggestions(model, choose_suggestions(findings, choices))
+            model, fixed, changes = _accept(model, choices, config, design)
         else:
             fixed, changes = apply_fixes(model, findings)
         fixed = fixed.replace(findings=refused_findings(model))  # objects still not in it

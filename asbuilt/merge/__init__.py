@@ -683,6 +683,7 @@ def _mark_loose_ends(components, joints, joint_notes, ids, slack, tol):
         joined=joined,
         noted=noted,
         bend_limit_deg=elbow_bend_limit(tol),
+        tolerances=tol,
     )
     return [
         dataclasses.replace(comp, snap={**comp.snap, "loose_ends": found[comp.id]})

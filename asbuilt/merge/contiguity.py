@@ -257,7 +257,7 @@ def _evaluate_pair(i, ki, j, kj, pts, out, axes, ods, tol: Tolerances, relaxed: 
     return _Candidate(cost, kind, (i, ki), (j, kj), relaxed)
 
 
-def _best_for_link(i, j, pts, out, axes, ods, tol, slack):
+def best_for_link(i, j, pts, out, axes, ods, tol, slack):
     """The linked pair's best joint candidate, else its best ``"oblique"`` one (a bend beyond
     an elbow, returned so that the link's note can say so), else None."""
     best = oblique = None
@@ -405,7 +405,7 @@ def find_joints(
 
     # 1. explicit links first (distance limits widened by LINK_MARGIN)
     link_candidates = {
-        key: _best_for_link(*key, pts, out, axes, ods, tol, slack) for key in sorted(linked_pairs)
+        key: best_for_link(*key, pts, out, axes, ods, tol, slack) for key in sorted(linked_pairs)
     }
     # 1a. a linked run (an inline pair) with a pipe linked to it as a square-on branch is a tee:
     # taking the links one by one in id order made the branch's link an elbow first and left

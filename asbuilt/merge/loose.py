@@ -37,7 +37,7 @@ from scipy.spatial import cKDTree
 
 from asbuilt.model import Bend, Component, Cross, Reducer, Straight, Tee
 
-from .contiguity import ELBOW_MAX_DEG, line_closest_points, segment_distance
+from .contiguity import ELBOW_MAX_DEG, best_for_link, line_closest_points, segment_distance
 from .ports import ports
 
 __all__ = ["FACING_REACH", "IN_LINE_DEG", "PORT_TOUCH", "loose_ends", "bodies"]
@@ -117,6 +117,7 @@ def loose_ends(
     joined: Iterable[frozenset] = (),
     noted: Iterable[frozenset] = (),
     bend_limit_deg: float = ELBOW_MAX_DEG + 10.0,
+    tolerances=None,
 ) -> dict[str, list[dict]]:
     """Open pipe ends that run into another pipe or fitting within ``reach`` (+ slack).
 
@@ -134,6 +135,9 @@ def loose_ends(
         Largest bend (degrees) of an elbow between two ends that face each other from afar
         (contiguity's ``elbow_bend_limit``; the default is its value at the default
         ``intended_angle_deg``, 10).
+    tolerances : Tolerances, optional
+        Merging's tolerances, for whether a link would join two facing ends (default
+        :data:`asbuilt.tolerances.DEFAULT_TOLERANCES`).
 
     Returns
     -------
@@ -145,7 +149,8 @@ def loose_ends(
         ``noted``. An end meeting another open end beyond the reach (see the module) has
         ``gap`` the distance (m) from the end to where the axes meet, ``corner`` that point
         ([x, y, z] m), ``beyond`` how far (m) past the other pipe's end it lies, and
-        ``bend_deg`` (0: the other pipe continues this one's line).
+        ``bend_deg`` (0: the other pipe continues this one's line) and ``linkable`` (whether
+        merging would join the two if the scan linked them: :func:`link_would_join`).
     """
     slack = dict(slack or {})
     joined, noted = set(joined), set(noted)
@@ -223,6 +228,15 @@ def loose_ends(
             if record is not None:
                 record["end"] = ("start", "end")[k]
                 record["noted"] = any(frozenset((own, q)) in noted for q in record["touches_pipes"])
+                # as far apart as a scan link may bridge (contiguity's rule): linking them in
+                # the scan would have merging join them
+                other = next(c for c in piping if c.id == record["touches"])
+                record["linkable"] = link_would_join(
+                    comp,
+                    other,
+                    (slack.get(own, 0.0), slack.get(source_of.get(other.id, ""), 0.0)),
+                    tolerances,
+                )
                 found.setdefault(comp.id, []).append(record)
             continue
         (gap, _), other, theirs = best
@@ -290,3 +304,22 @@ def _facing_end(comp, own, point, out, open_ends, open_tree, scan_pipes, joined,
         "beyond": float(max(beyond, 0.0)),
         "bend_deg": float(bend),
     }
+
+
+def link_would_join(a: Component, b: Component, slack, tolerances=None) -> bool:
+    """Whether merging would join the straight pipes ``a`` and ``b`` if the scan linked them:
+    contiguity's joint search for a linked pair (:func:`asbuilt.merge.contiguity.best_for_link`,
+    its limits widened by ``LINK_MARGIN``) finds an inline or elbow joint between their ends.
+
+    ``slack`` is the two pipes' slack (metres, as merging computes it from their shots).
+    """
+    from asbuilt.tolerances import DEFAULT_TOLERANCES
+
+    tol = DEFAULT_TOLERANCES if tolerances is None else tolerances
+    pts = np.array([[a.geometry.start, a.geometry.end], [b.geometry.start, b.geometry.end]], float)
+    axes = pts[:, 1] - pts[:, 0]
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    out = np.stack([-axes, axes], axis=1)
+    ods = 2.0 * np.array([a.geometry.outer_radius, b.geometry.outer_radius], float)
+    found = best_for_link(0, 1, pts, out, axes, ods, tol, np.asarray(slack, float))
+    return found is not None and found.kind != "oblique"

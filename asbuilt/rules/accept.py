@@ -12,7 +12,8 @@ number::
 A finding's key is its rule code, ``@`` and its objects joined by commas, as ``asbuilt check``
 prints them (``AB501@P1,P2``). Suggestions are numbered in their order (the order of the
 finding's ``suggestions`` in JSON), advice included; only a change to the model's components
-(a size, a rotation: :func:`asbuilt.rules.fixes.applicable`) can be accepted. The choices are checked against the findings before anything is applied, so a typo
+(a size, a rotation: :func:`asbuilt.rules.fixes.applicable`), or a scan link merging then
+realises (:func:`asbuilt.rules.fixes.is_link`), can be accepted. The choices are checked against the findings before anything is applied, so a typo
 never writes half of what was asked.
 """
 
@@ -25,7 +26,7 @@ from dataclasses import dataclass
 from asbuilt.errors import SuggestionError, quoted
 from asbuilt.findings import Finding, Suggestion
 
-from .fixes import applicable
+from .fixes import acceptable_change, is_link
 
 __all__ = [
     "Choice",
@@ -57,7 +58,7 @@ def finding_key(finding: Finding) -> str:
 def acceptable(finding: Finding) -> list[int]:
     """Numbers (1-based) of ``finding``'s suggestions that are changes ``--fix`` can make (not
     advice, nor a change only a person can make, such as reading the scan in other units)."""
-    return [i for i, s in enumerate(finding.suggestions, 1) if applicable(s)]
+    return [i for i, s in enumerate(finding.suggestions, 1) if acceptable_change(s)]
 
 
 def accept_choice(finding: Finding, number: int) -> str | None:
@@ -139,7 +140,7 @@ def _pick(choice: Choice, finding: Finding, number: int | None) -> Suggestion:
             f"suggestion{'s' if len(finding.suggestions) != 1 else ''}, not {number}"
         )
     suggestion = finding.suggestions[number - 1]
-    if not applicable(suggestion):
+    if not acceptable_change(suggestion):
         hint = f"; accept {key}:{changes[0]}" if len(changes) == 1 else ""
         raise SuggestionError(
             f"--accept {quoted(choice.text)}: suggestion {number} of {key} is advice, not a "
@@ -186,7 +187,9 @@ def choose_suggestions(
         suggestion = _pick(choice, finding, number)
         if any(f is finding and s is suggestion for f, s in chosen):
             continue  # the same choice twice
-        for target in _targets(suggestion):
+        # a link names a pair (one pipe may be linked to two others); a change, each object
+        targets = [",".join(sorted(_targets(suggestion)))] if is_link(suggestion) else None
+        for target in targets or _targets(suggestion):
             slot = (target, str(suggestion.change.get("field")))
             if slot in claimed:
                 raise SuggestionError(

@@ -25,7 +25,10 @@ from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
 __all__ = [
     "APPLIED_FIELDS",
+    "LINK_FIELD",
+    "acceptable_change",
     "applicable",
+    "is_link",
     "apply_fixes",
     "apply_suggestions",
     "rotate_geometry",
@@ -37,12 +40,31 @@ __all__ = [
 #: refused fit's suggestion keeps the measured points to rescan.
 APPLIED_FIELDS = ("nominal", "rotation")
 
+#: A change to the scan that merging then realises: ``{"objects": [a, b], "field": "link"}``
+#: adds the scan link ``[a, b]`` (scan object ids), and the model is merged again
+#: (:func:`asbuilt.pipeline.relink`); it can be accepted (``--accept``), never by ``--fix``
+#: alone, and :func:`apply_suggestions` leaves it to that step.
+LINK_FIELD = "link"
+
 
 def applicable(suggestion) -> bool:
     """Whether ``suggestion`` is a change to a model's components that can be applied."""
     change = suggestion.change
     targets = change.get("objects") or change.get("object")
     return bool(targets) and change.get("field") in APPLIED_FIELDS
+
+
+def is_link(suggestion) -> bool:
+    """Whether ``suggestion`` adds a scan link between two objects (see :data:`LINK_FIELD`)."""
+    change = suggestion.change
+    objects = change.get("objects") or ()
+    return change.get("field") == LINK_FIELD and len(objects) == 2
+
+
+def acceptable_change(suggestion) -> bool:
+    """Whether ``suggestion`` is a change a person can accept: one :func:`apply_suggestions`
+    makes, or a scan link merging then realises (:func:`is_link`)."""
+    return applicable(suggestion) or is_link(suggestion)
 
 
 def rotate_geometry(geometry, rotation, about):

@@ -400,15 +400,23 @@ def _unjoined_reason(record: dict, comp, other, names: str) -> tuple[str, str]:
 
 def _facing_reason(record: dict, pipe: str, target: str) -> tuple[str, str]:
     """Why an open end facing another pipe's open end from beyond merging's reach was not
-    joined, and what to do (:func:`asbuilt.merge.loose.loose_ends`'s ``corner`` records)."""
-    link = f"link {pipe} and {target} in the scan (links) and model again"
+    joined, and what to do (:func:`asbuilt.merge.loose.loose_ends`'s ``corner`` records).
+    When a scan link would have merging join them (the record's ``linkable``), linking is
+    the change :func:`_link_suggestion` offers, and the advice is the other case."""
     bend = float(record.get("bend_deg", 90.0))
+    if record.get("linkable"):
+        link = "accept the link (the suggestion above)"
+    else:
+        link = (
+            "model the part by hand (they are too far apart for a scan link to join: merging "
+            "invents no pipe)"
+        )
     if bend < IN_LINE_DEG:
         return (
             f"{target} continues its line {mm(float(record['gap']))} past its end, beyond "
             "merging's reach (joint_distance plus the shot spacing)",
             f"if one pipe runs on between them (a stretch or a valve the scan did not reach), "
-            f"{link}, or model the part by hand; otherwise scan both up to their ends",
+            f"{link}; otherwise scan both up to their ends",
         )
     return (
         f"their axes meet {mm(float(record['gap']))} past its end and "
@@ -416,6 +424,22 @@ def _facing_reason(record: dict, pipe: str, target: str) -> tuple[str, str]:
         "elbow would join them, beyond merging's reach (joint_distance plus the shot spacing)",
         f"if an elbow joins them (the scan stopped short of it), {link}; otherwise scan "
         f"{pipe} and {target} up to their ends",
+    )
+
+
+def _link_suggestion(record: dict, comp, other) -> Suggestion | None:
+    """The scan link that would have merging join a facing pair (``--accept`` it; never
+    automatic: only a person knows whether an elbow or a pipe the scan did not reach is
+    there), or None when no link would (:func:`asbuilt.merge.loose.link_would_join`)."""
+    if record.get("corner") is None or not record.get("linkable") or other is None:
+        return None
+    a = comp.sources[0] if comp.sources else comp.id
+    b = other.sources[0] if other.sources else other.id
+    joint = "in line" if float(record.get("bend_deg", 90.0)) < IN_LINE_DEG else "with an elbow"
+    return Suggestion(
+        f"link {a} and {b} in the scan and merge again: merging then joins them {joint}",
+        {"objects": [a, b], "field": "link"},
+        unambiguous=False,
     )
 
 
@@ -455,6 +479,7 @@ def check_unjoined_ends(ctx: Context, table: SizeTable | None = None) -> None:
                 in_line = float(record.get("bend_deg", 90.0)) < IN_LINE_DEG
                 where = f"ends {mm(gap)} short of" + ("" if in_line else " a corner with")
             why, suggestion = _unjoined_reason(record, comp, other, names)
+            link = _link_suggestion(record, comp, other)
             ctx.emit(
                 slug,
                 [comp.id, target],
@@ -462,7 +487,7 @@ def check_unjoined_ends(ctx: Context, table: SizeTable | None = None) -> None:
                 location=np.asarray(record["at"], float),
                 measured=gap,
                 unit="m",
-                suggestions=(Suggestion(suggestion),),
+                suggestions=(*((link,) if link else ()), Suggestion(suggestion)),
             )
 
 

@@ -635,3 +635,49 @@ def test_a_waiver_in_the_rules_file_turns_an_error_into_info_and_exit_0(tmp_path
     )
     code, out, _ = run(["--list-rules"], capsys)
     assert "AB002" in out and "unused-waiver" in out
+
+
+FACING = [
+    {
+        "id": "F1",
+        "kind": "cylinder",
+        "points": 30,
+        "geometry": {"type": "cylinder", "start": [-1, 4, 1], "end": [1.4, 4, 1], "od": 0.1143},
+    },
+    {
+        "id": "F2",
+        "kind": "cylinder",
+        "points": 30,
+        "geometry": {"type": "cylinder", "start": [2, 4.6, 1], "end": [2, 7, 1], "od": 0.1143},
+    },
+]
+
+
+def test_accepting_a_scan_link_merges_again_and_joins_the_pipes(tmp_path, capsys):
+    """AB304 on two pipes facing each other beyond merging's reach offers the scan link that
+    would join them; accepted, the model is merged again with it (an elbow), and the written
+    document's scan keeps the link."""
+    path = scan_file(tmp_path, *FACING)
+    code, out, _ = run([path, "--select", "unjoined-end"], capsys)
+    assert "warning unjoined-end: F1 ends" in out
+    assert "1. link F1 and F2 in the scan and merge again" in out
+    assert "[--accept AB304@F1,F2]" in out and "[--fix, or" not in out
+    fixed = tmp_path / "fixed.json"
+    # never by --fix alone
+    run([path, "--fix", fixed], capsys)
+    document = json.loads(fixed.read_text(encoding="utf-8"))
+    assert [c["type"] for c in document["components"]] == ["pipe", "pipe"]
+    code, out, _ = run([path, "--accept", "AB304@F1,F2", "--fix", fixed], capsys)
+    assert code == 0
+    assert "fixed: F1, F2: link F1 and F2 in the scan and merge again" in out
+    assert "unjoined-end" not in out.replace("(unjoined-end)", "")
+    document = json.loads(fixed.read_text(encoding="utf-8"))
+    assert [c["type"] for c in document["components"]] == ["pipe", "elbow", "pipe"]
+    assert len({c["spool"] for c in document["components"]}) == 1
+    assert document["scan"]["links"] == [["F1", "F2"]]
+    # the same from the model document of the unlinked scan
+    model = tmp_path / "model.json"
+    assert main(["model", str(path), "--out", str(model)]) == 0
+    capsys.readouterr()
+    code, out, _ = run([model, "--accept", "AB304@F1,F2", "--fix", tmp_path / "f2.json"], capsys)
+    assert code == 0 and "fixed: F1, F2: link F1 and F2" in out

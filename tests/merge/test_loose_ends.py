@@ -259,3 +259,49 @@ def test_a_pipe_continuing_another_s_line_beyond_the_reach_is_a_finding():
 def test_no_finding_for_ends_that_do_not_face_each_other(pipes):
     model = merge_model(report_of(pipes))
     assert not _unjoined(model)
+
+
+def _facing(kind: str, gap: float) -> list:
+    """Two NPS 4 pipes facing each other from ``gap`` metres: at a corner (P2's end 0.8 gap
+    off P1's axis), or in line."""
+    if kind == "corner":
+        return [
+            Pipe("P1", (0, 0, 1), (2, 0, 1), OD),
+            Pipe("P2", (2 + gap, 0.8 * gap, 1), (2 + gap, 3, 1), OD),
+        ]
+    return [Pipe("P1", (0, 0, 1), (2, 0, 1), OD), Pipe("P2", (2 + gap, 0, 1), (4 + gap, 0, 1), OD)]
+
+
+@pytest.mark.parametrize(
+    "kind, gap",
+    [("corner", g) for g in (0.4, 0.6, 0.8, 0.9, 1.2)]
+    + [("inline", g) for g in (0.6, 1.0, 1.1, 1.4)],
+)
+def test_a_facing_end_is_linkable_exactly_when_a_link_would_join_it(kind, gap):
+    """The record's ``linkable`` (offered to the user as a scan link to accept) agrees with what
+    merging does when the scan links the pair: the same pipes in one spool."""
+    pipes = _facing(kind, gap)
+    records = [
+        r for c in merge_model(report_of(pipes)).components for r in c.snap.get("loose_ends") or ()
+    ]
+    assert records and all("linkable" in r for r in records)
+    linked = merge_model(report_of(pipes, links=[("P1", "P2")]))
+    spools = {c.id: c.spool for c in linked.components}
+    joined = spools["P1"] is not None and spools["P1"] == spools["P2"]
+    assert {r["linkable"] for r in records} == {joined}
+
+
+@pytest.mark.parametrize(("gap", "offered"), [(0.6, True), (1.2, False)])
+def test_unjoined_end_offers_the_link_only_where_it_would_join(gap, offered):
+    model = merge_model(report_of(_facing("corner", gap)))
+    (finding,) = [f for f in check_model(model) if f.slug == "unjoined-end"]
+    changes = [s for s in finding.suggestions if s.change]
+    if offered:
+        (link,) = changes
+        assert link.change == {"objects": ["P1", "P2"], "field": "link"}
+        assert not link.unambiguous  # only a person knows an elbow is there
+        assert link.description.endswith("merging then joins them with an elbow")
+        assert "accept the link" in finding.suggestions[-1].description
+    else:
+        assert changes == []
+        assert "too far apart for a scan link to join" in finding.suggestions[-1].description
