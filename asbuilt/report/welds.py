@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from asbuilt.merge.ports import ports
 from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cylinder
 
@@ -94,36 +95,37 @@ class WeldSummary:
     spool_open_ends: Mapping[str, int]
 
 
-def piping_ends(geometry) -> list[tuple[np.ndarray, float]]:
-    """Each welded end of a piping geometry: ``(point (3,) metres, outside diameter metres)``.
-
-    Empty for geometries that are not piping (a cuboid, a sphere...). A reducer's and a
-    reducing elbow's ends each have their own diameter; a tee's and a cross's outlets the
-    branch's.
-    """
-    if isinstance(geometry, Straight):
-        od = 2.0 * float(geometry.outer_radius)
-        return [(np.asarray(geometry.start), od), (np.asarray(geometry.end), od)]
+def _end_diameters(geometry) -> list[float]:
+    """The outside diameter (metres) at each end :func:`asbuilt.merge.ports.ports` gives, in
+    its order: a reducer's and a reducing elbow's ends each their own, a tee's and a cross's
+    outlets the branch's."""
     if isinstance(geometry, Reducer):
-        return [
-            (np.asarray(geometry.start), 2.0 * float(geometry.outer_radius_start)),
-            (np.asarray(geometry.end), 2.0 * float(geometry.outer_radius_end)),
-        ]
+        return [2.0 * float(geometry.outer_radius_start), 2.0 * float(geometry.outer_radius_end)]
+    if isinstance(geometry, Straight):
+        return [2.0 * float(geometry.outer_radius)] * 2
     if isinstance(geometry, Bend):
-        start, end = geometry.radii
-        return [(np.asarray(geometry.start), 2.0 * start), (np.asarray(geometry.end), 2.0 * end)]
+        return [2.0 * float(r) for r in geometry.radii]
     if isinstance(geometry, Tee | Cross):
-        run = 2.0 * float(geometry.outer_radius)
-        branch = 2.0 * float(geometry.branch_outer_radius)
-        return [
-            (np.asarray(geometry.run_start), run),
-            (np.asarray(geometry.run_end), run),
-            *((np.asarray(end), branch) for end in geometry.outlets),
-        ]
-    if isinstance(geometry, Cylinder):  # a pipe left as fitted
+        run, branch = 2.0 * float(geometry.outer_radius), 2.0 * float(geometry.branch_outer_radius)
+        return [run, run, *[branch] * len(geometry.outlets)]
+    return []
+
+
+def piping_ends(component: Component) -> list[tuple[np.ndarray, float]]:
+    """Each welded end of a piping component: ``(point (3,) metres, outside diameter metres)``.
+
+    The ends are its ports (:func:`asbuilt.merge.ports.ports`, as merging joins them); a pipe
+    left as a fitted cylinder has its cylinder's two ends. Empty for components that are not
+    piping (a cuboid, a sphere...).
+    """
+    geometry = component.geometry
+    if isinstance(geometry, Cylinder):
         od = 2.0 * float(geometry.radius)
         return [(np.asarray(end), od) for end in geometry.ends]
-    return []
+    return [
+        (np.asarray(point), od)
+        for (point, _), od in zip(ports(component), _end_diameters(geometry), strict=True)
+    ]
 
 
 def _size_of(catalog, od: float) -> tuple[str | None, float | None]:
@@ -160,7 +162,7 @@ def welds_of(
     for index, comp in enumerate(components):
         if comp.type not in PIPING_TYPES:
             continue
-        for point, od in piping_ends(comp.geometry):
+        for point, od in piping_ends(comp):
             points.append(point)
             owners.append(index)
             ods.append(od)

@@ -148,7 +148,7 @@ def test_a_dn_catalog_gives_nps_from_its_nps_column():
 
 def test_a_reducer_is_welded_at_each_end_at_that_ends_size():
     reducer = Reducer([0, 0, 0], [0.14, 0, 0], OD["6"] / 2, OD["4"] / 2)
-    ends = piping_ends(reducer)
+    ends = piping_ends(Component("R1", "reducer", reducer))
     assert [od for _, od in ends] == pytest.approx([OD["6"], OD["4"]])
     comps = (
         Component("P1", "pipe", Straight([-1, 0, 0], [0, 0, 0], OD["6"] / 2, 0.0071)),
