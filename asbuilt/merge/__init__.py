@@ -760,19 +760,13 @@ def _constraints(joints: tuple[Joint, ...], eccentric=None):
             coaxial.append((joint.ends[0][0], joint.ends[1][0]))
             found = eccentric.get(index)
             offsets.append(None if found is None else found.offset)
-        elif joint.kind == "cross":
-            # both outlets on one line, meeting the run (or the pipe running through)
-            (a, _), (b, _) = joint.ends[-2:]
-            coaxial.append((a, b))
-            offsets.append(None)
-            if joint.through is None:
-                coaxial.append((joint.ends[0][0], joint.ends[1][0]))
-                offsets.append(None)
-                meets.append((a, joint.ends[0][0]))
-            else:
-                meets.append((a, joint.through))
-        elif joint.kind in ("tee", "lateral"):
+        elif joint.kind in ("tee", "lateral", "cross"):
             branch = joint.ends[-1][0]
+            if joint.kind == "cross":
+                # both outlets on one line; the first meets the run (or the pipe running through)
+                (branch, _), (other, _) = joint.ends[-2:]
+                coaxial.append((branch, other))
+                offsets.append(None)
             if joint.through is None:
                 coaxial.append((joint.ends[0][0], joint.ends[1][0]))
                 offsets.append(None)

@@ -36,6 +36,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from asbuilt.model import Bend, Component, Cross, Reducer, Straight, Tee
+from asbuilt.tolerances import DEFAULT_TOLERANCES
 
 from .contiguity import ELBOW_MAX_DEG, best_for_link, line_closest_points, segment_distance
 from .ports import ports
@@ -313,8 +314,6 @@ def link_would_join(a: Component, b: Component, slack, tolerances=None) -> bool:
 
     ``slack`` is the two pipes' slack (metres, as merging computes it from their shots).
     """
-    from asbuilt.tolerances import DEFAULT_TOLERANCES
-
     tol = DEFAULT_TOLERANCES if tolerances is None else tolerances
     pts = np.array([[a.geometry.start, a.geometry.end], [b.geometry.start, b.geometry.end]], float)
     axes = pts[:, 1] - pts[:, 0]
