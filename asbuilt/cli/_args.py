@@ -47,7 +47,8 @@ def refuse_standard_output(path, option: str, what: str, example: str) -> None:
 
 
 #: Suffixes of the files other commands write (models, reports): a scan or calibration, which is
-#: JSON, named so would be taken for one.
+#: JSON, named so would be taken for one. The export and report registries' suffixes, JSON aside,
+#: written out so that simulate and scan need not import them (a test keeps them equal).
 OTHER_FORMATS = (
     ".step", ".stp", ".glb", ".gltf", ".dxf", ".stl", ".obj", ".pcf", ".ifc", ".html", ".htm",
     ".csv",

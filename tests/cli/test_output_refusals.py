@@ -83,3 +83,13 @@ def test_an_output_the_command_cannot_write_is_one_line_and_nothing_written(
         "t.json",
     ]
     assert list((tmp_path / "folder").iterdir()) == []
+
+
+def test_the_other_formats_are_exactly_what_model_and_report_write():
+    """The list the JSON-writing commands refuse (kept literal: importing the report package
+    would cost simulate and scan 0.4 s of start-up) is the export and report registries'
+    suffixes, JSON aside."""
+    from asbuilt import export, report
+    from asbuilt.cli._args import OTHER_FORMATS
+
+    assert set(OTHER_FORMATS) == (set(export.SUFFIXES) | set(report.SUFFIXES)) - {".json"}
