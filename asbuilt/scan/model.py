@@ -39,6 +39,9 @@ class ScanObject:
         so points can be recomputed after a new calibration.
     station : ndarray, shape (3,), metres, or None
         Where this object was scanned from, when not from the scan's ``sensor.position``.
+    insulation : float, metres
+        Thickness of the insulation (lagging and its cladding) on a cylinder, 0 for a bare
+        one: the points lie on the cladding, the pipe inside is ``2 * insulation`` narrower.
     extra : Mapping
         Unknown keys of the object, kept as they were.
     """
@@ -52,6 +55,7 @@ class ScanObject:
     nominal: str | None = None
     measurements: np.ndarray | None = None
     station: np.ndarray | None = None
+    insulation: float = 0.0
     extra: Mapping = field(default_factory=dict)
 
     def viewpoint(self, sensor: Sensor) -> np.ndarray | None:

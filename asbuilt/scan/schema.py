@@ -21,7 +21,14 @@ import sys
 from pathlib import Path
 
 from asbuilt.atomic import atomic_write
-from asbuilt.scan.load import FORMAT, MAX_ID_CHARACTERS, MAX_POINTS, VERSION
+from asbuilt.scan.load import (
+    FORMAT,
+    INSULATED_KINDS,
+    MAX_ID_CHARACTERS,
+    MAX_INSULATION,
+    MAX_POINTS,
+    VERSION,
+)
 from asbuilt.scan.model import KINDS
 from asbuilt.tolerances import MIN_POINTS
 from asbuilt.units import UNITS
@@ -66,6 +73,15 @@ def _object_schema() -> dict:
         }
         for kind in KINDS
     ]
+    per_kind.append(
+        {
+            "if": {
+                "properties": {"kind": {"not": {"enum": list(INSULATED_KINDS)}}},
+                "required": ["kind"],
+            },
+            "then": {"properties": {"insulation": {"enum": [0, None]}}},
+        }
+    )
     return {
         "type": "object",
         "description": "One object the operator pointed at. Unknown keys are kept and ignored.",
@@ -112,6 +128,14 @@ def _object_schema() -> dict:
             "group": _optional_text("Spool or assembly name."),
             "label": _optional_text("Free text."),
             "nominal": _optional_text('Operator size hint, e.g. 4" or DN100.'),
+            "insulation": {
+                "type": ["number", "null"],
+                "minimum": 0,
+                "description": "Optional, cylinders only: thickness of the insulation (lagging "
+                "and cladding) the points were measured on, in the file's units; the pipe "
+                "inside is twice this narrower. At most "
+                f"{MAX_INSULATION} m once converted (checked by the loader).",
+            },
         },
         "allOf": per_kind,
     }

@@ -509,6 +509,37 @@ BAD = (
         schema_catches=False,
     ),
     Bad(
+        "insulation on a cuboid",
+        _set("objects.1.insulation", 0.05),
+        'objects[1] (K2).insulation: insulation is a radial thickness on a cylinder, not on kind '
+        '"cuboid"; give the object "kind": "cylinder" or remove its insulation',
+    ),
+    Bad(
+        "insulation on an auto object",
+        _set("objects.5.insulation", 0.05),
+        'objects[5] (K6).insulation: insulation is a radial thickness on a cylinder, not on kind '
+        '"auto"; give the object "kind": "cylinder" or remove its insulation',
+    ),
+    Bad(
+        "negative insulation",
+        _set("objects.0.insulation", -0.01),
+        "objects[0] (K1).insulation: must be a number >= 0 (the insulation's thickness in the "
+        "file's units), not -0.01",
+    ),
+    Bad(
+        "insulation as text",
+        _set("objects.0.insulation", "50 mm"),
+        "objects[0] (K1).insulation: must be a number >= 0 (the insulation's thickness in the "
+        "file's units), not a string (\"50 mm\")",
+    ),
+    Bad(
+        "insulation in millimetres in a metre file",
+        _set("objects.0.insulation", 50),
+        "objects[0] (K1).insulation: 50 m is thicker than any pipe insulation (at most 0.5 m); "
+        "it is in the file's units (m): check the value and the units",
+        schema_catches=False,
+    ),
+    Bad(
         "measurement of 2 numbers",
         _set("objects.3.measurements", [[10.0, 5.0]] * 16),
         "objects[3] (K4).measurements[0]: a measurement must be 3 numbers "

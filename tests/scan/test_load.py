@@ -390,3 +390,23 @@ def test_overlong_integers_are_located(digits, message):
     column = text.index("-999") + 1  # JSON columns count from 1
     assert str(err.value).startswith(message.format(column=column)), str(err.value)
     assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("units", "given", "metres"),
+    [("m", 0.05, 0.05), ("mm", 50, 0.05), ("in", 2, 0.0508), ("m", None, 0.0), ("mm", 0, 0.0)],
+)
+def test_insulation_is_read_in_metres(units, given, metres):
+    doc = make_doc(units)
+    doc["objects"][0]["insulation"] = given
+    scan = loads_scan(json.dumps(doc))
+    assert scan.objects[0].insulation == pytest.approx(metres)
+    assert "insulation" not in scan.objects[0].extra
+    assert all(obj.insulation == 0.0 for obj in scan.objects[1:])
+
+
+def test_zero_insulation_is_allowed_on_any_kind():
+    doc = make_doc()
+    for obj in doc["objects"]:
+        obj["insulation"] = 0
+    assert [o.insulation for o in loads_scan(json.dumps(doc)).objects] == [0.0] * 6
