@@ -14,10 +14,11 @@ from typing import ClassVar
 
 import numpy as np
 
+from .errors import FitError
 from .findings import Finding
 from .fit.result import FitReport, FitResult
 from .primitives import Cuboid, Cylinder, Hull, Plane, Primitive, Sphere, as_vector
-from .scan.model import Scan
+from .scan.model import Scan, ScanObject
 
 __all__ = [
     "Straight",
@@ -429,6 +430,10 @@ class Component:
     spool, group, label : str or None
     nominal, schedule : str or None
         Catalog nominal size (e.g. ``"4"``) and schedule (e.g. ``"STD"``) when known.
+    insulation : float, metres
+        Thickness of the insulation around it, 0 when bare. ``geometry`` is the component
+        itself (the pipe, not its cladding); the insulation is an envelope that much larger
+        all round, which clashes and the take-off count.
     fit : FitResult or None
         The fit it comes from.
     snap : Mapping
@@ -449,10 +454,12 @@ class Component:
     fit: FitResult | None = None
     snap: Mapping = field(default_factory=dict)
     corrections: tuple[Correction, ...] = ()
+    insulation: float = 0.0
 
     def __post_init__(self):
         if self.type not in COMPONENT_TYPES:
             raise ValueError(f"component type must be one of {COMPONENT_TYPES}, not {self.type!r}")
+        _nonneg(self.insulation, "insulation")
 
 
 @dataclass(frozen=True)
@@ -498,12 +505,40 @@ class Model:
         return dataclasses.replace(self, **changes)
 
 
-def _component_from_fit(item) -> Component:
+def bare_cylinder(obj: ScanObject, cylinder: Cylinder, source: str | None = None) -> Cylinder:
+    """The cylinder inside an object's insulation: ``cylinder`` (fitted to the cladding, metres)
+    with its radius less the object's ``insulation``; ``cylinder`` itself when bare.
+
+    Raises
+    ------
+    FitError
+        Located at the object's ``insulation``, when the insulation is as thick as the fitted
+        radius or thicker (no pipe would be left inside).
+    """
+    thickness = float(obj.insulation)
+    if thickness <= 0:
+        return cylinder
+    if thickness >= cylinder.radius:
+        raise FitError(
+            f"{thickness * 1000:g} mm of insulation is as thick as the fitted radius "
+            f"({cylinder.radius * 1000:.1f} mm) or thicker, so no pipe is left inside; check "
+            "the thickness and the file's units",
+            source=source,
+            where=f"{obj.where}.insulation",
+        )
+    return dataclasses.replace(cylinder, radius=cylinder.radius - thickness)
+
+
+def _component_from_fit(item, source: str | None = None) -> Component:
     obj, result = item.object, item.result
+    geometry = result.primitive
+    if isinstance(geometry, Cylinder):
+        geometry = bare_cylinder(obj, geometry, source)
     return Component(
         id=obj.id,
         type=result.primitive.kind,
-        geometry=result.primitive,
+        geometry=geometry,
+        insulation=float(obj.insulation) if isinstance(geometry, Cylinder) else 0.0,
         # an object fused with a second station's view of it (asbuilt.fit._stations) has both
         sources=(obj.id, *((obj.extra["fused_with"],) if "fused_with" in obj.extra else ())),
         group=obj.group,
@@ -516,7 +551,7 @@ def model_from_fits(report: FitReport) -> Model:
     """The unmerged model: one component per fitted object, exactly as fitted."""
     scan = report.scan
     return Model(
-        components=tuple(_component_from_fit(item) for item in report.fits),
+        components=tuple(_component_from_fit(item, scan.source) for item in report.fits),
         units=scan.units,
         name=scan.name,
         scan=scan,

@@ -8,15 +8,17 @@ scan's ``group`` name; ungrouped components hang from the root.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import cadquery as cq
 
 from asbuilt.errors import SolidBuildError
+from asbuilt.insulation import jacket
 from asbuilt.model import Component, Model
 
-from .colours import colour_for, component_status
+from .colours import KIND_COLOURS, colour_for, component_status
 from .mesh import LINEAR_DEFLECTION, Mesh, tessellate
 from .meshgen import mesh_for
 from .solids import (
@@ -48,10 +50,32 @@ class CadPart:
     group: str | None = None
     local: cq.Solid | None = None
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    jacket: object = None
+    name: str | None = None
 
     @property
     def id(self) -> str:
-        return self.component.id
+        """The part's name in every file: the component's id, or for an insulation part
+        ``name`` (e.g. ``"P1 insulation"``)."""
+        return self.name or self.component.id
+
+    @property
+    def insulation(self) -> bool:
+        """True for the insulation around ``component`` (its ``jacket`` geometry), not the
+        component itself."""
+        return self.jacket is not None
+
+    @property
+    def kind(self) -> str:
+        """What the part is, for colours, layers and names: ``"insulation"`` or the
+        component's type."""
+        return "insulation" if self.insulation else self.component.type
+
+    @property
+    def geometry(self):
+        """The geometry the part's solid and mesh are made from (metres): the jacket of an
+        insulation part, else the component's."""
+        return self.jacket if self.insulation else self.component.geometry
 
 
 def group_of(component: Component) -> str | None:
@@ -112,7 +136,7 @@ class CadModel:
         """
         mesh = self._meshes.get(part.id)
         if mesh is None:
-            mesh = mesh_for(part.component.geometry, plate_thickness=self.plate_thickness)
+            mesh = mesh_for(part.geometry, plate_thickness=self.plate_thickness)
             if mesh is None:
                 mesh = tessellate(part.solid, LINEAR_DEFLECTION)
             self._meshes[part.id] = mesh
@@ -135,7 +159,7 @@ class CadModel:
         """The spool's components fused into one valid solid (metres); SolidBuildError when they
         do not form one connected solid."""
         self._need_solids()
-        members = [part for part in self.parts if part.group == spool_id]
+        members = [part for part in self.parts if part.group == spool_id and not part.insulation]
         if not members:
             raise SolidBuildError("no components belong to this spool", where=f"spool {spool_id}")
         shape: cq.Shape = members[0].solid
@@ -255,6 +279,12 @@ def prepare(
                 origin=tuple(float(v) for v in origin),
             )
         )
+        jacket = _jacket_part(parts[-1], ids, thickness, solids)
+        if jacket is not None:
+            parts.append(jacket)
+            ids.append(jacket.id)
+            if jacket.solid is None:
+                meshes[jacket.id] = mesh_for(jacket.jacket, plate_thickness=thickness)
         if progress is not None:
             progress(done, total)
     name = model.name or "scan"
@@ -266,6 +296,35 @@ def prepare(
         name=name,
         plate_thickness=float(thickness),
         _meshes=meshes,
+    )
+
+
+def _jacket_part(part: CadPart, taken: list[str], thickness: float, solids: bool):
+    """The insulation part around ``part`` (after it, in its group), or None when bare.
+
+    Named ``"<id> insulation"`` (made unique among ``taken``), translucent, never recoloured
+    by findings (they are the component's). Its solid, when solids are built, is the jacket's:
+    a tee's always, as the tee's own mesh comes from its solid.
+    """
+    geometry = jacket(part.component)
+    if geometry is None:
+        return None
+    name = f"{part.id} insulation"
+    while name in taken:
+        name += " (2)"
+    local, origin = None, (0.0, 0.0, 0.0)
+    if solids or mesh_for(geometry, plate_thickness=thickness) is None:
+        shell = dataclasses.replace(part.component, id=name, geometry=geometry)
+        local, origin = placed_solid(shell, plate_thickness=thickness)
+    return CadPart(
+        component=part.component,
+        solid=None if local is None else place(local, origin),
+        colour=KIND_COLOURS["insulation"],
+        group=part.group,
+        local=local,
+        origin=tuple(float(v) for v in origin),
+        jacket=geometry,
+        name=name,
     )
 
 

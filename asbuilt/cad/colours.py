@@ -22,7 +22,8 @@ __all__ = [
 RGBA = tuple[float, float, float, float]
 
 #: Colour of each component type (RGBA, 0..1): pipes blue, fittings dark blue, cuboids concrete
-#: grey, spheres teal, planes light grey, hulls translucent orange (bounding models, not parts).
+#: grey, spheres teal, planes light grey, hulls translucent orange (bounding models, not parts),
+#: insulation translucent cladding white (the pipe stays visible inside).
 KIND_COLOURS: dict[str, RGBA] = {
     "pipe": (0.16, 0.42, 0.80, 1.0),
     "coupling": (0.16, 0.42, 0.80, 1.0),
@@ -35,6 +36,8 @@ KIND_COLOURS: dict[str, RGBA] = {
     "sphere": (0.18, 0.60, 0.55, 1.0),
     "plane": (0.84, 0.84, 0.82, 1.0),
     "hull": (0.95, 0.55, 0.15, 0.5),
+    # not a component type: the insulation parts around insulated components (asbuilt.cad)
+    "insulation": (0.85, 0.83, 0.74, 0.35),
 }
 
 #: Colour of a component with findings, by its worst severity (info does not recolour).

@@ -346,6 +346,17 @@ def faces_field(entry: dict) -> list:
     return value
 
 
+def insulation_field(entry: dict) -> float:
+    """The component's insulation thickness, metres: 0 when null or absent (documents written
+    before insulation was modelled), else a number >= 0 (``SummaryFieldError`` if not)."""
+    if entry.get("insulation") is None:
+        return 0.0
+    value = number_field(entry, "insulation")
+    if value < 0:
+        raise SummaryFieldError("insulation", f"must be >= 0 (metres), not {value!r}")
+    return value
+
+
 def wall_field(entry: dict, key: str = "wall") -> float:
     """The wall ``key`` (metres); one without it (a reducer's, tee's or elbow's end, in
     documents written before fittings had a wall per end) has the one ``wall``, or 0 (solid)."""

@@ -71,16 +71,18 @@ def _clean(text: str) -> str:
     return _INVALID.sub("_", text.strip()).strip("_").upper() or "X"
 
 
-def layer_name(component, group: str | None) -> str:
+def layer_name(component, group: str | None, kind: str | None = None) -> str:
     """The 3D layer of a component: discipline, kind, nominal size, group.
 
     ``P-PIPE-NPS4-S1`` for a 4" pipe of spool S1, ``P-ELBOW-NPS4`` for an ungrouped elbow,
-    ``ASBUILT-CUBOID-COLUMNS`` for a cuboid of group "columns". Characters DXF forbids in layer
-    names become ``_`` (``1-1/2`` -> ``NPS1-1_2``). Names longer than 255 characters (a long
-    group name) keep their first 246 and end in ``~`` and 8 hex digits of a hash of the whole.
+    ``ASBUILT-CUBOID-COLUMNS`` for a cuboid of group "columns"; ``kind`` ``"insulation"`` for
+    the insulation around a component (``P-INSULATION-NPS4-S1``, on its own layer so it can be
+    hidden). Characters DXF forbids in layer names become ``_`` (``1-1/2`` -> ``NPS1-1_2``).
+    Names longer than 255 characters (a long group name) keep their first 246 and end in ``~``
+    and 8 hex digits of a hash of the whole.
     """
     prefix = "P" if component.type in PIPING_TYPES else "ASBUILT"
-    parts = [prefix, component.type.upper()]
+    parts = [prefix, (kind or component.type).upper()]
     if component.nominal:
         parts.append("NPS" + _clean(str(component.nominal)))
     if group:
@@ -260,9 +262,9 @@ def _drawing(cad) -> tuple[ezdxf.document.Drawing, dict]:
     ).set_placement((low[0], high[2] - elevation_shift + 2 * text_height))
 
     for part, mesh in zip(parts, meshes):
-        layer = layer_name(part.component, part.group)
+        layer = layer_name(part.component, part.group, part.kind)
         if layer not in doc.layers:
-            rgb = rgb255(KIND_COLOURS.get(part.component.type, (0.5, 0.5, 0.5, 1.0)))
+            rgb = rgb255(KIND_COLOURS.get(part.kind, (0.5, 0.5, 0.5, 1.0)))
             entry = doc.layers.add(layer, color=_nearest_aci(rgb))
             entry.rgb = rgb
         attribs = {"layer": layer}
@@ -270,6 +272,8 @@ def _drawing(cad) -> tuple[ezdxf.document.Drawing, dict]:
             attribs["true_color"] = dxf_colors.rgb2int(rgb255(part.colour))
         vertices, faces = mesh.merged()
         records.update(_add_polyfaces(msp, vertices * _MM, faces, attribs))
+        if part.insulation:
+            continue  # the views draw the component's centreline and label once
 
         lines = [(line * _MM, d * _MM) for line, d in _centrelines(part.component.geometry)]
         points = mesh.vertices * _MM

@@ -101,7 +101,7 @@ def gltf_document(cad) -> tuple[dict, bytes]:
     group_names = cad.group_node_names()
 
     def material_for(part) -> int:
-        key = part.status if part.status in ("error", "warning") else part.component.type
+        key = part.status if part.status in ("error", "warning") else part.kind
         if key not in material_index:
             r, g, b, a = part.colour
             material = {
@@ -153,7 +153,9 @@ def gltf_document(cad) -> tuple[dict, bytes]:
                 ],
             }
         )
-        extras = {"type": part.component.type}
+        extras = {"type": part.kind}
+        if part.insulation:
+            extras["insulates"] = part.component.id
         if part.group is not None:
             extras["group"] = part.group
         if part.status is not None:

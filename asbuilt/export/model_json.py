@@ -26,6 +26,7 @@ from asbuilt.export._model_fields import (
     check_component_fields,
     check_diagnostics,
     faces_field,
+    insulation_field,
     number_field,
     point_field,
     points_field,
@@ -240,6 +241,7 @@ def _component(component: Component) -> dict:
         "type": component.type,
         "nominal": component.nominal,
         "schedule": component.schedule,
+        "insulation": component.insulation,
         **_geometry_fields(component.geometry),
         "spool": component.spool,
         "group": component.group,
@@ -693,6 +695,7 @@ def model_from_document(document: dict, *, source: str | None = None) -> Model:
                     label=entry.get("label"),
                     nominal=entry.get("nominal"),
                     schedule=entry.get("schedule"),
+                    insulation=insulation_field(entry),
                     snap=entry.get("snap") or {},
                     fit=_shared_fit(entry, geometry, fits),
                     corrections=tuple(

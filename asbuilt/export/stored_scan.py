@@ -44,6 +44,8 @@ def _object_entry(obj: ScanObject) -> dict:
         )
     if obj.station is not None:
         entry["station"] = np.asarray(obj.station, dtype=np.float64)
+    if obj.insulation:
+        entry["insulation"] = float(obj.insulation)
     entry.update({k: v for k, v in _mapping(obj.extra).items() if k not in OBJECT_KEYS})
     return entry
 
@@ -143,6 +145,14 @@ def _sensor(raw) -> Sensor:
     return Sensor(position=position, range_sigma=None if sigma is None else float(sigma))
 
 
+def _insulation(raw, where: str) -> float:
+    if raw is None:
+        return 0.0
+    if not _is_number(raw) or not math.isfinite(raw) or raw < 0:
+        raise _fail(where, f"must be a number >= 0 (m) or null, not {_describe(raw)}")
+    return float(raw)
+
+
 def _scan_object(index: int, raw, seen: set) -> ScanObject:
     where = f"objects[{index}]"
     if not isinstance(raw, dict):
@@ -182,6 +192,7 @@ def _scan_object(index: int, raw, seen: set) -> ScanObject:
         nominal=_text(raw, "nominal", where),
         measurements=measurements,
         station=_position(raw.get("station"), f"{where}.station"),
+        insulation=_insulation(raw.get("insulation"), f"{where}.insulation"),
         extra=MappingProxyType({k: v for k, v in raw.items() if k not in OBJECT_KEYS}),
     )
 

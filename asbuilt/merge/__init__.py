@@ -273,7 +273,7 @@ def merge_model(
     pipe_idx: list[int] = []
     others: dict[int, Component] = {}
     for k, (item, comp) in enumerate(zip(report.fits, base.components)):
-        prim = item.result.primitive
+        prim = comp.geometry  # inside any insulation (asbuilt.model.bare_cylinder)
         if not isinstance(prim, Cylinder):
             continue
         obj = item.object
@@ -298,13 +298,14 @@ def merge_model(
                 label=comp.label,
                 fit=comp.fit,
                 snap={"status": "not-pipe", "reason": why},
+                insulation=comp.insulation,
             )
     if not pipe_idx:
         comps = tuple(others.get(k, c) for k, c in enumerate(base.components))
         return base.replace(components=comps, catalog=catalog.name)
 
     items = [report.fits[k] for k in pipe_idx]
-    cyls = [item.result.primitive for item in items]
+    cyls = [base.components[k].geometry for k in pipe_idx]  # inside any insulation
     ids = [item.object.id for item in items]
     index_of = {obj_id: n for n, obj_id in enumerate(ids)}
     centers = np.array([c.center for c in cyls])
@@ -581,6 +582,12 @@ def merge_model(
             snap_map["reason"] = (
                 f"joint estimate of the run {', '.join(run_ids)}: " + snap_map["reason"]
             )
+        if comp.insulation:
+            snap_map["reason"] = (
+                f"fitted on {comp.insulation * 1000:g} mm of insulation (cladding OD "
+                f"{(ods[m] + 2 * comp.insulation) * 1000:.1f} mm, pipe "
+                f"{ods[m] * 1000:.1f} mm): " + snap_map["reason"]
+            )
         snap_map.update(run_info[m])
         if member_hint[m]:
             snap_map["hint"] = member_hint[m]
@@ -603,6 +610,7 @@ def merge_model(
             fit=comp.fit,
             snap=snap_map,
             corrections=tuple(corrections),
+            insulation=comp.insulation,
         )
         specs.append(
             PipeSpec(

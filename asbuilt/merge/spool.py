@@ -647,7 +647,7 @@ def build_spools(
             comps.append((pid, start, end))
         by_pipe[i] = comps
 
-    fittings_after: dict[int, list[tuple[str, str, object, PipeSpec, dict]]] = {}
+    fittings_after: dict[int, list[tuple[str, str, object, PipeSpec, dict, float]]] = {}
     for joint, item in built:
         kind, name, geometry, size_of, snap = item[:5]
         if kind in ("tee", "cross") and joint.through is not None:
@@ -659,7 +659,11 @@ def build_spools(
             name = "-".join([piece_ids[i][k], piece_ids[i][k + 1], *outlets])
             snap = {**snap, "connects": [piece_ids[i][k], piece_ids[i][k + 1], *outlets]}
         first = min(joint.pipes)
-        fittings_after.setdefault(first, []).append((kind, name, geometry, size_of, snap))
+        # lagging runs on over the fittings of insulated pipes: the thickest of theirs
+        insulation = max(pipes[k].component.insulation for k in joint.pipes)
+        fittings_after.setdefault(first, []).append(
+            (kind, name, geometry, size_of, snap, insulation)
+        )
 
     # spools: pipes joined by any joint (including contacts and failed ones)
     roots = {group[0]: group for group in connected_groups(len(pipes), joints)}
@@ -757,11 +761,12 @@ def build_spools(
                 fit=base.fit,
                 snap=snap,
                 corrections=tuple(corrections),
+                insulation=base.insulation,
             )
             components.append(comp)
             spool_members[spool].append(comp.id)
             pipe_length[spool] += geometry.length
-        for kind, name, geometry, size_of, snap in fittings_after.get(i, []):
+        for kind, name, geometry, size_of, snap, insulation in fittings_after.get(i, []):
             comp = Component(
                 id=unique(name),
                 type=kind,
@@ -772,6 +777,7 @@ def build_spools(
                 nominal=size_of.nominal,
                 schedule=size_of.schedule,
                 snap=snap,
+                insulation=insulation,
             )
             components.append(comp)
             spool_members[spool].append(comp.id)

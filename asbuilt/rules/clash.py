@@ -18,6 +18,8 @@ merging placed is not spared so: it ends only at its ports, :data:`FITTINGS`). A
 one member passing through another. Two same-size pipes on one axis are judged before those
 exceptions: overlapping by more than a joint's scale (:data:`DUPLICATE_DIAMETERS` ODs or
 ``joint_distance``), or one wholly inside the other, they are a clash (a duplicate scan).
+An insulated component's solid here is its envelope (:func:`asbuilt.insulation.envelope`): the
+cladding was measured and takes up the room, so a beam through the lagging is a clash.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from asbuilt.findings import Suggestion
+from asbuilt.insulation import envelope
 from asbuilt.model import Bend, Cross, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
@@ -492,12 +495,14 @@ def check_clash(ctx: Context) -> None:
     min_volume = float(ctx.opt(slug, "min_volume"))
     samples = int(ctx.opt(slug, "samples"))
     connections = bool(ctx.opt(slug, "end_connections"))
-    keep, boxes = [], []
+    keep, boxes, solid = [], [], []
     for comp in comps:
-        box = bounds(comp.geometry, thickness)
+        shape = envelope(comp)  # an insulated pipe takes up the room of its cladding
+        box = bounds(shape, thickness)
         if box is not None:
             keep.append(comp)
             boxes.append(box)
+            solid.append(shape)
     if len(keep) < 2:
         return
     boxes = np.asarray(boxes)
@@ -509,14 +514,15 @@ def check_clash(ctx: Context) -> None:
             continue
         if frozenset((a.id, b.id)) in joined:
             continue
+        ga, gb = solid[i], solid[j]
         if connections and (
-            (a.type not in FITTINGS and ends_into(a.geometry, b.geometry, thickness))
-            or (b.type not in FITTINGS and ends_into(b.geometry, a.geometry, thickness))
+            (a.type not in FITTINGS and ends_into(a.geometry, gb, thickness))
+            or (b.type not in FITTINGS and ends_into(b.geometry, ga, thickness))
         ):
             continue
         volume, se, centroid = overlap_volume(
-            a.geometry,
-            b.geometry,
+            ga,
+            gb,
             boxes[i],
             boxes[j],
             samples,
@@ -529,12 +535,12 @@ def check_clash(ctx: Context) -> None:
         # their surfaces is certain; an overlap within that band may be fit noise (a pipe resting
         # on a support)
         erode_a, erode_b = erosions(surface_stderr(a), surface_stderr(b), ctx.k)
-        margin = _across(erode_a, a.geometry, centroid) + _across(erode_b, b.geometry, centroid)
+        margin = _across(erode_a, ga, centroid) + _across(erode_b, gb, centroid)
         certain = volume - ctx.k * se > min_volume
         if certain and margin > 0:
             kept, kept_se, _ = overlap_volume(
-                a.geometry,
-                b.geometry,
+                ga,
+                gb,
                 boxes[i],
                 boxes[j],
                 samples,
@@ -549,6 +555,7 @@ def check_clash(ctx: Context) -> None:
             slug,
             [first, second],
             f"{first} and {second} intersect: {volume * 1e6:.0f} cm3 (+- {se * 1e6:.0f}) of overlap"
+            + (" (insulation included)" if a.insulation or b.insulation else "")
             + (
                 ""
                 if certain

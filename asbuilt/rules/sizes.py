@@ -31,7 +31,8 @@ def measured_od(component: Component) -> tuple[float | None, float | None]:
         return od, None if s is None else float(s)
     if component.fit is not None and component.fit.kind == "cylinder":
         r_se = stderr_value(component.fit.stderr, "radius")
-        return 2 * float(component.fit.primitive.radius), None if r_se is None else 2 * r_se
+        od = 2 * (float(component.fit.primitive.radius) - float(component.insulation))
+        return od, None if r_se is None else 2 * r_se
     return None, None
 
 
@@ -335,9 +336,14 @@ def check_hint(ctx: Context, table: SizeTable | None) -> None:
             )
         cause = ""
         if steps is not None and steps > _HINT_MISREAD_STEPS and od > float(hint_od):
+            more = mm((od - float(hint_od)) / 2)
             cause = (
                 f"; the fit is {steps} catalog sizes above the hint: lagging or insulation about "
-                f"{mm((od - float(hint_od)) / 2)} thick, a coating or a clamp may cover the pipe"
+                f"{more} thick, a coating or a clamp may cover the pipe (give the scan object's "
+                '"insulation" thickness)'
+                if not comp.insulation
+                else f"; the fit is {steps} catalog sizes above the hint: the insulation may be "
+                f"about {more} thicker than the {mm(comp.insulation)} given"
             )
         ctx.emit(
             slug,

@@ -17,7 +17,8 @@ from asbuilt.model import COMPONENT_TYPES
 
 
 def test_every_component_type_has_a_colour():
-    assert set(KIND_COLOURS) == set(COMPONENT_TYPES)
+    # and the insulation parts drawn around insulated components
+    assert set(KIND_COLOURS) == set(COMPONENT_TYPES) | {"insulation"}
     for colour in KIND_COLOURS.values():
         assert len(colour) == 4 and all(0 <= c <= 1 for c in colour)
 
