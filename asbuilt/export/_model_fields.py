@@ -58,6 +58,15 @@ def _texts_problem(value) -> str | None:
     return "must be a list of text"
 
 
+def _sizes_problem(value) -> str | None:
+    """A fitting's end sizes: nominal sizes, null for an end whose pipe matched no size."""
+    if value is None or (
+        isinstance(value, list) and all(v is None or isinstance(v, str) for v in value)
+    ):
+        return None
+    return "must be a list of nominal sizes (text, or null for no catalog size)"
+
+
 def _point_problem(value) -> str | None:
     if (
         isinstance(value, list)
@@ -137,7 +146,14 @@ def _check_fields(mapping: Mapping, fields: Mapping[str, Callable], key: str) ->
             check(value, where)
 
 
-_SCALARS = (_number_problem, _text_problem, _flag_problem, _texts_problem, _point_problem)
+_SCALARS = (
+    _number_problem,
+    _text_problem,
+    _flag_problem,
+    _texts_problem,
+    _sizes_problem,
+    _point_problem,
+)
 
 _CANDIDATE = _object(
     {"nominal": _text_problem, "od": _number_problem, "od_catalog": _number_problem}
@@ -164,7 +180,7 @@ SNAP_FIELDS: dict[str, Callable] = {
     "hint_rejected": _flag_problem,
     "connects": _texts_problem,
     "run": _texts_problem,
-    "sizes": _texts_problem,
+    "sizes": _sizes_problem,
     "notes": _texts_problem,
     "merge_notes": _texts_problem,
     "candidates": _candidates,

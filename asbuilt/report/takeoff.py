@@ -368,9 +368,9 @@ def _fitting_size(component: Component, sizes: _Sizes) -> str:
     g = component.geometry
     if isinstance(g, Reducer):
         listed = component.snap.get("sizes") if isinstance(component.snap, Mapping) else None
-        if listed and len(listed) == 2:
+        if listed and len(listed) == 2 and all(s is not None for s in listed):
             big, small = (str(s) for s in listed)
-        else:
+        else:  # an end whose pipe matched no catalog size is named by its OD
             ods = sorted((2 * g.outer_radius_start, 2 * g.outer_radius_end), reverse=True)
             big, small = (sizes.nominal_for_od(od) or f"{od * 1000:.1f} mm" for od in ods)
         return f"{sizes.label(big, None)} x {small}"
