@@ -501,3 +501,72 @@ def test_elbows_with_one_size_still_read():
     assert component.geometry.radii == (0.1683 / 2, 0.1683 / 2)
     assert component.geometry.walls == (0.00602, 0.00602)
     assert not component.geometry.reducing
+
+
+def test_insulation_round_trips_in_components_and_the_scan(tmp_path):
+    import dataclasses
+
+    from asbuilt.pipeline import build_model
+    from asbuilt.scan import load_scan
+
+    scan = load_scan(ROOT / "samples" / "spool.json")
+    objects = tuple(
+        dataclasses.replace(o, insulation=0.04) if o.kind == "cylinder" else o for o in scan.objects
+    )
+    # the sample's points lie on the bare pipes; 40 mm less leaves every one a pipe inside
+    model = build_model(dataclasses.replace(scan, objects=objects))
+    assert {c.insulation for c in model.components} == {0.04}
+    path = tmp_path / "lagged.json"
+    write_model_json(model, path)
+    document = load_model_document(path)
+    assert {c["insulation"] for c in document["components"]} == {0.04}
+    assert {o.get("insulation") for o in document["scan"]["objects"]} == {0.04}
+    again = load_model(path)
+    assert [c.insulation for c in again.components] == [c.insulation for c in model.components]
+    assert {o.insulation for o in again.scan.objects} == {0.04}
+
+
+@pytest.mark.parametrize(("given", "read"), [(None, 0.0), ("absent", 0.0), (0.03, 0.03)])
+def test_insulation_absent_or_null_reads_as_bare(given, read):
+    pipe = {"id": "P1", "type": "pipe", "shape": "straight", "start": [0, 0, 0], "end": [1, 0, 0]}
+    pipe["od"] = 0.1143
+    if given != "absent":
+        pipe["insulation"] = given
+    document = {"format": FORMAT, "version": 1, "components": [pipe]}
+    assert model_from_document(document).components[0].insulation == read
+
+
+@pytest.mark.parametrize(
+    ("value", "message"), [(-0.01, "must be >= 0 (metres), not -0.01"), ("5", "finite number")]
+)
+def test_bad_insulation_is_located(value, message):
+    pipe = {"id": "P1", "type": "pipe", "shape": "straight", "start": [0, 0, 0], "end": [1, 0, 0]}
+    document = {
+        "format": FORMAT,
+        "version": 1,
+        "components": [{**pipe, "od": 0.1, "insulation": value}],
+    }
+    with pytest.raises(ModelDocumentError) as info:
+        model_from_document(document, source="m.json")
+    assert str(info.value).startswith("m.json: components[0] (P1).insulation: ")
+    assert message in str(info.value)
+
+
+def test_a_reducer_to_a_pipe_of_no_catalog_size_round_trips(tmp_path, monkeypatch):
+    # its snap "sizes" holds null for the unsnapped end; documents holding it were refused
+    from asbuilt.merge import merge_model
+    from asbuilt.report.takeoff import take_off
+
+    monkeypatch.syspath_prepend(str(ROOT / "tests" / "merge"))
+    from synthetic_pipes import Pipe, report_of
+
+    pipes = [Pipe("P1", (0, 0, 0), (1, 0, 0), 0.1143), Pipe("P2", (1.2, 0, 0), (2.2, 0, 0), 0.08)]
+    model = merge_model(report_of(pipes))
+    reducer = next(c for c in model.components if c.type == "reducer")
+    assert reducer.snap["sizes"] == ["4", None]
+    path = tmp_path / "m.json"
+    write_model_json(model, path)
+    again = load_model(path)
+    assert next(c for c in again.components if c.type == "reducer").snap["sizes"] == ["4", None]
+    (line,) = [f for f in take_off(again).fittings if f.type.endswith("reducer")]
+    assert line.size == "NPS 4 x 80.0 mm"

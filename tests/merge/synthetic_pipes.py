@@ -24,6 +24,7 @@ class Pipe:
     group: str | None = None
     label: str | None = None
     se_axis_deg: float = 0.2
+    insulation: float = 0.0  # metres; ``od`` is then the fitted (cladding) OD
 
 
 def cylinder_fit(start, end, od, se_radius=0.0005, se_axis_deg=0.2) -> FitResult:
@@ -59,6 +60,7 @@ def report_of(pipes, links=(), extra=()) -> FitReport:
             group=p.group,
             label=p.label,
             nominal=p.nominal,
+            insulation=p.insulation,
         )
         objects.append(obj)
         fit = cylinder_fit(p.start, p.end, p.od, p.se_radius, p.se_axis_deg)

@@ -1,5 +1,7 @@
 """clash: overlap volumes against closed forms (Steinmetz solid, lens, slab of a cylinder)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -380,3 +382,14 @@ def test_the_eroded_faces_of_a_box_are_per_axis():
     points = np.array([[0.45, 0, 0], [0, 0, 1.9], [0, 0, 1.7]])
     # shrunk 0.1 m across x and y, 0.25 m along z
     assert inside(box, points, erode=np.array([0.1, 0.1, 0.25])).tolist() == [False, False, True]
+
+
+def test_an_insulated_pipe_clashes_at_its_cladding():
+    # crossing pipes 30 mm apart: clear when bare, 20 mm into the other's 50 mm of lagging
+    a = pipe("P1", [-1, 0, 1], [1, 0, 1], 0.1143)
+    b = pipe("P2", [0, -1, 1.1443], [0, 1, 1.1443], 0.1143)
+    assert not [f for f in check_model(model(a, b)) if f.slug == "clash"]
+    lagged = dataclasses.replace(b, insulation=0.05)
+    (found,) = [f for f in check_model(model(a, lagged)) if f.slug == "clash"]
+    assert found.severity == "error" and found.objects == ("P1", "P2")
+    assert "(insulation included)" in found.message

@@ -511,13 +511,13 @@ BAD = (
     Bad(
         "insulation on a cuboid",
         _set("objects.1.insulation", 0.05),
-        'objects[1] (K2).insulation: insulation is a radial thickness on a cylinder, not on kind '
+        "objects[1] (K2).insulation: insulation is a radial thickness on a cylinder, not on kind "
         '"cuboid"; give the object "kind": "cylinder" or remove its insulation',
     ),
     Bad(
         "insulation on an auto object",
         _set("objects.5.insulation", 0.05),
-        'objects[5] (K6).insulation: insulation is a radial thickness on a cylinder, not on kind '
+        "objects[5] (K6).insulation: insulation is a radial thickness on a cylinder, not on kind "
         '"auto"; give the object "kind": "cylinder" or remove its insulation',
     ),
     Bad(
@@ -530,7 +530,7 @@ BAD = (
         "insulation as text",
         _set("objects.0.insulation", "50 mm"),
         "objects[0] (K1).insulation: must be a number >= 0 (the insulation's thickness in the "
-        "file's units), not a string (\"50 mm\")",
+        'file\'s units), not a string ("50 mm")',
     ),
     Bad(
         "insulation in millimetres in a metre file",
