@@ -34,6 +34,7 @@ an IFC file is written, and its absence is a one-line :class:`asbuilt.errors.Exp
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import uuid
 from collections.abc import Mapping
@@ -42,8 +43,9 @@ from pathlib import Path
 import numpy as np
 
 from asbuilt import __version__
-from asbuilt.cad.colours import colour_for, component_status
+from asbuilt.cad.colours import KIND_COLOURS, colour_for, component_status
 from asbuilt.errors import ExportError
+from asbuilt.insulation import jacket
 from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
@@ -399,6 +401,48 @@ class _Writer:
             return None
         return None if dn is None else dn / 1000.0
 
+    def insulation(self, component: Component, element, storey) -> object | None:
+        """The IfcCovering INSULATION around an insulated component (its jacket,
+        :func:`asbuilt.insulation.jacket`), related to its element by IfcRelCoversBldgElements;
+        None when it is bare."""
+        geometry = jacket(component)
+        if geometry is None:
+            return None
+        api, f = self.api, self.f
+        name = f"{component.id} insulation"
+        covering = api.root.create_entity(
+            f, ifc_class="IfcCovering", predefined_type="INSULATION", name=name
+        )
+        covering.GlobalId = self.guid("insulation", component.id)
+        anchor, kind, items = self.shape(dataclasses.replace(component, geometry=geometry))
+        covering.ObjectPlacement = f.createIfcLocalPlacement(
+            storey.ObjectPlacement, self.axis2(anchor)
+        )
+        representation = f.createIfcShapeRepresentation(self.body, "Body", kind, items)
+        api.geometry.assign_representation(f, product=covering, representation=representation)
+        if "insulation" not in self.styles:
+            r, g, b, a = KIND_COLOURS["insulation"]
+            colour = f.createIfcColourRgb(None, float(r), float(g), float(b))
+            shading = f.createIfcSurfaceStyleShading(colour, float(1.0 - a))
+            self.styles["insulation"] = f.createIfcSurfaceStyle("insulation", "BOTH", [shading])
+        api.style.assign_representation_styles(
+            f, shape_representation=representation, styles=[self.styles["insulation"]]
+        )
+        pset = api.pset.add_pset(f, product=covering, name="Asbuilt_Component")
+        api.pset.edit_pset(
+            f,
+            pset=pset,
+            properties={
+                "ComponentType": "insulation",
+                "InsulationThickness": f.createIfcPositiveLengthMeasure(component.insulation),
+                "Covers": component.id,
+            },
+        )
+        relation = api.root.create_entity(f, ifc_class="IfcRelCoversBldgElements")
+        relation.RelatingBuildingElement = element
+        relation.RelatedCoverings = [covering]
+        return covering
+
     def asbuilt_properties(self, component: Component) -> dict:
         g = component.geometry
         props: dict = {"ComponentType": component.type}
@@ -454,6 +498,10 @@ class _Writer:
                     )
                 else:
                     props[f"StdErr_{key}"] = self.f.createIfcLengthMeasure(value)
+        if component.insulation:
+            props["InsulationThickness"] = self.f.createIfcPositiveLengthMeasure(
+                component.insulation
+            )
         props["ComplianceStatus"] = self.status.get(component.id) or "ok"
         codes = self.codes.get(component.id)
         if codes:
@@ -522,11 +570,15 @@ class _Writer:
         for entity in (site, building, storey):
             api.geometry.edit_object_placement(f, product=entity)
         elements = {}
+        coverings = []
         for component in self.model.components:
             elements[component.id] = self.element(component, storey)
+            covering = self.insulation(component, elements[component.id], storey)
+            if covering is not None:
+                coverings.append(covering)
         if elements:
             api.spatial.assign_container(
-                f, products=list(elements.values()), relating_structure=storey
+                f, products=list(elements.values()) + coverings, relating_structure=storey
             )
         self.groups(elements, building)
         self.ports(elements)

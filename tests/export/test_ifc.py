@@ -607,3 +607,57 @@ def test_nominal_diameter_from_the_models_own_catalog_file(tmp_path):
     document = ifcopenshell.open(str(tmp_path / "p.ifc"))
     (pipe,) = document.by_type("IfcPipeSegment")
     assert _psets(pipe)["Pset_PipeSegmentTypeCommon"]["NominalDiameter"] == pytest.approx(0.101)
+
+
+@needs_ifc
+def test_insulation_is_a_covering_of_its_element(tmp_path):
+    """An insulated component's jacket is an IfcCovering INSULATION, related to its element
+    (IfcRelCoversBldgElements), of the jacket's volume; the element says the thickness too."""
+    import ifcopenshell
+    import ifcopenshell.geom
+    import ifcopenshell.util.element
+    import ifcopenshell.util.shape
+    import ifcopenshell.validate
+
+    t = 0.05
+    lagged = {"P1", "E1", "CY"}
+    model = zoo_model()
+    model = model.replace(
+        components=tuple(
+            dataclasses.replace(c, insulation=t) if c.id in lagged else c for c in model.components
+        )
+    )
+    path = tmp_path / "lagged.ifc"
+    export_model(model, path)
+    f = ifcopenshell.open(str(path))
+    coverings = {c.Name: c for c in f.by_type("IfcCovering")}
+    assert set(coverings) == {f"{name} insulation" for name in lagged}
+    covered = {
+        rel.RelatedCoverings[0].Name: rel.RelatingBuildingElement.Name
+        for rel in f.by_type("IfcRelCoversBldgElements")
+    }
+    assert covered == {f"{name} insulation": name for name in lagged}
+    settings = ifcopenshell.geom.settings()
+    settings.set("use-world-coords", True)
+    settings.set("mesher-linear-deflection", 2e-4)
+    settings.set("mesher-angular-deflection", 0.1)
+    ring = math.pi * ((R4 + t) ** 2 - R4**2)
+    expected = {
+        "P1 insulation": ring * 1.0,
+        "E1 insulation": ring * 0.2 * math.pi / 2,  # Pappus, bend radius 0.2 m
+        "CY insulation": math.pi * ((0.15 + t) ** 2 - 0.15**2) * 3.0,
+    }
+    for name, volume in expected.items():
+        covering = coverings[name]
+        assert covering.PredefinedType == "INSULATION"
+        shape = ifcopenshell.geom.create_shape(settings, covering).geometry
+        assert ifcopenshell.util.shape.get_volume(shape) == pytest.approx(volume, rel=2e-3)
+        props = ifcopenshell.util.element.get_psets(covering)["Asbuilt_Component"]
+        assert props["InsulationThickness"] == pytest.approx(t)
+    pipe = next(e for e in f.by_type("IfcPipeSegment") if e.Name == "P1")
+    assert ifcopenshell.util.element.get_psets(pipe)["Asbuilt_Component"][
+        "InsulationThickness"
+    ] == pytest.approx(t)
+    logger = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(str(path), logger)
+    assert logger.statements == []
