@@ -285,15 +285,28 @@ def fit_table_rows(report: FitReport, units: str | None = None) -> list[tuple[st
 def fit_table_notes(report: FitReport, units: str | None = None) -> list[tuple[str, str]]:
     """Every fit's notes as ``(object id, note)`` pairs in the scan's order, to show under the
     table: a fit's warnings (undetermined, viewpoint ignored, wider noise, an assumed size),
-    auto's reason for its choice and the outliers it rejected are part of what it says. Their
+    auto's reason for its choice and the outliers it rejected are part of what it says; an
+    insulated cylinder's (the scan's ``insulation``) says the pipe inside it. Their
     lengths are in inches and feet when ``units`` (default: the scan's) is imperial
     (:func:`note_in_units`)."""
     units = report.scan.units if units is None else units
-    return [
-        (item.object.id, note_in_units(note, units))
-        for item in report.fits
-        for note in item.result.notes
-    ]
+    notes = []
+    for item in report.fits:
+        said = list(item.result.notes)
+        thickness = item.object.insulation
+        if thickness and item.result.kind == "cylinder":
+            inside = item.result.primitive.radius - thickness
+            said.append(
+                f"fitted on its insulation: the cladding's radius; with {thickness * 1000:g} mm "
+                + (
+                    f"of insulation the pipe inside has radius {inside * 1000:.1f} mm (OD "
+                    f"{2 * inside * 1000:.1f} mm), which merging snaps"
+                    if inside > 0
+                    else "of insulation no pipe is left inside: check the thickness"
+                )
+            )
+        notes.extend((item.object.id, note_in_units(note, units)) for note in said)
+    return notes
 
 
 #: A length in a fit's note: a number, a space, then mm or m as a word of its own.

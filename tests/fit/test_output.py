@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -238,3 +239,34 @@ def test_notes_give_lengths_in_inches_and_feet_for_imperial_output(note, units, 
     # The fits write their notes in mm and m; a scan in inches or feet shows its table, and
     # its notes, in inches and feet (2 mm = 0.0787 in; 13.39 km = 43,930 ft).
     assert expected in note_in_units(note, units)
+
+
+@pytest.mark.parametrize(
+    ("thickness", "expected"),
+    [
+        (
+            0.02,
+            "fitted on its insulation: the cladding's radius; with 20 mm of insulation the pipe "
+            "inside has radius 37.2 mm (OD 74.3 mm), which merging snaps",
+        ),
+        (
+            0.06,
+            "fitted on its insulation: the cladding's radius; with 60 mm of insulation no "
+            "pipe is left inside: check the thickness",
+        ),
+    ],
+)
+def test_an_insulated_cylinder_notes_the_pipe_inside(thickness, expected):
+    from asbuilt.fit.output import fit_table_notes
+
+    report = report_of(("P1", "cylinder", result_for(PIPE)), ("B1", "cuboid", result_for(BOX)))
+    objects = (
+        dataclasses.replace(report.scan.objects[0], insulation=thickness),
+        report.scan.objects[1],
+    )
+    scan = dataclasses.replace(report.scan, objects=objects)
+    fits = tuple(dataclasses.replace(item, object=obj) for item, obj in zip(report.fits, objects))
+    notes = fit_table_notes(FitReport(scan=scan, fits=fits))
+    assert notes == [("P1", expected)]
+    # the JSON keeps what was measured: the cladding
+    assert fit_report_to_dict(FitReport(scan=scan, fits=fits))["objects"][0]["radius"] == 0.05715
