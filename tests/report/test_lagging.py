@@ -5,8 +5,12 @@ frustum, written independently of the module's Pappus form where one exists."""
 
 from __future__ import annotations
 
+import csv
 import dataclasses
+import io
+import json
 import math
+from datetime import datetime, timezone
 
 import numpy as np
 import pytest
@@ -19,6 +23,7 @@ from asbuilt.report.takeoff import take_off
 
 OD6 = 0.1683  # ASME B36.10M NPS 6
 T = 0.05  # 50 mm of lagging
+STAMP = datetime(2026, 1, 1, tzinfo=timezone.utc)
 
 
 def _part(geometry, t=T, type_="pipe"):
@@ -195,3 +200,46 @@ def test_a_bare_scan_has_no_insulation():
     assert (t.insulated_length, t.insulation_area, t.insulation_volume) == (0.0, 0.0, 0.0)
     assert all(sp.insulated_length == 0.0 for sp in t.spools)
     assert all(row.insulation == 0.0 for row in t.rows)
+
+
+def test_insulation_in_the_json_report_follows_the_schema():
+    import jsonschema
+
+    from asbuilt.report.data import report_data
+    from asbuilt.report.json_report import dumps_report, report_schema
+
+    validator = jsonschema.Draft202012Validator(report_schema())
+    document = json.loads(dumps_report(report_data(_known_lagged(), generated=STAMP)))
+    assert [f"{list(e.path)}: {e.message}" for e in validator.iter_errors(document)] == []
+    takeoff = document["takeoff"]
+    assert [(q["thickness"], q["size"], q["fittings"]) for q in takeoff["insulation"]] == [
+        (T, "NPS 4", 1),
+        (0.1, "OD 2000.0 mm", 0),
+    ]
+    arc = LR4 * math.pi / 2
+    totals = takeoff["totals"]
+    assert totals["insulated_length"] == pytest.approx(5.0 + arc)
+    assert totals["insulated_fittings"] == 1
+    assert totals["insulation_volume"] == pytest.approx(
+        sum(q["volume"] for q in takeoff["insulation"])
+    )
+    assert takeoff["spools"][0]["insulated_length"] == pytest.approx(2.0 + arc)
+    assert {c["id"]: c["insulation"] for c in document["components"]}["TK1"] == 0.1
+    # a bare model: no rows, zero totals, still valid
+    bare = json.loads(dumps_report(report_data(known_model(), generated=STAMP)))
+    assert list(validator.iter_errors(bare)) == []
+    assert bare["takeoff"]["insulation"] == []
+    assert bare["takeoff"]["totals"]["insulation_area"] == 0.0
+    # a row with a zero thickness is no insulation row
+    bare["takeoff"]["insulation"] = [dict(document["takeoff"]["insulation"][0], thickness=0)]
+    assert len(list(validator.iter_errors(bare))) == 1
+
+
+def test_the_csv_appends_the_insulation_thickness_in_mm():
+    from asbuilt.report.data import report_data
+    from asbuilt.report.table_csv import COLUMNS, csv_text
+
+    assert COLUMNS[-1] == "insulation_mm"
+    text = csv_text(report_data(_known_lagged(), generated=STAMP))
+    rows = {row["id"]: row["insulation_mm"] for row in csv.DictReader(io.StringIO(text))}
+    assert rows == {"P1": "50.0", "P1-P2": "50.0", "P2": "50.0", "C1": "0.0", "TK1": "100.0"}
