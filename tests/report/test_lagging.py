@@ -243,3 +243,29 @@ def test_the_csv_appends_the_insulation_thickness_in_mm():
     text = csv_text(report_data(_known_lagged(), generated=STAMP))
     rows = {row["id"]: row["insulation_mm"] for row in csv.DictReader(io.StringIO(text))}
     assert rows == {"P1": "50.0", "P1-P2": "50.0", "P2": "50.0", "C1": "0.0", "TK1": "100.0"}
+
+
+def test_the_html_takeoff_has_an_insulation_table_only_when_insulated():
+    from asbuilt.report._html_takeoff import _takeoff
+    from asbuilt.report.data import report_data
+
+    page = _takeoff(report_data(_known_lagged(), generated=STAMP))
+    assert "<h3>Insulation by thickness and size</h3>" in page
+    assert '<table class="insulation">' in page
+    assert '<th class="num">Insulated (m)</th>' in page  # the spools table's column
+    arc = LR4 * math.pi / 2
+    assert f'<tr><td class="num">50.0</td><td>NPS 4</td><td class="num">{2 + arc:,.3f}</td>' in page
+    assert (
+        f'<tr class="total"><td colspan="2">Total</td><td class="num">{5 + arc:,.3f}</td>' in page
+    )
+    bare = _takeoff(report_data(known_model(), generated=STAMP))
+    assert "Insulat" not in bare
+
+
+def test_the_insulated_page_is_well_formed():
+    from report_helpers import check_html
+
+    from asbuilt.report.data import report_data
+    from asbuilt.report.html import html_text
+
+    check_html(html_text(report_data(_known_lagged(), generated=STAMP)))
