@@ -1,5 +1,5 @@
 """The HTML report's quantity take-off section: spools, pipe by size and schedule, fittings, butt
-welds, and other solids (a private helper of :mod:`asbuilt.report.html`)."""
+welds, insulation, and other solids (a private helper of :mod:`asbuilt.report.html`)."""
 
 from __future__ import annotations
 
@@ -52,6 +52,8 @@ def _takeoff(data: ReportData) -> str:
             + (("lateral",) if has_laterals else ())
             + ("reducer", "coupling")
         )
+        # an insulated length column only where something is insulated
+        lagged = bool(t.insulation)
         rows = [
             f'<tr id="spool-{anchor(sp.id)[4:]}">'
             + _td(_e(sp.id))
@@ -64,6 +66,7 @@ def _takeoff(data: ReportData) -> str:
             + _td(str(sp.welds), True)
             + _td(_num(sp.diameter_inches, 1), True)
             + _td(str(sp.open_ends), True)
+            + (_td(_num(sp.insulated_length), True) if lagged else "")
             + _td(" ".join(_e(code) for code in sp.findings))
             + "</tr>"
             for sp in t.spools
@@ -86,6 +89,7 @@ def _takeoff(data: ReportData) -> str:
                     ("Welds", True),
                     ("Dia-inch", True),
                     ("Open ends", True),
+                    *((("Insulated (m)", True),) if lagged else ()),
                     ("Findings", False),
                 ],
                 rows,
@@ -184,6 +188,8 @@ def _takeoff(data: ReportData) -> str:
     else:
         out.append('<p class="muted">No fittings.</p>')
     out.append(_welds(t))
+    if t.insulation:  # nothing when bare: most plants are, and the table would be empty
+        out.append(_insulation(t))
 
     out.append("<h3>Members, tanks, vessels and other solids</h3>")
     if t.solids:
@@ -279,3 +285,50 @@ def _welds(t) -> str:
         f"stopped; they are not counted as welds.{missing}</p>"
     )
     return "\n".join(out)
+
+
+def _insulation(t) -> str:
+    """The insulation by thickness and size (:mod:`asbuilt.report.lagging`)."""
+    rows = [
+        "<tr>"
+        + _td(_mm(q.thickness), True)
+        + _td(_e(q.size))
+        + _td(_num(q.length), True)
+        + _td(_num(q.area, 2), True)
+        + _td(_num(q.volume, 3), True)
+        + _td(str(q.fittings), True)
+        + _td(", ".join(_link(c) for c in q.components))
+        + "</tr>"
+        for q in t.insulation
+    ]
+    rows.append(
+        '<tr class="total"><td colspan="2">Total</td>'
+        + _td(_num(t.insulated_length), True)
+        + _td(_num(t.insulation_area, 2), True)
+        + _td(_num(t.insulation_volume, 3), True)
+        + _td(str(t.insulated_fittings), True)
+        + "<td></td></tr>"
+    )
+    table = _table(
+        [
+            ("Thickness (mm)", True),
+            ("Size", False),
+            ("Length (m)", True),
+            ("Cladding (m²)", True),
+            ("Volume (m³)", True),
+            ("Fittings", True),
+            ("Components", False),
+        ],
+        rows,
+        "insulation",
+    )
+    return (
+        "<h3>Insulation by thickness and size</h3>\n"
+        + table
+        + '\n<p class="muted">Length along the centreline (elbows R &times; angle, tees and '
+        "crosses their run plus each outlet beyond the run's cladding); cladding area "
+        "2&pi;(r&nbsp;+&nbsp;t)&nbsp;L and volume &pi;((r&nbsp;+&nbsp;t)² &minus; r²)&nbsp;L "
+        "(Pappus: exact for pipes and elbows, approximate at reducers, tees and crosses); the "
+        "full thickness is counted, also where the drawn jacket is trimmed at a tight fitting. "
+        "Tanks and vessels: their sides only (heads are not modelled).</p>"
+    )

@@ -62,6 +62,7 @@ def build_report_schema() -> dict:
             "welds": _COUNT,
             "diameter_inches": {"anyOf": [_NONNEG, {"type": "null"}]},
             "open_ends": _COUNT,
+            "insulated_length": _NONNEG,
         }
     )
     weld = _object(
@@ -73,6 +74,17 @@ def build_report_schema() -> dict:
             "count": {"type": "integer", "minimum": 1},
             "diameter_inches": {"anyOf": [_NONNEG, {"type": "null"}]},
             "joints": _IDS,
+        }
+    )
+    insulation = _object(
+        {
+            "thickness": {"type": "number", "exclusiveMinimum": 0},
+            "size": {"type": "string"},
+            "length": _NONNEG,
+            "area": _NONNEG,
+            "volume": _NONNEG,
+            "fittings": _COUNT,
+            "components": _IDS,
         }
     )
     pipe = _object(
@@ -130,6 +142,7 @@ def build_report_schema() -> dict:
             "area": _NUMBER_OR_NULL,
             "findings": _IDS,
             "severity": _SEVERITY_OR_NULL,
+            "insulation": _NONNEG,
         }
     )
     quality = _object(
@@ -194,6 +207,10 @@ def build_report_schema() -> dict:
             "weld_count": _COUNT,
             "diameter_inches": {"anyOf": [_NONNEG, {"type": "null"}]},
             "welds_without_nps": _COUNT,
+            "insulated_length": _NONNEG,
+            "insulation_area": _NONNEG,
+            "insulation_volume": _NONNEG,
+            "insulated_fittings": _COUNT,
             "density": _NUMBER_OR_NULL,
             "material": _STRING_OR_NULL,
             "volumes": {"type": "object", "additionalProperties": _NUMBER},
@@ -230,6 +247,7 @@ def build_report_schema() -> dict:
                     "pipes": {"type": "array", "items": pipe},
                     "fittings": {"type": "array", "items": fitting},
                     "welds": {"type": "array", "items": weld},
+                    "insulation": {"type": "array", "items": insulation},
                     "solids": {"type": "array", "items": solid},
                     "totals": totals,
                 }

@@ -5,7 +5,8 @@ Columns (header row first, in this order): ``id``, ``type``, ``spool``, ``label`
 for a reducer), ``schedule``, ``length_m`` and ``length_ft`` (straight length of pipes and
 cylinders, longest edge of cuboids; empty for fittings), ``quantity_unit`` (``m``, ``ea``,
 ``m3`` or ``m2``), ``quantity``, ``weight_kg`` (pipes with a known wall), ``surface_area_m2``,
-``findings`` (finding codes, worst first, separated by spaces) and ``severity`` (the worst).
+``findings`` (finding codes, worst first, separated by spaces), ``severity`` (the worst) and
+``insulation_mm`` (the thickness of lagging around it in millimetres, 1 decimal; 0 when bare).
 Empty cells mean "not applicable or unknown". Decimal point, comma separated, CRLF line ends
 (RFC 4180, Python's ``csv`` excel dialect).
 
@@ -46,6 +47,7 @@ COLUMNS = (
     "surface_area_m2",
     "findings",
     "severity",
+    "insulation_mm",
 )
 
 _DECIMALS = {"m": 3, "m2": 3, "m3": 4, "ea": 0}
@@ -91,6 +93,7 @@ def csv_text(data: ReportData) -> str:
                 _number(row.area, 3),
                 text_cell(" ".join(row.findings)),
                 text_cell(row.severity),
+                _number(row.insulation * 1000.0, 1),
             ]
         )
     return buffer.getvalue()

@@ -20,6 +20,8 @@ Formulas
 * Plane: area of its outline polygon (shoelace formula in the plane), no volume.
 * Hull: volume by the divergence theorem over its outward triangles, surface the sum of the
   triangle areas.
+* Insulation (lagging and cladding): insulated centreline length, cladding area and insulation
+  volume by Pappus' theorems, grouped by thickness and size (:mod:`asbuilt.report.lagging`).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 from asbuilt.units import UNITS
 
+from .lagging import InsulationQuantity, InsulationSummary, summarise_insulation
 from .welds import WeldCount, WeldSummary, summarise_welds
 
 __all__ = [
@@ -194,7 +197,8 @@ class ComponentRow:
     spheres, planes and hulls); ``quantity_unit`` is ``"m"`` (pipe), ``"ea"`` (fittings),
     ``"m3"`` (solids) or ``"m2"`` (planes) and ``quantity`` the amount in it; ``weight`` kg or
     None; ``area`` m2 or None; ``findings`` the codes of the findings naming it, worst first;
-    ``severity`` the worst of them or None.
+    ``severity`` the worst of them or None; ``insulation`` metres, the thickness of lagging
+    around it (0 when bare; :attr:`asbuilt.model.Component.insulation`).
     """
 
     id: str
@@ -211,6 +215,7 @@ class ComponentRow:
     area: float | None
     findings: tuple[str, ...]
     severity: str | None
+    insulation: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -222,7 +227,9 @@ class SpoolQuantity:
     (``fittings``: component type -> count, a lateral as ``"lateral"``, not ``"tee"``), its ``sizes`` (display labels) and ``findings`` (codes on its
     components, worst first); its butt ``welds``, their ``diameter_inches`` (None when no weld
     has an NPS size) and its ``open_ends`` (piping ends meeting nothing: flanges, equipment,
-    where the scan stopped; :mod:`asbuilt.report.welds`)."""
+    where the scan stopped; :mod:`asbuilt.report.welds`); its ``insulated_length`` metres
+    (centreline length of its insulated components, :mod:`asbuilt.report.lagging`; 0 when
+    bare)."""
 
     id: str
     pipe_length: float
@@ -236,6 +243,7 @@ class SpoolQuantity:
     welds: int = 0
     diameter_inches: float | None = None
     open_ends: int = 0
+    insulated_length: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -246,7 +254,9 @@ class TakeOff:
     (None: no weight) and ``material``; ``spools`` per spool in the model's order. Butt welds
     (:mod:`asbuilt.report.welds`): ``welds`` by size, largest first, ``weld_count``,
     ``diameter_inches`` (None when no weld has an NPS size) and ``welds_without_nps`` (welds
-    left out of it)."""
+    left out of it). Insulation (:mod:`asbuilt.report.lagging`): ``insulation`` by thickness and
+    size, thinnest first, ``insulated_length`` metres, ``insulation_area`` m2 of cladding,
+    ``insulation_volume`` m3 and ``insulated_fittings`` (all 0 when nothing is insulated)."""
 
     pipes: tuple[PipeLine, ...]
     fittings: tuple[FittingCount, ...]
@@ -265,6 +275,11 @@ class TakeOff:
     weld_count: int = 0
     diameter_inches: float | None = None
     welds_without_nps: int = 0
+    insulation: tuple[InsulationQuantity, ...] = ()
+    insulated_length: float = 0.0
+    insulation_area: float = 0.0
+    insulation_volume: float = 0.0
+    insulated_fittings: int = 0
 
 
 # ----------------------------------------------------------------------------------------------
@@ -406,7 +421,7 @@ def _findings_by_object(model: Model) -> dict[str, list]:
 
 
 def _spools(
-    model: Model, rows: list[ComponentRow], welds: WeldSummary
+    model: Model, rows: list[ComponentRow], welds: WeldSummary, lagging: InsulationSummary
 ) -> tuple[SpoolQuantity, ...]:
     by_id = {row.id: row for row in rows}
     # bought as laterals, not tees (see FITTING_KINDS), so counted apart here too
@@ -443,6 +458,7 @@ def _spools(
                 welds=welds.spool_welds.get(spool_id, 0),
                 diameter_inches=welds.spool_diameter_inches.get(spool_id),
                 open_ends=welds.spool_open_ends.get(spool_id, 0),
+                insulated_length=lagging.spool_length.get(spool_id, 0.0),
             )
         )
     return tuple(result)
@@ -540,6 +556,7 @@ def take_off(model: Model, *, density: float | None = None, catalog=None) -> Tak
                 area=None if area is None else float(area),
                 findings=tuple(dict.fromkeys(f.code for f in found)),
                 severity=found[0].severity if found else None,
+                insulation=float(comp.insulation),
             )
         )
 
@@ -577,6 +594,11 @@ def take_off(model: Model, *, density: float | None = None, catalog=None) -> Tak
             key=lambda kv: (FITTING_KINDS.index(kv[0][0]), -kv[1]["od"], kv[0][1], kv[0][3] or 0),
         )
     )
+    # grouped under the take-off's own size labels (a tank, which has none, by its OD)
+    labels = {row.id: row.size for row in rows}
+    lagging = summarise_insulation(
+        model, lambda c: labels.get(c.id) or sizes.label(None, _outer_diameter(c.geometry))
+    )
     volumes: dict[str, float] = {}
     areas: dict[str, float] = {}
     for solid in solids:
@@ -584,7 +606,7 @@ def take_off(model: Model, *, density: float | None = None, catalog=None) -> Tak
         if solid.volume is not None:
             volumes[solid.category] = volumes.get(solid.category, 0.0) + solid.volume
     return TakeOff(
-        spools=_spools(model, rows, welds),
+        spools=_spools(model, rows, welds, lagging),
         pipes=pipes,
         fittings=fitting_rows,
         solids=tuple(solids),
@@ -605,4 +627,9 @@ def take_off(model: Model, *, density: float | None = None, catalog=None) -> Tak
         weld_count=welds.count,
         diameter_inches=welds.diameter_inches,
         welds_without_nps=welds.without_nps,
+        insulation=lagging.by_size,
+        insulated_length=lagging.length,
+        insulation_area=lagging.area,
+        insulation_volume=lagging.volume,
+        insulated_fittings=lagging.fittings,
     )
