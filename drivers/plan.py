@@ -256,7 +256,7 @@ def check_insulation(value, kind: str, *, source: str | None = None, where: str 
             source=source,
             where=where,
         )
-    return float(value)
+    return abs(float(value))  # -0.0 is 0
 
 
 @dataclass(frozen=True)
