@@ -7,13 +7,15 @@ A target is what the operator says and points at: an id, a kind and a window of 
      "settings": {"retries": 2, "edge_pairs": 4, "edge_tolerance": 0.002},
      "targets": [
        {"id": "P1", "kind": "cylinder", "window_deg": [-10, -3, 12, 4],
-        "points": 24, "group": "line-1", "nominal": "4\\""}]}
+        "points": 24, "group": "line-1", "nominal": "4\\"", "insulation": 0.05}]}
 
 ``window_deg`` is ``[pan1, tilt1, pan2, tilt2]``: two opposite corners in the pan-tilt unit's
 own degrees (as its position readout shows them); ``points`` is optional (default: the paper's
 minimum for the kind). Settings are optional and override the command-line defaults; they are
 the fields of :class:`SessionSettings` (``edge_tolerance`` in metres, the others counts or
-true/false).
+true/false). A cylinder's optional ``insulation`` is the thickness of its lagging and cladding in
+metres, like every length in a plan (whatever the scan's ``--units``); the session writes it to
+the scan object in the scan file's units.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from pathlib import Path
 
 from asbuilt._text import loads_json, read_text
 from asbuilt.errors import ScanError
-from asbuilt.scan.load import MAX_POINTS
+from asbuilt.scan.load import INSULATED_KINDS, MAX_INSULATION, MAX_POINTS
 from asbuilt.scan.model import KINDS
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 
@@ -36,6 +38,7 @@ __all__ = [
     "SessionSettings",
     "DEFAULT_SETTINGS",
     "required_points",
+    "check_insulation",
     "load_plan",
     "plan_to_dict",
 ]
@@ -118,6 +121,10 @@ class Target:
         Points wanted on the object (None: :func:`required_points`).
     group, label, nominal : str or None
         Copied to the scan object.
+    insulation : float or None
+        Metres: the thickness of the insulation (lagging and cladding) a cylinder's points are
+        measured on (see :func:`check_insulation`); written to the scan object in the file's
+        units. None: not given (a bare pipe).
     """
 
     id: str
@@ -127,6 +134,10 @@ class Target:
     group: str | None = None
     label: str | None = None
     nominal: str | None = None
+    insulation: float | None = None
+
+    def __post_init__(self) -> None:
+        check_insulation(self.insulation, self.kind, where=f"{self.id}.insulation")
 
     def wanted(self, tolerances: Tolerances = DEFAULT_TOLERANCES) -> int:
         """Points to collect: ``points`` but never fewer than :func:`required_points`."""
@@ -135,7 +146,7 @@ class Target:
     def to_dict(self) -> dict:
         """JSON form (as in a plan file)."""
         d = {"id": self.id, "kind": self.kind, "window_deg": self.window.degrees()}
-        for key in ("points", "group", "label", "nominal"):
+        for key in ("points", "group", "label", "nominal", "insulation"):
             if getattr(self, key) is not None:
                 d[key] = getattr(self, key)
         return d
@@ -194,7 +205,58 @@ class Target:
             if value is not None and not isinstance(value, str):
                 raise ScanError("must be a string", source=source, where=f"{where}.{key}")
             extra[key] = value
+        extra["insulation"] = check_insulation(
+            raw.get("insulation"), kind, source=source, where=f"{where}.insulation"
+        )
         return cls(tid, kind, window, points, **extra)
+
+
+def _shown(value) -> str:
+    """A short phrase for a JSON value in messages (as the scan loader words them)."""
+    if value is None or isinstance(value, bool):
+        return json.dumps(value)
+    if isinstance(value, str):
+        return f"a string ({json.dumps(value if len(value) <= 20 else value[:17] + '...')})"
+    if isinstance(value, (list, dict)):
+        return "an array" if isinstance(value, list) else "an object"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "NaN" if math.isnan(value) else "infinite"
+    text = repr(value)
+    return text if len(text) <= 20 else text[:17] + "..."
+
+
+def check_insulation(value, kind: str, *, source: str | None = None, where: str = "insulation"):
+    """A target's insulation thickness in metres (None when absent or null), or ScanError.
+
+    The scan loader's rules (:data:`~asbuilt.scan.load.MAX_INSULATION`,
+    :data:`~asbuilt.scan.load.INSULATED_KINDS`) in the plan's metres: a number >= 0, at most
+    0.5 m (more is a unit slip: ``50`` meaning millimetres), and above 0 only on a cylinder.
+    """
+    if value is None:
+        return None
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if not number or (isinstance(value, float) and not math.isfinite(value)) or value < 0:
+        raise ScanError(
+            f"must be a number >= 0 (the insulation's thickness in metres), not {_shown(value)}",
+            source=source,
+            where=where,
+        )
+    if value > MAX_INSULATION:  # an integer of any length compares without overflow
+        raise ScanError(
+            f"{_shown(value)} m is thicker than any pipe insulation (at most "
+            f"{MAX_INSULATION:g} m); a plan's lengths are in metres (50 mm is 0.05): check the "
+            "value",
+            source=source,
+            where=where,
+        )
+    if value > 0 and kind not in INSULATED_KINDS:
+        raise ScanError(
+            f'insulation is a radial thickness on a cylinder, not on kind "{kind}"; give the '
+            'target "kind": "cylinder" or remove its insulation',
+            source=source,
+            where=where,
+        )
+    return abs(float(value))  # -0.0 is 0
 
 
 @dataclass(frozen=True)

@@ -73,6 +73,7 @@ import numpy as np
 
 from asbuilt.atomic import atomic_write, check_target
 from asbuilt.errors import DeviceProtocolError, DeviceTimeout, ScanError
+from asbuilt.scan.load import MAX_INSULATION
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 from asbuilt.units import unit_factor
 
@@ -463,6 +464,14 @@ class _Resumed:
     failed: dict = field(default_factory=dict)  # id -> reason
 
 
+def _file_thickness(metres: float, k: float) -> float:
+    """An insulation thickness in the file's units (``k`` metres each), to 9 decimals (50 mm
+    stays ``50``, not ``50.00000000000001``) unless the rounding would take it past the scan
+    loader's :data:`~asbuilt.scan.load.MAX_INSULATION` once converted back."""
+    value = round(metres / k, 9)
+    return value if value * k <= MAX_INSULATION else metres / k
+
+
 class ScanSession:
     """An acquisition session writing one scan file.
 
@@ -740,6 +749,8 @@ class ScanSession:
             for key in ("group", "label", "nominal"):
                 if getattr(t, key) is not None:
                     obj[key] = getattr(t, key)
+            if t.insulation is not None:
+                obj["insulation"] = _file_thickness(t.insulation, k)
             obj["acquisition"] = {
                 "window_deg": t.window.degrees(),
                 "shots": len(result.shots),

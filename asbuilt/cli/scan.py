@@ -341,7 +341,7 @@ def _interactive_targets(ptu, lrf, session, answers: _Input):
     """Prompt for targets until an empty id or end of input (``answers.ended``)."""
     from asbuilt.drivers.plan import Target, Window
     from asbuilt.errors import ScanError
-    from asbuilt.scan.load import check_object_id, check_text
+    from asbuilt.scan.load import INSULATED_KINDS, check_object_id, check_text
     from asbuilt.scan.model import KINDS
 
     ask = answers.ask
@@ -394,14 +394,56 @@ def _interactive_targets(ptu, lrf, session, answers: _Input):
         except ScanError as exc:
             sys.stderr.write(f"  nominal size {exc.message}; give the object again\n")
             continue
-        yield Target(oid, kind, window, nominal=nominal or None)
+        insulation = None
+        if kind in INSULATED_KINDS:
+            unit = _thickness_unit(session.units)
+            typed = ask(f"  insulation thickness (optional, {unit}): ")
+            problem, insulation = _typed_thickness(typed or "", unit)
+            if problem is not None:
+                sys.stderr.write(f"  insulation thickness {problem}; give the object again\n")
+                continue
+        yield Target(oid, kind, window, nominal=nominal or None, insulation=insulation)
+
+
+def _thickness_unit(units: str) -> str:
+    """The unit the operator types an insulation thickness in: inches in an imperial session
+    (``--units in`` or ``ft``: lagging is sold in inches there), else millimetres."""
+    return "in" if units in ("in", "ft") else "mm"
+
+
+def _typed_thickness(text: str, unit: str) -> tuple[str | None, float | None]:
+    """An answer to the insulation prompt: ``(None, metres)``, ``(None, None)`` when empty (a
+    bare pipe), or ``(the problem, None)`` by the scan loader's rules (a number >= 0, at most
+    :data:`~asbuilt.scan.load.MAX_INSULATION` once in metres)."""
+    import math
+
+    from asbuilt.scan.load import MAX_INSULATION
+    from asbuilt.units import from_metres, to_metres
+
+    if not text:
+        return None, None
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0):
+        return f"must be a number >= 0 in {unit}, not {text!r}", None
+    metres = to_metres(value, unit)
+    if metres > MAX_INSULATION:
+        most = from_metres(MAX_INSULATION, unit)
+        return (
+            f"{value:g} {unit} is thicker than any pipe insulation (at most {most:g} {unit})",
+            None,
+        )
+    return None, abs(metres)  # -0 typed is 0
 
 
 def _check_plan_texts(plan, source: str) -> None:
     """Refuse, before the devices open, a plan whose targets the scan file could not carry: an
     id or text the scan loader refuses (a control character, white space at either end, more
     than 255 characters). The session would otherwise end in a scan file that no command
-    reads."""
+    reads. (An insulation thickness the loader would refuse is refused by
+    :func:`~asbuilt.drivers.plan.load_plan` itself, by the same rules in metres.)"""
     from asbuilt.scan.load import check_object_id, check_text
 
     for index, target in enumerate(plan.targets):

@@ -136,6 +136,7 @@ def test_interactive_session_with_typed_and_aimed_windows(site, monkeypatch, cap
                 "cylinder",
                 "72 -6.5 108 -1.5",
                 '12"',
+                "",  # insulation thickness: a bare pipe
                 "C1",
                 "cuboid",
                 "aim",
@@ -154,10 +155,73 @@ def test_interactive_session_with_typed_and_aimed_windows(site, monkeypatch, cap
     doc = json.loads((site / "scan.json").read_text())
     assert [o["id"] for o in doc["objects"]] == ["P1", "C1"]
     assert doc["objects"][0]["nominal"] == '12"'
+    assert "insulation" not in doc["objects"][0]  # empty answer: bare
     window = doc["objects"][1]["acquisition"]["window_deg"]
     assert window == pytest.approx([63.5, -8, 73, 10], abs=0.06)  # whole counts of 0.0514 deg
     err = capsys.readouterr().err
     assert "object id" in err and "corner 1" in err
+    assert err.count("  insulation thickness (optional, mm): ") == 1  # the cylinder's only
+
+
+def test_a_plans_insulated_cylinder_is_written_in_the_scan_units(site, capsys):
+    """The plan gives the thickness in metres; the scan file carries it in its --units and
+    reads back in metres."""
+    from asbuilt.scan import load_scan
+
+    plan = {**PLAN, "targets": [{**PLAN["targets"][0], "insulation": 0.05}, PLAN["targets"][1]]}
+    (site / "lagged.plan.json").write_text(json.dumps(plan))
+    more = ["--plan", str(site / "lagged.plan.json"), "--units", "mm"]
+    assert main(_args(site, "lagplan", more=more)) == 0
+    doc = json.loads((site / "scan.json").read_text())
+    assert doc["units"] == "mm"
+    assert doc["objects"][0]["insulation"] == 50 and "insulation" not in doc["objects"][1]
+    scan = load_scan(site / "scan.json")
+    assert scan.object("P1").insulation == pytest.approx(0.05)
+    assert scan.object("P1").nominal == '12"' and scan.object("C1").insulation == 0
+
+
+def test_an_operators_insulation_is_asked_for_cylinders_and_asked_again_when_bad(
+    site, monkeypatch, capsys
+):
+    """In millimetres (said in the prompt) for a metric scan; empty is a bare pipe; an answer
+    that is not a thickness the scan could carry asks for the object again, as the nominal
+    size does."""
+    from asbuilt.scan import load_scan
+
+    p1 = ["P1", "cylinder", "72 -6.5 108 -1.5", '12"']
+    answers = [*p1, "2 in", *p1, "-5", *p1, "600", *p1, "38", "C1", "cuboid", "63.5 -8 73 10", ""]
+    monkeypatch.setattr(sys, "stdin", io.StringIO("\n".join([*answers, ""]) + "\n"))
+    assert main(_args(site, "lagtyped", more=["--units", "cm"])) == 0
+    err = capsys.readouterr().err
+    assert err.count("  insulation thickness (optional, mm): ") == 4
+    assert "  insulation thickness must be a number >= 0 in mm, not '2 in'; give the object " in err
+    assert "must be a number >= 0 in mm, not '-5'; give the object again" in err
+    assert "600 mm is thicker than any pipe insulation (at most 500 mm); give the object" in err
+    doc = json.loads((site / "scan.json").read_text())
+    assert [o["id"] for o in doc["objects"]] == ["P1", "C1"]
+    assert doc["objects"][0]["insulation"] == 3.8  # cm, the scan's units
+    assert "insulation" not in doc["objects"][1]
+    assert load_scan(site / "scan.json").object("P1").insulation == pytest.approx(0.038)
+
+
+@pytest.mark.parametrize(
+    "units, text, expected",
+    [
+        ("m", "", (None, None)),
+        ("mm", "50", (None, 0.05)),
+        ("in", "1.5", (None, 0.0381)),
+        ("ft", "2", (None, 0.0508)),
+        ("ft", "20", ("20 in is thicker than any pipe insulation (at most 19.685 in)", None)),
+        ("m", "nan", ("must be a number >= 0 in mm, not 'nan'", None)),
+        ("m", "-0", (None, 0.0)),
+    ],
+)
+def test_the_typed_thickness_is_in_mm_or_in_inches_for_an_imperial_scan(units, text, expected):
+    from asbuilt.cli.scan import _thickness_unit, _typed_thickness
+
+    problem, metres = _typed_thickness(text, _thickness_unit(units))
+    assert problem == expected[0]
+    assert metres == (pytest.approx(expected[1]) if expected[1] is not None else None)
 
 
 def test_ctrl_c_stops_cleanly_and_resume_finishes(site, monkeypatch, capsys):
@@ -346,7 +410,7 @@ def test_a_bad_edge_tolerance_is_one_clear_error(value):
         _settings(args, None)
 
 
-P1_ANSWERS = ["P1", "cylinder", "72 -6.5 108 -1.5", '12"']
+P1_ANSWERS = ["P1", "cylinder", "72 -6.5 108 -1.5", '12"', ""]
 
 
 def test_bad_typed_angles_are_re_prompted_in_the_operators_terms(site, monkeypatch, capsys):

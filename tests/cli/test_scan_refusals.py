@@ -8,6 +8,7 @@ import json
 import sys
 
 import pytest
+from asbuilt.drivers.simrig import _RIGS
 
 from asbuilt.cli import main
 from asbuilt.scan import load_scan
@@ -44,6 +45,27 @@ def _plan(site, **target) -> str:
         ),
         ({"nominal": '4"\n'}, "bad-plan.json: targets[0] (W1).nominal: holds a control character"),
         ({"label": "a\u0007b"}, "bad-plan.json: targets[0] (W1).label: holds a control character"),
+        (
+            {"kind": "cuboid", "insulation": 0.05},
+            "bad-plan.json: targets[0] (W1).insulation: insulation is a radial thickness on a "
+            'cylinder, not on kind "cuboid"; give the target "kind": "cylinder" or remove its '
+            "insulation\n",
+        ),
+        (
+            {"insulation": 0.05},
+            "bad-plan.json: targets[0] (W1).insulation: insulation is a radial thickness on a "
+            'cylinder, not on kind "plane"',
+        ),
+        (
+            {"kind": "cylinder", "insulation": -0.05},
+            "bad-plan.json: targets[0] (W1).insulation: must be a number >= 0 (the insulation's "
+            "thickness in metres), not -0.05\n",
+        ),
+        (
+            {"kind": "cylinder", "insulation": 50},
+            "bad-plan.json: targets[0] (W1).insulation: 50 m is thicker than any pipe insulation "
+            "(at most 0.5 m); a plan's lengths are in metres (50 mm is 0.05): check the value\n",
+        ),
     ],
 )
 def test_a_plan_the_scan_file_could_not_carry_is_refused_before_the_session(
@@ -55,6 +77,7 @@ def test_a_plan_the_scan_file_could_not_carry_is_refused_before_the_session(
     err = capsys.readouterr().err
     assert err.startswith(f"asbuilt: error: {site / message}") and err.count("\n") == 1, err
     assert sorted(p.name for p in site.iterdir()) == ["bad-plan.json", "plan.json", "scene.json"]
+    assert not _RIGS  # no simulated device was opened
 
 
 def test_a_name_the_scan_file_could_not_carry_is_refused_before_the_session(site, capsys):

@@ -57,6 +57,7 @@ def test_plan_round_trip(tmp_path):
                 points=24,
                 group="line-1",
                 nominal='4"',
+                insulation=0.05,
             ),
             Target("C1", "cuboid", Window.from_degrees([20, -10, 30, 10])),
         ),
@@ -68,6 +69,7 @@ def test_plan_round_trip(tmp_path):
     assert back.settings == {"retries": 1}
     assert [t.id for t in back.targets] == ["P1", "C1"]
     assert back.targets[0].points == 24 and back.targets[0].nominal == '4"'
+    assert back.targets[0].insulation == 0.05 and back.targets[1].insulation is None
     assert back.targets[0].window.degrees() == pytest.approx([-10, -3, 12, 4])
 
 
@@ -253,3 +255,76 @@ def test_fuzzed_plans_are_one_located_line(tmp_path, content, message):
     with pytest.raises(ScanError) as info:
         load_plan(path)
     assert str(info.value) == f"{path}: {message}"
+
+
+def _insulated(tmp_path, **target):
+    path = tmp_path / "plan.json"
+    doc = {"format": "asbuilt-scan-plan", "version": 1, "targets": [{**GOOD, **target}]}
+    path.write_text(json.dumps(doc))
+    return path
+
+
+@pytest.mark.parametrize("thickness", [0, 0.05, 0.5, None])
+def test_a_cylinders_insulation_is_metres_like_every_plan_length(tmp_path, thickness):
+    target = load_plan(_insulated(tmp_path, insulation=thickness)).targets[0]
+    assert target.insulation == thickness
+    assert ("insulation" in target.to_dict()) is (thickness is not None)
+
+
+@pytest.mark.parametrize(
+    "target, message",
+    [
+        (
+            {"insulation": -0.01},
+            "must be a number >= 0 (the insulation's thickness in metres), not -0.01",
+        ),
+        (
+            {"insulation": "50 mm"},
+            'must be a number >= 0 (the insulation\'s thickness in metres), not a string ("50 mm")',
+        ),
+        ({"insulation": True}, "not true"),
+        ({"insulation": [0.05]}, "not an array"),
+        (
+            {"insulation": 50},
+            "50 m is thicker than any pipe insulation (at most 0.5 m); a plan's lengths are in "
+            "metres (50 mm is 0.05): check the value",
+        ),
+        (
+            {"insulation": 10**400},
+            "must be a number >= 0 (the insulation's thickness in metres), not infinite",
+        ),
+        (
+            {"kind": "cuboid", "insulation": 0.05},
+            'insulation is a radial thickness on a cylinder, not on kind "cuboid"; give the '
+            'target "kind": "cylinder" or remove its insulation',
+        ),
+        ({"kind": "sphere", "insulation": 0.05}, 'not on kind "sphere"'),
+    ],
+    ids=["negative", "text", "boolean", "array", "millimetres", "huge-integer", "cuboid", "sphere"],
+)
+def test_a_bad_insulation_is_one_located_line(tmp_path, target, message):
+    """The scan loader's rules (a number >= 0, at most MAX_INSULATION, cylinders only), refused
+    when the plan is read: the session would otherwise write a scan no command reads."""
+    path = _insulated(tmp_path, **target)
+    with pytest.raises(ScanError) as info:
+        load_plan(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: targets[0] (P1).insulation: ") and message in text, text
+    assert "\n" not in text
+
+
+def test_a_non_finite_insulation_is_refused(tmp_path):
+    path = tmp_path / "plan.json"
+    path.write_text(
+        '{"format": "asbuilt-scan-plan", "version": 1, "targets": [{"id": "P1", "kind": '
+        '"cylinder", "window_deg": [0, 0, 10, 5], "insulation": NaN}]}'
+    )
+    with pytest.raises(ScanError, match=r"targets\[0\] \(P1\)\.insulation: must be a number"):
+        load_plan(path)
+
+
+def test_a_bare_cuboid_may_say_zero_as_a_scan_object_may():
+    w = Window.from_degrees([0, 0, 1, 1])
+    assert Target("C1", "cuboid", w, insulation=0).insulation == 0
+    with pytest.raises(ScanError, match="C1.insulation: insulation is a radial thickness"):
+        Target("C1", "cuboid", w, insulation=0.05)

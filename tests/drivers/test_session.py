@@ -600,3 +600,55 @@ def test_a_back_shot_that_misses_steps_further_inside():
     ]
     assert len(right) >= 2 and not right[0][1]  # the first one back missed ...
     assert right[-1][1] and right[-1][0].pan < edge  # ... a later one hit, inside the edge
+
+
+def test_an_insulated_target_is_written_in_the_file_units_and_survives_a_resume(
+    scene_file, tmp_path
+):
+    """The thickness (metres in the target) is written in the scan's units, the journal keeps it
+    in the plan's metres, and a resumed object is written with it; the scan loader reads it back
+    in metres."""
+    from asbuilt.scan import load_scan
+
+    lagged = dataclasses.replace(PIPE, insulation=0.05)
+
+    def run(rig, lrf_options="", resume=False):
+        ptu, lrf = _devices(scene_file, rig, lrf_options)
+        try:
+            shooter = DeviceShooter(ptu, lrf)
+            with ScanSession(shooter, STATION, out, units="mm", resume=resume) as session:
+                if session.pending is not None:
+                    session.scan(session.pending)
+                for target in (lagged, COLUMN):
+                    if not session.is_done(target.id):
+                        session.scan(target)
+        finally:
+            ptu.close()
+            lrf.close()
+
+    out = tmp_path / "lagged.json"
+    with pytest.raises(DeviceError, match="unplugged"):
+        run("lag1", lrf_options="?unplug_after=10")  # in the middle of P1
+    objects = [r for r in read_journal(journal_path_for(out)) if r["type"] == "object"]
+    assert objects[0]["target"]["insulation"] == 0.05
+    run("lag2", resume=True)
+    doc = json.loads(out.read_text())
+    assert doc["units"] == "mm"
+    assert doc["objects"][0]["insulation"] == 50  # not 50.00000000000001
+    assert "insulation" not in doc["objects"][1]
+    scan = load_scan(out)
+    assert scan.object("P1").insulation == pytest.approx(0.05)
+    assert scan.object("C1").insulation == 0
+
+
+@pytest.mark.parametrize("units", ["m", "mm", "cm", "in", "ft"])
+def test_the_thickest_insulation_a_target_takes_is_one_the_scan_loader_reads(units):
+    from asbuilt.drivers.session import _file_thickness
+
+    from asbuilt.scan.load import MAX_INSULATION
+    from asbuilt.units import unit_factor
+
+    k = unit_factor(units)
+    for metres in (MAX_INSULATION, math.nextafter(MAX_INSULATION, 0), 0.0381, 0.0):
+        assert _file_thickness(metres, k) * k <= MAX_INSULATION
+        assert _file_thickness(metres, k) * k == pytest.approx(metres, abs=1e-9)
