@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import base64
 import contextlib
+import dataclasses
 import functools
 import html
 import io
@@ -26,6 +27,7 @@ import warnings
 
 import numpy as np
 
+from asbuilt.insulation import envelope
 from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
 
@@ -411,8 +413,12 @@ def render_view(
     polygons: dict[str | None, list] = {key: [] for key in SEVERITY_COLOURS}
     segments: list = []
     centres: list[tuple[str, np.ndarray, str | None]] = []
+    lagging: list = []  # insulated components' cladding, where their points lie
     for comp in model.components:
         outlines = projected_outlines(comp, axes)
+        if comp.insulation:
+            clad = dataclasses.replace(comp, geometry=envelope(comp))
+            lagging.extend(o for o in projected_outlines(clad, axes) if len(o) >= 3)
         severity = worst.get(comp.id)
         for outline in outlines:
             (polygons[severity] if len(outline) >= 3 else segments).append(outline)
@@ -438,6 +444,18 @@ def render_view(
                     linewidths=0.6,
                     label="no finding" if severity is None else severity,
                     zorder=2 if severity is None else 3,
+                )
+            )
+        if lagging:
+            ax.add_collection(
+                PolyCollection(
+                    lagging,
+                    facecolors="none",
+                    edgecolors="#8c8677",
+                    linestyles="--",
+                    linewidths=0.6,
+                    label="insulation",
+                    zorder=1,
                 )
             )
         if segments:

@@ -254,3 +254,19 @@ def test_a_long_id_is_cut_in_the_picture_and_links_to_its_row(recwarn):
     svg = render_view(_with_ids(long_id), "plan")
     assert ">" + "P" * 29 + "...</text>" in svg and long_id not in svg.replace(anchor(long_id), "")
     assert not recwarn.list, [str(w.message) for w in recwarn.list]
+
+
+def test_insulated_components_show_their_cladding_outline():
+    # the points of an insulated pipe lie on its cladding: the views draw it, dashed, unfilled
+    model = known_model()
+    bare = render_view(model, "plan")
+    assert ">insulation<" not in bare
+    pipe = next(c for c in model.components if c.type == "pipe")
+    lagged = model.replace(
+        components=tuple(
+            dataclasses.replace(c, insulation=0.05) if c is pipe else c for c in model.components
+        )
+    )
+    svg = render_view(lagged, "plan")
+    assert ">insulation<" in svg  # its legend entry
+    assert "stroke-dasharray" in svg and svg.count("<path") > bare.count("<path")
