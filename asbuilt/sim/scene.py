@@ -20,7 +20,7 @@ import numpy as np
 
 from asbuilt.errors import SceneError
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Primitive, Sphere
-from asbuilt.scan.load import MAX_POINTS
+from asbuilt.scan.load import INSULATED_KINDS, MAX_INSULATION, MAX_POINTS
 from asbuilt.scan.model import KINDS
 from asbuilt.tolerances import MIN_POINTS
 from asbuilt.units import UNITS
@@ -47,6 +47,7 @@ __all__ = [
     "loads_scene",
     "scene_from_dict",
     "GEOMETRY_TYPES",
+    "INSULATED_GEOMETRY",
     "DEFAULT_POINTS",
 ]
 
@@ -64,6 +65,15 @@ GEOMETRY_TYPES = (
     "mesh",
     "ground",
 )
+
+#: Geometry types an object's ``insulation`` may wrap: its surface is a pipe's (a pipe run's
+#: elbows are wrapped with its straights).
+INSULATED_GEOMETRY = ("cylinder", "pipe_run", "elbow")
+
+#: Share of an elbow's bend radius its cladding may reach: lagging is mitred thinner on a tight
+#: bend. The same share as :data:`asbuilt.insulation.JACKET_ROOM` (not imported: it would load
+#: the model package into every simulation).
+ELBOW_CLADDING_ROOM = 0.95
 
 #: Points per object when neither the object nor the scene says.
 DEFAULT_POINTS = 30
@@ -123,9 +133,10 @@ class SceneObject:
         The kind the operator says when scanning it (one of the scan kinds); None for
         background-only geometry.
     shape : Shape
-        Exact geometry in metres.
+        Exact geometry in metres: what the beams hit, the cladding of an insulated pipe.
     truth : Primitive
-        The true primitive (what a perfect fit would return), metres.
+        The true primitive (what a perfect fit would return), metres; of an insulated pipe,
+        the bare pipe inside its insulation.
     points : int
         Shots wanted on it.
     scan : bool
@@ -136,6 +147,9 @@ class SceneObject:
         Position in :attr:`Scene.objects` (the ``object_index`` of ray hits).
     group, label, nominal : str or None
         Copied to the scan.
+    insulation : float, metres
+        Thickness of the lagging and cladding around the pipe (0: bare); ``shape`` is the
+        cladding, ``truth`` the pipe, and the scan object carries the thickness.
     """
 
     id: str
@@ -149,6 +163,7 @@ class SceneObject:
     group: str | None = None
     label: str | None = None
     nominal: str | None = None
+    insulation: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -310,10 +325,13 @@ def _rows(value) -> np.ndarray | None:
         return None
 
 
-def _cylinder_object(start, end, radius, capped: bool = True) -> tuple[Shape, Primitive]:
+def _cylinder_object(
+    start, end, radius, capped: bool = True, insulation: float = 0.0
+) -> tuple[Shape, Primitive]:
+    """The shape the beams hit (the cladding, ``radius + insulation``) and the true pipe."""
     axis = end - start
     length = float(np.linalg.norm(axis))
-    shape = CylinderShape(start=start, end=end, radius=radius, capped=capped)
+    shape = CylinderShape(start=start, end=end, radius=radius + insulation, capped=capped)
     truth = Cylinder(center=0.5 * (start + end), axis=axis / length, radius=radius, length=length)
     return shape, truth
 
@@ -323,8 +341,21 @@ def _box_object(center, axes, size) -> tuple[Shape, Primitive]:
     return BoxShape(center=truth.center, axes=truth.axes, size=truth.size), truth
 
 
-def _geometry(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
-    """Expand one geometry into one or more pieces ``{id, shape, truth, scan?}``."""
+def _elbow_object(corner, before, after, bend, radius, insulation: float = 0.0) -> dict:
+    """An elbow's shape (its cladding, mitred to :data:`ELBOW_CLADDING_ROOM` of the bend
+    radius) and its truth (the bare torus segment), as a piece; ValueError when no turn."""
+    vertices, faces = torus_segment_mesh(corner, before, after, bend, radius)
+    piece = {"truth": Hull(vertices=vertices, faces=faces)}
+    clad = max(radius, min(radius + insulation, ELBOW_CLADDING_ROOM * bend))
+    if clad > radius:
+        vertices, faces = torus_segment_mesh(corner, before, after, bend, clad)
+    piece["shape"] = MeshShape(vertices=vertices, faces=faces)
+    return piece
+
+
+def _geometry(reader: _Reader, geo, where, obj_id: str, insulation: float = 0.0) -> list[dict]:
+    """Expand one geometry into one or more pieces ``{id, shape, truth, scan?}``; an insulated
+    pipe's shape is its cladding, ``insulation`` (metres) outside its truth."""
     kind = geo.get("type")
     if kind not in GEOMETRY_TYPES:
         reader.fail(
@@ -340,7 +371,8 @@ def _geometry(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
         if not isinstance(capped, bool):
             reader.fail(f"{where}.capped", f"must be true or false, not {capped!r}")
         radius = reader.radius(geo, where)
-        return [dict(zip(("shape", "truth"), _cylinder_object(start, end, radius, capped)))]
+        shape, truth = _cylinder_object(start, end, radius, capped, insulation)
+        return [{"shape": shape, "truth": truth}]
     if kind == "tank":
         base = reader.vector(geo, "base", where)
         height = reader.length(geo, "height", where, positive=True, required=True)
@@ -349,7 +381,7 @@ def _geometry(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
             dict(zip(("shape", "truth"), _cylinder_object(base, top, reader.radius(geo, where))))
         ]
     if kind == "pipe_run":
-        return _pipe_run(reader, geo, where, obj_id)
+        return _pipe_run(reader, geo, where, obj_id, insulation)
     if kind == "sphere":
         center = reader.vector(geo, "center", where)
         radius = reader.radius(geo, where)
@@ -438,18 +470,11 @@ def _geometry(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
         before = reader.vector(geo, "from", where)
         after = reader.vector(geo, "to", where)
         bend = reader.length(geo, "bend_radius", where, positive=True, required=True)
+        radius = reader.radius(geo, where)
         try:
-            vertices, faces = torus_segment_mesh(
-                corner, before, after, bend, reader.radius(geo, where)
-            )
+            return [_elbow_object(corner, before, after, bend, radius, insulation)]
         except ValueError as exc:
             reader.fail(where, f"{exc}; 'from', 'corner' and 'to' must make a turn")
-        return [
-            {
-                "shape": MeshShape(vertices=vertices, faces=faces),
-                "truth": Hull(vertices=vertices, faces=faces),
-            }
-        ]
     if kind == "mesh":
         vertices, faces = _load_mesh(reader, geo, where)
         return [
@@ -473,9 +498,10 @@ def _geometry(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
     ]
 
 
-def _pipe_run(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
+def _pipe_run(reader: _Reader, geo, where, obj_id: str, insulation: float = 0.0) -> list[dict]:
     """A polyline pipe: straight cylinders stopping short of each corner by the elbow's
-    centre-to-end, plus (unscanned) elbow meshes at the corners."""
+    centre-to-end, plus (unscanned) elbow meshes at the corners; all clad in ``insulation``
+    (metres) when given, the truths bare."""
     raw = geo.get("path")
     if not isinstance(raw, list) or len(raw) < 2:
         reader.fail(f"{where}.path", "must be a list of at least 2 points")
@@ -521,23 +547,48 @@ def _pipe_run(reader: _Reader, geo, where, obj_id: str) -> list[dict]:
             )
         start = path[k] + cut[k, 0] * u
         end = path[k + 1] - cut[k, 1] * u
-        shape, truth = _cylinder_object(start, end, radius)
+        shape, truth = _cylinder_object(start, end, radius, insulation=insulation)
         pieces.append({"id": ids[k], "shape": shape, "truth": truth})
     if elbows:
         for k in range(1, count):
             if cut[k, 0] <= 1e-9:
                 continue
-            vertices, faces = torus_segment_mesh(path[k], path[k - 1], path[k + 1], bend, radius)
-            pieces.append(
-                {
-                    "id": f"{obj_id}-E{k}",
-                    "shape": MeshShape(vertices=vertices, faces=faces),
-                    "truth": Hull(vertices=vertices, faces=faces),
-                    "scan": False,
-                    "kind": None,
-                }
-            )
+            elbow = _elbow_object(path[k], path[k - 1], path[k + 1], bend, radius, insulation)
+            pieces.append({"id": f"{obj_id}-E{k}", **elbow, "scan": False, "kind": None})
     return pieces
+
+
+def _insulation(reader: _Reader, data, geo, kind: str | None, where: str) -> float:
+    """The object's insulation thickness in metres (0 when absent or null), or a located error:
+    a number >= 0, at most the scan format's :data:`~asbuilt.scan.load.MAX_INSULATION`, on a
+    pipe geometry (:data:`INSULATED_GEOMETRY`) that is scanned, if at all, as a cylinder."""
+    thickness = reader.length(data, "insulation", where, minimum=0.0, default=0.0)
+    if thickness <= 0:
+        return 0.0
+    at = f"{where}.insulation"
+    if thickness > MAX_INSULATION:
+        units = next((k for k, v in UNITS.items() if v == reader.scale), "m")
+        reader.fail(
+            at,
+            f"{thickness / reader.scale:g} {units} is thicker than any pipe insulation (at most "
+            f"{MAX_INSULATION / reader.scale:g} {units}); it is in the scene's units ({units}): "
+            "check the value and the units",
+        )
+    kind_of_geometry = geo.get("type")
+    if kind_of_geometry in GEOMETRY_TYPES and kind_of_geometry not in INSULATED_GEOMETRY:
+        reader.fail(
+            at,
+            f"insulation wraps a pipe, not geometry type {kind_of_geometry!r}; use it on "
+            + ", ".join(INSULATED_GEOMETRY)
+            + " or remove it",
+        )
+    if kind is not None and kind not in INSULATED_KINDS:
+        reader.fail(
+            at,
+            f'the scan carries insulation on a cylinder only, not on kind "{kind}"; give the '
+            'object "kind": "cylinder" or remove its insulation',
+        )
+    return thickness
 
 
 def _station(reader: _Reader, data, where) -> Station:
@@ -651,7 +702,8 @@ def scene_from_dict(doc, *, source: str | None = None, base_dir=None) -> Scene:
         geo = data.get("geometry")
         if not isinstance(geo, dict):
             reader.fail(where, "missing field 'geometry' (an object with a 'type')")
-        pieces = _geometry(reader, geo, f"{where}.geometry", obj_id)
+        insulation = _insulation(reader, data, geo, kind if scan else None, where)
+        pieces = _geometry(reader, geo, f"{where}.geometry", obj_id, insulation)
         if scan and any(p.get("ground") for p in pieces):
             reader.fail(
                 f"{where}.scan",
@@ -688,6 +740,7 @@ def scene_from_dict(doc, *, source: str | None = None, base_dir=None) -> Scene:
                     scan=piece_scan,
                     station=station,
                     index=len(objects),
+                    insulation=insulation,
                     **strings,
                 )
             )

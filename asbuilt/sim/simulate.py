@@ -61,7 +61,7 @@ def simulate_scan(
         An ``asbuilt-scan`` version 1 document in the scene's units: ``sensor`` is the first
         station; each object carries ``points`` (n, 3) and ``measurements`` (n, 3) of
         ``[pan_deg, tilt_deg, range]``; an object scanned from another station also carries
-        ``"station": [x, y, z]``.
+        ``"station": [x, y, z]``, an insulated one its ``"insulation"`` thickness.
 
     Raises
     ------
@@ -113,6 +113,8 @@ def simulate_scan(
             value = getattr(obj, key)
             if value is not None:
                 entry[key] = value
+        if obj.insulation > 0:  # the cladding was scanned: say how thick, in the file's units
+            entry["insulation"] = float(f"{obj.insulation / scale:.6g}")
         if station is not main:
             entry["station"] = _round(station.position / scale, decimals)
         objects.append(entry)
