@@ -75,7 +75,9 @@ def test_every_sample_exports(sample, tmp_path, capsys):
     document = json.loads(outputs[3].read_text())
     from asbuilt.export.step import read_step
 
-    assert len(read_step(outputs[0])) == len(document["components"])
+    # one solid per component, and one more per insulated component (its jacket)
+    jackets = sum(1 for comp in document["components"] if comp.get("insulation"))
+    assert len(read_step(outputs[0])) == len(document["components"]) + jackets
 
 
 def test_no_merge_no_check_plate_thickness(tmp_path, capsys):
