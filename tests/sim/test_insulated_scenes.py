@@ -207,3 +207,11 @@ def test_unscanned_insulated_cylinder_is_fine(scene_doc):
     scene_doc["objects"][0].update(insulation=0.05, scan=False, kind="auto")
     scene = scene_from_dict(scene_doc)
     assert scene.object("P1").shape.radius == pytest.approx(OD4 / 2 + 0.05)
+
+
+def test_the_simulator_mitres_elbow_cladding_as_cad_draws_it():
+    # a copy (the simulator does not import the model package), kept equal here
+    from asbuilt.insulation import JACKET_ROOM
+    from asbuilt.sim.scene import ELBOW_CLADDING_ROOM
+
+    assert ELBOW_CLADDING_ROOM == JACKET_ROOM
