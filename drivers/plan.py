@@ -27,7 +27,8 @@ from pathlib import Path
 
 from asbuilt._text import loads_json, read_text
 from asbuilt.errors import ScanError
-from asbuilt.scan.load import INSULATED_KINDS, MAX_INSULATION, MAX_POINTS
+from asbuilt.scan.insulation import INSULATED_KINDS, MAX_INSULATION
+from asbuilt.scan.load import MAX_POINTS
 from asbuilt.scan.model import KINDS
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 
@@ -228,8 +229,8 @@ def _shown(value) -> str:
 def check_insulation(value, kind: str, *, source: str | None = None, where: str = "insulation"):
     """A target's insulation thickness in metres (None when absent or null), or ScanError.
 
-    The scan loader's rules (:data:`~asbuilt.scan.load.MAX_INSULATION`,
-    :data:`~asbuilt.scan.load.INSULATED_KINDS`) in the plan's metres: a number >= 0, at most
+    The scan loader's rules (:data:`~asbuilt.scan.insulation.MAX_INSULATION`,
+    :data:`~asbuilt.scan.insulation.INSULATED_KINDS`) in the plan's metres: a number >= 0, at most
     0.5 m (more is a unit slip: ``50`` meaning millimetres), and above 0 only on a cylinder.
     """
     if value is None:

@@ -73,7 +73,7 @@ import numpy as np
 
 from asbuilt.atomic import atomic_write, check_target
 from asbuilt.errors import DeviceProtocolError, DeviceTimeout, ScanError
-from asbuilt.scan.load import MAX_INSULATION
+from asbuilt.scan.insulation import MAX_INSULATION
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 from asbuilt.units import unit_factor
 
@@ -467,7 +467,7 @@ class _Resumed:
 def _file_thickness(metres: float, k: float) -> float:
     """An insulation thickness in the file's units (``k`` metres each), to 9 decimals (50 mm
     stays ``50``, not ``50.00000000000001``) unless the rounding would take it past the scan
-    loader's :data:`~asbuilt.scan.load.MAX_INSULATION` once converted back."""
+    loader's :data:`~asbuilt.scan.insulation.MAX_INSULATION` once converted back."""
     value = round(metres / k, 9)
     return value if value * k <= MAX_INSULATION else metres / k
 

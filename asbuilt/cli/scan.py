@@ -341,7 +341,8 @@ def _interactive_targets(ptu, lrf, session, answers: _Input):
     """Prompt for targets until an empty id or end of input (``answers.ended``)."""
     from asbuilt.drivers.plan import Target, Window
     from asbuilt.errors import ScanError
-    from asbuilt.scan.load import INSULATED_KINDS, check_object_id, check_text
+    from asbuilt.scan.insulation import INSULATED_KINDS
+    from asbuilt.scan.load import check_object_id, check_text
     from asbuilt.scan.model import KINDS
 
     ask = answers.ask
@@ -414,10 +415,10 @@ def _thickness_unit(units: str) -> str:
 def _typed_thickness(text: str, unit: str) -> tuple[str | None, float | None]:
     """An answer to the insulation prompt: ``(None, metres)``, ``(None, None)`` when empty (a
     bare pipe), or ``(the problem, None)`` by the scan loader's rules (a number >= 0, at most
-    :data:`~asbuilt.scan.load.MAX_INSULATION` once in metres)."""
+    :data:`~asbuilt.scan.insulation.MAX_INSULATION` once in metres)."""
     import math
 
-    from asbuilt.scan.load import MAX_INSULATION
+    from asbuilt.scan.insulation import MAX_INSULATION
     from asbuilt.units import from_metres, to_metres
 
     if not text:

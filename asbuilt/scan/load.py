@@ -25,6 +25,7 @@ import numpy as np
 
 from asbuilt._text import REPEATED_KEY, decode_text
 from asbuilt.errors import ScanError, ScanReadError, located
+from asbuilt.scan.insulation import insulation_in_metres
 from asbuilt.scan.model import KINDS, Scan, ScanObject, Sensor, kind_phrase
 from asbuilt.tolerances import MIN_POINTS
 from asbuilt.units import UNITS
@@ -72,14 +73,6 @@ MAX_INTEGER_DIGITS = 640
 #: surely in the wrong unit (a metre value in a millimetre file is 1000 times too small).
 PLAUSIBLE_RANGE_SIGMA = (1e-5, 0.1)
 
-#: Thickest insulation an object may carry, metres: pipe lagging tables stop near 150-200 mm
-#: and cryogenic or cold-box systems reach about 300 mm, so half a metre of it in a file is a
-#: unit slip (50 written with "units": "m" meaning millimetres).
-MAX_INSULATION = 0.5
-
-#: The kinds an insulation thickness applies to: its surface is a cylinder's, the thickness is
-#: radial.
-INSULATED_KINDS = ("cylinder",)
 
 #: Largest coordinate magnitude, metres, after the unit conversion: beyond any survey frame
 #: (UTM northings reach 1e7 m, Earth-centred coordinates 6.4e6 m). A larger one is a unit slip
@@ -619,38 +612,16 @@ def _object(index: int, raw, factor: float, ctx: _Context) -> ScanObject:
         nominal=_optional_string(raw, "nominal", f"{where}.nominal", ctx),
         measurements=measurements,
         station=_position(raw.get("station"), factor, f"{where}.station", ctx),
-        insulation=_insulation(raw, kind, factor, where, ctx),
+        insulation=_insulation(raw.get("insulation"), kind, factor, f"{where}.insulation", ctx),
         extra=MappingProxyType({k: v for k, v in raw.items() if k not in OBJECT_KEYS}),
     )
 
 
-def _insulation(raw: dict, kind: str, factor: float, where: str, ctx: _Context) -> float:
+def _insulation(value, kind: str, factor: float, where: str, ctx: _Context) -> float:
     """The object's insulation thickness in metres (0 when absent or null), or a located error."""
-    value = raw.get("insulation")
-    if value is None:
-        return 0.0
-    where = f"{where}.insulation"
-    if not _is_finite_number(value) or value < 0:
-        raise ctx.error(
-            where,
-            "must be a number >= 0 (the insulation's thickness in the file's units), "
-            f"not {_describe(value)}",
-        )
-    thickness = float(value) * factor
-    if thickness > MAX_INSULATION:
-        units = next((name for name, f in UNITS.items() if f == factor), "m")
-        raise ctx.error(
-            where,
-            f"{float(value):g} {units} is thicker than any pipe insulation (at most "
-            f"{MAX_INSULATION / factor:g} {units}); it is in the file's units ({units}): "
-            "check the value and the units",
-        )
-    if thickness > 0 and kind not in INSULATED_KINDS:
-        raise ctx.error(
-            where,
-            f'insulation is a radial thickness on a cylinder, not on kind "{kind}"; give the '
-            'object "kind": "cylinder" or remove its insulation',
-        )
+    thickness, problem = insulation_in_metres(value, kind, factor, _describe)
+    if problem:
+        raise ctx.error(where, problem)
     return thickness
 
 

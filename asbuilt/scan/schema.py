@@ -21,14 +21,8 @@ import sys
 from pathlib import Path
 
 from asbuilt.atomic import atomic_write
-from asbuilt.scan.load import (
-    FORMAT,
-    INSULATED_KINDS,
-    MAX_ID_CHARACTERS,
-    MAX_INSULATION,
-    MAX_POINTS,
-    VERSION,
-)
+from asbuilt.scan.insulation import INSULATED_KINDS, MAX_INSULATION
+from asbuilt.scan.load import FORMAT, MAX_ID_CHARACTERS, MAX_POINTS, VERSION
 from asbuilt.scan.model import KINDS
 from asbuilt.tolerances import MIN_POINTS
 from asbuilt.units import UNITS

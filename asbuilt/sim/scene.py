@@ -20,7 +20,8 @@ import numpy as np
 
 from asbuilt.errors import SceneError
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Primitive, Sphere
-from asbuilt.scan.load import INSULATED_KINDS, MAX_INSULATION, MAX_POINTS
+from asbuilt.scan.insulation import INSULATED_KINDS, MAX_INSULATION
+from asbuilt.scan.load import MAX_POINTS
 from asbuilt.scan.model import KINDS
 from asbuilt.tolerances import MIN_POINTS
 from asbuilt.units import UNITS
@@ -560,7 +561,7 @@ def _pipe_run(reader: _Reader, geo, where, obj_id: str, insulation: float = 0.0)
 
 def _insulation(reader: _Reader, data, geo, kind: str | None, where: str) -> float:
     """The object's insulation thickness in metres (0 when absent or null), or a located error:
-    a number >= 0, at most the scan format's :data:`~asbuilt.scan.load.MAX_INSULATION`, on a
+    a number >= 0, at most the scan format's :data:`~asbuilt.scan.insulation.MAX_INSULATION`, on a
     pipe geometry (:data:`INSULATED_GEOMETRY`) that is scanned, if at all, as a cylinder."""
     thickness = reader.length(data, "insulation", where, minimum=0.0, default=0.0)
     if thickness <= 0:

@@ -645,7 +645,7 @@ def test_an_insulated_target_is_written_in_the_file_units_and_survives_a_resume(
 def test_the_thickest_insulation_a_target_takes_is_one_the_scan_loader_reads(units):
     from asbuilt.drivers.session import _file_thickness
 
-    from asbuilt.scan.load import MAX_INSULATION
+    from asbuilt.scan.insulation import MAX_INSULATION
     from asbuilt.units import unit_factor
 
     k = unit_factor(units)
