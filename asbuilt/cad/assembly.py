@@ -279,12 +279,12 @@ def prepare(
                 origin=tuple(float(v) for v in origin),
             )
         )
-        jacket = _jacket_part(parts[-1], ids, thickness, solids)
+        jacket, jacket_mesh = _jacket_part(parts[-1], ids, thickness, solids)
         if jacket is not None:
             parts.append(jacket)
             ids.append(jacket.id)
-            if jacket.solid is None:
-                meshes[jacket.id] = mesh_for(jacket.jacket, plate_thickness=thickness)
+            if jacket_mesh is not None:
+                meshes[jacket.id] = jacket_mesh
         if progress is not None:
             progress(done, total)
     name = model.name or "scan"
@@ -299,8 +299,11 @@ def prepare(
     )
 
 
-def _jacket_part(part: CadPart, taken: list[str], thickness: float, solids: bool):
-    """The insulation part around ``part`` (after it, in its group), or None when bare.
+def _jacket_part(
+    part: CadPart, taken: list[str], thickness: float, solids: bool
+) -> tuple[CadPart | None, Mesh | None]:
+    """The insulation part around ``part`` (after it, in its group) and, prepared for meshes
+    only, its closed-form mesh; ``(None, None)`` when bare.
 
     Named ``"<id> insulation"`` (made unique among ``taken``), translucent, never recoloured
     by findings (they are the component's). Its solid, when solids are built, is the jacket's:
@@ -308,15 +311,16 @@ def _jacket_part(part: CadPart, taken: list[str], thickness: float, solids: bool
     """
     geometry = jacket(part.component)
     if geometry is None:
-        return None
+        return None, None
     name = f"{part.id} insulation"
     while name in taken:
         name += " (2)"
+    mesh = None if solids else mesh_for(geometry, plate_thickness=thickness)
     local, origin = None, (0.0, 0.0, 0.0)
-    if solids or mesh_for(geometry, plate_thickness=thickness) is None:
+    if mesh is None:
         shell = dataclasses.replace(part.component, id=name, geometry=geometry)
         local, origin = placed_solid(shell, plate_thickness=thickness)
-    return CadPart(
+    jacket_part = CadPart(
         component=part.component,
         solid=None if local is None else place(local, origin),
         colour=KIND_COLOURS["insulation"],
@@ -326,6 +330,7 @@ def _jacket_part(part: CadPart, taken: list[str], thickness: float, solids: bool
         jacket=geometry,
         name=name,
     )
+    return jacket_part, mesh
 
 
 def _mesh_only(component: Component, thickness: float) -> Mesh | None:

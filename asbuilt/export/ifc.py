@@ -223,8 +223,12 @@ class _Writer:
     def style_for(self, component: Component) -> object:
         status = self.status.get(component.id)
         key = status if status in ("error", "warning") else component.type
+        return self.surface_style(key, colour_for(component.type, status))
+
+    def surface_style(self, key: str, rgba) -> object:
+        """The one IfcSurfaceStyle named ``key`` (made on first use) of colour ``rgba`` (0..1)."""
         if key not in self.styles:
-            r, g, b, a = colour_for(component.type, status)
+            r, g, b, a = rgba
             colour = self.f.createIfcColourRgb(None, float(r), float(g), float(b))
             shading = self.f.createIfcSurfaceStyleShading(colour, float(1.0 - a))
             self.styles[key] = self.f.createIfcSurfaceStyle(key, "BOTH", [shading])
@@ -420,13 +424,9 @@ class _Writer:
         )
         representation = f.createIfcShapeRepresentation(self.body, "Body", kind, items)
         api.geometry.assign_representation(f, product=covering, representation=representation)
-        if "insulation" not in self.styles:
-            r, g, b, a = KIND_COLOURS["insulation"]
-            colour = f.createIfcColourRgb(None, float(r), float(g), float(b))
-            shading = f.createIfcSurfaceStyleShading(colour, float(1.0 - a))
-            self.styles["insulation"] = f.createIfcSurfaceStyle("insulation", "BOTH", [shading])
+        style = self.surface_style("insulation", KIND_COLOURS["insulation"])
         api.style.assign_representation_styles(
-            f, shape_representation=representation, styles=[self.styles["insulation"]]
+            f, shape_representation=representation, styles=[style]
         )
         pset = api.pset.add_pset(f, product=covering, name="Asbuilt_Component")
         api.pset.edit_pset(
