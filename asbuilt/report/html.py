@@ -207,6 +207,9 @@ def _codes(links: list[tuple[int, str, str]]) -> str:
 
 def _components(data: ReportData, links) -> str:
     fitted = {q.id for q in data.quality}
+    # The insulation column only when something is lagged, as the take-off's insulation table:
+    # most plants are bare, and a column of zeros would crowd the table.
+    lagged = any(r.insulation for r in data.takeoff.rows)
     rows = []
     for r in data.takeoff.rows:
         oid = _e(r.id)
@@ -224,6 +227,7 @@ def _components(data: ReportData, links) -> str:
             + _td(_e(r.quantity_unit))
             + _td(_num(r.quantity, 0 if r.quantity_unit == "ea" else 3), True)
             + _td(_num(r.weight, 1), True)
+            + (_td(_mm(r.insulation) if r.insulation else "", True) if lagged else "")
             + _td(_codes(links.get(r.id, [])))
             + "</tr>"
         )
@@ -239,6 +243,7 @@ def _components(data: ReportData, links) -> str:
             ("Unit", False),
             ("Quantity", True),
             ("Weight (kg)", True),
+            *([("Insulation (mm)", True)] if lagged else []),
             ("Findings", False),
         ],
         rows,

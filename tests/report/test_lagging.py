@@ -269,3 +269,28 @@ def test_the_insulated_page_is_well_formed():
     from asbuilt.report.html import html_text
 
     check_html(html_text(report_data(_known_lagged(), generated=STAMP)))
+
+
+def test_the_html_components_table_has_an_insulation_column_only_when_insulated():
+    import re
+
+    from asbuilt.report.data import report_data
+    from asbuilt.report.html import _components
+
+    page = _components(report_data(_known_lagged(), generated=STAMP), {})
+    heads = re.findall(r"<th[^>]*>([^<]*)</th>", page)
+    assert heads[-2:] == ["Insulation (mm)", "Findings"]
+    # each row's thickness in mm, in the column before the findings; a bare row's cell empty
+    cells = {
+        row_id: re.findall(r"<td[^>]*>(.*?)</td>", row)[-2]
+        for row_id, row in re.findall(r'<tr id="([^"]+)">(.*?)</tr>', page)
+    }
+    assert cells == {
+        "obj-P1": "50.0",
+        "obj-P1-P2": "50.0",
+        "obj-P2": "50.0",
+        "obj-C1": "",
+        "obj-TK1": "100.0",
+    }
+    bare = _components(report_data(known_model(), generated=STAMP), {})
+    assert "Insulation" not in bare
