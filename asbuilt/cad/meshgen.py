@@ -262,6 +262,10 @@ def plate_mesh(geometry: Plane, thickness: float) -> Mesh:
 
 
 def _signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """The signed volume (m3) the faces enclose, summed about the vertices' mean: about the
+    scan's origin a small hull at survey coordinates (4,000 km) sums products of 1e13 m3 that
+    cancel to noise larger than its volume, and its winding came out inverted."""
+    vertices = vertices - vertices.mean(axis=0)
     tri = vertices[faces]
     return float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6)
 

@@ -175,3 +175,23 @@ def test_a_reducing_elbow_mesh_has_each_ends_size_and_wall():
     at_start = np.abs(mesh.vertices[:, 1]) < 1e-12
     spread = np.ptp(rings[at_start])
     assert spread == pytest.approx(2 * r6 * (1 + 1e-3), rel=2e-2)
+
+
+@pytest.mark.parametrize(
+    "offset",
+    [(512345.678, 4123456.789, 250.0), (500000.0, 4000000.0, 100.0), (-731000.5, 5612345.25, -3.0)],
+)
+def test_a_small_hull_at_survey_coordinates_is_wound_outwards(offset):
+    # A 0.2 m obstacle's hull at UTM coordinates: its winding was judged by a volume summed
+    # about the origin, which there is rounding noise larger than the hull (seen in review).
+    from scipy.spatial import ConvexHull
+
+    from asbuilt.fit import fit_points
+
+    local = np.random.default_rng(3).normal(size=(30, 3)) * 0.06
+    hull = fit_points("hull", local + np.asarray(offset)).primitive
+    mesh = mesh_for(hull, plate_thickness=0.01)
+    assert mesh.volume == pytest.approx(ConvexHull(local).volume, rel=1e-6)
+    centre = mesh.vertices.mean(axis=0)
+    outward = np.einsum("ij,ij->i", mesh.normals, mesh.vertices - centre)
+    assert (outward > 0).all()
