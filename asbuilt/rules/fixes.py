@@ -145,15 +145,28 @@ def _axis(geometry):
     return None
 
 
-def _new_wall(component: Component, change, catalog) -> float | None:
+def model_schedule(model: Model, catalog) -> str | None:
+    """The schedule the model's pipes were built to (merging gives every snapped pipe one
+    schedule: ``--schedule``, else the catalog's default, else STD), for a pipe that has none
+    (left unsnapped) and is given a size: the most common among the model's pipes, else the
+    catalog's default; None when neither is known."""
+    from asbuilt.merge import resolve_schedule
+
+    schedules = [c.schedule for c in model.components if c.type == "pipe" and c.schedule]
+    if schedules:
+        return max(sorted(set(schedules)), key=schedules.count)
+    return None if catalog is None else resolve_schedule(catalog, None)
+
+
+def _new_wall(component: Component, change, catalog, schedule) -> float | None:
     """The wall (metres) a component re-sized by ``change`` takes: the catalog's wall of the new
-    size in the component's schedule, 0 (solid) when the catalog lists none or there is no
-    catalog; None (keep its own) when its diameter does not change and the catalog cannot say."""
+    size in ``schedule``, 0 (solid) when the catalog lists none or there is no catalog; None
+    (keep its own) when its diameter does not change and the catalog cannot say."""
     od, before = change.get("od"), _od(component.geometry)
     wall = None
-    if catalog is not None and component.schedule:
+    if catalog is not None and schedule:
         try:
-            wall = catalog.wall(str(change["value"]), component.schedule)
+            wall = catalog.wall(str(change["value"]), schedule)
         except KeyError:  # a size the catalog does not have
             wall = None
     if wall is not None:
@@ -163,15 +176,17 @@ def _new_wall(component: Component, change, catalog) -> float | None:
     return 0.0
 
 
-def _apply(component: Component, change, catalog=None) -> Component:
+def _apply(component: Component, change, catalog=None, schedule=None) -> Component:
+    """``component`` with ``change`` made; a re-sized pipe without a schedule of its own takes
+    ``schedule`` (:func:`model_schedule`) when the catalog has its wall there."""
     field = change.get("field")
     if field == "nominal":
         od = change.get("od")
         before_od = _od(component.geometry)
+        schedule = component.schedule or (schedule if component.type == "pipe" else None)
+        wall = None if od is None else _new_wall(component, change, catalog, schedule)
         geometry = (
-            component.geometry
-            if od is None
-            else resize_geometry(component.geometry, od, _new_wall(component, change, catalog))
+            component.geometry if od is None else resize_geometry(component.geometry, od, wall)
         )
         snap = dict(component.snap or {})
         snap.update(status="snapped", reason="accepted with asbuilt check --fix")
@@ -183,6 +198,8 @@ def _apply(component: Component, change, catalog=None) -> Component:
         fix = Correction(
             "size set by check --fix", component.nominal, str(change["value"]), size, "m"
         )
+        if not component.schedule and schedule and wall:
+            component = dataclasses.replace(component, schedule=schedule)
         return dataclasses.replace(
             component,
             geometry=geometry,
@@ -258,6 +275,7 @@ def apply_suggestions(model: Model, chosen, *, catalog=None) -> tuple[Model, lis
         catalog = model_catalog(model, catalog)[0]
     else:  # e.g. the rules' SizeTable, which has no walls
         catalog = None
+    schedule = model_schedule(model, catalog)
     components = {c.id: c for c in model.components}
     changes: list[str] = []
     for finding, suggestion in chosen:
@@ -267,7 +285,7 @@ def apply_suggestions(model: Model, chosen, *, catalog=None) -> tuple[Model, lis
         targets = change.get("objects") or [change.get("object")]
         applied = [t for t in targets if t in components]
         for target in applied:
-            components[target] = _apply(components[target], change, catalog)
+            components[target] = _apply(components[target], change, catalog, schedule)
         if applied:
             changes.append(f"{', '.join(applied)}: {suggestion.description} ({finding.slug})")
     fixed = tuple(components[c.id] for c in model.components)

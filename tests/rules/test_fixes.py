@@ -236,3 +236,45 @@ def test_size_fix_without_a_catalog_wall_builds_solid():
     )
     fixed, _ = apply_fixes(model(p), [finding])
     assert fixed.component("P1").geometry.wall == 0.0
+
+
+@pytest.mark.parametrize(
+    ("other_schedule", "expected_schedule", "expected_wall"),
+    [
+        ("XS", "XS", 0.00953),  # the model's pipes were built to XS: NPS 5 XS
+        (None, "STD", 0.00655),  # no other pipe tells: the catalog's default (STD)
+    ],
+)
+def test_an_unsnapped_pipe_given_a_size_takes_the_models_schedule(
+    other_schedule, expected_schedule, expected_wall
+):
+    """A pipe merging left unsnapped has no schedule; accepting a size for it must build it as
+    merging builds that size (the schedule the model's pipes have, else the catalog's default),
+    not as a solid bar without a weight (seen in review: NPS 5 with wall 0). Walls: ASME
+    B36.10M, NPS 5 STD 6.55 mm, XS 9.53 mm."""
+    import dataclasses
+
+    from asbuilt.findings import Finding, Suggestion
+
+    loose = pipe("P5", [0, 0, 1], [2, 0, 1], 0.1287, nominal=None)
+    assert loose.schedule is None
+    others = []
+    if other_schedule:
+        p4 = pipe("P4", [0, 3, 1], [2, 3, 1], 0.0889, nominal="3")
+        others.append(dataclasses.replace(p4, schedule=other_schedule))
+    change = {"object": "P5", "field": "nominal", "value": "5", "od": 0.1413}
+    finding = Finding(
+        "AB101",
+        "nonstandard-diameter",
+        "error",
+        ("P5",),
+        "x",
+        suggestions=(Suggestion("use NPS 5", change, unambiguous=False),),
+    )
+    fixed, _ = apply_suggestions(
+        model(loose, *others), [(finding, finding.suggestions[0])], catalog="asme-b36.10m"
+    )
+    p5 = fixed.component("P5")
+    assert (p5.nominal, p5.schedule) == ("5", expected_schedule)
+    assert p5.geometry.wall == pytest.approx(expected_wall)
+    assert p5.geometry.outer_radius == pytest.approx(0.1413 / 2)
