@@ -86,7 +86,14 @@ def unit_slip(ctx: Context, table: SizeTable | None) -> tuple[str, float] | None
     the catalog's range of ODs by more than ``IMPLAUSIBLE_OD_FACTOR`` as declared, and every
     pipe (a component merging took for one, else every cylinder) is a catalog size, within the
     snapping window, once scaled by ``factor`` (the true unit's metres over the declared
-    one's). None otherwise, and without a catalog or a scan."""
+    one's). None otherwise, and without a catalog or a scan.
+
+    Where several units make every pipe a size (a wide window at a coarse unit, where catalog
+    sizes are closer than the window, matches by chance), the evidence decides in this order:
+    the operator's size hints (a unit in which a hinted pipe is not its hint's size loses), the
+    fits' residuals (a unit in which a fit's RMS is no laser range finder's noise,
+    :data:`PLAUSIBLE_FIT_RMS`, loses), then each pipe's distance to its nearest size in
+    snapping windows."""
     scan = ctx.model.scan
     if table is None or scan is None or not table.sizes or scan.units not in UNITS:
         return None
@@ -99,6 +106,7 @@ def unit_slip(ctx: Context, table: SizeTable | None) -> tuple[str, float] | None
     if any(od is not None and smallest <= od <= largest for _, od in measured):
         return None
     pipes = [c for c in cylinders if c.type == "pipe"] or cylinders
+    hinted = [(c, od) for c in pipes if (od := _hint_od(ctx, c, table)) is not None]
     best = None
     for unit, metres in UNITS.items():
         if unit == scan.units:
@@ -114,9 +122,37 @@ def unit_slip(ctx: Context, table: SizeTable | None) -> tuple[str, float] | None
                 break
             score += abs(sizes[0][1] - od) / window
         else:
-            if best is None or score < best[0]:
-                best = (score, unit, factor)
+            unhinted = sum(
+                abs(_scaled(ctx, c, factor)[0] - hint_od) > _scaled(ctx, c, factor)[1]
+                for c, hint_od in hinted
+            )
+            low, high = PLAUSIBLE_FIT_RMS
+            noisy = sum(
+                not low <= c.fit.rms * factor <= high
+                for c in pipes
+                if c.fit is not None and np.isfinite(c.fit.rms) and c.fit.rms > 0
+            )
+            key = (unhinted, noisy, score)
+            if best is None or key < best[0]:
+                best = (key, unit, factor)
     return None if best is None else (best[1], best[2])
+
+
+#: The RMS residual (metres) a cylinder fit of a laser range finder's shots can have: 0.05 mm
+#: (a survey-grade instrument on a smooth pipe) to 15 mm (an inexpensive one at its range
+#: limit on a rough or lagged surface). A unit reading in which a fit's RMS falls outside is
+#: no scan of this kind: millimetre numbers read as centimetres make 2 mm of noise 20 mm.
+PLAUSIBLE_FIT_RMS = (5e-5, 0.015)
+
+
+def _hint_od(ctx: Context, component: Component, table: SizeTable) -> float | None:
+    """The OD (metres) the operator's size hint of a pipe names, or None."""
+    snap = component.snap or {}
+    info = snap.get("hint") if isinstance(snap.get("hint"), dict) else {}
+    if info.get("od") is not None:
+        return float(info["od"])
+    hint = info.get("nominal") or ctx.hint(component)
+    return table.od(hint) if hint else None
 
 
 def _scaled(ctx: Context, component: Component, factor: float) -> tuple[float, float]:

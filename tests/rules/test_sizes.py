@@ -102,6 +102,32 @@ def test_a_scan_in_the_wrong_units_is_told_so(units, scale, slip):
     assert first.change == {"field": "units", "value": slip} and not first.unambiguous
 
 
+@pytest.mark.parametrize("evidence", ["hints", "noise"])
+def test_a_unit_slip_with_wide_windows_is_told_by_the_hints_and_the_noise(evidence):
+    """Millimetre numbers in a metre file, fitted with 3.3 mm standard errors (2 mm noise, 20
+    shots): read as centimetres the pipes fall within a window (100 mm) of NPS 44-48, which
+    are 51 mm apart, as closely as they do of NPS 4 read as millimetres. The operator's 4"
+    hints, or the fits' 2 mm RMS (20 mm as centimetres: no range finder's noise), say mm
+    (seen in review: the check said cm and proposed NPS 46)."""
+    import dataclasses
+
+    hints = evidence == "hints"
+    # with the hints, an RMS plausible in both readings (0.5 mm / 5 mm): the hints decide
+    rms = 0.5 if hints else 2.0
+    pipes = []
+    for cid, y, od in (("P1", 0.0, 116.41), ("P2", 2000.0, 111.09)):
+        p = pipe(
+            cid, [0, y, 1], [2000, y, 1], od, status="no-size", od_stderr=3.3, rms=rms, sigma=rms
+        )
+        if hints:
+            p = dataclasses.replace(p, snap={**p.snap, "hint": {"nominal": '4"', "od": 0.1143}})
+        pipes.append(p)
+    # the shipped catalog: its NPS 44-48 are what a centimetre reading falls among
+    found = only(run_shipped(*pipes, scan=Scan(units="m", objects=())), "nonstandard-diameter")
+    assert [f.suggestions[0].change for f in found] == [{"field": "units", "value": "mm"}] * 2
+    assert all("(this one NPS 4 = 114.3 mm)" in f.suggestions[0].description for f in found)
+
+
 def test_one_plausible_cylinder_means_the_units_are_right():
     # a 118 mm nonstandard pipe beside a 114 m one: the scan's units stand, no suggestion
     pipes = [
