@@ -45,6 +45,13 @@ import numpy as np
 from asbuilt import __version__
 from asbuilt.cad.colours import KIND_COLOURS, colour_for, component_status
 from asbuilt.errors import ExportError
+from asbuilt.export._ifc_geometry import (
+    _centreline_length,
+    _outer_radius,
+    _perpendicular,
+    _piping_ends,
+    _wall,
+)
 from asbuilt.insulation import jacket
 from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
@@ -139,13 +146,6 @@ def ifc_class_for(component: Component) -> tuple[str, str]:
     if component.type == "plane":
         return ("IfcPlate", "NOTDEFINED")
     return ("IfcBuildingElementProxy", "NOTDEFINED")
-
-
-def _perpendicular(axis: np.ndarray) -> np.ndarray:
-    """A unit vector (3,) perpendicular to the unit ``axis`` (3,)."""
-    helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = np.cross(axis, helper)
-    return u / np.linalg.norm(u)
 
 
 class _Writer:
@@ -691,63 +691,6 @@ def _anchor_of(element) -> np.ndarray:
 
 def _owner(port):
     return port.Nests[0].RelatingObject if port.Nests else None
-
-
-def _outer_radius(g) -> float | None:
-    if isinstance(g, Straight | Bend | Tee | Cross):
-        return g.outer_radius
-    if isinstance(g, Reducer):
-        return g.outer_radius_start
-    if isinstance(g, Cylinder):
-        return g.radius
-    return None
-
-
-def _wall(g) -> float:
-    """The wall (m) that goes with :func:`_outer_radius`: a reducer's or elbow's at its start
-    end, a tee's run's; 0 when unknown or not piping."""
-    if isinstance(g, Reducer):
-        return g.wall_start
-    return getattr(g, "wall", 0.0)
-
-
-def _centreline_length(g) -> float | None:
-    """Centreline length, metres: straight and reducer end to end, bend arc, tee run."""
-    if isinstance(g, Straight | Reducer):
-        return g.length
-    if isinstance(g, Bend):
-        return g.bend_radius * float(np.radians(g.angle_deg))
-    if isinstance(g, Tee | Cross):
-        return float(np.linalg.norm(g.run_end - g.run_start))
-    if isinstance(g, Cylinder):
-        return g.length
-    return None
-
-
-def _piping_ends(g) -> list[tuple[np.ndarray, np.ndarray]]:
-    """``(point (3,) m, outward unit direction (3,))`` of each open end of a piping geometry."""
-    if isinstance(g, Straight):
-        return [(g.start, -g.direction), (g.end, g.direction)]
-    if isinstance(g, Reducer):
-        return [(g.start, -g.direction), (g.end, g.direction)]
-    if isinstance(g, Bend):
-        normal = np.cross(g.start - g.center, g.end - g.center)
-        normal /= np.linalg.norm(normal)
-        out_start = -np.cross(normal, g.start - g.center)
-        out_end = np.cross(normal, g.end - g.center)
-        return [
-            (g.start, out_start / np.linalg.norm(out_start)),
-            (g.end, out_end / np.linalg.norm(out_end)),
-        ]
-    if isinstance(g, Tee | Cross):
-        run = (g.run_end - g.run_start) / np.linalg.norm(g.run_end - g.run_start)
-        outlets = [(end, (end - g.center) / np.linalg.norm(end - g.center)) for end in g.outlets]
-        return [(g.run_start, -run), (g.run_end, run), *outlets]
-    if isinstance(g, Cylinder):
-        start, end = g.ends
-        axis = (end - start) / np.linalg.norm(end - start)
-        return [(start, -axis), (end, axis)]
-    return []
 
 
 def _stderr_items(stderr: Mapping) -> list[tuple[str, float]]:
