@@ -1,0 +1,270 @@
+"""The noise level a fit runs at: the sensor's range sigma, the residuals' own level when the
+points scatter significantly wider (a rough surface, an optimistic sigma), and the fit of a scan
+without a sigma, which prefers the fit at the prior noise when the shots it rejects are
+background (a private helper of :mod:`asbuilt.fit`, numpy only)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from asbuilt.errors import FitError, located
+from asbuilt.fit._cuboid_sparse import AmbiguousFrame
+from asbuilt.fit.result import FitResult
+from asbuilt.tolerances import Tolerances
+
+#: The residuals' own noise estimate must exceed the sensor's range sigma by this factor before
+#: it replaces the sensor's: at 20 inliers the estimate's standard error is about 16% of sigma,
+#: so 1.5 is three standard errors; below it an optimistic sigma costs a shot or two, not the fit.
+WIDER_NOISE_RATIO = 1.5
+#: ... and by at most this factor: points scattered wider than five times the sensor's noise
+#: about the best primitive are not that primitive (a box labelled a cylinder), and the fit's
+#: error stands.
+WIDER_NOISE_LIMIT = 5.0
+
+
+def _fit_with_noise(
+    kind: str, function, points: np.ndarray, sigma, tolerances, options
+) -> FitResult:
+    """The fit with the sensor's ``sigma`` (metres), refitted with the residuals' noise level
+    when the points scatter significantly wider than the sensor's noise.
+
+    The inlier test is ``outlier_cutoff_sigma`` sensor sigmas, so a rough, corroded or
+    insulated surface, or a range sigma copied from an optimistic data sheet, makes good shots
+    look like outliers: a third of them can be rejected and the standard errors come out too
+    small. The noise level is estimated from the likeliest inlier set of the fit's residuals
+    (nested by size, Gaussian inliers and uniform outliers, as in
+    :func:`asbuilt.fit._robust.best_inlier_set`); when it is above ``WIDER_NOISE_RATIO`` times
+    the sensor's sigma, the object is refitted with it and a note says so. A fit that fails on
+    too many outliers is tried once without the sensor's sigma and kept when its noise level is
+    within ``WIDER_NOISE_LIMIT`` sensor sigmas, or within a typical range finder's noise
+    (``WIDER_NOISE_RATIO`` times ``tolerances.prior_range_sigma``: the sensor's sigma is then
+    what is wrong); otherwise its error stands, with the scatter the fit found.
+    """
+    if kind == "hull":
+        return function(np.array(points), sigma=sigma, tolerances=tolerances, **options)
+    if sigma is None:
+        return _fit_without_sigma(function, points, tolerances, options)
+    sigma = float(sigma)
+    try:
+        result = function(np.array(points), sigma=sigma, tolerances=tolerances, **options)
+    except AmbiguousFrame:
+        # Shots that fit frames far apart as well at the sensor's noise: a lower level found
+        # without it would only make one frame look settled.
+        raise
+    except FitError as first:
+        try:
+            # With the prior-noise rescue: the fit of every shot at its own scale can be a
+            # metre-wide cylinder through pipe and wall at 60 mm, over the limit below, where
+            # the fit at the prior noise keeps the pipe (an optimistic 0.5 mm for a 2 mm finder).
+            result = _fit_without_sigma(function, points, tolerances, options, sigma)
+        except FitError:
+            raise first from None
+        # Within a typical range finder's noise the points are that kind and the sensor's
+        # sigma is what is wrong (0.2 mm declared for a 2 mm finder: ten times): wider than
+        # both limits, they are not that kind (a box labelled a cylinder), and the error
+        # stands, saying what the shots scatter by.
+        typical = WIDER_NOISE_RATIO * float(tolerances.prior_range_sigma)
+        if not result.sigma <= max(WIDER_NOISE_LIMIT * sigma, typical):
+            first.message += (
+                f" (Without the sensor's range sigma, {sigma * 1000:.3g} mm, the best"
+                f" {result.kind} leaves the shots scattered by {result.sigma * 1000:.3g} mm, more"
+                f" than a range finder's noise: these shots are not one {result.kind}, unless"
+                " range_sigma is far too optimistic.)"
+            )
+            first.args = (located(first.source, first.where, first.message),)
+            raise first from None
+        if result.sigma > WIDER_NOISE_RATIO * sigma:
+            return _noted_wider(result, result.sigma, sigma)
+        return _noted_found(result, sigma)
+    noise = _residual_noise(result, points, tolerances)
+    if not WIDER_NOISE_RATIO * sigma < noise:
+        return result
+    try:
+        wider = function(np.array(points), sigma=noise, tolerances=tolerances, **options)
+    except FitError:
+        if noise <= WIDER_NOISE_LIMIT * sigma:
+            raise
+        return result
+    if _left_basin(result, wider):
+        return result
+    # Also beyond WIDER_NOISE_LIMIT: a fit that stands at the sensor's sigma while its likeliest
+    # inliers scatter five times wider has rejected good shots beyond three sensor sigmas and
+    # claims standard errors five times too small (the review's pipes declared 0.5 mm for a
+    # 2 mm finder, fitted with their wall rows left out: 9 of 24 pipe shots rejected, radius
+    # errors up to 15 standard errors).
+    return _noted_wider(wider, noise, sigma)
+
+
+def _left_basin(first: FitResult, wider: FitResult) -> bool:
+    """Whether ``wider``, the fit of the same points at a wider noise level than ``first``,
+    rejects more than one of ``first``'s inliers: a wider threshold keeps every shot a fit had
+    unless the search went to another basin (a 0.88 m cylinder through part of a 0.6 m pipe's
+    shots and mixed returns, where the pipe had been found at the sensor's sigma with its wall
+    rows left out); then ``first`` stands."""
+    return int(np.count_nonzero(first.inliers & ~wider.inliers)) > 1
+
+
+#: Without a sensor sigma, rejected shots whose median distance from the fit made with the
+#: assumed noise is at least this many times the noise of the fit made without it are taken as
+#: background (a wall behind the pipe, 1.4 m from it: 150 times), not as the scatter of a rough
+#: surface (shots beyond three assumed sigmas of a surface scattering by s lie a median 1-2 s
+#: from it).
+BACKGROUND_RATIO = 5.0
+
+
+def _fit_without_sigma(
+    function, points: np.ndarray, tolerances, options, sensor_sigma: float | None = None
+) -> FitResult:
+    """The fit of a scan that gives no sensor sigma, with its noise level from its residuals;
+    when that noise is over ``WIDER_NOISE_RATIO`` times ``tolerances.prior_range_sigma`` (or the
+    fit is refused), the fit made with the prior noise as the sensor's is preferred if the shots
+    it rejects are background (``BACKGROUND_RATIO``), then settled with its inliers' own noise.
+
+    Without a sigma every threshold scales with the residuals, so shots of a wall behind a pipe
+    (a window run past the pipe's end: 15 of 36 shots) make the residuals wide enough to hold
+    them, and a cylinder of 0.8 m through pipe and wall shots "fits" all of them at 9 mm (an
+    independent ray caster's plant, 16 of 54 pipe fits). With the prior noise the robust search
+    rejects them, and the 2 mm noise the pipe's shots then show is the residuals' own.
+    """
+    prior = float(tolerances.prior_range_sigma)
+    refused = None
+    try:
+        result = function(np.array(points), sigma=None, tolerances=tolerances, **options)
+    except FitError as exc:
+        result, refused = None, exc
+    if result is not None and not result.sigma > WIDER_NOISE_RATIO * prior:
+        return result
+    try:
+        assumed = function(np.array(points), sigma=prior, tolerances=tolerances, **options)
+    except FitError:
+        assumed = None
+    wide = prior if result is None else float(result.sigma)
+    rejected = None if assumed is None else np.abs(assumed.residuals[~assumed.inliers])
+    distance = float(np.median(rejected)) if rejected is not None and rejected.size else 0.0
+    if not (
+        distance >= BACKGROUND_RATIO * wide
+        or _likelier_background(assumed, result, points, tolerances)
+    ):
+        if result is None:
+            raise refused
+        if sensor_sigma is None and result.sigma > FAR_WIDER_RATIO * prior:
+            # Not presented as a fit like any other: a 2 m "pipe" through a pipe's shots and the
+            # wall rows behind it scatters by 40-60 mm.
+            note = (
+                f"The shots scatter by {result.sigma * 1000:.3g} mm about the {result.kind}, "
+                f"{result.sigma / prior:.0f} times the {prior * 1000:g} mm noise of a typical "
+                "range finder, and no fit at that noise explains most of them: a very rough "
+                "surface, or shots of more than one surface (background behind the object). "
+                "Give sensor.range_sigma and the station, or check the shots."
+            )
+            result = dataclasses.replace(result, notes=(*result.notes, note))
+        return result
+    noise = max(_residual_noise(assumed, points, tolerances), float(tolerances.sigma_floor))
+    try:
+        settled = function(np.array(points), sigma=noise, tolerances=tolerances, **options)
+    except FitError:
+        settled = assumed
+    if _left_basin(assumed, settled):
+        settled = assumed
+    note = (
+        f"{int(np.count_nonzero(~settled.inliers))} shot(s) lie far from the {settled.kind} the "
+        f"others fit to {noise * 1000:.3g} mm (a median {distance:.3g} m away) and "
+        "were taken as background"
+        + (
+            f"; {'at its own scale' if sensor_sigma else 'without a sensor sigma'} a "
+            f"{result.kind} through all the shots would have fitted at {wide * 1000:.3g} mm"
+            if result is not None
+            else ""
+        )
+        + (
+            # The sensor's sigma was given but refused every fit (the caller says why).
+            "."
+            if sensor_sigma
+            else ". Give sensor.range_sigma (and the station) so that the fit need not guess."
+        )
+    )
+    return dataclasses.replace(
+        settled, sigma=noise, sigma_source="residuals", notes=(*settled.notes, note)
+    )
+
+
+#: A fit without a sensor sigma whose noise level is over this many times the prior range sigma
+#: is no rough surface's (measured roughness of pipes and walls: 5-10 mm); the fit at the prior
+#: noise may replace it on likelihood alone (:func:`_likelier_background`).
+FAR_WIDER_RATIO = 10.0
+
+
+def _likelier_background(assumed, result, points: np.ndarray, tolerances: Tolerances) -> bool:
+    """Whether the fit at the prior noise (``assumed``, its rejected shots taken as background)
+    explains ``points`` (n, 3) metres more likely than the fit of every shot at its own scale
+    (``result``), when that scale is over ``FAR_WIDER_RATIO`` prior sigmas.
+
+    Gaussian inliers at each fit's own noise and uniform outliers over the points' extent, with
+    the description length of which shots are outliers (:func:`asbuilt.fit._mixture`; the
+    same primitive, so the same parameter count). The median distance test
+    (``BACKGROUND_RATIO``) misses background near a wide fit: a 2.3 m sphere through a 1.3 m
+    sphere and the floor row below it scatters by 226 mm, and the floor shots lie a median
+    0.75 m from the 1.3 m sphere that fits the rest to 2 mm.
+    """
+    from asbuilt.fit._mixture import mixing_cost, mixture_score
+
+    if assumed is None or result is None:
+        return False
+    if not float(result.sigma) > FAR_WIDER_RATIO * float(tolerances.prior_range_sigma):
+        return False
+    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+    floor = float(tolerances.sigma_floor)
+    kept = int(np.count_nonzero(assumed.inliers))
+    narrow = mixture_score(assumed.residuals, assumed.inliers, extent, floor) + mixing_cost(
+        [kept, len(points) - kept]
+    )
+    wide = mixture_score(result.residuals, result.inliers, extent, floor) + mixing_cost(
+        [int(np.count_nonzero(result.inliers)), int(np.count_nonzero(~result.inliers))]
+    )
+    return narrow < wide
+
+
+def _residual_noise(result: FitResult, points: np.ndarray, tolerances: Tolerances) -> float:
+    """The noise level (metres) of a fit's likeliest inlier set: RMS with the degrees of
+    freedom of the fit's covariance taken off."""
+    from asbuilt.fit._robust import best_inlier_set
+
+    residuals = np.asarray(result.residuals, dtype=np.float64)
+    if result.inliers.all():
+        chosen = result.inliers  # the likeliest set is at least the inliers: here every point
+    else:
+        extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+        floor = float(tolerances.sigma_floor)
+        chosen = best_inlier_set(residuals, result.inliers, extent, floor)
+    used = 0 if result.covariance is None else len(result.covariance)
+    dof = int(np.count_nonzero(chosen)) - used
+    if dof <= 0:
+        return 0.0
+    kept = residuals[chosen]
+    return float(np.sqrt(kept @ kept / dof))
+
+
+def _noted_found(result: FitResult, sigma: float) -> FitResult:
+    """``result`` (fitted without the sensor's sigma, its own noise level within
+    ``WIDER_NOISE_RATIO`` of it) where the fit with the sensor's sigma failed, with a note."""
+    note = (
+        f"With the sensor's range sigma ({sigma * 1000:.3g} mm) the robust search found no "
+        f"{result.kind} holding most points; the search with the residuals' own noise level did "
+        f"({result.sigma * 1000:.3g} mm, which agrees with the sensor's), and its fit is kept."
+    )
+    return dataclasses.replace(result, notes=(*result.notes, note))
+
+
+def _noted_wider(result: FitResult, noise: float, sigma: float) -> FitResult:
+    """``result`` (fitted with the residuals' noise level) marked as such, with a note."""
+    note = (
+        f"The points scatter by {noise * 1000:.3g} mm about the {result.kind}, more than the "
+        f"sensor's range sigma ({sigma * 1000:.3g} mm): a rough or coated surface, or an "
+        f"optimistic sigma. The fit used {noise * 1000:.3g} mm for its outlier test and "
+        "standard errors."
+    )
+    return dataclasses.replace(
+        result, sigma=noise, sigma_source="residuals", notes=(*result.notes, note)
+    )
