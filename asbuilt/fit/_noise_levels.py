@@ -64,9 +64,12 @@ def _fit_with_noise(
         # Within a typical range finder's noise the points are that kind and the sensor's
         # sigma is what is wrong (0.2 mm declared for a 2 mm finder: ten times): wider than
         # both limits, they are not that kind (a box labelled a cylinder), and the error
-        # stands, saying what the shots scatter by.
-        typical = WIDER_NOISE_RATIO * float(tolerances.prior_range_sigma)
-        if not result.sigma <= max(WIDER_NOISE_LIMIT * sigma, typical):
+        # stands; where the sigma is finer than a typical finder's, it says what the shots
+        # scatter by (auto's fit without the sigma may be of another kind: not said).
+        prior = float(tolerances.prior_range_sigma)
+        if not result.sigma <= max(WIDER_NOISE_LIMIT * sigma, WIDER_NOISE_RATIO * prior):
+            if kind == "auto" or sigma >= prior:
+                raise first from None
             first.message += (
                 f" (Without the sensor's range sigma, {sigma * 1000:.3g} mm, the best"
                 f" {result.kind} leaves the shots scattered by {result.sigma * 1000:.3g} mm, more"

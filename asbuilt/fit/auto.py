@@ -340,9 +340,10 @@ def fit_auto(
                 options["viewpoint"] = viewpoint
             results[kind] = fitter(pts, **options)
         except FitError as exc:
-            failures[kind] = exc.message
+            # Some fits name their kind first ("cuboid: the 7 shots ..."); the notes name it.
+            failures[kind] = exc.message.removeprefix(f"{kind}: ")
     if not results:
-        reasons = "; ".join(f"{kind}: {why}" for kind, why in failures.items())
+        reasons = "; ".join(f"{kind}: {why.rstrip('.')}" for kind, why in failures.items())
         raise FitError(f"No kind fits these points ({reasons}); choose a kind or hull.")
     extent = float(np.linalg.norm(np.ptp(pts, axis=0)))
     # Every kind judged by its shots' distances to the surface it returns (a cuboid's own

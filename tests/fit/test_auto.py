@@ -12,7 +12,7 @@ import pytest
 from fit_scans import raster_scan
 
 from asbuilt.errors import FitError
-from asbuilt.fit import auto
+from asbuilt.fit import auto, fit_points
 from asbuilt.fit.auto import PARAMETERS, WEAK_EVIDENCE, fit_auto, information_scores
 from asbuilt.fit.cylinder import fit_cylinder
 from asbuilt.fit.result import FitResult
@@ -434,3 +434,32 @@ def test_a_sphere_far_wider_than_the_shots_is_not_preferred_as_simpler():
         assert result.primitive.kind == "cylinder", result.notes
         assert any("plane's trace of curvature" in note for note in result.notes)
         assert abs(result.primitive.radius - truth[obj.id]["radius"]) < 3 * result.stderr["radius"]
+
+
+def test_refusals_name_their_kind_once_and_join_cleanly():
+    """Seen in review: "auto could not fit a cuboid: cuboid: the 7 shots ..." (the cuboid fit
+    names its kind first) and "...one box.; choose a kind" where the reasons were joined."""
+    seven = np.array(
+        [
+            [-0.966369, 3.923841, 1.21963],
+            [-0.934668, 3.946293, 1.911919],
+            [-0.92217, 3.96478, 1.645184],
+            [-1.052777, 3.932624, 1.500268],
+            [-1.044949, 3.928596, 1.069245],
+            [-1.017117, 3.917048, 1.927526],
+            [-1.041794, 3.924908, 1.53814],
+        ]
+    )
+    result = fit_points("auto", seven, sigma=0.002, viewpoint=[0.0, 0.0, 1.0])
+    refusals = [n for n in result.notes if n.startswith("auto could not fit a ")]
+    assert refusals
+    for note in refusals:
+        kind = note.removeprefix("auto could not fit a ").split(":")[0]
+        assert not note.startswith(f"auto could not fit a {kind}: {kind}:"), note
+    blob = np.random.default_rng(1).uniform(0, 1, (30, 3)) + [0, 4, 0]
+    with pytest.raises(FitError) as refused:
+        fit_points("auto", blob, sigma=0.002, viewpoint=np.zeros(3))
+    message = refused.value.message
+    assert message.startswith("No kind fits these points (plane: ")
+    assert message.endswith("); choose a kind or hull.")
+    assert ".;" not in message and ".)" not in message
