@@ -38,8 +38,16 @@ SUBCOMMANDS = (
 )
 
 
+class _OneLineParser(argparse.ArgumentParser):
+    """argparse with its usage errors on one line (bad input gets one line and exit code 2, as
+    every other bad input does), pointing at ``--help`` instead of repeating the usage."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _OneLineParser(
         prog="asbuilt",
         description="Turn sparse laser range points of construction objects into as-built CAD.",
         epilog="Example: asbuilt model samples/spool.json --out spool.step",

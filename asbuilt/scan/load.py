@@ -112,6 +112,8 @@ def _describe(value) -> str:
         return "null"
     if isinstance(value, bool):
         return "true" if value else "false"
+    if value == "":
+        return "an empty string"
     if isinstance(value, str):
         shown = value if len(value) <= 20 else value[:17] + "..."
         return f"a string ({json.dumps(shown)})"
@@ -248,6 +250,11 @@ def loads_scan(text: str | bytes, source: str | None = None) -> Scan:
         raise ScanReadError(_too_large(source, len(text)))
     if isinstance(text, (bytes, bytearray)):
         text = decode_text(bytes(text), ScanError, source=source, what="scan")
+    if not text.strip():
+        raise ScanError(
+            "the file is empty (or only white space); give an asbuilt-scan JSON document",
+            source=source,
+        )
     repeated: list[bool] = []
     try:
         document = json.loads(

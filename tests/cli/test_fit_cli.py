@@ -232,6 +232,25 @@ def test_unknown_units_option(capsys):
     assert "invalid choice: 'yd'" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    "argv, prog",
+    [
+        (["fit", "scan.json", "--units", "yd"], "asbuilt fit"),
+        (["model", "scan.json"], "asbuilt model"),  # --out missing
+        (["check", "scan.json", "--frobnicate"], "asbuilt"),  # unknown options: the top parser
+        (["frobnicate"], "asbuilt"),
+    ],
+)
+def test_usage_errors_are_one_line(capsys, argv, prog):
+    # Bad input gets one line and exit code 2; argparse printed its usage over several lines.
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"{prog}: error: "), err
+    assert err.endswith(f" (see {prog} --help)\n")
+
+
 def test_help_lists_the_options(capsys):
     with pytest.raises(SystemExit):
         main(["fit", "--help"])

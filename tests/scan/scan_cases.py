@@ -154,6 +154,18 @@ class Bad:
 
 BAD = (
     Bad(
+        "an empty file",
+        _text(""),
+        "the file is empty (or only white space); give an asbuilt-scan JSON document",
+        schema_catches=False,  # not JSON at all
+    ),
+    Bad(
+        "a file of white space",
+        _text(" \n\t\n"),
+        "the file is empty (or only white space); give an asbuilt-scan JSON document",
+        schema_catches=False,
+    ),
+    Bad(
         "malformed JSON",
         _text('{"format": "asbuilt-scan",\n  "version": 1\n  "units": "m"}'),
         "line 3 column 3: invalid JSON (Expecting ',' delimiter); fix the syntax there",
@@ -431,7 +443,7 @@ BAD = (
     Bad(
         "empty id",
         _set("objects.1.id", ""),
-        'objects[1].id: must be non-empty text, not a string (""); give the object an id such as "P1"',
+        'objects[1].id: must be non-empty text, not an empty string; give the object an id such as "P1"',
     ),
     Bad(
         "blank id",

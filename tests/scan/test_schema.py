@@ -72,7 +72,7 @@ def test_schema_and_loader_agree_on_bad_documents(case):
     text = built if isinstance(built, str) else json.dumps(built)
     with pytest.raises(ScanError):
         loads_scan(text)
-    if case.message.startswith("line "):
+    if case.message.startswith(("line ", "the file is empty")):
         return  # not JSON: nothing for a schema to judge
     document = json.loads(text)
     schema_errors = list(validator().iter_errors(document))
