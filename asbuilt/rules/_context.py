@@ -36,6 +36,13 @@ __all__ = [
 PIPE_TYPES = ("pipe", "cylinder", "coupling")
 
 
+def _spread(stderr: float | None) -> float:
+    """A standard error for the verdicts: None or NaN as 0 (exact), +inf kept (unbounded)."""
+    if stderr is None or np.isnan(stderr):
+        return 0.0
+    return float(stderr)
+
+
 def verdict(measured: float, allowed: float, stderr: float | None, k: float) -> str:
     """``"pass"``, ``"violation"`` or ``"unverifiable"`` for ``measured <= allowed``.
 
@@ -44,11 +51,12 @@ def verdict(measured: float, allowed: float, stderr: float | None, k: float) -> 
     measured, allowed : float
         In one unit; ``allowed`` is the largest compliant value.
     stderr : float or None
-        Standard error of ``measured`` (None or NaN is taken as 0: an exact measurement).
+        Standard error of ``measured`` (None or NaN is taken as 0: an exact measurement; an
+        infinite one, a quantity the scan only bounds, can never be verified).
     k : float
         Coverage factor (2: "exceeds by more than twice its standard error").
     """
-    s = 0.0 if stderr is None or not np.isfinite(stderr) else float(stderr)
+    s = _spread(stderr)
     if measured - k * s > allowed:
         return "violation"
     if measured > allowed or k * s > allowed:
@@ -62,7 +70,7 @@ def verdict_min(measured: float, required: float, stderr: float | None, k: float
     Violation when ``measured + k*s < required``; unverifiable when ``measured < required`` within
     ``k*s``, or when ``k*s > required`` (the measurement cannot tell the required value from 0).
     """
-    s = 0.0 if stderr is None or not np.isfinite(stderr) else float(stderr)
+    s = _spread(stderr)
     if measured + k * s < required:
         return "violation"
     if measured < required or k * s > required:

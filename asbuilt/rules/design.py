@@ -193,6 +193,8 @@ def _emit(
     known = f" (known to +- {se * 1000:.1f} mm)" if outcome == "unverifiable" and se else ""
     if unit != "m":
         known = ""
+    elif known and not np.isfinite(se):
+        known = " (a bound only: the shots do not reach across it)"
     ctx.emit(
         "design-deviation",
         [comp.id],
@@ -284,19 +286,64 @@ def _check_direction(ctx, designed, comp):
     )
 
 
-def _section(geometry):
+def _size_stderrs(comp) -> np.ndarray:
+    """Each of a cuboid's sizes' own standard errors (metres, in ``geometry.size``'s order):
+    infinite where the fit has none (a size the shots only bound, written null in a model
+    document), and for every size when the component has no fit (nothing says how well it is
+    known: exact, as the rules take a missing standard error, is 0)."""
+    size = np.asarray(comp.geometry.size, dtype=np.float64)
+    fit = comp.fit
+    if fit is None or not fit.stderr or fit.stderr.get("size") is None:
+        return np.zeros(len(size))
+    values = np.asarray(
+        [np.nan if v is None else v for v in np.ravel(fit.stderr["size"])], dtype=np.float64
+    )
+    if values.shape != size.shape:
+        return np.full(len(size), np.inf)
+    return np.where(np.isfinite(values), values, np.inf)
+
+
+def _section(comp):
+    """The built section's sizes (metres, ascending) and each one's standard error: a cuboid's
+    two sizes across its longest, a cylinder's diameter; None for other shapes."""
+    geometry = comp.geometry
     if isinstance(geometry, Cuboid):
-        i = int(np.argmax(geometry.size))
-        return np.sort(np.delete(np.asarray(geometry.size), i))
+        keep = np.delete(np.arange(3), int(np.argmax(geometry.size)))
+        order = keep[np.argsort(np.asarray(geometry.size)[keep])]
+        return np.asarray(geometry.size)[order], _size_stderrs(comp)[order]
     if isinstance(geometry, Cylinder):
-        return np.array([2 * geometry.radius])
+        se = stderr_value(comp.fit.stderr, "radius") if comp.fit is not None else None
+        return np.array([2 * geometry.radius]), np.array([np.nan if se is None else 2 * se])
     return None
 
 
-def _check_section(ctx, designed, comp, built, wanted, se_value):
+def _plan_stderr(comp) -> float | None:
+    """The standard error (metres) of a column's axis position in plan: the fit's centre error
+    is over all three box axes, and along a column its height (bounded by the shots' extent)
+    dominates it (a 5 m column: 131 mm where its section is known to 34); across the axis it
+    is at least half the section sizes' errors (the centre lies midway between faces), and the
+    centre's variance less the length's share, when that is more."""
+    fit = comp.fit
+    if fit is None:
+        return None
+    g = comp.geometry
+    if not isinstance(g, Cuboid):
+        return stderr_value(fit.stderr, "center")
+    se = _size_stderrs(comp)
+    longest = int(np.argmax(g.size))
+    across = np.delete(se, longest)
+    floor = 0.25 * float(np.sum(across**2))
+    centre = stderr_value(fit.stderr, "center")
+    if centre is None or not np.isfinite(centre) or not np.isfinite(se[longest]):
+        return float(np.sqrt(floor))
+    return float(np.sqrt(max(centre**2 - 0.25 * se[longest] ** 2, floor)))
+
+
+def _check_section(ctx, designed, comp, built, wanted, se_values):
     plus = float(ctx.opt("design-deviation", "section_plus"))
     minus = float(ctx.opt("design-deviation", "section_minus"))
-    for b, w in zip(built, wanted):
+    for b, w, se_value in zip(built, wanted, se_values):
+        se_value = None if np.isnan(se_value) else float(se_value)
         diff = float(b - w)
         allowed = plus if diff >= 0 else minus
         _emit(
@@ -329,8 +376,7 @@ def _check_column(ctx, designed, comp):
     at_base = centre + t * axis
     offset = float(np.hypot(*(at_base - designed.start)[:2]))
     tol = float(ctx.opt("design-deviation", "position_tolerance"))
-    fit = comp.fit
-    se = stderr_value(fit.stderr, "center") if fit is not None else None
+    se = _plan_stderr(comp)
     _emit(
         ctx,
         comp,
@@ -344,10 +390,9 @@ def _check_column(ctx, designed, comp):
         mm(tol),
         verdict(offset, tol, se, ctx.k),
     )
-    built = _section(comp.geometry)
-    if built is not None and designed.size is not None and len(built) == len(designed.size):
-        se_size = stderr_value(fit.stderr, "size") if fit is not None else None
-        _check_section(ctx, designed, comp, built, np.sort(designed.size), se_size)
+    section = _section(comp)
+    if section is not None and designed.size is not None and len(section[0]) == len(designed.size):
+        _check_section(ctx, designed, comp, *section[:1], np.sort(designed.size), section[1])
 
 
 def _check_box(ctx, designed, comp):
@@ -371,8 +416,9 @@ def _check_box(ctx, designed, comp):
         mm(tol),
         verdict(offset, tol, se, ctx.k),
     )
-    se_size = stderr_value(fit.stderr, "size") if fit is not None else None
-    _check_section(ctx, designed, comp, np.sort(g.size), np.sort(designed.size), se_size)
+    order = np.argsort(g.size)
+    sizes, stderrs = np.asarray(g.size)[order], _size_stderrs(comp)[order]
+    _check_section(ctx, designed, comp, sizes, np.sort(designed.size), stderrs)
 
 
 def check_design(ctx: Context) -> None:

@@ -302,3 +302,48 @@ def test_a_pipe_at_a_reducer_far_longer_than_designed_is_still_an_error():
         if "length" in f.message and f.objects[0] == "P3"
     ]
     assert f.severity == "error" and "deviates from design D-P3" in f.message
+
+
+def _with_size_stderrs(component, size_se, center_se):
+    import dataclasses
+
+    fit = dataclasses.replace(
+        component.fit, stderr={**component.fit.stderr, "size": size_se, "center": center_se}
+    )
+    return dataclasses.replace(component, fit=fit)
+
+
+def test_a_columns_section_and_plan_position_are_judged_by_their_own_standard_errors():
+    """Seen in review: every column's section and plan position were judged against the error
+    of its height (the largest of the three sizes' errors, and the centre's 3-D error, which
+    the height dominates), so a 20 mm wider and a 50 mm displaced column were 'cannot verify'."""
+    built = column("C1", [0.05, 0, 0], 0.0, 3.0, section=(0.32, 0.3))
+    # sizes (0.32, 0.30, 3.0): the sections known to 2 and 3 mm, the height only to 300 mm;
+    # the centre's 3-D error is the height's half (150 mm) and the section's
+    built = _with_size_stderrs(built, (0.002, 0.003, 0.3), float(np.sqrt(0.15**2 + 0.0018**2)))
+    d = design(columns=[{"id": "DC1", "base": [0, 0, 0], "top": [0, 0, 3000], "size": [300, 300]}])
+    out = {f.message.split(":")[0]: f for f in findings(model(built), d, "design-deviation")}
+    position = out["position deviates from design DC1"]
+    assert position.severity == "error" and position.stderr == pytest.approx(0.0018, abs=1e-4)
+    (wide,) = [f for f in findings(model(built), d, "design-deviation") if "+20.0 mm" in f.message]
+    assert wide.severity == "error" and wide.stderr == 0.002
+
+
+def test_a_section_the_scan_only_bounds_cannot_fail_the_design():
+    """A size bounded only by the shots' extent has no standard error (null in a model
+    document, infinite in a fit): it can neither pass nor fail; it was taken as exact, and a
+    399.5 mm lower bound failed a 450 mm design as an error."""
+    built = column("C1", [0.0, 0, 0], 0.0, 3.0, section=(0.4, 0.4))
+    for unknown in (None, float("inf")):
+        bounded = _with_size_stderrs(built, (unknown, 0.001, 0.3), 0.15)
+        d = design(
+            columns=[{"id": "DC1", "base": [0, 0, 0], "top": [0, 0, 3000], "size": [450, 450]}]
+        )
+        sections = [
+            f for f in findings(model(bounded), d, "design-deviation") if "section" in f.message
+        ]
+        # the measured side (400 +- 1 mm for 450) fails; the bounded one cannot be told
+        assert sorted(f.severity for f in sections) == ["error", "warning"]
+        (bound,) = [f for f in sections if f.severity == "warning"]
+        assert bound.unverifiable
+        assert "(a bound only: the shots do not reach across it)" in bound.message
