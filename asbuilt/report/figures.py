@@ -292,6 +292,41 @@ def _regular_faces() -> tuple[tuple[str, str], ...]:
     return tuple(faces)
 
 
+#: Offsets (in label heights) tried, in order, for a label that would cover one already placed:
+#: a vertical pipe and its elbow share a plan position, and their ids printed over each other
+#: ("P2" on "P2-P3" read "P2-P32").
+LABEL_NUDGES = (0.0, 1.0, -1.0, 2.0, -2.0)
+
+
+def _separate_labels(fig, texts) -> None:
+    """Move each label, in order, up or down by whole label heights (:data:`LABEL_NUDGES`) off
+    the labels placed before it; one that fits nowhere stays on its component. The layout is
+    made first (without rendering), so the boxes are measured at the picture's final scale."""
+    if len(texts) < 2:
+        return
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    # The boxes are measured on an Agg canvas (the PNG's; an SVG's text is drawn with the same
+    # font metrics); savefig picks its own canvas by format afterwards.
+    canvas = fig.canvas if hasattr(fig.canvas, "get_renderer") else FigureCanvasAgg(fig)
+    fig.draw_without_rendering()
+    renderer = canvas.get_renderer()
+    placed = []
+    for text in texts:
+        box = text.get_window_extent(renderer)
+        if any(box.overlaps(other) for other in placed):
+            step = box.height * 72.0 / fig.dpi + 1.0  # points: the label's height and a gap
+            for nudge in LABEL_NUDGES[1:]:
+                text.xyann = (0.0, nudge * step)
+                moved = text.get_window_extent(renderer)
+                if not any(moved.overlaps(other) for other in placed):
+                    box = moved
+                    break
+            else:
+                text.xyann = (0.0, 0.0)
+        placed.append(box)
+
+
 def label_fonts(labels) -> tuple[list[str], frozenset[int]]:
     """The font families to draw ``labels`` with, and the code points they can draw.
 
@@ -494,12 +529,15 @@ def render_view(
             labelled = flagged[:label_limit]
         families, drawable = label_fonts(oid for oid, _, _ in labelled)
         font = {"fontfamily": families} if families else {}
+        texts = []
         for oid, centre, _severity in labelled:
             text = ax.annotate(
                 # An SVG keeps the characters for the viewer's fonts to draw; a PNG is drawn
                 # here, where a character no installed font has would be an empty box.
                 drawable_label(oid, None if fmt == "svg" else drawable),
                 centre,
+                xytext=(0.0, 0.0),
+                textcoords="offset points",
                 fontsize=7,
                 **font,
                 ha="center",
@@ -509,6 +547,7 @@ def render_view(
                 bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.7},
             )
             text.set_url(f"#{anchor(oid)}")
+            texts.append(text)
         ax.autoscale_view()
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel(labels[0])
@@ -521,6 +560,10 @@ def render_view(
             fig.legend(
                 loc="outside lower center", ncols=6, fontsize=7, markerscale=2, frameon=False
             )
+        with warnings.catch_warnings():
+            # measured on Agg: an SVG label's character no font has (see below) is no concern
+            warnings.filterwarnings("ignore", _MISSING_GLYPH, UserWarning)
+            _separate_labels(fig, texts)
         buffer = io.BytesIO()
         with warnings.catch_warnings():
             # Only an SVG label can still miss a glyph here (see above): not the user's concern.

@@ -270,3 +270,30 @@ def test_insulated_components_show_their_cladding_outline():
     svg = render_view(lagged, "plan")
     assert ">insulation<" in svg  # its legend entry
     assert "stroke-dasharray" in svg and svg.count("<path") > bare.count("<path")
+
+
+def test_labels_at_one_plan_position_are_moved_apart():
+    """A vertical pipe and its elbow share a plan position: their ids were printed over each
+    other ("P2" on "P2-P3" read "P2-P32", seen in review). Each label after the first is moved
+    by whole label heights off those placed before it."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from asbuilt.report.figures import _separate_labels
+
+    fig = Figure(figsize=(4, 3), dpi=100, layout="constrained")
+    ax = fig.add_subplot()
+    ax.set_xlim(0, 10)
+    ax.set_ylim(0, 10)
+    texts = [
+        ax.annotate(label, (5.0, 5.0), xytext=(0.0, 0.0), textcoords="offset points", fontsize=7)
+        for label in ("P2", "P2-P3", "P1-P2", "TK1")
+    ]
+    lone = ax.annotate("C1", (1.0, 1.0), xytext=(0.0, 0.0), textcoords="offset points")
+    _separate_labels(fig, [*texts, lone])
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    boxes = [t.get_window_extent(renderer) for t in texts]
+    for i, box in enumerate(boxes):
+        for other in boxes[:i]:
+            assert not box.overlaps(other)
+    assert texts[0].xyann == (0.0, 0.0) and lone.xyann == (0.0, 0.0)  # only movers move
