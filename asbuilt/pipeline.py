@@ -24,6 +24,7 @@ from asbuilt.fit.result import FitFailure, FitReport
 from asbuilt.model import Model, model_from_fits
 from asbuilt.scan.model import Scan, kind_phrase
 from asbuilt.tolerances import Tolerances
+from asbuilt.units import note_in_units
 
 __all__ = [
     "build_model",
@@ -36,13 +37,16 @@ __all__ = [
 ]
 
 
-def fit_refused_finding(failure: FitFailure) -> Finding:
+def fit_refused_finding(failure: FitFailure, units: str = "m") -> Finding:
     """The error finding for an object whose fit was refused.
 
     Parameters
     ----------
     failure : FitFailure
         The object (points shape (n, 3) metres) and its located FitError.
+    units : str
+        The scan's units: for inches or feet the message tells its lengths in inches and feet
+        (:func:`asbuilt.units.note_in_units`), as the other findings do.
 
     Returns
     -------
@@ -65,7 +69,9 @@ def fit_refused_finding(failure: FitFailure) -> Finding:
         slug=FIT_REFUSED_SLUG,
         severity="error",
         objects=(obj.id,),
-        message=f"{_not_fitted(obj.kind)}, so it is not in the model: {failure.message}",
+        message=note_in_units(
+            f"{_not_fitted(obj.kind)}, so it is not in the model: {failure.message}", units
+        ),
         location=points.mean(axis=0) if len(points) else None,
         suggestions=(keep,),
     )
@@ -77,7 +83,7 @@ def _not_fitted(kind: str) -> str:
 
 def fit_refused_findings(report: FitReport) -> tuple[Finding, ...]:
     """One :func:`fit_refused_finding` per refused object of ``report``, in the scan's order."""
-    return tuple(fit_refused_finding(failure) for failure in report.failures)
+    return tuple(fit_refused_finding(failure, report.scan.units) for failure in report.failures)
 
 
 def recheck(model: Model, config=None, design=None, *, catalog=None) -> tuple[Finding, ...]:

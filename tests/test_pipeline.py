@@ -237,3 +237,19 @@ def test_relink_says_when_the_link_does_not_join():
 
     with pytest.raises(SuggestionError, match="linking P1 and P2 does not join them"):
         relink(_facing_model(gap=1.2), [("P1", "P2")])
+
+
+@pytest.mark.parametrize(
+    ("units", "said"), [("m", "within 4 mm of a line"), ("in", "within 0.157 in of a line")]
+)
+def test_a_refused_fit_is_told_in_the_scans_units(units, said):
+    # the fit's reason says mm; a scan in inches reads its findings in inches, as its fit notes
+    from asbuilt.fit.result import FitFailure
+    from asbuilt.pipeline import fit_refused_finding
+    from asbuilt.scan.model import ScanObject
+
+    obj = ScanObject(id="P3", kind="cylinder", points=np.zeros((5, 3)))
+    failure = FitFailure(obj, FitError("The points lie within 4 mm of a line."))
+    finding = fit_refused_finding(failure, units)
+    assert said in finding.message
+    assert finding.suggestions[0].change["points"] == np.zeros((5, 3)).tolist()

@@ -18,14 +18,13 @@ strict JSON.
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Iterable
 
 import numpy as np
 
 from asbuilt.fit.result import FitReport, FitResult, ObjectFit
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Primitive, Sphere
-from asbuilt.units import unit_factor
+from asbuilt.units import IMPERIAL, SMALL_SIZE_LIMIT, note_in_units, unit_factor
 
 __all__ = [
     "TABLE_COLUMNS",
@@ -40,11 +39,6 @@ __all__ = [
 
 #: Column headings of :func:`fit_table_rows`.
 TABLE_COLUMNS = ("id", "kind", "dimensions", "center", "rms", "inliers", "standard errors")
-
-#: Output units that are imperial (the table then shows inches and feet).
-_IMPERIAL = ("in", "ft")
-#: Sizes below this (metres) are shown in the small display unit, others in the large one.
-_SMALL_SIZE_LIMIT = 10.0
 
 
 def _number(value: float, factor: float = 1.0) -> float | None:
@@ -183,7 +177,7 @@ def display_units(units: str) -> tuple[str, str]:
     """(small, large) display units for a table: ``("mm", "m")``, or ``("in", "ft")`` when the
     output unit is imperial. Radii, sizes under 10 m and residuals use the small one; lengths
     and positions the large one."""
-    return ("in", "ft") if units in _IMPERIAL else ("mm", "m")
+    return ("in", "ft") if units in IMPERIAL else ("mm", "m")
 
 
 def _decimals(unit: str) -> int:
@@ -198,7 +192,7 @@ def _fmt(value_m: float, unit: str) -> str:
 
 
 def _size(value_m: float, small: str, large: str) -> str:
-    unit = small if abs(value_m) < _SMALL_SIZE_LIMIT else large
+    unit = small if abs(value_m) < SMALL_SIZE_LIMIT else large
     return f"{_fmt(value_m, unit)} {unit}"
 
 
@@ -210,7 +204,7 @@ def _dimensions(primitive: Primitive, small: str, large: str) -> str:
     if isinstance(primitive, Sphere):
         return f"r {_size(primitive.radius, small, large)}"
     if isinstance(primitive, Cuboid):
-        unit = small if primitive.size.max() < _SMALL_SIZE_LIMIT else large
+        unit = small if primitive.size.max() < SMALL_SIZE_LIMIT else large
         return " × ".join(_fmt(s, unit) for s in primitive.size) + f" {unit}"
     if isinstance(primitive, Plane):
         area = primitive.area / unit_factor(large) ** 2
@@ -307,21 +301,3 @@ def fit_table_notes(report: FitReport, units: str | None = None) -> list[tuple[s
             )
         notes.extend((item.object.id, note_in_units(note, units)) for note in said)
     return notes
-
-
-#: A length in a fit's note: a number, a space, then mm or m as a word of its own.
-_NOTE_LENGTH = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?(?:e[+-]?\d+)?) (mm|m)\b(?![\^²])")
-
-
-def note_in_units(note: str, units: str) -> str:
-    """A fit's note with its lengths (written in mm and m by the fits) in inches and feet when
-    ``units`` is imperial (the table's own choice, :func:`display_units`); unchanged else."""
-    if units not in _IMPERIAL:
-        return note
-
-    def imperial(match: re.Match) -> str:
-        metres = float(match.group(1)) * (0.001 if match.group(2) == "mm" else 1.0)
-        unit = "in" if abs(metres) < _SMALL_SIZE_LIMIT else "ft"
-        return f"{metres / unit_factor(unit):.3g} {unit}"  # as many digits as the note had
-
-    return _NOTE_LENGTH.sub(imperial, note)

@@ -51,7 +51,7 @@ from .eccentric import eccentric_joints
 from .joint import find_runs, joint_estimate
 from .loose import loose_ends
 from .regularize import align_lines, fit_up, regularize_directions
-from .snap import SnapResult, snap_diameter
+from .snap import SnapResult, snap_diameter, texts_in_units
 from .spool import PipeSpec, build_spools
 
 __all__ = [
@@ -249,7 +249,9 @@ def merge_model(
         ``components``: pipes (``Straight``), elbows (``Bend``), tees (``Tee``), reducers
         (``Reducer``) and the unchanged non-pipe components; each
         pipe's ``snap`` says how its size was chosen and ``corrections`` what merging changed.
-        ``spools`` lists the connected groups. All in metres.
+        ``spools`` lists the connected groups. All in metres; the snaps' sentences (reason,
+        notes) tell lengths in inches and feet for a scan in inches or feet
+        (:func:`.snap.texts_in_units`).
 
     Raises
     ------
@@ -302,7 +304,7 @@ def merge_model(
             )
     if not pipe_idx:
         comps = tuple(others.get(k, c) for k, c in enumerate(base.components))
-        return base.replace(components=comps, catalog=catalog.name)
+        return texts_in_units(base.replace(components=comps, catalog=catalog.name))
 
     items = [report.fits[k] for k in pipe_idx]
     cyls = [base.components[k].geometry for k in pipe_idx]  # inside any insulation
@@ -658,7 +660,8 @@ def merge_model(
             ordered.extend(by_source.get(comp.id, []))
         else:
             ordered.append(others.get(k, comp))
-    return base.replace(components=tuple(ordered), spools=tuple(spools), catalog=catalog.name)
+    merged = base.replace(components=tuple(ordered), spools=tuple(spools), catalog=catalog.name)
+    return texts_in_units(merged)  # snap reasons and notes in inches for an imperial scan
 
 
 def _mark_loose_ends(components, joints, joint_notes, ids, slack, tol):

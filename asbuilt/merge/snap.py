@@ -11,16 +11,23 @@ window does not contain it.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from asbuilt.catalog import Catalog, PipeSize, parse_nominal
+from asbuilt.model import Model
+from asbuilt.units import IMPERIAL, note_in_units
 
-__all__ = ["SnapResult", "snap_diameter", "STATUSES"]
+__all__ = ["SnapResult", "snap_diameter", "STATUSES", "TEXT_FIELDS", "texts_in_units"]
 
 #: Snap statuses: a size chosen from the fit, none in range, two in range, chosen by the hint.
 STATUSES = ("snapped", "no-size", "ambiguous", "hint")
+
+#: The ``snap`` fields that are sentences for people (a text or a list of texts); the others
+#: are data, in metres.
+TEXT_FIELDS = ("reason", "notes", "merge_notes")
 
 
 @dataclass(frozen=True)
@@ -175,3 +182,31 @@ def snap_diameter(
         f"{names}; scan more points or give a nominal hint"
     )
     return SnapResult("ambiguous", od_fit, se, window, None, inside, reason, hint_info)
+
+
+def texts_in_units(model: Model) -> Model:
+    """``model`` with its components' snap sentences (:data:`TEXT_FIELDS`: snap reasons, fitting
+    and merge notes, written in mm and m) telling lengths in inches and feet when its display
+    units are imperial, as the fits' notes do (:func:`asbuilt.units.note_in_units`); the very
+    same model for metric units."""
+    if model.units not in IMPERIAL:
+        return model
+
+    def told(value):
+        if isinstance(value, str):
+            return note_in_units(value, model.units)
+        return [note_in_units(v, model.units) if isinstance(v, str) else v for v in value]
+
+    components = tuple(
+        dataclasses.replace(
+            comp,
+            snap={
+                key: told(value) if key in TEXT_FIELDS and value else value
+                for key, value in comp.snap.items()
+            },
+        )
+        if comp.snap
+        else comp
+        for comp in model.components
+    )
+    return model.replace(components=components)

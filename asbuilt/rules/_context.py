@@ -9,13 +9,14 @@ value ``m`` with standard error ``s`` against an allowed maximum ``a`` is a *vio
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from asbuilt.findings import Finding, Suggestion
 from asbuilt.model import Bend, Component, Cross, Model, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+from asbuilt.units import note_in_units
 
 from .config import RulesConfig
 from .registry import rule
@@ -79,7 +80,8 @@ def verdict_min(measured: float, required: float, stderr: float | None, k: float
 
 
 def mm(value: float) -> str:
-    """A length in metres written in millimetres for messages (``"3.9 mm"``)."""
+    """A length in metres written in millimetres for messages (``"3.9 mm"``); :meth:`Context.emit`
+    tells it in inches or feet when the model's display units are imperial."""
     return f"{value * 1000:.1f} mm"
 
 
@@ -205,6 +207,12 @@ class Context:
                 return nominal
         return None
 
+    def text(self, message: str) -> str:
+        """``message`` (lengths written in mm and m) as people read it: its lengths in inches
+        and feet when the model's display units are imperial, as the fits' notes
+        (:func:`asbuilt.units.note_in_units`); unchanged for metric units."""
+        return note_in_units(message, self.model.units)
+
     def emit(
         self,
         slug: str,
@@ -223,7 +231,9 @@ class Context:
         """Record a finding of rule ``slug``; ``outcome`` "violation" or "unverifiable".
 
         An unverifiable finding is a warning whose message starts ``cannot verify <slug>:`` and
-        carries the ``rescan`` advice as a suggestion.
+        carries the ``rescan`` advice as a suggestion. The message and the suggestions' texts
+        are written with lengths in mm and m; they are told in the model's units (:meth:`text`),
+        while ``measured``, ``allowed``, ``stderr`` and the suggestions' changes stay SI.
         """
         if outcome == "pass":
             return
@@ -237,6 +247,8 @@ class Context:
             if rescan:
                 suggestions = (Suggestion(rescan), *suggestions)
         r = rule(slug)
+        message = self.text(message)
+        suggestions = tuple(replace(s, description=self.text(s.description)) for s in suggestions)
         self.findings.append(
             Finding(
                 code=r.code,

@@ -31,6 +31,7 @@ from asbuilt.findings import Suggestion
 from asbuilt.insulation import envelope
 from asbuilt.model import Bend, Cross, Reducer, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
+from asbuilt.units import IMPERIAL, unit_factor
 
 from ._context import Context, axis_of, ends_of, mm, stderr_value
 from ._graph import end_pairs, linked_pairs
@@ -487,6 +488,15 @@ def _check_duplicate(ctx: Context, a, b, touch: float) -> bool:
     return True
 
 
+def _volume(ctx: Context, volume: float, se: float) -> str:
+    """An overlap volume (m3) and its standard error for the message: cm3, or cubic inches
+    when the model's display units are imperial (as its lengths are then inches)."""
+    if ctx.model.units in IMPERIAL:
+        cubic_inch = unit_factor("in") ** 3
+        return f"{volume / cubic_inch:.3g} in3 (+- {se / cubic_inch:.2g})"
+    return f"{volume * 1e6:.0f} cm3 (+- {se * 1e6:.0f})"
+
+
 def check_clash(ctx: Context) -> None:
     slug = "clash"
     comps = list(ctx.model.components)
@@ -554,7 +564,7 @@ def check_clash(ctx: Context) -> None:
         ctx.emit(
             slug,
             [first, second],
-            f"{first} and {second} intersect: {volume * 1e6:.0f} cm3 (+- {se * 1e6:.0f}) of overlap"
+            f"{first} and {second} intersect: {_volume(ctx, volume, se)} of overlap"
             + (" (insulation included)" if a.insulation or b.insulation else "")
             + (
                 ""
