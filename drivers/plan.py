@@ -38,6 +38,8 @@ __all__ = [
     "Plan",
     "SessionSettings",
     "DEFAULT_SETTINGS",
+    "TARGET_KEYS",
+    "PLAN_KEYS",
     "required_points",
     "check_insulation",
     "load_plan",
@@ -107,6 +109,13 @@ def required_points(kind: str, tolerances: Tolerances = DEFAULT_TOLERANCES) -> i
     return max(paper.get(kind, tolerances.recommended_points_cuboid), MIN_POINTS.get(kind, 7))
 
 
+#: The keys a plan target may have (anything else is refused: a typo would drop the field).
+TARGET_KEYS = ("id", "kind", "window_deg", "points", "group", "label", "nominal", "insulation")
+
+#: The top-level keys of a plan file (``comment``: free text, as in the example files).
+PLAN_KEYS = ("format", "version", "comment", "settings", "targets")
+
+
 @dataclass(frozen=True)
 class Target:
     """One object to scan.
@@ -161,6 +170,13 @@ class Target:
         if not isinstance(tid, str) or not tid.strip():
             raise ScanError("needs a non-empty string id", source=source, where=f"{where}.id")
         where = f"{where} ({tid})"
+        for key in raw:  # a typo ("insualtion") would silently drop what it says
+            if key not in TARGET_KEYS:
+                raise ScanError(
+                    f"unknown key; use {', '.join(TARGET_KEYS)}",
+                    source=source,
+                    where=f"{where}.{key}",
+                )
         kind = raw.get("kind")
         if kind not in KINDS:
             raise ScanError(
@@ -369,6 +385,11 @@ def load_plan(path) -> Plan:
         )
     if doc.get("version") != 1:
         raise ScanError("version must be 1", source=source, where="version")
+    for key in doc:
+        if key not in PLAN_KEYS:
+            raise ScanError(f"unknown key; use {', '.join(PLAN_KEYS)}", source=source, where=key)
+    if "comment" in doc and not isinstance(doc["comment"], str):
+        raise ScanError("must be a string", source=source, where="comment")
     raw_targets = doc.get("targets")
     if not isinstance(raw_targets, list) or not raw_targets:
         raise ScanError("needs a non-empty array of targets", source=source, where="targets")

@@ -107,6 +107,18 @@ GOOD = {"id": "P1", "kind": "cylinder", "window_deg": [0, 0, 10, 5]}
             "targets[0].id",
         ),
         (
+            {"format": "asbuilt-scan-plan", "version": 1, "targets": [{**GOOD, "nominl": "12"}]},
+            "targets[0] (P1).nominl: unknown key; use id, kind, window_deg",
+        ),
+        (
+            {"format": "asbuilt-scan-plan", "version": 1, "targets": [GOOD], "setings": {}},
+            "setings: unknown key; use format, version, comment, settings, targets",
+        ),
+        (
+            {"format": "asbuilt-scan-plan", "version": 1, "targets": [GOOD], "comment": 3},
+            "comment: must be a string",
+        ),
+        (
             {"format": "asbuilt-scan-plan", "version": 1, "targets": [GOOD, GOOD]},
             "targets[1] (P1): duplicate id",
         ),
@@ -328,3 +340,9 @@ def test_a_bare_cuboid_may_say_zero_as_a_scan_object_may():
     assert Target("C1", "cuboid", w, insulation=0).insulation == 0
     with pytest.raises(ScanError, match="C1.insulation: insulation is a radial thickness"):
         Target("C1", "cuboid", w, insulation=0.05)
+
+
+def test_a_plan_may_carry_a_comment(tmp_path):
+    doc = {"format": "asbuilt-scan-plan", "version": 1, "comment": "site A", "targets": [GOOD]}
+    (tmp_path / "p.json").write_text(json.dumps(doc))
+    assert [t.id for t in load_plan(tmp_path / "p.json").targets] == ["P1"]
