@@ -56,6 +56,8 @@ __all__ = [
     "observable_parameters",
     "estimate_calibration",
     "load_targets",
+    "file_key",
+    "file_value",
 ]
 
 _SECTIONS = {
@@ -295,6 +297,30 @@ class TargetShots:
     rng: np.ndarray
 
 
+def _unit_suffix(name: str) -> str:
+    """``"_deg"`` for an angle parameter, ``"_m"`` for a length, ``""`` for a scale (ratio)."""
+    field_name = name.partition(".")[0]
+    if field_name.endswith("scale"):
+        return ""
+    return "_m" if field_name.endswith(("offset", "position")) else "_deg"
+
+
+def file_key(name: str) -> str:
+    """A parameter's key in a calibration file's ``estimate``, with the file's unit suffix.
+
+    ``pan_zero`` -> ``pan_zero_deg``, ``tilt_axis_offset.z`` -> ``tilt_axis_offset_m.z``,
+    ``base_rotation.yaw`` -> ``base_rotation_deg.yaw``, ``range_scale`` -> ``range_scale``
+    (version 1 files written before the suffixes held bare names in radians and metres).
+    """
+    field_name, dot, comp = name.partition(".")
+    return f"{field_name}{_unit_suffix(name)}{dot}{comp}"
+
+
+def file_value(name: str, value: float) -> float:
+    """``value`` of parameter ``name`` (radians, metres or ratio) in the file's units."""
+    return math.degrees(float(value)) if _unit_suffix(name) == "_deg" else float(value)
+
+
 @dataclass(frozen=True)
 class CalibrationResult:
     """What :func:`estimate_calibration` found.
@@ -306,7 +332,8 @@ class CalibrationResult:
     free, fixed : tuple of str
         Parameter names estimated / held fixed (see :data:`asbuilt.drivers.kinematics.PARAMETERS`).
     stderr : dict of str to float
-        Standard error of each free parameter (radians, metres or ratio).
+        Standard error of each free parameter (radians, metres or ratio; :meth:`summary`
+        writes them in the file's degrees and metres, under :func:`file_key` names).
     residual_rms, initial_rms : float
         Metres, RMS of the residuals after and before.
     per_target_rms : dict of str to float
@@ -331,7 +358,7 @@ class CalibrationResult:
             "n_shots": self.n_shots,
             "free": list(self.free),
             "fixed": list(self.fixed),
-            "stderr": {k: float(v) for k, v in self.stderr.items()},
+            "stderr": {file_key(k): file_value(k, v) for k, v in self.stderr.items()},
             "per_target_rms_m": {k: float(v) for k, v in self.per_target_rms.items()},
         }
 

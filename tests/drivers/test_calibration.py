@@ -15,7 +15,9 @@ from asbuilt.drivers.calibration import (
     SphereTarget,
     TargetShots,
     calibration_from_dict,
+    calibration_to_dict,
     estimate_calibration,
+    file_key,
     load_calibration,
     load_targets,
     observable_parameters,
@@ -369,3 +371,26 @@ def test_an_initial_scale_near_zero_fails_the_estimate_in_one_line():
     initial = dataclasses.replace(NOMINAL, range_scale=1e-9)
     with pytest.raises(CalibrationError, match=r"^the estimate failed \(pan_scale, tilt_scale"):
         estimate_calibration(_shots(TRUE, np.random.default_rng(5)), initial)
+
+
+def test_file_keys_carry_the_files_units():
+    keys = {name: file_key(name) for name in PARAMETERS}
+    assert keys["pan_zero"] == "pan_zero_deg" and keys["beam_horizontal"] == "beam_horizontal_deg"
+    assert keys["tilt_axis_offset.z"] == "tilt_axis_offset_m.z"
+    assert keys["base_rotation.yaw"] == "base_rotation_deg.yaw"
+    assert keys["range_offset"] == "range_offset_m" and keys["range_scale"] == "range_scale"
+    assert len(set(keys.values())) == len(PARAMETERS)
+
+
+def test_the_estimate_summary_gives_standard_errors_in_degrees_and_metres():
+    """The file's angles are degrees: its stderr said 0.003 for a pan zero known to 0.18 deg."""
+    result = estimate_calibration(_shots(TRUE, np.random.default_rng(1)), NOMINAL)
+    stderr = result.summary()["stderr"]
+    assert "pan_zero" not in stderr  # the bare name meant radians (older files)
+    assert stderr["pan_zero_deg"] == pytest.approx(math.degrees(result.stderr["pan_zero"]))
+    assert stderr["tilt_zero_deg"] == pytest.approx(math.degrees(result.stderr["tilt_zero"]))
+    assert stderr["laser_offset_m.z"] == pytest.approx(result.stderr["laser_offset.z"])
+    assert stderr["range_scale"] == pytest.approx(result.stderr["range_scale"])
+    doc = calibration_to_dict(result.calibration, result.summary())
+    back = calibration_from_dict(json.loads(json.dumps(doc)))  # the estimate is no field
+    assert np.allclose(back.to_vector(), result.calibration.to_vector(), rtol=0, atol=1e-12)
