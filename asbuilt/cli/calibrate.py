@@ -181,7 +181,12 @@ def run(args: argparse.Namespace) -> int:
     )
     for name, rms in result.per_target_rms.items():
         out.print(f"  {name}: {rms * 1000:.2f} mm")
+    # Each note is one line: soft_wrap leaves the wrapping to the terminal (rich's own wrapping
+    # broke the list after a comma, as if the line ended there).
     if result.fixed:
-        out.print("held fixed (not observable from these targets): " + ", ".join(result.fixed))
+        out.print(
+            "held fixed (not observable from these targets): " + ", ".join(result.fixed),
+            soft_wrap=True,
+        )
     out.print(f"wrote {args.out}")
     return 0

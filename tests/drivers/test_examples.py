@@ -80,3 +80,5 @@ def test_example_room_scan_calibrates(tmp_path, capsys):
     estimate = load_calibration(out)
     assert estimate.range_offset == pytest.approx(0.015, abs=0.005)
     assert estimate.tilt_zero == pytest.approx(math.radians(-0.5), abs=math.radians(0.15))
+    notes = {line.split(" (")[0]: line for line in text.splitlines()}
+    assert notes["held fixed"].endswith("base_position.z, base_rotation.yaw")  # one line
