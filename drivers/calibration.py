@@ -39,6 +39,7 @@ from asbuilt.atomic import atomic_write
 from asbuilt.errors import CalibrationError
 from asbuilt.scan.load import MAX_COORDINATE_M
 
+from .calibration_checks import check_reach, single_target_parameters
 from .kinematics import PARAMETERS, Calibration, forward
 
 __all__ = [
@@ -339,6 +340,10 @@ class CalibrationResult:
     per_target_rms : dict of str to float
         Metres, RMS residual per target.
     n_shots : int
+    one_target : dict of str to str
+        Free parameter -> the target whose known pose alone determines it: an error in that
+        pose moves the parameter undetected
+        (:func:`~asbuilt.drivers.calibration_checks.single_target_parameters`).
     """
 
     calibration: Calibration
@@ -349,6 +354,7 @@ class CalibrationResult:
     initial_rms: float = 0.0
     per_target_rms: dict = field(default_factory=dict)
     n_shots: int = 0
+    one_target: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
         """JSON-ready summary for the calibration file's ``estimate`` section."""
@@ -360,6 +366,7 @@ class CalibrationResult:
             "fixed": list(self.fixed),
             "stderr": {file_key(k): file_value(k, v) for k, v in self.stderr.items()},
             "per_target_rms_m": {k: float(v) for k, v in self.per_target_rms.items()},
+            "one_target": dict(self.one_target),
         }
 
 
@@ -553,7 +560,9 @@ def estimate_calibration(
     Raises
     ------
     CalibrationError
-        Too few shots, unknown parameter names, or no parameter observable.
+        Too few shots, unknown parameter names, no parameter observable, or targets the shots
+        cannot fit (the estimate fails, or moves the instrument beyond the shots' reach:
+        :func:`~asbuilt.drivers.calibration_checks.check_reach`).
     """
     from scipy.optimize import least_squares
 
@@ -592,6 +601,8 @@ def estimate_calibration(
             "target's numbers, that the scan's objects are the targets named, and the initial "
             "calibration"
         ) from None
+    calibration = problem.calibration(sol.x)
+    check_reach(shots, initial, calibration, _per_target(shots, r0))
     dof = max(len(res) - len(sol.x), 1)
     s2 = float(res @ res) / dof
     try:
@@ -599,22 +610,28 @@ def estimate_calibration(
         err = np.sqrt(np.clip(np.diag(cov), 0, None))
     except np.linalg.LinAlgError:
         err = np.full(len(sol.x), np.nan)
-    per_target = {}
-    k = 0
-    for s in shots:
-        m = len(s.pan) * (3 if isinstance(s.target, PointTarget) else 1)
-        per_target[s.name] = float(np.sqrt(np.mean(res[k : k + m] ** 2)))
-        k += m
     return CalibrationResult(
-        calibration=problem.calibration(sol.x),
+        calibration=calibration,
         free=chosen,
         fixed=tuple(n for n in PRIORITY if n not in chosen),
         stderr={name: float(e) for name, e in zip(chosen, err)},
         residual_rms=float(np.sqrt(np.mean(res**2))),
         initial_rms=float(np.sqrt(np.mean(r0**2))),
-        per_target_rms=per_target,
+        per_target_rms=_per_target(shots, res),
         n_shots=n_shots,
+        one_target=single_target_parameters(shots, calibration, chosen, min_independence),
     )
+
+
+def _per_target(shots: Sequence[TargetShots], res: np.ndarray) -> dict[str, float]:
+    """RMS of ``res`` (m) over each target's shots, by target name."""
+    out = {}
+    k = 0
+    for s in shots:
+        m = len(s.pan) * (3 if isinstance(s.target, PointTarget) else 1)
+        out[s.name] = float(np.sqrt(np.mean(res[k : k + m] ** 2)))
+        k += m
+    return out
 
 
 def _vec(value, source, where) -> tuple[float, float, float]:

@@ -188,5 +188,16 @@ def run(args: argparse.Namespace) -> int:
             "held fixed (not observable from these targets): " + ", ".join(result.fixed),
             soft_wrap=True,
         )
+    if result.one_target:
+        notes = []
+        for name, target in result.one_target.items():
+            moved = file_value(name, result.calibration.get(name) - initial.get(name))
+            unit = " deg" if "_deg" in file_key(name) else (" m" if "_m" in file_key(name) else "")
+            notes.append(f"{name} by {target} (moved {moved:+.3g}{unit})")
+        out.print(
+            "set by one target's pose alone (an error in that pose moves it undetected): "
+            + ", ".join(notes),
+            soft_wrap=True,
+        )
     out.print(f"wrote {args.out}")
     return 0

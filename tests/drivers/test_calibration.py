@@ -394,3 +394,32 @@ def test_the_estimate_summary_gives_standard_errors_in_degrees_and_metres():
     doc = calibration_to_dict(result.calibration, result.summary())
     back = calibration_from_dict(json.loads(json.dumps(doc)))  # the estimate is no field
     assert np.allclose(back.to_vector(), result.calibration.to_vector(), rtol=0, atol=1e-12)
+
+
+def _with(shots, name, target):
+    return [
+        TargetShots(s.name, target, s.pan, s.tilt, s.rng) if s.name == name else s for s in shots
+    ]
+
+
+def test_a_target_off_by_metres_is_refused_by_the_shots_reach():
+    """A wall's offset typed 40 for 4 (ball centre unknown): the base went 36 m without a word."""
+    shots = _with(_shots(TRUE, np.random.default_rng(3)), "ball", SphereTarget(0.15))
+    bad = _with(shots, "front", PlaneTarget((1.0, 0.0, 0.0), 40.0))
+    with pytest.raises(CalibrationError, match=r"moves base_position 36 m .* shots at 'front'"):
+        estimate_calibration(bad, NOMINAL)
+
+
+def test_what_one_targets_pose_alone_sets_is_reported_and_a_second_target_checks_it():
+    rng = np.random.default_rng(4)
+    shots = _with(_shots(TRUE, rng), "front", PlaneTarget((1.0, 0.0, 0.0), 4.3))  # 0.3 m off
+    lone = estimate_calibration(_with(shots, "ball", SphereTarget(0.15)), NOMINAL)
+    # Only the front wall fixes x: its error moves the base and leaves no residual.
+    assert lone.one_target == {"base_position.x": "front"}
+    assert lone.calibration.base_position[0] == pytest.approx(0.3, abs=0.01)
+    assert lone.residual_rms < 0.001
+    assert lone.summary()["one_target"] == {"base_position.x": "front"}
+    # The ball's surveyed centre fixes x too: the same error now shows in the residuals.
+    both = estimate_calibration(shots, NOMINAL)
+    assert "base_position.x" not in both.one_target
+    assert max(both.per_target_rms.values()) > 0.01
