@@ -39,7 +39,7 @@ from asbuilt.atomic import atomic_write
 from asbuilt.errors import CalibrationError
 from asbuilt.scan.load import MAX_COORDINATE_M
 
-from .calibration_checks import check_reach, single_target_parameters
+from .calibration_checks import check_reach, correlated_pairs, single_target_parameters
 from .kinematics import PARAMETERS, Calibration, forward
 
 __all__ = [
@@ -340,6 +340,9 @@ class CalibrationResult:
     per_target_rms : dict of str to float
         Metres, RMS residual per target.
     n_shots : int
+    correlated : tuple of (str, str, float)
+        Pairs of free parameters with |correlation| >= 0.95: the targets determine mainly their
+        combination (:func:`~asbuilt.drivers.calibration_checks.correlated_pairs`).
     one_target : dict of str to str
         Free parameter -> the target whose known pose alone determines it: an error in that
         pose moves the parameter undetected
@@ -354,6 +357,7 @@ class CalibrationResult:
     initial_rms: float = 0.0
     per_target_rms: dict = field(default_factory=dict)
     n_shots: int = 0
+    correlated: tuple = ()
     one_target: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
@@ -366,6 +370,7 @@ class CalibrationResult:
             "fixed": list(self.fixed),
             "stderr": {file_key(k): file_value(k, v) for k, v in self.stderr.items()},
             "per_target_rms_m": {k: float(v) for k, v in self.per_target_rms.items()},
+            "correlated": [[a, b, round(rho, 3)] for a, b, rho in self.correlated],
             "one_target": dict(self.one_target),
         }
 
@@ -609,7 +614,7 @@ def estimate_calibration(
         cov = np.linalg.pinv(jac.T @ jac) * s2
         err = np.sqrt(np.clip(np.diag(cov), 0, None))
     except np.linalg.LinAlgError:
-        err = np.full(len(sol.x), np.nan)
+        cov, err = None, np.full(len(sol.x), np.nan)
     return CalibrationResult(
         calibration=calibration,
         free=chosen,
@@ -619,6 +624,7 @@ def estimate_calibration(
         initial_rms=float(np.sqrt(np.mean(r0**2))),
         per_target_rms=_per_target(shots, res),
         n_shots=n_shots,
+        correlated=tuple(correlated_pairs(chosen, cov)) if cov is not None else (),
         one_target=single_target_parameters(shots, calibration, chosen, min_independence),
     )
 

@@ -10,6 +10,10 @@
   (without it they would not be observable). An error in that target's pose goes into the
   parameter whole and leaves no residual: it cannot be detected from these shots, only by a
   second target that fixes the same direction.
+* :func:`correlated_pairs`: pairs of estimated parameters whose correlation (from the
+  covariance) is near +-1: the targets determine mainly a combination of the two (the pan zero
+  and the horizontal beam misalignment add up for targets seen at one tilt), and the values
+  apart are uncertain even when the chain as a whole is right.
 """
 
 from __future__ import annotations
@@ -23,9 +27,14 @@ from asbuilt.errors import CalibrationError
 from .kinematics import Calibration, forward
 
 __all__ = [
+    "CORRELATION_LIMIT",
     "check_reach",
     "single_target_parameters",
+    "correlated_pairs",
 ]
+
+#: |correlation| at or above which two estimated parameters are reported as a pair.
+CORRELATION_LIMIT = 0.95
 
 #: Length parameter groups checked by :func:`check_reach` (vectors by their components).
 _LENGTHS = ("base_position", "tilt_axis_offset", "laser_offset", "range_offset")
@@ -104,3 +113,21 @@ def single_target_parameters(
             if name not in kept:
                 out.setdefault(name, s.name)
     return out
+
+
+def correlated_pairs(
+    names: Sequence[str], cov: np.ndarray, limit: float = CORRELATION_LIMIT
+) -> list[tuple[str, str, float]]:
+    """Pairs of ``names`` (the first rows/columns of ``cov``) with |correlation| >= ``limit``,
+    strongest first, as ``(a, b, correlation)``."""
+    n = len(names)
+    sub = np.asarray(cov, float)[:n, :n]
+    sd = np.sqrt(np.clip(np.diag(sub), 0, None))
+    pairs = []
+    for i in range(n):
+        for j in range(i + 1, n):
+            if sd[i] > 0 and sd[j] > 0:
+                rho = float(sub[i, j] / (sd[i] * sd[j]))
+                if abs(rho) >= limit:
+                    pairs.append((names[i], names[j], max(-1.0, min(1.0, rho))))
+    return sorted(pairs, key=lambda p: -abs(p[2]))

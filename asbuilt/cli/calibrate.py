@@ -188,6 +188,13 @@ def run(args: argparse.Namespace) -> int:
             "held fixed (not observable from these targets): " + ", ".join(result.fixed),
             soft_wrap=True,
         )
+    if result.correlated:
+        pairs = ", ".join(f"{a} ~ {b} ({rho:+.2f})" for a, b, rho in result.correlated)
+        out.print(
+            "strongly correlated (these targets determine mainly each pair's combination, "
+            f"not the values apart): {pairs}",
+            soft_wrap=True,
+        )
     if result.one_target:
         notes = []
         for name, target in result.one_target.items():

@@ -23,6 +23,7 @@ from asbuilt.drivers.calibration import (
     observable_parameters,
     save_calibration,
 )
+from asbuilt.drivers.calibration_checks import correlated_pairs
 from asbuilt.drivers.kinematics import PARAMETERS, Calibration, aim, beam, forward
 
 from asbuilt.errors import CalibrationError
@@ -423,3 +424,21 @@ def test_what_one_targets_pose_alone_sets_is_reported_and_a_second_target_checks
     both = estimate_calibration(shots, NOMINAL)
     assert "base_position.x" not in both.one_target
     assert max(both.per_target_rms.values()) > 0.01
+
+
+def test_correlated_pairs_from_a_covariance():
+    cov = np.array(
+        [[1.0, -0.98, 0.1, 5.0], [-0.98, 1.0, 0.0, 0.0], [0.1, 0.0, 4.0, 0.0]] + [[0] * 4]
+    )
+    cov[3, 3] = 1.0
+    assert correlated_pairs(["a", "b", "c"], cov) == [("a", "b", pytest.approx(-0.98))]
+    assert correlated_pairs(["a", "b", "c"], cov, limit=0.05) == [
+        ("a", "b", pytest.approx(-0.98)),
+        ("a", "c", pytest.approx(0.05)),
+    ]
+
+
+def test_the_summary_lists_correlated_pairs():
+    result = estimate_calibration(_shots(TRUE, np.random.default_rng(1)), NOMINAL)
+    pairs = result.summary()["correlated"]
+    assert all(abs(rho) >= 0.95 and a in result.free and b in result.free for a, b, rho in pairs)

@@ -81,8 +81,14 @@ def test_example_room_scan_calibrates(tmp_path, capsys):
     estimate = load_calibration(out)
     assert estimate.range_offset == pytest.approx(0.015, abs=0.005)
     assert estimate.tilt_zero == pytest.approx(math.radians(-0.5), abs=math.radians(0.15))
+    # The pan zero and the horizontal beam misalignment trade off on these targets: their sum
+    # is the true 0.8 degree (room.true.cal.json), and the pair is reported as correlated.
+    pan = estimate.pan_zero + estimate.beam_horizontal
+    assert pan == pytest.approx(math.radians(0.8), abs=math.radians(0.05))
     notes = {line.split(" (")[0]: line for line in text.splitlines()}
+    assert "pan_zero ~ beam_horizontal (-0.9" in notes["strongly correlated"]
     doc = json.loads(out.read_text())
+    assert ["pan_zero", "beam_horizontal"] in [pair[:2] for pair in doc["estimate"]["correlated"]]
     # base_position.x rests on the front wall's offset alone
     assert "base_position.x by front (moved +0.00" in notes["set by one target's pose alone"]
     assert doc["estimate"]["one_target"] == {"base_position.x": "front"}
