@@ -20,6 +20,7 @@ the scan object in the scan file's units.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from dataclasses import dataclass, field
@@ -44,6 +45,9 @@ __all__ = [
     "check_insulation",
     "load_plan",
     "plan_to_dict",
+    "plan_digest",
+    "plan_record",
+    "resume_plan_mismatch",
 ]
 
 
@@ -444,3 +448,64 @@ def plan_to_dict(plan: Plan) -> dict:
     if plan.settings:
         doc["settings"] = dict(plan.settings)
     return doc
+
+
+def plan_digest(plan: Plan) -> str:
+    """SHA-256 (hex) of the plan's targets in their JSON form (order, ids, kinds, windows...).
+
+    The settings are left out: a session keeps its own (the journal records them).
+    """
+    text = json.dumps([t.to_dict() for t in plan.targets], sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def plan_record(plan: Plan | None, name: str | None = None) -> dict | None:
+    """The journal's session ``plan`` field: the plan file's name, its target count and
+    :func:`plan_digest`; None for a session without a plan (the targets come from prompts)."""
+    if plan is None:
+        return None
+    return {"file": name, "targets": len(plan.targets), "sha256": plan_digest(plan)}
+
+
+def _targets(n) -> str:
+    return f"{n} target" if n == 1 else f"{n} targets"
+
+
+def resume_plan_mismatch(records: list, plan: Plan | None, name: str | None = None) -> str | None:
+    """Why ``plan`` (None: the prompts) cannot continue the journaled session, or None.
+
+    A journal whose session record has a ``plan`` field must be resumed with the same plan
+    (same targets: :func:`plan_digest`), or without one if it had none. An older journal,
+    without the field, is checked by its objects: each target it began must be in the plan as
+    it was journaled.
+    """
+    head = records[0] if records else {}
+    if "plan" in head:
+        recorded = head["plan"] if isinstance(head["plan"], dict) else None
+        if recorded is None:
+            if plan is None:
+                return None
+            return "the journal's session took its targets from the prompts; resume without --plan"
+        was = f"{recorded.get('file') or 'a plan'} ({_targets(recorded.get('targets'))})"
+        if plan is None:
+            return f"the journal's session ran the plan {was}; resume with that --plan"
+        if recorded.get("sha256") != plan_digest(plan):
+            now = f"{name} ({_targets(len(plan.targets))})" if name else "this plan"
+            return (
+                f"the journal's session ran another plan, {was}, not {now}; resume with the "
+                "session's own --plan, or choose another --out for this one"
+            )
+        return None
+    if plan is None:
+        return None
+    mine = {t.id: t.to_dict() for t in plan.targets}
+    for rec in records:
+        target = rec.get("target") if rec.get("type") == "object" else None
+        if isinstance(target, dict) and mine.get(target.get("id")) != target:
+            how = "gives otherwise" if target.get("id") in mine else "does not have"
+            return (
+                f"the journal's session scanned target {target.get('id')!r}, which "
+                f"{name or 'this plan'} {how}; resume with the session's own --plan, or choose "
+                "another --out for this one"
+            )
+    return None
