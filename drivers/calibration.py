@@ -39,6 +39,7 @@ from asbuilt.atomic import atomic_write
 from asbuilt.errors import CalibrationError
 from asbuilt.scan.load import MAX_COORDINATE_M
 
+from .calibration_checks import check_reach, correlated_pairs, single_target_parameters
 from .kinematics import PARAMETERS, Calibration, forward
 
 __all__ = [
@@ -56,6 +57,8 @@ __all__ = [
     "observable_parameters",
     "estimate_calibration",
     "load_targets",
+    "file_key",
+    "file_value",
 ]
 
 _SECTIONS = {
@@ -295,6 +298,30 @@ class TargetShots:
     rng: np.ndarray
 
 
+def _unit_suffix(name: str) -> str:
+    """``"_deg"`` for an angle parameter, ``"_m"`` for a length, ``""`` for a scale (ratio)."""
+    field_name = name.partition(".")[0]
+    if field_name.endswith("scale"):
+        return ""
+    return "_m" if field_name.endswith(("offset", "position")) else "_deg"
+
+
+def file_key(name: str) -> str:
+    """A parameter's key in a calibration file's ``estimate``, with the file's unit suffix.
+
+    ``pan_zero`` -> ``pan_zero_deg``, ``tilt_axis_offset.z`` -> ``tilt_axis_offset_m.z``,
+    ``base_rotation.yaw`` -> ``base_rotation_deg.yaw``, ``range_scale`` -> ``range_scale``
+    (version 1 files written before the suffixes held bare names in radians and metres).
+    """
+    field_name, dot, comp = name.partition(".")
+    return f"{field_name}{_unit_suffix(name)}{dot}{comp}"
+
+
+def file_value(name: str, value: float) -> float:
+    """``value`` of parameter ``name`` (radians, metres or ratio) in the file's units."""
+    return math.degrees(float(value)) if _unit_suffix(name) == "_deg" else float(value)
+
+
 @dataclass(frozen=True)
 class CalibrationResult:
     """What :func:`estimate_calibration` found.
@@ -306,12 +333,20 @@ class CalibrationResult:
     free, fixed : tuple of str
         Parameter names estimated / held fixed (see :data:`asbuilt.drivers.kinematics.PARAMETERS`).
     stderr : dict of str to float
-        Standard error of each free parameter (radians, metres or ratio).
+        Standard error of each free parameter (radians, metres or ratio; :meth:`summary`
+        writes them in the file's degrees and metres, under :func:`file_key` names).
     residual_rms, initial_rms : float
         Metres, RMS of the residuals after and before.
     per_target_rms : dict of str to float
         Metres, RMS residual per target.
     n_shots : int
+    correlated : tuple of (str, str, float)
+        Pairs of free parameters with |correlation| >= 0.95: the targets determine mainly their
+        combination (:func:`~asbuilt.drivers.calibration_checks.correlated_pairs`).
+    one_target : dict of str to str
+        Free parameter -> the target whose known pose alone determines it: an error in that
+        pose moves the parameter undetected
+        (:func:`~asbuilt.drivers.calibration_checks.single_target_parameters`).
     """
 
     calibration: Calibration
@@ -322,6 +357,8 @@ class CalibrationResult:
     initial_rms: float = 0.0
     per_target_rms: dict = field(default_factory=dict)
     n_shots: int = 0
+    correlated: tuple = ()
+    one_target: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
         """JSON-ready summary for the calibration file's ``estimate`` section."""
@@ -331,8 +368,10 @@ class CalibrationResult:
             "n_shots": self.n_shots,
             "free": list(self.free),
             "fixed": list(self.fixed),
-            "stderr": {k: float(v) for k, v in self.stderr.items()},
+            "stderr": {file_key(k): file_value(k, v) for k, v in self.stderr.items()},
             "per_target_rms_m": {k: float(v) for k, v in self.per_target_rms.items()},
+            "correlated": [[a, b, round(rho, 3)] for a, b, rho in self.correlated],
+            "one_target": dict(self.one_target),
         }
 
 
@@ -526,7 +565,9 @@ def estimate_calibration(
     Raises
     ------
     CalibrationError
-        Too few shots, unknown parameter names, or no parameter observable.
+        Too few shots, unknown parameter names, no parameter observable, or targets the shots
+        cannot fit (the estimate fails, or moves the instrument beyond the shots' reach:
+        :func:`~asbuilt.drivers.calibration_checks.check_reach`).
     """
     from scipy.optimize import least_squares
 
@@ -565,29 +606,38 @@ def estimate_calibration(
             "target's numbers, that the scan's objects are the targets named, and the initial "
             "calibration"
         ) from None
+    calibration = problem.calibration(sol.x)
+    check_reach(shots, initial, calibration, _per_target(shots, r0))
     dof = max(len(res) - len(sol.x), 1)
     s2 = float(res @ res) / dof
     try:
         cov = np.linalg.pinv(jac.T @ jac) * s2
         err = np.sqrt(np.clip(np.diag(cov), 0, None))
     except np.linalg.LinAlgError:
-        err = np.full(len(sol.x), np.nan)
-    per_target = {}
-    k = 0
-    for s in shots:
-        m = len(s.pan) * (3 if isinstance(s.target, PointTarget) else 1)
-        per_target[s.name] = float(np.sqrt(np.mean(res[k : k + m] ** 2)))
-        k += m
+        cov, err = None, np.full(len(sol.x), np.nan)
     return CalibrationResult(
-        calibration=problem.calibration(sol.x),
+        calibration=calibration,
         free=chosen,
         fixed=tuple(n for n in PRIORITY if n not in chosen),
         stderr={name: float(e) for name, e in zip(chosen, err)},
         residual_rms=float(np.sqrt(np.mean(res**2))),
         initial_rms=float(np.sqrt(np.mean(r0**2))),
-        per_target_rms=per_target,
+        per_target_rms=_per_target(shots, res),
         n_shots=n_shots,
+        correlated=tuple(correlated_pairs(chosen, cov)) if cov is not None else (),
+        one_target=single_target_parameters(shots, calibration, chosen, min_independence),
     )
+
+
+def _per_target(shots: Sequence[TargetShots], res: np.ndarray) -> dict[str, float]:
+    """RMS of ``res`` (m) over each target's shots, by target name."""
+    out = {}
+    k = 0
+    for s in shots:
+        m = len(s.pan) * (3 if isinstance(s.target, PointTarget) else 1)
+        out[s.name] = float(np.sqrt(np.mean(res[k : k + m] ** 2)))
+        k += m
+    return out
 
 
 def _vec(value, source, where) -> tuple[float, float, float]:

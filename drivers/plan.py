@@ -20,6 +20,7 @@ the scan object in the scan file's units.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from dataclasses import dataclass, field
@@ -38,10 +39,15 @@ __all__ = [
     "Plan",
     "SessionSettings",
     "DEFAULT_SETTINGS",
+    "TARGET_KEYS",
+    "PLAN_KEYS",
     "required_points",
     "check_insulation",
     "load_plan",
     "plan_to_dict",
+    "plan_digest",
+    "plan_record",
+    "resume_plan_mismatch",
 ]
 
 
@@ -107,6 +113,13 @@ def required_points(kind: str, tolerances: Tolerances = DEFAULT_TOLERANCES) -> i
     return max(paper.get(kind, tolerances.recommended_points_cuboid), MIN_POINTS.get(kind, 7))
 
 
+#: The keys a plan target may have (anything else is refused: a typo would drop the field).
+TARGET_KEYS = ("id", "kind", "window_deg", "points", "group", "label", "nominal", "insulation")
+
+#: The top-level keys of a plan file (``comment``: free text, as in the example files).
+PLAN_KEYS = ("format", "version", "comment", "settings", "targets")
+
+
 @dataclass(frozen=True)
 class Target:
     """One object to scan.
@@ -161,6 +174,13 @@ class Target:
         if not isinstance(tid, str) or not tid.strip():
             raise ScanError("needs a non-empty string id", source=source, where=f"{where}.id")
         where = f"{where} ({tid})"
+        for key in raw:  # a typo ("insualtion") would silently drop what it says
+            if key not in TARGET_KEYS:
+                raise ScanError(
+                    f"unknown key; use {', '.join(TARGET_KEYS)}",
+                    source=source,
+                    where=f"{where}.{key}",
+                )
         kind = raw.get("kind")
         if kind not in KINDS:
             raise ScanError(
@@ -369,6 +389,11 @@ def load_plan(path) -> Plan:
         )
     if doc.get("version") != 1:
         raise ScanError("version must be 1", source=source, where="version")
+    for key in doc:
+        if key not in PLAN_KEYS:
+            raise ScanError(f"unknown key; use {', '.join(PLAN_KEYS)}", source=source, where=key)
+    if "comment" in doc and not isinstance(doc["comment"], str):
+        raise ScanError("must be a string", source=source, where="comment")
     raw_targets = doc.get("targets")
     if not isinstance(raw_targets, list) or not raw_targets:
         raise ScanError("needs a non-empty array of targets", source=source, where="targets")
@@ -423,3 +448,64 @@ def plan_to_dict(plan: Plan) -> dict:
     if plan.settings:
         doc["settings"] = dict(plan.settings)
     return doc
+
+
+def plan_digest(plan: Plan) -> str:
+    """SHA-256 (hex) of the plan's targets in their JSON form (order, ids, kinds, windows...).
+
+    The settings are left out: a session keeps its own (the journal records them).
+    """
+    text = json.dumps([t.to_dict() for t in plan.targets], sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def plan_record(plan: Plan | None, name: str | None = None) -> dict | None:
+    """The journal's session ``plan`` field: the plan file's name, its target count and
+    :func:`plan_digest`; None for a session without a plan (the targets come from prompts)."""
+    if plan is None:
+        return None
+    return {"file": name, "targets": len(plan.targets), "sha256": plan_digest(plan)}
+
+
+def _targets(n) -> str:
+    return f"{n} target" if n == 1 else f"{n} targets"
+
+
+def resume_plan_mismatch(records: list, plan: Plan | None, name: str | None = None) -> str | None:
+    """Why ``plan`` (None: the prompts) cannot continue the journaled session, or None.
+
+    A journal whose session record has a ``plan`` field must be resumed with the same plan
+    (same targets: :func:`plan_digest`), or without one if it had none. An older journal,
+    without the field, is checked by its objects: each target it began must be in the plan as
+    it was journaled.
+    """
+    head = records[0] if records else {}
+    if "plan" in head:
+        recorded = head["plan"] if isinstance(head["plan"], dict) else None
+        if recorded is None:
+            if plan is None:
+                return None
+            return "the journal's session took its targets from the prompts; resume without --plan"
+        was = f"{recorded.get('file') or 'a plan'} ({_targets(recorded.get('targets'))})"
+        if plan is None:
+            return f"the journal's session ran the plan {was}; resume with that --plan"
+        if recorded.get("sha256") != plan_digest(plan):
+            now = f"{name} ({_targets(len(plan.targets))})" if name else "this plan"
+            return (
+                f"the journal's session ran another plan, {was}, not {now}; resume with the "
+                "session's own --plan, or choose another --out for this one"
+            )
+        return None
+    if plan is None:
+        return None
+    mine = {t.id: t.to_dict() for t in plan.targets}
+    for rec in records:
+        target = rec.get("target") if rec.get("type") == "object" else None
+        if isinstance(target, dict) and mine.get(target.get("id")) != target:
+            how = "gives otherwise" if target.get("id") in mine else "does not have"
+            return (
+                f"the journal's session scanned target {target.get('id')!r}, which "
+                f"{name or 'this plan'} {how}; resume with the session's own --plan, or choose "
+                "another --out for this one"
+            )
+    return None

@@ -77,6 +77,7 @@ from asbuilt.scan.insulation import MAX_INSULATION
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 from asbuilt.units import unit_factor
 
+from . import plan as plans
 from .edges import (
     BACK_STEPS,
     SIDES,
@@ -493,11 +494,14 @@ class ScanSession:
     name : str, optional
         The scan's name.
     tolerances : Tolerances
+    plan, plan_file : Plan and str, optional
+        The targets' plan and its file (None: prompts), journaled; a resume must give the same.
 
     Raises
     ------
     ScanError
-        A journal exists and ``resume`` is False, or ``resume`` without a journal.
+        A journal exists and ``resume`` is False, or ``resume`` without a journal or with
+        another plan than the session's (:func:`~asbuilt.drivers.plan.resume_plan_mismatch`).
     """
 
     def __init__(
@@ -512,6 +516,8 @@ class ScanSession:
         on_shot=None,
         name: str | None = None,
         tolerances: Tolerances = DEFAULT_TOLERANCES,
+        plan: plans.Plan | None = None,
+        plan_file: str | None = None,
     ):
         from .calibration import calibration_to_dict
 
@@ -537,7 +543,7 @@ class ScanSession:
                     "no journal to resume from; start without --resume",
                     source=str(self.journal_path),
                 )
-            self._load_journal()
+            self._load_journal(plan, plan_file)
         elif exists:
             raise ScanError(
                 "a journal of an earlier session is here; continue it with --resume or choose "
@@ -563,6 +569,7 @@ class ScanSession:
                     "started": datetime.now(timezone.utc).isoformat(timespec="seconds"),
                     "calibration": calibration_to_dict(calibration),
                     "settings": dataclasses.asdict(settings),
+                    "plan": plans.plan_record(plan, plan_file and Path(plan_file).name),
                 }
             )
         else:
@@ -571,13 +578,16 @@ class ScanSession:
             )
 
     # -- resume ----------------------------------------------------------------------------
-    def _load_journal(self) -> None:
+    def _load_journal(self, plan=None, plan_file: str | None = None) -> None:
         recs = read_journal(self.journal_path)
         source = str(self.journal_path)
         if not recs or recs[0].get("type") != "session":
             raise ScanError(
                 "does not start with a session record; not a scan journal", source=source
             )
+        mismatch = plans.resume_plan_mismatch(recs, plan, plan_file and Path(plan_file).name)
+        if mismatch:
+            raise ScanError(mismatch, source=source)
         try:
             self.settings = SessionSettings(**recs[0].get("settings", {}))
         except (TypeError, ValueError) as exc:

@@ -33,17 +33,43 @@ from serial.serialutil import PortNotOpenError, SerialBase, SerialException
 
 from asbuilt.errors import AsbuiltError
 
-__all__ = ["Serial", "make_device", "parse_sim_url"]
+__all__ = ["Serial", "make_device", "parse_sim_url", "url_options"]
+
+
+#: URL options of one port (either scheme), and of each scheme's device (docs/drivers.md).
+PORT_OPTIONS = ("silent", "unplug_after")
+DEVICE_OPTIONS = {
+    "sim-ptu": ("protocol", "address", "trickle"),
+    "sim-lrf": ("protocol", "device_id", "prefix"),
+}
+
+
+def url_options(scheme: str) -> tuple[str, ...]:
+    """Every query key a ``scheme`` URL accepts (rig, device and port options), sorted."""
+    from .simrig import RIG_OPTIONS
+
+    return tuple(sorted({*RIG_OPTIONS, *DEVICE_OPTIONS[scheme], *PORT_OPTIONS}))
 
 
 def parse_sim_url(url: str) -> tuple[str, str, dict[str, str]]:
-    """Split ``sim-ptu://rig?k=v`` into ``(scheme, rig, options)``."""
+    """Split ``sim-ptu://rig?k=v`` into ``(scheme, rig, options)``.
+
+    Raises
+    ------
+    SerialException
+        Another scheme, or a query key the scheme does not know (a misspelt ``calibraton=``
+        would otherwise give an ideal rig), naming the key and the valid ones.
+    """
     parts = urllib.parse.urlsplit(url)
     scheme = parts.scheme.lower()
     if scheme not in ("sim-ptu", "sim-lrf"):
         raise SerialException(f"{url}: expected sim-ptu://RIG?... or sim-lrf://RIG?...")
     name = parts.netloc or parts.path.strip("/") or "default"
     options = {k: v[-1] for k, v in urllib.parse.parse_qs(parts.query, True).items()}
+    valid = url_options(scheme)
+    for key in options:
+        if key not in valid:
+            raise SerialException(f"unknown URL option {key!r}; use {', '.join(valid)}")
     return scheme, name, options
 
 

@@ -80,9 +80,17 @@ def open_port(
     Raises
     ------
     DeviceError
-        The port cannot be opened (missing device, busy, unknown URL scheme).
+        The port cannot be opened (missing device, busy, unknown URL scheme), or a simulator
+        URL has an option it does not know.
     """
     register_url_handlers()
+    if url.partition("://")[0].lower() in SIM_SCHEMES:
+        from .simport import parse_sim_url
+
+        try:  # a misspelt option is a typo to name, not a port that cannot open
+            parse_sim_url(url)
+        except serial.SerialException as exc:
+            raise DeviceError(f"{url}: {exc}") from None
     pty = is_pseudo_terminal(_wrapped_path(url))
     if pty:  # a pty passes bytes unchanged and cannot do 7 bits or parity (Linux refuses them)
         bytesize, parity = 8, "N"

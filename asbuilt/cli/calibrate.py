@@ -100,7 +100,6 @@ def _parameter_choices(free_text: str | None, fix_text: str | None):
 
 def run(args: argparse.Namespace) -> int:
     """Load, estimate, print, write; return 0."""
-    import math
 
     import numpy as np
     from rich.console import Console
@@ -112,6 +111,8 @@ def run(args: argparse.Namespace) -> int:
     from asbuilt.drivers.calibration import (
         TargetShots,
         estimate_calibration,
+        file_key,
+        file_value,
         load_calibration,
         load_targets,
         save_calibration,
@@ -165,15 +166,13 @@ def run(args: argparse.Namespace) -> int:
     )
     for col in ("parameter", "initial", "estimate", "stderr"):
         table.add_column(col, justify="left" if col == "parameter" else "right")
-    for name in result.free:
-        angle = not any(k in name for k in ("offset", "position", "scale"))
-        conv = math.degrees if angle else float
-        unit = " deg" if angle else ("" if "scale" in name else " m")
+    for name in result.free:  # in the file's units (file_value: degrees, metres, ratios)
+        unit = " deg" if "_deg" in file_key(name) else (" m" if "_m" in file_key(name) else "")
         table.add_row(
             name,
-            f"{conv(initial.get(name)):.6g}{unit}",
-            f"{conv(result.calibration.get(name)):.6g}{unit}",
-            f"{conv(result.stderr[name]):.2g}{unit}",
+            f"{file_value(name, initial.get(name)):.6g}{unit}",
+            f"{file_value(name, result.calibration.get(name)):.6g}{unit}",
+            f"{file_value(name, result.stderr[name]):.2g}{unit}",
         )
     out.print(table)
     out.print(
@@ -182,7 +181,30 @@ def run(args: argparse.Namespace) -> int:
     )
     for name, rms in result.per_target_rms.items():
         out.print(f"  {name}: {rms * 1000:.2f} mm")
+    # Each note is one line: soft_wrap leaves the wrapping to the terminal (rich's own wrapping
+    # broke the list after a comma, as if the line ended there).
     if result.fixed:
-        out.print("held fixed (not observable from these targets): " + ", ".join(result.fixed))
+        out.print(
+            "held fixed (not observable from these targets): " + ", ".join(result.fixed),
+            soft_wrap=True,
+        )
+    if result.correlated:
+        pairs = ", ".join(f"{a} ~ {b} ({rho:+.2f})" for a, b, rho in result.correlated)
+        out.print(
+            "strongly correlated (these targets determine mainly each pair's combination, "
+            f"not the values apart): {pairs}",
+            soft_wrap=True,
+        )
+    if result.one_target:
+        notes = []
+        for name, target in result.one_target.items():
+            moved = file_value(name, result.calibration.get(name) - initial.get(name))
+            unit = " deg" if "_deg" in file_key(name) else (" m" if "_m" in file_key(name) else "")
+            notes.append(f"{name} by {target} (moved {moved:+.3g}{unit})")
+        out.print(
+            "set by one target's pose alone (an error in that pose moves it undetected): "
+            + ", ".join(notes),
+            soft_wrap=True,
+        )
     out.print(f"wrote {args.out}")
     return 0

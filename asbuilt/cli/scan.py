@@ -492,6 +492,8 @@ def run(args: argparse.Namespace) -> int:
     if plan is not None:
         _check_plan_texts(plan, args.plan)
     settings = _settings(args, plan)
+    if args.resume:
+        _check_resume_plan(args.out, plan, args.plan)
     if args.calibration:
         calibration = load_calibration(args.calibration)
     else:
@@ -523,6 +525,25 @@ def _saved(session, out, why: str) -> str:
         f"{why}: {kept}; every shot is in {session.journal_path}; continue with asbuilt scan "
         "--resume (same --out)"
     )
+
+
+def _check_resume_plan(out, plan, plan_file) -> None:
+    """Refuse, before the devices open, a ``--resume`` with another plan than the journal's
+    session (its targets would be appended to that session's scan); the session checks it
+    again with the rest of the journal."""
+    from pathlib import Path
+
+    from asbuilt.drivers.journal import journal_path_for, read_journal
+    from asbuilt.drivers.plan import resume_plan_mismatch
+    from asbuilt.errors import ScanError
+
+    journal = journal_path_for(out)
+    if not journal.is_file() or journal.stat().st_size == 0:
+        return  # the session says there is nothing to resume
+    records = read_journal(journal)
+    mismatch = resume_plan_mismatch(records, plan, plan_file and Path(plan_file).name)
+    if mismatch:
+        raise ScanError(mismatch, source=str(journal))
 
 
 def _run(args, err, settings, plan, calibration) -> int:
@@ -593,6 +614,8 @@ def _run(args, err, settings, plan, calibration) -> int:
             resume=args.resume,
             on_shot=on_shot,
             name=args.name,
+            plan=plan,
+            plan_file=args.plan,
         )
         with progress:
             if session.pending is not None:

@@ -291,6 +291,47 @@ def test_bad_input_is_one_line(site, capsys, more, message):
     assert message in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize(
+    "plan, message",
+    [
+        (
+            "other.json",
+            "the journal's session ran another plan, plan.json (2 targets), not other.json (1 "
+            "target); resume with the session's own --plan, or choose another --out for this one",
+        ),
+        (None, "the journal's session ran the plan plan.json (2 targets); resume with that --plan"),
+    ],
+)
+def test_resume_with_another_plan_is_refused_before_the_devices_open(site, capsys, plan, message):
+    """A resumed session took another plan's targets and appended them to its scan."""
+    from asbuilt.drivers.plan import load_plan, plan_record
+    from asbuilt.drivers.simrig import _RIGS
+
+    (site / "other.json").write_text(json.dumps({**PLAN, "targets": PLAN["targets"][1:]}))
+    record = {"type": "session", "version": 1, "units": "m", "settings": {}}
+    record["plan"] = plan_record(load_plan(site / "plan.json"), "plan.json")
+    journal = site / "scan.json.journal"
+    journal.write_text(json.dumps(record) + "\n")
+    before = journal.read_bytes()
+    more = ["--plan", str(site / plan)] if plan else []
+    assert main(_args(site, "rp", more=[*more, "--resume"])) == 2
+    err = capsys.readouterr().err
+    assert err == f"asbuilt: error: {journal}: {message}\n"
+    assert journal.read_bytes() == before and not (site / "scan.json").exists()
+    assert "rp" not in _RIGS  # refused before any device opened
+
+
+def test_resume_of_an_older_journal_with_another_plan_is_refused(site, capsys):
+    """A journal from before sessions recorded their plan: its begun targets must be the plan's."""
+    (site / "other.json").write_text(json.dumps({**PLAN, "targets": PLAN["targets"][1:]}))
+    target = {"id": "P1", "kind": "cylinder", "window_deg": [72, -6.5, 108, -1.5], "nominal": '12"'}
+    lines = [{"type": "session", "version": 1, "units": "m"}, {"type": "object", "target": target}]
+    (site / "scan.json.journal").write_text("".join(json.dumps(r) + "\n" for r in lines))
+    more = ["--plan", str(site / "other.json"), "--resume"]
+    assert main(_args(site, "ro", more=more)) == 2
+    assert "scanned target 'P1', which other.json does not have" in capsys.readouterr().err
+
+
 def test_existing_journal_needs_resume(site, capsys):
     (site / "scan.json.journal").write_text('{"type":"session","version":1}\n')
     assert main(_args(site, "j", more=["--plan", str(site / "plan.json")])) == 2

@@ -61,6 +61,12 @@ def _plan(site, **target) -> str:
             "bad-plan.json: targets[0] (W1).insulation: must be a number >= 0 (the insulation's "
             "thickness in metres), not -0.05\n",
         ),
+        (  # a typo used to drop the insulation silently: the pipe came out 50 mm too big
+            {"kind": "cylinder", "insualtion": 0.05},
+            "bad-plan.json: targets[0] (W1).insualtion: unknown key; use id, kind, window_deg, "
+            "points, group, label, nominal, insulation\n",
+        ),
+        ({"foo": 1}, "bad-plan.json: targets[0] (W1).foo: unknown key; use id, kind"),
         (
             {"kind": "cylinder", "insulation": 50},
             "bad-plan.json: targets[0] (W1).insulation: 50 m is thicker than any pipe insulation "

@@ -15,12 +15,15 @@ from asbuilt.drivers.calibration import (
     SphereTarget,
     TargetShots,
     calibration_from_dict,
+    calibration_to_dict,
     estimate_calibration,
+    file_key,
     load_calibration,
     load_targets,
     observable_parameters,
     save_calibration,
 )
+from asbuilt.drivers.calibration_checks import correlated_pairs
 from asbuilt.drivers.kinematics import PARAMETERS, Calibration, aim, beam, forward
 
 from asbuilt.errors import CalibrationError
@@ -369,3 +372,73 @@ def test_an_initial_scale_near_zero_fails_the_estimate_in_one_line():
     initial = dataclasses.replace(NOMINAL, range_scale=1e-9)
     with pytest.raises(CalibrationError, match=r"^the estimate failed \(pan_scale, tilt_scale"):
         estimate_calibration(_shots(TRUE, np.random.default_rng(5)), initial)
+
+
+def test_file_keys_carry_the_files_units():
+    keys = {name: file_key(name) for name in PARAMETERS}
+    assert keys["pan_zero"] == "pan_zero_deg" and keys["beam_horizontal"] == "beam_horizontal_deg"
+    assert keys["tilt_axis_offset.z"] == "tilt_axis_offset_m.z"
+    assert keys["base_rotation.yaw"] == "base_rotation_deg.yaw"
+    assert keys["range_offset"] == "range_offset_m" and keys["range_scale"] == "range_scale"
+    assert len(set(keys.values())) == len(PARAMETERS)
+
+
+def test_the_estimate_summary_gives_standard_errors_in_degrees_and_metres():
+    """The file's angles are degrees: its stderr said 0.003 for a pan zero known to 0.18 deg."""
+    result = estimate_calibration(_shots(TRUE, np.random.default_rng(1)), NOMINAL)
+    stderr = result.summary()["stderr"]
+    assert "pan_zero" not in stderr  # the bare name meant radians (older files)
+    assert stderr["pan_zero_deg"] == pytest.approx(math.degrees(result.stderr["pan_zero"]))
+    assert stderr["tilt_zero_deg"] == pytest.approx(math.degrees(result.stderr["tilt_zero"]))
+    assert stderr["laser_offset_m.z"] == pytest.approx(result.stderr["laser_offset.z"])
+    assert stderr["range_scale"] == pytest.approx(result.stderr["range_scale"])
+    doc = calibration_to_dict(result.calibration, result.summary())
+    back = calibration_from_dict(json.loads(json.dumps(doc)))  # the estimate is no field
+    assert np.allclose(back.to_vector(), result.calibration.to_vector(), rtol=0, atol=1e-12)
+
+
+def _with(shots, name, target):
+    return [
+        TargetShots(s.name, target, s.pan, s.tilt, s.rng) if s.name == name else s for s in shots
+    ]
+
+
+def test_a_target_off_by_metres_is_refused_by_the_shots_reach():
+    """A wall's offset typed 40 for 4 (ball centre unknown): the base went 36 m without a word."""
+    shots = _with(_shots(TRUE, np.random.default_rng(3)), "ball", SphereTarget(0.15))
+    bad = _with(shots, "front", PlaneTarget((1.0, 0.0, 0.0), 40.0))
+    with pytest.raises(CalibrationError, match=r"moves base_position 36 m .* shots at 'front'"):
+        estimate_calibration(bad, NOMINAL)
+
+
+def test_what_one_targets_pose_alone_sets_is_reported_and_a_second_target_checks_it():
+    rng = np.random.default_rng(4)
+    shots = _with(_shots(TRUE, rng), "front", PlaneTarget((1.0, 0.0, 0.0), 4.3))  # 0.3 m off
+    lone = estimate_calibration(_with(shots, "ball", SphereTarget(0.15)), NOMINAL)
+    # Only the front wall fixes x: its error moves the base and leaves no residual.
+    assert lone.one_target == {"base_position.x": "front"}
+    assert lone.calibration.base_position[0] == pytest.approx(0.3, abs=0.01)
+    assert lone.residual_rms < 0.001
+    assert lone.summary()["one_target"] == {"base_position.x": "front"}
+    # The ball's surveyed centre fixes x too: the same error now shows in the residuals.
+    both = estimate_calibration(shots, NOMINAL)
+    assert "base_position.x" not in both.one_target
+    assert max(both.per_target_rms.values()) > 0.01
+
+
+def test_correlated_pairs_from_a_covariance():
+    cov = np.array(
+        [[1.0, -0.98, 0.1, 5.0], [-0.98, 1.0, 0.0, 0.0], [0.1, 0.0, 4.0, 0.0]] + [[0] * 4]
+    )
+    cov[3, 3] = 1.0
+    assert correlated_pairs(["a", "b", "c"], cov) == [("a", "b", pytest.approx(-0.98))]
+    assert correlated_pairs(["a", "b", "c"], cov, limit=0.05) == [
+        ("a", "b", pytest.approx(-0.98)),
+        ("a", "c", pytest.approx(0.05)),
+    ]
+
+
+def test_the_summary_lists_correlated_pairs():
+    result = estimate_calibration(_shots(TRUE, np.random.default_rng(1)), NOMINAL)
+    pairs = result.summary()["correlated"]
+    assert all(abs(rho) >= 0.95 and a in result.free and b in result.free for a, b, rho in pairs)

@@ -11,8 +11,11 @@ from asbuilt.drivers.plan import (
     Target,
     Window,
     load_plan,
+    plan_digest,
+    plan_record,
     plan_to_dict,
     required_points,
+    resume_plan_mismatch,
 )
 
 from asbuilt.errors import ScanError
@@ -105,6 +108,18 @@ GOOD = {"id": "P1", "kind": "cylinder", "window_deg": [0, 0, 10, 5]}
         (
             {"format": "asbuilt-scan-plan", "version": 1, "targets": [{**GOOD, "id": ""}]},
             "targets[0].id",
+        ),
+        (
+            {"format": "asbuilt-scan-plan", "version": 1, "targets": [{**GOOD, "nominl": "12"}]},
+            "targets[0] (P1).nominl: unknown key; use id, kind, window_deg",
+        ),
+        (
+            {"format": "asbuilt-scan-plan", "version": 1, "targets": [GOOD], "setings": {}},
+            "setings: unknown key; use format, version, comment, settings, targets",
+        ),
+        (
+            {"format": "asbuilt-scan-plan", "version": 1, "targets": [GOOD], "comment": 3},
+            "comment: must be a string",
         ),
         (
             {"format": "asbuilt-scan-plan", "version": 1, "targets": [GOOD, GOOD]},
@@ -328,3 +343,46 @@ def test_a_bare_cuboid_may_say_zero_as_a_scan_object_may():
     assert Target("C1", "cuboid", w, insulation=0).insulation == 0
     with pytest.raises(ScanError, match="C1.insulation: insulation is a radial thickness"):
         Target("C1", "cuboid", w, insulation=0.05)
+
+
+def test_a_plan_may_carry_a_comment(tmp_path):
+    doc = {"format": "asbuilt-scan-plan", "version": 1, "comment": "site A", "targets": [GOOD]}
+    (tmp_path / "p.json").write_text(json.dumps(doc))
+    assert [t.id for t in load_plan(tmp_path / "p.json").targets] == ["P1"]
+
+
+def _session(plan, name="site.plan.json", **more):
+    return [{"type": "session", "version": 1, "plan": plan_record(plan, name), **more}]
+
+
+def test_a_resume_must_give_the_sessions_own_plan():
+    site = Plan((Target.from_dict(GOOD),))
+    other = Plan((Target.from_dict({**GOOD, "id": "W1", "kind": "plane"}),))
+    assert resume_plan_mismatch(_session(site), site, "copy.json") is None  # same targets
+    assert "ran another plan, site.plan.json (1 target), not room.plan.json (1 target)" in (
+        resume_plan_mismatch(_session(site), other, "room.plan.json")
+    )
+    assert "ran the plan site.plan.json (1 target); resume with that --plan" in (
+        resume_plan_mismatch(_session(site), None)
+    )
+    assert resume_plan_mismatch(_session(None), None) is None
+    assert "from the prompts; resume without --plan" in resume_plan_mismatch(_session(None), site)
+    assert plan_digest(site) != plan_digest(other) and len(plan_digest(site)) == 64
+
+
+def test_an_older_journal_is_checked_by_the_targets_it_began():
+    """Journals written before sessions recorded their plan: each begun target must be the
+    plan's, as it was journaled."""
+    site = Plan((Target.from_dict(GOOD),))
+    old = [
+        {"type": "session", "version": 1},
+        {"type": "object", "target": site.targets[0].to_dict()},
+    ]
+    assert resume_plan_mismatch(old, site) is None
+    assert resume_plan_mismatch(old, None) is None  # the prompts go on, as before
+    moved = Plan((Target.from_dict({**GOOD, "window_deg": [0, 0, 11, 5]}),))
+    assert "target 'P1', which room.plan.json gives otherwise" in (
+        resume_plan_mismatch(old, moved, "room.plan.json")
+    )
+    other = Plan((Target.from_dict({**GOOD, "id": "W1"}),))
+    assert "target 'P1', which this plan does not have" in resume_plan_mismatch(old, other)

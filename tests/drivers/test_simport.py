@@ -68,3 +68,25 @@ def test_station_option_places_the_rig(tmp_path):
     assert get_rig("two", {}).calibration.base_position == (0.0, 1.0, 1.5)
     with pytest.raises(serial.SerialException, match="no station 'S9'; use one of S1, S2"):
         serial.serial_for_url(f"sim-ptu://three?scene={path}&station=S9")
+
+
+@pytest.mark.parametrize(
+    "url, key",
+    [
+        ("sim-ptu://t?scene=a.json&calibraton=true.cal.json", "calibraton"),
+        ("sim-ptu://x?scene=a.json&bogus=1", "bogus"),
+        ("sim-ptu://x?prefix=ld:", "prefix"),  # a sim-lrf option
+        ("sim-lrf://x?trickle=0.1", "trickle"),  # a Pelco-D sim-ptu option
+    ],
+)
+def test_unknown_url_options_are_refused_by_name(url, key):
+    # A misspelt calibration= used to be dropped, giving an ideal rig without a word.
+    with pytest.raises(serial.SerialException, match=rf"unknown URL option '{key}'; use .*seed"):
+        parse_sim_url(url)
+
+
+def test_every_documented_url_option_is_accepted():
+    ptu = "sim-ptu://r?scene=a&calibration=c&range_sigma=0&angle_sigma=0&dropout=0&divergence=0"
+    ptu += "&min_cos=0&max_range=9&seed=1&speed=0&station=s&protocol=flir&address=1&trickle=0"
+    assert len(parse_sim_url(ptu + "&silent=0&unplug_after=3")[2]) == 16
+    assert parse_sim_url("sim-lrf://r?protocol=lw20&device_id=0&prefix=ld:")[2]["prefix"] == "ld:"

@@ -136,3 +136,9 @@ def test_a_7e1_driver_reopens_a_plain_pty_also_through_the_spy_wrapper(tmp_path)
     finally:
         os.close(master)
         os.close(slave)
+
+
+def test_open_port_names_an_unknown_simulator_option():
+    url = "sim-ptu://typo?scene=a.json&calibraton=true.cal.json"
+    with pytest.raises(DeviceError, match=r"^sim-ptu://typo\?.*: unknown URL option 'calibraton'"):
+        open_port(url)
