@@ -35,7 +35,10 @@ Per object (:func:`scan_target`, deterministic given the measured ranges):
    at most, ``edge_shots`` shots per object at most. Cylinders and spheres take
    ``curved_depth`` steps (2) instead: their fits use surface points only, and shots pressed
    against a curved silhouette graze it (mixed returns). The last hit of a pair then lies
-   within ``edge_tolerance`` (across the beam) of the silhouette edge, which bounds the
+   within ``edge_tolerance`` (across the beam) of the silhouette edge, or within one head
+   position when the head cannot aim finer (its steps are whole positions: the bracket is
+   recorded as the head reached it, ``ObjectScan.brackets``, ``acquisition.edge_brackets``
+   in the scan file), which bounds the
    object's unseen edges (a face's far edge, a column's top) far better than the raster (up
    to one raster step short). When that last hit shares its bisected angle with other hits
    (every step missed, so it is the raster shot the pair started from; or a step fell on a
