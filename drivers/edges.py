@@ -1,4 +1,5 @@
-"""Where a scan session's raster lines and edge-bisection pairs go (pure functions).
+"""Where a scan session's raster lines and edge-bisection pairs go (pure functions), and the
+brackets the bisection ended on as the scan file records them (:func:`edge_turns`).
 
 Helpers of :func:`asbuilt.drivers.session.scan_target`: the fewest raster lines for an object
 (:func:`min_lines`), the pairs of raster cells that bracket the object's silhouette on each side
@@ -13,6 +14,7 @@ import math
 
 import numpy as np
 
+from .kinematics import beam
 from .plan import Window
 
 __all__ = [
@@ -22,6 +24,7 @@ __all__ = [
     "bracket",
     "deal_pairs",
     "distinct_brackets",
+    "edge_turns",
     "is_extreme",
     "is_interior",
     "long_sides",
@@ -158,8 +161,8 @@ def deal_pairs(sides: dict[str, list], count: int) -> list:
     A side's share is taken at evenly spaced quantiles of its pairs in boundary order (its
     middle one for a share of one), away from the silhouette's corners, where an edge of the
     window's side meets the next. A side with fewer pairs than its share gives them all and the
-    rest goes to the others. Returns the pairs (``(inside, outside, range, beyond)``), side by
-    side.
+    rest goes to the others. Returns the pairs as given (``(inside, outside, range, beyond,
+    ...)``), side by side.
     """
     available = [side for side in SIDES if sides[side]]
     share = dict.fromkeys(available, 0)
@@ -208,3 +211,21 @@ def boundary_pairs(cells: np.ndarray) -> dict[str, list]:
                     ((r, c), (r + 1, c)) if a else ((r + 1, c), (r, c))
                 )
     return found
+
+
+def edge_turns(result, calibration) -> list:
+    """``acquisition.edge_brackets`` of an object (``result``, an ObjectScan; ``calibration``
+    its chain): per bisected pair whose last hit is one of its points, ``[point index, dx, dy,
+    dz, ux, uy, uz]``: the first miss's beam direction less the hit's, and the miss's (unit
+    vectors, scan frame), from the angles the head reached (docs/scan-format.md)."""
+    kept = np.cumsum(result.on_object) - 1
+    out = []
+    for hit, miss in result.brackets:
+        if not result.on_object[hit]:
+            continue
+        a, b = result.shots[hit], result.shots[miss]
+        _, dirs = beam(calibration, np.array([a.pan, b.pan]), np.array([a.tilt, b.tilt]))
+        dirs = dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
+        turn = np.round(dirs[1] - dirs[0], 12).tolist()
+        out.append([int(kept[hit]), *turn, *np.round(dirs[1], 12).tolist()])
+    return out

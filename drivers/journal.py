@@ -22,7 +22,7 @@ from pathlib import Path
 from asbuilt._json_numbers import parse_int as _parse_int
 from asbuilt.errors import ScanError
 
-__all__ = ["Journal", "read_journal", "journal_path_for", "torn_path_for"]
+__all__ = ["Journal", "Replay", "read_journal", "journal_path_for", "torn_path_for"]
 
 _TAIL_BLOCK = 65536  # bytes read at a time when looking for the journal's last line break
 
@@ -157,3 +157,29 @@ def read_journal(path) -> list[dict]:
             )
         records.append(record)
     return records
+
+
+class Replay:
+    """Serves recorded shots (:class:`asbuilt.drivers.session.Shot`) while the planner asks for
+    the same directions, then goes live (``live(pan, tilt, phase)``; None: a mismatch is an
+    error)."""
+
+    def __init__(self, recorded: list, live):
+        self.recorded = list(recorded)
+        self.live = live
+        self.i = 0
+        self.diverged = False
+
+    def __call__(self, pan: float, tilt: float, phase: str):
+        if not self.diverged and self.i < len(self.recorded):
+            rec = self.recorded[self.i]
+            if abs(rec.pan_req - pan) < 1e-12 and abs(rec.tilt_req - tilt) < 1e-12:
+                self.i += 1
+                return rec
+            self.diverged = True
+        if self.live is None:
+            raise ScanError(
+                "the journal does not match the planner (edited journal or another "
+                "version); rescan this object"
+            )
+        return self.live(pan, tilt, phase)

@@ -35,7 +35,10 @@ Per object (:func:`scan_target`, deterministic given the measured ranges):
    at most, ``edge_shots`` shots per object at most. Cylinders and spheres take
    ``curved_depth`` steps (2) instead: their fits use surface points only, and shots pressed
    against a curved silhouette graze it (mixed returns). The last hit of a pair then lies
-   within ``edge_tolerance`` (across the beam) of the silhouette edge, which bounds the
+   within ``edge_tolerance`` (across the beam) of the silhouette edge, or within one head
+   position when the head cannot aim finer (its steps are whole positions: the bracket is
+   recorded as the head reached it, ``ObjectScan.brackets``, ``acquisition.edge_brackets``
+   in the scan file), which bounds the
    object's unseen edges (a face's far edge, a column's top) far better than the raster (up
    to one raster step short). When that last hit shares its bisected angle with other hits
    (every step missed, so it is the raster shot the pair started from; or a step fell on a
@@ -85,6 +88,7 @@ from .edges import (
     bracket,
     deal_pairs,
     distinct_brackets,
+    edge_turns,
     is_extreme,
     is_interior,
     long_sides,
@@ -92,6 +96,7 @@ from .edges import (
     on_a_line_shot,
 )
 from .journal import Journal, journal_path_for, read_journal
+from .journal import Replay as _Replay
 from .kinematics import Calibration, forward
 from .plan import DEFAULT_SETTINGS, SessionSettings, Target, Window
 from .raster import _cell_index, foreground_threshold, grid
@@ -183,11 +188,16 @@ class ObjectScan:
         Every shot, in order.
     on_object : ndarray of bool, shape (len(shots),)
         Shots kept as the object's points.
+    brackets : tuple of (int, int)
+        Each bisected pair's last hit and the first miss beyond it (indices into ``shots``):
+        the edge lies between the two beams, whatever the bracket the requested angles
+        narrowed to (a head aims in whole positions).
     """
 
     target: Target
     shots: tuple[Shot, ...]
     on_object: np.ndarray
+    brackets: tuple[tuple[int, int], ...] = ()
 
     @property
     def skipped(self) -> int:
@@ -387,6 +397,8 @@ def scan_target(
                         np.array([win0.pan_min + (c2 + 0.5) * dp, win0.tilt_min + (r2 + 0.5) * dt]),
                         float(shots[index[r, c]].range),
                         not (0 <= r2 < r0 and 0 <= c2 < c0),
+                        int(index[r, c]),
+                        int(index[r2, c2]) if 0 <= r2 < r0 and 0 <= c2 < c0 else -1,
                     )
                     for (r, c), (r2, c2) in chosen
                 ]
@@ -402,7 +414,8 @@ def scan_target(
         threshold = foreground_threshold(s.range for s in shots)
         return shot.range is not None and (settings.keep_background or shot.range < threshold)
 
-    for inside, outside, reach, beyond in deal_pairs(sides, settings.edge_pairs):
+    brackets = []  # (last hit, first miss beyond it), indices into shots
+    for inside, outside, reach, beyond, hit_at, miss_at in deal_pairs(sides, settings.edge_pairs):
         if beyond:
             # The object reaches the raster's border here: the cell beyond it was not shot.
             if budget <= 0:
@@ -412,6 +425,7 @@ def scan_target(
             budget -= 1
             if is_hit(shot):
                 continue  # the object runs on beyond the window: no edge to pin here
+            miss_at = len(shots) - 1
         for _ in range(depth):
             if budget <= 0:
                 break
@@ -422,9 +436,11 @@ def scan_target(
             shots.append(shot)
             budget -= 1
             if is_hit(shot):
-                inside, reach = mid, float(shot.range)
+                inside, reach, hit_at = mid, float(shot.range), len(shots) - 1
             else:
-                outside = mid
+                outside, miss_at = mid, len(shots) - 1
+        if not curved and miss_at >= 0:
+            brackets.append((hit_at, miss_at))
         if (
             not curved
             and budget > 0
@@ -452,7 +468,7 @@ def scan_target(
                 budget -= 1
                 if is_hit(shot):
                     break
-    return ObjectScan(target, tuple(shots), on_object(threshold))
+    return ObjectScan(target, tuple(shots), on_object(threshold), tuple(brackets))
 
 
 # -- session --------------------------------------------------------------------------------------
@@ -773,6 +789,9 @@ class ScanSession:
                     )
                 ),
             }
+            turns = edge_turns(result, self.calibration)
+            if turns:
+                obj["acquisition"]["edge_brackets"] = turns
             objects.append(obj)
         doc = {"format": "asbuilt-scan", "version": 1, "units": self.units}
         if self.name:
@@ -793,27 +812,3 @@ class ScanSession:
         with atomic_write(self.out, "w") as f:
             json.dump(self.document(), f, indent=1)
             f.write("\n")
-
-
-class _Replay:
-    """Serves recorded shots while the planner asks for the same directions, then goes live."""
-
-    def __init__(self, recorded: list[Shot], live: Shoot | None):
-        self.recorded = list(recorded)
-        self.live = live
-        self.i = 0
-        self.diverged = False
-
-    def __call__(self, pan: float, tilt: float, phase: str) -> Shot:
-        if not self.diverged and self.i < len(self.recorded):
-            rec = self.recorded[self.i]
-            if abs(rec.pan_req - pan) < 1e-12 and abs(rec.tilt_req - tilt) < 1e-12:
-                self.i += 1
-                return rec
-            self.diverged = True
-        if self.live is None:
-            raise ScanError(
-                "the journal does not match the planner (edited journal or another "
-                "version); rescan this object"
-            )
-        return self.live(pan, tilt, phase)

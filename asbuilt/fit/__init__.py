@@ -25,6 +25,7 @@ import numpy as np
 from scipy.special import chdtri
 
 from asbuilt.errors import FitError, located
+from asbuilt.fit._edge_brackets import edge_brackets, widen_pinned
 from asbuilt.fit._noise_levels import _fit_with_noise
 from asbuilt.fit._stations import fuse_station_views
 from asbuilt.fit._window import beyond_window, open_ends
@@ -438,6 +439,10 @@ def fit_object(
         result = fit_points(
             obj.kind, obj.points, sigma=sigma, tolerances=tolerances, viewpoint=viewpoint
         )
+        brackets = edge_brackets(obj)
+        if brackets is not None:
+            # A bound an edge-bisection hit pins lies within the bracket the session ended on.
+            result = widen_pinned(result, obj.points, *brackets, viewpoint)
         beyond = beyond_window(obj)
         if beyond is not None:
             # A size an acquisition session saw run on past the window is a lower bound.

@@ -242,7 +242,10 @@ def bounds(x, label, inliers, model, noise, edge_pad, edges=None, single=None):
     answer of :func:`asbuilt.fit._silhouette.edge_shots`; the line through it and its partner
     within 75 degrees of the axis) is the extreme inlier, or within the residual cut or half
     the pad of it (:func:`_pinned`), the extreme is the bound itself: the session bisects until
-    the bracket is a few millimetres across, about the range noise, so no pad is added.
+    the bracket is a few millimetres across, about the range noise, so no pad is added. (Or
+    until one head position: a scan that records its brackets has the bound moved to the
+    middle of the last one and its gap added to the standard error afterwards,
+    :mod:`asbuilt.fit._edge_brackets`.)
 
     ``single``: :func:`single_lines` of these points, when already computed.
 
