@@ -106,7 +106,7 @@ def unit_slip(ctx: Context, table: SizeTable | None) -> tuple[str, float] | None
     if any(od is not None and smallest <= od <= largest for _, od in measured):
         return None
     pipes = [c for c in cylinders if c.type == "pipe"] or cylinders
-    hinted = [(c, od) for c in pipes if (od := _hint_od(ctx, c, table)) is not None]
+    hinted = [(c, od) for c in pipes if (od := _hint(ctx, c, table)[1]) is not None]
     best = None
     for unit, metres in UNITS.items():
         if unit == scan.units:
@@ -122,10 +122,8 @@ def unit_slip(ctx: Context, table: SizeTable | None) -> tuple[str, float] | None
                 break
             score += abs(sizes[0][1] - od) / window
         else:
-            unhinted = sum(
-                abs(_scaled(ctx, c, factor)[0] - hint_od) > _scaled(ctx, c, factor)[1]
-                for c, hint_od in hinted
-            )
+            scaled = [(_scaled(ctx, c, factor), hint_od) for c, hint_od in hinted]
+            unhinted = sum(abs(od - hint_od) > window for (od, window), hint_od in scaled)
             low, high = PLAUSIBLE_FIT_RMS
             noisy = sum(
                 not low <= c.fit.rms * factor <= high
@@ -145,14 +143,16 @@ def unit_slip(ctx: Context, table: SizeTable | None) -> tuple[str, float] | None
 PLAUSIBLE_FIT_RMS = (5e-5, 0.015)
 
 
-def _hint_od(ctx: Context, component: Component, table: SizeTable) -> float | None:
-    """The OD (metres) the operator's size hint of a pipe names, or None."""
+def _hint(ctx: Context, component: Component, table: SizeTable | None):
+    """The operator's size hint of a pipe (the text, as merging recorded it or as the scan
+    gives it) and the OD (metres) it names (merging's, else the catalog's); None where unknown."""
     snap = component.snap or {}
     info = snap.get("hint") if isinstance(snap.get("hint"), dict) else {}
-    if info.get("od") is not None:
-        return float(info["od"])
     hint = info.get("nominal") or ctx.hint(component)
-    return table.od(hint) if hint else None
+    od = info.get("od")
+    if od is None and table is not None and hint:
+        od = table.od(hint)
+    return hint, None if od is None else float(od)
 
 
 def _scaled(ctx: Context, component: Component, factor: float) -> tuple[float, float]:
@@ -314,13 +314,9 @@ def check_hint(ctx: Context, table: SizeTable | None) -> None:
     slug = "hint-mismatch"
     for comp in ctx.pipes:
         snap = comp.snap or {}
-        info = snap.get("hint") if isinstance(snap.get("hint"), dict) else {}
-        hint = info.get("nominal") or ctx.hint(comp)
+        hint, hint_od = _hint(ctx, comp, table)
         if not hint or snap.get("hint_rejected"):
             continue
-        hint_od = info.get("od")
-        if hint_od is None and table is not None:
-            hint_od = table.od(hint)
         if hint_od is None and table is not None and comp.type == "pipe":
             # only a pipe's hint names a catalog size (a tank's "3000 ID" does not)
             catalog = table.standard
