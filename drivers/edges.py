@@ -30,6 +30,7 @@ __all__ = [
     "long_sides",
     "min_lines",
     "on_a_line_shot",
+    "same_position",
 ]
 
 
@@ -71,21 +72,35 @@ BACK_STEPS = (1.0, 2.0, 4.0)
 SIDES = ("left", "right", "bottom", "top")
 
 
-def on_a_line_shot(inside: np.ndarray, outside: np.ndarray, shots: list, is_hit) -> bool:
-    """Whether another hit shares the bisected angle of a pair's last hit ``inside``.
+def on_a_line_shot(inside: np.ndarray, outside: np.ndarray, hit, shots: list, is_hit) -> bool:
+    """Whether another hit shares the bisected angle of a pair's last hit.
 
-    The bisected angle is the one in which ``inside`` and ``outside`` (``[pan, tilt]``,
-    radians) differ: pan for a left or right pair, tilt for a bottom or top one. ``shots``:
-    the object's shots so far; ``is_hit(shot)``: whether one is on the object.
+    The bisected angle is the one in which ``inside`` and ``outside`` (the pair's requested
+    ``[pan, tilt]``, radians) differ: pan for a left or right pair, tilt for a bottom or top
+    one. ``hit``: the pair's last hit (a :class:`Shot`); ``shots``: the object's shots so far;
+    ``is_hit(shot)``: whether one is on the object. Angles are compared where the head reached
+    them, not where they were asked for: a head aiming in whole positions puts a request a
+    fraction of a position off a raster column on that column.
     """
     axis = 0 if abs(outside[0] - inside[0]) > abs(outside[1] - inside[1]) else 1
     other = 1 - axis
+    at = (hit.pan, hit.tilt)
     return any(
-        abs((s.pan_req, s.tilt_req)[axis] - inside[axis]) <= 1e-12
-        and abs((s.pan_req, s.tilt_req)[other] - inside[other]) > 1e-12
+        abs((s.pan, s.tilt)[axis] - at[axis]) <= _SAME_ANGLE
+        and abs((s.pan, s.tilt)[other] - at[other]) > _SAME_ANGLE
         and is_hit(s)
         for s in shots
     )
+
+
+#: Angles (radians) closer than this are one head position: far below any unit's step
+#: (0.0514 degree on a PTU-D46, 0.01 degree on a Pelco head) and above rounding in radians.
+_SAME_ANGLE = 1e-9
+
+
+def same_position(one, other) -> bool:
+    """Whether two shots (:class:`Shot`) were taken with the head at the same position."""
+    return abs(one.pan - other.pan) <= _SAME_ANGLE and abs(one.tilt - other.tilt) <= _SAME_ANGLE
 
 
 def bracket(inside: np.ndarray, outside: np.ndarray) -> float:

@@ -95,6 +95,7 @@ from .edges import (
     long_sides,
     min_lines,
     on_a_line_shot,
+    same_position,
 )
 from .journal import Journal, journal_path_for, read_journal
 from .journal import Replay as _Replay
@@ -287,10 +288,16 @@ def scan_target(
             shot = shoot(float(mid[0]), float(mid[1]), "edge")
             shots.append(shot)
             budget -= 1
+            # A head that aims in whole positions reached one end of the bracket again: the
+            # bracket is one position across and cannot narrow; another step would only repeat
+            # this shot (and count its point twice).
+            repeated = any(at >= 0 and same_position(shots[at], shot) for at in (hit_at, miss_at))
             if is_hit(shot):
                 inside, reach, hit_at = mid, float(shot.range), len(shots) - 1
             else:
                 outside, miss_at = mid, len(shots) - 1
+            if repeated:
+                break
         if not curved and miss_at >= 0:
             brackets.append((hit_at, miss_at))
         if (
@@ -300,6 +307,7 @@ def scan_target(
             and on_a_line_shot(
                 inside,
                 outside,
+                shots[hit_at],
                 shots,
                 lambda s: s.range is not None and (settings.keep_background or s.range < threshold),
             )

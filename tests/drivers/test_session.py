@@ -430,6 +430,33 @@ def test_every_side_is_bisected_down_to_the_tolerance(tolerance):
     assert len(edges) <= most
 
 
+def test_a_bisection_stops_at_the_heads_resolution():
+    # A PTU-D46 aims in whole positions of 0.0514 degree: once a bracket is one position across,
+    # a midpoint reaches one of its ends again. The bisection stops there instead of shooting
+    # the same position again until its depth runs out (each repeat a point counted twice).
+    step = math.radians(0.0514)
+    shoot_exactly, _ = box_world()
+
+    def shoot(pan, tilt, phase):
+        at = shoot_exactly(round(pan / step) * step, round(tilt / step) * step, phase)
+        return dataclasses.replace(at, pan_req=pan, tilt_req=tilt)
+
+    target = Target("C", "cuboid", Window(-0.07, 0.09, -0.17, 0.13))
+    settings = SessionSettings(edge_pairs=4, edge_tolerance=1e-6, edge_depth=30, edge_shots=200)
+    result = scan_target(target, shoot, settings)
+    edges = [s for s in result.shots if s.phase == "edge"]
+    positions = [(s.pan, s.tilt) for s in result.shots]
+    repeats = len(positions) - len(set(positions))
+    # One repeat at most per bisected pair (the shot that finds the bracket closed), where an
+    # unbounded bisection would spend its depth: 30 shots a pair.
+    assert repeats <= 4
+    assert len(edges) <= 4 * 12
+    # and each side's edge is still pinned to within one position of the truth
+    hits = [s for s, k in zip(result.shots, result.on_object) if k]
+    assert min(s.pan for s in hits) - (0.01 - 0.05) < step
+    assert (0.01 + 0.05) - max(s.pan for s in hits) < step
+
+
 def test_edge_shots_are_capped_per_object():
     shoot, _ = box_world()
     target = Target("C", "cuboid", Window(-0.07, 0.09, -0.17, 0.13))
