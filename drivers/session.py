@@ -99,7 +99,7 @@ from .edges import (
 )
 from .journal import Journal, journal_path_for, read_journal
 from .journal import Replay as _Replay
-from .kinematics import Calibration, forward
+from .kinematics import Calibration, beam, forward
 from .plan import DEFAULT_SETTINGS, SessionSettings, Target, Window
 from .raster import _cell_index, foreground_threshold, grid
 
@@ -616,6 +616,24 @@ class ScanSession:
         self.close()
 
     # -- output ----------------------------------------------------------------------------
+    def beam_origin(self) -> np.ndarray:
+        """Where the beams start, shape (3,), metres, scan frame: the scan's sensor position.
+
+        The fits read the shots' raster (rows, columns, bisection shots) from their directions
+        as seen from the sensor position. The beams start on the tilt axis, not at the base: a
+        PTU-D46's 47 mm above it, seen from the base, turns each shot's tilt by a parallax that
+        changes with its range, enough to break a row apart (the column of the docs' site lost
+        a measured size in 5 of 8 scans). With the laser on the tilt axis the beams all start at
+        one point; with a laser offset, the mean of the object shots' origins (a few
+        millimetres from each).
+        """
+        angles = [r.measurements()[:, :2] for r in self.objects.values()]
+        angles = np.concatenate(angles) if angles else np.zeros((0, 2))
+        if not len(angles):
+            angles = np.zeros((1, 2))
+        origins, _ = beam(self.calibration, angles[:, 0], angles[:, 1])
+        return origins.mean(axis=0)
+
     def document(self) -> dict:
         """The ``asbuilt-scan`` document of every finished object (file units)."""
         k = unit_factor(self.units)
@@ -656,7 +674,7 @@ class ScanSession:
         doc = {"format": "asbuilt-scan", "version": 1, "units": self.units}
         if self.name:
             doc["name"] = self.name
-        doc["sensor"] = {"position": [v / k for v in self.calibration.base_position]}
+        doc["sensor"] = {"position": [v / k for v in self.beam_origin()]}
         doc["objects"] = objects
         from .calibration import calibration_to_dict
 
