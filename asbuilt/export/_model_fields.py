@@ -1,5 +1,5 @@
 """The fields of a model document's components, checked by type on loading: numbers, points,
-texts, ``snap`` records and fit diagnostics (:mod:`asbuilt.export.model_json` reads them).
+texts, ``snap`` records and fit diagnostics (:mod:`asbuilt.export._model_json_read` reads them).
 
 Merging writes ``snap`` (how a component's size was chosen, what a fitting connects, the
 notes merging left) and the rules, reports and CAD read it back from a document. A document
