@@ -157,7 +157,7 @@ def _fit_points(kind: str, points, sigma, tolerances, viewpoint) -> FitResult:
     options = {}
     if viewpoint is not None and _accepts_viewpoint(function):
         options["viewpoint"] = viewpoint
-    distinct, row_of = _distinct_rows(array)
+    distinct, row_of = _canonical_rows(array)
     repeats = len(array) - len(distinct)
     if repeats and len(distinct) < MIN_POINTS[kind]:
         what = kind_phrase(kind)
@@ -171,10 +171,10 @@ def _fit_points(kind: str, points, sigma, tolerances, viewpoint) -> FitResult:
     if kind != "auto":  # auto weighs each kind's fit itself, an undetermined one included
         _refuse_unknown_radius(result, distinct)
     notes = [_prior_noise(result, tolerances) if sigma is None else None, _undetermined(result)]
+    result = dataclasses.replace(
+        result, residuals=result.residuals[row_of], inliers=result.inliers[row_of]
+    )
     if repeats:
-        result = dataclasses.replace(
-            result, residuals=result.residuals[row_of], inliers=result.inliers[row_of]
-        )
         notes.append(
             f"{repeats} point(s) repeat other points exactly and were counted once (the same "
             "rows twice in the file, e.g. a scan merged with itself); the standard errors are "
@@ -186,9 +186,17 @@ def _fit_points(kind: str, points, sigma, tolerances, viewpoint) -> FitResult:
     return result
 
 
-def _distinct_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The distinct rows of ``points`` (n, 3) metres, in order of first appearance, shape
-    (m, 3), and for each of the n rows the index of its distinct row, shape (n,) int.
+def _canonical_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of ``points`` (n, 3) metres in one canonical order, shape (m, 3), and
+    for each of the n rows the index of its distinct row, shape (n,) int.
+
+    The fits draw random samples by index (RANSAC hypotheses, starts), so the order of the rows
+    would otherwise choose which samples they see: the same shots written in another order (two
+    stations' files merged, a converter's sort) could settle on another outlier set, a size a
+    few millimetres off. Sorted by distance from the points' centroid, every order of the same
+    shots gives the same fit, and a rigid motion or a change of scale leaves the order as it
+    is (a sort by coordinate would not: the fits must not depend on the frame either).
+    Coordinates break exact ties of distance (points placed symmetrically by construction).
 
     Exactly repeated coordinates are one measurement written twice (a scan file merged with
     itself, copied rows): a second shot at the same angles re-measures the range and differs in
@@ -196,15 +204,15 @@ def _distinct_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     standard errors slightly conservative). Counted twice, they would shrink the standard errors
     by up to sqrt(2) for no new information.
     """
-    order = np.lexsort(points.T)
+    centred = points - points.mean(axis=0)
+    # np.lexsort's last key sorts first: distance, then x, y, z
+    order = np.lexsort((*points.T[::-1], np.einsum("ij,ij->i", centred, centred)))
     ordered = points[order]
-    if not (ordered[1:] == ordered[:-1]).all(axis=1).any():
-        return points, np.arange(len(points))  # the usual case, at a tenth of np.unique's cost
-    _, first, inverse = np.unique(points, axis=0, return_index=True, return_inverse=True)
-    order = np.argsort(first)
-    position = np.empty(len(first), dtype=np.intp)
-    position[order] = np.arange(len(first))
-    return points[first[order]], position[inverse.reshape(-1)]
+    first = np.ones(len(points), dtype=bool)
+    first[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
+    row_of = np.empty(len(points), dtype=np.intp)
+    row_of[order] = np.cumsum(first) - 1
+    return ordered[first], row_of
 
 
 def _checked_sigma(sigma) -> float:

@@ -239,7 +239,10 @@ def test_fit_uses_the_sensor_sigma_in_metres(stand_ins):
     )
     report = fit(loads_scan(text))
     assert CALLS[0]["sigma"] == pytest.approx(0.002)
-    np.testing.assert_allclose(CALLS[0]["points"], octahedron())
+    # the same rows, in the fit's own order (every order of the shots gives the same fit)
+    np.testing.assert_allclose(
+        np.unique(CALLS[0]["points"], axis=0), np.unique(octahedron(), axis=0)
+    )
     assert report.get("S1").result.sigma_source == "sensor"
 
 
@@ -541,7 +544,7 @@ def test_a_flat_wall_fitted_as_a_sphere_is_refused(seed):
     # The best sphere is tens of kilometres wide and its radius is not known at all. J^T J was
     # singular to rounding; its inverse or pseudo-inverse reported the radius to a fraction of
     # its size (r 155 km +-84 m for seed 3), so the refusal never fired.
-    with pytest.raises(FitError, match="do not determine the sphere's radius .* one standard"):
+    with pytest.raises(FitError, match="do not determine the sphere's radius"):
         fit_points("sphere", _flat_wall(seed, 0.0001), sigma=0.0001)
 
 
@@ -725,7 +728,11 @@ def test_without_a_sigma_a_rough_pipe_keeps_its_shots(roughness):
     for _ in range(5):
         points = _rough_pipe(rng, roughness)
         result = fit_points("cylinder", points, viewpoint=np.zeros(3))
-        plain = fitter_for("cylinder")(points, viewpoint=np.zeros(3))  # no assumed noise
+        # no assumed noise; the rows in the order fit_points gives the fits (by distance from
+        # their centroid), so that both draw the same random samples
+        centred = points - points.mean(axis=0)
+        rows = points[np.argsort(np.einsum("ij,ij->i", centred, centred))]
+        plain = fitter_for("cylinder")(rows, viewpoint=np.zeros(3))
         assert result.primitive.radius == plain.primitive.radius
         assert result.inliers.sum() >= len(points) - 2
         assert result.sigma > 0.004
