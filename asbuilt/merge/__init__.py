@@ -705,7 +705,16 @@ def _mark_loose_ends(components, joints, joint_notes, ids, slack, tol):
 
 
 def _mean_spacing(item, cylinder) -> float:
-    """Mean spacing (metres) of a pipe's inlier shots along its axis: extent / (shots - 1)."""
+    """The shots' step (metres) along a pipe's axis at its ends, the larger of the two: how far
+    its last shot may stand from a real end (:func:`asbuilt.fit._cylinder_finish.end_gaps`, the
+    step the fit's length standard error is built on). The mean spacing (extent over shots)
+    was a row's own spread on a raster crossing the pipe: "extended 204 mm beyond its last shot
+    (shots every 31 mm on average)" for a pipe whose raster lines lay 0.2 m apart along it.
+    """
+    from scipy.spatial import cKDTree
+
+    from asbuilt.fit._cylinder_finish import end_gaps
+
     pts = np.asarray(item.object.points, float)
     mask = np.asarray(item.result.inliers, bool)
     if mask.shape == (len(pts),):
@@ -713,7 +722,8 @@ def _mean_spacing(item, cylinder) -> float:
     if len(pts) < 2:
         return 0.0
     along = (pts - np.asarray(cylinder.center)) @ np.asarray(cylinder.axis)
-    return float(np.ptp(along)) / (len(pts) - 1)
+    nearest = float(np.median(cKDTree(pts).query(pts, k=2)[0][:, 1]))
+    return max(end_gaps(along, nearest, float(item.result.sigma or 0.0)))
 
 
 def _links_to_other_objects(report, index_of, cyls, slack, tol):

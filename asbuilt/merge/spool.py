@@ -729,7 +729,7 @@ def build_spools(
             elif moved > EXTEND_NOTE + p.spacing:
                 end_notes.append(
                     f"extended {moved * 1000:.0f} mm at its {label} to {at}, beyond its last shot "
-                    f"(shots every {p.spacing * 1000:.0f} mm on average): that pipe was not "
+                    f"(its shots' step along it at its ends: {p.spacing * 1000:.0f} mm): that pipe was not "
                     "measured"
                 )
             if abs(moved) > 1e-7:
