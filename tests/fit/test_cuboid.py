@@ -276,6 +276,10 @@ def test_one_face_seen():
     assert result.diagnostics["faces"] == 1
     assert result.observed == (False, False, False)
     assert any("one face" in note for note in result.notes)
+    # The depth is made up, and with it where the centre lies behind the face: a review's
+    # one-face box had its centre 280 mm off at +-59 mm.
+    assert math.isinf(result.stderr["center"])
+    assert sum(math.isinf(se) for se in result.stderr["size"]) == 1
     # The face normal is the x axis; the face (x = 5.8) is the box's near side.
     normal_row = int(np.argmax(np.abs(box.axes[:, 0])))
     assert abs(box.axes[normal_row, 0]) > 0.9999
