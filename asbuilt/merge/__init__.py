@@ -629,7 +629,7 @@ def merge_model(
                 schedule=schedule_used,
                 notes=list(notes_of.get(m, [])),
                 slack=float(slack[m]),
-                spacing=_mean_spacing(items[m], cyls[m]),
+                spacing=_end_step(items[m], cyls[m]),
             )
         )
     group_of = [item.object.group for item in items]
@@ -704,7 +704,7 @@ def _mark_loose_ends(components, joints, joint_notes, ids, slack, tol):
     ]
 
 
-def _mean_spacing(item, cylinder) -> float:
+def _end_step(item, cylinder) -> float:
     """The shots' step (metres) along a pipe's axis at its ends, the larger of the two: how far
     its last shot may stand from a real end (:func:`asbuilt.fit._cylinder_finish.end_gaps`, the
     step the fit's length standard error is built on). The mean spacing (extent over shots)

@@ -89,8 +89,8 @@ MAX_BEND_DEG = 100.0
 #: outermost shot, so the fitting then covers pipe the scan measured; 10 mm allows for shots
 #: on the weld bead and bevel and for range noise along the axis.
 TRIM_NOTE = 0.010
-#: A pipe extended by more than this (metres) plus its mean shot spacing along the axis (the
-#: last shot is typically within a spacing of the end) gets a note: that much pipe was never
+#: A pipe extended by more than this (metres) plus its shots' step along the axis at its ends
+#: (the last shot is within a step of the end) gets a note: that much pipe was never
 #: measured. It is Tolerances.joint_distance's default: sparse
 #: scans stop short of fittings by a shot spacing or so, and operators keep the beam off the
 #: fitting (the simulated perfect spool's pipes end 30-70 mm short of every fitting); farther
@@ -127,8 +127,8 @@ class PipeSpec:
     slack : float
         Coarsest spacing of the pipe's shots along its axis, metres (for the notes).
     spacing : float
-        Mean spacing of its shots along its axis, metres: an extension longer than this plus
-        :data:`EXTEND_NOTE` gets a note.
+        Its shots' step along its axis at its ends (the larger), metres: an extension longer
+        than this plus :data:`EXTEND_NOTE` gets a note.
     """
 
     id: str
