@@ -711,8 +711,7 @@ def _end_step(item, cylinder) -> float:
     was a row's own spread on a raster crossing the pipe: "extended 204 mm beyond its last shot
     (shots every 31 mm on average)" for a pipe whose raster lines lay 0.2 m apart along it.
     """
-    from scipy.spatial import cKDTree
-
+    from asbuilt.fit._common import median_spacing
     from asbuilt.fit._cylinder_finish import end_gaps
 
     pts = np.asarray(item.object.points, float)
@@ -722,8 +721,7 @@ def _end_step(item, cylinder) -> float:
     if len(pts) < 2:
         return 0.0
     along = (pts - np.asarray(cylinder.center)) @ np.asarray(cylinder.axis)
-    nearest = float(np.median(cKDTree(pts).query(pts, k=2)[0][:, 1]))
-    return max(end_gaps(along, nearest, float(item.result.sigma or 0.0)))
+    return max(end_gaps(along, median_spacing(pts), float(item.result.sigma or 0.0)))
 
 
 def _links_to_other_objects(report, index_of, cyls, slack, tol):
