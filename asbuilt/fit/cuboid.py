@@ -111,6 +111,7 @@ from asbuilt.fit._cuboid_sizes import (
     single_lines,
 )
 from asbuilt.fit._cuboid_sparse import AmbiguousFrame, describe
+from asbuilt.fit._cuboid_viewpoint import checked
 from asbuilt.fit._joint import (
     best_fit,
     counted_outliers,
@@ -345,14 +346,28 @@ def fit_cuboid(
 
 def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
     """:func:`fit_cuboid` before its open-end check: the shots' fit, or with ``viewpoint``
-    the nearest surfaces' when the first fit is contradicted or refused."""
-    edge_pad = options["edge_pad"]
+    the nearest surfaces' when the first fit is contradicted or refused; refused when the shots
+    contradict the viewpoint (:mod:`asbuilt.fit._cuboid_viewpoint`)."""
     if viewpoint is None:
         return _fit_cuboid_shots(points, sigma=sigma, tolerances=tolerances, **options)
     try:
         view = np.array(as_vector(viewpoint, "viewpoint"))
     except ValueError as exc:
         raise FitError(f"cuboid: {exc}") from None
+    result, error = _fit_seen_from(points, sigma, tolerances, view, options)
+    return checked(
+        result,
+        error,
+        _validate(points),
+        view,
+        lambda: _fit_cuboid_shots(points, sigma=sigma, tolerances=tolerances, **options),
+    )
+
+
+def _fit_seen_from(points, sigma, tolerances, view, options):
+    """:func:`_fit_box` as seen from ``view`` (3,) metres, as ``(result, error)``: the fit
+    (None when refused) and the refusal (a FitError, None when fitted)."""
+    edge_pad = options["edge_pad"]
     result = error = None
     try:
         result = _fit_cuboid_shots(
@@ -363,7 +378,7 @@ def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
     except FitError as exc:
         error = exc
     if result is not None and result.inliers.all():
-        return result  # every shot on a face: none in front of the box or inside it
+        return result, None  # every shot on a face: none in front of the box or inside it
     pts = _validate(points)
     contradictions = len(pts)
     if result is not None:
@@ -372,7 +387,7 @@ def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
         # object on a face's plane in front of another face.
         contradictions = int(np.count_nonzero(contradicting(result.primitive, pts, view, width)))
         if contradictions < FRONT_SHOTS:
-            return result
+            return result, None
 
     def fit_subset(subset, sigma, tolerances, viewpoint):
         return _fit_cuboid_shots(
@@ -386,10 +401,8 @@ def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
 
     rescued = fit_nearest_box(fit_subset, pts, view, sigma, tolerances, contradictions)
     if rescued is not None and _on_its_box(rescued, sigma, tolerances):
-        return rescued
-    if result is None:
-        raise error
-    return result
+        return rescued, None
+    return result, error
 
 
 def _on_its_box(found: FitResult, sigma, tolerances) -> bool:
