@@ -35,7 +35,8 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    station and the frame is fitted again; a fit with a face seen edge-on from every shot,
    which the other faces leave free to turn, ranks after the other plausible fits; shots
    seen past the box (behind every seen face, farther than every kept shot) are background,
-   not counted against ``max_outlier_fraction``.
+   not counted against ``max_outlier_fraction``, unless the shots contradict the viewpoint
+   (a wrong station: :mod:`asbuilt.fit._cuboid_viewpoint`), which refuses the fit.
 3. Sizes: between two opposite seen faces (``observed`` True); otherwise from a seen face (the
    fitted corner edge) to the farthest inlier along that axis, or between the extreme inliers
    when no face bounds the axis (``observed`` False: the paper's point-projection step). Those
