@@ -35,7 +35,8 @@ by orthogonal-distance fits of all faces at once with exactly perpendicular norm
    station and the frame is fitted again; a fit with a face seen edge-on from every shot,
    which the other faces leave free to turn, ranks after the other plausible fits; shots
    seen past the box (behind every seen face, farther than every kept shot) are background,
-   not counted against ``max_outlier_fraction``.
+   not counted against ``max_outlier_fraction``, unless the shots contradict the viewpoint
+   (a wrong station: :mod:`asbuilt.fit._cuboid_viewpoint`), which refuses the fit.
 3. Sizes: between two opposite seen faces (``observed`` True); otherwise from a seen face (the
    fitted corner edge) to the farthest inlier along that axis, or between the extreme inliers
    when no face bounds the axis (``observed`` False: the paper's point-projection step). Those
@@ -111,6 +112,7 @@ from asbuilt.fit._cuboid_sizes import (
     single_lines,
 )
 from asbuilt.fit._cuboid_sparse import AmbiguousFrame, describe
+from asbuilt.fit._cuboid_viewpoint import checked
 from asbuilt.fit._joint import (
     best_fit,
     counted_outliers,
@@ -345,14 +347,28 @@ def fit_cuboid(
 
 def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
     """:func:`fit_cuboid` before its open-end check: the shots' fit, or with ``viewpoint``
-    the nearest surfaces' when the first fit is contradicted or refused."""
-    edge_pad = options["edge_pad"]
+    the nearest surfaces' when the first fit is contradicted or refused; refused when the shots
+    contradict the viewpoint (:mod:`asbuilt.fit._cuboid_viewpoint`)."""
     if viewpoint is None:
         return _fit_cuboid_shots(points, sigma=sigma, tolerances=tolerances, **options)
     try:
         view = np.array(as_vector(viewpoint, "viewpoint"))
     except ValueError as exc:
         raise FitError(f"cuboid: {exc}") from None
+    result, error = _fit_seen_from(points, sigma, tolerances, view, options)
+    return checked(
+        result,
+        error,
+        _validate(points),
+        view,
+        lambda: _fit_cuboid_shots(points, sigma=sigma, tolerances=tolerances, **options),
+    )
+
+
+def _fit_seen_from(points, sigma, tolerances, view, options):
+    """:func:`_fit_box` as seen from ``view`` (3,) metres, as ``(result, error)``: the fit
+    (None when refused) and the refusal (a FitError, None when fitted)."""
+    edge_pad = options["edge_pad"]
     result = error = None
     try:
         result = _fit_cuboid_shots(
@@ -363,7 +379,7 @@ def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
     except FitError as exc:
         error = exc
     if result is not None and result.inliers.all():
-        return result  # every shot on a face: none in front of the box or inside it
+        return result, None  # every shot on a face: none in front of the box or inside it
     pts = _validate(points)
     contradictions = len(pts)
     if result is not None:
@@ -372,7 +388,7 @@ def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
         # object on a face's plane in front of another face.
         contradictions = int(np.count_nonzero(contradicting(result.primitive, pts, view, width)))
         if contradictions < FRONT_SHOTS:
-            return result
+            return result, None
 
     def fit_subset(subset, sigma, tolerances, viewpoint):
         return _fit_cuboid_shots(
@@ -385,11 +401,22 @@ def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
         )
 
     rescued = fit_nearest_box(fit_subset, pts, view, sigma, tolerances, contradictions)
-    if rescued is not None:
-        return rescued
-    if result is None:
-        raise error
-    return result
+    if rescued is not None and _on_its_box(rescued, sigma, tolerances):
+        return rescued, None
+    return result, error
+
+
+def _on_its_box(found: FitResult, sigma, tolerances) -> bool:
+    """Whether every inlier of ``found`` (a subset's fit taken for every shot, its residuals
+    to the box's surface) lies within twice the inlier cutoff of its box (``sigma`` metres or
+    None: the fit's own noise level). The subset's fit keeps shots within the cutoff of a
+    face's plane; one far past the box along that plane is on no face of it (a box 0.2 m
+    deep with shots 0.17 m in front of its face, rms 60 mm at a 2 mm sigma, its note saying
+    the rejected lay beyond 3 x 2 mm of their face)."""
+    noise = found.sigma if sigma is None else sigma
+    width = tolerances.outlier_cutoff_sigma * max(noise, tolerances.sigma_floor)
+    kept = np.abs(found.residuals[found.inliers])
+    return kept.size == 0 or float(kept.max()) <= 2.0 * width
 
 
 def _seed_frame(seed, x: np.ndarray, origin: np.ndarray, threshold: float) -> _faces.Frame:
