@@ -637,6 +637,10 @@ def _fit_cuboid_shots(
         short = unreached(lo_face, hi_face, bisected, lattice, int(np.count_nonzero(inliers)))
     used_window = False
     gaps = None
+    if grid is not None and not one_face:
+        # Rejected shots on raster lines beyond the box (a window run across the wall behind
+        # it) put the window's sides on the background, not on the box's silhouette.
+        grid = _silhouette.background_sides(grid, seen[1], inliers)
     if silhouette and grid is not None and not one_face:
         gaps = raster_gaps(
             xb, origin, model, label_b, lo, hi, lo_pt, hi_pt, viewpoint, grid, cutoff * scale
