@@ -16,7 +16,7 @@ import numpy as np
 
 from .errors import FitError
 from .findings import Finding
-from .fit.result import FitReport, FitResult
+from .fit.result import FitFailure, FitReport, FitResult
 from .primitives import Cuboid, Cylinder, Hull, Plane, Primitive, Sphere, as_vector
 from .scan.model import Scan, ScanObject
 
@@ -33,6 +33,9 @@ __all__ = [
     "Model",
     "COMPONENT_TYPES",
     "model_from_fits",
+    "bare_cylinder",
+    "insulation_refused",
+    "without_pipeless_insulation",
 ]
 
 #: Component types: piping parts made by merging, then the plain fitted kinds.
@@ -505,6 +508,21 @@ class Model:
         return dataclasses.replace(self, **changes)
 
 
+def _pipeless(obj: ScanObject, cylinder: Cylinder, source: str | None) -> FitError | None:
+    """The located error when ``obj``'s insulation is as thick as ``cylinder``'s radius (fitted
+    to the cladding, metres) or thicker: no pipe would be left inside. None otherwise."""
+    thickness = float(obj.insulation)
+    if thickness <= 0 or thickness < cylinder.radius:
+        return None
+    return FitError(
+        f"{thickness * 1000:g} mm of insulation is as thick as the fitted radius "
+        f"({cylinder.radius * 1000:.1f} mm) or thicker, so no pipe is left inside; check "
+        "the thickness and the file's units",
+        source=source,
+        where=f"{obj.where}.insulation",
+    )
+
+
 def bare_cylinder(obj: ScanObject, cylinder: Cylinder, source: str | None = None) -> Cylinder:
     """The cylinder inside an object's insulation: ``cylinder`` (fitted to the cladding, metres)
     with its radius less the object's ``insulation``; ``cylinder`` itself when bare.
@@ -513,20 +531,62 @@ def bare_cylinder(obj: ScanObject, cylinder: Cylinder, source: str | None = None
     ------
     FitError
         Located at the object's ``insulation``, when the insulation is as thick as the fitted
-        radius or thicker (no pipe would be left inside).
+        radius or thicker (no pipe would be left inside). :func:`build_model
+        <asbuilt.pipeline.build_model>` takes such objects out first
+        (:func:`without_pipeless_insulation`), so this is met only by a caller that merges a
+        fit report itself.
     """
+    error = _pipeless(obj, cylinder, source)
+    if error is not None:
+        raise error
     thickness = float(obj.insulation)
     if thickness <= 0:
         return cylinder
-    if thickness >= cylinder.radius:
-        raise FitError(
-            f"{thickness * 1000:g} mm of insulation is as thick as the fitted radius "
-            f"({cylinder.radius * 1000:.1f} mm) or thicker, so no pipe is left inside; check "
-            "the thickness and the file's units",
-            source=source,
-            where=f"{obj.where}.insulation",
-        )
     return dataclasses.replace(cylinder, radius=cylinder.radius - thickness)
+
+
+def without_pipeless_insulation(report: FitReport) -> FitReport:
+    """``report`` with each fitted cylinder whose ``insulation`` leaves no pipe inside moved to
+    its failures, in the scan's order.
+
+    The points fit the cladding well; it is the thickness given that leaves nothing to model
+    (a unit slip or a typo), so the object is refused as a fit is, one object at a time: the
+    others are modelled, and :func:`asbuilt.pipeline.fit_refused_finding` keeps its points.
+
+    Parameters
+    ----------
+    report : FitReport
+        As :func:`asbuilt.fit.fit` returns it (metres).
+
+    Returns
+    -------
+    FitReport
+        ``report`` itself when no object is refused so; else a copy whose ``failures`` hold the
+        new :class:`~asbuilt.fit.result.FitFailure` s (located ``objects[i] (ID).insulation``,
+        :func:`insulation_refused`). Its ``fits`` may be empty: the caller decides whether
+        nothing fitted is bad input.
+    """
+    source = report.scan.source
+    refused = {}
+    for item in report.fits:
+        if isinstance(item.result.primitive, Cylinder):
+            error = _pipeless(item.object, item.result.primitive, source)
+            if error is not None:
+                refused[item.object.id] = FitFailure(object=item.object, error=error)
+    if not refused:
+        return report
+    order = {obj.id: k for k, obj in enumerate(report.scan.objects)}
+    failures = sorted(
+        (*report.failures, *refused.values()), key=lambda f: order.get(f.object.id, len(order))
+    )
+    fits = tuple(item for item in report.fits if item.object.id not in refused)
+    return dataclasses.replace(report, fits=fits, failures=tuple(failures))
+
+
+def insulation_refused(failure: FitFailure) -> bool:
+    """Whether ``failure`` is an object refused for its insulation
+    (:func:`without_pipeless_insulation`) rather than for its points."""
+    return (failure.error.where or "").endswith(".insulation")
 
 
 def _component_from_fit(item, source: str | None = None) -> Component:

@@ -8,7 +8,9 @@ Every stage is a pure function of the previous one's output; this module only ch
 An object whose fit is refused does not stop the others: it is left out of the model and
 becomes an error finding (:data:`~asbuilt.findings.FIT_REFUSED_CODE`, ``fit-refused``) that
 keeps its measured points (:func:`fit_refused_findings`); :func:`recheck` keeps those findings
-when a model is checked again.
+when a model is checked again. So does an insulated cylinder whose ``insulation`` is as thick as
+its fitted radius or thicker (:func:`asbuilt.model.without_pipeless_insulation`): no pipe is left
+inside to model, but the rest of the scan is.
 """
 
 from __future__ import annotations
@@ -21,7 +23,12 @@ import numpy as np
 
 from asbuilt.findings import FIT_REFUSED_CODE, FIT_REFUSED_SLUG, Finding, Suggestion
 from asbuilt.fit.result import FitFailure, FitReport
-from asbuilt.model import Model, model_from_fits
+from asbuilt.model import (
+    Model,
+    insulation_refused,
+    model_from_fits,
+    without_pipeless_insulation,
+)
 from asbuilt.scan.model import Scan, kind_phrase
 from asbuilt.tolerances import Tolerances
 from asbuilt.units import note_in_units
@@ -59,19 +66,21 @@ def fit_refused_finding(failure: FitFailure, units: str = "m") -> Finding:
     """
     obj = failure.object
     points = np.asarray(obj.points, dtype=np.float64)
-    keep = Suggestion(
-        f"rescan {obj.id}; its {len(points)} measured points are kept with this finding",
-        {"object": obj.id, "kind": obj.kind, "points": points.tolist()},
-        False,
-    )
+    kept = f"its {len(points)} measured points are kept with this finding"
+    if insulation_refused(failure):
+        # the points fit; the thickness given is what leaves nothing to model
+        what = f"fitted as {kind_phrase(obj.kind)}, but not in the model: {failure.message}"
+        todo = f"check {obj.id}'s insulation thickness and the file's units; {kept}"
+    else:
+        what = f"{_not_fitted(obj.kind)}, so it is not in the model: {failure.message}"
+        todo = f"rescan {obj.id}; {kept}"
+    keep = Suggestion(todo, {"object": obj.id, "kind": obj.kind, "points": points.tolist()}, False)
     return Finding(
         code=FIT_REFUSED_CODE,
         slug=FIT_REFUSED_SLUG,
         severity="error",
         objects=(obj.id,),
-        message=note_in_units(
-            f"{_not_fitted(obj.kind)}, so it is not in the model: {failure.message}", units
-        ),
+        message=note_in_units(what, units),
         location=points.mean(axis=0) if len(points) else None,
         suggestions=(keep,),
     )
@@ -201,7 +210,7 @@ def build_model(
         tolerances = config.tolerances
     if merge or catalog is not None:
         catalog = resolve_catalog(catalog)  # once: the merge, the rules and the model share it
-    report = fit(scan, tolerances, progress=progress)
+    report = _modelled(fit(scan, tolerances, progress=progress))
     if merge:
         model = _merged(report, catalog, tolerances, schedule, elbow_radius)
     else:
@@ -212,6 +221,18 @@ def build_model(
     if check:
         model = model.replace(findings=recheck(model, config, design, catalog=catalog))
     return model
+
+
+def _modelled(report: FitReport) -> FitReport:
+    """``report`` with the objects whose insulation leaves no pipe inside refused
+    (:func:`~asbuilt.model.without_pipeless_insulation`); as for fits, nothing left to model is
+    bad input (:class:`~asbuilt.fit.NothingFittedError`)."""
+    from asbuilt.fit import NothingFittedError
+
+    refused = without_pipeless_insulation(report)
+    if refused is not report and not refused.fits:  # an empty scan stays an empty model
+        raise NothingFittedError(list(refused.failures))
+    return refused
 
 
 def _merged(report: FitReport, catalog, tolerances, schedule, elbow_radius) -> Model:
@@ -319,7 +340,7 @@ def relink(
     if model.fits is not None:
         report = dataclasses.replace(model.fits, scan=scan)
     else:
-        report = fit(scan, tolerances)
+        report = _modelled(fit(scan, tolerances))
     relinked = _merged(
         report, catalog, tolerances, _model_schedule(model), _model_elbow_radius(model)
     )

@@ -146,7 +146,36 @@ def object_fit_to_dict(item: ObjectFit, units: str = "m") -> dict:
     head = {"id": item.object.id, "kind": item.requested}
     if item.result.kind != item.requested:
         head["chosen"] = item.result.kind
-    return {**head, **_result_fields(item.result, units)}
+    fields = _result_fields(item.result, units)
+    note = _insulation_note(item)
+    if note is not None and note[1]:
+        # only the refusal: the cylinder is the cladding's either way, but this one is not
+        # modelled, and a program reading --json must see why
+        fields["notes"].append(note_in_units(note[0], units))
+    return {**head, **fields}
+
+
+def _insulation_note(item: ObjectFit) -> tuple[str, bool] | None:
+    """``(note, pipeless)`` for a cylinder fitted on its insulation (the scan's ``insulation``):
+    the pipe inside, or that none is left (``pipeless``: the thickness is the fitted radius or
+    more, and :func:`asbuilt.model.without_pipeless_insulation` keeps it out of the model);
+    None for a bare object."""
+    thickness = item.object.insulation
+    if not thickness or item.result.kind != "cylinder":
+        return None
+    inside = item.result.primitive.radius - thickness
+    head = f"fitted on its insulation: the cladding's radius; with {thickness * 1000:g} mm "
+    if inside > 0:
+        return (
+            head + f"of insulation the pipe inside has radius {inside * 1000:.1f} mm (OD "
+            f"{2 * inside * 1000:.1f} mm), which merging snaps",
+            False,
+        )
+    return (
+        head + "of insulation no pipe is left inside, so model, check and report leave it out "
+        "(fit-refused): check the thickness and the file's units",
+        True,
+    )
 
 
 def fit_report_to_dict(report: FitReport, units: str | None = None) -> dict:
@@ -287,17 +316,8 @@ def fit_table_notes(report: FitReport, units: str | None = None) -> list[tuple[s
     notes = []
     for item in report.fits:
         said = list(item.result.notes)
-        thickness = item.object.insulation
-        if thickness and item.result.kind == "cylinder":
-            inside = item.result.primitive.radius - thickness
-            said.append(
-                f"fitted on its insulation: the cladding's radius; with {thickness * 1000:g} mm "
-                + (
-                    f"of insulation the pipe inside has radius {inside * 1000:.1f} mm (OD "
-                    f"{2 * inside * 1000:.1f} mm), which merging snaps"
-                    if inside > 0
-                    else "of insulation no pipe is left inside: check the thickness"
-                )
-            )
+        note = _insulation_note(item)
+        if note is not None:
+            said.append(note[0])
         notes.extend((item.object.id, note_in_units(note, units)) for note in said)
     return notes

@@ -13,6 +13,7 @@ import numpy as np
 from asbuilt.catalog import parse_nominal
 from asbuilt.findings import Suggestion
 from asbuilt.model import Component, Cross, Tee
+from asbuilt.scan.insulation import MAX_INSULATION
 from asbuilt.units import UNITS
 
 from ._catalog import SizeTable, reducing_tee_made, tee_outlets
@@ -310,8 +311,44 @@ def _size_steps(table: SizeTable, od_a: float, od_b: float) -> int:
     return sum(1 for _, _, s in table.sizes if low + 5e-5 < s <= high + 5e-5)
 
 
+def _hint_units(
+    ctx: Context, component: Component, od: float, hint_od: float, slip
+) -> tuple[str, float] | None:
+    """``(unit, factor)`` when a pipe's disagreement with its hint is a unit slip rather than
+    lagging or a misread: :func:`unit_slip` found one for the whole scan (``slip``), or the
+    fitted OD is further from the hint's OD than any insulation explains (half the difference
+    over :data:`~asbuilt.scan.insulation.MAX_INSULATION`) and another unit's reading (a ratio
+    of 1000, 100, 10, 25.4, 304.8, 12, 39.37... between the units) puts it within the snapping
+    window of the hint's OD. None otherwise, and without a scan of known units."""
+    if slip is not None:
+        return slip
+    scan = ctx.model.scan
+    if scan is None or scan.units not in UNITS or abs(od - hint_od) / 2 <= MAX_INSULATION:
+        return None
+    best = None
+    for unit, metres in UNITS.items():
+        factor = metres / UNITS[scan.units]
+        scaled, window = _scaled(ctx, component, factor)
+        off = abs(scaled - hint_od) / window
+        if unit != scan.units and off <= 1 and (best is None or off < best[0]):
+            best = (off, unit, factor)
+    return None if best is None else (best[1], best[2])
+
+
+def _hint_units_text(ctx: Context, component: Component, hint_od: float, reading) -> str:
+    """What a pipe's numbers look like read in ``reading`` = (unit, factor): ``numbers look like
+    mm, not m; read so, P1's OD is 167.1 mm, the hint's size``."""
+    unit, factor = reading
+    scaled, window = _scaled(ctx, component, factor)
+    return (
+        f"numbers look like {unit}, not {ctx.model.scan.units}; read so, {component.id}'s OD "
+        f"is {mm(scaled)}" + (", the hint's size" if abs(scaled - hint_od) <= window else "")
+    )
+
+
 def check_hint(ctx: Context, table: SizeTable | None) -> None:
     slug = "hint-mismatch"
+    slip = unit_slip(ctx, table)
     for comp in ctx.pipes:
         snap = comp.snap or {}
         hint, hint_od = _hint(ctx, comp, table)
@@ -367,7 +404,22 @@ def check_hint(ctx: Context, table: SizeTable | None) -> None:
                 ),
             )
         cause = ""
-        if steps is not None and steps > _HINT_MISREAD_STEPS and od > float(hint_od):
+        reading = _hint_units(ctx, comp, od, float(hint_od), slip)
+        if reading is not None:
+            # 83 m of "lagging" is millimetre numbers in a metre file: say so, not insulation
+            text = _hint_units_text(ctx, comp, float(hint_od), reading)
+            change = {"field": "units", "value": reading[0]}
+            suggestions.insert(0, Suggestion(f'check the scan\'s "units": its {text}', change))
+            cause = (
+                f"; the fit is {od / float(hint_od):.4g} times the hint's OD, a unit slip rather "
+                f"than lagging: the scan's {text}"
+            )
+        elif abs(od - float(hint_od)) / 2 > MAX_INSULATION:
+            cause = (
+                f"; more than any lagging or insulation explains (at most "
+                f'{mm(MAX_INSULATION)} thick): check the hint, the fit and the scan\'s "units"'
+            )
+        elif steps is not None and steps > _HINT_MISREAD_STEPS and od > float(hint_od):
             more = mm((od - float(hint_od)) / 2)
             cause = (
                 f"; the fit is {steps} catalog sizes above the hint: lagging or insulation about "

@@ -252,7 +252,8 @@ def test_notes_give_lengths_in_inches_and_feet_for_imperial_output(note, units, 
         (
             0.06,
             "fitted on its insulation: the cladding's radius; with 60 mm of insulation no "
-            "pipe is left inside: check the thickness",
+            "pipe is left inside, so model, check and report leave it out (fit-refused): check "
+            "the thickness and the file's units",
         ),
     ],
 )
