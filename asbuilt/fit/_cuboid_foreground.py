@@ -20,6 +20,8 @@ point along the beam. Lengths in metres.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from asbuilt.fit._common import median_spacing
@@ -40,6 +42,7 @@ __all__ = [
     "behind",
     "contradicting",
     "fit_nearest_box",
+    "measured_part",
     "seen_planes",
 ]
 
@@ -112,6 +115,37 @@ def behind(cuboid, points: np.ndarray, view: np.ndarray, cutoff: float) -> np.nd
     directions = (points - view) / ranges[:, None]
     nearest = ((cuboid.corners - view) @ directions.T).min(axis=0)  # (n,)
     return ~through & (ranges > nearest + cutoff)
+
+
+def measured_part(found, shots: np.ndarray, view: np.ndarray, cutoff: float):
+    """The part of a fitted box its shots measured, for the test of which left-out shots lie
+    behind it: for a fit that saw one face (its depth set to the smaller visible width, not
+    measured), the rectangle its ``shots`` (m, 3) metres (its inliers) span on that face, the
+    one facing ``view`` (3,) metres, as a plate ``4 cutoff`` metres deep; the box itself
+    otherwise.
+
+    Past its shots a box's edges are padded into the gap up to the next raster line, and a
+    one-face box's back is made up: beams through those parts say only that the box ends
+    sooner. A column's 82 shots, seen on one face in a window twice its width, fitted 0.52 m
+    wide and deep, and the wall shots a raster step beside it passed through the pad and the
+    made-up depth (53 of 215), so the column's fit was thrown out and the wall's taken for the
+    column (1.3 x 1.3 x 4.9 m for 0.45 x 0.43 x 3.6 m).
+    """
+    cuboid = found.primitive
+    if found.diagnostics.get("faces") != 1:
+        # Two or three seen faces: a receding beam's near part, its edge padded into the gap
+        # up to its far part (cut off at a range jump), must not take that far part for
+        # background (its shots' beams run through the pad, so the next subset is fitted).
+        return cuboid
+    local = (shots - cuboid.center) @ cuboid.axes.T
+    low, high = local.min(axis=0), local.max(axis=0)
+    toward = (view - cuboid.center) @ cuboid.axes.T
+    k = int(np.argmax(np.abs(toward)))
+    front = 0.5 * float(cuboid.size[k]) * np.sign(toward[k])
+    low[k], high[k] = sorted((front, front - 4.0 * cutoff * np.sign(toward[k])))
+    size = np.maximum(high - low, 4.0 * cutoff)
+    middle = 0.5 * (low + high)
+    return dataclasses.replace(cuboid, center=cuboid.center + middle @ cuboid.axes, size=size)
 
 
 def seen_planes(cuboid, points: np.ndarray, cutoff: float) -> list[tuple[np.ndarray, float]]:
@@ -216,7 +250,8 @@ def fit_nearest_box(
             fit, found, points, mask, sigma, tolerances, view, _on_seen_planes(points, cutoff, view)
         )
         left_out = ~kept
-        wrong = ~behind(found.primitive, points[left_out], view, cutoff)
+        measured = measured_part(found, points[kept][found.inliers], view, cutoff)
+        wrong = ~behind(measured, points[left_out], view, cutoff)
         if np.count_nonzero(wrong) >= min(FRONT_SHOTS, contradictions):
             continue
         inliers = np.zeros(n, dtype=bool)

@@ -78,3 +78,43 @@ def test_a_window_on_the_silhouette_is_read_as_before(seed):
     result = fit_points("cuboid", _shots(seed, 0.0, 7), sigma=SIGMA, viewpoint=STATION)
     assert result.inliers.all()
     assert np.allclose(result.primitive.size, _matched_truth(result), atol=0.01)
+
+
+def _one_face_column(seed: int) -> np.ndarray:
+    """A black-box review's column (0.449 x 0.426 x 3.567 m, 10.8 m away, its side face seen
+    at 76 degrees, so one face carries its shots) before a wall 1.1 m behind it, shot by a
+    raster of 0.687 degree steps over its silhouette window widened on every side by half the
+    window's smaller extent, the wall catching the beams that pass it: (n, 3) metres."""
+    axes = np.array([[0.82903304, 0.55919963, 0.0], [-0.55919963, 0.82903304, 0.0], [0, 0, 1.0]])
+    center = np.array([10.130126, 3.793114, 1.783691])
+    box = BoxShape(center, axes, np.array([0.449118, 0.425668, 3.567382]))
+    wall = PlaneShape(np.array([11.423655, 4.277461, 1.5]), np.array([-0.981428, -0.191831, 0.0]))
+    pan, tilt = angles_from_direction(box.corners() - STATION)
+    # The window's edges on raster lines, a margin of half the silhouette's smaller angular
+    # extent on every side (the review's generator).
+    margin = 0.5 * min(np.ptp(pan), np.ptp(tilt))
+    step = np.radians(0.687)
+
+    def lines(low, high):
+        low, high = low - margin, high + margin
+        return np.linspace(low, high, int(round((high - low) / step)) + 1)
+
+    p, t = np.meshgrid(lines(pan.min(), pan.max()), lines(tilt.min(), tilt.max()))
+    directions = direction_from_angles(p.ravel(), t.ravel())
+    hits = raycast([box, wall], STATION, directions)
+    rng = np.random.default_rng(seed)
+    ranges = hits.range[hits.hit] + rng.normal(0.0, SIGMA, int(hits.hit.sum()))
+    return STATION + ranges[:, None] * directions[hits.hit]
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_one_face_column_before_the_wall_is_not_thrown_out_for_its_made_up_depth(seed):
+    # Before: the wall was fitted as the column, 1.34 x 1.34 x 4.90 m with the column's shots
+    # rejected, because the wall shots beside the column passed through the one-face fit's
+    # padded edges and made-up depth (asbuilt.fit._cuboid_foreground.measured_part).
+    points = _one_face_column(seed)
+    result = fit_points("cuboid", points, sigma=SIGMA, viewpoint=STATION)
+    size = np.sort(np.asarray(result.primitive.size))
+    assert size[2] == pytest.approx(3.567, abs=0.3)
+    assert np.all(size[:2] < 0.7)
+    assert result.n_inliers < 0.5 * len(points)
