@@ -10,7 +10,8 @@ discounted as background (a box seen on one face, 25 of 35 shots rejected and th
 or the fit is refused for its outliers, or a subset's fit keeps shots that lie on a face's
 plane but far off the box.
 
-So when the fit as seen from the viewpoint is refused, or leaves out more than
+So when the shots do not lie on a pan-tilt raster's rows and columns as seen from the viewpoint
+(shots that do were taken from there) and the fit as seen from it is refused, or leaves out more than
 ``DOUBTFUL_REJECTED`` of the shots (counted as outliers or not), the shots are fitted without
 the viewpoint too. If that fit keeps all but fewer than ``BLIND_REJECTED`` of them and more
 than ``UNSEEN_FRACTION`` of its inliers lie on faces turned away from the viewpoint (all of
@@ -31,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.errors import FitError
+from asbuilt.fit._silhouette import raster_grid
 
 #: More than this fraction of the viewpoint-free fit's inliers on faces turned away from the
 #: viewpoint contradicts it (the cylinder fit's share of shots its pipe would hide).
@@ -97,6 +99,13 @@ def checked(result, error, points: np.ndarray, view: np.ndarray, fit_alone):
     viewpoint (see the module docstring): then a FitError saying so. ``fit_alone()`` fits the
     shots without the viewpoint (called only when the fit from it is in doubt)."""
     n = points.shape[0]
+    if raster_grid(points, view) is not None:
+        # The shots lie on a pan-tilt raster's rows and columns as seen from the viewpoint:
+        # they were taken from there (from another station a raster's lattice does not line
+        # up). Background in a wide window can make the fit of the shots alone a box with the
+        # wall for its back face, turned away: a black-box review's columns and piers before
+        # walls and floors, right stations, 16 of 480 fits refused with this message.
+        return _kept(result, error)
     if result is not None:
         # With no box the viewpoint can have seen, the search keeps one it cannot have: faces
         # turned away from it, or around it.
