@@ -149,18 +149,7 @@ def _rough_rival(kind, function, result, points, sigma, tolerances, options) -> 
         return result
     if wider.kind != result.kind:
         return result
-    from asbuilt.fit._mixture import mixing_cost, mixture_score
-
-    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
-    floor = float(tolerances.sigma_floor)
-
-    def score(fit):
-        kept = int(np.count_nonzero(fit.inliers))
-        return mixture_score(
-            np.asarray(fit.residuals, dtype=np.float64), fit.inliers, extent, floor
-        ) + mixing_cost([kept, len(fit.inliers) - kept])
-
-    if not score(wider) < score(result):
+    if not _mixture_cost(wider, points, tolerances) < _mixture_cost(result, points, tolerances):
         return result
     noise = max(_residual_noise(wider, points, tolerances), level)
     return _noted_wider(wider, noise, sigma)
@@ -277,22 +266,25 @@ def _likelier_background(assumed, result, points: np.ndarray, tolerances: Tolera
     sphere and the floor row below it scatters by 226 mm, and the floor shots lie a median
     0.75 m from the 1.3 m sphere that fits the rest to 2 mm.
     """
-    from asbuilt.fit._mixture import mixing_cost, mixture_score
-
     if assumed is None or result is None:
         return False
     if not float(result.sigma) > FAR_WIDER_RATIO * float(tolerances.prior_range_sigma):
         return False
+    return _mixture_cost(assumed, points, tolerances) < _mixture_cost(result, points, tolerances)
+
+
+def _mixture_cost(fit: FitResult, points: np.ndarray, tolerances: Tolerances) -> float:
+    """Minus twice the log-likelihood of ``fit``'s residuals over ``points`` (n, 3) metres as
+    Gaussian inliers at their own noise and uniform outliers over the points' extent, with the
+    description length of which shots are outliers (:func:`asbuilt.fit._mixture.mixture_score`
+    plus :func:`~asbuilt.fit._mixture.mixing_cost`). Lower is likelier; fits of the same
+    primitive compare without a parameter count."""
+    from asbuilt.fit._mixture import mixing_cost, mixture_score
+
     extent = float(np.linalg.norm(np.ptp(points, axis=0)))
-    floor = float(tolerances.sigma_floor)
-    kept = int(np.count_nonzero(assumed.inliers))
-    narrow = mixture_score(assumed.residuals, assumed.inliers, extent, floor) + mixing_cost(
-        [kept, len(points) - kept]
-    )
-    wide = mixture_score(result.residuals, result.inliers, extent, floor) + mixing_cost(
-        [int(np.count_nonzero(result.inliers)), int(np.count_nonzero(~result.inliers))]
-    )
-    return narrow < wide
+    kept = int(np.count_nonzero(fit.inliers))
+    score = mixture_score(fit.residuals, fit.inliers, extent, float(tolerances.sigma_floor))
+    return score + mixing_cost([kept, len(fit.inliers) - kept])
 
 
 def _residual_noise(result: FitResult, points: np.ndarray, tolerances: Tolerances) -> float:
