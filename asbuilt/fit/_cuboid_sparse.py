@@ -192,9 +192,13 @@ def _two_lines(points: np.ndarray, normal: np.ndarray, width: float):
     return None
 
 
-def corner_frames(trial, x: np.ndarray, width: float, view: np.ndarray, frame_class) -> list:
+def corner_frames(
+    trial, x: np.ndarray, width: float, view: np.ndarray, frame_class, turns=(0.0,)
+) -> list:
     """Frames that split a fitted face holding two parallel lines of shots into two faces
-    meeting at a convex corner between them, each face turned 45 degrees from the viewpoint.
+    meeting at a convex corner between them, each face turned 45 degrees from the viewpoint,
+    with the corner's bisector then turned by each of ``turns`` (degrees) about the lines (two
+    faces through one line each fit every such corner).
 
     ``trial`` is :func:`asbuilt.fit._joint.fit_frame`'s tuple, ``x`` (n, 3) metres the
     centred shots, ``width`` metres the inlier cutoff, ``view`` (3,) metres the viewpoint
@@ -222,41 +226,325 @@ def corner_frames(trial, x: np.ndarray, width: float, view: np.ndarray, frame_cl
         if norm == 0.0:
             continue
         toward /= norm
-        across = np.cross(toward, direction)
-        members = np.flatnonzero(mine)
-        a, b = members[first], members[~first]
-        if (x[a] @ across).mean() > (x[b] @ across).mean():
-            a, b = b, a
-        axes = np.vstack(
-            [
-                (toward - across) / math.sqrt(2.0),
-                (toward + across) / math.sqrt(2.0),
-                direction,
-            ]
-        )
-        face_axis, face_sign, face_offset = [0, 1], [1.0, 1.0], []
+        for turn in turns:
+            t = math.radians(turn)
+            bisector = math.cos(t) * toward + math.sin(t) * np.cross(direction, toward)
+            across = np.cross(bisector, direction)
+            members = np.flatnonzero(mine)
+            a, b = members[first], members[~first]
+            if (x[a] @ across).mean() > (x[b] @ across).mean():
+                a, b = b, a
+            axes = np.vstack(
+                [
+                    (bisector - across) / math.sqrt(2.0),
+                    (bisector + across) / math.sqrt(2.0),
+                    direction,
+                ]
+            )
+            face_axis, face_sign, face_offset = [0, 1], [1.0, 1.0], []
+            labels = -np.ones(x.shape[0], dtype=np.int64)
+            labels[a], labels[b] = 0, 1
+            face_offset = [float((x[a] @ axes[0]).mean()), float((x[b] @ axes[1]).mean())]
+            for g in range(model.offset.shape[0]):
+                along = float(normals[g] @ direction)
+                if g == f or abs(along) < math.cos(math.radians(RIVAL_DEG)):
+                    continue
+                theirs = inliers & (label == g)
+                if not theirs.any():
+                    continue
+                sign = 1.0 if along > 0 else -1.0
+                labels[theirs] = len(face_axis)
+                face_axis.append(2)
+                face_sign.append(sign)
+                face_offset.append(float((x[theirs] @ (sign * direction)).mean()))
+            out.append(
+                frame_class(
+                    axes,
+                    np.array(face_axis, dtype=np.int64),
+                    np.array(face_sign),
+                    np.array(face_offset),
+                    labels,
+                )
+            )
+    return out
+
+
+#: Most parallel lines of shots across two adjacent seen faces whose other splits between the
+#: faces are fitted as rivals (:func:`line_split_frames`). Up to three lines every split fits
+#: exactly (a frame turning about the lines has one rotation and two offsets); with more, a
+#: split is exact no longer but can stay within noise where the lines are close together.
+LINE_SPLIT_LINES = 6
+
+
+def _side_faces(model) -> tuple[int, int, int] | None:
+    """(face, face, common axis) of a frame's two adjacent seen faces whose common edge is along
+    an axis no other face except one across that axis is normal to, or None."""
+    per_axis = np.bincount(model.face_axis, minlength=3)
+    for k in range(3):
+        sides = [f for f in range(model.offset.shape[0]) if model.face_axis[f] != k]
+        if len(sides) == 2 and model.face_axis[sides[0]] != model.face_axis[sides[1]]:
+            if per_axis[k] <= 1:
+                return sides[0], sides[1], k
+    return None
+
+
+def raster_line_groups(trial, x: np.ndarray, width: float):
+    """The shots of two adjacent seen faces as parallel lines along their common edge, in
+    order across the faces from the first face's far end, round the corner, to the second's.
+
+    Parameters
+    ----------
+    trial : tuple
+        :func:`asbuilt.fit._joint.fit_frame`'s tuple (model, label (n,), residual (n,) m,
+        inliers (n,) bool, ...).
+    x : ndarray, shape (n, 3)
+        The centred shots, metres.
+    width : float
+        The inlier cutoff, metres: a line's shots lie within ``2 * width`` across it, and
+        lines are more than ``4 * width`` apart.
+
+    Returns
+    -------
+    tuple or None
+        (faces (f1, f2), common axis k, list of index arrays, one per line), or None when the
+        frame has no such pair of faces, a face's shots are spread across it (not lines), or
+        there are more than ``LINE_SPLIT_LINES`` lines.
+    """
+    model, label, _, inliers = trial[:4]
+    if model.offset.shape[0] == 1:
+        return _one_face_lines(trial, x, width)
+    sides = _side_faces(model)
+    if sides is None:
+        return None
+    f1, f2, k = sides
+    i, j = int(model.face_axis[f1]), int(model.face_axis[f2])
+    normals = model.normals()
+    # The corner: where the two faces' planes meet, in the plane across the common axis.
+    corner_i = model.offset[f1] * model.face_sign[f1]
+    corner_j = model.offset[f2] * model.face_sign[f2]
+    on1, on2 = np.flatnonzero(inliers & (label == f1)), np.flatnonzero(inliers & (label == f2))
+    if on1.size == 0 or on2.size == 0 or normals.shape[0] != model.offset.shape[0]:
+        return None
+    # A walk across the faces: the first face's shots at minus their distance from the
+    # corner, the second's at plus theirs.
+    members = np.concatenate([on1, on2])
+    walk = np.concatenate(
+        [-np.abs(x[on1] @ model.axes[j] - corner_j), np.abs(x[on2] @ model.axes[i] - corner_i)]
+    )
+    return _lines(members, walk, (f1, f2), k, width)
+
+
+def _lines(members, walk, faces, k, width):
+    """:func:`raster_line_groups`' answer from the shots ``members`` (m,) at ``walk`` (m,)
+    metres across the lines, or None."""
+    order = np.argsort(walk, kind="stable")
+    cuts = np.flatnonzero(np.diff(walk[order]) > 4 * width) + 1
+    lines = [members[part] for part in np.split(order, cuts)]
+    # (Two lines, one on each face, leave the frame free to turn: the fit's covariance says
+    # so, as it cannot for a choice between splits.)
+    if len(lines) < 3 or len(lines) > LINE_SPLIT_LINES:
+        return None
+    for part in np.split(walk[order], cuts):
+        if np.ptp(part) > 2 * width:
+            return None  # shots spread across a face: not lines, and they fix its direction
+    return faces, k, lines
+
+
+def _one_face_lines(trial, x: np.ndarray, width: float):
+    """:func:`raster_line_groups` for a one-face fit: its shots as lines along the in-plane
+    axis they spread along most."""
+    model, label, _, inliers = trial[:4]
+    on = np.flatnonzero(inliers & (label == 0))
+    if on.size < 3:
+        return None
+    u = int(model.face_axis[0])
+    others = [a for a in range(3) if a != u]
+    spread = [float(np.ptp(x[on] @ model.axes[a])) for a in others]
+    k = others[int(np.argmax(spread))]
+    across = others[int(np.argmin(spread))]
+    return _lines(on, x[on] @ model.axes[across], (0,), k, width)
+
+
+def _direction_through(points: np.ndarray, across: np.ndarray) -> np.ndarray:
+    """The unit direction (3,) in the plane ``across`` (2, 3) (orthonormal rows) of the line
+    that best fits the points' (m, 3) metres projections (total least squares)."""
+    plan = points @ across.T
+    rel = plan - plan.mean(axis=0)
+    _, _, vt = np.linalg.svd(rel, full_matrices=False)
+    return vt[0] @ across
+
+
+def line_split_frames(trial, x: np.ndarray, width: float, view: np.ndarray, frame_class):
+    """Frames that split two adjacent seen faces' lines of shots between them otherwise.
+
+    A face holding one or two parallel lines of shots (raster columns on a column's sides)
+    lies in a plane through them whatever face its neighbours are on: three lines fit the
+    corner between the first and the second or between the second and the third exactly, and
+    the fit's covariance, given the split, cannot say so. Each other split of
+    :func:`raster_line_groups`' three or more lines (a corner between two consecutive lines)
+    gives a frame whose first face runs through the lines on its side (or, holding one line,
+    is square to the second face through the lines on the other). Faces across the common
+    axis (a top) are kept. The joint fit then settles each frame, and :func:`rival` compares
+    them with the chosen one.
+
+    Parameters
+    ----------
+    trial : tuple
+        The chosen fit (:func:`asbuilt.fit._joint.fit_frame`'s tuple).
+    x : ndarray, shape (n, 3)
+        The centred shots, metres.
+    width : float
+        The inlier cutoff, metres.
+    view : ndarray, shape (3,)
+        The viewpoint, metres (centred frame): orients a face whose side is not set by the
+        other face's shots.
+    frame_class : type
+        Builds a frame (:class:`asbuilt.fit._faces.Frame`).
+
+    Returns
+    -------
+    frames : list
+        The frames (empty when the faces are not a few lines of shots).
+    lined : ndarray, shape (n,), bool
+        The shots on the lines (for :func:`contained`).
+    along : ndarray, shape (3,), or None
+        The lines' unit direction (the chosen frame's axis), None without frames.
+    """
+    lined = np.zeros(x.shape[0], dtype=bool)
+    found = raster_line_groups(trial, x, width)
+    if found is None:
+        return [], lined, None
+    model, label, _, inliers = trial[:4]
+    faces, k, lines = found
+    lined[np.concatenate(lines)] = True
+    along = model.axes[k]
+    plan = np.delete(model.axes, k, axis=0)  # (2, 3): the plane across the common edge
+    splits = []
+    # (One face: every split is another frame.)
+    chosen = sum(int(label[line[0]] == faces[0]) for line in lines) if len(faces) == 2 else 0
+    for m in range(1, len(lines)):
+        if m == chosen:
+            continue  # the chosen frame's own split
+        first, second = np.concatenate(lines[:m]), np.concatenate(lines[m:])
+        if m >= 2:
+            splits.append((first, second, _direction_through(x[first], plan)))
+        else:
+            d2 = _direction_through(x[second], plan)
+            splits.append((first, second, np.cross(along, d2)))
+    out = []
+    for first, second, d1 in splits:
+        c1, c2 = x[first].mean(axis=0), x[second].mean(axis=0)
+        d1 = d1 - (d1 @ along) * along
+        d1 /= np.linalg.norm(d1)
+        n1 = np.cross(along, d1)
+        # Outward: the other face's shots lie behind each face (a convex corner); where
+        # they lie in its plane, the face faces the viewpoint.
+        s1 = float(n1 @ (c2 - c1)) or -float(n1 @ (view - c1))
+        n1 = -n1 if s1 > 0 else n1
+        s2 = float(d1 @ (c1 - c2)) or -float(d1 @ (view - c2))
+        n2 = -d1 if s2 > 0 else d1
+        face_axis, face_sign = [0, 1], [1.0, 1.0]
+        face_offset = [float((x[first] @ n1).mean()), float((x[second] @ n2).mean())]
         labels = -np.ones(x.shape[0], dtype=np.int64)
-        labels[a], labels[b] = 0, 1
-        face_offset = [float((x[a] @ axes[0]).mean()), float((x[b] @ axes[1]).mean())]
+        labels[first], labels[second] = 0, 1
         for g in range(model.offset.shape[0]):
-            along = float(normals[g] @ direction)
-            if g == f or abs(along) < math.cos(math.radians(RIVAL_DEG)):
+            if g in faces:
                 continue
+            sign = float(model.face_sign[g] * (model.axes[model.face_axis[g]] @ along))
+            sign = 1.0 if sign > 0 else -1.0
             theirs = inliers & (label == g)
-            if not theirs.any():
-                continue
-            sign = 1.0 if along > 0 else -1.0
             labels[theirs] = len(face_axis)
             face_axis.append(2)
             face_sign.append(sign)
-            face_offset.append(float((x[theirs] @ (sign * direction)).mean()))
+            face_offset.append(float(model.offset[g]))
         out.append(
             frame_class(
-                axes,
+                np.vstack([n1, n2, along]),
                 np.array(face_axis, dtype=np.int64),
                 np.array(face_sign),
                 np.array(face_offset),
                 labels,
             )
         )
-    return out
+    return out, lined, along
+
+
+def contained(trial, x: np.ndarray, width: float, lined: np.ndarray) -> bool:
+    """Whether every inlier of a frame's fit among the ``lined`` (n,) bool shots (the lines of
+    :func:`line_split_frames`) lies inside every seen face's plane (within ``width`` metres,
+    the inlier cutoff): on the surface of a convex box, not past one of its faces (a corner
+    turned the wrong way puts one face's shots outside the other). Other inliers may lie on a
+    face's plane far past the box (a floor shot on the plane of a column's side). ``trial`` is
+    :func:`asbuilt.fit._joint.fit_frame`'s tuple, ``x`` (n, 3) metres the centred shots."""
+    model, _, _, inliers = trial[:4]
+    if not (inliers & lined).any():
+        return False
+    return bool((model.all_residuals(x[inliers & lined]) <= width).all())
+
+
+#: Incidence (degrees) past which a shot's range residual is taken at this angle's cosine: a
+#: face seen edge-on would divide by nothing.
+_RANGE_INCIDENCE_DEG = 85.0
+
+
+def range_cost(trial, x: np.ndarray, view: np.ndarray, cap: float) -> float:
+    """MSAC cost (metres squared, each term capped at ``cap`` squared) of a frame's fit over
+    the shots' residuals along their beams from ``view`` (3,) metres (centred frame).
+
+    A range finder's noise lies along the beam, and a shot's distance to its face is that
+    error times the cosine of its incidence: the orthogonal cost favours a frame that turns a
+    face with many shots toward grazing incidence, though along the beams it fits them no
+    better (three raster columns on a column's two faces, split either way, 25 sigma^2 apart
+    orthogonally and equal along the beams). ``trial`` is
+    :func:`asbuilt.fit._joint.fit_frame`'s tuple, ``x`` (n, 3) metres the centred shots.
+    """
+    model, label, residual = trial[:3]
+    beams = x - view
+    beams /= np.maximum(np.linalg.norm(beams, axis=1), 1e-12)[:, None]
+    cosine = np.abs(np.einsum("ij,ij->i", beams, model.normals()[label]))
+    cosine = np.maximum(cosine, math.cos(math.radians(_RANGE_INCIDENCE_DEG)))
+    return float(np.sum(np.minimum((residual / cosine) ** 2, cap * cap)))
+
+
+def on_two_lines(trial, x: np.ndarray, width: float) -> np.ndarray | None:
+    """The lines' unit direction (3,) when a one-face fit's inliers lie on two parallel lines
+    across its face (two raster columns), each within ``2 * width`` metres across and more
+    than ``4 * width`` apart, else None: the cheap test before :func:`corner_frames` (which
+    tries pairs of shots). ``trial`` is :func:`asbuilt.fit._joint.fit_frame`'s tuple, ``x``
+    (n, 3) metres the centred shots."""
+    model, _, _, inliers = trial[:4]
+    members = x[inliers]
+    if model.offset.shape[0] != 1 or members.shape[0] < 4:
+        return None
+    rel = members - members.mean(axis=0)
+    _, _, vt = np.linalg.svd(rel, full_matrices=False)
+    # Across the lines: the in-plane direction square to the points' longest spread.
+    normal = model.normals()[0]
+    along = vt[0] - (vt[0] @ normal) * normal
+    along = along / max(float(np.linalg.norm(along)), 1e-12)
+    w = np.sort(rel @ np.cross(normal, along))
+    gaps = np.diff(w)
+    cut = int(gaps.argmax())
+    if (
+        gaps[cut] > 4 * width
+        and 1 <= cut <= w.size - 3
+        and np.ptp(w[: cut + 1]) <= 2 * width
+        and np.ptp(w[cut + 1 :]) <= 2 * width
+    ):
+        return along
+    return None
+
+
+def equal_spread(best, others, costs, counts, admissible) -> float:
+    """The largest angle (degrees) from ``best`` to a fitted frame of ``others`` that fits the
+    shots as well (cost within ``RIVAL_COST``, no more shots rejected) and is ``admissible``,
+    else 0: how far the shots leave the frame free to lie, whatever its covariance says
+    (arguments as for :func:`rival`)."""
+    cost, rejected = costs(best), counts(best)
+    spread = 0.0
+    for trial in others:
+        if trial is best or not admissible(trial):
+            continue
+        if counts(trial) <= rejected and costs(trial) <= cost + RIVAL_COST:
+            spread = max(spread, frame_angle(best[0].axes, trial[0].axes))
+    return spread

@@ -708,6 +708,10 @@ def _fit_cuboid_shots(
         longest = float(np.max(size[1:]))
         in_plane_angle = reach / max(longest, 1e-9)
         c_rot = c_rot + in_plane_angle**2 * np.outer(model.axes[0], model.axes[0])
+    if model.turn is not None:
+        # Two faces meeting between the face's two raster lines fit as well: its turn about
+        # the lines is known only to the farthest such frame (asbuilt.fit._cuboid_sparse).
+        c_rot = c_rot + math.radians(model.turn[1]) ** 2 * np.outer(model.turn[0], model.turn[0])
     # Each axis direction's variance: the rotation covariance across that axis (the rotation
     # about an axis leaves it unmoved). Per axis, because a column's tilt error (its long
     # axis) is several times smaller than its yaw error (the two across it).

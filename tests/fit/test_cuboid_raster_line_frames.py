@@ -1,0 +1,138 @@
+"""A column whose two seen faces hold only a few raster columns of shots between them.
+
+Three vertical raster columns on two faces fit the corner between the first and the second or
+between the second and the third exactly, and two on one face fit two faces meeting between
+them: at any shot count the fit must then refuse (``AmbiguousFrame``) or report an axis
+standard error that covers its error (an independent review's bare columns came out 3-43
+degrees turned at +-0.1-0.3 degree). The scans are ray cast here: a pan-tilt raster from a
+station at the origin onto a box, range noise along the beams.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from asbuilt.errors import FitError
+from asbuilt.fit._cuboid_sparse import AmbiguousFrame
+from asbuilt.fit.cuboid import fit_cuboid
+
+SIGMA = 0.002  # metres, range noise
+TILT_STEP_DEG = 0.7
+
+
+def _box_hits(beams: np.ndarray, centre, rot, half) -> np.ndarray:
+    """Range (m,) metres along each unit beam (m, 3) from the origin to a box (centre (3,),
+    axes the columns of ``rot`` (3, 3), half sizes (3,) metres); nan for a miss (slabs)."""
+    origin = -(centre @ rot)  # the station in the box's frame
+    local = beams @ rot
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = (-half - origin) / local
+        t2 = (half - origin) / local
+    near = np.nanmax(np.minimum(t1, t2), axis=1)
+    far = np.nanmin(np.maximum(t1, t2), axis=1)
+    return np.where((far >= near) & (near > 0), near, np.nan)
+
+
+def column_scan(size, distance, bearing_deg, yaw_deg, columns, seed):
+    """A bare column's shots over a raster whose pan step puts about ``columns`` raster
+    columns across its silhouette.
+
+    Returns the shots (n, 3) metres, the true axes (3, 3) (rows), the number of raster columns
+    that hit and the true size (3,) metres.
+    """
+    rng = np.random.default_rng(seed)
+    size = np.asarray(size, dtype=np.float64)
+    bearing = math.radians(bearing_deg)
+    centre = np.array([distance * math.cos(bearing), distance * math.sin(bearing), 0.5 * size[2]])
+    centre[2] -= 1.5  # the station 1.5 m above the column's foot
+    yaw = bearing + math.radians(yaw_deg)
+    rot = np.array(
+        [[math.cos(yaw), -math.sin(yaw), 0.0], [math.sin(yaw), math.cos(yaw), 0.0], [0, 0, 1]]
+    )
+    # The silhouette's angular width: the box's corners' bearings.
+    corners = np.array([[sx, sy] for sx in (-1, 1) for sy in (-1, 1)]) * size[:2] / 2
+    plan = centre[:2] + corners @ rot[:2, :2].T
+    bearings = np.arctan2(plan[:, 1], plan[:, 0])
+    width = float(bearings.max() - bearings.min())
+    step = width / columns
+    pans = bearings.min() + step * (rng.uniform(0.1, 0.9) + np.arange(-2, columns + 2))
+    top = math.atan2(size[2] - 1.5, distance)
+    bottom = math.atan2(-1.5, distance)
+    tilts = np.arange(bottom, top, math.radians(TILT_STEP_DEG)) + 0.3 * math.radians(TILT_STEP_DEG)
+    pan, tilt = (a.ravel() for a in np.meshgrid(pans, tilts))
+    beams = np.column_stack([np.cos(tilt) * np.cos(pan), np.cos(tilt) * np.sin(pan), np.sin(tilt)])
+    ranges = _box_hits(beams, centre, rot, size / 2)
+    hit = np.isfinite(ranges)
+    points = beams[hit] * (ranges[hit] + rng.normal(0.0, SIGMA, hit.sum()))[:, None]
+    return points, rot.T, np.unique(pan[hit]).size, size
+
+
+def _axis_errors(result, truth_axes) -> tuple[np.ndarray, np.ndarray]:
+    """Angle (3,) degrees from each fitted axis to its nearest true axis, and the fitted
+    axes' standard errors (3,) degrees."""
+    axes = np.asarray(result.primitive.axes)
+    cosines = np.abs(axes @ truth_axes.T).max(axis=1)
+    return np.degrees(np.arccos(np.clip(cosines, 0.0, 1.0))), np.asarray(
+        result.stderr["axes_deg"], dtype=np.float64
+    )
+
+
+# (yaw of the column's frame from the line of sight, degrees; seed): a face seen at 10-35
+# degrees, its neighbour at grazing incidence, as in the review's columns.
+THREE_COLUMN_CASES = [(yaw, seed) for yaw in (12.0, 25.0, 38.0, 55.0, 70.0) for seed in (0, 1)]
+
+
+def test_three_raster_columns_on_two_faces_are_refused_or_their_error_is_covered():
+    refused = 0
+    for yaw, seed in THREE_COLUMN_CASES:
+        points, truth, hit_columns, _ = column_scan((0.36, 0.43, 3.0), 10.0, 20.0, yaw, 3, seed)
+        assert hit_columns == 3, (yaw, seed, hit_columns)
+        assert points.shape[0] > SPARSE_LIMIT  # not the few-shot path
+        try:
+            result = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+        except AmbiguousFrame as exc:
+            assert "fit box frames" in str(exc) and "equally well" in str(exc)
+            refused += 1
+            continue
+        error, se = _axis_errors(result, truth)
+        # Every axis's error within three of its standard errors (and a noise allowance).
+        assert np.all(error <= 3.0 * se + 0.5), (yaw, seed, error, se)
+    # Three lines split either way fit exactly: most such columns cannot be told.
+    assert refused >= len(THREE_COLUMN_CASES) // 2, refused
+
+
+SPARSE_LIMIT = 16
+
+
+@pytest.mark.parametrize("yaw", [15.0, 35.0, 60.0])
+def test_two_raster_columns_report_the_turn_they_cannot_fix(yaw):
+    """Two raster columns, one on each face or both on one: fitted as one face through both,
+    its turn about them must be as uncertain as two faces meeting between them allow."""
+    for seed in (0, 1, 2):
+        points, truth, hit_columns, _ = column_scan((0.36, 0.43, 3.0), 10.0, -15.0, yaw, 2, seed)
+        if hit_columns != 2:
+            continue
+        try:
+            result = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+        except FitError:
+            continue  # refused is honest too
+        error, se = _axis_errors(result, truth)
+        assert np.all(error <= 3.0 * se + 0.5), (seed, error, se)
+        # The column's own axis is still measured.
+        vertical = int(np.argmax(np.abs(np.asarray(result.primitive.axes)[:, 2])))
+        assert error[vertical] < 0.5
+
+
+@pytest.mark.parametrize("yaw", [20.0, 45.0])
+def test_a_column_over_many_raster_columns_is_fitted_as_before(yaw):
+    """Eight raster columns across two faces fix the frame: no rival, the frame to a degree."""
+    points, truth, hit_columns, size = column_scan((0.36, 0.43, 3.0), 8.0, 10.0, yaw, 8, 3)
+    assert hit_columns >= 7
+    result = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+    error, se = _axis_errors(result, truth)
+    assert np.all(error < 1.0), error
+    assert np.all(error <= 3.0 * se + 0.1), (error, se)
+    assert abs(result.primitive.size[2] - size[2]) < 0.1
