@@ -30,13 +30,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting
-from asbuilt.fit._cylinder_background import (
-    near_random_planes,
-    rescued,
-    segment_noise,
-    subset_fits,
-)
+from asbuilt.errors import FitError
+from asbuilt.fit._cuboid_sparse import AmbiguousFrame
+from asbuilt.fit._cylinder_background import near_random_planes, rescued, segment_noise
 from asbuilt.tolerances import MIN_POINTS
 
 __all__ = [
@@ -264,31 +260,32 @@ def fit_past_planes(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances
 
     Returns
     -------
-    tuple
-        ``(fit, contradicted)``: the subset's fit as the fit of every shot (residuals over all,
-        the background's shots not inliers) with a note, or None; and whether at least
-        ``FRONT_SHOTS`` of the shots it rejected itself lie in front of its box (a fit to take
-        only when no other stands).
+    FitResult or None
+        The subset's fit as the fit of every shot (residuals over all, the background's shots
+        not inliers), with a note.
     """
     cutoff = tolerances.outlier_cutoff_sigma * segment_noise(sigma, tolerances)
     background = background_planes(points, view, cutoff, angles)
     if not background.any():
-        return None, False
+        return None
     margin = INSIDE_STEPS * _raster_step(angles)
-    for found, mask, width in subset_fits(fit, points, view, sigma, tolerances, [~background]):
-        kept = np.flatnonzero(mask)[found.inliers]
-        if np.count_nonzero(_inside(angles[kept], angles[background], margin)) >= INSIDE_SHOTS:
-            return None, False
-        # The shots the fit itself rejected should not lie in front of its box: a floor left
-        # after the wall, fitted as the box, has the brace standing on it in front of it.
-        rejected = points[np.flatnonzero(mask)[~found.inliers]]
-        front = int(np.count_nonzero(contradicting(found.primitive, rejected, view, width)))
-        inliers = np.zeros(len(points), dtype=bool)
-        inliers[kept] = True
-        note = (
-            f"{int(np.count_nonzero(background))} shot(s) lie on a floor, ceiling or wall behind "
-            "the box (a plane with the box's shots in front of it that fills more of the raster "
-            "window than they do) and were left out as background before the fit."
-        )
-        return rescued(found, points, inliers, note), front >= FRONT_SHOTS
-    return None, False
+    mask = ~background
+    try:
+        found = fit(points[mask], sigma, tolerances, view)
+    except AmbiguousFrame:
+        # The box's own shots fit frames far apart as well: that is the answer, not the
+        # background's box the first fit made of the rest.
+        raise
+    except FitError:
+        return None
+    kept = np.flatnonzero(mask)[found.inliers]
+    if np.count_nonzero(_inside(angles[kept], angles[background], margin)) >= INSIDE_SHOTS:
+        return None
+    inliers = np.zeros(len(points), dtype=bool)
+    inliers[kept] = True
+    note = (
+        f"{int(np.count_nonzero(background))} shot(s) lie on a floor, ceiling or wall behind "
+        "the box (a plane with the box's shots in front of it that fills more of the raster "
+        "window than they do) and were left out as background before the fit."
+    )
+    return rescued(found, points, inliers, note)

@@ -404,14 +404,23 @@ def _fit_seen_from(points, sigma, tolerances, view, options):
 
         return fit_subset
 
-    planes, contradicted = None, False
+    def against(found) -> int:
+        # The shots no beam can have measured with the box there (in front of it along the
+        # beam, or inside it).
+        width = tolerances.outlier_cutoff_sigma * max(found.sigma, tolerances.sigma_floor)
+        return int(np.count_nonzero(contradicting(found.primitive, pts, view, width)))
+
+    planes = None
     seen = _silhouette.shot_angles(pts, view)
     if seen is not None:
-        planes, contradicted = fit_past_planes(fitter(False), pts, view, sigma, tolerances, seen[1])
-        if planes is not None and not _on_its_box(planes, sigma, tolerances):
+        planes = fit_past_planes(fitter(False), pts, view, sigma, tolerances, seen[1])
+        if planes is not None and _on_its_box(planes, sigma, tolerances):
+            if against(planes) < min(FRONT_SHOTS, contradictions):
+                return planes, None
+            if against(planes) >= contradictions:
+                planes = None  # no fewer shots in front of it than of the first fit's box
+        else:
             planes = None
-        if planes is not None and not contradicted:
-            return planes, None
     rescued = fit_nearest_box(fitter(False), pts, view, sigma, tolerances, contradictions)
     if rescued is not None and not _on_its_box(rescued, sigma, tolerances):
         rescued = None
@@ -419,10 +428,6 @@ def _fit_seen_from(points, sigma, tolerances, view, options):
         # Both stand: the one fewer shots contradict (a floor left after the wall and fitted
         # as the box has the brace on it in front of it; a nearest surface's box metres wide
         # has the beam's other shots inside it).
-        def against(found):
-            width = tolerances.outlier_cutoff_sigma * max(found.sigma, tolerances.sigma_floor)
-            return np.count_nonzero(contradicting(found.primitive, pts, view, width))
-
         return (planes if against(planes) < against(rescued) else rescued), None
     if rescued is not None or planes is not None:
         return (rescued if rescued is not None else planes), None
