@@ -109,12 +109,19 @@ def behind(cuboid, points: np.ndarray, view: np.ndarray, cutoff: float) -> np.nd
     """Which shots can be background seen past the box, shape (n,) bool: more than ``cutoff``
     metres beyond the box's nearest point along their beams, and their beams clear of the box
     taken ``cutoff`` smaller on every side (a beam cannot reach a wall through the box; one
-    that grazed its edge and came back from the wall, or a mixed return, passes outside)."""
+    that grazed its edge and came back from the wall, or a mixed return, passes outside).
+
+    A shot whose beam would meet the box farther on than it was measured lies in front of the
+    box, not behind it: something nearer stopped the beam, so it is no background of this box
+    (a pier's shots, in front of the floor its fit took for a face).
+    """
     ranges, entry, leave = beam_box(cuboid, points, view, cutoff)
-    through = (entry < leave) & (leave > 0.0) & (ranges > entry)
+    crossing = (entry < leave) & (leave > 0.0)
+    through = crossing & (ranges > entry)
+    in_front = crossing & (ranges < entry - cutoff)
     directions = (points - view) / ranges[:, None]
     nearest = ((cuboid.corners - view) @ directions.T).min(axis=0)  # (n,)
-    return ~through & (ranges > nearest + cutoff)
+    return ~through & ~in_front & (ranges > nearest + cutoff)
 
 
 def measured_part(found, shots: np.ndarray, view: np.ndarray, cutoff: float):

@@ -99,6 +99,7 @@ from asbuilt.fit._cuboid_edges import raster_corners
 from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
 from asbuilt.fit._cuboid_noise import _likeliest_noise
 from asbuilt.fit._cuboid_open import open_past_faces
+from asbuilt.fit._cuboid_planes import fit_past_planes
 from asbuilt.fit._cuboid_reach import lower_bounds, unreached
 from asbuilt.fit._cuboid_sizes import (
     SUBSET_GRAZING_DEG,
@@ -390,19 +391,46 @@ def _fit_seen_from(points, sigma, tolerances, view, options):
         if contradictions < FRONT_SHOTS:
             return result, None
 
-    def fit_subset(subset, sigma, tolerances, viewpoint):
-        return _fit_cuboid_shots(
-            subset,
-            sigma=sigma,
-            tolerances=tolerances,
-            viewpoint=viewpoint,
-            edge_pad=edge_pad,
-            silhouette=False,
-        )
+    def fitter(silhouette: bool):
+        def fit_subset(subset, sigma, tolerances, viewpoint):
+            return _fit_cuboid_shots(
+                subset,
+                sigma=sigma,
+                tolerances=tolerances,
+                viewpoint=viewpoint,
+                edge_pad=edge_pad,
+                silhouette=silhouette,
+            )
 
-    rescued = fit_nearest_box(fit_subset, pts, view, sigma, tolerances, contradictions)
-    if rescued is not None and _on_its_box(rescued, sigma, tolerances):
-        return rescued, None
+        return fit_subset
+
+    def against(found) -> int:
+        # The shots no beam can have measured with the box there (in front of it along the
+        # beam, or inside it).
+        width = tolerances.outlier_cutoff_sigma * max(found.sigma, tolerances.sigma_floor)
+        return int(np.count_nonzero(contradicting(found.primitive, pts, view, width)))
+
+    planes = None
+    seen = _silhouette.shot_angles(pts, view)
+    if seen is not None:
+        planes = fit_past_planes(fitter(False), pts, view, sigma, tolerances, seen[1])
+        if planes is not None and _on_its_box(planes, sigma, tolerances):
+            if against(planes) < min(FRONT_SHOTS, contradictions):
+                return planes, None
+            if against(planes) >= contradictions:
+                planes = None  # no fewer shots in front of it than of the first fit's box
+        else:
+            planes = None
+    rescued = fit_nearest_box(fitter(False), pts, view, sigma, tolerances, contradictions)
+    if rescued is not None and not _on_its_box(rescued, sigma, tolerances):
+        rescued = None
+    if planes is not None and rescued is not None:
+        # Both stand: the one fewer shots contradict (a floor left after the wall and fitted
+        # as the box has the brace on it in front of it; a nearest surface's box metres wide
+        # has the beam's other shots inside it).
+        return (planes if against(planes) < against(rescued) else rescued), None
+    if rescued is not None or planes is not None:
+        return (rescued if rescued is not None else planes), None
     return result, error
 
 
