@@ -31,6 +31,7 @@ __all__ = [
     "one_face_depth",
     "propagate",
     "raster_gaps",
+    "rival_size_spread",
     "silhouette_bounds",
     "single_lines",
 ]
@@ -610,3 +611,32 @@ def propagate(model, x, cov, bounds_info, sigma, one_face, spans=None):
     size_var = np.diag(out)[:3] + extent_var
     centre_cov = out[3:, 3:] + model.axes.T @ np.diag(extent_var / 4.0) @ model.axes
     return np.sqrt(size_var), float(np.sqrt(np.trace(centre_cov)))
+
+
+def rival_size_spread(model, x, label, inliers, width, edge_pad, edges=None) -> np.ndarray:
+    """How far (metres, (3,) per axis of ``model``) the sizes of the frames that split the
+    fit's raster lines otherwise (``model.split_rivals``, :func:`asbuilt.fit._cuboid_sparse.
+    line_split_spread`) lie from its own, along their nearest axis: a frame turned about the
+    lines puts other shots on each face and bounds the box elsewhere.
+
+    Both frames' sizes are taken the same way, as :func:`bounds` of each fit's own inliers
+    among the shots ``x`` (n, 3) metres (centred; ``label`` (n,), ``inliers`` (n,) bool are
+    ``model``'s, ``width`` metres the inlier cutoff, ``edge_pad`` and ``edges`` as for
+    :func:`bounds`): the raster window, which may move an unseen edge of either, is not read
+    again for the rival, so only the part of the difference the frame makes is counted.
+    """
+
+    def extent(frame, frame_label, frame_inliers) -> np.ndarray:
+        single = single_lines(x, frame_label, frame_inliers, frame, width)
+        lo, hi = bounds(x, frame_label, frame_inliers, frame, width, edge_pad, edges, single)[:2]
+        return hi - lo
+
+    spread = np.zeros(3)
+    if not model.split_rivals:
+        return spread
+    own = extent(model, label, inliers)
+    for trial in model.split_rivals:
+        other = extent(trial[0], trial[1], trial[3])
+        nearest = np.abs(model.axes @ trial[0].axes.T).argmax(axis=1)
+        spread = np.maximum(spread, np.abs(other[nearest] - own))
+    return spread

@@ -31,7 +31,9 @@ __all__ = [
     "SPARSE_SHOTS",
     "corner_frames",
     "describe",
+    "equal_fits",
     "frame_angle",
+    "line_split_spread",
     "lone_face_shots",
     "rival",
 ]
@@ -535,16 +537,98 @@ def on_two_lines(trial, x: np.ndarray, width: float) -> np.ndarray | None:
     return None
 
 
-def equal_spread(best, others, costs, counts, admissible) -> float:
-    """The largest angle (degrees) from ``best`` to a fitted frame of ``others`` that fits the
-    shots as well (cost within ``RIVAL_COST``, no more shots rejected) and is ``admissible``,
-    else 0: how far the shots leave the frame free to lie, whatever its covariance says
-    (arguments as for :func:`rival`)."""
+#: Turns (degrees) of the corner between a face's two raster lines (from the bisector facing
+#: the viewpoint) at which two faces meeting there are fitted as rivals of the one face: two
+#: perpendicular planes, each through one of two parallel lines, meet anywhere on a circle,
+#: and only facing the viewpoint with the shots on a convex box bounds the turn.
+CORNER_TURNS_DEG = (-30.0, -15.0, 0.0, 15.0, 30.0)
+#: The standard error (degrees) of a one-face fit's turn about its two raster lines when two
+#: faces meeting between them fit as well: the corner may lie anywhere the faces still face
+#: the station, a turn of up to +-90 degrees, uniform: 90 / sqrt(3).
+CORNER_TURN_SE_DEG = 52.0
+
+
+def equal_fits(best, others, costs, counts, admissible) -> list:
+    """The fitted frames of ``others`` that fit the shots as well as ``best`` or better (cost
+    within ``RIVAL_COST``, no more shots rejected) and are ``admissible``, as (fit, angle
+    degrees from ``best``) pairs: where the shots leave the frame free to lie, whatever its
+    covariance says (arguments as for :func:`rival`)."""
     cost, rejected = costs(best), counts(best)
-    spread = 0.0
+    out = []
     for trial in others:
         if trial is best or not admissible(trial):
             continue
         if counts(trial) <= rejected and costs(trial) <= cost + RIVAL_COST:
-            spread = max(spread, frame_angle(best[0].axes, trial[0].axes))
-    return spread
+            out.append((trial, frame_angle(best[0].axes, trial[0].axes)))
+    return out
+
+
+def line_split_spread(
+    best, split, lined, along, x, view, cap, costs, counts, plausible, fitted, frame_class
+):
+    """How far the frames that split a fit's raster lines otherwise lie, when they fit as well.
+
+    Three or more raster lines on two faces (:func:`line_split_frames`, ``split`` their fits)
+    split otherwise as exactly, and a face of two lines may as well be two faces meeting
+    between them, free to turn (:func:`corner_frames`). Either is an answer the shots cannot
+    rule out: rather than refuse the fit (on the cuboid benchmark such rivals stood beside
+    fits whose frame was within 2 degrees of the truth twice as often as not), the fit keeps
+    its frame and reports their spread as its uncertainty.
+
+    Parameters
+    ----------
+    best : tuple
+        The chosen fit (:func:`asbuilt.fit._joint.fit_frame`'s tuple; its 7th item is whether
+        it has one face).
+    split : list of tuple
+        The fits of :func:`line_split_frames`' frames.
+    lined : ndarray, shape (n,), bool
+        The shots on the lines (:func:`line_split_frames`).
+    along : ndarray, shape (3,), or None
+        The lines' unit direction.
+    x : ndarray, shape (n, 3)
+        The centred shots, metres.
+    view : ndarray, shape (3,)
+        The viewpoint, metres (centred frame).
+    cap : float
+        The inlier cutoff, metres.
+    costs, counts : callable
+        Fit -> cost (units of sigma squared, along the beams with a trusted viewpoint) and
+        fit -> shots it rejects that count against it (as for :func:`rival`).
+    plausible : callable
+        Fit -> whether a station can have seen its box.
+    fitted : callable
+        Frame -> its fit (the joint fit, remembered with the others).
+    frame_class : type
+        Builds a frame (:class:`asbuilt.fit._faces.Frame`).
+
+    Returns
+    -------
+    turn : tuple or None
+        (the lines' unit direction (3,), degrees): the turn about the lines to the farthest
+        frame that fits as well (``CORNER_TURN_SE_DEG`` for a face of two lines that two faces
+        fit as well), else None.
+    rivals : list of tuple
+        The fits of the other splits that fit as well (their sizes differ from the fit's).
+    """
+
+    def admissible(trial, shots) -> bool:
+        return plausible(trial) and contained(trial, x, cap, shots)
+
+    found = equal_fits(best, split, costs, counts, lambda trial: admissible(trial, lined))
+    turn = max((angle for _, angle in found), default=0.0)
+    lines_along = on_two_lines(best, x, cap) if best[6] else None
+    if lines_along is not None:
+        # One face through two raster lines may as well be two faces meeting between them,
+        # each through one line and free to turn about it (that fit's covariance says so).
+        frames = corner_frames(best, x, cap, view, frame_class, CORNER_TURNS_DEG)
+        corners = [fitted(frame) for frame in frames]
+        spread = equal_fits(best, corners, costs, counts, lambda t: admissible(t, best[3]))
+        if spread:
+            # Any such corner fits (it meets the lines anywhere on a circle): the turn is
+            # unknown, not just as far as the corners tried (the review's columns, 8-43
+            # degrees off).
+            turn = max(turn, max(angle for _, angle in spread), CORNER_TURN_SE_DEG)
+            along = lines_along
+    rivals = [trial for trial, _ in found]
+    return ((along, turn) if turn > 0.0 else None), rivals

@@ -21,27 +21,16 @@ from asbuilt.fit._cuboid_background import only_background, seen_past
 from asbuilt.fit._cuboid_grazing import _grazing_faces, _without_unseen_faces
 from asbuilt.fit._cuboid_sparse import (
     SPARSE_SHOTS,
-    contained,
     corner_frames,
-    equal_spread,
     line_split_frames,
+    line_split_spread,
     lone_face_shots,
-    on_two_lines,
     range_cost,
     rival,
 )
 from asbuilt.fit._mixture import mixing_cost
 from asbuilt.fit._rectangle import min_area_rectangle
 
-#: Turns (degrees) of the corner between a face's two raster lines (from the bisector facing
-#: the viewpoint) at which two faces meeting there are fitted as rivals of the one face: two
-#: perpendicular planes, each through one of two parallel lines, meet anywhere on a circle,
-#: and only facing the viewpoint with the shots on a convex box bounds the turn.
-CORNER_TURNS_DEG = (-30.0, -15.0, 0.0, 15.0, 30.0)
-#: The standard error (degrees) of a one-face fit's turn about its two raster lines when two
-#: faces meeting between them fit as well: the corner may lie anywhere the faces still face
-#: the station, a turn of up to +-90 degrees, uniform: 90 / sqrt(3).
-CORNER_TURN_SE_DEG = 52.0
 #: Tukey biweight tuning constant (95% efficiency at the normal; Beaton and Tukey 1974).
 _TUKEY_C = 4.685
 #: Median absolute deviation to sigma for normal residuals.
@@ -77,10 +66,13 @@ class FaceModel:
         # From few shots: how far (degrees) a frame that fits them as well lies, else None
         # (set by :func:`best_fit`; the fit is then refused).
         self.rival = None
-        # One face through two raster lines that two faces meeting between them fit as well:
-        # (the lines' unit direction (3,), degrees to the farthest such frame), else None (set
-        # by :func:`best_fit`; the fit's turn about the lines is then that uncertain).
+        # Raster lines that other frames split otherwise, or a face of two lines that two faces
+        # meeting between them fit as well: (the lines' unit direction (3,), degrees to the
+        # farthest such frame), else None (set by :func:`best_fit`; the fit's turn about the
+        # lines is then that uncertain).
         self.turn = None
+        # The fits of those other splits (their sizes differ from this frame's).
+        self.split_rivals: list = []
 
     @property
     def grazing(self) -> bool:
@@ -711,11 +703,6 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
     ):
         trials = [trial for _, trial in done]
         best = _edge_on_side_face(best, trials, x, view, noise, cutoff, cap, lines)
-    # Two faces holding a few parallel lines of shots between them may split the lines
-    # otherwise, as exactly, and one face's lines may be two faces': those frames are fitted
-    # as rivals, at any shot count (from few shots the comparison below takes them in).
-    frames_split, lined, along = line_split_frames(best, x, cap, view, _faces.Frame)
-    split = [fitted(frame) for frame in frames_split]
     if sparse:
         sigma = cap / cutoff
         # A face of two raster lines may be two faces meeting between them: fitted as a rival.
@@ -758,14 +745,17 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
             counted,
             # A rival with a face seen edge-on counts: that face is free to turn, the
             # very freedom that makes the frame uncertain.
-            lambda trial: (
-                plausible(trial[0], view, trusted)
-                and (all(trial is not other for other in split) or contained(trial, x, cap, lined))
-            ),
+            lambda trial: plausible(trial[0], view, trusted),
         )
         if found is not None:
             best[0].rival = found[1]
-    if best[0].rival is None and (split or best[6]):
+    if best[0].rival is not None:
+        return best
+    # Two faces holding a few parallel lines of shots between them may split the lines
+    # otherwise, as exactly, and one face's lines may be two faces', at any shot count.
+    frames_split, lined, along = line_split_frames(best, x, cap, view, _faces.Frame)
+    split = [fitted(frame) for frame in frames_split]
+    if split or best[6]:
         sigma = cap / cutoff
 
         def cost(trial) -> float:
@@ -774,42 +764,20 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
             msac = range_cost(trial, x, view, cap) if trusted else _msac(trial[2], cap)
             return msac / sigma**2
 
-        def count(trial) -> int:
-            return counted_outliers(trial, x, view, trusted, cap)
-
-        def admissible(trial, shots) -> bool:
-            return plausible(trial[0], view, trusted) and contained(trial, x, cap, shots)
-
-        turn = 0.0
-        if split:
-            args = (cost, count, lambda trial: admissible(trial, lined))
-            found = None if best[6] else rival(best, split, *args)
-            if found is not None:
-                # Two faces' lines split otherwise as well, far off: refused (the sizes
-                # differ too).
-                best[0].rival = found[1]
-            else:
-                turn = equal_spread(best, split, *args)
-        lines_along = on_two_lines(best, x, cap) if best[6] and best[0].rival is None else None
-        if lines_along is not None:
-            # One face through two raster lines may as well be two faces meeting between
-            # them, each through one line and free to turn about it (that fit's covariance
-            # says so).
-            corners = [
-                fitted(frame)
-                for frame in corner_frames(best, x, cap, view, _faces.Frame, CORNER_TURNS_DEG)
-            ]
-            spread = equal_spread(
-                best, corners, cost, count, lambda trial: admissible(trial, best[3])
-            )
-            if spread > 0.0:
-                # Any such corner fits (it meets the lines anywhere on a circle): the turn is
-                # unknown, not just as far as the corners tried (the review's columns, 8-43
-                # degrees off).
-                turn, along = max(turn, spread, CORNER_TURN_SE_DEG), lines_along
-        if turn > 0.0 and best[0].rival is None:
-            # Frames that fit as well this far off: the turn about the lines is that
-            # uncertain, though the covariance, given the fit's split of the lines, holds it
-            # to a fraction of a degree.
-            best[0].turn = (along, turn)
+        # Other splits of the lines that fit as well are not refused: the fit keeps its frame
+        # and reports their spread (the turn about the lines, and their sizes) as uncertainty.
+        best[0].turn, best[0].split_rivals = line_split_spread(
+            best,
+            split,
+            lined,
+            along,
+            x,
+            view,
+            cap,
+            cost,
+            lambda trial: counted_outliers(trial, x, view, trusted, cap),
+            lambda trial: plausible(trial[0], view, trusted),
+            fitted,
+            _faces.Frame,
+        )
     return best

@@ -109,6 +109,7 @@ from asbuilt.fit._cuboid_sizes import (
     one_face_depth,
     propagate,
     raster_gaps,
+    rival_size_spread,
     silhouette_bounds,
     single_lines,
 )
@@ -730,6 +731,12 @@ def _fit_cuboid_shots(
     size_se, centre_se = propagate(
         model, xb, cov, (lo_pt, hi_pt, lo_face, hi_face, pad), sig, one_face, spans
     )
+    if model.split_rivals:
+        # Other splits of the raster lines between the faces fit as well (kept, not refused:
+        # asbuilt.fit._cuboid_sparse.line_split_spread): each size is known only to within
+        # their sizes, in quadrature with the fit's own error.
+        spread = rival_size_spread(model, x, label, inliers, cutoff * scale, edge_pad, edges)
+        size_se = np.hypot(np.asarray(size_se, dtype=np.float64), spread)
     c_rot = model.rot_basis @ cov[: model.rot_basis.shape[1], : model.rot_basis.shape[1]]
     c_rot = c_rot @ model.rot_basis.T
     if one_face:
