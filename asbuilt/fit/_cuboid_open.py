@@ -74,6 +74,13 @@ def open_ends(result: FitResult, points: np.ndarray, cutoff: float):
         return []
     faces = _seen_faces(local, half, kept, cutoff)
     tilt = np.radians(np.asarray(result.stderr.get("axes_deg", (0.0,) * 3), dtype=np.float64))
+    if "turn_deg" in result.diagnostics:
+        # A frame splitting the raster lines otherwise is another answer, not a tilt: its
+        # faces lie elsewhere, and a wedge that wide around this frame's faces would take in
+        # any shot past the box (asbuilt.fit._cuboid_sparse.line_split_spread).
+        other = np.arange(3) != int(result.diagnostics["turn_axis"])
+        spread = math.radians(result.diagnostics["turn_deg"])
+        tilt[other] = np.sqrt(np.maximum(tilt[other] ** 2 - spread**2, 0.0))
     tilt = np.where(np.isfinite(tilt), tilt, math.pi / 2)
     found = []
     for k in range(3):

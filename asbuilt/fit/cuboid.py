@@ -781,6 +781,11 @@ def _fit_cuboid_shots(
         "silhouette": float(used_window),
         "mended": float(mended),
     }
+    if model.turn is not None:
+        # The turn about the raster lines to the farthest frame splitting them otherwise, and
+        # the output axis it is about (asbuilt.fit._cuboid_open leaves it out of a face's tilt).
+        diagnostics["turn_deg"] = float(model.turn[1])
+        diagnostics["turn_axis"] = float(np.argmax(np.abs(axes @ model.turn[0])))
     if one_face:
         diagnostics["assumed_size"] = float(
             np.flatnonzero(np.asarray(order) == model.face_axis[0])[0]
