@@ -19,16 +19,18 @@ Two things tell such a plane from a face of the box, as seen from the station:
   background.
 
 Such planes are left out, the largest first, each judged among the shots still left, and the
-box fitted to the rest. The fit stands when no left-out shot was measured through it: none's
-direction lies inside the silhouette its own shots span as seen from the station (a box is
-opaque; the floor beside a pier and in front of it, and the wall's next raster line past a
-column's edge, lie outside it). Lengths in metres, angles in radians.
+box fitted to the rest. The fit stands when no left-out shots (fewer than ``INSIDE_SHOTS``)
+were measured through it: their directions lie outside the silhouette its own shots span as
+seen from the station (a box is opaque; the floor beside a pier and in front of it, and the
+wall's next raster line past a column's edge, lie outside it). The caller keeps it only when
+fewer shots lie in front of its box than of the first fit's. Lengths in metres, angles in
+radians.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
+from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from asbuilt.errors import FitError
 from asbuilt.fit._cuboid_sparse import AmbiguousFrame
@@ -74,16 +76,14 @@ LINE_STEPS = 0.5
 #: shots' silhouette by more than this many raster steps (one on its edge is a raster
 #: neighbour, its beam past the box).
 INSIDE_STEPS = 0.25
-#: At most this many left-out shots may lie inside the box's silhouette (one or two can be a
-#: stray return, a mixed one at a corner; as :data:`asbuilt.fit._cuboid_foreground.FRONT_SHOTS`).
+#: Fewer than this many left-out shots may lie inside the box's silhouette (one or two can be
+#: a stray return, a mixed one at a corner; as :data:`asbuilt.fit._cuboid_foreground.FRONT_SHOTS`).
 INSIDE_SHOTS = 3
 
 
 def _raster_step(ang: np.ndarray) -> float:
     """The median angular distance (radians) from each shot's direction ``ang`` (n, 2) to its
     nearest neighbour's: the raster's finer step."""
-    from scipy.spatial import cKDTree
-
     distance, _ = cKDTree(ang).query(ang, k=2)
     return float(np.median(distance[:, 1]))
 
@@ -242,8 +242,9 @@ def _inside(kept: np.ndarray, others: np.ndarray, margin: float) -> np.ndarray:
 
 def fit_past_planes(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances, angles):
     """The cuboid fit of the shots off the floor, ceiling or wall a raster window reached
-    around the box (:func:`background_planes`), when no left-out shot lies inside its shots'
-    silhouette; else None.
+    around the box (:func:`background_planes`), when fewer than ``INSIDE_SHOTS`` left-out shots
+    lie inside its shots' silhouette; else None. A box whose own shots fit frames far apart
+    equally well raises :class:`~asbuilt.fit._cuboid_sparse.AmbiguousFrame`.
 
     Parameters
     ----------
