@@ -140,3 +140,81 @@ def test_a_column_over_many_raster_columns_is_fitted_as_before(yaw):
     assert np.all(error < 1.0), error
     assert np.all(error <= 3.0 * se + 0.1), (error, se)
     assert abs(result.primitive.size[2] - size[2]) < 0.1
+
+
+# ----------------------------------------------------------------- which splits are fitted
+
+
+def _corner_by_search(first, second, steps=20000):
+    """The least RMS of two perpendicular lines through two 2-D point sets, by a search over
+    the first line's direction (each line through its set's centroid at a given direction)."""
+    best = math.inf
+    for angle in np.linspace(0.0, math.pi, steps, endpoint=False):
+        t = np.array([math.cos(angle), math.sin(angle)])
+        n = np.array([-t[1], t[0]])
+        sse = np.sum(((first - first.mean(axis=0)) @ n) ** 2)
+        sse += np.sum(((second - second.mean(axis=0)) @ t) ** 2)
+        best = min(best, sse)
+    return math.sqrt(best / (first.shape[0] + second.shape[0]))
+
+
+@pytest.mark.parametrize(
+    ("turn_deg", "noise", "bend_deg", "seed"),
+    [(0.0, 0.0, 0.0, 0), (33.0, 0.002, 0.0, 1), (-71.0, 0.005, 0.0, 2), (12.0, 0.001, 8.0, 3)],
+)
+def test_corner_fit_is_the_least_squares_corner(turn_deg, noise, bend_deg, seed):
+    """corner_fit's RMS agrees with a brute-force search over directions, and its lines are
+    perpendicular and through each set (``bend_deg`` turns the second set off square)."""
+    from asbuilt.fit._cuboid_sparse import corner_fit
+
+    rng = np.random.default_rng(seed)
+    turn, bend = math.radians(turn_deg), math.radians(90.0 + bend_deg)
+    u = np.array([math.cos(turn), math.sin(turn)])
+    v = np.array([math.cos(turn + bend), math.sin(turn + bend)])
+    first = rng.uniform(0.05, 0.4, (9, 1)) * u + rng.normal(0.0, noise, (9, 2))
+    second = rng.uniform(0.05, 0.3, (7, 1)) * v + rng.normal(0.0, noise, (7, 2))
+    rms, normals, offsets = corner_fit(first, second)
+    assert rms == pytest.approx(_corner_by_search(first, second), rel=1e-3, abs=1e-9)
+    assert abs(normals[0] @ normals[1]) < 1e-12
+    assert np.allclose(np.linalg.norm(normals, axis=1), 1.0)
+    # Each line passes through its set's centroid.
+    assert normals[0] @ first.mean(axis=0) == pytest.approx(offsets[0])
+    assert normals[1] @ second.mean(axis=0) == pytest.approx(offsets[1])
+    if noise == 0.0 and bend_deg == 0.0:
+        assert rms < 1e-12
+
+
+def test_splits_no_corner_fits_are_left_out_without_changing_the_fit(monkeypatch):
+    """Columns over five raster columns: the splits whose lines no corner fits within the
+    cutoff (or whose corner returns to the chosen split) are not fitted, and the fit, its
+    standard errors included, is what fitting every split gives."""
+    import asbuilt.fit._cuboid_sparse as sparse
+    import asbuilt.fit._joint as joint
+
+    counted = []
+    split_frames = joint.line_split_frames
+
+    def counting(*args):
+        frames, lined, along = split_frames(*args)
+        counted.append(len(frames))
+        return frames, lined, along
+
+    monkeypatch.setattr(joint, "line_split_frames", counting)
+    fitted = {True: 0, False: 0}
+    for yaw, seed in [(20.0, 0), (35.0, 1), (50.0, 2), (65.0, 3)]:
+        points, _, hit_columns, _ = column_scan((0.36, 0.43, 3.0), 9.0, 5.0, yaw, 5, seed)
+        assert 4 <= hit_columns <= 6, hit_columns
+        results = {}
+        for gated in (True, False):
+            monkeypatch.setattr(sparse, "LINE_SPLIT_RMS", 1.0 if gated else math.inf)
+            counted.clear()
+            results[gated] = fit_cuboid(points, sigma=SIGMA, viewpoint=np.zeros(3))
+            fitted[gated] += sum(counted)
+        for gated_value, every_value in [
+            (results[True].primitive.center, results[False].primitive.center),
+            (results[True].primitive.size, results[False].primitive.size),
+            (results[True].stderr["axes_deg"], results[False].stderr["axes_deg"]),
+            (results[True].stderr["size"], results[False].stderr["size"]),
+        ]:
+            assert np.allclose(gated_value, every_value, rtol=1e-9, atol=1e-12)
+    assert fitted[True] < fitted[False], fitted
