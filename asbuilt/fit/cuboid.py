@@ -95,6 +95,7 @@ from asbuilt.errors import FitError
 from asbuilt.fit import _faces, _silhouette, _vectors
 from asbuilt.fit._beam_fans import raster_lines
 from asbuilt.fit._common import noise_level, random_subset
+from asbuilt.fit._cuboid_bisection import mixed_returns, spread_subset
 from asbuilt.fit._cuboid_edges import raster_corners
 from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
 from asbuilt.fit._cuboid_noise import _likeliest_noise
@@ -142,95 +143,6 @@ METHOD = (
 #: Most points the face segmentation looks at (a dense cloud is subsampled for it: its plane
 #: hypotheses are scored against every segmented point).
 _SEGMENTED_POINTS = 2000
-
-
-def _spread_subset(x: np.ndarray, base: np.ndarray) -> np.ndarray:
-    """Indices of the ``base`` points (n,) bool plus the others that stand apart from them.
-
-    Another point joins when it is at least half the base points' median nearest-neighbour
-    distance from every point already taken (in the order given). Returns sorted indices.
-    """
-    taken = list(np.flatnonzero(base))
-    if len(taken) < 2 or len(taken) == x.shape[0]:
-        return np.flatnonzero(base) if len(taken) >= 2 else np.arange(x.shape[0])
-    pts = x[taken]
-    others = np.flatnonzero(~base)
-    # Dense (``_faces._DENSE_LIMIT``): a k-d tree instead of a distance matrix, same result (a
-    # matrix of 10,000 points is 2.4 GB).
-    if max(len(taken), others.size) > _faces._DENSE_LIMIT:
-        from scipy.spatial import cKDTree
-
-        tree = cKDTree(pts)
-        least = 0.5 * median(tree.query(pts, k=2)[0][:, 1])
-        # Only a point far enough from every base point can join; those are few (bisection
-        # shots), so the greedy pass over them is cheap.
-        apart = others[tree.query(x[others], k=1)[0] >= least]
-        joined: list[int] = []
-        for i in apart:
-            if not joined or np.linalg.norm(x[joined] - x[i], axis=1).min() >= least:
-                joined.append(int(i))
-        return np.sort(np.array(taken + joined, dtype=np.int64))
-    d = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=2)
-    np.fill_diagonal(d, np.inf)
-    least = 0.5 * median(d.min(axis=1))
-    for i in others:
-        if np.linalg.norm(x[taken] - x[i], axis=1).min() >= least:
-            taken.append(i)
-    return np.sort(np.array(taken, dtype=np.int64))
-
-
-def _mixed_returns(x, label, inliers, model, edges, view, tol):
-    """Bisection shots rejected as outliers, put back on the box along their beam.
-
-    A shot pressed against a silhouette edge often straddles it and returns a mixed range (the
-    background's, or one in between), so the fit rejects it; its direction is still the
-    shot's, just inside the silhouette. Where the beam from ``view`` (3,) (centred frame)
-    through such a shot enters the box is where a clean return would have been: the last of
-    its entries into the seen faces' half-spaces (the slab method: every seen face faces the
-    viewpoint). Kept only if that is not farther than the measured point by more than ``tol``
-    metres (a mixed return is never short), on the face of the inlier it leans on (its
-    partner, or the partner's partner and so on back along the bisection) and no farther from
-    that than the measured point: a shot on a face the fit did not find is left out.
-
-    Returns the mended points (m, 3), their face labels (m,) and the indices (m,) of the shots
-    they mend. The mended points are held fixed in the error propagation.
-    """
-    points, labels, index = [], [], []
-    normals = model.normals()
-    for i in np.flatnonzero((edges[0] >= 0) & ~inliers):
-        beam = x[i] - view
-        reach = float(np.linalg.norm(beam))
-        if reach <= 0.0:
-            continue
-        unit = beam / reach
-        facing = normals @ unit
-        front = facing < -1e-6
-        if not np.any(front):
-            continue
-        t = np.where(front, (model.offset - normals @ view) / np.where(front, facing, 1.0), -np.inf)
-        f = int(np.argmax(t))
-        if not (0.0 < t[f] <= reach + tol):
-            continue
-        mended = view + t[f] * unit
-        # A bisection runs on one face from the raster shot it started from: the mended point
-        # must be on the face of the shot it leans on (its partner, or the partner's, back to
-        # a shot the fit kept) and no farther from it than the measured point (pushed away
-        # along the beam by the mixed range).
-        partner = int(edges[1][i])
-        for _ in range(32):  # back along the bisection to a shot the fit kept
-            if partner < 0 or inliers[partner] or edges[0][partner] < 0:
-                break
-            partner = int(edges[1][partner])
-        if partner < 0 or not inliers[partner] or int(label[partner]) != f:
-            continue
-        if np.linalg.norm(mended - x[partner]) > np.linalg.norm(x[i] - x[partner]) + tol:
-            continue
-        points.append(mended)
-        labels.append(f)
-        index.append(i)
-    if not index:
-        return np.zeros((0, 3)), np.zeros(0, np.int64), np.zeros(0, np.int64)
-    return np.array(points), np.array(labels, np.int64), np.array(index, np.int64)
 
 
 def _validate(points) -> np.ndarray:
@@ -519,7 +431,7 @@ def _fit_cuboid_shots(
     # neighbourhoods give no normal and would shrink the spacing scale, but its first hits
     # sample a narrow face half a raster step farther out. The joint fit and the bounds use
     # every point.
-    seg = _spread_subset(x, edges[0] < 0)
+    seg = spread_subset(x, edges[0] < 0)
     if seg.size < max(MIN_POINTS["cuboid"], n // 2):
         seg = np.arange(n)
     if seg.size > _SEGMENTED_POINTS:
@@ -639,7 +551,7 @@ def _fit_cuboid_shots(
     # face along the beam, they bound the edge as a clean hit would (extra rows of xb).
     xb, label_b, inliers_b, edges_b, mended = x, label, inliers, edges, 0
     if trusted and not one_face:
-        extra, extra_label, extra_of = _mixed_returns(
+        extra, extra_label, extra_of = mixed_returns(
             x, label, inliers, model, edges, viewpoint - origin, cutoff * max(scale, noise)
         )
         if extra_of.size:

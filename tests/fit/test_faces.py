@@ -67,17 +67,6 @@ def test_dense_paths_give_what_the_dense_matrices_give(monkeypatch):
     np.testing.assert_array_equal(sorted_counts, dense)
 
 
-def test_spread_subset_with_a_tree_matches_the_dense_one(monkeypatch):
-    from asbuilt.fit import cuboid
-
-    rng = np.random.default_rng(11)
-    x = rng.uniform(0, 1, (300, 3))
-    base = rng.uniform(size=300) < 0.8
-    dense = cuboid._spread_subset(x, base)
-    monkeypatch.setattr(_faces, "_DENSE_LIMIT", 10)
-    np.testing.assert_array_equal(cuboid._spread_subset(x, base), dense)
-
-
 # The hot-path helpers below replace numpy conveniences by cheaper calls; each must give the
 # convenience's answer bit for bit (the fit's decisions must not change).
 
