@@ -613,30 +613,39 @@ def propagate(model, x, cov, bounds_info, sigma, one_face, spans=None):
     return np.sqrt(size_var), float(np.sqrt(np.trace(centre_cov)))
 
 
-def rival_size_spread(model, x, label, inliers, width, edge_pad, edges=None) -> np.ndarray:
-    """How far (metres, (3,) per axis of ``model``) the sizes of the frames that split the
-    fit's raster lines otherwise (``model.split_rivals``, :func:`asbuilt.fit._cuboid_sparse.
-    line_split_spread`) lie from its own, along their nearest axis: a frame turned about the
-    lines puts other shots on each face and bounds the box elsewhere.
+def rival_size_spread(model, x, label, inliers, width, edge_pad, edges=None):
+    """How far the sizes and the centre of the frames that split the fit's raster lines
+    otherwise (``model.split_rivals``, :func:`asbuilt.fit._cuboid_sparse.line_split_spread`)
+    lie from its own: a frame turned about the lines puts other shots on each face and bounds
+    the box elsewhere.
 
-    Both frames' sizes are taken the same way, as :func:`bounds` of each fit's own inliers
+    Both frames' boxes are taken the same way, as :func:`bounds` of each fit's own inliers
     among the shots ``x`` (n, 3) metres (centred; ``label`` (n,), ``inliers`` (n,) bool are
     ``model``'s, ``width`` metres the inlier cutoff, ``edge_pad`` and ``edges`` as for
     :func:`bounds`): the raster window, which may move an unseen edge of either, is not read
     again for the rival, so only the part of the difference the frame makes is counted.
+
+    Returns
+    -------
+    sizes : ndarray, shape (3,)
+        Per axis of ``model``, metres: the largest difference between a rival's size along
+        its nearest axis and the fit's own.
+    centre : float
+        Metres: the largest distance between a rival's centre and the fit's own.
     """
 
-    def extent(frame, frame_label, frame_inliers) -> np.ndarray:
+    def box(frame, frame_label, frame_inliers) -> tuple[np.ndarray, np.ndarray]:
         single = single_lines(x, frame_label, frame_inliers, frame, width)
         lo, hi = bounds(x, frame_label, frame_inliers, frame, width, edge_pad, edges, single)[:2]
-        return hi - lo
+        return hi - lo, frame.axes.T @ (0.5 * (hi + lo))
 
-    spread = np.zeros(3)
+    spread, shift = np.zeros(3), 0.0
     if not model.split_rivals:
-        return spread
-    own = extent(model, label, inliers)
+        return spread, shift
+    own, own_centre = box(model, label, inliers)
     for trial in model.split_rivals:
-        other = extent(trial[0], trial[1], trial[3])
+        other, other_centre = box(trial[0], trial[1], trial[3])
         nearest = np.abs(model.axes @ trial[0].axes.T).argmax(axis=1)
         spread = np.maximum(spread, np.abs(other[nearest] - own))
-    return spread
+        shift = max(shift, float(np.linalg.norm(other_centre - own_centre)))
+    return spread, shift

@@ -645,10 +645,11 @@ def _fit_cuboid_shots(
     )
     if model.split_rivals:
         # Other splits of the raster lines between the faces fit as well (kept, not refused:
-        # asbuilt.fit._cuboid_sparse.line_split_spread): each size is known only to within
-        # their sizes, in quadrature with the fit's own error.
-        spread = rival_size_spread(model, x, label, inliers, cutoff * scale, edge_pad, edges)
+        # asbuilt.fit._cuboid_sparse.line_split_spread): each size, and the centre, is known
+        # only to within theirs, in quadrature with the fit's own error.
+        spread, shift = rival_size_spread(model, x, label, inliers, cutoff * scale, edge_pad, edges)
         size_se = np.hypot(np.asarray(size_se, dtype=np.float64), spread)
+        centre_se = math.hypot(centre_se, shift)
     c_rot = model.rot_basis @ cov[: model.rot_basis.shape[1], : model.rot_basis.shape[1]]
     c_rot = c_rot @ model.rot_basis.T
     if one_face:

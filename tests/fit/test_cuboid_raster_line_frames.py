@@ -11,7 +11,9 @@ station at the origin onto a box, range noise along the beams.
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -218,3 +220,32 @@ def test_splits_no_corner_fits_are_left_out_without_changing_the_fit(monkeypatch
         ]:
             assert np.allclose(gated_value, every_value, rtol=1e-9, atol=1e-12)
     assert fitted[True] < fitted[False], fitted
+
+
+# Three scan-session point sets of the accuracy benchmark (20% edge outliers took the edge
+# bisection shots) whose raster lines another split, 30-45 degrees away, fits as well.
+RIVAL_CENTRES = json.loads((Path(__file__).parent / "split_rival_centres.json").read_text())
+
+
+@pytest.mark.parametrize("case", RIVAL_CENTRES, ids=[case["key"] for case in RIVAL_CENTRES])
+def test_a_rival_split_widens_the_centre_error_too(case, monkeypatch):
+    """The centre's standard error takes in how far the rival split's box centre lies: it had
+    stayed at the fit's own 2 mm beside size errors of 0.2-0.4 m and a 30-45 degree turn."""
+    from asbuilt.fit import cuboid
+
+    shifts = []
+    spread = cuboid.rival_size_spread
+
+    def spying(*args, **kwargs):
+        sizes, shift = spread(*args, **kwargs)
+        shifts.append(shift)
+        return sizes, shift
+
+    monkeypatch.setattr(cuboid, "rival_size_spread", spying)
+    points = np.array(case["points"])
+    result = fit_cuboid(points, sigma=SIGMA, viewpoint=np.array(case["station"]))
+    assert shifts and max(shifts) > 0.05, shifts  # a rival box elsewhere
+    assert result.stderr["center"] >= max(shifts)
+    assert max(result.stderr["size"]) > 0.1 and max(result.stderr["axes_deg"]) > 20.0
+    error = np.linalg.norm(np.asarray(result.primitive.center) - np.array(case["center"]))
+    assert error <= 3.0 * result.stderr["center"]
