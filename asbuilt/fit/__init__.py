@@ -370,10 +370,16 @@ def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
         if plane_sse - fit_sse >= result.sigma**2 * chdtri(max(extra, 1), CURVATURE_TAIL):
             return
         why = "a plane fits the points about as closely"
+    reach = (result.diagnostics or {}).get("radius_reach")
+    shape = (
+        f"they lie on two lines along it, which radii up to {reach * 1000:.0f} mm fit as well."
+        " Take a third raster line across it"
+        if reach is not None
+        else "they lie on a nearly flat strip or patch of it. Shoot across more of its surface"
+    )
     raise FitError(
         f"These points do not determine the {result.kind}'s radius (best fit r {best}, {why}): "
-        "they lie on a nearly flat strip or patch of it. Shoot across more of its surface, or "
-        "check its kind.",
+        f"{shape}, or check its kind.",
         where="points",
     )
 

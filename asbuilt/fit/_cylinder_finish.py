@@ -41,6 +41,7 @@ from asbuilt.fit._cylinder_model import (
     incidence_weighted,
     rms,
 )
+from asbuilt.fit._cylinder_two_lines import on_two_lines, radius_reach
 from asbuilt.fit._robust import refit_on, robust_geometric_fit
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cylinder
@@ -273,13 +274,25 @@ def finished(robust, scene: Scene, ignored_view, starts, reconsider) -> FitResul
     jac[:, 1] -= shift * jac[:, 3]
     covariance = covariance_from_jacobian(jac * np.sqrt(weights)[:, None], noise)
     tilt_var = covariance[0, 0] + covariance[1, 1]
+    angles = angles_about(axis, center, kept)
+    two_lines = sigma is not None and on_two_lines(
+        kept, axis, center, tolerances.outlier_cutoff_sigma * noise, angles
+    )
+    reach = radius_reach(kept, weights, axis, center, radius, noise) if two_lines else radius
+    if reach > radius:
+        # Two raster lines along the pipe bound its radius only from below
+        # (asbuilt.fit._cylinder_two_lines): the radii the shots accept, and the centre that
+        # moves with them, widen the covariance's errors.
+        spread = 0.5 * (reach - radius)
+        covariance[4, 4] += spread**2
+        covariance[2, 2] += 0.5 * spread**2
+        covariance[3, 3] += 0.5 * spread**2
     gaps = end_gaps(along, median_spacing(kept), noise)
     length_se = stderr_of(
         (gaps[0] ** 2 + gaps[1] ** 2) / 3.0 + 2.0 * noise**2 + (radius**2) * tilt_var
     )
     oriented = orient(axis)
     cylinder = Cylinder(mid + offset, oriented, radius, length)
-    angles = angles_about(axis, center, kept)
     stderr = {
         "radius": stderr_of(covariance[4, 4]),
         "axis_deg": float(np.degrees(stderr_of(tilt_var))),
@@ -291,6 +304,12 @@ def finished(robust, scene: Scene, ignored_view, starts, reconsider) -> FitResul
     notes = []
     if ignored_view:
         notes.append(VIEW_IGNORED)
+    if reach > radius:
+        notes.append(
+            f"The shots lie on two lines along the pipe: they fit radii from {radius * 1000:.3g}"
+            f" to {reach * 1000:.3g} mm as well (the radius's standard error spans them). Take"
+            " a third raster line across the pipe to measure it."
+        )
     outliers = int(len(pts) - robust.inliers.sum())
     if outliers:
         notes.append(
@@ -305,6 +324,8 @@ def finished(robust, scene: Scene, ignored_view, starts, reconsider) -> FitResul
         "length_over_diameter": length / (2.0 * radius),
         "starts": float(len(starts)),
     }
+    if reach > radius:
+        diagnostics["radius_reach"] = reach
     return FitResult(
         primitive=cylinder,
         residuals=cylinder.distance(pts),

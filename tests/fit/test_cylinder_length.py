@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from fit_scans import raster_scan
 
+from asbuilt.errors import FitError
 from asbuilt.fit import fit_points
 from asbuilt.primitives import Cylinder
 
@@ -27,7 +28,14 @@ def test_an_oblique_pipes_length_is_within_its_standard_error(tilt_deg):
     z = []
     for seed in range(8):
         points = raster_scan(pipe, SENSOR, 40, np.random.default_rng(seed)).points
-        result = fit_points("cylinder", points, sigma=0.002, viewpoint=SENSOR)
+        try:
+            result = fit_points("cylinder", points, sigma=0.002, viewpoint=SENSOR)
+        except FitError as exc:
+            # Two raster lines along the pipe leave its radius open (it had fitted r 39 mm
+            # for 57 mm): refused, and no length to judge.
+            assert "two lines along it" in str(exc)
+            continue
         se = result.stderr["length"]
         z.append((result.primitive.length - pipe.length) / se)
+    assert len(z) >= 6, z
     assert max(abs(v) for v in z) < 4.0, z

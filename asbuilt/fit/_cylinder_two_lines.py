@@ -1,0 +1,155 @@
+"""A pipe whose shots lie on two raster lines along it: the radius is bounded only from below.
+
+Private helper of :mod:`asbuilt.fit._cylinder_finish`. Two raster columns along a vertical
+pipe (or two rows along a horizontal one) put the shots on two straight lines on its surface.
+In the cross-section they are two short arcs, and a circle through both fits them for any
+radius above half their distance: the arcs' own curvature (a sagitta of a fraction of a
+millimetre over a few centimetres) is below the noise. The least-squares fit then settles
+near that smallest radius, where the circle bends most freely and absorbs the noise (an
+independent review: 38.9 +-1.3 mm for a 57.1 mm pipe, 49.9 +-1.0 for 84.2; the true radius fits
+the shots at a chi-square of 25 for 36 shots, the fit at 6.6). Its covariance, a linearisation
+at that bend, does not see the long flat valley beyond.
+
+:func:`radius_reach` detects the two lines and walks the radius up that valley: the fit's
+axis and centre refitted at each larger radius (held fixed), for as long as the shots still
+pass the chi-square test at the sensor's noise. The radius's standard error then spans the
+radii the shots accept.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.stats import chi2
+
+from asbuilt.fit._common import orthonormal_basis
+from asbuilt.fit._cylinder_model import angles_about
+
+__all__ = ["RADIUS_STEPS", "on_two_lines", "radius_reach"]
+
+#: Radii tried above the fit's, as multiples of it: up to eight times (a wider pipe than that
+#: would have been hit by more raster lines at any usual raster step).
+RADIUS_STEPS = (1.25, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0)
+#: Chi-square tail probability at which a radius no longer fits the shots.
+_ACCEPT = 0.99
+
+
+def on_two_lines(
+    kept: np.ndarray, axis: np.ndarray, center: np.ndarray, width: float, about=None
+) -> bool:
+    """Whether a cylinder fit's inliers lie on two straight lines along it.
+
+    The inliers' directions about the axis are split at their two widest gaps into two
+    groups, each spanning at most half the narrower of those gaps; each must hold at least
+    three shots lying within ``width`` metres RMS of a straight line (total least squares)
+    that runs within 30 degrees of the axis.
+
+    Parameters
+    ----------
+    kept : ndarray, shape (m, 3)
+        The inliers, metres.
+    axis : ndarray, shape (3,)
+        The fitted unit axis.
+    center : ndarray, shape (3,)
+        A point on the axis, metres.
+    width : float
+        Metres: the inlier cutoff.
+    about : ndarray, shape (m,), optional
+        The inliers' directions about the axis, radians (``angles_about``), when known.
+    """
+    if kept.shape[0] < 6:
+        return False
+    if about is None:
+        about = angles_about(axis, center, kept)
+    order = np.argsort(about)
+    angles = about[order]
+    gaps = np.diff(np.concatenate([angles, [angles[0] + 2.0 * math.pi]]))
+    first, second = np.sort(np.argsort(gaps)[-2:])
+    # Each group's own angular extent (the circle less the two gaps and the other group's):
+    # lines are narrow beside the gaps that part them, scattered shots are not.
+    inner = float(np.sum(gaps[first + 1 : second]))
+    outer = 2.0 * math.pi - inner - float(gaps[first] + gaps[second])
+    if 2.0 * max(inner, outer) > min(gaps[first], gaps[second]):
+        return False
+    groups = [
+        order[first + 1 : second + 1],
+        np.concatenate([order[second + 1 :], order[: first + 1]]),
+    ]
+    for group in groups:
+        if group.size < 3:
+            return False
+        points = kept[group]
+        rel = points - points.mean(axis=0)
+        _, singular, vt = np.linalg.svd(rel, full_matrices=False)
+        if abs(float(vt[0] @ axis)) < math.cos(math.radians(30.0)):
+            return False
+        if math.sqrt(float(singular[1] ** 2 + singular[2] ** 2) / group.size) > width:
+            return False
+    return True
+
+
+def _fixed_radius_chi2(kept, weights, axis, center, radius, noise) -> float:
+    """Least chi-square of the inliers (m, 3) metres, with ``weights`` (m,) (inverse relative
+    variances), about a cylinder of the given ``radius`` metres, its axis and centre refitted
+    from ``axis`` (3,) and ``center`` (3,) metres."""
+    u, v = orthonormal_basis(axis)
+    scale = np.sqrt(weights) / noise
+
+    def residuals(q: np.ndarray) -> np.ndarray:
+        direction = axis + q[0] * u + q[1] * v
+        direction = direction / np.linalg.norm(direction)
+        rel = kept - (center + q[2] * u + q[3] * v)
+        across = rel - np.outer(rel @ direction, direction)
+        return (np.linalg.norm(across, axis=1) - radius) * scale
+
+    # From the fit's place and from the centre moved away by the added radius on either side
+    # (the larger circle through the same two lines has its centre farther from them).
+    grow = radius - float(
+        np.median(np.linalg.norm((kept - center) - np.outer((kept - center) @ axis, axis), axis=1))
+    )
+    mid = kept.mean(axis=0) - center
+    toward = mid - (mid @ axis) * axis
+    toward = toward / max(float(np.linalg.norm(toward)), 1e-12)
+    best = math.inf
+    for sign in (0.0, -1.0, 1.0):
+        start = np.array([0.0, 0.0, sign * grow * (toward @ u), sign * grow * (toward @ v)])
+        fit = least_squares(residuals, start, method="lm")
+        best = min(best, 2.0 * float(fit.cost))
+    return best
+
+
+def radius_reach(kept, weights, axis, center, radius, noise, n_parameters=5) -> float:
+    """The largest radius (metres) at which a two-line fit's inliers still pass the
+    chi-square test, its axis and centre refitted: the top of the radii the shots accept.
+
+    Parameters
+    ----------
+    kept : ndarray, shape (m, 3)
+        The inliers, metres.
+    weights : ndarray, shape (m,)
+        Their weights (inverse relative variances).
+    axis, center : ndarray, shape (3,)
+        The fitted unit axis and a point on it, metres.
+    radius : float
+        The fitted radius, metres.
+    noise : float
+        Metres: the noise level of a square-on shot (the sensor's sigma when given).
+    n_parameters : int
+        The cylinder's parameters (the chi-square test's degrees of freedom are the shots less
+        these).
+
+    Returns
+    -------
+    float
+        Metres; ``radius`` itself when no larger radius tried passes.
+    """
+    limit = chi2.ppf(_ACCEPT, max(kept.shape[0] - n_parameters, 1))
+    reach = radius
+    for factor in RADIUS_STEPS:
+        trial = factor * radius
+        if _fixed_radius_chi2(kept, weights, axis, center, trial, noise) > limit:
+            break
+        reach = trial
+    return reach
