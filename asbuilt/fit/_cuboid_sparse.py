@@ -433,8 +433,8 @@ def line_split_frames(trial, x: np.ndarray, width: float, view: np.ndarray, fram
     corner fits within ``LINE_SPLIT_RMS`` cutoffs (:func:`corner_fit`), whose fit could not
     keep them all, and one whose corner, fitted to its lines, lies nearer the chosen split's
     shots (each shot nearer the plane of the face the chosen frame put it on), where the joint
-    fit, which assigns each shot to its nearest face, returns to the chosen frame. The joint fit then settles each frame, and :func:`rival` compares
-    them with the chosen one.
+    fit, which assigns each shot to its nearest face, returns to the chosen frame. The joint
+    fit then settles each frame, and :func:`rival` compares them with the chosen one.
 
     Parameters
     ----------
@@ -471,6 +471,9 @@ def line_split_frames(trial, x: np.ndarray, width: float, view: np.ndarray, fram
     splits = []
     # (One face: every split is another frame.)
     chosen = sum(int(label[line[0]] == faces[0]) for line in lines) if len(faces) == 2 else 0
+    on_first = np.zeros(x.shape[0], dtype=bool)  # the chosen split's first face
+    if chosen:
+        on_first[np.concatenate(lines[:chosen])] = True
     for m in range(1, len(lines)):
         if m == chosen:
             continue  # the chosen frame's own split
@@ -482,8 +485,6 @@ def line_split_frames(trial, x: np.ndarray, width: float, view: np.ndarray, fram
             # Each shot to the nearer of the split's corner planes: the chosen split again?
             both = np.concatenate([first, second])
             off = np.abs((x[both] @ plan.T) @ normals.T - offsets)
-            on_first = np.zeros(x.shape[0], dtype=bool)
-            on_first[np.concatenate(lines[:chosen])] = True
             if np.array_equal(off[:, 0] < off[:, 1], on_first[both]):
                 continue
         if m >= 2:

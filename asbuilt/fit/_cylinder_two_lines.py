@@ -10,9 +10,9 @@ independent review: 38.9 +-1.3 mm for a 57.1 mm pipe, 49.9 +-1.0 for 84.2; the t
 the shots at a chi-square of 25 for 36 shots, the fit at 6.6). Its covariance, a linearisation
 at that bend, does not see the long flat valley beyond.
 
-:func:`radius_reach` detects the two lines and walks the radius up that valley: the fit's
-axis and centre refitted at each larger radius (held fixed), for as long as the shots still
-pass the chi-square test at the sensor's noise. The radius's standard error then spans the
+:func:`on_two_lines` detects the two lines, and :func:`radius_reach` walks the radius up that
+valley: the fit's axis and centre refitted at each larger radius (held fixed), for as long as
+the shots still pass the chi-square test at the sensor's noise. The radius's standard error then spans the
 radii the shots accept.
 """
 
