@@ -95,6 +95,7 @@ from asbuilt.fit._cylinder_model import (
     MODEL,
     stacked,
 )
+from asbuilt.fit._cylinder_planes import fit_past_planes
 from asbuilt.fit._cylinder_quick import quick_fit as _quick_fit
 from asbuilt.fit._cylinder_quick import rejected_are_background, robust_among
 from asbuilt.fit._cylinder_starts import (
@@ -265,6 +266,13 @@ def fit_cylinder(
         across = fit_without_end_plane(fit, pts, sigma, tolerances, view, first, reference)
         if across is not None:
             return across
+    if viewpoint is not None and len(np.asarray(points)) <= DENSE_POINTS:
+        # A wall behind the pipe, a floor under it or one it passes through: one plane with
+        # the pipe's shots in front of it (asbuilt.fit._cylinder_planes).
+        pts, view = validate_points(points, "cylinder"), np.asarray(viewpoint, dtype=np.float64)
+        past = fit_past_planes(_fit_seen_from, pts, view, sigma, tolerances, first)
+        if past is not None:
+            return past
     if result is None:
         raise error
     return result
