@@ -48,6 +48,7 @@ from asbuilt.fit._cylinder_end_plane import worth_a_look
 
 __all__ = [
     "BACKGROUND_PLANE_SHOTS",
+    "BackgroundPlaneFit",
     "CROSSED_SHOTS",
     "FRONT_CUTOFFS",
     "FRONT_SHOTS",
@@ -250,6 +251,14 @@ def _stands(found, points, rest, inliers, view, cutoff, first, out) -> bool:
 #: The fit's diagnostics key counting the shots left out on background planes.
 BACKGROUND_PLANE_SHOTS = "background_plane_shots"
 
+
+class BackgroundPlaneFit(FitError):
+    """A cylinder fit refused: it is nearly a plane and most of its inliers lie on a wall or
+    floor with other shots in front of it. Not retried without the sensor's sigma (the shots'
+    scatter is not what is wrong; on the review's scenes every such retry that stood was a
+    wrong pipe)."""
+
+
 #: Why a plane-like fit of shots that mostly lie on a background plane is refused.
 PLANE_NOT_PIPE = (
     "The cylinder these shots fit best (r {radius}) is nearly a plane over its inliers, and"
@@ -285,7 +294,7 @@ def fit_past_planes(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances
 
     Raises
     ------
-    FitError
+    BackgroundPlaneFit
         When ``first`` is :func:`plane_like`, no fit past the planes stands, and most of its
         inliers lie on the first background plane found (a floor or wall fitted as a pipe).
     """
@@ -329,5 +338,5 @@ def fit_past_planes(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances
     ):
         radius = first.primitive.radius
         shown = f"{radius * 1000:.0f} mm" if radius < 1.0 else f"{radius:.4g} m"
-        raise FitError(PLANE_NOT_PIPE.format(radius=shown))
+        raise BackgroundPlaneFit(PLANE_NOT_PIPE.format(radius=shown))
     return None

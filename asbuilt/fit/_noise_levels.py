@@ -11,6 +11,7 @@ import numpy as np
 
 from asbuilt.errors import FitError, located
 from asbuilt.fit._cuboid_sparse import AmbiguousFrame
+from asbuilt.fit._cylinder_planes import BACKGROUND_PLANE_SHOTS, BackgroundPlaneFit
 from asbuilt.fit.result import FitResult
 from asbuilt.tolerances import Tolerances
 
@@ -49,9 +50,10 @@ def _fit_with_noise(
     sigma = float(sigma)
     try:
         result = function(np.array(points), sigma=sigma, tolerances=tolerances, **options)
-    except AmbiguousFrame:
+    except (AmbiguousFrame, BackgroundPlaneFit):
         # Shots that fit frames far apart as well at the sensor's noise: a lower level found
-        # without it would only make one frame look settled.
+        # without it would only make one frame look settled. A plane-like cylinder on a wall
+        # or floor: the shots' scatter is not what is wrong.
         raise
     except FitError as first:
         try:
@@ -81,7 +83,7 @@ def _fit_with_noise(
         if result.sigma > WIDER_NOISE_RATIO * sigma:
             return _noted_wider(result, result.sigma, sigma)
         return _noted_found(result, sigma)
-    noise = _residual_noise(result, points, tolerances)
+    noise = _residual_noise(result, points, tolerances, _not_background(result, sigma, tolerances))
     if not WIDER_NOISE_RATIO * sigma < noise:
         return _rough_rival(kind, function, result, points, sigma, tolerances, options)
     try:
@@ -287,12 +289,35 @@ def _mixture_cost(fit: FitResult, points: np.ndarray, tolerances: Tolerances) ->
     return score + mixing_cost([kept, len(fit.inliers) - kept])
 
 
-def _residual_noise(result: FitResult, points: np.ndarray, tolerances: Tolerances) -> float:
+def _not_background(result: FitResult, sigma: float, tolerances: Tolerances):
+    """The shots (n,) bool whose scatter can tell a rough surface, or None for all of them.
+
+    A cylinder fit that left out a wall or floor as background
+    (:mod:`asbuilt.fit._cylinder_planes`) has most shots on it, decimetres off the pipe: its
+    likeliest inlier set took them in and put the noise at 0.2-1.9 m (the review's wide
+    windows), whose refit lost the pipe. Only the shots within ``NEAR_REJECTION_RATIO``
+    inlier thresholds of the fit are then weighed: a rough surface's scatter lies there.
+    """
+    if not result.diagnostics.get(BACKGROUND_PLANE_SHOTS):
+        return None
+    threshold = float(tolerances.outlier_cutoff_sigma) * sigma
+    return (
+        np.abs(np.asarray(result.residuals, dtype=np.float64)) <= NEAR_REJECTION_RATIO * threshold
+    )
+
+
+def _residual_noise(
+    result: FitResult, points: np.ndarray, tolerances: Tolerances, among=None
+) -> float:
     """The noise level (metres) of a fit's likeliest inlier set: RMS with the degrees of
-    freedom of the fit's covariance taken off."""
+    freedom of the fit's covariance taken off; over the shots ``among`` (n,) bool only when
+    given."""
     from asbuilt.fit._robust import best_inlier_set
 
     residuals = np.asarray(result.residuals, dtype=np.float64)
+    if among is not None:
+        residuals, points = residuals[among], points[among]
+        result = dataclasses.replace(result, residuals=residuals, inliers=result.inliers[among])
     if result.inliers.all():
         chosen = result.inliers  # the likeliest set is at least the inliers: here every point
     else:

@@ -265,7 +265,10 @@ def fit_cylinder(
         fit = _fit_cylinder if view is None else _fit_seen_from
         across = fit_without_end_plane(fit, pts, sigma, tolerances, view, first, reference)
         if across is not None:
-            return across
+            # A floor or wall around the pipe can still hold the fit past the end plane (a
+            # metre-wide cylinder through floor shots): the background planes are looked for
+            # when it is in doubt too.
+            result = first = across
     if viewpoint is not None and len(np.asarray(points)) <= DENSE_POINTS:
         # A wall behind the pipe, a floor under it or one it passes through: one plane with
         # the pipe's shots in front of it (asbuilt.fit._cylinder_planes).
