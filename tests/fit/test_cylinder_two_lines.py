@@ -102,3 +102,37 @@ def _lines(count, rng, radius=0.06):
 def test_two_lines_are_told_from_more(count, expected):
     points, axis, centre = _lines(count, np.random.default_rng(count))
     assert on_two_lines(points, axis, centre, 0.006) is expected
+
+
+def _slanted_lines(count, rng, radius=0.057, sweep_deg=50.0):
+    """Shots on ``count`` raster lines slanted across a z-axis cylinder: each runs 0.8 m along
+    it while turning ``sweep_deg`` about it (a window turned to the pipe), 64 degrees apart."""
+    z = np.linspace(-0.4, 0.4, 13)
+    turn = np.radians(sweep_deg) * (z - z.mean()) / np.ptp(z)
+    points = np.concatenate(
+        [
+            np.column_stack([radius * np.cos(a), radius * np.sin(a), z])
+            for a in [turn + np.radians(64.0) * (i - (count - 1) / 2) for i in range(count)]
+        ]
+    )
+    return points + rng.normal(0.0, SIGMA / 2, points.shape), np.array([0.0, 0.0, 1.0]), np.zeros(3)
+
+
+@pytest.mark.parametrize(("count", "expected"), [(2, True), (3, False), (4, False)])
+def test_two_slanted_lines_are_told_from_more(count, expected):
+    """Slanted lines' directions about the axis run into each other, so no gap parts them; two
+    of them are still straight within the noise, three or more are not."""
+    points, axis, centre = _slanted_lines(count, np.random.default_rng(count))
+    assert on_two_lines(points, axis, centre, 3 * SIGMA) is expected
+
+
+def test_a_review_pipe_on_two_slanted_lines_is_refused():
+    """The stop-48 review's plumb NPS 4 pipe through a floor: its 26 shots on two raster lines
+    3 degrees apart gave r 30.1 +-1.8 mm for 57.15 mm."""
+    path = Path(__file__).with_name("background_plane_scenes.json")
+    scene = json.loads(path.read_text())["scenes"]["two_slanted_lines"]
+    points = np.array(scene["points"])
+    with pytest.raises(FitError, match="two lines along it"):
+        fit_points("cylinder", points[scene["on_target"]], sigma=SIGMA, viewpoint=scene["station"])
+    with pytest.raises(FitError):  # with the floor's 307 shots too
+        fit_points("cylinder", points, sigma=SIGMA, viewpoint=scene["station"])
