@@ -6,9 +6,7 @@ import json
 from pathlib import Path
 
 import numpy as np
-import pytest
 
-from asbuilt.errors import FitError
 from asbuilt.fit import fit_points
 from asbuilt.fit._cylinder_background import (
     behind_the_pipe,
