@@ -25,6 +25,7 @@ import numpy as np
 from scipy.special import chdtri
 
 from asbuilt.errors import FitError, located
+from asbuilt.fit._common import validate_points
 from asbuilt.fit._edge_brackets import edge_brackets, widen_pinned
 from asbuilt.fit._noise_levels import _fit_with_noise
 from asbuilt.fit._stations import fuse_station_views
@@ -147,6 +148,11 @@ def _fit_points(kind: str, points, sigma, tolerances, viewpoint) -> FitResult:
             viewpoint = as_vector(viewpoint, "viewpoint")
         except ValueError as exc:
             raise FitError(str(exc), where="viewpoint") from None
+    if len(array) < 3:
+        # Too few for any kind, said before the spread checks below take 1-2 points for a line
+        # or fail on none ("failed numerically"); from three up each fitter says what its kind
+        # needs (a cuboid's depends on the faces its shots show).
+        validate_points(array, kind)
     if kind != "hull":
         if sigma is not None:
             _require_spread_beyond_noise(array, kind, LINE_SPREAD_SIGMAS * sigma)

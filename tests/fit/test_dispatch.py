@@ -34,7 +34,7 @@ from asbuilt.fit import (
 from asbuilt.primitives import Sphere
 from asbuilt.scan import ScanObject, loads_scan
 from asbuilt.scan.model import Scan, Sensor
-from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
+from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 
 CALLS: list[dict] = []
 
@@ -965,3 +965,13 @@ def wide_without_a_sigma(points, *, sigma=None, tolerances=DEFAULT_TOLERANCES) -
     if sigma is not None:
         raise FitError("28 of 36 points are outliers to the best sphere")
     return replace(centroid_sphere(points), sigma=0.04, sigma_source="residuals")
+
+
+@pytest.mark.parametrize("count", [0, 1, 2])
+@pytest.mark.parametrize("kind", sorted(MIN_POINTS))
+def test_too_few_points_say_how_many_the_kind_needs(kind, count):
+    """Before, 0 points failed "numerically (Eigenvalues did not converge)" and 1-2 points were
+    said to lie on one line."""
+    points = np.random.default_rng(count).normal(size=(count, 3))
+    with pytest.raises(FitError, match=f"needs at least {MIN_POINTS[kind]} points, got {count};"):
+        fit_points(kind, points, sigma=0.002)
