@@ -659,13 +659,19 @@ def test_ctrl_c_while_the_kernel_loads_is_an_interruption(tmp_path, capsys, monk
     for name in [m for m in sys.modules if m == "asbuilt.cad" or m.startswith("asbuilt.cad.")]:
         monkeypatch.delitem(sys.modules, name)
     monkeypatch.setattr(sys, "meta_path", [_InterruptOnImport("asbuilt.cad"), *sys.meta_path])
-    before = signal.getsignal(signal.SIGINT)
-    out = tmp_path / "m.step"
-    out.write_text("KEEP")
-    argv = ["model", str(ROOT / "samples" / "spool.json"), "--quiet"]
-    argv += ["--out", str(out), "--out", str(tmp_path / "m.json")]
-    assert main(argv) == 130
-    assert capsys.readouterr().err == "asbuilt: interrupted\n"
-    assert [p.name for p in tmp_path.iterdir()] == ["m.step"]
-    assert out.read_text() == "KEEP"
-    assert signal.getsignal(signal.SIGINT) is before  # restored for the caller
+    # Ctrl-C live, as at a terminal: a suite started in the background (nohup, `&`) inherits it
+    # ignored, and then the interruption never comes.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        before = signal.getsignal(signal.SIGINT)
+        out = tmp_path / "m.step"
+        out.write_text("KEEP")
+        argv = ["model", str(ROOT / "samples" / "spool.json"), "--quiet"]
+        argv += ["--out", str(out), "--out", str(tmp_path / "m.json")]
+        assert main(argv) == 130
+        assert capsys.readouterr().err == "asbuilt: interrupted\n"
+        assert [p.name for p in tmp_path.iterdir()] == ["m.step"]
+        assert out.read_text() == "KEEP"
+        assert signal.getsignal(signal.SIGINT) is before  # restored for the caller
+    finally:
+        signal.signal(signal.SIGINT, previous)

@@ -244,6 +244,9 @@ def test_kernel_import_holds_back_ctrl_c_and_sigterm_until_it_ends():
 
     seen = []
     previous = signal.signal(signal.SIGTERM, lambda signum, frame: seen.append(signum))
+    # Ctrl-C live, as at a terminal: a suite started in the background (nohup, `&`) inherits it
+    # ignored, and an ignored Ctrl-C stays ignored (the next test).
+    previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         with pytest.raises(KeyboardInterrupt):
             with _sigterm_deferred():
@@ -254,6 +257,7 @@ def test_kernel_import_holds_back_ctrl_c_and_sigterm_until_it_ends():
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     finally:
         signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGINT, previous_int)
 
 
 def test_an_ignored_ctrl_c_stays_ignored_through_the_kernel_import():
