@@ -38,6 +38,7 @@ __all__ = [
     "only_background_behind",
     "fit_without_background",
     "rescued",
+    "random_planes",
     "segment_noise",
     "subset_fits",
     "taken_back",
@@ -297,18 +298,23 @@ PLANE_SAMPLES = 300
 MOST_PLANES = 4
 
 
-def near_random_planes(points: np.ndarray, cutoff: float, samples: int, rng) -> np.ndarray:
-    """Which of ``points`` (n, 3) metres lie within ``cutoff`` metres of the planes through
-    ``samples`` random triples of them (RANSAC hypotheses, Fischler & Bolles 1981; degenerate
-    triples dropped): bool array (n, planes)."""
-    n = len(points)
-    triples = rng.integers(0, n, (samples, 3))
+def random_planes(points: np.ndarray, samples: int, rng) -> tuple[np.ndarray, np.ndarray]:
+    """The planes through ``samples`` random triples of ``points`` (n, 3) metres (RANSAC
+    hypotheses, Fischler & Bolles 1981; degenerate triples dropped): unit normals (planes, 3)
+    and offsets (planes,) metres, ``normal @ x == offset`` on each."""
+    triples = rng.integers(0, len(points), (samples, 3))
     first = points[triples[:, 0]]
     normals = np.cross(points[triples[:, 1]] - first, points[triples[:, 2]] - first)
     lengths = np.linalg.norm(normals, axis=1)
     good = lengths > 1e-12
     normals = normals[good] / lengths[good, None]
-    offsets = np.einsum("ij,ij->i", normals, first[good])
+    return normals, np.einsum("ij,ij->i", normals, first[good])
+
+
+def near_random_planes(points: np.ndarray, cutoff: float, samples: int, rng) -> np.ndarray:
+    """Which of ``points`` (n, 3) metres lie within ``cutoff`` metres of the planes through
+    ``samples`` random triples of them (:func:`random_planes`): bool array (n, planes)."""
+    normals, offsets = random_planes(points, samples, rng)
     return np.abs(points @ normals.T - offsets) <= cutoff
 
 

@@ -38,6 +38,7 @@ from asbuilt.errors import FitError
 from asbuilt.fit._cuboid_planes import _plane_through
 from asbuilt.fit._cylinder_background import (
     DETERMINED_RADIUS,
+    random_planes,
     rescued,
     segment_noise,
     taken_back,
@@ -127,13 +128,7 @@ def _heights(points: np.ndarray, view: np.ndarray, samples: int, rng) -> np.ndar
     """Each of ``points``' (n, 3) metres height above the planes through ``samples`` random
     triples of them (RANSAC hypotheses, Fischler & Bolles 1981; degenerate triples dropped),
     positive on the side of ``view`` (3,) metres: shape (n, planes), metres."""
-    triples = rng.integers(0, len(points), (samples, 3))
-    first = points[triples[:, 0]]
-    normals = np.cross(points[triples[:, 1]] - first, points[triples[:, 2]] - first)
-    lengths = np.linalg.norm(normals, axis=1)
-    good = lengths > 1e-12
-    normals = normals[good] / lengths[good, None]
-    offsets = np.einsum("ij,ij->i", normals, first[good])
+    normals, offsets = random_planes(points, samples, rng)
     heights = points @ normals.T - offsets
     return heights * np.where(normals @ view > offsets, 1.0, -1.0)
 
