@@ -25,7 +25,7 @@ import numpy as np
 from scipy.special import chdtri
 
 from asbuilt.errors import FitError, located
-from asbuilt.fit._common import validate_points
+from asbuilt.fit._common import extent_of, validate_points
 from asbuilt.fit._edge_brackets import edge_brackets, widen_pinned
 from asbuilt.fit._noise_levels import _fit_with_noise
 from asbuilt.fit._stations import fuse_station_views
@@ -367,9 +367,9 @@ def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
         kept = points[result.inliers]
         if len(kept) < 4 or not result.sigma > 0:
             return
-        centred = kept - kept.mean(axis=0)
-        if radius <= _PLANE_LIKE_RADIUS * 2.0 * float(np.sqrt(np.max(np.sum(centred**2, 1)))):
+        if radius <= _PLANE_LIKE_RADIUS * extent_of(kept):
             return  # curved over the points: their plane is no rival
+        centred = kept - kept.mean(axis=0)
         plane_sse = float(np.linalg.svd(centred, compute_uv=False)[-1] ** 2)
         fit_sse = float(np.sum(result.residuals[result.inliers] ** 2))
         extra = (len(result.covariance) if result.covariance is not None else 4) - 3

@@ -17,6 +17,7 @@ from asbuilt.scan.model import kind_phrase
 from asbuilt.tolerances import MIN_POINTS, Tolerances
 
 __all__ = [
+    "extent_of",
     "validate_points",
     "principal_axes",
     "require_spread",
@@ -175,6 +176,13 @@ def basis_floats(ax: float, ay: float, az: float) -> tuple[float, ...]:
     norm = (ux * ux + uy * uy + uz * uz) ** 0.5
     ux, uy, uz = ux / norm, uy / norm, uz / norm
     return ux, uy, uz, ay * uz - az * uy, az * ux - ax * uz, ax * uy - ay * ux
+
+
+def extent_of(points: np.ndarray) -> float:
+    """Twice the largest distance of ``points`` (m, 3) metres from their centroid, metres: the
+    span a fit's radius is weighed against to call it nearly a plane over them."""
+    centred = points - points.mean(axis=0)
+    return 2.0 * float(np.sqrt(np.max(np.einsum("ij,ij->i", centred, centred))))
 
 
 def row_norms(vectors: np.ndarray) -> np.ndarray:

@@ -35,6 +35,7 @@ import dataclasses
 import numpy as np
 
 from asbuilt.errors import FitError
+from asbuilt.fit._common import extent_of
 from asbuilt.fit._cuboid_planes import _plane_through
 from asbuilt.fit._cylinder_background import (
     DETERMINED_RADIUS,
@@ -89,18 +90,11 @@ NEAR_SHARE = 1.0 / 3.0
 CROSSED_SHOTS = 3
 
 
-def _extent(points: np.ndarray) -> float:
-    """Twice the largest distance of ``points`` (m, 3) metres from their centroid, metres (as
-    :func:`asbuilt.fit._refuse_unknown_radius` measures a fit's inliers)."""
-    centred = points - points.mean(axis=0)
-    return 2.0 * float(np.sqrt(np.max(np.einsum("ij,ij->i", centred, centred))))
-
-
 def plane_like(result, points: np.ndarray) -> bool:
     """Whether a cylinder fit (a FitResult over ``points`` (n, 3) metres) is wider than
     ``PLANE_LIKE`` times its inliers' extent: over them, nearly a plane."""
     kept = points[result.inliers]
-    return len(kept) < 2 or result.primitive.radius > PLANE_LIKE * _extent(kept)
+    return len(kept) < 2 or result.primitive.radius > PLANE_LIKE * extent_of(kept)
 
 
 def in_doubt(first, points: np.ndarray, sigma, tolerances) -> bool:
@@ -225,7 +219,7 @@ def _stands(found, points, rest, inliers, view, cutoff, first, out) -> bool:
         np.count_nonzero(inliers) < FRONT_SHOTS
         or cylinder.radius <= cutoff  # any line of shots fits a pipe thinner than the cutoff
         or not found.stderr["radius"] <= DETERMINED_RADIUS * cylinder.radius
-        or cylinder.radius > PLANE_LIKE * _extent(points[inliers])
+        or cylinder.radius > PLANE_LIKE * extent_of(points[inliers])
     ):
         return False
     if np.count_nonzero(_crossing(cylinder, points[~rest], view, cutoff)) >= CROSSED_SHOTS:

@@ -82,12 +82,8 @@ def on_two_lines(
     for group in groups:
         if group.size < 3:
             return False
-        points = kept[group]
-        rel = points - points.mean(axis=0)
-        _, singular, vt = np.linalg.svd(rel, full_matrices=False)
-        if abs(float(vt[0] @ axis)) < math.cos(math.radians(30.0)):
-            return False
-        if math.sqrt(float(singular[1] ** 2 + singular[2] ** 2) / group.size) > width:
+        line = _line(kept[group], width)
+        if line is None or abs(float(line[1] @ axis)) < math.cos(math.radians(30.0)):
             return False
     return True
 
