@@ -30,6 +30,7 @@ from asbuilt.fit._visibility import excess_and_beyond
 __all__ = [
     "JUMP_SLOPE",
     "JUMP_NOISE",
+    "GAP_STEPS",
     "NEAR_SHARE",
     "MOST_SUBSETS",
     "DETERMINED_RADIUS",
@@ -64,6 +65,9 @@ JUMP_SLOPE = 3.0
 #: ... and by more than this many range sigmas (two shots of one surface in nearly the same
 #: direction differ by their noise).
 JUMP_NOISE = 6.0
+#: With ``gaps``, beams that came back more than this many of their finest raster steps apart
+#: (over the diagonal of the coarsest cells) have open space between them.
+GAP_STEPS = 3.5
 #: A subset of the shots is tried only if it holds at least this share of them (a pipe framed
 #: by a raster a little larger than itself keeps about half; fewer would let one wall row be
 #: taken as a pipe).
@@ -82,7 +86,9 @@ def segment_noise(sigma, tolerances) -> float:
     return float(sigma) if sigma is not None else float(tolerances.prior_range_sigma)
 
 
-def depth_segments(points: np.ndarray, view: np.ndarray, noise: float) -> list[np.ndarray]:
+def depth_segments(
+    points: np.ndarray, view: np.ndarray, noise: float, gaps: bool = False
+) -> list[np.ndarray]:
     """The shots cut into surfaces at range jumps between neighbouring beams, nearest first.
 
     Parameters
@@ -92,6 +98,10 @@ def depth_segments(points: np.ndarray, view: np.ndarray, noise: float) -> list[n
         The station.
     noise : float, metres
         The range noise.
+    gaps : bool
+        Also cut where beams that came back lie more than ``GAP_STEPS`` raster steps apart
+        (the beams between them returned nothing: open space between two pipes of a rack
+        with nothing behind them).
 
     Returns
     -------
@@ -129,6 +139,10 @@ def depth_segments(points: np.ndarray, view: np.ndarray, noise: float) -> list[n
     spacing = np.minimum(ranges[rows], ranges[cols]) * np.minimum(finest[rows], finest[cols])
     jump = np.abs(ranges[rows] - ranges[cols])
     linked = jump <= np.maximum(JUMP_SLOPE * spacing, JUMP_NOISE * noise)
+    if gaps:
+        # A raster's diagonal is under 1.5 of its coarser step, its coarser step (the
+        # benchmark's cells are up to 1.4 x 0.7 of a square one) under 2 of its finest.
+        linked &= angle <= GAP_STEPS * np.maximum(finest[rows], finest[cols])
     labels = components(n, rows[linked], cols[linked])
     segments = [np.flatnonzero(labels == k) for k in np.unique(labels)]
     return sorted(segments, key=lambda members: float(np.median(ranges[members])))

@@ -95,6 +95,14 @@ from asbuilt.fit._cylinder_model import (
     MODEL,
     stacked,
 )
+from asbuilt.fit._cylinder_others import (
+    NO_MAJORITY,
+    OTHER_ANGLE,
+    OTHER_RADIUS,
+    OTHER_SHOTS,
+    cylinders_named,
+    with_other_cylinder,
+)
 from asbuilt.fit._cylinder_planes import fit_past_planes
 from asbuilt.fit._cylinder_quick import quick_fit as _quick_fit
 from asbuilt.fit._cylinder_quick import rejected_are_background, robust_among
@@ -120,7 +128,14 @@ from asbuilt.fit._visibility import (
 from asbuilt.fit.result import FitResult
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
-__all__ = ["END_PLANE_SHOTS", "fit_cylinder", "METHOD"]
+__all__ = [
+    "END_PLANE_SHOTS",
+    "OTHER_ANGLE",
+    "OTHER_RADIUS",
+    "OTHER_SHOTS",
+    "fit_cylinder",
+    "METHOD",
+]
 
 
 #: How many of the best starts are settled again and judged by their beams when the viewpoint
@@ -250,6 +265,44 @@ def fit_cylinder(
     FitError
         Too few points, identical, collinear or coplanar points, or too many outliers.
     """
+    pts = validate_points(points, "cylinder")
+    view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64)
+    try:
+        result = _fit_rescued(pts, sigma, tolerances, view)
+    except FitError as error:
+        if not error.message.startswith(NO_MAJORITY) or len(pts) > DENSE_POINTS:
+            raise
+        # A tee's header or a rack neighbour in the window: said, not guessed
+        # (asbuilt.fit._cylinder_others).
+        named = cylinders_named(_subset_fit(view), pts, view, sigma, tolerances)
+        if not named:
+            raise
+        raise FitError(error.message + named, source=error.source, where=error.where) from None
+    if len(pts) > DENSE_POINTS:
+        return result
+    if view is not None and _view_ignored(result):
+        view = None
+    return with_other_cylinder(_subset_fit(view), pts, view, sigma, tolerances, result)
+
+
+def _subset_fit(view):
+    """The fit of a subset of the shots for :mod:`asbuilt.fit._cylinder_others`: every rescue
+    (a flange face across a branch's end, a wall behind it) but not that step itself; with a
+    ``view``, one that keeps it."""
+    if view is None:
+        return _fit_rescued
+
+    def fit(points, sigma, tolerances, viewpoint):
+        result = _fit_rescued(points, sigma, tolerances, viewpoint)
+        if _view_ignored(result):
+            raise FitError(VIEW_IGNORED)
+        return result
+
+    return fit
+
+
+def _fit_rescued(points, sigma, tolerances, viewpoint) -> FitResult:
+    """:func:`fit_cylinder` before other cylinders among the shots are looked for."""
     try:
         result = _fit_with_rescues(points, sigma, tolerances, viewpoint)
     except FitError as exc:
@@ -275,7 +328,7 @@ def fit_cylinder(
         pts, view = validate_points(points, "cylinder"), np.asarray(viewpoint, dtype=np.float64)
         past = fit_past_planes(_fit_seen_from, pts, view, sigma, tolerances, first)
         if past is not None:
-            return past
+            result = past
     if result is None:
         raise error
     return result
