@@ -1,4 +1,5 @@
-"""Scan quality rules: too-few-points, weak-geometry, poor-fit, outliers, ambiguous-kind.
+"""Scan quality rules: too-few-points, weak-geometry, poor-fit, outliers, ambiguous-kind,
+another-object.
 
 They judge the fit each component comes from (``component.fit``); merged fittings have none.
 The residual test is a chi-square one in disguise: for ``d`` degrees of freedom the RMS of
@@ -12,9 +13,9 @@ import numpy as np
 
 from asbuilt.findings import Suggestion
 from asbuilt.fit.auto import RIVAL_PREFIX
-from asbuilt.fit.cylinder import END_PLANE_SHOTS
+from asbuilt.fit.cylinder import END_PLANE_SHOTS, OTHER_ANGLE, OTHER_RADIUS, OTHER_SHOTS
 
-from ._context import Context, centre_of, stderr_value, verdict
+from ._context import Context, centre_of, mm, stderr_value, verdict
 
 __all__ = ["CHECKS"]
 
@@ -189,22 +190,28 @@ def check_outliers(ctx: Context) -> None:
         # Shots the cylinder fit found on a surface across the pipe's end (a flange face, the
         # wall it enters) are explained, not background the fit may have taken for the pipe.
         on_end = _count(fit.diagnostics.get(END_PLANE_SHOTS))
-        share = (rejected - on_end) / n
+        # ... and those that fit another cylinder are another object, which another-object
+        # reports with its own remedy.
+        on_other = min(_count(fit.diagnostics.get(OTHER_SHOTS)), max(rejected - on_end, 0))
+        unexplained = rejected - on_end - on_other
+        share = unexplained / n
         se = float(np.sqrt(max(share * (1 - share), 1.0 / n) / n))
         if share <= allowed:
             continue
         outcome = verdict(share, allowed, se, ctx.k)
-        explained = (
-            f" ({on_end} more lie on a plane across the pipe's end: a flange face, or the wall"
-            " it enters)"
+        explained = [
+            f"{on_end} more lie on a plane across the pipe's end: a flange face, or the wall"
+            " it enters"
             if on_end
-            else ""
-        )
+            else "",
+            f"{on_other} more fit another cylinder" if on_other else "",
+        ]
+        said = "; ".join(part for part in explained if part)
         ctx.emit(
             slug,
             [comp.id],
-            f"{rejected - on_end} of {n} points ({share * 100:.0f}%) were rejected as outliers"
-            + explained,
+            f"{unexplained} of {n} points ({share * 100:.0f}%) were rejected as outliers"
+            + (f" ({said})" if said else ""),
             location=centre_of(comp.geometry),
             measured=share,
             allowed=allowed,
@@ -253,10 +260,42 @@ def check_ambiguous_kind(ctx: Context) -> None:
         )
 
 
+def check_another_object(ctx: Context) -> None:
+    """Cylinders whose rejected shots fit another cylinder (the fit's ``other_cylinder_*``
+    diagnostics, :mod:`asbuilt.fit._cylinder_others`): a tee's header, a rack neighbour, or
+    the object itself when the fit settled on its neighbour."""
+    slug = "another-object"
+    for comp in _fitted(ctx):
+        fit = comp.fit
+        shots = _count(fit.diagnostics.get(OTHER_SHOTS))
+        radius = fit.diagnostics.get(OTHER_RADIUS)
+        if not shots or radius is None or not np.isfinite(radius):
+            continue
+        angle = float(fit.diagnostics.get(OTHER_ANGLE, float("nan")))
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"{shots} of {fit.n_points} points, left out of the fit, fit another cylinder"
+            f" (radius {mm(float(radius))}, axis {angle:.0f} deg from the fitted one's);"
+            " the fit may be of a neighbour or header rather than the object aimed at",
+            location=centre_of(comp.geometry),
+            measured=shots,
+            unit="points",
+            suggestions=(
+                Suggestion(
+                    f"if {comp.id} is the other cylinder, give it only that cylinder's shots"
+                    " (or rescan with the raster window on it alone)"
+                ),
+                Suggestion(f"scan the other cylinder as an object of its own, beside {comp.id}"),
+            ),
+        )
+
+
 CHECKS = {
     "too-few-points": check_points,
     "weak-geometry": check_weak,
     "poor-fit": check_poor_fit,
     "outliers": check_outliers,
     "ambiguous-kind": check_ambiguous_kind,
+    "another-object": check_another_object,
 }

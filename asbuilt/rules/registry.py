@@ -205,6 +205,16 @@ RULES: tuple[Rule, ...] = (
         "quality",
     ),
     Rule(
+        "AB406",
+        "another-object",
+        "warning",
+        "{shots} of {count} points, left out of the fit, fit another cylinder",
+        "A raster window takes in what lies around the object: a tee's header, a rack "
+        "neighbour. The fit keeps the cylinder with the most shots, which need not be the one "
+        "aimed at.",
+        "quality",
+    ),
+    Rule(
         "AB501",
         "clash",
         "error",

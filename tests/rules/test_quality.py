@@ -178,3 +178,49 @@ def test_a_size_run_past_the_scan_window_is_weak(kind):
     (f,) = only(dataclasses.replace(comp, fit=fit), "weak-geometry")
     assert "runs on past the scan window" in f.message
     assert "a window over its ends" in f.suggestions[0].description
+
+
+def _with_other(comp, shots, radius=0.0842, angle=90.0, on_end=0):
+    diagnostics = {
+        **comp.fit.diagnostics,
+        "other_cylinder_shots": shots,
+        "other_cylinder_radius": radius,
+        "other_cylinder_axis_deg": angle,
+        "end_plane_shots": on_end,
+    }
+    return dataclasses.replace(comp, fit=dataclasses.replace(comp.fit, diagnostics=diagnostics))
+
+
+def test_rejected_shots_that_fit_another_cylinder_are_another_object():
+    """A branch fitted as its header: the fit names the cylinder its rejected shots fit
+    (asbuilt.fit._cylinder_others), and the rule says the fit may be of the wrong pipe."""
+    comp = _with_other(pipe("P1", [0, 0, 1], [2, 0, 1], 0.3238, n=40, rejected=12), 12)
+    (f,) = only(comp, "another-object")
+    assert f.code == "AB406" and f.severity == "warning" and f.measured == 12
+    assert f.message.startswith(
+        "12 of 40 points, left out of the fit, fit another cylinder (radius 84.2 mm, axis 90 deg"
+    )
+    assert "give it only that cylinder's shots" in f.suggestions[0].description
+    # Those shots are explained: not outliers too (12 rejected of 40 is 30%).
+    assert not only(comp, "outliers")
+    assert not only(pipe("P2", [0, 0, 1], [2, 0, 1], 0.1143), "another-object")
+
+
+@pytest.mark.parametrize(
+    "other, on_end, expected",
+    [
+        (4, 0, "6 of 25 points (24%) were rejected as outliers (4 more fit another cylinder)"),
+        (
+            3,
+            1,
+            "6 of 25 points (24%) were rejected as outliers (1 more lie on a plane across the"
+            " pipe's end: a flange face, or the wall it enters; 3 more fit another cylinder)",
+        ),
+        (5, 0, None),  # 5 of 25 unexplained: 20%, within the limit
+        (float("nan"), 0, "10 of 25 points (40%) were rejected as outliers"),  # null in a file
+    ],
+)
+def test_shots_of_another_cylinder_are_not_counted_as_outliers(other, on_end, expected):
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, n=25, rejected=10)
+    found = only(_with_other(comp, other, on_end=on_end), "outliers")
+    assert [f.message for f in found] == ([expected] if expected else [])

@@ -45,7 +45,17 @@ def test_every_required_rule_is_registered(slug):
         ("ab202", {"out-of-plumb"}),
         ("out-of-plumb", {"out-of-plumb"}),
         ("AB2", {"misaligned-axis", "out-of-plumb", "slope"}),
-        ("AB4", {"too-few-points", "weak-geometry", "poor-fit", "outliers", "ambiguous-kind"}),
+        (
+            "AB4",
+            {
+                "too-few-points",
+                "weak-geometry",
+                "poor-fit",
+                "outliers",
+                "ambiguous-kind",
+                "another-object",
+            },
+        ),
         ("nope", set()),
         ("AB9", set()),
     ],
