@@ -25,7 +25,7 @@ import numpy as np
 from scipy.special import chdtri
 
 from asbuilt.errors import FitError, located
-from asbuilt.fit._common import extent_of, validate_points
+from asbuilt.fit._common import extent_of, radius_text, validate_points
 from asbuilt.fit._edge_brackets import edge_brackets, widen_pinned
 from asbuilt.fit._noise_levels import _fit_with_noise
 from asbuilt.fit._stations import fuse_station_views
@@ -359,7 +359,7 @@ def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
     stderr = (result.stderr or {}).get("radius")
     if radius is None or stderr is None:
         return
-    best = f"{radius * 1000:.0f} mm" if radius < 1.0 else f"{radius:.4g} m"
+    best = radius_text(radius)
     if stderr > REFUSED_RELATIVE * radius:
         spread = "+-inf" if not np.isfinite(stderr) else f"+-{stderr / radius:.0%}"
         why = f"one standard error {spread}"

@@ -17,6 +17,7 @@ from asbuilt.scan.model import kind_phrase
 from asbuilt.tolerances import MIN_POINTS, Tolerances
 
 __all__ = [
+    "radius_text",
     "extent_of",
     "validate_points",
     "principal_axes",
@@ -183,6 +184,12 @@ def extent_of(points: np.ndarray) -> float:
     span a fit's radius is weighed against to call it nearly a plane over them."""
     centred = points - points.mean(axis=0)
     return 2.0 * float(np.sqrt(np.max(np.einsum("ij,ij->i", centred, centred))))
+
+
+def radius_text(radius: float) -> str:
+    """A fitted radius (metres) for a message: millimetres under a metre, else metres (a
+    plane fitted as a cylinder can be kilometres wide)."""
+    return f"{radius * 1000:.0f} mm" if radius < 1.0 else f"{radius:.4g} m"
 
 
 def row_norms(vectors: np.ndarray) -> np.ndarray:

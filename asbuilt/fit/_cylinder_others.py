@@ -39,6 +39,7 @@ import dataclasses
 import numpy as np
 
 from asbuilt.errors import FitError
+from asbuilt.fit._common import radius_text
 from asbuilt.fit._cylinder_background import DETERMINED_RADIUS, depth_segments, segment_noise
 from asbuilt.fit._cylinder_planes import plane_like
 
@@ -83,10 +84,6 @@ OTHER_RADIUS = "other_cylinder_radius"
 OTHER_ANGLE = "other_cylinder_axis_deg"
 
 
-def _shown(radius: float) -> str:
-    return f"{radius * 1000:.0f} mm" if radius < 1.0 else f"{radius:.4g} m"
-
-
 def _cylinder_of(fit, points, mask, sigma, tolerances, view, others):
     """The fit of ``points[mask]`` and its inliers among all ``points`` ((n,) bool), if it
     stands as another cylinder (module docstring) apart from ``others`` (cylinders); else
@@ -129,10 +126,11 @@ def _off_axis(point: np.ndarray, cylinder) -> float:
     return float(np.linalg.norm(offset - np.dot(offset, cylinder.axis) * cylinder.axis))
 
 
-def _candidates(points, view, noise, among) -> list[np.ndarray]:
-    """Masks (n,) bool to fit: the shots ``among`` ((n,) bool) together, then (with a
-    station) each of their surfaces cut at range jumps that holds ``FEWEST_SHOTS`` or more."""
-    masks = [among] if np.count_nonzero(among) >= FEWEST_SHOTS else []
+def _candidates(points, view, noise, among, whole: bool) -> list[np.ndarray]:
+    """Masks (n,) bool to fit: the shots ``among`` ((n,) bool) together if ``whole``, then
+    (with a station) each of their surfaces cut at range jumps that holds ``FEWEST_SHOTS`` or
+    more."""
+    masks = [among] if whole and np.count_nonzero(among) >= FEWEST_SHOTS else []
     if view is None:
         return masks
     index = np.flatnonzero(among)
@@ -173,7 +171,7 @@ def with_other_cylinder(fit, points: np.ndarray, view, sigma, tolerances, result
         return result
     noise = segment_noise(sigma, tolerances)
     best = None
-    for mask in _candidates(points, view, noise, rejected):
+    for mask in _candidates(points, view, noise, rejected, whole=True):
         found = _cylinder_of(fit, points, mask, sigma, tolerances, view, [result.primitive])
         if found is not None and (best is None or found[1].sum() > best[1].sum()):
             best = found
@@ -185,7 +183,7 @@ def with_other_cylinder(fit, points: np.ndarray, view, sigma, tolerances, result
     angle = float(np.degrees(np.arccos(min(1.0, cosine))))
     note = (
         f"{kept} of the {len(points)} shots, left out of this fit, fit another cylinder"
-        f" (r {_shown(other.primitive.radius)}, its axis {angle:.0f} degrees from this one's):"
+        f" (r {radius_text(other.primitive.radius)}, its axis {angle:.0f} degrees from this one's):"
         " a header the branch leaves, a pipe beside it, or the object itself if the raster was"
         " aimed at it. If the object is that one, give it only its own shots."
     )
@@ -210,7 +208,7 @@ def cylinders_named(fit, points: np.ndarray, view, sigma, tolerances) -> str:
     noise = segment_noise(sigma, tolerances)
     everything = np.ones(len(points), dtype=bool)
     found = []
-    for mask in _candidates(points, view, noise, everything)[1:]:
+    for mask in _candidates(points, view, noise, everything, whole=False):
         one = _cylinder_of(fit, points, mask, sigma, tolerances, view, [])
         if one is not None:
             found.append(one)
@@ -222,7 +220,7 @@ def cylinders_named(fit, points: np.ndarray, view, sigma, tolerances) -> str:
     if len(kept) < 2:
         return ""
     listed = ", ".join(
-        f"r {_shown(one.primitive.radius)} over {int(np.count_nonzero(inliers))} shots"
+        f"r {radius_text(one.primitive.radius)} over {int(np.count_nonzero(inliers))} shots"
         for one, inliers in kept[:MOST_CYLINDERS]
     )
     return (

@@ -35,7 +35,7 @@ import dataclasses
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit._common import extent_of
+from asbuilt.fit._common import extent_of, radius_text
 from asbuilt.fit._cuboid_planes import _plane_through
 from asbuilt.fit._cylinder_background import (
     DETERMINED_RADIUS,
@@ -325,7 +325,6 @@ def fit_past_planes(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances
         and plane_like(first, points)
         and np.count_nonzero(first_plane & first.inliers) > 0.5 * np.count_nonzero(first.inliers)
     ):
-        radius = first.primitive.radius
-        shown = f"{radius * 1000:.0f} mm" if radius < 1.0 else f"{radius:.4g} m"
+        shown = radius_text(first.primitive.radius)
         raise BackgroundPlaneFit(PLANE_NOT_PIPE.format(radius=shown))
     return None

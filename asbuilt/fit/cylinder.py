@@ -302,31 +302,30 @@ def _subset_fit(view):
 
 
 def _fit_rescued(points, sigma, tolerances, viewpoint) -> FitResult:
-    """:func:`fit_cylinder` before other cylinders among the shots are looked for."""
+    """:func:`fit_cylinder` before other cylinders among the shots are looked for.
+    ``points`` (n, 3) metres are validated (:func:`validate_points`) and ``viewpoint`` (3,)
+    metres, when given, an array: both come from :func:`fit_cylinder`."""
     try:
         result = _fit_with_rescues(points, sigma, tolerances, viewpoint)
     except FitError as exc:
         result, error = None, exc
     first = None if result is None or _view_ignored(result) else result
-    if worth_a_look(first, sigma, tolerances) and len(np.asarray(points)) <= DENSE_POINTS:
+    if worth_a_look(first, sigma, tolerances) and len(points) <= DENSE_POINTS:
         # Shots on a flange face or the wall the pipe enters lie on one plane across its end.
-        pts = validate_points(points, "cylinder")
-        view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64)
         reference = result
-        if result is None and view is not None:
-            reference = _fit_or_none(pts, sigma, tolerances)  # refused only for the viewpoint?
-        fit = _fit_cylinder if view is None else _fit_seen_from
-        across = fit_without_end_plane(fit, pts, sigma, tolerances, view, first, reference)
+        if result is None and viewpoint is not None:
+            reference = _fit_or_none(points, sigma, tolerances)  # refused only for the view?
+        fit = _fit_cylinder if viewpoint is None else _fit_seen_from
+        across = fit_without_end_plane(fit, points, sigma, tolerances, viewpoint, first, reference)
         if across is not None:
             # A floor or wall around the pipe can still hold the fit past the end plane (a
             # metre-wide cylinder through floor shots): the background planes are looked for
             # when it is in doubt too.
             result = first = across
-    if viewpoint is not None and len(np.asarray(points)) <= DENSE_POINTS:
+    if viewpoint is not None and len(points) <= DENSE_POINTS:
         # A wall behind the pipe, a floor under it or one it passes through: one plane with
         # the pipe's shots in front of it (asbuilt.fit._cylinder_planes).
-        pts, view = validate_points(points, "cylinder"), np.asarray(viewpoint, dtype=np.float64)
-        past = fit_past_planes(_fit_seen_from, pts, view, sigma, tolerances, first)
+        past = fit_past_planes(_fit_seen_from, points, viewpoint, sigma, tolerances, first)
         if past is not None:
             result = past
     if result is None:

@@ -199,14 +199,15 @@ def check_outliers(ctx: Context) -> None:
         if share <= allowed:
             continue
         outcome = verdict(share, allowed, se, ctx.k)
-        explained = [
-            f"{on_end} more lie on a plane across the pipe's end: a flange face, or the wall"
-            " it enters"
-            if on_end
-            else "",
-            f"{on_other} more fit another cylinder" if on_other else "",
-        ]
-        said = "; ".join(part for part in explained if part)
+        explained = []
+        if on_end:
+            explained.append(
+                f"{on_end} more lie on a plane across the pipe's end: a flange face, or the"
+                " wall it enters"
+            )
+        if on_other:
+            explained.append(f"{on_other} more fit another cylinder")
+        said = "; ".join(explained)
         ctx.emit(
             slug,
             [comp.id],
