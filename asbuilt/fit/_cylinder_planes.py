@@ -97,19 +97,19 @@ def plane_like(result, points: np.ndarray) -> bool:
     return len(kept) < 2 or result.primitive.radius > PLANE_LIKE * extent_of(kept)
 
 
-def in_doubt(first, points: np.ndarray, sigma, tolerances) -> bool:
+def in_doubt(first, points: np.ndarray, sigma, tolerances, face_explained: bool = False) -> bool:
     """Whether to look for background planes after the ``first`` fit (a FitResult over
     ``points`` (n, 3) metres, or None when it was refused or ignored the viewpoint): always
     when refused; when its radius is not known to ``DETERMINED_RADIUS`` of itself, it is
     :func:`plane_like`, or many of its shots lie off it
-    (:func:`asbuilt.fit._cylinder_end_plane.worth_a_look`)."""
+    (:func:`asbuilt.fit._cylinder_end_plane.worth_a_look`, ``face_explained`` passed on)."""
     if first is None:
         return True
     stderr = first.stderr.get("radius")
     return bool(
         not stderr <= DETERMINED_RADIUS * first.primitive.radius
         or plane_like(first, points)
-        or worth_a_look(first, sigma, tolerances)
+        or worth_a_look(first, sigma, tolerances, face_explained)
     )
 
 
@@ -257,7 +257,9 @@ PLANE_NOT_PIPE = (
 )
 
 
-def fit_past_planes(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances, first):
+def fit_past_planes(
+    fit, points: np.ndarray, view: np.ndarray, sigma, tolerances, first, face_explained=False
+):
     """The cylinder fit with background planes left out (module docstring), or None.
 
     Parameters
@@ -274,6 +276,9 @@ def fit_past_planes(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances
     first : FitResult or None
         The first fit (None when refused or when it ignored the viewpoint). Nothing is looked
         for unless it is :func:`in_doubt`.
+    face_explained : bool
+        Whether ``first`` left out a face across the pipe's end after beating a fit of every
+        shot (for :func:`in_doubt`: those shots are not in doubt).
 
     Returns
     -------
@@ -287,7 +292,7 @@ def fit_past_planes(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances
         When ``first`` is :func:`plane_like`, no fit past the planes stands, and most of its
         inliers lie on the first background plane found (a floor or wall fitted as a pipe).
     """
-    if not in_doubt(first, points, sigma, tolerances):
+    if not in_doubt(first, points, sigma, tolerances, face_explained):
         return None
     n = len(points)
     cutoff = tolerances.outlier_cutoff_sigma * segment_noise(sigma, tolerances)

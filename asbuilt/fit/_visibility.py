@@ -25,6 +25,7 @@ from asbuilt.fit._robust import GeometricModel, RobustFit, gauss_newton, settled
 from asbuilt.tolerances import Tolerances
 
 __all__ = [
+    "beam_entries",
     "beyond_first_surface",
     "cylinder_beam_excess",
     "edge_on_degrees",
@@ -155,6 +156,17 @@ def excess_and_beyond(axis, center, radius, points: np.ndarray, viewpoint, span=
         excess[missed] = 0.0
         beyond[missed] = np.inf
     return excess, beyond
+
+
+def beam_entries(axis, center, radius, points: np.ndarray, viewpoint) -> np.ndarray:
+    """Where each beam from ``viewpoint`` ((3,) metres) to ``points`` ((n, 3) metres) enters
+    one infinite cylinder (``axis`` (3,), ``center`` (3,) metres, ``radius`` metres), or for a
+    beam that misses it where it passes nearest its axis: shape (n, 3), metres."""
+    view = np.asarray(viewpoint, dtype=np.float64)
+    crossings = _beam_crossings(axis, center, radius, points, view)
+    middle, half_chord = _chord(*crossings[1:])
+    directions = (points - view) / np.maximum(crossings[0], 1e-300)[:, None]
+    return view + (middle - half_chord)[:, None] * directions
 
 
 def _chord_ends(axis, center, points: np.ndarray, viewpoint, near, far):

@@ -83,7 +83,12 @@ from asbuilt.fit._cylinder_checks import (
     unhidden_starts,
     unseen,
 )
-from asbuilt.fit._cylinder_end_plane import END_PLANE_SHOTS, fit_without_end_plane, worth_a_look
+from asbuilt.fit._cylinder_end_plane import (
+    END_PLANE_SHOTS,
+    drawn_to_a_face,
+    fit_without_end_plane,
+    worth_a_look,
+)
 from asbuilt.fit._cylinder_finish import (
     METHOD,
     VIEW_IGNORED,
@@ -310,7 +315,10 @@ def _fit_rescued(points, sigma, tolerances, viewpoint) -> FitResult:
     except FitError as exc:
         result, error = None, exc
     first = None if result is None or _view_ignored(result) else result
-    if worth_a_look(first, sigma, tolerances) and len(points) <= DENSE_POINTS:
+    face_explained = False
+    if len(points) <= DENSE_POINTS and (
+        worth_a_look(first, sigma, tolerances) or drawn_to_a_face(first, points, sigma, tolerances)
+    ):
         # Shots on a flange face or the wall the pipe enters lie on one plane across its end.
         reference = result
         if result is None and viewpoint is not None:
@@ -320,12 +328,17 @@ def _fit_rescued(points, sigma, tolerances, viewpoint) -> FitResult:
         if across is not None:
             # A floor or wall around the pipe can still hold the fit past the end plane (a
             # metre-wide cylinder through floor shots): the background planes are looked for
-            # when it is in doubt too.
+            # when it is in doubt too. Its face's shots are explained when it beat a first fit
+            # (a review's pipe through a floor, no first fit: the floor taken as a pipe whose
+            # end plane was the pipe's own shots).
+            face_explained = first is not None
             result = first = across
     if viewpoint is not None and len(points) <= DENSE_POINTS:
         # A wall behind the pipe, a floor under it or one it passes through: one plane with
         # the pipe's shots in front of it (asbuilt.fit._cylinder_planes).
-        past = fit_past_planes(_fit_seen_from, points, viewpoint, sigma, tolerances, first)
+        past = fit_past_planes(
+            _fit_past_end, points, viewpoint, sigma, tolerances, first, face_explained
+        )
         if past is not None:
             result = past
     if result is None:
@@ -379,6 +392,22 @@ def _fit_with_rescues(points, sigma, tolerances, viewpoint) -> FitResult:
         # ignoring the viewpoint takes the wall for pipe. A wrong station (the far side, another
         # frame) sees one surface, or fragments with no large one nearest (docs/fitting.md).
         raise FitError(VIEW_CONTRADICTED)
+    return result
+
+
+def _fit_past_end(points, sigma, tolerances, viewpoint) -> FitResult:
+    """:func:`_fit_seen_from` of the shots left past background planes, itself checked for a
+    face across the pipe's end (:mod:`asbuilt.fit._cylinder_end_plane`): with a tee's header
+    left out as background, its branch's flange face is left in and can draw the fit across it."""
+    result = _fit_seen_from(points, sigma, tolerances, viewpoint)
+    if worth_a_look(result, sigma, tolerances) or drawn_to_a_face(
+        result, points, sigma, tolerances
+    ):
+        across = fit_without_end_plane(
+            _fit_seen_from, points, sigma, tolerances, viewpoint, result, result
+        )
+        if across is not None:
+            return across
     return result
 
 

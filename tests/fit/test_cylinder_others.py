@@ -142,13 +142,49 @@ def _tee(header_radius, branch_radius, seed):
     return [CylinderShape(centre, end, branch_radius), header]
 
 
+def test_flanged_branches_alone_are_fitted_past_their_face():
+    """The branches' own shots, 9-14 on the side and 12-16 on the flange face: the first fit
+    lay across the face (axis 89 degrees off, radius 12-46% off at a stated 1-2%) in 11 of
+    these 16 scenes before a plane holding most of a fit's inliers was tried whatever that
+    fit's axis said; now 15 are within 10% with the axis within 10 degrees."""
+    right = 0
+    for header, branch in [(0.1619, 0.05715), (0.2191, 0.0841)]:
+        for seed in range(8):
+            shapes = _tee(header, branch, seed)
+            points, on = _shoot(shapes, seed)
+            result = fit_points("cylinder", points[on], sigma=SIGMA, viewpoint=STATION)
+            axis = shapes[0].end - shapes[0].start
+            cosine = abs(result.primitive.axis @ axis) / np.linalg.norm(axis)
+            right += result.primitive.radius == pytest.approx(branch, rel=0.1) and (
+                np.degrees(np.arccos(min(cosine, 1.0))) < 10.0
+            )
+    assert right >= 14
+
+
+def test_flanged_branches_with_their_header_in_the_window():
+    """With the header in the window too (14-23 shots on it), a background plane through the
+    header is left out and the branch fitted past its face: 11 of these 16 tees within 10%
+    (5 before); the rest wrong or refused (the plane takes some side shots with it)."""
+    right = 0
+    for header, branch in [(0.2191, 0.0841), (0.3048, 0.1096)]:
+        for seed in range(8):
+            points, _ = _shoot(_tee(header, branch, seed), seed)
+            try:
+                result = fit_points("cylinder", points, sigma=SIGMA, viewpoint=STATION)
+            except FitError:
+                continue
+            right += result.primitive.radius == pytest.approx(branch, rel=0.1)
+    assert right >= 10
+
+
 @pytest.mark.xfail(
     strict=True,
     reason="open: a flanged branch 1.5 radii long pointing at the station, the header in its"
     " window, has 9-12 side shots against 14-16 on its flange face and 14-22 on the header;"
-    " the background-plane rescue leaves out the header with a few branch shots and the fit"
-    " of the rest takes the flange face in (r 31.8 +-0.8 mm for 57.15 mm here; 8-49% small on"
-    " six such tees)",
+    " the background plane through the header takes 4 of the 9 side shots with it, and the"
+    " fit of the rest lies across the face (r 31.8 +-0.8 mm for 57.15 mm here). Of 40 such"
+    " tees 19 within 10% (8 before), 2 refused, 19 wrong (8 of them a 30 mm branch fitted as"
+    " its header, with a note naming the branch)",
 )
 def test_a_flanged_branch_with_its_header_in_the_window():
     points, _ = _shoot(_tee(0.1619, 0.05715, 4), 4)

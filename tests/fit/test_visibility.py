@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from scipy.optimize import brentq, minimize_scalar
 
 from asbuilt.fit._visibility import (
+    beam_entries,
     beyond_first_surface,
     cylinder_beam_excess,
     edge_on_degrees,
@@ -219,3 +220,15 @@ def test_a_beam_past_the_pipes_end_met_no_pipe():
     both = excess_and_beyond(AXIS, np.zeros(3), 1.0, below, view)
     spanned = excess_and_beyond(AXIS, np.zeros(3), 1.0, below, view, (-1.0, 1.0))
     assert np.allclose(both, spanned)
+
+
+def test_where_beams_enter_a_unit_pipe():
+    """Along the z axis, radius 1: a beam from (5, 0, 0) to the axis enters at (1, 0, 0); one
+    from (5, 0, 3) enters where x = 1 on its line, (1, 0, 0.6); one that misses (toward
+    (0, 2, 0)) is given where it passes nearest the axis, the foot of the perpendicular from
+    the axis to its line: (20, 50, 0) / 29."""
+    view = np.array([5.0, 0.0, 0.0])
+    entries = beam_entries(AXIS, np.zeros(3), 1.0, np.array([[0.0, 0, 0], [0, 2, 0]]), view)
+    np.testing.assert_allclose(entries, [[1.0, 0, 0], [20 / 29, 50 / 29, 0]], atol=1e-12)
+    tilted = beam_entries(AXIS, np.zeros(3), 1.0, np.zeros((1, 3)), np.array([5.0, 0, 3]))
+    np.testing.assert_allclose(tilted, [[1.0, 0, 0.6]], atol=1e-12)
