@@ -13,7 +13,6 @@ Run: ``python benchmarks/end_plane_pipes.py --seeds 60`` (about a minute).
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import sys
 from pathlib import Path
 
@@ -22,15 +21,13 @@ import numpy as np
 import asbuilt.fit.cylinder as cylinder_module
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+import _test_modules  # noqa: E402
 
 
 def _scenes_module():
     """The tests' scene generator, loaded from the checkout (the tests are not installed)."""
-    path = HERE.parent / "tests" / "fit" / "test_cylinder_end_plane.py"
-    spec = importlib.util.spec_from_file_location("end_plane_scenes", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return _test_modules.load("fit/test_cylinder_end_plane.py", "end_plane_scenes")
 
 
 def main(argv=None) -> int:

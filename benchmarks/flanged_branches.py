@@ -14,24 +14,23 @@ Run: ``python benchmarks/flanged_branches.py --seeds 8`` (about half a minute).
 from __future__ import annotations
 
 import argparse
-import importlib.util
+import sys
 from pathlib import Path
 
 from asbuilt.errors import FitError
 from asbuilt.fit import fit_points
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+import _test_modules  # noqa: E402
+
 #: (header radius, branch radius), metres: NPS 12/4, 8/4, 16/6, 12/2, 24/8.
 PAIRS = [(0.1619, 0.05715), (0.1096, 0.0572), (0.2191, 0.0841), (0.1619, 0.0302), (0.3048, 0.1096)]
 
 
 def _scenes_module():
     """The tests' tee and raster, loaded from the checkout (the tests are not installed)."""
-    path = HERE.parent / "tests" / "fit" / "test_cylinder_others.py"
-    spec = importlib.util.spec_from_file_location("tee_scenes", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return _test_modules.load("fit/test_cylinder_others.py", "tee_scenes")
 
 
 def _outcome(points, scenes, branch: float) -> str:
