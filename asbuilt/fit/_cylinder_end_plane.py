@@ -52,11 +52,11 @@ __all__ = [
     "ACROSS_DEG",
     "CAPTURED_DETERMINED",
     "CAPTURED_SHARE",
-    "FACE_SAMPLES",
-    "FLAT_AS_ROUND",
     "DOUBT_SHARE",
     "END_PLANE_SHOTS",
     "END_SHOTS",
+    "FACE_SAMPLES",
+    "FLAT_AS_ROUND",
     "MORE_EXPLAINED",
     "drawn_to_a_face",
     "fit_without_end_plane",
@@ -211,13 +211,11 @@ def _a_pipe_itself(fit, shots: np.ndarray, sigma, tolerances, view) -> bool:
 
 
 def _captured(planes: np.ndarray, fit) -> np.ndarray:
-    """Which of ``planes`` ((n,) or (n, planes) bool) hold more than :data:`CAPTURED_SHARE` of
-    the inliers of ``fit`` (a FitResult, or None: none), shape () or (planes,) bool."""
+    """Which of ``planes`` ((n, planes) bool) hold more than :data:`CAPTURED_SHARE` of the
+    inliers of ``fit`` (a FitResult, or None: none), shape (planes,) bool."""
     if fit is None:
-        return np.zeros(planes.shape[1:], dtype=bool)
-    held = np.count_nonzero(
-        planes & (fit.inliers if planes.ndim == 1 else fit.inliers[:, None]), axis=0
-    )
+        return np.zeros(planes.shape[1], dtype=bool)
+    held = np.count_nonzero(planes & fit.inliers[:, None], axis=0)
     return held > CAPTURED_SHARE * np.count_nonzero(fit.inliers)
 
 
@@ -366,7 +364,9 @@ def fit_without_end_plane(fit, points: np.ndarray, sigma, tolerances, view, firs
             break
         normal, centroid = _plane(points[plane])
         # A plane that drew the fit to itself is tried whatever its axis, unless it is a pipe.
-        captured = bool(_captured(plane, first) or _captured(plane, reference))
+        captured = bool(
+            _captured(plane[:, None], first)[0] or _captured(plane[:, None], reference)[0]
+        )
         if not _one_sided(points, plane, normal, centroid, cutoff) or not (
             captured or _square_at_an_end(reference, normal, centroid, cutoff)
         ):

@@ -316,9 +316,7 @@ def _fit_rescued(points, sigma, tolerances, viewpoint) -> FitResult:
         result, error = None, exc
     first = None if result is None or _view_ignored(result) else result
     face_explained = False
-    if len(points) <= DENSE_POINTS and (
-        worth_a_look(first, sigma, tolerances) or drawn_to_a_face(first, points, sigma, tolerances)
-    ):
+    if len(points) <= DENSE_POINTS and _face_worth_a_look(first, points, sigma, tolerances):
         # Shots on a flange face or the wall the pipe enters lie on one plane across its end.
         reference = result
         if result is None and viewpoint is not None:
@@ -395,14 +393,21 @@ def _fit_with_rescues(points, sigma, tolerances, viewpoint) -> FitResult:
     return result
 
 
+def _face_worth_a_look(first, points, sigma, tolerances) -> bool:
+    """Whether to look for a face across the pipe's end after the ``first`` fit (None when
+    refused or when it ignored the viewpoint): many shots off it, or a face may have drawn it
+    (:mod:`asbuilt.fit._cylinder_end_plane`)."""
+    return worth_a_look(first, sigma, tolerances) or drawn_to_a_face(
+        first, points, sigma, tolerances
+    )
+
+
 def _fit_past_end(points, sigma, tolerances, viewpoint) -> FitResult:
     """:func:`_fit_seen_from` of the shots left past background planes, itself checked for a
     face across the pipe's end (:mod:`asbuilt.fit._cylinder_end_plane`): with a tee's header
     left out as background, its branch's flange face is left in and can draw the fit across it."""
     result = _fit_seen_from(points, sigma, tolerances, viewpoint)
-    if worth_a_look(result, sigma, tolerances) or drawn_to_a_face(
-        result, points, sigma, tolerances
-    ):
+    if _face_worth_a_look(result, points, sigma, tolerances):
         across = fit_without_end_plane(
             _fit_seen_from, points, sigma, tolerances, viewpoint, result, result
         )

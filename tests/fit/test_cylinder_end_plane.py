@@ -263,7 +263,7 @@ def test_a_plane_holding_most_of_a_fits_inliers_captured_it():
     planes[inliers[:most], 0] = True
     planes[inliers[: most - 1], 1] = True
     assert list(_captured(planes, fit)) == [True, False]
-    assert bool(_captured(planes[:, 0], fit)) and not _captured(planes, None).any()
+    assert _captured(planes[:, :1], fit)[0] and not _captured(planes, None).any()
 
 
 @pytest.mark.parametrize("seed", range(4))
