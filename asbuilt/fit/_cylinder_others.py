@@ -41,6 +41,7 @@ import numpy as np
 from asbuilt.errors import FitError
 from asbuilt.fit._common import radius_text
 from asbuilt.fit._cylinder_background import DETERMINED_RADIUS, depth_segments, segment_noise
+from asbuilt.fit._cylinder_end_plane import END_PLANE_SHOTS
 from asbuilt.fit._cylinder_planes import plane_like
 
 __all__ = [
@@ -57,9 +58,10 @@ __all__ = [
     "with_other_cylinder",
 ]
 
-#: A cylinder among the shots is reported only with at least this many inliers: fewer leave
-#: its radius and axis to a handful of shots (mixed returns and edge shots come in ones and
-#: twos, a neighbour's raster line in fives and sixes).
+#: A cylinder among the shots is reported only with at least this many inliers (and shots on
+#: the face across its end, when its fit left such a face out): fewer leave its radius and
+#: axis to a handful of shots (mixed returns and edge shots come in ones and twos, a
+#: neighbour's raster line in fives and sixes).
 FEWEST_SHOTS = 10
 #: ... and its inliers must cover at least this arc about its axis (degrees): a pipe a raster
 #: reaches shows 90-180 degrees of itself to the station, while a wall or floor bent into a
@@ -95,8 +97,10 @@ def _cylinder_of(fit, points, mask, sigma, tolerances, view, others):
     inliers = np.zeros(len(points), dtype=bool)
     inliers[mask] = found.inliers
     cylinder = found.primitive
+    # A flanged branch's face, left out as the surface across its end, is its shots too.
+    face = int(found.diagnostics.get(END_PLANE_SHOTS, 0))
     if (
-        np.count_nonzero(inliers) < FEWEST_SHOTS
+        np.count_nonzero(inliers) + face < FEWEST_SHOTS
         or not found.stderr["radius"] <= DETERMINED_RADIUS * cylinder.radius
         or plane_like(found, points[mask])
         or not found.diagnostics.get("arc_deg", 0.0) >= FEWEST_ARC_DEGREES

@@ -22,8 +22,11 @@ from asbuilt.fit import fit_points
 from asbuilt.fit._cylinder_end_plane import (
     CAPTURED_SHARE,
     END_PLANE_SHOTS,
+    PIPE_ARC_DEGREES,
+    _a_pipe_itself,
     _across_the_end,
     _captured,
+    _face_of_the_fit,
     _through_the_face,
     drawn_to_a_face,
     fit_without_end_plane,
@@ -275,6 +278,60 @@ def test_a_lone_pipe_is_not_drawn_to_a_face(seed):
     points[:8, 2] += 0.4  # a wall behind
     fit = fit_points("cylinder", points, sigma=SIGMA, viewpoint=[0.0, 0.0, -5.0])
     assert not drawn_to_a_face(fit, points, SIGMA, DEFAULT_TOLERANCES)
+
+
+def _face_and_fit(off_height: float):
+    """Twenty shots: twelve on a 60 mm disk in the plane z = 0 that a fit explains to 0.1 mm
+    (closer than their plane: a fit bent to their noise), two more shots off the fit at
+    height ``off_height`` metres above that plane, six off the plane that the fit keeps. The
+    fit is a FitResult with those residuals; returns (fit, points, on, off)."""
+    rng = np.random.default_rng(3)
+    angle, reach = rng.uniform(0, 2 * np.pi, 14), 0.03 * np.sqrt(rng.uniform(0, 1, 14))
+    disk = np.column_stack([reach * np.cos(angle), reach * np.sin(angle), np.zeros(14)])
+    disk[:, 2] += rng.normal(0, SIGMA, 14)
+    disk[12:, 2] += off_height
+    side = np.column_stack([rng.uniform(-0.1, -0.05, 6), np.zeros(6), rng.uniform(0.02, 0.2, 6)])
+    points = np.vstack([disk, side])
+    template = fit_points("cylinder", _lone_pipe(5, 20), sigma=SIGMA)
+    residuals = np.full(20, 1e-4)
+    residuals[12:14] = 0.03
+    fit = dataclasses.replace(template, residuals=residuals, inliers=np.abs(residuals) < 0.006)
+    on = np.arange(20) < 12
+    return fit, points, on, ~fit.inliers
+
+
+def test_the_rest_of_a_face_off_the_fit_marks_it():
+    """A fit that explains a face's shots better than their plane still lay across the face
+    when shots it left off lie on that plane too; not when they lie off it."""
+    fit, points, on, off = _face_and_fit(0.0)
+    assert _face_of_the_fit(fit, points, on, off, 0.006)
+    fit, points, on, off = _face_and_fit(0.05)
+    assert not _face_of_the_fit(fit, points, on, off, 0.006)
+
+
+@pytest.mark.parametrize("arc, pipe", [(PIPE_ARC_DEGREES - 1.0, False), (PIPE_ARC_DEGREES, True)])
+def test_shots_over_a_narrow_arc_are_no_pipe_itself(arc, pipe):
+    """A determined fit of a plane's shots is their pipe only over a wide enough arc (a tee's
+    60 mm flange face fitted alone: r 173 +-82 mm over 18 degrees)."""
+    shots = _lone_pipe(4, 20)
+    found = fit_points("cylinder", shots, sigma=SIGMA)
+    assert found.stderr["radius"] < 0.1 * found.primitive.radius
+
+    def fit(points, sigma, tolerances, view):
+        return dataclasses.replace(found, diagnostics={**found.diagnostics, "arc_deg": arc})
+
+    assert _a_pipe_itself(fit, shots, SIGMA, DEFAULT_TOLERANCES, None) is pipe
+
+
+def test_a_thin_pipes_crest_is_a_pipe_itself():
+    """A 60 mm pipe's 20 shots within 50 degrees of its crest lie within 6 mm of one plane,
+    and fitted alone they are a pipe (over about 100 degrees of arc)."""
+    rng = np.random.default_rng(2)
+    theta, x = rng.uniform(-0.9, 0.9, 20), rng.uniform(-0.5, 0.5, 20)
+    crest = np.column_stack([x, 0.0302 * np.sin(theta), -0.0302 * np.cos(theta)])
+    crest += rng.normal(0, SIGMA, crest.shape)
+    fit = cylinder_module._fit_cylinder
+    assert _a_pipe_itself(fit, crest, SIGMA, DEFAULT_TOLERANCES, None)
 
 
 def _capped_pipe():

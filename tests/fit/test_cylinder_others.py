@@ -161,10 +161,34 @@ def test_flanged_branches_alone_are_fitted_past_their_face():
     assert right >= 14
 
 
+def test_thin_flanged_branches_alone_are_fitted_past_their_face():
+    """NPS 2 branches (9-14 side shots, 10-14 on a face two diameters across): a fit lying
+    along the face bends to a few of its shots' noise and explains them better than their
+    plane does, but leaves the rest of the face off, on that plane. Before that was a reason
+    to look, 4 of these 8 were r 31-35% low at a stated 2-3%; now 7 are within 10%."""
+    right = 0
+    for seed in range(8):
+        shapes = _tee(0.1619, 0.0302, seed)
+        points, on = _shoot(shapes, seed)
+        result = fit_points("cylinder", points[on], sigma=SIGMA, viewpoint=STATION)
+        right += result.primitive.radius == pytest.approx(0.0302, rel=0.1)
+    assert right >= 6
+
+
+def test_a_thin_branch_fitted_as_its_header_names_the_branch():
+    """An NPS 2 branch's shots, refitted among those its header's fit left out, leave the
+    branch's face out as the surface across its end and keep only its 8 side shots; with the
+    face's shots counted (10 or more in all) the branch is named."""
+    points, _ = _shoot(_tee(0.1619, 0.0302, 0), 0)
+    result = fit_points("cylinder", points, sigma=SIGMA, viewpoint=STATION)
+    assert result.primitive.radius > 3 * 0.0302  # the header's shots, not the branch's
+    assert _other_radius(result) == pytest.approx(0.0302, rel=0.2)
+
+
 def test_flanged_branches_with_their_header_in_the_window():
     """With the header in the window too (14-23 shots on it), a background plane through the
-    header is left out and the branch fitted past its face: 11 of these 16 tees within 10%
-    (5 before); the rest wrong or refused (the plane takes some side shots with it)."""
+    header is left out and the branch fitted past its face: 13 of these 16 tees within 10%
+    (5 at stop 50); the rest wrong or refused (the plane takes some side shots with it)."""
     right = 0
     for header, branch in [(0.2191, 0.0841), (0.3048, 0.1096)]:
         for seed in range(8):
@@ -183,8 +207,8 @@ def test_flanged_branches_with_their_header_in_the_window():
     " window, has 9-12 side shots against 14-16 on its flange face and 14-22 on the header;"
     " the background plane through the header takes 4 of the 9 side shots with it, and the"
     " fit of the rest lies across the face (r 31.8 +-0.8 mm for 57.15 mm here). Of 40 such"
-    " tees 19 within 10% (8 before), 2 refused, 19 wrong (8 of them a 30 mm branch fitted as"
-    " its header, with a note naming the branch)",
+    " tees 22 within 10% (8 at stop 50), 1 refused, 17 wrong (8 of them a 30 mm branch fitted"
+    " as its header, with a note naming the branch)",
 )
 def test_a_flanged_branch_with_its_header_in_the_window():
     points, _ = _shoot(_tee(0.1619, 0.05715, 4), 4)
