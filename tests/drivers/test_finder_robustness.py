@@ -219,3 +219,27 @@ def test_a_long_move_acknowledged_at_its_end_waits_for_the_travel_time():
                 pan, _ = ptu.move_to(math.radians(pan_deg), 0.0)
                 assert ptu.position() == pytest.approx((pan, 0.0), abs=1e-3)
         assert server.error is None
+
+
+# -- Pelco-D tilt encoding ----------------------------------------------------------------------
+def test_a_signed_tilt_seen_by_the_pelco_driver_is_journalled_as_a_note(tmp_path):
+    # the head reports tilts below zero in signed 16-bit, which the default "wrap" driver reads
+    # and notes; the session hands the note to the journal
+    from asbuilt.drivers.pelco import PelcoD
+
+    out = tmp_path / "s.json"
+    rig = wall_rig(4.0)
+    rig.move(tilt_counts=5 * 3600 / rig.resolution[1])  # left tilted up: raw -500 (FE 0C)
+    options = {"tilt_encoding": "signed"}
+    with PtyServer(rig, "dimetix", ptu_protocol="pelco-d", ptu_options=options) as srv:
+        with (
+            PelcoD.open(srv.ptu_path, timeout=1.0, move_timeout=2.0) as ptu,
+            DimetixDLS.open(srv.lrf_path, timeout=1.0) as lrf,
+        ):
+            assert len(ptu.notes) == 1  # the opening's query
+            window = Window.from_degrees([-4, -4, 4, -1])  # down: raw 100-400 either way
+            with ScanSession(DeviceShooter(ptu, lrf), STATION, out) as session:
+                assert session.scan(Target("W2", "plane", window)) is not None
+            assert ptu.notes == []
+    notes = [r for r in read_journal(journal_path_for(out)) if r["type"] == "note"]
+    assert len(notes) == 1 and "read as signed 16-bit" in notes[0]["notes"][0]
