@@ -105,7 +105,7 @@ def make_device(scheme: str, rig, options: dict[str, str], settings: dict | None
     if protocol == "lw20":
         from .sim_lw20 import LW20Simulator
 
-        return LW20Simulator(rig, options.get("prefix", ""))
+        return LW20Simulator(rig, options.get("prefix", ""), **settings)
     raise SerialException(
         f"unknown simulated range finder protocol {protocol!r}; use dimetix, ldm or lw20"
     )
