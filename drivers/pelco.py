@@ -605,7 +605,9 @@ class PelcoD:
         :class:`~asbuilt.drivers.ptu.PTULimitError` (a head never seen moving, which may not
         take absolute moves at all, waits out ``move_timeout`` instead).
         A reply that cannot be read (noise: bad checksum, short frame) is queried again, up to
-        ``POLL_RETRIES`` in a row; silence (:class:`DeviceTimeout`) ends the wait at once.
+        ``POLL_RETRIES`` in a row. Silence (:class:`DeviceTimeout`: the reference does not say
+        that a head answers position queries while it moves, and some do not) is queried
+        again until ``move_timeout``, which then ends the wait with a timeout saying so.
         """
         deadline = time.monotonic() + self.move_timeout
         failures = 0
@@ -619,6 +621,15 @@ class PelcoD:
                 failures += 1
                 if failures > POLL_RETRIES or time.monotonic() > deadline:
                     raise
+                continue
+            except DeviceTimeout as exc:  # busy moving, maybe: ask again until the move's limit
+                if time.monotonic() > deadline:
+                    where = "" if at is None else f" (last reported pan {at[0]} / tilt {at[1]})"
+                    raise DeviceTimeout(
+                        f"{self.name}: the head did not answer position queries up to "
+                        f"{self.move_timeout:g} s after the move to pan {pan_raw} / tilt "
+                        f"{tilt_raw} hundredths of a degree{where}; last: {exc}"
+                    ) from exc
                 continue
             if self._near(at[0], pan_raw) and self._near(at[1], tilt_raw):
                 return at

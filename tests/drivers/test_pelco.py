@@ -478,3 +478,34 @@ def test_the_default_encoding_is_unchanged_and_bad_encodings_are_refused():
         assert ptu.tilt_encoding == "wrap" and ptu.notes == [] and not ptu.signed_tilt_seen
     with FrameFake(Head()) as fake, pytest.raises(ValueError, match="tilt_encoding"):
         _open(fake, tilt_encoding="two's complement")
+
+
+# -- a head silent while it moves ---------------------------------------------------------------
+def test_a_head_silent_to_position_queries_while_moving_is_asked_until_it_arrives():
+    # the reference does not say a head answers position queries while it moves
+    rig = wall_rig(4.0)
+    rig.speed = 20 * 3600 / rig.resolution[0]  # 20 deg/s: 20 deg of pan take a second
+    options = {"busy_silent": True}
+    with PtyServer(rig, "dimetix", ptu_protocol="pelco-d", ptu_options=options) as server:
+        with PelcoD.open(server.ptu_path, timeout=0.3, move_timeout=5.0) as ptu:
+            start = time.monotonic()
+            pan, tilt = ptu.move_to(math.radians(20), math.radians(-3))  # before: DeviceTimeout
+            assert time.monotonic() - start >= 0.9
+            assert [math.degrees(a) for a in (pan, tilt)] == pytest.approx([20, -3])
+            assert ptu.position() == pytest.approx((pan, tilt))
+        assert server.error is None
+
+
+def test_a_head_that_stays_silent_after_a_move_times_out_at_the_moves_limit():
+    answering = {"on": True}
+
+    def respond(got):
+        if got[3] in (0x4B, 0x4D):
+            answering["on"] = False  # silent from the first move on
+        return Head()(got) if answering["on"] else []
+
+    with FrameFake(respond) as fake, _open(fake, timeout=0.2, move_timeout=1.0) as ptu:
+        start = time.monotonic()
+        with pytest.raises(DeviceTimeout, match="did not answer position queries up to 1 s"):
+            ptu.move_to(math.radians(10), 0.0)
+        assert 1.0 <= time.monotonic() - start < 2.0
