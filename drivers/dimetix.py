@@ -11,11 +11,19 @@ Keeping replies with their shots: the input is cleared before every ``sNg``; aft
 its ``gN?``, so a late answer to the earlier ``sNg`` is dropped instead of being taken for the
 next shot's range. Only replies naming this device's id count; commands seen on the line (an
 RS-485 adapter's echo, another host on the bus) are skipped.
+
+Command line ending: the reference gives CR LF but not how the device splits it. The driver
+sends CR LF; :meth:`DimetixDLS.probe` (two stops, ``sNc``) switches to CR alone for a device
+that ends a command at CR and keeps the LF as the first byte of the next one (which it then
+does not take for a command: the second stop goes unanswered), and to LF alone for one that
+ends a command at LF and keeps the CR (which refuses or ignores even the first stop). An
+ending is kept only when two stops are acknowledged with it.
 """
 
 from __future__ import annotations
 
 import re
+import time
 
 from asbuilt.errors import DeviceProtocolError, DeviceTimeout
 
@@ -51,6 +59,9 @@ _FROM = re.compile(r"^g(\d)")  # any reply names the id of the device that sent 
 
 #: Seconds :meth:`DimetixDLS.laser` waits for a reply the reference does not promise.
 LASER_REPLY_WAIT = 0.3
+#: Seconds :meth:`DimetixDLS.probe` listens for an answer to a lone line ending it sends (to end
+#: what the device holds of a command) before trying another ending.
+FLUSH_WAIT = 0.3
 _COMMAND = re.compile(r"^s\d", re.IGNORECASE)  # a command on the bus: an echo or another host's
 
 
@@ -71,6 +82,9 @@ class DimetixDLS:
         self.channel = channel
         self.device_id = int(device_id)
         self._unsynced = False  # a reply may still be on its way (timeout, garbage)
+        #: Command line ending: CR LF, or CR or LF alone once :meth:`probe` found that the device
+        #: keeps the other byte as part of a command.
+        self.eol = "\r\n"
 
     @classmethod
     def open(
@@ -151,7 +165,7 @@ class DimetixDLS:
         if self._unsynced:
             self.stop()
         self.channel.discard_input()  # nothing received before the command can be its answer
-        self.channel.write(f"s{n}g\r\n")
+        self.channel.write(f"s{n}g{self.eol}")
         try:
             while True:
                 line = self._line(f"distance reply from device id {n}", timeout)
@@ -182,14 +196,68 @@ class DimetixDLS:
             No ``gN?`` from this device id within the timeout.
         """
         self.channel.discard_input()
-        self.channel.write(f"s{self.device_id}c\r\n")
+        self.channel.write(f"s{self.device_id}c{self.eol}")
         while not _IDLE.match(self._line(f"stop acknowledgement from device id {self.device_id}")):
             pass  # a late reply to an earlier command
         self._unsynced = False
 
     def probe(self) -> None:
-        """Check that the sensor answers on these line settings (a stop, :meth:`stop`)."""
-        self.stop()
+        """Check that the sensor answers on these line settings and settle how commands end:
+        two stops (:meth:`stop`), both acknowledged.
+
+        If one goes unanswered, the device may keep a byte of CR LF as part of a command: one
+        that ends a command at CR and keeps the LF as the first byte of the next (the first
+        stop answered, LF ``sNc`` not), or one that ends it at LF and keeps the CR (``sNc`` CR
+        is no command: not even the first answered, or only refused, ``E203``). Each of CR and
+        LF alone is then tried, the likelier first: a lone ending ends what the device holds
+        of a command (its answer dropped), and two stops ended with it must be acknowledged.
+        An ending that does not draw them is given up for CR LF again (:attr:`eol`), and the
+        first timeout raised.
+
+        Raises
+        ------
+        DeviceTimeout
+            No acknowledgement with any of the endings tried.
+        """
+        answered = 0
+        try:
+            self.stop()
+            answered = 1
+            self.stop()
+        except DeviceTimeout as exc:
+            for eol in ("\r", "\n") if answered else ("\n", "\r"):
+                if self._try_ending(eol):
+                    return
+            raise exc
+
+    def _try_ending(self, eol: str) -> bool:
+        """Send ``eol`` alone (ending what the device holds of a command, its answer dropped),
+        then two stops ended with it; keep it if both are acknowledged, else go back to CR LF."""
+        self.eol = eol
+        self._flush()
+        try:
+            self.stop()
+            self.stop()
+            return True
+        except DeviceTimeout:
+            self.eol = "\r\n"
+            self._flush()
+            return False
+
+    def _flush(self) -> None:
+        """Send :attr:`eol` alone and drop whatever comes within ``FLUSH_WAIT`` of quiet."""
+        self.channel.discard_input()
+        self.channel.write(self.eol)
+        deadline = time.monotonic() + self.channel.timeout
+        while time.monotonic() < deadline:
+            try:
+                self.channel.read_line(FLUSH_WAIT)
+            except DeviceTimeout:
+                break
+            except DeviceProtocolError:
+                continue
+        self.channel.discard_input()
+        self._unsynced = False
 
     def laser(self, on: bool) -> None:
         """``sNo`` / ``sNp``: laser pointer on or off.
@@ -199,7 +267,7 @@ class DimetixDLS:
         done; an error reply raises as a measurement's does.
         """
         self.channel.discard_input()
-        self.channel.write(f"s{self.device_id}{'o' if on else 'p'}\r\n")
+        self.channel.write(f"s{self.device_id}{'o' if on else 'p'}{self.eol}")
         try:
             line = self._line("acknowledgement", LASER_REPLY_WAIT)
         except DeviceTimeout:

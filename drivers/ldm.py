@@ -14,8 +14,10 @@ documented in the reference used here; other codes are reported as the device se
 Command line ending: the reference shows the replies' (CR LF) but not the commands'. The
 driver sends CR LF; :meth:`LDM4x.probe` switches to CR alone for a meter that ends a command at
 CR and again at LF (it answers the empty second one too, an ``Exx`` before or after the
-distance) and for one that ends it at CR and keeps the LF as the start of the next command (which
-it then refuses: a second ``DM`` at the same aim answered with an error).
+distance), for one that ends it at CR and keeps the LF as the start of the next command (which
+it then refuses: a second ``DM`` at the same aim answered with an error), and to LF alone for one
+that ends it at LF and keeps the CR in it (which refuses even the first ``DM``: an error other
+than E15, or silence).
 
 Keeping replies with their shots: the input is cleared before every ``DM`` (a power-up
 autostart line, a stale answer); the protocol has no stop command, so after a timeout the next
@@ -25,6 +27,7 @@ measurement first waits (up to its timeout) for the late answer and drops it.
 from __future__ import annotations
 
 import re
+import time
 
 from asbuilt.errors import DeviceProtocolError, DeviceTimeout
 
@@ -66,8 +69,8 @@ class LDM4x:
         self.last_quality: int | None = None
         self._late = False  # a DM timed out: its answer may still come
         self._last_reply = ""  # the last DM's reply line, as sent
-        #: Command line ending: CR LF, or CR alone once :meth:`probe` found that the meter
-        #: ends a command at each.
+        #: Command line ending: CR LF, or CR or LF alone once :meth:`probe` found that the meter
+        #: needs it.
         self.eol = "\r\n"
 
     @classmethod
@@ -157,7 +160,11 @@ class LDM4x:
         1. One ``DM`` CR LF. A second reply to it means the meter ended the command at CR and
            again at LF: an error first (the empty command's, answered at once) is followed by
            the distance within the reply timeout; a distance first by the error within
-           ``SECOND_REPLY_WAIT``. Commands then end with CR alone (:attr:`eol`).
+           ``SECOND_REPLY_WAIT``. Commands then end with CR alone (:attr:`eol`). Silence, or
+           one error other than E15 (the miss), may be a meter that ends a command at LF and
+           keeps the CR in it (``DM`` CR is no command): two ``DM`` LF answered alike with a
+           distance or E15 make commands end with LF alone (else the driver goes back to CR LF,
+           and silence raises the first timeout).
         2. Otherwise a second ``DM`` CR LF at the same aim must be answered in kind (a distance
            after a distance, the same code after a code). A meter that ends a command at CR
            and keeps the LF as the first byte of the next command refuses that second one (an
@@ -174,7 +181,15 @@ class LDM4x:
         DeviceTimeout, DeviceProtocolError
             Silence, or a reply that is neither a distance nor ``Exx`` (wrong baud rate).
         """
-        first = self._answer()
+        try:
+            first = self._answer()
+        except DeviceTimeout as exc:  # silence: maybe "DM" CR is no command for this meter
+            last = self._try_lf()
+            if last is None:
+                raise exc
+            if not _decimal(last):
+                self._set_decimal()
+            return
         # after an error, the distance may follow the empty command's error: the full timeout
         wait = SECOND_REPLY_WAIT if _kind(first) == "distance" else None
         try:
@@ -186,6 +201,8 @@ class LDM4x:
                 self._distance(second)  # anything else is the baud rate's problem, said as such
             self.eol = "\r"
             last = self._answer()
+        elif _refused(first) and (lf := self._try_lf()) is not None:
+            last = lf
         else:
             try:
                 last = self._answer()
@@ -227,12 +244,32 @@ class LDM4x:
         self.eol = "\r\n"
         return self._answer()
 
+    def _try_lf(self) -> str | None:
+        """``DM`` CR LF drew silence or a refusal: try LF alone (see :meth:`probe`, step 1); the
+        last reply if two ``DM`` LF are answered alike with a distance or E15, else None (CR LF
+        again)."""
+        self._late = False  # a meter that refused "DM" CR owes no answer to it
+        self._flush("\n")
+        self.eol = "\n"
+        try:
+            a = self._answer()
+            b = self._answer()
+        except DeviceTimeout:
+            a = b = None
+        if a is not None and _kind(a) == _kind(b) and not _refused(a):
+            return b
+        self._late = False
+        self._flush("\r\n")
+        self.eol = "\r\n"
+        return None
+
     def _flush(self, ending: str) -> None:
         """Send ``ending`` alone (it ends whatever the meter holds of a command) and drop the
         answer it may draw."""
         self.channel.write(ending)
+        deadline = time.monotonic() + self.channel.timeout  # a meter streaming (autostart)
         try:
-            while True:
+            while time.monotonic() < deadline:
                 self.channel.read_line(SECOND_REPLY_WAIT)
         except DeviceTimeout:
             pass
@@ -255,6 +292,12 @@ def _kind(reply: str | None) -> str | None:
     if reply is None:
         return None
     return reply if _ERROR.match(reply) else "distance"
+
+
+def _refused(reply: str) -> bool:
+    """Whether ``reply`` is an error code other than E15 (the miss): what a meter may answer to
+    a command it does not know."""
+    return _kind(reply) not in ("distance", "E15")
 
 
 def _decimal(reply: str) -> bool:

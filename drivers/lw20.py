@@ -16,7 +16,9 @@ What the reference leaves open and this driver assumes (docs/drivers.md):
   text) is a :class:`~asbuilt.errors.DeviceProtocolError`: a wrong baud rate or not an LW20;
 * a value of zero or below (``0.00``, ``-1.00``) is the device's "no target" and raises
   :class:`~asbuilt.drivers.rangefinder.SignalTooWeak` (code ``no-target``), a miss like the
-  other finders' "signal too weak";
+  other finders' "signal too weak"; so does a "no target" said in text: ``no target`` (any case,
+  also ``no-target``, ``notarget``) or dashes in place of the number (``--.--``, ``----``),
+  with the same optional label and unit. Any other text stays a protocol error;
 * a line that is only our own command echoed back (``LD``, ``www``) is skipped.
 
 Keeping replies with their shots: the protocol has no stop command, so after a timeout the next
@@ -42,6 +44,12 @@ _REPLY = re.compile(
     r"([-+]?(?:\d+(?:\.\d*)?|\.\d+))"  # the number of metres
     r"\s*(?:m)?$"  # an optional unit
 )
+_NO_TARGET = re.compile(
+    r"^(?:[A-Za-z]+(?:,\d+)?\s*[:=]\s*|[A-Za-z]+\s+)?"  # the same optional label
+    r"(?:no[\s_-]*target|--+(?:\.-+)?|-\.-+)"  # "no target" in words, dashes for the number
+    r"\s*(?:m)?$",
+    re.IGNORECASE,
+)
 _ECHO = re.compile(r"^(?:LD|www)$", re.IGNORECASE)
 
 #: Seconds of quiet after ``www`` taken as the end of the device's answer to it (if any).
@@ -54,13 +62,16 @@ def parse_distance(line: str, name: str = "LW20") -> float:
     Raises
     ------
     SignalTooWeak
-        The value is 0 or negative: no target.
+        The value is 0 or negative, or the line says "no target" in text (``no target``,
+        ``--.--``): no target.
     DeviceProtocolError
         The line is not one number (with an optional label and unit).
     """
     text = line.strip()
     m = _REPLY.match(text)
     value = float(m.group(1)) if m else math.nan
+    if m is None and _NO_TARGET.match(text):
+        value = 0.0  # no target, said in text
     if not math.isfinite(value):
         raise DeviceProtocolError(
             f"{name}: unexpected reply {line!r} to LD (expected a distance in metres such as "
@@ -139,7 +150,7 @@ class LW20:
         Raises
         ------
         SignalTooWeak
-            No target (a value <= 0).
+            No target (a value <= 0, ``no target``, ``--.--``).
         DeviceTimeout, DeviceProtocolError
             Silence or a reply that is not a distance.
         """

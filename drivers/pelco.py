@@ -24,6 +24,12 @@ docs/drivers.md and adjustable):
   9000 straight down, 27000-35999 above the horizon), the convention of most heads that document
   it; angles returned are positive *up*, as :class:`~asbuilt.drivers.ptu.PanTiltUnit`'s are.
   The tilt range defaults to +-90 degrees (``tilt_limits``);
+* tilt on the wire: the reference gives no encoding for negative angles. By default
+  (``tilt_encoding="wrap"``) a tilt is sent as 0-35999 (-10 degrees raw is 35000); heads that use
+  signed 16-bit two's complement instead (-10 degrees raw is ``FC 18``, 64536) take
+  ``tilt_encoding="signed"``. Tilt *replies* are read either way: 0-35999 as such, and a value
+  above 35999, which only a signed head sends, as its negative two's complement (noted once in
+  :attr:`PelcoD.notes`, with a hint in any later move error, for a head set to "wrap");
 * the host port is 2400 baud 8N1 (the usual factory setting of Pelco-D heads), address 1.
 
 Every reply's checksum is verified. Bytes before a ``FF`` sync (noise, a late or foreign
@@ -58,6 +64,7 @@ __all__ = [
     "QUERY_TILT",
     "PAN_REPLY",
     "TILT_REPLY",
+    "TILT_ENCODINGS",
 ]
 
 SYNC = 0xFF
@@ -68,6 +75,10 @@ QUERY_TILT = 0x53
 PAN_REPLY = 0x59
 TILT_REPLY = 0x5B
 FULL_TURN = 36000  # hundredths of a degree
+WORD = 0x10000  # a 16-bit data1/data2 value
+#: How a tilt goes on the wire (``tilt_encoding``): ``"wrap"`` 0-35999, ``"signed"`` 16-bit two's
+#: complement.
+TILT_ENCODINGS = ("wrap", "signed")
 
 #: Seconds of quiet :meth:`PelcoD._resync` waits for after a failed exchange (late bytes).
 RESYNC_QUIET = 0.1
@@ -210,6 +221,9 @@ class PelcoD:
         How the raw tilt grows: -1 downwards (default), +1 upwards.
     tilt_zero : float
         Raw tilt of the level head, degrees (0).
+    tilt_encoding : {"wrap", "signed"}
+        How a raw tilt below zero is sent: ``"wrap"`` (default) into 0-35999, ``"signed"`` as
+        16-bit two's complement. Replies are read in either encoding.
     pan_limits : (float, float) or None
         Signed pan limits in degrees; None (default) for a head turning all the way round.
     tilt_limits : (float, float)
@@ -236,6 +250,7 @@ class PelcoD:
         move_timeout: float = 30.0,
         tilt_sign: int = -1,
         tilt_zero: float = 0.0,
+        tilt_encoding: str = "wrap",
         pan_limits=None,
         tilt_limits=(-90.0, 90.0),
         tolerance: int = 1,
@@ -245,6 +260,8 @@ class PelcoD:
             raise ValueError(f"address must be a Pelco-D address 1-255, got {address!r}")
         if tilt_sign not in (1, -1):
             raise ValueError(f"tilt_sign must be 1 or -1, got {tilt_sign!r}")
+        if tilt_encoding not in TILT_ENCODINGS:
+            raise ValueError(f"tilt_encoding must be 'wrap' or 'signed', got {tilt_encoding!r}")
         if not math.isfinite(float(tilt_zero)):
             raise ValueError(f"tilt_zero must be a finite angle in degrees, got {tilt_zero!r}")
         if int(tolerance) != tolerance or tolerance < 0:
@@ -259,6 +276,12 @@ class PelcoD:
         self.poll_interval = _seconds(poll_interval, "poll_interval", zero=True)
         self.tilt_sign = int(tilt_sign)
         self.tilt_zero = round(float(tilt_zero) * 100) % FULL_TURN
+        self.tilt_encoding = tilt_encoding
+        #: Whether the head has reported a tilt above 35999 (signed 16-bit: below zero).
+        self.signed_tilt_seen = False
+        #: What the driver found out about the head on the way (an encoding it did not expect),
+        #: oldest first; whoever keeps a log takes them (the scan session journals them).
+        self.notes: list[str] = []
         self.tolerance = int(tolerance)
         self.limits = _limits(pan_limits, tilt_limits)
         self._buffer = bytearray()
@@ -279,7 +302,7 @@ class PelcoD:
         """Open the head at ``url`` (8N1, default 2400 baud) and, by default, :meth:`initialize`.
 
         ``options`` go to the constructor (``address``, ``tilt_sign``, ``tilt_zero``,
-        ``pan_limits``, ``tilt_limits``, ``tolerance``, ``poll_interval``).
+        ``tilt_encoding``, ``pan_limits``, ``tilt_limits``, ``tolerance``, ``poll_interval``).
         """
         port = open_port(url, baudrate=baudrate, write_timeout=timeout)
         try:
@@ -446,18 +469,47 @@ class PelcoD:
         return self.limits
 
     def position_raw(self) -> tuple[int, int]:
-        """The head's pan and tilt as it reports them, hundredths of a degree (0-35999)."""
-        values = []
-        for cmd, reply, axis in ((QUERY_PAN, PAN_REPLY, "pan"), (QUERY_TILT, TILT_REPLY, "tilt")):
-            value = self.query(cmd, reply, f"{axis} position query")
-            if value >= FULL_TURN:
-                self._unsynced = True
-                raise DeviceProtocolError(
-                    f"{self.name}: the head reported {axis} {value}, outside 0-35999 hundredths "
-                    "of a degree; check that it speaks Pelco-D"
-                )
-            values.append(value)
-        return values[0], values[1]
+        """The head's pan and tilt, hundredths of a degree (0-35999); a tilt reported in signed
+        16-bit (above 35999: below zero) is brought into 0-35999."""
+        pan = self.query(QUERY_PAN, PAN_REPLY, "pan position query")
+        if pan >= FULL_TURN:
+            self._unsynced = True
+            raise DeviceProtocolError(
+                f"{self.name}: the head reported pan {pan}, outside 0-35999 hundredths "
+                "of a degree; check that it speaks Pelco-D"
+            )
+        tilt = self.query(QUERY_TILT, TILT_REPLY, "tilt position query")
+        return pan, self._tilt_from_wire(tilt)
+
+    def _tilt_from_wire(self, value: int) -> int:
+        """A reported tilt as 0-35999: up to 35999 as it is (both encodings agree on 0-18000,
+        and only "wrap" sends 18001-35999 within +-180 degrees); above, the negative signed
+        16-bit value it can only be (noted once if the head is set to "wrap")."""
+        if value < FULL_TURN:
+            return value
+        signed = value - WORD
+        if not self.signed_tilt_seen and self.tilt_encoding == "wrap":
+            self.notes.append(
+                f"the head reported tilt {value} ({_hex(bytes((value >> 8, value & 0xFF)))}), "
+                f"read as signed 16-bit {signed} hundredths of a degree; if tilts below zero "
+                "go astray, set tilt_encoding='signed' (--ptu-tilt-encoding signed)"
+            )
+        self.signed_tilt_seen = True
+        return signed % FULL_TURN
+
+    def _tilt_to_wire(self, tilt_raw: int) -> int:
+        """A raw tilt 0-35999 as sent: as it is ("wrap"), or signed 16-bit ("signed")."""
+        if self.tilt_encoding == "signed":
+            return _signed(tilt_raw) % WORD
+        return tilt_raw
+
+    def _encoding_hint(self) -> str:
+        if self.signed_tilt_seen and self.tilt_encoding == "wrap":
+            return (
+                "; the head reports its tilt in signed 16-bit: try tilt_encoding='signed' "
+                "(--ptu-tilt-encoding signed)"
+            )
+        return ""
 
     def raw_to_angles(self, pan_raw: int, tilt_raw: int) -> tuple[float, float]:
         """Raw positions (hundredths, 0-35999) to unit angles (rad): pan signed, tilt up."""
@@ -528,7 +580,8 @@ class PelcoD:
         if self._unsynced:
             self._resync()
         self.send(0x00, PAN_ABSOLUTE, pan_raw >> 8, pan_raw & 0xFF)
-        self.send(0x00, TILT_ABSOLUTE, tilt_raw >> 8, tilt_raw & 0xFF)
+        tilt_wire = self._tilt_to_wire(tilt_raw)
+        self.send(0x00, TILT_ABSOLUTE, tilt_wire >> 8, tilt_wire & 0xFF)
         if wait:
             at = self.wait_for(pan_raw, tilt_raw)
             # where the head says it is (within tolerance of the target, or at the step
@@ -552,7 +605,9 @@ class PelcoD:
         :class:`~asbuilt.drivers.ptu.PTULimitError` (a head never seen moving, which may not
         take absolute moves at all, waits out ``move_timeout`` instead).
         A reply that cannot be read (noise: bad checksum, short frame) is queried again, up to
-        ``POLL_RETRIES`` in a row; silence (:class:`DeviceTimeout`) ends the wait at once.
+        ``POLL_RETRIES`` in a row. Silence (:class:`DeviceTimeout`: the reference does not say
+        that a head answers position queries while it moves, and some do not) is queried
+        again until ``move_timeout``, which then ends the wait with a timeout saying so.
         """
         deadline = time.monotonic() + self.move_timeout
         failures = 0
@@ -566,6 +621,15 @@ class PelcoD:
                 failures += 1
                 if failures > POLL_RETRIES or time.monotonic() > deadline:
                     raise
+                continue
+            except DeviceTimeout as exc:  # busy moving, maybe: ask again until the move's limit
+                if time.monotonic() > deadline:
+                    where = "" if at is None else f" (last reported pan {at[0]} / tilt {at[1]})"
+                    raise DeviceTimeout(
+                        f"{self.name}: the head did not answer position queries up to "
+                        f"{self.move_timeout:g} s after the move to pan {pan_raw} / tilt "
+                        f"{tilt_raw} hundredths of a degree{where}; last: {exc}"
+                    ) from exc
                 continue
             if self._near(at[0], pan_raw) and self._near(at[1], tilt_raw):
                 return at
@@ -583,13 +647,14 @@ class PelcoD:
                 raise PTULimitError(
                     f"{self.name}: the head stopped at pan {at[0]} / tilt {at[1]} hundredths of a "
                     f"degree, short of the target {pan_raw} / {tilt_raw} (a mechanical limit or "
-                    "an obstruction); aim inside the head's reach"
+                    "an obstruction); aim inside the head's reach" + self._encoding_hint()
                 )
             if time.monotonic() > deadline:
                 raise DeviceTimeout(
                     f"{self.name}: the head reports pan {at[0]} / tilt {at[1]} hundredths of a "
                     f"degree, not the target {pan_raw} / {tilt_raw}, {self.move_timeout:g} s "
                     "after the move; check the head, its limits and the move timeout"
+                    + self._encoding_hint()
                 )
             if self.poll_interval:
                 time.sleep(self.poll_interval)

@@ -66,9 +66,10 @@ class PtyServer:
     ptu_address : int
         Pelco-D address (1-255).
     ptu_options, lrf_options : dict, optional
-        Keyword options of the FLIR, Dimetix and LDM simulators
-        (:class:`~asbuilt.drivers.sim_ptu.PTUSimulator`, :mod:`~asbuilt.drivers.sim_lrf`): a
-        measuring time, a banner, 7E1 bytes...
+        Keyword options of the FLIR, Pelco-D, Dimetix and LDM simulators
+        (:class:`~asbuilt.drivers.sim_ptu.PTUSimulator`,
+        :class:`~asbuilt.drivers.sim_pelco.PelcoDSimulator`, :mod:`~asbuilt.drivers.sim_lrf`):
+        a measuring time, a banner, 7E1 bytes, a signed tilt...
 
     Attributes
     ----------

@@ -586,11 +586,14 @@ class ScanSession:
 
     def _note_unsolicited(self) -> None:
         """Journal the lines the pan-tilt unit sent on its own (a power-up banner...), which
-        its driver skipped, as ``note`` records (a resume ignores them)."""
-        lines = getattr(getattr(self.shooter, "ptu", None), "unsolicited", None)
-        if isinstance(lines, list) and lines:
-            self.journal.append({"type": "note", "device": "ptu", "unsolicited": list(lines)})
-            lines.clear()
+        its driver skipped, and its driver's notes (a Pelco-D head's tilt encoding), as ``note``
+        records (a resume ignores them)."""
+        ptu = getattr(self.shooter, "ptu", None)
+        for key in ("unsolicited", "notes"):  # notes: what a driver found out (Pelco-D)
+            lines = getattr(ptu, key, None)
+            if isinstance(lines, list) and lines:
+                self.journal.append({"type": "note", "device": "ptu", key: list(lines)})
+                lines.clear()
 
     def _too_few(self, shots: list[Shot], n: int, minimum: int) -> str:
         """Why an object with ``n`` shots on it is not in the scan: aim, or the unit's reach."""

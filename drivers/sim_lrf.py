@@ -18,8 +18,9 @@ the setting read back: the simulator's assumption, the manual's exact acknowledg
 
 Options (constructor keywords; :class:`~asbuilt.drivers.pty_sim.PtyServer` passes them on):
 both take ``measure_time`` (seconds per measurement); the Dimetix ``parity_bit7`` (7E1 bytes as
-an 8N1 pty passes them) and ``refuse`` (an error code for every ``sNg``); the LDM
-``command_end`` (``"cr-keep-lf"``: commands end at CR, an LF starts the next one),
+an 8N1 pty passes them) and ``refuse`` (an error code for every ``sNg``); both ``command_end``
+(``"cr-keep-lf"``: commands end at CR, an LF starts the next one; ``"lf-keep-cr"``: commands
+end at LF, a CR before it is part of the command); the LDM
 ``output_format``, ``hex_digits`` (0: unpadded format h) and ``unknown_reply``.
 """
 
@@ -34,6 +35,7 @@ from .simrig import SimulatedRig
 __all__ = ["DimetixSimulator", "LDMSimulator"]
 
 _DIMETIX = re.compile(rb"^s(\d)([a-z]+)([+-]\d+)?$")
+_ENDINGS = ("any", "cr-keep-lf", "lf-keep-cr")
 
 
 class _LineDevice(ABC):
@@ -45,15 +47,16 @@ class _LineDevice(ABC):
     measure_time : float
         Seconds a measurement takes: its reply is sent that long after the command (or after
         the previous measurement's reply, the device measuring one at a time).
-    command_end : {"any", "cr-keep-lf"}
+    command_end : {"any", "cr-keep-lf", "lf-keep-cr"}
         ``"any"``: CR or LF ends a command (empty ones ignored). ``"cr-keep-lf"``: only CR does;
         an LF is kept as the first byte of the next command, which then is no command this
-        device knows (a meter whose commands end at CR, sent CR LF).
+        device knows (a meter whose commands end at CR, sent CR LF). ``"lf-keep-cr"``: only LF
+        does, and a CR before it stays in the command, which then is no command either.
     """
 
     def __init__(self, rig: SimulatedRig, measure_time: float = 0.0, command_end: str = "any"):
-        if command_end not in ("any", "cr-keep-lf"):
-            raise ValueError(f"command_end must be 'any' or 'cr-keep-lf', got {command_end!r}")
+        if command_end not in _ENDINGS:
+            raise ValueError(f"command_end must be one of {_ENDINGS}, got {command_end!r}")
         self.rig = rig
         self.measure_time = float(measure_time)
         self.command_end = command_end
@@ -64,12 +67,13 @@ class _LineDevice(ABC):
         """Consume bytes from the host; return ``(deliver_at, bytes)`` chunks to send back."""
         now = time.monotonic()
         out: list[tuple[float, bytes]] = []
-        ends = b"\r" if self.command_end == "cr-keep-lf" else b"\r\n"
+        ends = {"cr-keep-lf": b"\r", "lf-keep-cr": b"\n"}.get(self.command_end, b"\r\n")
+        kept = self.command_end != "any"  # the other byte is part of the command
         for byte in data:
             if byte in ends:
                 if self._line:
                     raw = bytes(self._line)
-                    line = raw.strip(b" ") if self.command_end == "cr-keep-lf" else raw.strip()
+                    line = raw.strip(b" ") if kept else raw.strip()
                     self._line.clear()
                     if line:
                         at = now
@@ -103,8 +107,9 @@ class DimetixSimulator(_LineDevice):
         measure_time: float = 0.0,
         parity_bit7: bool = False,
         refuse: int | None = None,
+        command_end: str = "any",
     ):
-        super().__init__(rig, measure_time)
+        super().__init__(rig, measure_time, command_end)
         self.device_id = device_id
         self.user_offset = 0  # 0.1 mm
         self.laser = False
@@ -196,8 +201,8 @@ class LDMSimulator(_LineDevice):
 
     def _execute(self, line: bytes) -> list[bytes]:
         text = line.decode("ascii", "replace")
-        text = text.strip(" ") if self.command_end == "cr-keep-lf" else text.strip()  # "\nDM"
-        cmd, arg = text[:2].upper(), text[2:].strip()
+        text = text.strip(" ") if self.command_end != "any" else text.strip()  # "\nDM", "DM\r"
+        cmd, arg = text[:2].upper(), text[2:].strip(" " if self.command_end != "any" else None)
         if cmd in ("DM", "DW", "DX") and not arg:
             value = self.rig.measure()
             if value is None:

@@ -6,7 +6,8 @@ command is ignored (the device is not listening on its serial port yet); ``www``
 reply (the simulator's assumption: the reference gives none). Then ``LD`` answers the distance
 along the rig's beam in metres with two decimals (the LW20's centimetre resolution), e.g.
 ``4.99``, and ``-1.00`` when there is no return (the simulator's choice of "no target"; the
-reference is silent). A ``prefix`` option puts a label before the value (``ld:4.99``).
+reference is silent; ``no_target`` sets another text, e.g. ``no target`` or ``--.--``). A
+``prefix`` option puts a label before the value (``ld:4.99``).
 Other commands get no reply.
 """
 
@@ -19,11 +20,13 @@ __all__ = ["LW20Simulator"]
 
 
 class LW20Simulator(_LineDevice):
-    """An LW20 over a rig; ``prefix`` is put before every distance."""
+    """An LW20 over a rig; ``prefix`` is put before every distance, ``no_target`` (after the
+    prefix) is the answer when there is no return."""
 
-    def __init__(self, rig: SimulatedRig, prefix: str = ""):
+    def __init__(self, rig: SimulatedRig, prefix: str = "", *, no_target: str = "-1.00"):
         super().__init__(rig)
         self.prefix = prefix
+        self.no_target = no_target
         self.serial_mode = False
 
     def startup(self) -> list[tuple[float, bytes]]:
@@ -40,6 +43,6 @@ class LW20Simulator(_LineDevice):
         if text.upper() == "LD":
             value = self.rig.measure()
             if value is None or not 0 < value < 1000:
-                return [f"{self.prefix}-1.00".encode()]
+                return [f"{self.prefix}{self.no_target}".encode()]
             return [f"{self.prefix}{value:.2f}".encode()]
         return []

@@ -14,7 +14,11 @@ independently of :mod:`asbuilt.drivers.pelco`:
   position (while moving, where the head is now) in data1 (high) data2 (low);
 * the simulator's own assumptions where the reference is silent: pan turns all the way round
   (0-35999); tilt raw 0 is level and grows downwards (``tilt_sign=-1``), mechanically limited
-  to +-90 degrees (a target beyond is clamped); other commands are ignored.
+  to +-90 degrees (a target beyond is clamped); other commands are ignored. With
+  ``tilt_encoding="signed"`` the tilt is 16-bit two's complement instead, set and reported
+  (-10 degrees raw is ``FC 18``), as some heads do;
+* ``busy_silent``: a position query gets no answer while the head is moving (some heads are
+  busy then).
 
 Options for tests of the driver: ``trickle`` sends every reply byte by byte, ``trickle``
 seconds apart (replies split across reads); ``corrupt`` (a set of reply numbers, 1-based) sends
@@ -53,6 +57,10 @@ class PelcoDSimulator:
         How the raw tilt grows: -1 downwards, +1 upwards.
     tilt_range : (float, float)
         Mechanical tilt range, degrees up positive.
+    tilt_encoding : {"wrap", "signed"}
+        Raw tilt in 0-35999 (default) or in signed 16-bit two's complement.
+    busy_silent : bool
+        No answer to position queries while moving.
     trickle : float
         Seconds between the bytes of a reply (0: a reply in one piece).
     corrupt : iterable of int
@@ -66,6 +74,8 @@ class PelcoDSimulator:
         *,
         tilt_sign: int = -1,
         tilt_range=(-90.0, 90.0),
+        tilt_encoding: str = "wrap",
+        busy_silent: bool = False,
         trickle: float = 0.0,
         corrupt=(),
     ):
@@ -73,6 +83,10 @@ class PelcoDSimulator:
         self.address = int(address)
         self.tilt_sign = tilt_sign
         self.tilt_range = tuple(float(v) for v in tilt_range)
+        if tilt_encoding not in ("wrap", "signed"):
+            raise ValueError(f"tilt_encoding must be 'wrap' or 'signed', got {tilt_encoding!r}")
+        self.tilt_encoding = tilt_encoding
+        self.busy_silent = bool(busy_silent)
         self.trickle = float(trickle)
         self.corrupt = set(corrupt)
         self.replies = 0
@@ -93,8 +107,8 @@ class PelcoDSimulator:
     def _raw_position(self, now: float) -> tuple[int, int]:
         pan_c, tilt_c = self.rig.counts(now)
         pan = round(self._to_degrees(pan_c, 0) * 100) % _FULL
-        tilt = round(self.tilt_sign * self._to_degrees(tilt_c, 1) * 100) % _FULL
-        return pan, tilt
+        tilt = round(self.tilt_sign * self._to_degrees(tilt_c, 1) * 100)
+        return pan, tilt % (0x10000 if self.tilt_encoding == "signed" else _FULL)
 
     # -- bytes -----------------------------------------------------------------------------
     def feed(self, data: bytes) -> list[tuple[float, bytes]]:
@@ -138,16 +152,25 @@ class PelcoDSimulator:
             return []
         if cmd2 == 0x4B and value < _FULL:
             self.rig.move(pan_counts=self._to_counts(_signed(value) / 100, 0))
+        elif cmd2 == 0x4D and self.tilt_encoding == "signed":
+            self._tilt_to(self.tilt_sign * (value - 0x10000 if value >= 0x8000 else value) / 100)
         elif cmd2 == 0x4D and value < _FULL:
-            up = self.tilt_sign * _signed(value) / 100
-            lo, hi = self.tilt_range
-            up = min(max(up, lo), hi)
-            self.rig.move(tilt_counts=self._to_counts(up, 1))
+            self._tilt_to(self.tilt_sign * _signed(value) / 100)
         elif cmd2 == 0x00 and value == 0:  # stop where the head is
             pan_c, tilt_c = self.rig.counts(now)
             self.rig.move(pan_c, tilt_c)
+        elif cmd2 in (0x51, 0x53) and self.busy_silent and self._moving(now):
+            return []
         elif cmd2 == 0x51:
             return self._reply(now, 0x59, self._raw_position(now)[0])
         elif cmd2 == 0x53:
             return self._reply(now, 0x5B, self._raw_position(now)[1])
         return []
+
+    def _moving(self, now: float) -> bool:
+        return now < self.rig.move_end()
+
+    def _tilt_to(self, up: float) -> None:
+        """Tilt to ``up`` degrees, clamped to the mechanical range."""
+        lo, hi = self.tilt_range
+        self.rig.move(tilt_counts=self._to_counts(min(max(up, lo), hi), 1))

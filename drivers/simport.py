@@ -75,7 +75,7 @@ def parse_sim_url(url: str) -> tuple[str, str, dict[str, str]]:
 
 def make_device(scheme: str, rig, options: dict[str, str], settings: dict | None = None):
     """The simulator for ``scheme`` over ``rig`` (port options: protocol, device_id, address,
-    trickle, prefix; ``settings``: the FLIR, Dimetix or LDM simulator class's keyword options,
+    trickle, prefix; ``settings``: the FLIR, Pelco-D, Dimetix or LDM simulator class's keyword options,
     e.g. ``measure_time``)."""
     settings = dict(settings or {})
     if scheme == "sim-ptu":
@@ -86,7 +86,8 @@ def make_device(scheme: str, rig, options: dict[str, str], settings: dict | None
             address = int(options.get("address", 1))
             if not 1 <= address <= 255:
                 raise ValueError(f"address must be a Pelco-D address 1-255, not {address}")
-            return PelcoDSimulator(rig, address, trickle=float(options.get("trickle", 0)))
+            settings.setdefault("trickle", float(options.get("trickle", 0)))
+            return PelcoDSimulator(rig, address, **settings)
         if protocol != "flir":
             raise SerialException(
                 f"unknown simulated pan-tilt protocol {protocol!r}; use flir or pelco-d"
@@ -104,7 +105,7 @@ def make_device(scheme: str, rig, options: dict[str, str], settings: dict | None
     if protocol == "lw20":
         from .sim_lw20 import LW20Simulator
 
-        return LW20Simulator(rig, options.get("prefix", ""))
+        return LW20Simulator(rig, options.get("prefix", ""), **settings)
     raise SerialException(
         f"unknown simulated range finder protocol {protocol!r}; use dimetix, ldm or lw20"
     )

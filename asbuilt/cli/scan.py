@@ -77,6 +77,13 @@ def register(subparsers) -> argparse.ArgumentParser:
         help="Pelco-D: -1 if the raw tilt grows downwards (default), 1 if upwards",
     )
     parser.add_argument(
+        "--ptu-tilt-encoding",
+        choices=("wrap", "signed"),
+        default=None,
+        help="Pelco-D: how a raw tilt below zero is sent: wrap into 0-35999 (default) or "
+        "signed 16-bit two's complement",
+    )
+    parser.add_argument(
         "--ptu-tilt-zero",
         type=float,
         default=None,
@@ -183,7 +190,7 @@ def _check_head_options(args) -> None:
 
     from asbuilt.errors import ScanError
 
-    pelco = ("ptu_address", "ptu_tilt_sign", "ptu_tilt_zero")
+    pelco = ("ptu_address", "ptu_tilt_sign", "ptu_tilt_encoding", "ptu_tilt_zero")
     if args.ptu_protocol != "pelco-d":
         for key in pelco:
             if getattr(args, key) is not None:
@@ -207,6 +214,7 @@ def _head_options(args) -> dict:
     for key, name in (
         ("ptu_address", "address"),
         ("ptu_tilt_sign", "tilt_sign"),
+        ("ptu_tilt_encoding", "tilt_encoding"),
         ("ptu_tilt_zero", "tilt_zero"),
     ):
         if getattr(args, key) is not None:

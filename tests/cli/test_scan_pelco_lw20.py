@@ -23,11 +23,13 @@ pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs POSIX 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _server(site, address=1):
+def _server(site, address=1, **ptu_options):
     world = load_world(site / "scene.json")
     calibration, _ = station_defaults(world, None)
     rig = SimulatedRig(world, calibration, speed=20000.0)  # moves take a moment: polled
-    return PtyServer(rig, "lw20", ptu_protocol="pelco-d", ptu_address=address)
+    return PtyServer(
+        rig, "lw20", ptu_protocol="pelco-d", ptu_address=address, ptu_options=ptu_options
+    )
 
 
 def _scan(site, ptu, lrf, *more):
@@ -61,6 +63,18 @@ def test_a_scan_with_a_pelco_head_and_an_lw20(site, capsys):
     wall = doc["objects"][0]
     assert wall["id"] == "W1" and len(wall["points"]) >= 9
     assert all(abs(y - 6.0 + 0.1) < 0.01 for _, y, _ in wall["points"])  # the wall's near face
+
+
+def test_a_scan_with_a_head_whose_tilt_is_signed_16_bit(site, capsys):
+    # tilts below zero go on the wire as two's complement (FC 18 for -10 deg)
+    with _server(site, tilt_encoding="signed") as server:
+        more = ("--ptu-tilt-encoding", "signed")
+        assert _scan(site, server.ptu_path, server.lrf_path, *more) == 0
+        assert server.error is None
+    wall = json.loads((site / "scan.json").read_text())["objects"][0]
+    assert len(wall["points"]) >= 9
+    assert min(z for _, _, z in wall["points"]) < 0  # shots below the horizon reached
+    assert all(abs(y - 6.0 + 0.1) < 0.01 for _, y, _ in wall["points"])
 
 
 def test_a_head_at_another_address_is_one_line_before_anything_is_shot(site, capsys):
@@ -105,6 +119,7 @@ def test_an_lw20_answering_garbage_is_one_line_before_the_head_moves(site, capsy
     [
         (["--ptu-address", "3"], "--ptu-address is a Pelco-D option"),
         (["--ptu-tilt-sign", "1"], "--ptu-tilt-sign is a Pelco-D option"),
+        (["--ptu-tilt-encoding", "signed"], "--ptu-tilt-encoding is a Pelco-D option"),
         (["--ptu-protocol", "pelco-d", "--ptu-address", "0"], "Pelco-D address 1-255, not 0"),
         (["--ptu-protocol", "pelco-d", "--ptu-address", "256"], "Pelco-D address 1-255"),
         (["--ptu-protocol", "pelco-d", "--ptu-tilt-zero", "nan"], "--ptu-tilt-zero must be"),

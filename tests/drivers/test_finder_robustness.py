@@ -25,6 +25,8 @@ from asbuilt.drivers.rangefinder import (
 from asbuilt.drivers.session import DeviceShooter, ScanSession
 from driver_helpers import wall_rig
 
+from asbuilt.errors import DeviceTimeout
+
 pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs POSIX pseudo-terminals")
 
 WALL = Target("W1", "plane", Window.from_degrees([-8, -4, 8, 4]))
@@ -47,6 +49,65 @@ def test_an_ldm_that_keeps_the_lf_for_the_next_command_gets_cr_alone(unknown_rep
             assert lrf.eol == "\r"
             assert [lrf.measure() for _ in range(4)] == pytest.approx([4.0] * 4, abs=1e-3)
         assert server.error is None
+
+
+@pytest.mark.parametrize("unknown_reply", ["E12", None])
+@pytest.mark.parametrize("output_format", ["d", "h"])
+def test_an_ldm_that_keeps_the_cr_in_the_command_gets_lf_alone(unknown_reply, output_format):
+    # LF ends a command and the CR of CR LF stays in it ("DM\r"), which the meter refuses (an
+    # error code, or silence) from the first DM on: the probe tries LF alone and keeps it
+    options = {
+        "command_end": "lf-keep-cr",
+        "unknown_reply": unknown_reply,
+        "output_format": output_format,
+    }
+    with PtyServer(wall_rig(4.0), "ldm", lrf_options=options) as server:
+        with LDM4x.open(server.lrf_path, timeout=1.0) as lrf:
+            lrf.probe()
+            assert lrf.eol == "\n"
+            assert _lrf_sim(server).format == "d"  # SDd LF understood
+            assert [lrf.measure() for _ in range(3)] == pytest.approx([4.0] * 3, abs=1e-3)
+        assert server.error is None
+
+
+def test_an_ldm_that_keeps_the_cr_and_misses_still_gets_lf_alone():
+    rig = wall_rig(4.0)
+    rig.move(pan_counts=150 * 3600 / rig.resolution[0])  # facing away from the wall: E15
+    options = {"command_end": "lf-keep-cr", "unknown_reply": "E12"}
+    with PtyServer(rig, "ldm", lrf_options=options) as server:
+        with LDM4x.open(server.lrf_path, timeout=1.0) as lrf:
+            lrf.probe()
+            assert lrf.eol == "\n"
+            with pytest.raises(SignalTooWeak):
+                lrf.measure()
+
+
+@pytest.mark.parametrize(
+    "command_end, eol", [("any", "\r\n"), ("cr-keep-lf", "\r"), ("lf-keep-cr", "\n")]
+)
+def test_a_dimetix_gets_the_line_ending_it_takes(command_end, eol):
+    # "cr-keep-lf": the probe's first stop is answered, the second ("\ns0c") is not;
+    # "lf-keep-cr": not even the first ("s0c\r"); each is found and kept
+    with PtyServer(wall_rig(4.0), "dimetix", lrf_options={"command_end": command_end}) as server:
+        with DimetixDLS.open(server.lrf_path, timeout=1.0) as lrf:
+            lrf.probe()
+            assert lrf.eol == eol
+            assert [lrf.measure() for _ in range(3)] == pytest.approx([4.0] * 3, abs=1e-3)
+            lrf.laser(True)
+            assert _lrf_sim(server).laser
+        assert server.error is None
+
+
+def test_a_silent_dimetix_is_still_a_timeout_with_cr_lf_kept():
+    master, slave = os.openpty()
+    try:
+        with DimetixDLS.open(os.ttyname(slave), timeout=0.3) as lrf:
+            with pytest.raises(DeviceTimeout, match="stop acknowledgement"):
+                lrf.probe()
+            assert lrf.eol == "\r\n"
+    finally:
+        os.close(slave)
+        os.close(master)
 
 
 def test_an_ldm_ending_commands_anywhere_keeps_cr_lf():
@@ -219,3 +280,27 @@ def test_a_long_move_acknowledged_at_its_end_waits_for_the_travel_time():
                 pan, _ = ptu.move_to(math.radians(pan_deg), 0.0)
                 assert ptu.position() == pytest.approx((pan, 0.0), abs=1e-3)
         assert server.error is None
+
+
+# -- Pelco-D tilt encoding ----------------------------------------------------------------------
+def test_a_signed_tilt_seen_by_the_pelco_driver_is_journalled_as_a_note(tmp_path):
+    # the head reports tilts below zero in signed 16-bit, which the default "wrap" driver reads
+    # and notes; the session hands the note to the journal
+    from asbuilt.drivers.pelco import PelcoD
+
+    out = tmp_path / "s.json"
+    rig = wall_rig(4.0)
+    rig.move(tilt_counts=5 * 3600 / rig.resolution[1])  # left tilted up: raw -500 (FE 0C)
+    options = {"tilt_encoding": "signed"}
+    with PtyServer(rig, "dimetix", ptu_protocol="pelco-d", ptu_options=options) as srv:
+        with (
+            PelcoD.open(srv.ptu_path, timeout=1.0, move_timeout=2.0) as ptu,
+            DimetixDLS.open(srv.lrf_path, timeout=1.0) as lrf,
+        ):
+            assert len(ptu.notes) == 1  # the opening's query
+            window = Window.from_degrees([-4, -4, 4, -1])  # down: raw 100-400 either way
+            with ScanSession(DeviceShooter(ptu, lrf), STATION, out) as session:
+                assert session.scan(Target("W2", "plane", window)) is not None
+            assert ptu.notes == []
+    notes = [r for r in read_journal(journal_path_for(out)) if r["type"] == "note"]
+    assert len(notes) == 1 and "read as signed 16-bit" in notes[0]["notes"][0]

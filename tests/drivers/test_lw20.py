@@ -55,6 +55,33 @@ def test_zero_or_negative_is_no_target(scripted, reply):
 @pytest.mark.parametrize(
     "reply",
     [
+        b"no target\r\n",
+        b"No Target\r\n",
+        b"NO-TARGET\r\n",
+        b"notarget\r\n",
+        b"--.--\r\n",
+        b"-.--\r\n",
+        b"----\r\n",
+        b"ld:--.--\r\n",
+        b"LD: --.-- m\r\n",
+    ],
+)
+def test_no_target_said_in_text_is_no_target_too(scripted, reply):
+    # the reference does not say how the LW20 reports no return: the text forms are misses
+    lrf, _ = _lw20(scripted, [("LD", reply)])
+    with pytest.raises(SignalTooWeak, match="no target") as info:
+        lrf.measure()
+    assert info.value.code == "no-target"
+
+
+@pytest.mark.parametrize(
+    "reply",
+    [
+        b"-\r\n",
+        b"no\r\n",
+        b"target\r\n",
+        b"no target 4.99\r\n",
+        b"--.-- --.--\r\n",
         b"abc\r\n",
         b"4.9.9\r\n",
         b"1.00 2.00\r\n",
@@ -110,6 +137,23 @@ def test_over_a_pseudo_terminal_against_the_simulator():
                 ptu.move_to(math.radians(150), 0.0)  # facing away from the wall
                 with pytest.raises(SignalTooWeak):
                     lrf.measure()
+        assert server.error is None
+
+
+@pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs POSIX pseudo-terminals")
+@pytest.mark.parametrize("no_target", ["no target", "--.--"])
+def test_an_lw20_saying_no_target_in_text_misses_from_the_probe_on(no_target):
+    from asbuilt.drivers.pty_sim import PtyServer
+
+    rig = wall_rig(4.0)
+    rig.move(pan_counts=150 * 3600 / rig.resolution[0])  # facing away from the wall
+    with PtyServer(rig, "lw20", lrf_options={"no_target": no_target}) as server:
+        with LW20.open(server.lrf_path, timeout=1.0) as lrf:
+            lrf.probe()  # its LD is answered "no target": an answer all the same
+            with pytest.raises(SignalTooWeak):
+                lrf.measure()
+            rig.move(pan_counts=0)
+            assert lrf.measure() == pytest.approx(4.0, abs=0.006)
         assert server.error is None
 
 

@@ -421,3 +421,91 @@ def test_a_head_stopped_at_a_mechanical_limit_is_a_limit_error_not_a_timeout():
         # back within reach, the head arrives as usual
         pan, tilt = ptu.move_to(math.radians(5), math.radians(-10))
         assert math.degrees(tilt) == pytest.approx(-10)
+
+
+# -- tilt encoding: 0-35999 or signed 16-bit ----------------------------------------------------
+def _rig_tilt_deg(rig):
+    return math.degrees(rig.unit_angles()[1])
+
+
+@pytest.mark.parametrize("tilt_sign", [1, -1])
+def test_a_head_whose_tilt_is_signed_16_bit_with_tilt_encoding_signed(tilt_sign):
+    # the reference gives no encoding for tilts below zero; some heads use two's complement
+    rig = wall_rig(4.0)
+    options = {"tilt_encoding": "signed", "tilt_sign": tilt_sign}
+    with PtyServer(rig, "dimetix", ptu_protocol="pelco-d", ptu_options=options) as server:
+        with PelcoD.open(server.ptu_path, timeout=1.0, move_timeout=3.0, **options) as ptu:
+            for tilt_deg in (-10.0, 15.0, -0.01, 0.0):
+                pan, tilt = ptu.move_to(math.radians(5), math.radians(tilt_deg))
+                assert math.degrees(tilt) == pytest.approx(tilt_deg)
+                assert _rig_tilt_deg(rig) == pytest.approx(tilt_deg, abs=0.01)
+                assert ptu.position() == pytest.approx((pan, tilt))
+            assert ptu.notes == []
+        wire = [f for f in _ptu_sim(server).frames if f[3] == 0x4D]
+        # -10 deg up: raw -1000 (FC 18) for a head whose raw tilt grows upwards, +1000 (03 E8)
+        assert wire[0][4:6] == (b"\xfc\x18" if tilt_sign == 1 else b"\x03\xe8")
+        assert server.error is None
+
+
+def _ptu_sim(server):
+    return server._endpoints[0].device
+
+
+def test_a_signed_tilt_reply_is_read_with_the_default_encoding_and_noted():
+    # a reply above 35999 can only be signed 16-bit: read as such, not refused
+    rig = wall_rig(4.0)
+    rig.move(tilt_counts=rig.tilt.target - 10 * 3600 / rig.resolution[1])  # 10 deg down
+    options = {"tilt_encoding": "signed", "tilt_sign": 1}
+    with PtyServer(rig, "dimetix", ptu_protocol="pelco-d", ptu_options=options) as server:
+        with PelcoD.open(server.ptu_path, timeout=1.0, move_timeout=1.0, tilt_sign=1) as ptu:
+            assert math.degrees(ptu.position()[1]) == pytest.approx(-10)  # 64536 = -1000
+            assert ptu.signed_tilt_seen
+            assert len(ptu.notes) == 1 and "read as signed 16-bit -1000" in ptu.notes[0]
+            # at or above level both encodings agree
+            assert math.degrees(ptu.move_to(0.0, math.radians(20))[1]) == pytest.approx(20)
+            # below it, "wrap" sends 35500, which such a head takes for +355 deg: the error
+            # says what to set
+            with pytest.raises((DeviceTimeout, PTULimitError), match="--ptu-tilt-encoding"):
+                ptu.move_to(0.0, math.radians(-5))
+            assert len(ptu.notes) == 1
+
+
+def test_the_default_encoding_is_unchanged_and_bad_encodings_are_refused():
+    head = Head()
+    with FrameFake(head) as fake, _open(fake) as ptu:
+        ptu.move_to(0.0, math.radians(10))
+        assert head.target[1] == 35000
+        assert ptu.tilt_encoding == "wrap" and ptu.notes == [] and not ptu.signed_tilt_seen
+    with FrameFake(Head()) as fake, pytest.raises(ValueError, match="tilt_encoding"):
+        _open(fake, tilt_encoding="two's complement")
+
+
+# -- a head silent while it moves ---------------------------------------------------------------
+def test_a_head_silent_to_position_queries_while_moving_is_asked_until_it_arrives():
+    # the reference does not say a head answers position queries while it moves
+    rig = wall_rig(4.0)
+    rig.speed = 20 * 3600 / rig.resolution[0]  # 20 deg/s: 20 deg of pan take a second
+    options = {"busy_silent": True}
+    with PtyServer(rig, "dimetix", ptu_protocol="pelco-d", ptu_options=options) as server:
+        with PelcoD.open(server.ptu_path, timeout=0.3, move_timeout=5.0) as ptu:
+            start = time.monotonic()
+            pan, tilt = ptu.move_to(math.radians(20), math.radians(-3))  # before: DeviceTimeout
+            assert time.monotonic() - start >= 0.9
+            assert [math.degrees(a) for a in (pan, tilt)] == pytest.approx([20, -3])
+            assert ptu.position() == pytest.approx((pan, tilt))
+        assert server.error is None
+
+
+def test_a_head_that_stays_silent_after_a_move_times_out_at_the_moves_limit():
+    answering = {"on": True}
+
+    def respond(got):
+        if got[3] in (0x4B, 0x4D):
+            answering["on"] = False  # silent from the first move on
+        return Head()(got) if answering["on"] else []
+
+    with FrameFake(respond) as fake, _open(fake, timeout=0.2, move_timeout=1.0) as ptu:
+        start = time.monotonic()
+        with pytest.raises(DeviceTimeout, match="did not answer position queries up to 1 s"):
+            ptu.move_to(math.radians(10), 0.0)
+        assert 1.0 <= time.monotonic() - start < 2.0
