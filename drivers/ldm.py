@@ -225,14 +225,8 @@ class LDM4x:
         """Commands ended with CR LF drew replies of different kinds (``first``, ``second``;
         None for silence): try CR alone (see :meth:`probe`, step 2); the last reply of the
         ending kept."""
-        self._flush("\r")
-        self._late = False  # the flush waited for, and dropped, anything still owed
-        self.eol = "\r"
-        try:
-            a = self._answer()
-            b = self._answer()
-        except DeviceTimeout:
-            a = b = None
+        self._late = False  # the flush waits for, and drops, anything still owed
+        a, b = self._two_answers("\r")
         if (
             a is not None
             and _kind(a) == _kind(b)
@@ -249,19 +243,23 @@ class LDM4x:
         last reply if two ``DM`` LF are answered alike with a distance or E15, else None (CR LF
         again)."""
         self._late = False  # a meter that refused "DM" CR owes no answer to it
-        self._flush("\n")
-        self.eol = "\n"
-        try:
-            a = self._answer()
-            b = self._answer()
-        except DeviceTimeout:
-            a = b = None
+        a, b = self._two_answers("\n")
         if a is not None and _kind(a) == _kind(b) and not _refused(a):
             return b
         self._late = False
         self._flush("\r\n")
         self.eol = "\r\n"
         return None
+
+    def _two_answers(self, ending: str) -> tuple[str | None, str | None]:
+        """Commands ended with ``ending`` from now on (after :meth:`_flush`): the replies to two
+        ``DM``, or (None, None) when either met silence."""
+        self._flush(ending)
+        self.eol = ending
+        try:
+            return self._answer(), self._answer()
+        except DeviceTimeout:
+            return None, None
 
     def _flush(self, ending: str) -> None:
         """Send ``ending`` alone (it ends whatever the meter holds of a command) and drop the
