@@ -13,6 +13,7 @@ from scipy.special import chdtri
 
 from asbuilt.errors import FitError
 from asbuilt.fit._mixture import mixture_score
+from asbuilt.fit._small_linalg import eigh, eigvalsh, inv, svd
 from asbuilt.scan.model import kind_phrase
 from asbuilt.tolerances import MIN_POINTS, Tolerances
 
@@ -109,7 +110,7 @@ def principal_axes(points: np.ndarray, weights: np.ndarray | None = None):
         total = float(weights.sum())
         centroid = (weights @ points) / total
         centred = (points - centroid) * np.sqrt(weights)[:, None]
-    _, singular, vt = np.linalg.svd(centred, full_matrices=False)
+    _, singular, vt = svd(centred)
     spread = np.zeros(3)
     spread[: len(singular)] = singular / np.sqrt(max(total, 1.0))
     if vt.shape[0] < 3:
@@ -445,10 +446,10 @@ def covariance_from_jacobian(jacobian: np.ndarray, sigma: float) -> np.ndarray:
     p = jacobian.shape[1]
     normal = jacobian.T @ jacobian
     # J's singular values squared, to the rounding of the largest (ample for the 1e-14 test).
-    squares = np.linalg.eigvalsh(normal)
+    squares = eigvalsh(normal)
     if jacobian.shape[0] >= p and squares[0] > _WELL_POSED**2 * squares[-1]:
-        return sigma * sigma * np.linalg.inv(normal)
-    _, values, rows = np.linalg.svd(jacobian, full_matrices=True)
+        return sigma * sigma * inv(normal)
+    _, values, rows = svd(jacobian, full_matrices=True)
     largest = values[0] if values.size and values[0] > 0 else 1.0
     # Rows of V beyond the singular values (fewer residuals than parameters) are undetermined.
     values = np.concatenate([values, np.zeros(p - values.size)])
@@ -488,7 +489,7 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     # without its per-call overhead.
     hood -= hood.sum(axis=1, keepdims=True) / k
     scatter = hood.transpose(0, 2, 1) @ hood
-    values, vectors = np.linalg.eigh(scatter)
+    values, vectors = eigh(scatter)
     flatness = values[:, 0] / np.maximum(values[:, 1], 1e-300)
     return vectors[:, :, 0], flatness
 

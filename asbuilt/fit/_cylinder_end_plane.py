@@ -46,6 +46,7 @@ from asbuilt.fit._cylinder_background import (
     rescued,
 )
 from asbuilt.fit._cylinder_checks import PLANE_LIKE
+from asbuilt.fit._small_linalg import svd
 from asbuilt.fit._visibility import beam_entries, excess_and_beyond
 
 __all__ = [
@@ -150,7 +151,7 @@ def _candidate_planes(points: np.ndarray, cutoff: float, least: int, most: int, 
 def _plane(points: np.ndarray):
     """Total least squares plane of ``points`` (m, 3) metres: (unit normal (3,), centroid (3,))."""
     centroid = points.mean(axis=0)
-    return np.linalg.svd(points - centroid)[2][2], centroid
+    return svd(points - centroid, full_matrices=True)[2][2], centroid
 
 
 def _across_the_end(cylinder, points, kept, left_out, cutoff: float, view) -> bool:
@@ -363,8 +364,8 @@ def _face_of_the_fit(fit, points: np.ndarray, on: np.ndarray, off: np.ndarray, c
     shots = points[on]
     if len(shots) < FLAT_SHOTS:
         return False
-    centroid = shots.mean(axis=0)
-    _, singular, rows = np.linalg.svd(shots - centroid, full_matrices=False)
+    centroid = shots.sum(axis=0) / len(shots)  # shots.mean(axis=0), without its overhead
+    _, singular, rows = svd(shots - centroid)
     if singular[1] < cutoff * np.sqrt(len(shots)):
         return False  # one line of shots: any plane through it holds them
     plane_square = singular[2] ** 2 / (len(shots) - 3)

@@ -24,6 +24,7 @@ from asbuilt.fit._common import (
     median_spacing,
     noise_level,
     orient,
+    quick_median,
     stderr_of,
 )
 from asbuilt.fit._cylinder_checks import (
@@ -168,7 +169,7 @@ def end_gaps(along: np.ndarray, spacing: float, noise: float) -> tuple[float, fl
         # 30-60 degrees to the rows: length 4.60 m of 6 +-21 mm). When the gaps fall in two
         # scales (the largest over _ROW_BREAK times the median), a break between lines is a
         # gap above their geometric mean.
-        typical, widest = float(np.median(gaps)), float(gaps.max())
+        typical, widest = quick_median(gaps), float(gaps.max())
         if widest > _ROW_BREAK * typical:
             same_row = max(same_row, math.sqrt(typical * widest))
     low = ordered[ordered > ordered[0] + same_row]

@@ -33,6 +33,7 @@ from asbuilt.fit._cylinder_model import (
 )
 from asbuilt.fit._cylinder_starts import line_axis, trust_order
 from asbuilt.fit._robust import RobustFit, keep_count, robust_geometric_fit
+from asbuilt.fit._vectors import cross3
 from asbuilt.fit._visibility import excess_and_beyond
 from asbuilt.tolerances import Tolerances
 
@@ -211,7 +212,7 @@ def rejected_are_background(
         return False
     u, v = orthonormal_basis(axis)
     facing = (mean[0] * u + mean[1] * v) / resultant
-    lateral = np.cross(axis, facing)
+    lateral = cross3(axis, facing)
     toward = (local - center) @ facing  # (n,) metres towards the station, across the axis
     if (toward[rejected] > cutoff).any():
         return False

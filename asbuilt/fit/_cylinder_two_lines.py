@@ -26,6 +26,7 @@ from scipy.stats import chi2
 
 from asbuilt.fit._common import orthonormal_basis
 from asbuilt.fit._cylinder_model import angles_about
+from asbuilt.fit._small_linalg import svd
 
 __all__ = ["RADIUS_STEPS", "on_two_lines", "radius_reach"]
 
@@ -97,7 +98,7 @@ def _line(points: np.ndarray, width: float):
     """The straight line (a point (3,) metres, a unit direction (3,)) that ``points`` (m, 3)
     metres lie within ``width`` metres RMS of (total least squares), or None."""
     mean = points.mean(axis=0)
-    _, singular, vt = np.linalg.svd(points - mean, full_matrices=False)
+    _, singular, vt = svd(points - mean)
     if math.sqrt(float(singular[1] ** 2 + singular[2] ** 2) / len(points)) > width:
         return None
     return mean, vt[0]

@@ -10,6 +10,7 @@ import dataclasses
 import numpy as np
 
 from asbuilt.errors import FitError, located
+from asbuilt.fit._common import quick_median
 from asbuilt.fit._cuboid_sparse import AmbiguousFrame
 from asbuilt.fit._cylinder_planes import BACKGROUND_PLANE_SHOTS, BackgroundPlaneFit
 from asbuilt.fit.result import FitResult
@@ -134,7 +135,7 @@ def _rough_rival(kind, function, result, points, sigma, tolerances, options) -> 
         return result
     rejected = np.abs(np.asarray(result.residuals, dtype=np.float64)[~result.inliers])
     threshold = float(tolerances.outlier_cutoff_sigma) * sigma
-    if rejected.size < 2 or not np.median(rejected) <= NEAR_REJECTION_RATIO * threshold:
+    if rejected.size < 2 or not quick_median(rejected) <= NEAR_REJECTION_RATIO * threshold:
         return result
     residuals = np.asarray(result.residuals, dtype=np.float64)
     near = np.abs(residuals) <= NEAR_REJECTION_RATIO * threshold
