@@ -18,6 +18,7 @@ from asbuilt.scan.model import kind_phrase
 from asbuilt.tolerances import MIN_POINTS, Tolerances
 
 __all__ = [
+    "FreshGenerator",
     "radius_text",
     "extent_of",
     "validate_points",
@@ -626,3 +627,37 @@ def quick_median(values: np.ndarray) -> float:
         return float(part[half])
     part.partition((half - 1, half))
     return float(0.5 * (part[half - 1] + part[half]))
+
+
+#: The integer draws :class:`FreshGenerator` remembers, by seed and the draws before each.
+_DRAWS: dict = {}
+
+
+class FreshGenerator:
+    """``np.random.default_rng(seed)`` for code that only draws integers from it
+    (``integers(low, high, size)``, positionally): the same arrays in the same order, each
+    remembered by the seed and the draws before it. The cylinder fit seeds fresh generators
+    with the shot count several times a fit (its starts, the faces it looks for); seeding one
+    costs more than the draws."""
+
+    __slots__ = ("_seed", "_history")
+
+    def __init__(self, seed: int):
+        self._seed = int(seed)
+        self._history: tuple = ()
+
+    def integers(self, low, high=None, size=None) -> np.ndarray:
+        """:meth:`numpy.random.Generator.integers` (int64), a fresh copy each call."""
+        draw = (low, high, size)
+        key = (self._seed, self._history, draw)
+        found = _DRAWS.get(key)
+        if found is None:
+            rng = np.random.default_rng(self._seed)
+            for earlier in self._history:
+                rng.integers(*earlier)
+            found = rng.integers(*draw)
+            if len(_DRAWS) >= 64:
+                _DRAWS.clear()
+            _DRAWS[key] = found
+        self._history = (*self._history, draw)
+        return found.copy()
