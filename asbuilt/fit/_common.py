@@ -509,7 +509,8 @@ def arc_coverage_deg(angles: np.ndarray) -> float:
     if angles.size < 2:
         return 0.0
     ordered = np.sort(np.mod(angles, 2 * np.pi))
-    gaps = np.diff(np.concatenate([ordered, ordered[:1] + 2 * np.pi]))
+    closed = np.concatenate([ordered, ordered[:1] + 2 * np.pi])
+    gaps = closed[1:] - closed[:-1]  # np.diff's differences, without its overhead
     return float(np.degrees(2 * np.pi - gaps.max()))
 
 
@@ -614,6 +615,13 @@ def column_medians(points: np.ndarray) -> np.ndarray:
         return part[half]
     part.partition((half - 1, half), axis=0)
     return 0.5 * (part[half - 1] + part[half])
+
+
+def diagonal_extent(points: np.ndarray) -> float:
+    """The diagonal of the box around ``points`` (n, 3) metres:
+    ``np.linalg.norm(np.ptp(points, axis=0))``'s arithmetic, without its overhead."""
+    span = points.max(axis=0) - points.min(axis=0)
+    return float(np.sqrt(span.dot(span)))
 
 
 def quick_median(values: np.ndarray) -> float:

@@ -68,11 +68,12 @@ def on_two_lines(
         about = angles_about(axis, center, kept)
     order = np.argsort(about)
     angles = about[order]
-    gaps = np.diff(np.concatenate([angles, [angles[0] + 2.0 * math.pi]]))
-    first, second = np.sort(np.argsort(gaps)[-2:])
+    closed = np.concatenate([angles, [angles[0] + 2.0 * math.pi]])
+    gaps = closed[1:] - closed[:-1]  # np.diff's differences, without its overhead
+    first, second = sorted(gaps.argsort()[-2:].tolist())
     # Each group's own angular extent (the circle less the two gaps and the other group's):
     # lines are narrow beside the gaps that part them, scattered shots are not.
-    inner = float(np.sum(gaps[first + 1 : second]))
+    inner = float(gaps[first + 1 : second].sum())
     outer = 2.0 * math.pi - inner - float(gaps[first] + gaps[second])
     if 2.0 * max(inner, outer) > min(gaps[first], gaps[second]):
         return _on_two_straight_lines(kept, axis, width)

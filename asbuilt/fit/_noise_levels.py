@@ -10,7 +10,7 @@ import dataclasses
 import numpy as np
 
 from asbuilt.errors import FitError, located
-from asbuilt.fit._common import quick_median
+from asbuilt.fit._common import diagonal_extent, quick_median
 from asbuilt.fit._cuboid_sparse import AmbiguousFrame
 from asbuilt.fit._cylinder_planes import BACKGROUND_PLANE_SHOTS, BackgroundPlaneFit
 from asbuilt.fit.result import FitResult
@@ -322,7 +322,7 @@ def _residual_noise(
     if result.inliers.all():
         chosen = result.inliers  # the likeliest set is at least the inliers: here every point
     else:
-        extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+        extent = diagonal_extent(points)
         floor = float(tolerances.sigma_floor)
         chosen = best_inlier_set(residuals, result.inliers, extent, floor)
     used = 0 if result.covariance is None else len(result.covariance)
