@@ -28,6 +28,7 @@ from asbuilt.errors import FitError, located
 from asbuilt.fit._common import extent_of, radius_text, validate_points
 from asbuilt.fit._edge_brackets import edge_brackets, widen_pinned
 from asbuilt.fit._noise_levels import _fit_with_noise
+from asbuilt.fit._small_linalg import eigvalsh, singular_values
 from asbuilt.fit._stations import fuse_station_views
 from asbuilt.fit._window import beyond_window, open_ends
 from asbuilt.fit.result import FitFailure, FitReport, FitResult, ObjectFit
@@ -282,7 +283,7 @@ def _require_spread_beyond_noise(
     # RMS spread along the principal directions, largest first: the roots of the scatter
     # matrix's eigenvalues (the centred points' singular values / sqrt(n), at a third the cost).
     scatter = centred.T @ centred / len(points)
-    spread = np.sqrt(np.maximum(np.linalg.eigvalsh(scatter)[::-1], 0.0))
+    spread = np.sqrt(np.maximum(eigvalsh(scatter)[::-1], 0.0))
     if spread[1] <= limit:
         what = kind_phrase(kind)
         noise = (
@@ -370,7 +371,7 @@ def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
         if radius <= _PLANE_LIKE_RADIUS * extent_of(kept):
             return  # curved over the points: their plane is no rival
         centred = kept - kept.mean(axis=0)
-        plane_sse = float(np.linalg.svd(centred, compute_uv=False)[-1] ** 2)
+        plane_sse = float(singular_values(centred)[-1] ** 2)
         fit_sse = float(np.sum(result.residuals[result.inliers] ** 2))
         extra = (len(result.covariance) if result.covariance is not None else 4) - 3
         if plane_sse - fit_sse >= result.sigma**2 * chdtri(max(extra, 1), CURVATURE_TAIL):

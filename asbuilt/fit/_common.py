@@ -13,10 +13,12 @@ from scipy.special import chdtri
 
 from asbuilt.errors import FitError
 from asbuilt.fit._mixture import mixture_score
+from asbuilt.fit._small_linalg import eigh, eigvalsh, inv, svd
 from asbuilt.scan.model import kind_phrase
 from asbuilt.tolerances import MIN_POINTS, Tolerances
 
 __all__ = [
+    "FreshGenerator",
     "radius_text",
     "extent_of",
     "validate_points",
@@ -109,7 +111,7 @@ def principal_axes(points: np.ndarray, weights: np.ndarray | None = None):
         total = float(weights.sum())
         centroid = (weights @ points) / total
         centred = (points - centroid) * np.sqrt(weights)[:, None]
-    _, singular, vt = np.linalg.svd(centred, full_matrices=False)
+    _, singular, vt = svd(centred)
     spread = np.zeros(3)
     spread[: len(singular)] = singular / np.sqrt(max(total, 1.0))
     if vt.shape[0] < 3:
@@ -445,10 +447,10 @@ def covariance_from_jacobian(jacobian: np.ndarray, sigma: float) -> np.ndarray:
     p = jacobian.shape[1]
     normal = jacobian.T @ jacobian
     # J's singular values squared, to the rounding of the largest (ample for the 1e-14 test).
-    squares = np.linalg.eigvalsh(normal)
+    squares = eigvalsh(normal)
     if jacobian.shape[0] >= p and squares[0] > _WELL_POSED**2 * squares[-1]:
-        return sigma * sigma * np.linalg.inv(normal)
-    _, values, rows = np.linalg.svd(jacobian, full_matrices=True)
+        return sigma * sigma * inv(normal)
+    _, values, rows = svd(jacobian, full_matrices=True)
     largest = values[0] if values.size and values[0] > 0 else 1.0
     # Rows of V beyond the singular values (fewer residuals than parameters) are undetermined.
     values = np.concatenate([values, np.zeros(p - values.size)])
@@ -488,7 +490,7 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     # without its per-call overhead.
     hood -= hood.sum(axis=1, keepdims=True) / k
     scatter = hood.transpose(0, 2, 1) @ hood
-    values, vectors = np.linalg.eigh(scatter)
+    values, vectors = eigh(scatter)
     flatness = values[:, 0] / np.maximum(values[:, 1], 1e-300)
     return vectors[:, :, 0], flatness
 
@@ -507,7 +509,8 @@ def arc_coverage_deg(angles: np.ndarray) -> float:
     if angles.size < 2:
         return 0.0
     ordered = np.sort(np.mod(angles, 2 * np.pi))
-    gaps = np.diff(np.concatenate([ordered, ordered[:1] + 2 * np.pi]))
+    closed = np.concatenate([ordered, ordered[:1] + 2 * np.pi])
+    gaps = closed[1:] - closed[:-1]  # np.diff's differences, without its overhead
     return float(np.degrees(2 * np.pi - gaps.max()))
 
 
@@ -614,6 +617,13 @@ def column_medians(points: np.ndarray) -> np.ndarray:
     return 0.5 * (part[half - 1] + part[half])
 
 
+def diagonal_extent(points: np.ndarray) -> float:
+    """The diagonal of the box around ``points`` (n, 3) metres:
+    ``np.linalg.norm(np.ptp(points, axis=0))``'s arithmetic, without its overhead."""
+    span = points.max(axis=0) - points.min(axis=0)
+    return float(np.sqrt(span.dot(span)))
+
+
 def quick_median(values: np.ndarray) -> float:
     """The median of a 1-D array without NaNs, as :func:`numpy.median` gives it (the middle
     value, or half the sum of the two middle ones) without its overhead."""
@@ -625,3 +635,37 @@ def quick_median(values: np.ndarray) -> float:
         return float(part[half])
     part.partition((half - 1, half))
     return float(0.5 * (part[half - 1] + part[half]))
+
+
+#: The integer draws :class:`FreshGenerator` remembers, by seed and the draws before each.
+_DRAWS: dict = {}
+
+
+class FreshGenerator:
+    """``np.random.default_rng(seed)`` for code that only draws integers from it
+    (``integers(low, high, size)``, positionally): the same arrays in the same order, each
+    remembered by the seed and the draws before it. The cylinder fit seeds fresh generators
+    with the shot count several times a fit (its starts, the faces it looks for); seeding one
+    costs more than the draws."""
+
+    __slots__ = ("_seed", "_history")
+
+    def __init__(self, seed: int):
+        self._seed = int(seed)
+        self._history: tuple = ()
+
+    def integers(self, low, high=None, size=None) -> np.ndarray:
+        """:meth:`numpy.random.Generator.integers` (int64), a fresh copy each call."""
+        draw = (low, high, size)
+        key = (self._seed, self._history, draw)
+        found = _DRAWS.get(key)
+        if found is None:
+            rng = np.random.default_rng(self._seed)
+            for earlier in self._history:
+                rng.integers(*earlier)
+            found = rng.integers(*draw)
+            if len(_DRAWS) >= 64:
+                _DRAWS.clear()
+            _DRAWS[key] = found
+        self._history = (*self._history, draw)
+        return found.copy()

@@ -37,7 +37,7 @@ import dataclasses
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit._common import extent_of
+from asbuilt.fit._common import FreshGenerator, extent_of
 from asbuilt.fit._cylinder_background import (
     DETERMINED_RADIUS,
     NEAR_SHARE,
@@ -46,6 +46,7 @@ from asbuilt.fit._cylinder_background import (
     rescued,
 )
 from asbuilt.fit._cylinder_checks import PLANE_LIKE
+from asbuilt.fit._small_linalg import svd
 from asbuilt.fit._visibility import beam_entries, excess_and_beyond
 
 __all__ = [
@@ -150,7 +151,7 @@ def _candidate_planes(points: np.ndarray, cutoff: float, least: int, most: int, 
 def _plane(points: np.ndarray):
     """Total least squares plane of ``points`` (m, 3) metres: (unit normal (3,), centroid (3,))."""
     centroid = points.mean(axis=0)
-    return np.linalg.svd(points - centroid)[2][2], centroid
+    return svd(points - centroid, full_matrices=True)[2][2], centroid
 
 
 def _across_the_end(cylinder, points, kept, left_out, cutoff: float, view) -> bool:
@@ -330,7 +331,7 @@ def drawn_to_a_face(first, points: np.ndarray, sigma, tolerances) -> bool:
     least = max(FLAT_SHOTS, int(CAPTURED_SHARE * len(index)) + 1)
     if len(index) < least:
         return False
-    rng = np.random.default_rng(len(points))
+    rng = FreshGenerator(len(points))  # np.random.default_rng's draws, remembered
     near = near_random_planes(points[index], cutoff, FACE_SAMPLES, rng)
     counts = near.sum(axis=0)
     tried: set = set()
@@ -363,12 +364,13 @@ def _face_of_the_fit(fit, points: np.ndarray, on: np.ndarray, off: np.ndarray, c
     shots = points[on]
     if len(shots) < FLAT_SHOTS:
         return False
-    centroid = shots.mean(axis=0)
-    _, singular, rows = np.linalg.svd(shots - centroid, full_matrices=False)
+    centroid = shots.sum(axis=0) / len(shots)  # shots.mean(axis=0), without its overhead
+    _, singular, rows = svd(shots - centroid)
     if singular[1] < cutoff * np.sqrt(len(shots)):
         return False  # one line of shots: any plane through it holds them
     plane_square = singular[2] ** 2 / (len(shots) - 3)
-    flat = float(np.mean(fit.residuals[on] ** 2)) >= FLAT_AS_ROUND * plane_square
+    squares = fit.residuals[on] ** 2
+    flat = float(squares.sum() / squares.size) >= FLAT_AS_ROUND * plane_square  # np.mean's sum
     if flat and np.count_nonzero(off) >= END_SHOTS:
         return True
     held = np.abs((points[off] - centroid) @ rows[2]) <= cutoff

@@ -17,7 +17,7 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit._circles import circle_starts
-from asbuilt.fit._common import orthonormal_basis, within_noise
+from asbuilt.fit._common import FreshGenerator, orthonormal_basis, within_noise
 from asbuilt.fit._cylinder_checks import (
     UNSEEN_FRACTION,
     admissible,
@@ -33,6 +33,7 @@ from asbuilt.fit._cylinder_model import (
 )
 from asbuilt.fit._cylinder_starts import line_axis, trust_order
 from asbuilt.fit._robust import RobustFit, keep_count, robust_geometric_fit
+from asbuilt.fit._vectors import cross3
 from asbuilt.fit._visibility import excess_and_beyond
 from asbuilt.tolerances import Tolerances
 
@@ -99,7 +100,8 @@ def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
         The fit, the starts it came from, and whether it rejected shots (the caller then still
         falls back on the full search if the fit's last checks refuse it).
     """
-    starts, costs = circle_starts(local, axes, keep, np.random.default_rng(len(local)))
+    # Fresh generators seeded with the shot count (FreshGenerator: the same draws).
+    starts, costs = circle_starts(local, axes, keep, FreshGenerator(len(local)))
     if not starts:
         return None
     best = starts[int(np.argmin(costs))]
@@ -114,10 +116,10 @@ def quick_fit(local, axes, keep, sigma, view, tolerances: Tolerances):
         # (the full search's, from the same random draws) finds the axis of 138 of the 142.
         # Of the 120 fits this makes quick (with and without the viewpoint), 119 are the full
         # search's to a micrometre; one keeps a shot the full search rejects, 0.2 mm apart.
-        line = line_axis(local, keep, np.random.default_rng(len(local)))
+        line = line_axis(local, keep, FreshGenerator(len(local)))
         if line is None:
             return None
-        more, more_costs = circle_starts(local, [line], keep, np.random.default_rng(len(local)))
+        more, more_costs = circle_starts(local, [line], keep, FreshGenerator(len(local)))
         starts, costs = starts + more, costs + more_costs
         try:
             robust = robust_among(local, starts, costs, sigma, tolerances, refined)
@@ -211,7 +213,7 @@ def rejected_are_background(
         return False
     u, v = orthonormal_basis(axis)
     facing = (mean[0] * u + mean[1] * v) / resultant
-    lateral = np.cross(axis, facing)
+    lateral = cross3(axis, facing)
     toward = (local - center) @ facing  # (n,) metres towards the station, across the axis
     if (toward[rejected] > cutoff).any():
         return False

@@ -12,6 +12,7 @@ import numpy as np
 
 from asbuilt.fit._circles import circle_starts
 from asbuilt.fit._common import (
+    FreshGenerator,
     orthonormal_bases,
     principal_axes,
     quick_median,
@@ -274,7 +275,7 @@ def pair_starts(points, normals, keep: int, count: int, samples: int = 48):
     is dragged away.
     """
     n = len(points)
-    rng = np.random.default_rng(n)
+    rng = FreshGenerator(n)  # np.random.default_rng(n)'s draws, remembered
     first = rng.integers(0, n, samples)
     second = rng.integers(0, n, samples)
     d1, d2 = normals[first], normals[second]

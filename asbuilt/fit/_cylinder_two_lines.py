@@ -24,8 +24,9 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import chi2
 
-from asbuilt.fit._common import orthonormal_basis
+from asbuilt.fit._common import orthonormal_basis, row_norms
 from asbuilt.fit._cylinder_model import angles_about
+from asbuilt.fit._small_linalg import svd
 
 __all__ = ["RADIUS_STEPS", "on_two_lines", "radius_reach"]
 
@@ -67,11 +68,12 @@ def on_two_lines(
         about = angles_about(axis, center, kept)
     order = np.argsort(about)
     angles = about[order]
-    gaps = np.diff(np.concatenate([angles, [angles[0] + 2.0 * math.pi]]))
-    first, second = np.sort(np.argsort(gaps)[-2:])
+    closed = np.concatenate([angles, [angles[0] + 2.0 * math.pi]])
+    gaps = closed[1:] - closed[:-1]  # np.diff's differences, without its overhead
+    first, second = sorted(gaps.argsort()[-2:].tolist())
     # Each group's own angular extent (the circle less the two gaps and the other group's):
     # lines are narrow beside the gaps that part them, scattered shots are not.
-    inner = float(np.sum(gaps[first + 1 : second]))
+    inner = float(gaps[first + 1 : second].sum())
     outer = 2.0 * math.pi - inner - float(gaps[first] + gaps[second])
     if 2.0 * max(inner, outer) > min(gaps[first], gaps[second]):
         return _on_two_straight_lines(kept, axis, width)
@@ -97,7 +99,7 @@ def _line(points: np.ndarray, width: float):
     """The straight line (a point (3,) metres, a unit direction (3,)) that ``points`` (m, 3)
     metres lie within ``width`` metres RMS of (total least squares), or None."""
     mean = points.mean(axis=0)
-    _, singular, vt = np.linalg.svd(points - mean, full_matrices=False)
+    _, singular, vt = svd(points - mean)
     if math.sqrt(float(singular[1] ** 2 + singular[2] ** 2) / len(points)) > width:
         return None
     return mean, vt[0]
@@ -135,7 +137,7 @@ def _on_two_straight_lines(kept: np.ndarray, axis: np.ndarray, width: float) -> 
     n = kept.shape[0]
     ends = min(END_SHOTS, n // 2)
     first = np.repeat(kept[order[:ends]], ends, axis=0)
-    last = np.tile(kept[order[-ends:]], (ends, 1))
+    last = np.concatenate([kept[order[-ends:]]] * ends)  # np.tile's rows, less overhead
     line = _near_line(kept, first, last, width)
     count = np.count_nonzero(line, axis=1)
     # The rest, against the line through its own first and last shot along the run: a quick
@@ -160,7 +162,7 @@ def _near_line(points: np.ndarray, first: np.ndarray, last: np.ndarray, width: f
     """Which of ``points`` (n, 3) metres lie within ``width`` metres of each line from
     ``first`` (p, 3) to ``last`` (p, 3) metres, shape (p, n) bool."""
     direction = last - first
-    direction /= np.maximum(np.linalg.norm(direction, axis=1), 1e-12)[:, None]
+    direction /= np.maximum(row_norms(direction), 1e-12)[:, None]
     offset = points[None, :, :] - first[:, None, :]
     along = np.einsum("pnk,pk->pn", offset, direction)
     return np.einsum("pnk,pnk->pn", offset, offset) - along**2 <= width**2

@@ -10,6 +10,7 @@ import dataclasses
 import numpy as np
 
 from asbuilt.errors import FitError, located
+from asbuilt.fit._common import diagonal_extent, quick_median
 from asbuilt.fit._cuboid_sparse import AmbiguousFrame
 from asbuilt.fit._cylinder_planes import BACKGROUND_PLANE_SHOTS, BackgroundPlaneFit
 from asbuilt.fit.result import FitResult
@@ -134,7 +135,7 @@ def _rough_rival(kind, function, result, points, sigma, tolerances, options) -> 
         return result
     rejected = np.abs(np.asarray(result.residuals, dtype=np.float64)[~result.inliers])
     threshold = float(tolerances.outlier_cutoff_sigma) * sigma
-    if rejected.size < 2 or not np.median(rejected) <= NEAR_REJECTION_RATIO * threshold:
+    if rejected.size < 2 or not quick_median(rejected) <= NEAR_REJECTION_RATIO * threshold:
         return result
     residuals = np.asarray(result.residuals, dtype=np.float64)
     near = np.abs(residuals) <= NEAR_REJECTION_RATIO * threshold
@@ -321,7 +322,7 @@ def _residual_noise(
     if result.inliers.all():
         chosen = result.inliers  # the likeliest set is at least the inliers: here every point
     else:
-        extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+        extent = diagonal_extent(points)
         floor = float(tolerances.sigma_floor)
         chosen = best_inlier_set(residuals, result.inliers, extent, floor)
     used = 0 if result.covariance is None else len(result.covariance)

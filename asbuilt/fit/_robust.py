@@ -27,7 +27,7 @@ import numpy as np
 from scipy.linalg.lapack import dposv as _dposv
 
 from asbuilt.errors import FitError
-from asbuilt.fit._common import few_residual_dof, residual_scale, robust_scale
+from asbuilt.fit._common import diagonal_extent, few_residual_dof, residual_scale, robust_scale
 from asbuilt.fit._mixture import mixture_score
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
@@ -345,7 +345,7 @@ def robust_geometric_fit(
             new_mask = np.ones(n, dtype=bool)
         if not rescued and not new_mask.all():
             rescued = True
-            extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+            extent = diagonal_extent(points)
             state, residuals, jacobian, new_mask = _likeliest_refit(
                 model, state, points, new_mask, extent, floor, max_iterations
             )
@@ -409,7 +409,7 @@ def settled_fit(
 def likelier(first, second, points, tolerances: Tolerances) -> bool:
     """Whether robust fit ``first`` explains the points better than ``second``: mixture
     likelihood of Gaussian inliers (own sigma) and uniform outliers over the points' extent."""
-    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+    extent = diagonal_extent(points)
     floor = tolerances.sigma_floor
     one = mixture_score(first.residuals, first.inliers, extent, floor)
     two = mixture_score(second.residuals, second.inliers, extent, floor)

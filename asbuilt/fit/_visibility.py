@@ -49,9 +49,13 @@ def _beam_crossings(axis, center, radius, points: np.ndarray, viewpoint):
     surface; ``lengths`` (n,) the shots' ranges, metres, the rest (s, n) (shapes and units as
     in :func:`cylinder_beam_excess`)."""
     view = np.asarray(viewpoint, dtype=np.float64)
-    axes = np.atleast_2d(axis)
-    centers = np.atleast_2d(center)
-    radii = np.atleast_1d(np.asarray(radius, dtype=np.float64))
+    # np.atleast_2d and np.atleast_1d's views, without their overhead.
+    axes, centers = np.asarray(axis), np.asarray(center)
+    if axes.ndim == 1:
+        axes = axes[None]
+    if centers.ndim == 1:
+        centers = centers[None]
+    radii = np.asarray(radius, dtype=np.float64).reshape(-1)
     beams = points - view
     lengths = np.sqrt(np.einsum("ij,ij->i", beams, beams))
     directions = beams / np.maximum(lengths, 1e-300)[:, None]
