@@ -30,6 +30,7 @@ from asbuilt.fit._cuboid_sparse import (
 )
 from asbuilt.fit._mixture import mixing_cost
 from asbuilt.fit._rectangle import min_area_rectangle
+from asbuilt.fit._small_linalg import solve
 
 #: Tukey biweight tuning constant (95% efficiency at the normal; Beaton and Tukey 1974).
 _TUKEY_C = 4.685
@@ -115,7 +116,7 @@ class FaceModel:
         weighted = jac.T * weights
         matrix = weighted @ jac
         matrix.flat[:: matrix.shape[0] + 1] += 1e-12 * max(float(matrix.trace()), 1e-30)
-        delta = np.linalg.solve(matrix, -(weighted @ residual))
+        delta = solve(matrix, -(weighted @ residual)[:, None])[:, 0]
         q = self.rot_basis.shape[1]
         rotation = rodrigues(self.rot_basis @ delta[:q])
         self.axes = self.axes @ rotation.T
