@@ -238,8 +238,10 @@ def _first_planes(points, normals, threshold, cos_face, rng, limit=_MAX_FIRST_HA
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = _ADD(np.abs(cand_n @ points.T - offsets[:, None]) < threshold, axis=1)
     order = (-counts).argsort(kind="stable")
+    # Planes with too few points come last in the order: left out before the greedy choice,
+    # they could only have been chosen after every plane kept, so the same planes are chosen.
+    order = order[counts[order] >= _MIN_FACE_POINTS]
     top = _distinct(cand_n, offsets, order, cos_face, threshold, 4 * limit)
-    top = [i for i in top if counts[i] >= _MIN_FACE_POINTS]
     if not top:
         return []
     ref_n, ref_o, masks, spread = _batch_refine(points, cand_n[top], offsets[top], threshold)
@@ -297,9 +299,9 @@ def _second_plane(points, normals, first, threshold, gap, rng, viewpoint=None, e
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = _ADD(np.abs(cand_n @ sub.T - offsets[:, None]) < threshold, axis=1)
     order = (-counts).argsort(kind="stable")
+    order = order[counts[order] >= least]  # as for the first planes: the same ones chosen
     limit = _SPARSE_SECOND if every else 8
     top = np.array(_distinct(cand_n, offsets, order, 0.999, threshold, limit), dtype=np.int64)
-    top = top[counts[top] >= least]
     if not top.size:
         return found if every else None
     ref_n, ref_o, masks, _ = _batch_refine(

@@ -66,7 +66,12 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, n
     """
     index = knn(points, k)
     hood = np.concatenate([points[:, None, :], points[index]], axis=1)
-    centred = hood - hood.mean(axis=1, keepdims=True)
+    # The neighbourhoods' means: their rows summed one after another and divided, as
+    # ``hood.mean(axis=1)`` reduces along that axis, without the strided reduction.
+    total = hood[:, 0] + hood[:, 1]
+    for j in range(2, hood.shape[1]):
+        total += hood[:, j]
+    centred = hood - (total / hood.shape[1])[:, None, :]
     cov = np.einsum("nki,nkj->nij", centred, centred) / hood.shape[1]
     values, vectors = eigh(cov)
     dof = max(hood.shape[1] - 3, 1)
