@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from asbuilt.errors import FitError
+from asbuilt.fit._small_linalg import eigh
 
 __all__ = [
     "AmbiguousFrame",
@@ -411,7 +412,7 @@ def corner_fit(first: np.ndarray, second: np.ndarray):
     quarter = np.array([[0.0, -1.0], [1.0, 0.0]])
     c1, c2 = first.mean(axis=0), second.mean(axis=0)
     d1, d2 = first - c1, second - c2
-    values, vectors = np.linalg.eigh(quarter.T @ (d1.T @ d1) @ quarter + d2.T @ d2)
+    values, vectors = eigh(quarter.T @ (d1.T @ d1) @ quarter + d2.T @ d2)
     t = vectors[:, 0]
     normals = np.vstack([quarter @ t, t])
     offsets = np.array([normals[0] @ c1, normals[1] @ c2])

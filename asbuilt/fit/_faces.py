@@ -22,6 +22,7 @@ import numpy as np
 
 from asbuilt.fit._common import median_spacing, quick_median, row_norms
 from asbuilt.fit._cuboid_sparse import SPARSE_SHOTS
+from asbuilt.fit._small_linalg import eigh
 from asbuilt.fit._vectors import cross3, cross_rows, perpendicular_basis, unit_rows
 
 __all__ = [
@@ -154,6 +155,7 @@ def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
     coords = points if basis is None else points @ basis
     dim = coords.shape[1]
     outer = (coords[:, :, None] * coords[:, None, :]).reshape(coords.shape[0], dim * dim)
+    last = None  # the previous round's covariances and their eigen-decomposition
     for _ in range(rounds + 1):
         masks = np.abs(normals @ points.T - offsets[:, None]) < threshold
         if _ == rounds and basis is not None:
@@ -163,7 +165,16 @@ def _batch_refine(points, normals, offsets, threshold, basis=None, rounds=2):
         mean = weight @ coords / count[:, None]
         second = (weight @ outer).reshape(-1, dim, dim) / count[:, None, None]
         cov = second - mean[:, :, None] * mean[:, None, :]
-        values, vectors = np.linalg.eigh(cov)
+        if last is None:
+            values, vectors = eigh(cov)
+        else:
+            # A plane whose consensus set stayed put has the same covariance, bit for bit, and
+            # so the same decomposition: only the others are decomposed again.
+            values, vectors = last[1].copy(), last[2].copy()
+            moved = (cov != last[0]).reshape(cov.shape[0], -1).any(axis=1)
+            if moved.any():
+                values[moved], vectors[moved] = eigh(cov[moved])
+        last = (cov, values, vectors)
         if _ == rounds:
             break
         fresh = vectors[:, :, 0] if basis is None else vectors[:, :, 0] @ basis.T
@@ -227,8 +238,10 @@ def _first_planes(points, normals, threshold, cos_face, rng, limit=_MAX_FIRST_HA
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = _ADD(np.abs(cand_n @ points.T - offsets[:, None]) < threshold, axis=1)
     order = (-counts).argsort(kind="stable")
+    # Planes with too few points come last in the order: left out before the greedy choice,
+    # they could only have been chosen after every plane kept, so the same planes are chosen.
+    order = order[counts[order] >= _MIN_FACE_POINTS]
     top = _distinct(cand_n, offsets, order, cos_face, threshold, 4 * limit)
-    top = [i for i in top if counts[i] >= _MIN_FACE_POINTS]
     if not top:
         return []
     ref_n, ref_o, masks, spread = _batch_refine(points, cand_n[top], offsets[top], threshold)
@@ -286,9 +299,9 @@ def _second_plane(points, normals, first, threshold, gap, rng, viewpoint=None, e
     offsets = np.einsum("ij,ij->i", cand_n, cand_p)
     counts = _ADD(np.abs(cand_n @ sub.T - offsets[:, None]) < threshold, axis=1)
     order = (-counts).argsort(kind="stable")
+    order = order[counts[order] >= least]  # as for the first planes: the same ones chosen
     limit = _SPARSE_SECOND if every else 8
     top = np.array(_distinct(cand_n, offsets, order, 0.999, threshold, limit), dtype=np.int64)
-    top = top[counts[top] >= least]
     if not top.size:
         return found if every else None
     ref_n, ref_o, masks, _ = _batch_refine(
@@ -408,10 +421,12 @@ def extra_faces(points, axes, faces, threshold, gap, viewpoint=None, opposite=Tr
         free_proj = proj_all[free]
         if free.size <= _DENSE_LIMIT:
             # Every axis's counts at once (:func:`_within`'s dense count, per column).
-            diff = np.abs(free_proj[:, None, :] - free_proj[None, :, :])
-            counts = _ADD(diff < threshold, axis=1)
-            peaks = counts.argmax(axis=0).tolist()
-            peak_counts = counts[peaks, [0, 1, 2]].tolist()
+            # (Axis by axis: (3, m, m) differences, each row a contiguous run.)
+            cols = free_proj.T
+            diff = np.abs(cols[:, :, None] - cols[:, None, :])
+            counts = _ADD(diff < threshold, axis=2)
+            peaks = counts.argmax(axis=1).tolist()
+            peak_counts = counts[[0, 1, 2], peaks].tolist()
         for k in range(3):
             if not opposite and k in seen_axes:
                 continue

@@ -30,6 +30,7 @@ from asbuilt.fit._cuboid_sparse import (
 )
 from asbuilt.fit._mixture import mixing_cost
 from asbuilt.fit._rectangle import min_area_rectangle
+from asbuilt.fit._small_linalg import solve
 
 #: Tukey biweight tuning constant (95% efficiency at the normal; Beaton and Tukey 1974).
 _TUKEY_C = 4.685
@@ -39,6 +40,7 @@ _IRLS_ITERATIONS = 6
 _REFIT_ITERATIONS = 4
 _EYE3 = np.eye(3)
 _EYE3.setflags(write=False)
+_ADD = np.add.reduce
 
 
 def rodrigues(omega: np.ndarray) -> np.ndarray:
@@ -59,7 +61,8 @@ class FaceModel:
         self.face_axis = face_axis
         self.face_sign = face_sign
         self.offset = np.array(face_offset, dtype=np.float64)
-        self.rot_basis = rot_basis  # (3, q): free rotation directions, world frame
+        # (3, q): free rotation directions, world frame (``_EYE3``, read-only: every direction)
+        self.rot_basis = rot_basis
         # The faces every inlier of which sees at grazing incidence from the trusted viewpoint
         # (set by the fit: :func:`_grazing_faces`); a frame with any ranks below the others.
         self.edge_on: tuple[int, ...] = ()
@@ -102,7 +105,9 @@ class FaceModel:
         # Filled in place (a hot path): rotation columns, then -1 in each point's face column
         # (-0.0 elsewhere, as negating a 0/1 indicator gives).
         jac = np.empty((x.shape[0], q + self.offset.shape[0]))
-        jac[:, :q] = _vectors.cross_rows(normal, x) @ self.rot_basis
+        rows = _vectors.cross_rows(normal, x)
+        # Free to turn about every axis (the shared identity basis): the rows are the columns.
+        jac[:, :q] = rows if self.rot_basis is _EYE3 else rows @ self.rot_basis
         jac[:, q:] = -0.0
         jac[np.arange(x.shape[0]), q + label] = -1.0
         return jac
@@ -114,10 +119,13 @@ class FaceModel:
         jac = self.jacobian(x, label, normal)
         weighted = jac.T * weights
         matrix = weighted @ jac
-        matrix.flat[:: matrix.shape[0] + 1] += 1e-12 * max(float(matrix.trace()), 1e-30)
-        delta = np.linalg.solve(matrix, -(weighted @ residual))
+        # The diagonal as a strided view (``trace`` sums the same view): cheaper than ``.flat``.
+        diagonal = matrix.ravel()[:: matrix.shape[0] + 1]
+        diagonal += 1e-12 * max(float(_ADD(diagonal)), 1e-30)
+        delta = solve(matrix, -(weighted @ residual)[:, None])[:, 0]
         q = self.rot_basis.shape[1]
-        rotation = rodrigues(self.rot_basis @ delta[:q])
+        turn = delta[:q] if self.rot_basis is _EYE3 else self.rot_basis @ delta[:q]
+        rotation = rodrigues(turn)
         self.axes = self.axes @ rotation.T
         self.offset = self.offset + delta[q:]
         return float(np.abs(delta).max())
@@ -208,7 +216,7 @@ def _grow(model, x, label, inliers, threshold, gap, viewpoint, trusted):
     if len(grown) == len(faces):
         return None
     frame = _faces.frame_from(x, model.axes, grown, threshold, viewpoint)
-    return FaceModel(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
+    return FaceModel(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, _EYE3)
 
 
 def expand_frame(frame, subset: np.ndarray, n: int):
@@ -265,7 +273,7 @@ def _start(frame, x: np.ndarray, keep=None) -> FaceModel:
     """The joint fit's starting model from a segmentation frame; ``keep`` (n,) bool, optional,
     the points a lone face's in-plane axes may come from."""
     if frame.n_faces != 1:
-        return FaceModel(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, np.eye(3))
+        return FaceModel(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, _EYE3)
     normal = frame.axes[int(frame.face_axis[0])]
     basis = _vectors.perpendicular_basis(normal)
     members = frame.labels == 0
@@ -323,7 +331,7 @@ def fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted, raster=No
         if grown is not None:
             start = (grown.axes.copy(), grown.face_axis, grown.face_sign, grown.offset.copy())
             model, (label, residual, inliers, scale, _) = settle(
-                lambda kept: FaceModel(*start, np.eye(3))
+                lambda kept: FaceModel(*start, _EYE3)
             )
     if fans:
         width = cutoff * max(scale, noise)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from asbuilt.fit._small_linalg import eigh
+
 __all__ = ["components", "knn", "local_normals"]
 
 
@@ -31,7 +33,13 @@ def knn(points: np.ndarray, k: int) -> np.ndarray:
 
         _, index = cKDTree(points).query(points, k=k + 1)
         return index[:, 1:]
-    d2 = ((points[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
+    # Squared distances coordinate by coordinate, summed in the order ``sum(axis=2)`` of the
+    # (n, n, 3) differences adds them (same bits): that array's rows of three cost more to
+    # broadcast and reduce than three (n, n) ones.
+    cols = points.T
+    d2 = (cols[0][:, None] - cols[0]) ** 2
+    d2 += (cols[1][:, None] - cols[1]) ** 2
+    d2 += (cols[2][:, None] - cols[2]) ** 2
     np.fill_diagonal(d2, np.inf)
     index = np.argpartition(d2, k - 1, axis=1)[:, :k]
     order = np.take_along_axis(d2, index, axis=1).argsort(axis=1)
@@ -58,9 +66,14 @@ def local_normals(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, n
     """
     index = knn(points, k)
     hood = np.concatenate([points[:, None, :], points[index]], axis=1)
-    centred = hood - hood.mean(axis=1, keepdims=True)
+    # The neighbourhoods' means: their rows summed one after another and divided, as
+    # ``hood.mean(axis=1)`` reduces along that axis, without the strided reduction.
+    total = hood[:, 0] + hood[:, 1]
+    for j in range(2, hood.shape[1]):
+        total += hood[:, j]
+    centred = hood - (total / hood.shape[1])[:, None, :]
     cov = np.einsum("nki,nkj->nij", centred, centred) / hood.shape[1]
-    values, vectors = np.linalg.eigh(cov)
+    values, vectors = eigh(cov)
     dof = max(hood.shape[1] - 3, 1)
     rms = np.sqrt(np.clip(values[:, 0], 0.0, None) * hood.shape[1] / dof)
     return vectors[:, :, 0], rms, index

@@ -269,24 +269,30 @@ def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
         view = np.array(as_vector(viewpoint, "viewpoint"))
     except ValueError as exc:
         raise FitError(f"cuboid: {exc}") from None
-    result, error = _fit_seen_from(points, sigma, tolerances, view, options)
+    # Validated once here (the same refusal the fit itself would raise first), not by every
+    # fit of the shots below.
+    pts = _validate(points)
+    result, error = _fit_seen_from(pts, sigma, tolerances, view, options)
     return checked(
         result,
         error,
-        _validate(points),
+        pts,
         view,
-        lambda: _fit_cuboid_shots(points, sigma=sigma, tolerances=tolerances, **options),
+        lambda: _fit_cuboid_shots(
+            pts, sigma=sigma, tolerances=tolerances, validated=True, **options
+        ),
     )
 
 
 def _fit_seen_from(points, sigma, tolerances, view, options):
     """:func:`_fit_box` as seen from ``view`` (3,) metres, as ``(result, error)``: the fit
-    (None when refused) and the refusal (a FitError, None when fitted)."""
+    (None when refused) and the refusal (a FitError, None when fitted); ``points`` (n, 3)
+    metres, validated (:func:`_validate`)."""
     edge_pad = options["edge_pad"]
     result = error = None
     try:
         result = _fit_cuboid_shots(
-            points, sigma=sigma, tolerances=tolerances, viewpoint=view, **options
+            points, sigma=sigma, tolerances=tolerances, viewpoint=view, validated=True, **options
         )
     except AmbiguousFrame:
         raise  # a subset of the shots cannot tell the frames apart either
@@ -294,7 +300,7 @@ def _fit_seen_from(points, sigma, tolerances, view, options):
         error = exc
     if result is not None and result.inliers.all():
         return result, None  # every shot on a face: none in front of the box or inside it
-    pts = _validate(points)
+    pts = points
     contradictions = len(pts)
     if result is not None:
         width = tolerances.outlier_cutoff_sigma * max(result.sigma, tolerances.sigma_floor)
@@ -384,6 +390,7 @@ def _fit_cuboid_shots(
     edge_pad: float = 0.5,
     silhouette: bool = True,
     seed=None,
+    validated: bool = False,
 ) -> FitResult:
     """:func:`fit_cuboid` of the shots as they are.
 
@@ -392,9 +399,10 @@ def _fit_cuboid_shots(
     (m,) int, ``face_sign`` (m,) +-1, ``face_offset`` (m,) metres from the scan frame's origin
     (outward normal . point = offset) and ``noise`` (metres, the consensus level when
     ``sigma`` is None). That frame alone is fitted: no search, so no frame a single station
-    could have seen replaces its opposite faces.
+    could have seen replaces its opposite faces. ``validated``: ``points`` is already
+    :func:`_validate`'s array.
     """
-    pts = _validate(points)
+    pts = points if validated else _validate(points)
     n = pts.shape[0]
     try:
         view = None if viewpoint is None else np.array(as_vector(viewpoint, "viewpoint"))
