@@ -223,7 +223,7 @@ def _canonical_rows(points: np.ndarray, centred=None) -> tuple[np.ndarray, np.nd
     first = np.ones(len(points), dtype=bool)
     first[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
     row_of = np.empty(len(points), dtype=np.intp)
-    row_of[order] = np.cumsum(first) - 1
+    row_of[order] = first.cumsum() - 1
     return ordered[first], row_of
 
 

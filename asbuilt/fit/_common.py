@@ -509,7 +509,8 @@ def arc_coverage_deg(angles: np.ndarray) -> float:
     """
     if angles.size < 2:
         return 0.0
-    ordered = np.sort(np.mod(angles, 2 * np.pi))
+    ordered = np.mod(angles, 2 * np.pi)
+    ordered.sort()  # np.sort's order, in place on the fresh array
     closed = np.concatenate([ordered, ordered[:1] + 2 * np.pi])
     gaps = closed[1:] - closed[:-1]  # np.diff's differences, without its overhead
     return float(np.degrees(2 * np.pi - gaps.max()))

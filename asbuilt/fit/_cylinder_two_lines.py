@@ -136,7 +136,7 @@ def _on_two_straight_lines(kept: np.ndarray, axis: np.ndarray, width: float) -> 
     order = (kept @ axis).argsort()
     n = kept.shape[0]
     ends = min(END_SHOTS, n // 2)
-    first = np.repeat(kept[order[:ends]], ends, axis=0)
+    first = kept[order[:ends]].repeat(ends, axis=0)
     last = np.concatenate([kept[order[-ends:]]] * ends)  # np.tile's rows, less overhead
     line = _near_line(kept, first, last, width)
     count = line.sum(axis=1)  # np.count_nonzero's counts, without its Python wrapper

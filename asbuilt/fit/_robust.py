@@ -350,7 +350,7 @@ def robust_geometric_fit(
             state, residuals, jacobian, new_mask = _likeliest_refit(
                 model, state, points, new_mask, extent, floor, max_iterations
             )
-        elif mask is not None and np.array_equal(new_mask, mask):
+        elif mask is not None and (new_mask == mask).all():  # np.array_equal, same shapes
             break
         mask = new_mask
         kept = int(np.count_nonzero(mask))
