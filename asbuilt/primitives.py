@@ -93,7 +93,7 @@ class Cylinder:
     def distance(self, points) -> np.ndarray:
         """Signed distance, shape (n,) metres, of points (n, 3) to the infinite lateral surface."""
         rel = np.asarray(points, dtype=np.float64) - self.center
-        radial = rel - np.outer(rel @ self.axis, self.axis)
+        radial = rel - (rel @ self.axis)[:, None] * self.axis  # np.outer's products
         # np.linalg.norm(radial, axis=1)'s arithmetic, without its overhead.
         return np.sqrt(np.add.reduce(radial * radial, axis=1)) - self.radius
 

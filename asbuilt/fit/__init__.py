@@ -154,17 +154,20 @@ def _fit_points(kind: str, points, sigma, tolerances, viewpoint) -> FitResult:
         # or fail on none ("failed numerically"); from three up each fitter says what its kind
         # needs (a cuboid's depends on the faces its shots show).
         validate_points(array, kind)
+    # The centred points, for the spread check and the canonical order alike.
+    centred = array - array.sum(axis=0) / len(array)  # array.mean(axis=0), less overhead
     if kind != "hull":
         if sigma is not None:
-            _require_spread_beyond_noise(array, kind, LINE_SPREAD_SIGMAS * sigma)
+            _require_spread_beyond_noise(array, kind, LINE_SPREAD_SIGMAS * sigma, centred=centred)
         else:
             # No sensor sigma: one prior sigma across the line, so that a head stuck on one
             # spot (shots scattered along its beam only) is refused while a 10 mm tube is not.
-            _require_spread_beyond_noise(array, kind, float(tolerances.prior_range_sigma), True)
+            prior = float(tolerances.prior_range_sigma)
+            _require_spread_beyond_noise(array, kind, prior, True, centred)
     options = {}
     if viewpoint is not None and _accepts_viewpoint(function):
         options["viewpoint"] = viewpoint
-    distinct, row_of = _canonical_rows(array)
+    distinct, row_of = _canonical_rows(array, centred)
     repeats = len(array) - len(distinct)
     if repeats and len(distinct) < MIN_POINTS[kind]:
         what = kind_phrase(kind)
@@ -193,9 +196,10 @@ def _fit_points(kind: str, points, sigma, tolerances, viewpoint) -> FitResult:
     return result
 
 
-def _canonical_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _canonical_rows(points: np.ndarray, centred=None) -> tuple[np.ndarray, np.ndarray]:
     """The distinct rows of ``points`` (n, 3) metres in one canonical order, shape (m, 3), and
-    for each of the n rows the index of its distinct row, shape (n,) int.
+    for each of the n rows the index of its distinct row, shape (n,) int. ``centred``:
+    ``points - points.mean(axis=0)`` when the caller has it already.
 
     The fits draw random samples by index (RANSAC hypotheses, starts), so the order of the rows
     would otherwise choose which samples they see: the same shots written in another order (two
@@ -211,14 +215,15 @@ def _canonical_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     standard errors slightly conservative). Counted twice, they would shrink the standard errors
     by up to sqrt(2) for no new information.
     """
-    centred = points - points.mean(axis=0)
+    if centred is None:
+        centred = points - points.mean(axis=0)
     # np.lexsort's last key sorts first: distance, then x, y, z
     order = np.lexsort((*points.T[::-1], np.einsum("ij,ij->i", centred, centred)))
     ordered = points[order]
     first = np.ones(len(points), dtype=bool)
     first[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
     row_of = np.empty(len(points), dtype=np.intp)
-    row_of[order] = np.cumsum(first) - 1
+    row_of[order] = first.cumsum() - 1
     return ordered[first], row_of
 
 
@@ -273,13 +278,15 @@ UNIT_SLIP_EXTENT = 0.05
 
 
 def _require_spread_beyond_noise(
-    points: np.ndarray, kind: str, limit: float, assumed: bool = False
+    points: np.ndarray, kind: str, limit: float, assumed: bool = False, centred=None
 ) -> None:
     """Raise FitError when the points (n, 3) metres lie within ``limit`` (metres; the range
     noise times ``LINE_SPREAD_SIGMAS``, or the prior noise when the scan gives no sigma and
     ``assumed``) of one line: no surface is measured, whatever primitive the fit would return
-    (a cylinder of a few millimetres around the line, a plane turned anyhow about it)."""
-    centred = points - points.mean(axis=0)
+    (a cylinder of a few millimetres around the line, a plane turned anyhow about it).
+    ``centred``: ``points - points.mean(axis=0)`` when the caller has it already."""
+    if centred is None:
+        centred = points - points.mean(axis=0)
     # RMS spread along the principal directions, largest first: the roots of the scatter
     # matrix's eigenvalues (the centred points' singular values / sqrt(n), at a third the cost).
     scatter = centred.T @ centred / len(points)

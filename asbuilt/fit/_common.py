@@ -184,8 +184,9 @@ def basis_floats(ax: float, ay: float, az: float) -> tuple[float, ...]:
 def extent_of(points: np.ndarray) -> float:
     """Twice the largest distance of ``points`` (m, 3) metres from their centroid, metres: the
     span a fit's radius is weighed against to call it nearly a plane over them."""
-    centred = points - points.mean(axis=0)
-    return 2.0 * float(np.sqrt(np.max(np.einsum("ij,ij->i", centred, centred))))
+    # points.mean(axis=0) and np.max's arithmetic, without their overhead.
+    centred = points - points.sum(axis=0) / len(points)
+    return 2.0 * float(np.sqrt(np.einsum("ij,ij->i", centred, centred).max()))
 
 
 def radius_text(radius: float) -> str:
@@ -508,7 +509,8 @@ def arc_coverage_deg(angles: np.ndarray) -> float:
     """
     if angles.size < 2:
         return 0.0
-    ordered = np.sort(np.mod(angles, 2 * np.pi))
+    ordered = np.mod(angles, 2 * np.pi)
+    ordered.sort()  # np.sort's order, in place on the fresh array
     closed = np.concatenate([ordered, ordered[:1] + 2 * np.pi])
     gaps = closed[1:] - closed[:-1]  # np.diff's differences, without its overhead
     return float(np.degrees(2 * np.pi - gaps.max()))

@@ -258,7 +258,8 @@ def edge_on(robust: RobustFit, points: np.ndarray, view: np.ndarray) -> bool:
         return False
     # np.percentile(angles, [25, 50]) (linear interpolation), without its overhead (a tenth
     # of a clean 40-point fit's time).
-    ordered = np.sort(angles)
+    angles.sort()  # a fresh array: np.sort's copy is not needed
+    ordered = angles
     quartile, median = (_interpolated(ordered, q) for q in (0.25, 0.5))
     return bool(median > EDGE_ON_DEG or quartile > EDGE_ON_QUARTILE_DEG)
 

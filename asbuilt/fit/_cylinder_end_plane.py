@@ -27,7 +27,8 @@ inliers is tried whatever that fit's axis says, unless its shots alone fit a pip
 pipe's crest, within the cutoff of one plane); the face's shots may lie inside the pipe's
 circle when their beams came in through the face (a cap or blind flange at the near end); and
 the face is looked for even when few shots lie off the first fit, if a plane through its
-inliers explains them about as well as the fit does (:func:`drawn_to_a_face`).
+inliers explains them about as well as the fit does (:func:`drawn_to_a_face`; not asked after
+a fit whose rejected shots were shown to be background, docs/fitting.md "Thin branches").
 """
 
 from __future__ import annotations

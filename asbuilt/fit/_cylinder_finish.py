@@ -38,6 +38,7 @@ from asbuilt.fit._cylinder_model import (
     MODEL,
     angles_about,
     drop_far_side,
+    facing,
     flip_covariance,
     incidence_weighted,
     rms,
@@ -85,7 +86,7 @@ def readmitted(robust, local, cutoff: float):
     came out r 90.7 mm with 3 rejected (the sensor's sigma given, no viewpoint). The later
     checks (far side, hidden shots) still judge the re-admitted shots.
     """
-    if robust.inliers.all() or np.max(np.abs(robust.residuals[~robust.inliers])) > 2 * cutoff:
+    if robust.inliers.all() or np.abs(robust.residuals[~robust.inliers]).max() > 2 * cutoff:
         return robust  # (a shot twice the cutoff off is no good shot a nearby fit could take)
     every = refit_on(MODEL, robust, local, np.ones(len(local), bool))
     if not (np.abs(every.residuals) <= cutoff).all():
@@ -159,7 +160,8 @@ def end_gaps(along: np.ndarray, spacing: float, noise: float) -> tuple[float, fl
     +-0.12 m, and came out 2.7 m short (17.3 m of 20).
     ``along``: the inliers' coordinates along the axis, shape (m,) metres.
     """
-    ordered = np.sort(along)
+    ordered = along.copy()  # np.sort(along), without its wrapper
+    ordered.sort()
     same_row = max(0.25 * spacing, 3.0 * noise)
     gaps = ordered[1:] - ordered[:-1]  # np.diff's differences, without its overhead
     if gaps.size:
@@ -240,7 +242,10 @@ def finished(robust, scene: Scene, ignored_view, starts, reconsider) -> FitResul
             local, [robust.state], MODEL, kind="cylinder", sigma=sigma, tolerances=tolerances
         )
     near = robust
-    robust = drop_far_side(near, local, tolerances)
+    # One fit's directions about its axis, asked by the far-side test and, when neither it nor
+    # the shots seen through the pipe changed the fit, by the incidence weights.
+    seen = facing(near, local)
+    robust = drop_far_side(near, local, tolerances, seen)
     far_side = int(np.count_nonzero(near.inliers & ~robust.inliers))
     if view is None and starts and far_side and doubtful_blind(robust, local):
         # The far-side refit slid onto a plane: the likeliest other basin replaces it if closer
@@ -253,7 +258,7 @@ def finished(robust, scene: Scene, ignored_view, starts, reconsider) -> FitResul
     through = 0
     if view is not None and not ignored_view:
         robust, through = not_seen_through(robust, local, view, sigma, tolerances)
-    robust, relative = incidence_weighted(robust, local)
+    robust, relative = incidence_weighted(robust, local, seen if robust is near else None)
     axis, center, radius = robust.state
     kept = local[robust.inliers]
     along = (kept - center) @ axis

@@ -26,6 +26,7 @@ __all__ = [
     "WEIGHTED_NOISE_RATIO",
     "ONE_SIDED",
     "FAR_SIDE_DEG",
+    "facing",
     "drop_far_side",
     "incidence_weighted",
     "flip_covariance",
@@ -184,7 +185,18 @@ ONE_SIDED = 0.5
 FAR_SIDE_DEG = 95.0
 
 
-def drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances) -> RobustFit:
+def facing(robust: RobustFit, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each of ``points``' (n, 3) metres direction about the fit's axis (:func:`angles_about`,
+    (n,) radians) and its inliers' mean direction (:func:`mean_direction`, (2,)): what
+    :func:`drop_far_side` and :func:`incidence_weighted` ask of one fit."""
+    axis, center, _ = robust.state
+    angles = angles_about(axis, center, points)
+    return angles, mean_direction(angles[robust.inliers])
+
+
+def drop_far_side(
+    robust: RobustFit, points: np.ndarray, tolerances: Tolerances, seen=None
+) -> RobustFit:
     """Reject inliers on the far side of a pipe seen from one side, and refit without them.
 
     A station sees at most the half of a pipe that faces it. A shot that passed the pipe and hit
@@ -193,12 +205,10 @@ def drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances)
     radius. When the inliers' directions about the axis are concentrated (mean resultant length
     above ``ONE_SIDED``, circular statistics: Mardia & Jupp 2000), inliers more than
     ``FAR_SIDE_DEG`` from their mean direction are rejected and the fit is redone by least
-    squares on the rest.
+    squares on the rest. ``seen``: :func:`facing` of ``robust`` when the caller has it already.
     """
-    axis, center, _ = robust.state
-    angles = angles_about(axis, center, points)
+    angles, mean = facing(robust, points) if seen is None else seen
     kept = robust.inliers
-    mean = mean_direction(angles[kept])
     resultant = float(np.hypot(*mean))
     if resultant <= ONE_SIDED:
         return robust
@@ -212,7 +222,9 @@ def drop_far_side(robust: RobustFit, points: np.ndarray, tolerances: Tolerances)
     return refit_on(MODEL, robust, points, mask)
 
 
-def incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFit, np.ndarray]:
+def incidence_weighted(
+    robust: RobustFit, points: np.ndarray, seen=None
+) -> tuple[RobustFit, np.ndarray]:
     """Refit the inliers by weighted least squares with a fitted incidence noise model.
 
     For a pipe seen from one side by a distant station, the cosine of a shot's incidence is
@@ -226,16 +238,16 @@ def incidence_weighted(robust: RobustFit, points: np.ndarray) -> tuple[RobustFit
     biases the radius and weighting would make that worse) the weights are 1.
 
     Returns the refitted RobustFit (same inliers) and each point's variance relative to a
-    square-on shot, shape (n,).
+    square-on shot, shape (n,). ``seen``: :func:`facing` of ``robust`` when the caller has it
+    already.
     """
     n = len(points)
     uniform = np.ones(n)
     axis, center, radius = robust.state
     if robust.scale > WEIGHTED_NOISE_RATIO * radius:
         return robust, uniform
-    angles = angles_about(axis, center, points)
+    angles, mean = facing(robust, points) if seen is None else seen
     kept = robust.inliers
-    mean = mean_direction(angles[kept])
     if float(np.hypot(*mean)) <= ONE_SIDED or np.count_nonzero(kept) < 8:
         return robust, uniform
     square_on = np.cos(angles - np.arctan2(mean[1], mean[0])) ** 2

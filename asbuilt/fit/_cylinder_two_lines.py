@@ -66,7 +66,7 @@ def on_two_lines(
         return False
     if about is None:
         about = angles_about(axis, center, kept)
-    order = np.argsort(about)
+    order = about.argsort()  # np.argsort's order, without its wrapper
     angles = about[order]
     closed = np.concatenate([angles, [angles[0] + 2.0 * math.pi]])
     gaps = closed[1:] - closed[:-1]  # np.diff's differences, without its overhead
@@ -133,18 +133,18 @@ def _on_two_straight_lines(kept: np.ndarray, axis: np.ndarray, width: float) -> 
     """
     if kept.shape[0] < 6:
         return False
-    order = np.argsort(kept @ axis)
+    order = (kept @ axis).argsort()
     n = kept.shape[0]
     ends = min(END_SHOTS, n // 2)
-    first = np.repeat(kept[order[:ends]], ends, axis=0)
+    first = kept[order[:ends]].repeat(ends, axis=0)
     last = np.concatenate([kept[order[-ends:]]] * ends)  # np.tile's rows, less overhead
     line = _near_line(kept, first, last, width)
-    count = np.count_nonzero(line, axis=1)
+    count = line.sum(axis=1)  # np.count_nonzero's counts, without its Python wrapper
     # The rest, against the line through its own first and last shot along the run: a quick
     # screen, so that only a likely pair of lines pays for the two fits below.
     ranked = ~line[:, order]
-    rest_first = order[np.argmax(ranked, axis=1)]
-    rest_last = order[n - 1 - np.argmax(ranked[:, ::-1], axis=1)]
+    rest_first = order[ranked.argmax(axis=1)]
+    rest_last = order[n - 1 - ranked[:, ::-1].argmax(axis=1)]
     rest = _near_line(kept, kept[rest_first], kept[rest_last], 2.0 * width)
     screened = (count >= 3) & (count <= n - 3) & (line | rest).all(axis=1)
     for k in np.flatnonzero(screened):

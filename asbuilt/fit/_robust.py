@@ -169,15 +169,16 @@ def best_inlier_set(residuals, mask, extent, floor):
     among grazing ones); taken together they raise sigma enough to be explained, which a
     one-at-a-time test never sees. Background shots, centimetres to metres off, never pay.
     """
-    order = np.argsort(np.abs(residuals))
-    squares = np.cumsum(residuals[order] ** 2)
+    # np.argsort, np.cumsum and np.argmin as methods, without their wrappers' overhead.
+    order = np.abs(residuals).argsort()
+    squares = (residuals[order] ** 2).cumsum()
     n = residuals.size
     counts = np.arange(1, n + 1)
     variance = np.maximum(squares / counts, floor * floor)
     score = counts * (1.0 + np.log(2.0 * np.pi * variance))
     score += (n - counts) * 2.0 * np.log(max(extent, floor))
     first = int(np.count_nonzero(mask)) - 1
-    best = first + int(np.argmin(score[first:]))
+    best = first + int(score[first:].argmin())
     chosen = np.zeros(n, dtype=bool)
     chosen[order[: best + 1]] = True
     return chosen | mask
@@ -349,7 +350,7 @@ def robust_geometric_fit(
             state, residuals, jacobian, new_mask = _likeliest_refit(
                 model, state, points, new_mask, extent, floor, max_iterations
             )
-        elif mask is not None and np.array_equal(new_mask, mask):
+        elif mask is not None and (new_mask == mask).all():  # np.array_equal, same shapes
             break
         mask = new_mask
         kept = int(np.count_nonzero(mask))

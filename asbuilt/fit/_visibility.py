@@ -239,7 +239,8 @@ def edge_on_degrees(axis, center, points: np.ndarray, viewpoint) -> np.ndarray:
     beam_length = np.sqrt(np.einsum("ij,ij->i", beams, beams))
     with np.errstate(divide="ignore", invalid="ignore"):
         cosine = np.abs(np.einsum("ij,ij->i", radial, across)) / (radial_length * across_length)
-        angle = np.degrees(np.arccos(cosine.clip(0.0, 1.0)))
+        # cosine.clip(0.0, 1.0)'s values (NaN kept), without the method's Python overhead.
+        angle = np.degrees(np.arccos(np.minimum(np.maximum(cosine, 0.0), 1.0)))
     angle[(across_length <= 0.1 * beam_length) | (radial_length <= 0.0)] = np.nan
     return angle
 
