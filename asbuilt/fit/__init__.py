@@ -336,8 +336,9 @@ UNDETERMINED_AXIS_DEG = 30.0
 REFUSED_RELATIVE = 1.0
 
 
-#: A radius over this many times the extent of the fit's inliers makes them a nearly flat
-#: patch of it, where their plane is the rival :func:`_refuse_unknown_radius` compares.
+#: A radius over this many times the extent of the fit's inliers (across a cylinder's axis,
+#: where it curves) makes them a nearly flat patch of it, where their plane is the rival
+#: :func:`_refuse_unknown_radius` compares.
 _PLANE_LIKE_RADIUS = 3.0
 
 #: Upper tail probability of the chi-square test that a plane-like fit's curvature must pass
@@ -352,7 +353,8 @@ CURVATURE_TAIL = 1e-3
 def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
     """Raise FitError when the fit's radius is not known to within its own size
     (``REFUSED_RELATIVE``), or when, wider than ``_PLANE_LIKE_RADIUS`` times its inliers'
-    extent, it does not explain them (``points`` (n, 3) metres, the rows of ``result``)
+    extent (across a cylinder's axis: :func:`asbuilt.fit._common.extent_of`), it does not
+    explain them (``points`` (n, 3) metres, the rows of ``result``)
     significantly more closely than their plane does.
 
     The second test is the first without its linearisation: a curvature ``k`` known to
@@ -375,7 +377,8 @@ def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
         kept = points[result.inliers]
         if len(kept) < 4 or not result.sigma > 0:
             return
-        if radius <= _PLANE_LIKE_RADIUS * extent_of(kept):
+        across = getattr(result.primitive, "axis", None)  # a cylinder's; None for a sphere
+        if radius <= _PLANE_LIKE_RADIUS * extent_of(kept, across):
             return  # curved over the points: their plane is no rival
         centred = kept - kept.mean(axis=0)
         plane_sse = float(singular_values(centred)[-1] ** 2)

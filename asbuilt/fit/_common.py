@@ -181,11 +181,19 @@ def basis_floats(ax: float, ay: float, az: float) -> tuple[float, ...]:
     return ux, uy, uz, ay * uz - az * uy, az * ux - ax * uz, ax * uy - ay * ux
 
 
-def extent_of(points: np.ndarray) -> float:
+def extent_of(points: np.ndarray, axis: np.ndarray | None = None) -> float:
     """Twice the largest distance of ``points`` (m, 3) metres from their centroid, metres: the
-    span a fit's radius is weighed against to call it nearly a plane over them."""
+    span a fit's radius is weighed against to call it nearly a plane over them.
+
+    With a cylinder's unit ``axis`` (3,), the distances are measured across it (the points
+    projected on the plane normal to the axis): a cylinder curves only across its axis, so a
+    strip of floor many metres long but a metre wide is a nearly flat patch of a 40 m
+    cylinder laid along it, however long the strip.
+    """
     # points.mean(axis=0) and np.max's arithmetic, without their overhead.
     centred = points - points.sum(axis=0) / len(points)
+    if axis is not None:
+        centred = centred - np.outer(centred @ axis, axis)
     return 2.0 * float(np.sqrt(np.einsum("ij,ij->i", centred, centred).max()))
 
 

@@ -92,9 +92,12 @@ CROSSED_SHOTS = 3
 
 def plane_like(result, points: np.ndarray) -> bool:
     """Whether a cylinder fit (a FitResult over ``points`` (n, 3) metres) is wider than
-    ``PLANE_LIKE`` times its inliers' extent: over them, nearly a plane."""
+    ``PLANE_LIKE`` times its inliers' extent across its axis: over them, nearly a plane (a
+    floor seen at grazing incidence is a strip tens of metres long, which a cylinder laid
+    along it bends over only across its width)."""
     kept = points[result.inliers]
-    return len(kept) < 2 or result.primitive.radius > PLANE_LIKE * extent_of(kept)
+    cylinder = result.primitive
+    return len(kept) < 2 or cylinder.radius > PLANE_LIKE * extent_of(kept, cylinder.axis)
 
 
 def in_doubt(first, points: np.ndarray, sigma, tolerances, face_explained: bool = False) -> bool:
@@ -219,7 +222,7 @@ def _stands(found, points, rest, inliers, view, cutoff, first, out) -> bool:
         np.count_nonzero(inliers) < FRONT_SHOTS
         or cylinder.radius <= cutoff  # any line of shots fits a pipe thinner than the cutoff
         or not found.stderr["radius"] <= DETERMINED_RADIUS * cylinder.radius
-        or cylinder.radius > PLANE_LIKE * extent_of(points[inliers])
+        or cylinder.radius > PLANE_LIKE * extent_of(points[inliers], cylinder.axis)
     ):
         return False
     if np.count_nonzero(_crossing(cylinder, points[~rest], view, cutoff)) >= CROSSED_SHOTS:
@@ -328,6 +331,14 @@ def fit_past_planes(
         first is not None
         and first_plane is not None
         and plane_like(first, points)
+        # Nearly a plane over its whole extent (kilometres wide), or across its axis only and
+        # known to within itself, so it would have been returned: an undetermined first fit
+        # a few times its width is refused anyway, and its retry without the sigma may find
+        # the pipe.
+        and (
+            first.stderr["radius"] <= first.primitive.radius
+            or first.primitive.radius > PLANE_LIKE * extent_of(points[first.inliers])
+        )
         and np.count_nonzero(first_plane & first.inliers) > 0.5 * np.count_nonzero(first.inliers)
     ):
         shown = radius_text(first.primitive.radius)

@@ -267,3 +267,19 @@ def test_row_norms_are_numpys_norms_exactly(columns):
     v = np.random.default_rng(columns).normal(0.0, 3.0, (200, columns))
     v[0] = 0.0
     np.testing.assert_array_equal(common.row_norms(v), np.linalg.norm(v, axis=1))
+
+
+def test_extent_across_an_axis_leaves_out_the_span_along_it():
+    """A strip 40 m long and 2 m wide: 40 m across its points, 2 m across an axis along it
+    (all a cylinder laid along the strip curves over), the full span again across an axis
+    normal to the strip."""
+    rng = np.random.default_rng(3)
+    strip = np.column_stack([rng.uniform(-20, 20, 200), rng.uniform(-1, 1, 200), np.zeros(200)])
+    strip[:2, :2] = [[-20, -1], [20, 1]]  # the corners: the extents are exact
+    full = 2 * np.linalg.norm(strip - strip.mean(axis=0), axis=1).max()
+    assert common.extent_of(strip) == pytest.approx(full)
+    across = strip[:, 1] - strip[:, 1].mean()
+    assert common.extent_of(strip, np.array([1.0, 0.0, 0.0])) == pytest.approx(
+        2 * np.abs(across).max()
+    )
+    assert common.extent_of(strip, np.array([0.0, 0.0, 1.0])) == pytest.approx(full)

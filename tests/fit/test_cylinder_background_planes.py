@@ -197,11 +197,14 @@ def _review_scene(name):
     )
 
 
-@pytest.mark.parametrize("name", ["wide_window_wall", "pipe_through_wall_end_plane"])
+@pytest.mark.parametrize(
+    "name", ["wide_window_wall", "pipe_through_wall_end_plane", "floor_strip_pipe_past_it"]
+)
 def test_review_scenes_give_the_pipe(name):
     """A wall over a window three times the pipe's silhouette (its shots put the residuals'
-    noise at 0.37 m, whose refit was refused), and a pipe through a wall whose end-plane
-    rescue took the wall for a pipe of r 1.39 m: the pipe, from its own shots."""
+    noise at 0.37 m, whose refit was refused), a pipe through a wall whose end-plane
+    rescue took the wall for a pipe of r 1.39 m, and a pipe rising out of a floor seen as a
+    strip 27 m long, fitted r 107 m along it: the pipe, from its own shots."""
     points, station, on_target, truth = _review_scene(name)
     result = fit_points("cylinder", points, sigma=SIGMA, viewpoint=station)
     cylinder = result.primitive
@@ -210,6 +213,16 @@ def test_review_scenes_give_the_pipe(name):
     assert axis_error <= max(3 * result.stderr["axis_deg"], 1.0)
     assert not (result.inliers & ~on_target).any()
     assert result.sigma == SIGMA  # the wall's shots did not set the noise level
+
+
+def test_a_long_floor_strip_is_not_returned_as_a_cylinder_laid_along_it():
+    """A floor seen at grazing incidence is a strip 83 m long and 1.8 m wide: a cylinder of
+    r 46 m laid along it is under 3 x the strip's length, but 25 x its width across the axis,
+    where a cylinder curves. It is plane-like, its shots lie on the floor, and nothing past
+    the floor fits a pipe: refused, with the reason."""
+    points, station, on_target, _ = _review_scene("floor_strip_returned")
+    with pytest.raises(FitError, match="nearly a plane over its inliers"):
+        fit_points("cylinder", points, sigma=SIGMA, viewpoint=station)
 
 
 def test_the_noise_level_is_judged_off_the_background():
