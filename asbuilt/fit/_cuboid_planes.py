@@ -29,12 +29,19 @@ radians.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from asbuilt.errors import FitError
 from asbuilt.fit._cuboid_sparse import AmbiguousFrame
-from asbuilt.fit._cylinder_background import near_random_planes, rescued, segment_noise
+from asbuilt.fit._cylinder_background import (
+    BACKGROUND_PLANE_SHOTS,
+    near_random_planes,
+    rescued,
+    segment_noise,
+)
 from asbuilt.tolerances import MIN_POINTS
 
 __all__ = [
@@ -289,4 +296,10 @@ def fit_past_planes(fit, points: np.ndarray, view: np.ndarray, sigma, tolerances
         "the box (a plane with the box's shots in front of it that fills more of the raster "
         "window than they do) and were left out as background before the fit."
     )
-    return rescued(found, points, inliers, note)
+    result = rescued(found, points, inliers, note)
+    # Counted for the noise check (asbuilt.fit._noise_levels): the shots left out lie far off
+    # the box and are no rough surface's scatter.
+    left_out = float(np.count_nonzero(background))
+    return dataclasses.replace(
+        result, diagnostics={**result.diagnostics, BACKGROUND_PLANE_SHOTS: left_out}
+    )

@@ -403,6 +403,12 @@ def fit_without_background_plane(fit, points: np.ndarray, sigma: float, toleranc
     return None
 
 
+#: The fit's diagnostics key counting the shots left out on background planes (a wall, floor
+#: or ceiling around the object: :mod:`asbuilt.fit._cylinder_planes`,
+#: :mod:`asbuilt.fit._cuboid_planes`).
+BACKGROUND_PLANE_SHOTS = "background_plane_shots"
+
+
 def rescued(found, points, inliers, note: str):
     """``found`` (a FitResult on a subset) as the fit of every one of ``points`` (n, 3) metres:
     its residuals over all of them, ``inliers`` (n,) bool, and ``note`` added."""

@@ -38,6 +38,7 @@ from asbuilt.errors import FitError
 from asbuilt.fit._common import extent_of, radius_text
 from asbuilt.fit._cuboid_planes import _plane_through
 from asbuilt.fit._cylinder_background import (
+    BACKGROUND_PLANE_SHOTS,
     DETERMINED_RADIUS,
     random_planes,
     rescued,
@@ -238,10 +239,6 @@ def _stands(found, points, rest, inliers, view, cutoff, first, out) -> bool:
         _msac(cylinder.distance(points[~out]), cutoff)
         < _msac(first.residuals[~out], cutoff) - cutoff**2
     )
-
-
-#: The fit's diagnostics key counting the shots left out on background planes.
-BACKGROUND_PLANE_SHOTS = "background_plane_shots"
 
 
 class BackgroundPlaneFit(FitError):

@@ -296,8 +296,10 @@ def _not_background(result: FitResult, sigma: float, tolerances: Tolerances):
     A cylinder fit that left out a wall or floor as background
     (:mod:`asbuilt.fit._cylinder_planes`) has most shots on it, decimetres off the pipe: its
     likeliest inlier set took them in and put the noise at 0.2-1.9 m (the review's wide
-    windows), whose refit lost the pipe. Only the shots within ``NEAR_REJECTION_RATIO``
-    inlier thresholds of the fit are then weighed: a rough surface's scatter lies there.
+    windows), whose refit lost the pipe; a cuboid fit past a floor or ceiling
+    (:mod:`asbuilt.fit._cuboid_planes`) likewise, at 1.0-2.6 m, whose refit returned the floor
+    as the box. Only the shots within ``NEAR_REJECTION_RATIO`` inlier thresholds of the fit
+    are then weighed: a rough surface's scatter lies there.
     """
     if not result.diagnostics.get(BACKGROUND_PLANE_SHOTS):
         return None

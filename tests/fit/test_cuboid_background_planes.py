@@ -11,11 +11,16 @@ floor, wall or ceiling was fitted as a face and the box's shots rejected: a pier
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from asbuilt.fit import fit_points
 from asbuilt.fit._cuboid_planes import background_planes
+from asbuilt.fit._cylinder_background import BACKGROUND_PLANE_SHOTS
+from asbuilt.fit._noise_levels import _not_background, _residual_noise
 from asbuilt.fit._silhouette import shot_angles
 from asbuilt.sim.raycast import (
     BoxShape,
@@ -25,6 +30,7 @@ from asbuilt.sim.raycast import (
     direction_from_angles,
     raycast,
 )
+from asbuilt.tolerances import DEFAULT_TOLERANCES
 
 SIGMA = 0.002  # metres
 
@@ -146,3 +152,36 @@ def test_a_column_behind_a_pipe_is_not_taken_for_background(seed):
     angles = shot_angles(points, station)[1]
     background = background_planes(points, station, 3 * SIGMA, angles)
     assert not (background & on_column).any()
+
+
+def _noise_scene(name):
+    path = Path(__file__).with_name("cuboid_background_noise.json")
+    scene = json.loads(path.read_text())["scenes"][name]
+    truth = scene["truth"]
+    return (
+        np.array(scene["points"]),
+        np.array(scene["station"]),
+        np.array(truth["axes"]),
+        np.array(truth["size"]),
+    )
+
+
+@pytest.mark.parametrize(
+    "name", ["pier_on_floor_window_three_times", "beam_under_ceiling_window_three_times"]
+)
+def test_the_noise_level_is_judged_off_the_background(name):
+    """The box fitted past a floor or ceiling: the noise check weighs only the shots near it.
+    Over every shot, the likeliest inlier set took in the left-out plane and put the noise at
+    2.0-2.4 m, and the refit at that level returned the floor or ceiling as a box of metres."""
+    points, station, axes, size = _noise_scene(name)
+    result = fit_points("cuboid", points, sigma=SIGMA, viewpoint=station)
+    assert result.sigma == SIGMA
+    assert result.diagnostics[BACKGROUND_PLANE_SHOTS] > 100
+    for axis, fitted, stderr in zip(
+        result.primitive.axes, result.primitive.size, result.stderr["size"], strict=True
+    ):
+        k = int(np.argmax(np.abs(axes @ axis)))
+        assert abs(fitted - size[k]) <= 3 * stderr
+    assert _residual_noise(result, points, DEFAULT_TOLERANCES) > 0.5  # the plane's metres
+    near = _not_background(result, SIGMA, DEFAULT_TOLERANCES)
+    assert _residual_noise(result, points, DEFAULT_TOLERANCES, near) < 1.5 * SIGMA
