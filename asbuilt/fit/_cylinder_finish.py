@@ -43,7 +43,7 @@ from asbuilt.fit._cylinder_model import (
     incidence_weighted,
     rms,
 )
-from asbuilt.fit._cylinder_two_lines import on_two_lines, radius_reach
+from asbuilt.fit._cylinder_two_lines import on_two_lines, on_two_raster_lines, radius_reach
 from asbuilt.fit._robust import refit_on, robust_geometric_fit
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cylinder
@@ -281,9 +281,18 @@ def finished(robust, scene: Scene, ignored_view, starts, reconsider) -> FitResul
     covariance = covariance_from_jacobian(jac * np.sqrt(weights)[:, None], noise)
     tilt_var = covariance[0, 0] + covariance[1, 1]
     angles = angles_about(axis, center, kept)
-    two_lines = sigma is not None and on_two_lines(
+    lines_along = sigma is not None and on_two_lines(
         kept, axis, center, tolerances.outlier_cutoff_sigma * noise, angles
     )
+    # Two raster lines across or slanted over the pipe leave a valley of radii as well.
+    lines_over = (
+        sigma is not None
+        and not lines_along
+        and view is not None
+        and not ignored_view
+        and on_two_raster_lines(kept, view)
+    )
+    two_lines = lines_along or lines_over
     reach = radius_reach(kept, weights, axis, center, radius, noise) if two_lines else radius
     if reach > radius:
         # Two raster lines along the pipe bound its radius only from below
@@ -311,8 +320,9 @@ def finished(robust, scene: Scene, ignored_view, starts, reconsider) -> FitResul
     if ignored_view:
         notes.append(VIEW_IGNORED)
     if reach > radius:
+        lines = "two raster lines over the pipe" if lines_over else "two lines along the pipe"
         notes.append(
-            f"The shots lie on two lines along the pipe: they fit radii from {radius * 1000:.3g}"
+            f"The shots lie on {lines}: they fit radii from {radius * 1000:.3g}"
             f" to {reach * 1000:.3g} mm as well (the radius's standard error spans them). Take"
             " a third raster line across the pipe to measure it."
         )

@@ -28,13 +28,17 @@ from asbuilt.fit._common import orthonormal_basis, row_norms
 from asbuilt.fit._cylinder_model import angles_about
 from asbuilt.fit._small_linalg import svd
 
-__all__ = ["RADIUS_STEPS", "on_two_lines", "radius_reach"]
+__all__ = ["LINE_SPREAD", "RADIUS_STEPS", "on_two_lines", "on_two_raster_lines", "radius_reach"]
 
 #: Radii tried above the fit's, as multiples of it: up to eight times (a wider pipe than that
 #: would have been hit by more raster lines at any usual raster step).
 RADIUS_STEPS = (1.25, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0)
 #: Chi-square tail probability at which a radius no longer fits the shots.
 _ACCEPT = 0.99
+#: Shots on one raster line share its pan (or tilt) to within this share of the gap to the
+#: next line: a line's own width is the head's rounding or encoder scatter, a few thousandths
+#: of a step.
+LINE_SPREAD = 0.1
 
 
 def on_two_lines(
@@ -166,6 +170,45 @@ def _near_line(points: np.ndarray, first: np.ndarray, last: np.ndarray, width: f
     offset = points[None, :, :] - first[:, None, :]
     along = np.einsum("pnk,pk->pn", offset, direction)
     return np.einsum("pnk,pnk->pn", offset, offset) - along**2 <= width**2
+
+
+def on_two_raster_lines(kept: np.ndarray, view: np.ndarray) -> bool:
+    """Whether a cylinder fit's inliers ``kept`` (m, 3) metres all lie on two raster lines
+    (two pans or two tilts) seen from the station ``view`` (3,) metres, three shots or more
+    on each.
+
+    Two raster lines across or slanted over a pipe are two curves on it, and cylinders of many
+    radii (their axes and centres moved) pass through both within the noise, as for two lines
+    along it (:func:`on_two_lines`): a black-box review's ray caster, pipes through a floor or
+    lying on it, each shot by two raster rows slanted over it (15-18 shots a row), fitted
+    r 41-86 mm for 57-110 mm at +-1-4 mm, the true radius passing the chi-square test as
+    closely as the fit. Each line's shots share its angle to within ``LINE_SPREAD`` of the gap
+    between the two lines.
+    """
+    if kept.shape[0] < 6:
+        return False
+    rel = kept - view
+    mean = rel.sum(axis=0)
+    # The tangents of each shot's pan about the shots' mean direction and of its tilt, rows
+    # of one array (monotonic in the angles over a window, and fewer numpy calls: this runs
+    # after every fit with a station).
+    flat = rel[:, :2] @ np.array([[mean[0], -mean[1]], [mean[1], mean[0]]])
+    tangents = np.empty((2, kept.shape[0]))
+    np.divide(flat[:, 1], flat[:, 0], out=tangents[0])
+    np.divide(rel[:, 2], np.sqrt(flat[:, 0] ** 2 + flat[:, 1] ** 2), out=tangents[1])
+    ordered = np.sort(tangents, axis=1)
+    gaps = ordered[:, 1:] - ordered[:, :-1]
+    last = kept.shape[0] - 1
+    for row, split in enumerate(gaps.argmax(axis=1).tolist()):
+        gap = float(gaps[row, split])
+        if not gap > 0.0 or min(split + 1, last - split) < 3:
+            continue
+        spread = max(
+            ordered[row, split] - ordered[row, 0], ordered[row, last] - ordered[row, split + 1]
+        )
+        if spread <= LINE_SPREAD * gap:
+            return True
+    return False
 
 
 def _fixed_radius_chi2(kept, weights, axis, center, radius, noise) -> float:
