@@ -46,9 +46,9 @@ wide cylinder, the pipe behind it seen past the face's edge. That fit is refused
 
 What it cannot see: a window whose every beam came back (a raster of three columns, one on the
 pipe and two on the column's face behind it, fits a circle exactly: r 406.9 +-2.3 mm for
-84.2) or a fit of the column's corner with the pipe's shots rejected in front of it. Without a
-station, off a raster, or on an axis slanted across the raster's lines the fit is left as it
-is. Lengths in metres, angles in radians.
+84.2) or a fit of the column's faces or corner with the pipe's shots rejected, the pipe not
+seen past them. Without a station, off a raster, or on an axis slanted across the raster's
+lines the fit is left as it is. Lengths in metres, angles in radians.
 """
 
 from __future__ import annotations
