@@ -54,6 +54,8 @@ __all__ = [
     "OTHER_ANGLE",
     "OTHER_RADIUS",
     "OTHER_SHOTS",
+    "apart",
+    "cylinder_of",
     "cylinders_named",
     "with_other_cylinder",
 ]
@@ -86,7 +88,7 @@ OTHER_RADIUS = "other_cylinder_radius"
 OTHER_ANGLE = "other_cylinder_axis_deg"
 
 
-def _cylinder_of(fit, points, mask, sigma, tolerances, view, others):
+def cylinder_of(fit, points, mask, sigma, tolerances, view, others):
     """The fit of ``points[mask]`` and its inliers among all ``points`` ((n,) bool), if it
     stands as another cylinder (module docstring) apart from ``others`` (cylinders); else
     None."""
@@ -106,12 +108,12 @@ def _cylinder_of(fit, points, mask, sigma, tolerances, view, others):
         or not found.diagnostics.get("arc_deg", 0.0) >= FEWEST_ARC_DEGREES
     ):
         return None
-    if not all(_apart(cylinder, other) for other in others):
+    if not all(apart(cylinder, other) for other in others):
         return None
     return found, inliers
 
 
-def _apart(one, other) -> bool:
+def apart(one, other) -> bool:
     """Whether two cylinders are not one pipe found twice (module docstring)."""
     cosine = abs(float(np.dot(one.axis, other.axis)))
     if np.degrees(np.arccos(min(1.0, cosine))) > APART_DEGREES:
@@ -176,7 +178,7 @@ def with_other_cylinder(fit, points: np.ndarray, view, sigma, tolerances, result
     noise = segment_noise(sigma, tolerances)
     best = None
     for mask in _candidates(points, view, noise, rejected, whole=True):
-        found = _cylinder_of(fit, points, mask, sigma, tolerances, view, [result.primitive])
+        found = cylinder_of(fit, points, mask, sigma, tolerances, view, [result.primitive])
         if found is not None and (best is None or found[1].sum() > best[1].sum()):
             best = found
     if best is None:
@@ -213,13 +215,13 @@ def cylinders_named(fit, points: np.ndarray, view, sigma, tolerances) -> str:
     everything = np.ones(len(points), dtype=bool)
     found = []
     for mask in _candidates(points, view, noise, everything, whole=False):
-        one = _cylinder_of(fit, points, mask, sigma, tolerances, view, [])
+        one = cylinder_of(fit, points, mask, sigma, tolerances, view, [])
         if one is not None:
             found.append(one)
     found.sort(key=lambda one: -int(np.count_nonzero(one[1])))
     kept: list = []
     for one in found:
-        if all(_apart(one[0].primitive, other.primitive) for other, _ in kept):
+        if all(apart(one[0].primitive, other.primitive) for other, _ in kept):
             kept.append(one)
     if len(kept) < 2:
         return ""

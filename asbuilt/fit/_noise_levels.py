@@ -12,6 +12,7 @@ import numpy as np
 from asbuilt.errors import FitError, located
 from asbuilt.fit._common import diagonal_extent, quick_median
 from asbuilt.fit._cuboid_sparse import AmbiguousFrame
+from asbuilt.fit._cylinder_open_space import OpenSpaceFit
 from asbuilt.fit._cylinder_planes import BACKGROUND_PLANE_SHOTS, BackgroundPlaneFit
 from asbuilt.fit.result import FitResult
 from asbuilt.tolerances import Tolerances
@@ -56,6 +57,8 @@ def _fit_with_noise(
         # without it would only make one frame look settled. A plane-like cylinder on a wall
         # or floor: the shots' scatter is not what is wrong.
         raise
+    except OpenSpaceFit as open_space:
+        return _past_open_space(open_space, function, points, sigma, tolerances, options)
     except FitError as first:
         try:
             # With the prior-noise rescue: the fit of every shot at its own scale can be a
@@ -100,6 +103,34 @@ def _fit_with_noise(
     # claims standard errors five times too small (the review's pipes declared 0.5 mm for a
     # 2 mm finder, fitted with their wall rows left out: 9 of 24 pipe shots rejected, radius
     # errors up to 15 standard errors).
+    return _noted_wider(wider, noise, sigma)
+
+
+def _past_open_space(
+    error: OpenSpaceFit, function, points: np.ndarray, sigma: float, tolerances, options
+) -> FitResult:
+    """The fit refused for open space (``error.refused``, a cylinder at the sensor's
+    ``sigma``) refitted at its inliers' noise level when they scatter wider, as any fit is
+    (:func:`_fit_with_noise`), the refit checked again; else ``error`` raised.
+
+    Not retried without the sigma: the beams that came back with nothing do not depend on
+    it (the retry's wider band let a pipe's two raster columns beside a box column pass as a
+    determined pipe). But the refused fit can be what the sensor's sigma made of a rough pipe:
+    a pipe through a floor, its grazing column's beams missing, fitted first as a 1.5 m
+    cylinder with the floor, whose refit at the 3.25 mm the shots scatter by is the pipe.
+    """
+    result = error.refused
+    if result is None:
+        raise error
+    noise = _residual_noise(result, points, tolerances, _not_background(result, sigma, tolerances))
+    if not WIDER_NOISE_RATIO * sigma < noise:
+        raise error
+    try:
+        wider = function(np.array(points), sigma=noise, tolerances=tolerances, **options)
+    except FitError:
+        raise error from None
+    if _left_basin(result, wider):
+        raise error
     return _noted_wider(wider, noise, sigma)
 
 

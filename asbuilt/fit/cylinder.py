@@ -100,6 +100,7 @@ from asbuilt.fit._cylinder_model import (
     MODEL,
     stacked,
 )
+from asbuilt.fit._cylinder_open_space import apart_across_open_space
 from asbuilt.fit._cylinder_others import (
     NO_MAJORITY,
     OTHER_ANGLE,
@@ -275,7 +276,9 @@ def fit_cylinder(
     try:
         result = _fit_rescued(pts, sigma, tolerances, view)
     except FitError as error:
-        if not error.message.startswith(NO_MAJORITY) or len(pts) > DENSE_POINTS:
+        if len(pts) > DENSE_POINTS:
+            raise
+        if not error.message.startswith(NO_MAJORITY):
             raise
         # A tee's header or a rack neighbour in the window: said, not guessed
         # (asbuilt.fit._cylinder_others).
@@ -285,8 +288,13 @@ def fit_cylinder(
         raise FitError(error.message + named, source=error.source, where=error.where) from None
     if len(pts) > DENSE_POINTS:
         return result
+    stated = view
     if view is not None and _view_ignored(result):
         view = None
+    # Beams inside the fit's silhouette that came back with nothing: not one pipe, refused
+    # (asbuilt.fit._cylinder_open_space). Read from the stated station even when the fit
+    # ignored it: the shots' directions from a wrong one fall on no raster.
+    result = apart_across_open_space(_subset_fit(stated), pts, stated, sigma, tolerances, result)
     return with_other_cylinder(_subset_fit(view), pts, view, sigma, tolerances, result)
 
 

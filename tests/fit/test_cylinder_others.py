@@ -21,7 +21,7 @@ from asbuilt.fit._cylinder_others import (
     OTHER_ANGLE,
     OTHER_RADIUS,
     OTHER_SHOTS,
-    _apart,
+    apart,
     cylinders_named,
 )
 from asbuilt.fit.cylinder import _fit_seen_from
@@ -240,10 +240,10 @@ def test_a_lone_pipe_names_no_other_cylinder(seed):
 def test_one_pipe_found_twice_is_not_apart():
     one = Cylinder(center=[0, 0, 0], axis=[0, 0, 1], radius=0.1, length=2.0)
     tilted = np.array([0, 0.1, 1]) / np.linalg.norm([0, 0.1, 1])  # 5.7 degrees
-    assert not _apart(one, Cylinder(center=[0.01, 0, 0.5], axis=tilted, radius=0.11, length=1))
-    assert _apart(one, Cylinder(center=[0.3, 0, 0], axis=[0, 0, 1], radius=0.1, length=2.0))
-    assert _apart(one, Cylinder(center=[0, 0, 0], axis=[0, 0, 1], radius=0.06, length=2.0))
-    assert _apart(
+    assert not apart(one, Cylinder(center=[0.01, 0, 0.5], axis=tilted, radius=0.11, length=1))
+    assert apart(one, Cylinder(center=[0.3, 0, 0], axis=[0, 0, 1], radius=0.1, length=2.0))
+    assert apart(one, Cylinder(center=[0, 0, 0], axis=[0, 0, 1], radius=0.06, length=2.0))
+    assert apart(
         one,
         Cylinder(center=[0, 0, 0], axis=np.array([1, 0, 1]) / np.sqrt(2), radius=0.1, length=2.0),
     )
