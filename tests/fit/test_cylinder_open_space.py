@@ -22,6 +22,7 @@ from asbuilt.fit._cylinder_open_space import (
     sides,
 )
 from asbuilt.fit._cylinder_others import NO_MAJORITY
+from asbuilt.fit._cylinder_planes import BackgroundPlaneFit
 from asbuilt.fit.cylinder import fit_cylinder
 from asbuilt.primitives import Cylinder
 
@@ -169,8 +170,14 @@ def test_review_scenes_are_right_or_refused(name):
     try:
         result = fit_points("cylinder", points, sigma=SIGMA, viewpoint=station)
     except FitError as error:
-        # The open-space refusal, or the one it fell back on without the sensor's sigma.
-        assert error.message.startswith((OPEN_SPACE, NO_MAJORITY)) or "points:" in str(error)
+        # The open-space refusal, the one it fell back on without the sensor's sigma, or a
+        # column's face fitted as a cylinder metres wide refused as plane-like first
+        # (asbuilt.fit._cylinder_planes: its radius weighed across its axis).
+        assert (
+            error.message.startswith((OPEN_SPACE, NO_MAJORITY))
+            or "points:" in str(error)
+            or isinstance(error, BackgroundPlaneFit)
+        )
         return
     cylinder = result.primitive
     error = abs(cylinder.radius - truth["radius"])
