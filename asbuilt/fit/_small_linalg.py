@@ -81,19 +81,23 @@ def inv(matrix: np.ndarray) -> np.ndarray:
         return _umath_linalg.inv(matrix, signature="d->d")
 
 
+#: numpy.linalg's error state for its SVD gufuncs: a failure to converge raises, as there.
+_SVD_ERRORS = {
+    "call": _raise_svd_not_converged,
+    "invalid": "call",
+    "over": "ignore",
+    "divide": "ignore",
+    "under": "ignore",
+}
+
+
 def svd(matrix: np.ndarray, full_matrices: bool = False):
     """:func:`numpy.linalg.svd` of a float64 matrix (..., m, k): ``(u, s, vh)``, reduced
     unless ``full_matrices`` (the public function's default is full)."""
     if _umath_linalg is None:  # pragma: no cover
         return tuple(np.linalg.svd(matrix, full_matrices=full_matrices))
     gufunc = _umath_linalg.svd_f if full_matrices else _umath_linalg.svd_s
-    with np.errstate(
-        call=_raise_svd_not_converged,
-        invalid="call",
-        over="ignore",
-        divide="ignore",
-        under="ignore",
-    ):
+    with np.errstate(**_SVD_ERRORS):
         return gufunc(matrix, signature="d->ddd")
 
 
@@ -102,11 +106,5 @@ def singular_values(matrix: np.ndarray) -> np.ndarray:
     singular values, descending."""
     if _umath_linalg is None:  # pragma: no cover
         return np.linalg.svd(matrix, compute_uv=False)
-    with np.errstate(
-        call=_raise_svd_not_converged,
-        invalid="call",
-        over="ignore",
-        divide="ignore",
-        under="ignore",
-    ):
+    with np.errstate(**_SVD_ERRORS):
         return _umath_linalg.svd(matrix, signature="d->d")
