@@ -579,21 +579,28 @@ def on_two_lines(trial, x: np.ndarray, width: float) -> np.ndarray | None:
     if model.offset.shape[0] != 1 or members.shape[0] < 4:
         return None
     rel = members - members.mean(axis=0)
-    _, _, vt = np.linalg.svd(rel, full_matrices=False)
-    # Across the lines: the in-plane direction square to the points' longest spread.
     normal = model.normals()[0]
-    along = vt[0] - (vt[0] @ normal) * normal
-    along = along / max(float(np.linalg.norm(along)), 1e-12)
-    w = np.sort(rel @ np.cross(normal, along))
-    gaps = np.diff(w)
-    cut = int(gaps.argmax())
-    if (
-        gaps[cut] > 4 * width
-        and 1 <= cut <= w.size - 3
-        and np.ptp(w[: cut + 1]) <= 2 * width
-        and np.ptp(w[cut + 1 :]) <= 2 * width
-    ):
-        return along
+    # Across the lines: the in-plane direction square to the points' longest spread; then
+    # again square to the lines' own spread (each line about its own centre). Two lines of
+    # unequal reach (a raster column cut short by the floor) tilt the first direction: across
+    # it each line spreads over 20 mm and failed the test.
+    centred = rel
+    for _ in range(2):
+        _, _, vt = np.linalg.svd(centred, full_matrices=False)
+        along = vt[0] - (vt[0] @ normal) * normal
+        along = along / max(float(np.linalg.norm(along)), 1e-12)
+        w = rel @ np.cross(normal, along)
+        order = np.argsort(w)
+        gaps = np.diff(w[order])
+        cut = int(gaps.argmax())
+        if gaps[cut] <= 4 * width or not 1 <= cut <= w.size - 3:
+            return None
+        low, high = order[: cut + 1], order[cut + 1 :]
+        if np.ptp(w[low]) <= 2 * width and np.ptp(w[high]) <= 2 * width:
+            return along
+        centred = rel.copy()
+        centred[low] -= rel[low].mean(axis=0)
+        centred[high] -= rel[high].mean(axis=0)
     return None
 
 
