@@ -88,6 +88,11 @@ class Frame:
         Plane offsets: a point x on face f has ``outward_normal . x == face_offset``.
     labels : ndarray, shape (n,), int
         Face index of each point within the consensus threshold of a face, else -1.
+    fixed_turn : ndarray, shape (3,), or None
+        A unit direction the joint fit may not turn the frame about (None: free to turn
+        every way). A corner offered between two parallel raster lines
+        (:func:`asbuilt.fit._cuboid_sparse.corner_frames`) is free to turn about them: fitted
+        free, it drifts wherever the noise takes it, or away from the lines altogether.
     """
 
     axes: np.ndarray
@@ -95,6 +100,7 @@ class Frame:
     face_sign: np.ndarray
     face_offset: np.ndarray
     labels: np.ndarray
+    fixed_turn: np.ndarray | None = None
 
     @property
     def n_faces(self) -> int:

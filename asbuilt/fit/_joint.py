@@ -269,11 +269,21 @@ def _beam_fans(model, x, label, inliers, width, viewpoint, raster) -> np.ndarray
 _FAN_ROUNDS = 3
 
 
+def _turns(frame) -> np.ndarray:
+    """The rotation basis (3, q) a frame's joint fit may turn in: every direction, or those
+    square to its ``fixed_turn``."""
+    if frame.fixed_turn is None:
+        return _EYE3
+    return _vectors.perpendicular_basis(frame.fixed_turn)
+
+
 def _start(frame, x: np.ndarray, keep=None) -> FaceModel:
     """The joint fit's starting model from a segmentation frame; ``keep`` (n,) bool, optional,
     the points a lone face's in-plane axes may come from."""
     if frame.n_faces != 1:
-        return FaceModel(frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, _EYE3)
+        return FaceModel(
+            frame.axes, frame.face_axis, frame.face_sign, frame.face_offset, _turns(frame)
+        )
     normal = frame.axes[int(frame.face_axis[0])]
     basis = _vectors.perpendicular_basis(normal)
     members = frame.labels == 0
@@ -331,7 +341,7 @@ def fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted, raster=No
         if grown is not None:
             start = (grown.axes.copy(), grown.face_axis, grown.face_sign, grown.offset.copy())
             model, (label, residual, inliers, scale, _) = settle(
-                lambda kept: FaceModel(*start, _EYE3)
+                lambda kept: FaceModel(*start, _turns(frame))
             )
     if fans:
         width = cutoff * max(scale, noise)
@@ -413,6 +423,7 @@ def _same_frame(a, b) -> bool:
         and np.array_equal(a.face_sign, b.face_sign)
         and np.allclose(a.axes, b.axes)
         and np.allclose(a.face_offset, b.face_offset)
+        and (a.fixed_turn is None) == (b.fixed_turn is None)
     )
 
 

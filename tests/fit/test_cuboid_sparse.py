@@ -68,3 +68,35 @@ def test_ambiguity_is_also_refused_without_the_sensor_sigma():
     (trial,) = [t for t in DATA["trials"] if t["name"] == "0.4 m, 3 faces, 10 shots, trial 12"]
     with pytest.raises(FitError, match="degrees apart"):
         fit_points("cuboid", np.array(trial["points"]), viewpoint=DATA["station"])
+
+
+@pytest.mark.parametrize("short_reach", [3.0, 1.5, 0.8])
+def test_two_raster_lines_of_unequal_reach_are_found(short_reach):
+    """Two raster columns on one fitted face, one cut short (by the floor, or a shorter view of
+    the column): the points' longest spread tilts away from the lines, across it each line
+    spreads over centimetres, yet the lines are the lines."""
+    from types import SimpleNamespace
+
+    from asbuilt.fit._cuboid_sparse import on_two_lines
+
+    rng = np.random.default_rng(7)
+    width = 0.006  # metres: 3 sigma of 2 mm
+    along = np.array([0.0, 1.0, 0.0])
+    tall = np.arange(0.0, 3.0, 0.1)
+    short = np.arange(0.0, short_reach, 0.1)
+    points = np.concatenate(
+        [
+            np.column_stack([np.zeros_like(tall), tall, np.zeros_like(tall)]),
+            np.column_stack([np.full_like(short, 0.3), short, np.zeros_like(short)]),
+        ]
+    )
+    points[:, 0] += rng.normal(0.0, 0.002, points.shape[0])
+    face = SimpleNamespace(offset=np.zeros(1), normals=lambda: np.array([[0.0, 0.0, 1.0]]))
+    trial = (face, None, None, np.ones(points.shape[0], dtype=bool))
+    found = on_two_lines(trial, points - points.mean(axis=0), width)
+    assert found is not None
+    assert abs(float(found @ along)) > np.cos(np.radians(0.5))
+    # One line alone is not two.
+    one = points[: tall.size]
+    trial = (face, None, None, np.ones(one.shape[0], dtype=bool))
+    assert on_two_lines(trial, one - one.mean(axis=0), width) is None
