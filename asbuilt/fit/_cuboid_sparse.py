@@ -197,7 +197,14 @@ def _two_lines(points: np.ndarray, normal: np.ndarray, width: float):
 
 
 def corner_frames(
-    trial, x: np.ndarray, width: float, view: np.ndarray, frame_class, turns=(0.0,), fixed=False
+    trial,
+    x: np.ndarray,
+    width: float,
+    view: np.ndarray,
+    frame_class,
+    turns=(0.0,),
+    fixed=False,
+    lines=None,
 ) -> list:
     """Frames that split a fitted face holding two parallel lines of shots into two faces
     meeting at a convex corner between them, each face turned 45 degrees from the viewpoint,
@@ -212,19 +219,26 @@ def corner_frames(
     fit then settles the corner, turning it about the lines too unless ``fixed`` (then each
     frame keeps its turn: the lines cannot set it, and a fit left free to turn about them
     drifts as the noise takes it, on the clutter benchmark's columns often off the lines
-    altogether, rejecting every shot).
+    altogether, rejecting every shot). ``lines``, (first line's shots (n,) bool, second's,
+    unit direction (3,)), gives the two lines instead, on any of the fit's faces
+    (:func:`asbuilt.fit._cuboid_lone.lone_shot_lines`).
     """
     model, label, _, inliers = trial[:4]
     normals = model.normals()
     out = []
-    for f in range(model.offset.shape[0]):
-        mine = inliers & (label == f)
-        if np.count_nonzero(mine) < 4:
-            continue
-        split = _two_lines(x[mine], normals[f], width)
-        if split is None:
-            continue
-        direction, first = split
+    if lines is not None:
+        mine = lines[0] | lines[1]
+        found = [(-1, mine, lines[2], lines[0][mine])]
+    else:
+        found = []
+        for f in range(model.offset.shape[0]):
+            mine = inliers & (label == f)
+            if np.count_nonzero(mine) < 4:
+                continue
+            split = _two_lines(x[mine], normals[f], width)
+            if split is not None:
+                found.append((f, mine, *split))
+    for f, mine, direction, first in found:
         # The corner's bisector points at the viewpoint (across the lines), so both faces
         # face it.
         toward = view - x[mine].mean(axis=0)
@@ -553,7 +567,7 @@ def contained(trial, x: np.ndarray, width: float, lined: np.ndarray) -> bool:
 _RANGE_INCIDENCE_DEG = 85.0
 
 
-def range_cost(trial, x: np.ndarray, view: np.ndarray, cap: float) -> float:
+def range_cost(trial, x: np.ndarray, view: np.ndarray, cap: float, skip=None) -> float:
     """MSAC cost (metres squared, each term capped at ``cap`` squared) of a frame's fit over
     the shots' residuals along their beams from ``view`` (3,) metres (centred frame).
 
@@ -562,9 +576,12 @@ def range_cost(trial, x: np.ndarray, view: np.ndarray, cap: float) -> float:
     face with many shots toward grazing incidence, though along the beams it fits them no
     better (three raster columns on a column's two faces, split either way, 25 sigma^2 apart
     orthogonally and equal along the beams). ``trial`` is
-    :func:`asbuilt.fit._joint.fit_frame`'s tuple, ``x`` (n, 3) metres the centred shots.
+    :func:`asbuilt.fit._joint.fit_frame`'s tuple, ``x`` (n, 3) metres the centred shots;
+    ``skip`` (n,) bool, optional: shots left out of the sum.
     """
     model, label, residual = trial[:3]
+    if skip is not None:
+        x, label, residual = x[~skip], label[~skip], residual[~skip]
     beams = x - view
     beams /= np.maximum(np.linalg.norm(beams, axis=1), 1e-12)[:, None]
     cosine = np.abs(np.einsum("ij,ij->i", beams, model.normals()[label]))
@@ -635,7 +652,19 @@ def equal_fits(best, others, costs, counts, admissible) -> list:
 
 
 def line_split_spread(
-    best, split, lined, along, x, view, cap, costs, counts, plausible, fitted, frame_class
+    best,
+    split,
+    lined,
+    along,
+    x,
+    view,
+    cap,
+    costs,
+    counts,
+    plausible,
+    fitted,
+    frame_class,
+    lone=None,
 ):
     """How far the frames that split a fit's raster lines otherwise lie, when they fit as well.
 
@@ -664,23 +693,30 @@ def line_split_spread(
     cap : float
         The inlier cutoff, metres.
     costs, counts : callable
-        Fit -> cost (units of sigma squared, along the beams with a trusted viewpoint) and
-        fit -> shots it rejects that count against it (as for :func:`rival`).
+        Fit (and optionally shots (n,) bool that cost nothing where it leaves them out as
+        background seen past its box) -> cost (units of sigma squared, along the beams with a
+        trusted viewpoint) and fit -> shots it rejects that count against it (as for
+        :func:`rival`).
     plausible : callable
         Fit -> whether a station can have seen its box.
     fitted : callable
         Frame -> its fit (the joint fit, remembered with the others).
     frame_class : type
         Builds a frame (:class:`asbuilt.fit._faces.Frame`).
+    lone : tuple or None
+        :func:`asbuilt.fit._cuboid_lone.lone_shot_lines` of ``best``: two lines and a lone
+        shot that alone turns the frame about them (passed to ``costs`` as the shots that
+        cost nothing where a fit leaves them out as background).
 
     Returns
     -------
     turn : tuple or None
         (the lines' unit direction (3,), degrees): the turn about the lines to the farthest
-        frame that fits as well (``CORNER_TURN_SE_DEG`` for a face of two lines that two faces
-        fit as well), else None.
+        frame that fits as well (``CORNER_TURN_SE_DEG`` for a face of two lines, or two lines
+        and a lone shot, that two faces meeting between the lines fit as well), else None.
     rivals : list of tuple
-        The fits of the other splits that fit as well (their sizes differ from the fit's).
+        The fits of the other splits that fit as well (their sizes differ from the fit's), and
+        of such corners when a lone shot set the frame (it alone set a size too).
     """
 
     def admissible(trial, shots) -> bool:
@@ -707,4 +743,26 @@ def line_split_spread(
             turn = max(turn, max(angle for _, angle in spread), CORNER_TURN_SE_DEG)
             along = lines_along
     rivals = [trial for trial, _ in found]
+    if lines_along is None and lone is not None:
+        # Two lines and a lone shot that fits whatever frame turns a face onto it: the corners
+        # between the lines are compared with that shot costing nothing where a corner leaves
+        # it out as background seen past its box (:mod:`asbuilt.fit._cuboid_lone`).
+        frames = corner_frames(
+            best, x, cap, view, frame_class, CORNER_TURNS_DEG, fixed=True, lines=lone[:3]
+        )
+        corners = [fitted(frame) for frame in frames]
+        spread = equal_fits(
+            best,
+            corners,
+            lambda trial: costs(trial, lone[3]),
+            lambda t: 0,
+            # (Every other kept shot, a top's too, inside the turned box.)
+            lambda trial: admissible(trial, best[3] & ~lone[3]),
+        )
+        if spread:
+            turn = max(turn, max(angle for _, angle in spread), CORNER_TURN_SE_DEG)
+            along = lone[2]
+            # The lone shot bounded the face it turned onto: the corners' boxes, each from the
+            # lines' shots alone, say how far that size is known.
+            rivals += [trial for trial, _ in spread]
     return ((along, turn) if turn > 0.0 else None), rivals

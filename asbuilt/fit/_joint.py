@@ -19,6 +19,7 @@ from asbuilt.fit._beam_fans import beam_fan_shots, neighbours
 from asbuilt.fit._common import within_noise
 from asbuilt.fit._cuboid_background import only_background, seen_past
 from asbuilt.fit._cuboid_grazing import _grazing_faces, _without_unseen_faces
+from asbuilt.fit._cuboid_lone import lone_shot_lines
 from asbuilt.fit._cuboid_sparse import (
     SPARSE_SHOTS,
     corner_frames,
@@ -774,13 +775,22 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
     # otherwise, as exactly, and one face's lines may be two faces', at any shot count.
     frames_split, lined, along = line_split_frames(best, x, cap, view, _faces.Frame)
     split = [fitted(frame) for frame in frames_split]
-    if split or best[6]:
+    # Two lines and one shot beside them that turned the frame: the corners between the lines
+    # are compared too.
+    lone = lone_shot_lines(best, x, cap)
+    if split or best[6] or lone is not None:
         sigma = cap / cutoff
 
-        def cost(trial) -> float:
+        def cost(trial, free=None) -> float:
             # Along the beams, with a trusted viewpoint: the orthogonal cost favours the
             # frame turning the most shots toward grazing incidence (:func:`range_cost`).
-            msac = range_cost(trial, x, view, cap) if trusted else _msac(trial[2], cap)
+            # Shots ``free`` cost nothing where the fit leaves them out as background seen
+            # past its box (a lone shot that only turned the frame, :func:`lone_shot_lines`).
+            skip = None if free is None else free & seen_past_shots(trial, x, view, cap)
+            if trusted:
+                msac = range_cost(trial, x, view, cap, skip)
+            else:
+                msac = _msac(trial[2] if skip is None else trial[2][~skip], cap)
             return msac / sigma**2
 
         # Other splits of the lines that fit as well are not refused: the fit keeps its frame
@@ -798,5 +808,6 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
             lambda trial: plausible(trial[0], view, trusted),
             fitted,
             _faces.Frame,
+            lone,
         )
     return best

@@ -1,0 +1,112 @@
+"""Two raster lines and a lone shot: a frame that only the lone shot turns.
+
+Private helper of :mod:`asbuilt.fit._cuboid_sparse`'s :func:`line_split_spread`. Two parallel
+raster lines on a column (one on each of two faces, or both on one) leave the box free to turn
+about them: any corner between the lines fits them. A single further shot then fixes the turn
+and fits it exactly, whatever it is: a face through one line and that shot (a plane through a
+line and a point), or a face of its own square to the lines' face (its offset fits one shot).
+On the clutter benchmark that shot was a floor or wall shot from the next raster column, and
+the fit turned the column 23-34 degrees to put it on a face, 1.3-1.6 m wide for 0.25-0.55,
+stating the turn to 0.16 degree. :func:`lone_shot_lines` finds such a fit; the corners between
+the lines (:func:`~asbuilt.fit._cuboid_sparse.corner_frames`, their turn held) are then
+compared with it with that shot costing nothing in a corner that leaves it out as background
+seen past its box (as a shot alone on a face of its own costs nothing in the sparse
+comparison, :func:`~asbuilt.fit._cuboid_sparse.rival`). A corner that would put it inside or
+in front of its box is still charged for it: there the shot is on the box, and it tells the
+frames apart (a sparse benchmark pier's fourth shot on a side, 0.2 degree off at +-0.5).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["LONE_SHOTS", "lone_shot_lines"]
+
+#: Most shots off the two lines a fit may hold and still be taken as set by them: one shot
+#: fits the one parameter it sets (the turn, or a face's offset) exactly; a second on the same
+#: face would test it.
+LONE_SHOTS = 1
+#: Fewest shots on each of the two lines (a raster column on a column's face holds 5-15).
+LINE_SHOTS = 3
+
+
+def _groups(uv: np.ndarray, radius: float, most: int) -> list[np.ndarray] | None:
+    """The points ``uv`` (m, 2) metres in groups, each of the points left within ``radius``
+    metres of its first, in order; None past ``most`` groups (cheap on a face of many lines)."""
+    left = np.ones(uv.shape[0], dtype=bool)
+    out = []
+    while left.any():
+        if len(out) == most:
+            return None
+        step = uv - uv[int(np.argmax(left))]
+        members = np.flatnonzero(left & (np.einsum("ij,ij->i", step, step) <= radius * radius))
+        left[members] = False
+        out.append(members)
+    return out
+
+
+def lone_shot_lines(trial, x: np.ndarray, width: float):
+    """Whether a fit of two or more faces keeps two parallel lines of shots and at most
+    ``LONE_SHOTS`` shot(s) beside them on the faces along the lines.
+
+    Parameters
+    ----------
+    trial : tuple
+        :func:`asbuilt.fit._joint.fit_frame`'s tuple (model, label (n,), residual (n,) m,
+        inliers (n,) bool, ...).
+    x : ndarray, shape (n, 3)
+        The centred shots, metres.
+    width : float
+        The inlier cutoff, metres: each line's shots lie within ``2 * width`` across it, the
+        lines lie more than ``4 * width`` apart, and a lone shot more than ``3 * width`` from
+        every other kept shot (across the lines' direction).
+
+    Returns
+    -------
+    tuple or None
+        (first line's shots (n,) bool, second line's (n,) bool, the lines' unit direction
+        (3,), the lone shots (n,) bool), or None. The lines run along one of the frame's axes;
+        faces normal to it (a column's top) are left out: their shots do not turn the frame
+        about the lines. A shot on a face holding both lines is no lone shot: their plane is
+        fixed without it, and it tests the frame.
+    """
+    model, label, _, inliers = trial[:4]
+    n = x.shape[0]
+    if model.offset.shape[0] < 2:
+        return None  # one face: :func:`~asbuilt.fit._cuboid_sparse.on_two_lines`
+    axis_of = np.where(inliers & (label >= 0), model.face_axis[np.maximum(label, 0)], -1)
+    local = x @ model.axes.T  # (n, 3): the shots in the frame
+    for k in range(3):
+        side = np.flatnonzero((axis_of != k) & (axis_of >= 0))
+        if side.size < 2 * LINE_SHOTS + 1:
+            continue
+        uv = local[side][:, [a for a in range(3) if a != k]]
+        # Cheap first: two lines and lone shots are at most 2 + LONE_SHOTS clusters along
+        # either direction across them (most faces' shots spread across far more).
+        gaps = np.diff(np.sort(uv, axis=0), axis=0) > 2 * width
+        if gaps.sum(axis=0).max() > 1 + LONE_SHOTS:
+            continue
+        # (A line within 2 widths across both ways lies within 2.83 of any of its shots.)
+        groups = _groups(uv, 3 * width, 2 + LONE_SHOTS)
+        if groups is None:
+            continue
+        lines = [g for g in groups if g.size >= LINE_SHOTS]
+        lone = [g for g in groups if g.size == 1]
+        if len(lines) != 2 or len(lines) + len(lone) != len(groups):
+            continue
+        if not 1 <= len(lone) <= LONE_SHOTS:
+            continue
+        if any(np.ptp(uv[g], axis=0).max() > 2 * width for g in lines):
+            continue
+        centres = [uv[g].mean(axis=0) for g in lines]
+        if np.linalg.norm(centres[0] - centres[1]) <= 4 * width:
+            continue
+        masks = [np.zeros(n, dtype=bool) for _ in range(3)]
+        for mask, g in zip(masks, [*lines, np.concatenate(lone)]):
+            mask[side[g]] = True
+        faces = [set(label[mask].tolist()) for mask in masks]
+        if faces[2] & faces[0] & faces[1]:
+            # On a face through both lines, whose plane they fix: the shot tests the frame.
+            continue
+        return masks[0], masks[1], model.axes[k].copy(), masks[2]
+    return None
