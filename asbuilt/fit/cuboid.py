@@ -144,6 +144,10 @@ METHOD = (
 #: hypotheses are scored against every segmented point).
 _SEGMENTED_POINTS = 2000
 
+#: Fewest shots on the fitted box's faces for a fit: three fix a face's plane, a fourth checks
+#: it. Fewer (the rest rejected, or discounted as background seen past the box) is no box.
+_MIN_ON_FACES = 4
+
 
 def _validate(points) -> np.ndarray:
     try:
@@ -534,6 +538,18 @@ def _fit_cuboid_shots(
             f"cuboid: {n_out} of {n} points are outliers (more than "
             f"{tolerances.max_outlier_fraction:.0%}); the points do not look like one box. "
             "Check the object's points or fit it as a hull."
+        )
+
+    kept = int(np.count_nonzero(inliers))
+    if kept < _MIN_ON_FACES:
+        # Every other shot discounted as background seen past the box passes the outlier
+        # limit, but a box on so few shots (one, on a column before a wall whose window put
+        # most shots on the wall) is not a fit: its sizes and standard errors are made up (0 m,
+        # an orientation error of millions of degrees).
+        raise FitError(
+            f"cuboid: only {kept} of {n} points lie on the fitted box's faces (at least "
+            f"{_MIN_ON_FACES} are needed); the rest are rejected or seen past it. Check the "
+            "object's points (mostly background?) or fit it as a hull."
         )
 
     if not trusted and not one_face and seed is None:

@@ -855,3 +855,18 @@ def _with_and_without_the_shortcut(points, monkeypatch):
     np.testing.assert_allclose(quick.primitive.size, full.primitive.size, atol=1e-9)
     np.testing.assert_allclose(quick.primitive.axes, full.primitive.axes, atol=1e-9)
     return taken, quick
+
+
+def test_a_box_on_a_single_shot_is_no_fit():
+    """A column before a wall, its window mostly wall (clutter benchmark scene): one frame
+    discounted every other shot as background seen past its box and kept a single shot,
+    sizes 0 and an orientation error of millions of degrees. Such a frame is no fit: the fit
+    found is on the column's own shots, its turn about them stated as unknown."""
+    data = json.loads(Path(__file__).with_name("one_shot_column.json").read_text())
+    result = fit_cuboid(np.array(data["points"]), sigma=data["sigma"], viewpoint=data["station"])
+    assert np.count_nonzero(result.inliers) >= 4
+    axes, truth = np.asarray(result.primitive.axes), np.asarray(data["axes"])
+    cosines = np.abs(axes @ truth.T).max(axis=1)
+    error = np.degrees(np.arccos(np.clip(cosines, 0.0, 1.0)))
+    assert np.all(error <= 3.0 * np.asarray(result.stderr["axes_deg"]) + 0.5), error
+    assert np.all(np.asarray(result.primitive.size) > 0.1)
