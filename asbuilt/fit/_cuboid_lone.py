@@ -6,8 +6,8 @@ about them: any corner between the lines fits them. A single further shot then f
 and fits it exactly, whatever it is: a face through one line and that shot (a plane through a
 line and a point), or a face of its own square to the lines' face (its offset fits one shot).
 On the clutter benchmark that shot was a floor or wall shot from the next raster column, and
-the fit turned the column 23-34 degrees to put it on a face, 1.3-1.6 m wide for 0.25-0.55,
-stating the turn to 0.16 degree. :func:`lone_shot_lines` finds such a fit; the corners between
+the fit turned the column 23-35 degrees to put it on a face, 1.3-1.6 m wide for 0.45-0.56,
+stating the turn to 0.15-0.18 degree. :func:`lone_shot_lines` finds such a fit; the corners between
 the lines (:func:`~asbuilt.fit._cuboid_sparse.corner_frames`, their turn held) are then
 compared with it with that shot costing nothing in a corner that leaves it out as background
 seen past its box (as a shot alone on a face of its own costs nothing in the sparse
