@@ -1,10 +1,11 @@
 """Two raster lines and a lone shot: a frame that only the lone shot turns.
 
-Private helper of :mod:`asbuilt.fit._cuboid_sparse`'s :func:`line_split_spread`. Two parallel
-raster lines on a column (one on each of two faces, or both on one) leave the box free to turn
-about them: any corner between the lines fits them. A single further shot then fixes the turn
-and fits it exactly, whatever it is: a face through one line and that shot (a plane through a
-line and a point), or a face of its own square to the lines' face (its offset fits one shot).
+Private helper of :mod:`asbuilt.fit._cuboid_sparse`'s :func:`line_split_spread` and of
+:func:`asbuilt.fit.cuboid.fit_cuboid`. Two parallel raster lines on a column (one on each of
+two faces, or both on one) leave the box free to turn about them: any corner between the
+lines fits them. A single further shot then fixes the turn and fits it exactly, whatever it
+is: a face through one line and that shot (a plane through a line and a point), or a face of
+its own square to the lines' face (its offset fits one shot).
 On the clutter benchmark that shot was a floor or wall shot from the next raster column, and
 the fit turned the column 23-35 degrees to put it on a face, 1.3-1.6 m wide for 0.45-0.56,
 stating the turn to 0.15-0.18 degree. :func:`lone_shot_lines` finds such a fit; the corners between
@@ -14,13 +15,24 @@ seen past its box (as a shot alone on a face of its own costs nothing in the spa
 comparison, :func:`~asbuilt.fit._cuboid_sparse.rival`). A corner that would put it inside or
 in front of its box is still charged for it: there the shot is on the box, and it tells the
 frames apart (a sparse benchmark pier's fourth shot on a side, 0.2 degree off at +-0.5).
+
+One raster line and a lone shot: a fit of one face whose shots lie on one line but for one
+shot beside it (:func:`one_line_and_lone_shot`) measures neither the face's turn nor its width,
+and :func:`asbuilt.fit.cuboid.fit_cuboid` refuses it (:class:`OneLineFace`): on the clutter
+benchmark three columns, each with one raster column on the box and a floor shot from the
+next, had been fitted 20-47 degrees turned at a stated +-0.1-6.6, 0.46-1.46 m wide for
+0.20-0.33 m.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["LONE_SHOTS", "lone_shot_lines"]
+from asbuilt.errors import FitError
+
+__all__ = ["LONE_SHOTS", "OneLineFace", "lone_shot_lines", "one_line_and_lone_shot"]
 
 #: Most shots off the two lines a fit may hold and still be taken as set by them: one shot
 #: fits the one parameter it sets (the turn, or a face's offset) exactly; a second on the same
@@ -28,6 +40,12 @@ __all__ = ["LONE_SHOTS", "lone_shot_lines"]
 LONE_SHOTS = 1
 #: Fewest shots on each of the two lines (a raster column on a column's face holds 5-15).
 LINE_SHOTS = 3
+
+
+class OneLineFace(FitError):
+    """A cuboid fit refused: its one seen face holds one raster line of shots and at most one
+    shot beside it (:func:`one_line_and_lone_shot`). Not retried at another noise level: the
+    line's shots fix no face at any."""
 
 
 def _groups(uv: np.ndarray, radius: float, most: int) -> list[np.ndarray] | None:
@@ -110,3 +128,27 @@ def lone_shot_lines(trial, x: np.ndarray, width: float):
             continue
         return masks[0], masks[1], model.axes[k].copy(), masks[2]
     return None
+
+
+def one_line_and_lone_shot(points: np.ndarray, width: float) -> bool:
+    """Whether a one-face fit's shots, ``points`` (m, 3) metres (its inliers), lie within
+    ``width`` metres (RMS) of one line, but for at most ``LONE_SHOTS`` shot(s) beside it.
+
+    A plane through a line is free to turn about it, and one shot beside the line fixes that
+    turn exactly, whatever the shot hit: a face fitted to a single raster column and one
+    floor or wall shot from the next column measures neither its turn nor its width. The one
+    shot tried as the lone one is the farthest from the line through them all (a shot far off
+    a line of shots stays the farthest from their least-squares line, which it pulls by about
+    its distance over m).
+    """
+    for _ in range(1 + LONE_SHOTS):
+        m = points.shape[0]
+        if m < 2:
+            return False
+        rel = points - points.sum(axis=0) / m
+        _, spread, vt = np.linalg.svd(rel, full_matrices=False)
+        if spread[1] < width * math.sqrt(m):
+            return True
+        across = rel - np.outer(rel @ vt[0], vt[0])
+        points = np.delete(points, int(np.argmax(np.einsum("ij,ij->i", across, across))), axis=0)
+    return False

@@ -98,6 +98,7 @@ from asbuilt.fit._common import noise_level, random_subset
 from asbuilt.fit._cuboid_bisection import mixed_returns, spread_subset
 from asbuilt.fit._cuboid_edges import raster_corners
 from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
+from asbuilt.fit._cuboid_lone import OneLineFace, one_line_and_lone_shot
 from asbuilt.fit._cuboid_noise import _likeliest_noise
 from asbuilt.fit._cuboid_open import open_past_faces
 from asbuilt.fit._cuboid_planes import fit_past_planes
@@ -250,17 +251,28 @@ def fit_cuboid(
     ------
     FitError
         Too few points, coincident or collinear points, no planar face, or more outliers than
-        ``tolerances.max_outlier_fraction``.
+        ``tolerances.max_outlier_fraction``; :class:`~asbuilt.fit._cuboid_lone.OneLineFace`
+        when the one face seen holds one raster line of shots and at most one beside it.
     """
     options = {"edge_pad": edge_pad, "silhouette": silhouette}
     result = _fit_box(points, sigma, tolerances, viewpoint, options)
+    # (The points were validated by the fit, whose rows ``result`` follows.)
+    pts = np.asarray(points, dtype=np.float64)
+    if result.diagnostics.get("faces") == 1:
+        noise = result.sigma if sigma is None else sigma
+        width = tolerances.outlier_cutoff_sigma * max(noise, tolerances.sigma_floor)
+        if one_line_and_lone_shot(pts[result.inliers], width):
+            raise OneLineFace(
+                "cuboid: the shots on the one face seen lie on one raster line (and at most "
+                "one shot beside it), which measures neither the face's turn nor its width; "
+                "take shots across the face on two or more raster lines, or on a second face."
+            )
     if result.inliers.all():
         return result  # no shot left out, so none that could run on past an end
     # Shots the fit left out that lie on a seen face's plane past an extent bound (a receding
-    # beam's far part, cut off at range jumps): that size is only a lower bound. (The points
-    # were validated by the fit, whose rows ``result`` follows.)
+    # beam's far part, cut off at range jumps): that size is only a lower bound.
     cutoff = tolerances.outlier_cutoff_sigma * max(result.sigma, tolerances.sigma_floor)
-    return open_past_faces(result, np.asarray(points, dtype=np.float64), cutoff)
+    return open_past_faces(result, pts, cutoff)
 
 
 def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
