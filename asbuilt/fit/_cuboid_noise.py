@@ -69,7 +69,7 @@ def _likeliest_noise(
     x : ndarray, shape (n, 3), metres
     tolerances : Tolerances
     plausible : callable
-        ``plausible(model) -> bool`` (:func:`asbuilt.fit._joint.plausible`); an implausible
+        ``plausible(model) -> bool`` (:func:`asbuilt.fit._cuboid_grazing.plausible`); an implausible
         fit scores nothing.
     outliers : callable, optional
         ``outliers(fitted, noise) -> int``, the rejected shots that count against the outlier

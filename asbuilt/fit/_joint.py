@@ -18,7 +18,14 @@ from asbuilt.fit import _faces, _vectors
 from asbuilt.fit._beam_fans import beam_fan_shots, neighbours
 from asbuilt.fit._common import within_noise
 from asbuilt.fit._cuboid_background import only_background, seen_past
-from asbuilt.fit._cuboid_grazing import _grazing_faces, _without_unseen_faces
+from asbuilt.fit._cuboid_grazing import (
+    HELD_SHOTS,
+    _grazing_faces,
+    _without_unseen_faces,
+    edge_on_side_face,
+    msac_cost,
+    plausible,
+)
 from asbuilt.fit._cuboid_lone import lone_shot_lines
 from asbuilt.fit._cuboid_sparse import (
     SPARSE_SHOTS,
@@ -350,73 +357,6 @@ def fit_frame(frame, x, noise, floor, cutoff, gap, viewpoint, trusted, raster=No
     return model, label, residual, inliers, scale, steps, one_face
 
 
-#: Shots a fit with a face seen edge-on must keep on its other faces, where the chosen fit
-#: rejects them, to be chosen instead (:func:`_edge_on_side_face`): a raster line's worth.
-_HELD_SHOTS = 3
-
-
-def _edge_on_side_face(best, trials, x, view, noise, cutoff, cap, lines):
-    """``best`` (a plausible fit with no face seen edge-on, with a trusted viewpoint ``view``
-    (3,) metres, centred frame), or the fit of ``trials`` that a true side face seen edge-on
-    demoted below it.
-
-    A face whose shots all see it beyond ``MAX_INCIDENCE_DEG`` from the station and lie on one
-    plane through it ranks last (:func:`_grazing_faces`: a frame free to turn puts a face on
-    one raster column's fan of beams). But a column's narrow side, seen at 83 degrees by the
-    one raster column that reaches it, is such a face too, and the frame ranked first instead
-    may be turned 20-45 degrees to a wrong corner through two raster columns of different faces,
-    rejecting a whole raster column of the wide face as outliers (simulated two-station
-    columns: 8 views of 60 at 0.2 m and 20 shots; ``benchmarks/two_station_boxes.py``). The
-    turned frame there rejects shots that the edge-on frame holds on its other, well-seen
-    faces; a frame turned onto a fan of beams holds the fan on its edge-on face instead. So a
-    plausible edge-on fit is chosen (the lowest cost of such fits) when its MSAC cost over all
-    shots (cut at ``cap`` metres) is lower and its other faces hold at least ``_HELD_SHOTS`` of
-    the shots ``best`` rejects or leaves farther than ``cap`` from its faces (kept only by
-    widening the noise level past the sensor's), each on a face that the shots ``best`` keeps on other raster
-    columns fix on their own (not one raster line): three raster columns on a tank fit a face
-    through two of them and a side seen edge-on through the third as exactly as a circle does,
-    and there the rejected shots are needed to make the face, not predicted by it. ``trials``
-    are fits (:func:`fit_frame` tuples); ``x`` (n, 3) metres, centred; ``noise`` metres and
-    ``cutoff`` as for :func:`fit_frame`; ``lines`` (n, 2) int, each shot's raster row and
-    column (:func:`asbuilt.fit._beam_fans.raster_lines`: a column, one pan angle, is a line on
-    any plane).
-    """
-    # Rejected, or kept only at a noise level the fit widened past the sensor's.
-    rejected = ~best[3] | (np.abs(best[2]) > cap)
-    columns = lines[:, 1]
-    chosen, cost = best, _msac(best[2], cap)
-    for trial in trials:
-        model, label, residual, inliers, scale = trial[:5]
-        if not (model.grazing and plausible(model, view, True)):
-            continue
-        trial_cost = _msac(residual, cap)
-        if not trial_cost < cost:
-            continue
-        width = cutoff * max(scale, noise)
-        held = 0
-        for f in range(model.offset.shape[0]):
-            if f in model.edge_on:
-                continue
-            on_face = inliers & (label == f)
-            for column in np.unique(columns[on_face & rejected]).tolist():
-                # The shots ``best`` rejects on this raster column count when the face's
-                # shots that ``best`` keeps on other columns fix the face (not one raster
-                # line, which lies in every plane through it): a prediction that came true.
-                # Three raster columns on a tank fit two columns as a face and the third as a
-                # side seen edge-on, with nothing left over to test.
-                fixing = x[on_face & ~rejected & (columns != column)]
-                if fixing.shape[0] >= 3 and not _faces.on_one_line(fixing, width):
-                    held += int(np.count_nonzero(on_face & rejected & (columns == column)))
-        if held >= _HELD_SHOTS:
-            chosen, cost = trial, trial_cost
-    return chosen
-
-
-def _msac(residual: np.ndarray, cap: float) -> float:
-    """MSAC cost (Torr and Zisserman 2000): squared residuals (n,) metres, each capped at cap^2."""
-    return float(np.sum(np.minimum(residual**2, cap * cap)))
-
-
 def _same_frame(a, b) -> bool:
     """Whether two segmentation frames have the same axes and faces."""
     return (
@@ -426,20 +366,6 @@ def _same_frame(a, b) -> bool:
         and np.allclose(a.face_offset, b.face_offset)
         and (a.fixed_turn is None) == (b.fixed_turn is None)
     )
-
-
-def plausible(model: FaceModel, view: np.ndarray, trusted: bool) -> bool:
-    """Whether a fitted frame can be a box seen from ``view`` (3,) metres (centred frame):
-    :func:`asbuilt.fit._faces.is_box`, and with a ``trusted`` viewpoint every face facing it
-    (a face turned away, such as a back face opposite a seen one, cannot have been hit).
-    Without one, no two opposite faces: no single station sees both (a scan from several
-    stations says so with each object's ``station``). Such a frame is chosen only when the
-    segmentation offers no plausible one."""
-    if not _faces.is_box(model.face_axis, model.face_sign, model.offset):
-        return False
-    if not trusted:
-        return not _faces.has_opposite(model.face_axis)
-    return bool((model.normals() @ view - model.offset > 0.0).all())
 
 
 def _on_a_line(trial, x: np.ndarray, width: float, raster: np.ndarray | None = None) -> bool:
@@ -635,7 +561,7 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
         if not by_cost:
             quality = int(np.count_nonzero(trial[3]))
         elif trusted:
-            quality = -_msac(trial[2], cap)
+            quality = -msac_cost(trial[2], cap)
         else:
             quality = -_information(trial, cap / cutoff, cutoff)
         # A fit with a face seen edge-on from every shot (a fan of beams) comes after every
@@ -719,10 +645,10 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
         and lines is not None
         and best_rank[0]
         and best_rank[1]
-        and np.count_nonzero(~best[3] | (np.abs(best[2]) > cap)) >= _HELD_SHOTS
+        and np.count_nonzero(~best[3] | (np.abs(best[2]) > cap)) >= HELD_SHOTS
     ):
         trials = [trial for _, trial in done]
-        best = _edge_on_side_face(best, trials, x, view, noise, cutoff, cap, lines)
+        best = edge_on_side_face(best, trials, x, view, noise, cutoff, cap, lines)
     if sparse:
         sigma = cap / cutoff
         # A face of two raster lines may be two faces meeting between them: fitted as a rival.
@@ -760,7 +686,7 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
             [trial for _, trial in done],
             # A shot alone on a face of its own costs nothing (its face fits it exactly).
             lambda trial: (
-                (_msac(trial[2], cap) - cap**2 * np.count_nonzero(alone(trial))) / sigma**2
+                (msac_cost(trial[2], cap) - cap**2 * np.count_nonzero(alone(trial))) / sigma**2
             ),
             counted,
             # A rival with a face seen edge-on counts: that face is free to turn, the
@@ -790,7 +716,7 @@ def best_fit(frames, exhaustive, fit_args, max_outlier_fraction, raster=None, kn
             if trusted:
                 msac = range_cost(trial, x, view, cap, skip)
             else:
-                msac = _msac(trial[2] if skip is None else trial[2][~skip], cap)
+                msac = msac_cost(trial[2] if skip is None else trial[2][~skip], cap)
             return msac / sigma**2
 
         # Other splits of the lines that fit as well are not refused: the fit keeps its frame
