@@ -16,6 +16,10 @@ comparison, :func:`~asbuilt.fit._cuboid_sparse.rival`). A corner that would put 
 in front of its box is still charged for it: there the shot is on the box, and it tells the
 frames apart (a sparse benchmark pier's fourth shot on a side, 0.2 degree off at +-0.5).
 
+A fit of one face holding two lines and one shot beyond them across the lines (a floor shot
+on the face's plane where it meets the floor) is found the same way (:func:`_one_face_lines`):
+the clutter benchmark's column turned 16 degrees at a stated +-6, 0.53 m wide for 0.26.
+
 One raster line and a lone shot: a fit of one face whose shots lie on one line but for one
 shot beside it (:func:`one_line_and_lone_shot`) measures neither the face's turn nor its width,
 and :func:`asbuilt.fit.cuboid.fit_cuboid` refuses it (:class:`OneLineFace`): on the clutter
@@ -31,6 +35,7 @@ import math
 import numpy as np
 
 from asbuilt.errors import FitError
+from asbuilt.fit._cuboid_sparse import on_two_lines
 
 __all__ = ["LONE_SHOTS", "OneLineFace", "lone_shot_lines", "one_line_and_lone_shot"]
 
@@ -65,7 +70,8 @@ def _groups(uv: np.ndarray, radius: float, most: int) -> list[np.ndarray] | None
 
 def lone_shot_lines(trial, x: np.ndarray, width: float):
     """Whether a fit of two or more faces keeps two parallel lines of shots and at most
-    ``LONE_SHOTS`` shot(s) beside them on the faces along the lines.
+    ``LONE_SHOTS`` shot(s) beside them on the faces along the lines; for a fit of one face,
+    :func:`_one_face_lines`.
 
     Parameters
     ----------
@@ -85,13 +91,13 @@ def lone_shot_lines(trial, x: np.ndarray, width: float):
         (first line's shots (n,) bool, second line's (n,) bool, the lines' unit direction
         (3,), the lone shots (n,) bool), or None. The lines run along one of the frame's axes;
         faces normal to it (a column's top) are left out: their shots do not turn the frame
-        about the lines. A shot on a face holding both lines is no lone shot: their plane is
-        fixed without it, and it tests the frame.
+        about the lines. With two faces or more, a shot on a face holding both lines is no
+        lone shot: their plane is fixed without it, and it tests the frame.
     """
     model, label, _, inliers = trial[:4]
     n = x.shape[0]
     if model.offset.shape[0] < 2:
-        return None  # one face: :func:`~asbuilt.fit._cuboid_sparse.on_two_lines`
+        return _one_face_lines(trial, x, width)
     axis_of = np.where(inliers & (label >= 0), model.face_axis[np.maximum(label, 0)], -1)
     local = x @ model.axes.T  # (n, 3): the shots in the frame
     for k in range(3):
@@ -127,6 +133,45 @@ def lone_shot_lines(trial, x: np.ndarray, width: float):
             # On a face through both lines, whose plane they fix: the shot tests the frame.
             continue
         return masks[0], masks[1], model.axes[k].copy(), masks[2]
+    return None
+
+
+def _one_face_lines(trial, x: np.ndarray, width: float):
+    """:func:`lone_shot_lines` for a fit of one face: its inliers on two parallel lines across
+    the face (:func:`~asbuilt.fit._cuboid_sparse.on_two_lines`) but for one shot beyond them
+    across the lines, more than ``3 * width`` from every other: a floor or wall shot of the
+    next raster column, on the face's plane where that plane meets the floor. Two lines fix
+    the face's plane, and the shot lies on it, but as two faces meeting between the lines fit
+    the lines as exactly, the shot is then background past their box: it tells the frames
+    apart no better than a lone shot beside two faces' lines, and it bounded the face's width.
+    (One face on two lines alone is :func:`~asbuilt.fit._cuboid_sparse.on_two_lines`'s.)"""
+    model, label, residual, inliers = trial[:4]
+    members = np.flatnonzero(inliers)
+    if members.size < 2 * LINE_SHOTS + LONE_SHOTS:
+        return None
+    normal = model.normals()[0]
+    rel = x[members] - x[members].sum(axis=0) / members.size
+    along = np.linalg.svd(rel, full_matrices=False)[2][0]
+    along = along - (along @ normal) * normal
+    w = rel @ np.cross(normal, along)
+    for end in dict.fromkeys((int(w.argmin()), int(w.argmax()))):
+        if np.abs(np.delete(w, end) - w[end]).min() <= 3 * width:
+            continue
+        kept = inliers.copy()
+        kept[members[end]] = False
+        direction = on_two_lines((model, label, residual, kept), x, width)
+        if direction is None:
+            continue
+        rest = np.flatnonzero(kept)
+        across = x[rest] @ np.cross(normal, direction)
+        order = np.argsort(across)
+        cut = int(np.diff(across[order]).argmax()) + 1
+        masks = [np.zeros(x.shape[0], dtype=bool) for _ in range(3)]
+        masks[0][rest[order[:cut]]] = True
+        masks[1][rest[order[cut:]]] = True
+        masks[2][members[end]] = True
+        if min(cut, rest.size - cut) >= LINE_SHOTS:
+            return masks[0], masks[1], direction, masks[2]
     return None
 
 
