@@ -79,12 +79,9 @@ def _line(u, v, n=8):
     return np.column_stack([np.full(n, u), np.full(n, v), np.linspace(0.0, 2.0, n)])
 
 
-def test_lone_shot_lines_finds_two_lines_and_a_lone_shot():
-    width = 0.006
-    # One line on each face (x = 0 and y = 0) and a shot on the first face beside its line.
-    x = np.vstack([_line(0.0, 0.1), _line(0.1, 0.0), [[0.0, 0.9, 0.0]]])
-    label = np.r_[np.zeros(8, int), np.ones(8, int), 0]
-    found = lone_shot_lines(_trial([0, 1], x, label), x, width)
+def assert_vertical_lines_and_lone_shot(found):
+    """``found`` (:func:`lone_shot_lines`) holds shots 0-7 and 8-15 as the two lines, along
+    z, and shot 16 as the lone one."""
     assert found is not None
     first, second, direction, lone = found
     assert np.flatnonzero(lone).tolist() == [16]
@@ -93,6 +90,15 @@ def test_lone_shot_lines_finds_two_lines_and_a_lone_shot():
         list(range(8, 16)),
     ]
     assert abs(direction[2]) == pytest.approx(1.0)
+
+
+def test_lone_shot_lines_finds_two_lines_and_a_lone_shot():
+    width = 0.006
+    # One line on each face (x = 0 and y = 0) and a shot on the first face beside its line.
+    x = np.vstack([_line(0.0, 0.1), _line(0.1, 0.0), [[0.0, 0.9, 0.0]]])
+    label = np.r_[np.zeros(8, int), np.ones(8, int), 0]
+    found = lone_shot_lines(_trial([0, 1], x, label), x, width)
+    assert_vertical_lines_and_lone_shot(found)
 
 
 def test_lone_shot_lines_leaves_a_shot_that_tests_the_frame():
@@ -129,14 +135,7 @@ def test_lone_shot_lines_on_one_face_finds_a_shot_beyond_its_two_lines():
     # Two lines on the face x = 0 and a floor shot on its plane beyond them across.
     x = np.vstack([_line(0.0, 0.1), _line(0.0, 0.4), [[0.0, 0.9, 0.0]]])
     found = lone_shot_lines(_one_face_trial(x), x, width)
-    assert found is not None
-    first, second, direction, lone = found
-    assert np.flatnonzero(lone).tolist() == [16]
-    assert sorted([np.flatnonzero(first).tolist(), np.flatnonzero(second).tolist()]) == [
-        list(range(8)),
-        list(range(8, 16)),
-    ]
-    assert abs(direction[2]) == pytest.approx(1.0)
+    assert_vertical_lines_and_lone_shot(found)
     # No shot beyond the lines, a shot between them (inside any corner's box: it tests the
     # frame), two beyond them, or three lines: none of them.
     for extra in ([], [[0.0, 0.25, 1.0]], [[0.0, 0.9, 0.0], [0.0, -0.5, 0.0]]):
