@@ -8,6 +8,7 @@ to its surface (positive outside). Nothing here fits or draws: see :mod:`asbuilt
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -27,7 +28,8 @@ def as_vector(value, name: str, size: int = 3) -> np.ndarray:
     array = np.asarray(value, dtype=np.float64)
     if array.shape != (size,):
         raise ValueError(f"The {name} must have shape ({size},), not {array.shape}.")
-    if not np.isfinite(array).all():
+    # Python's isfinite on the few values: a numpy call costs more than the test.
+    if not all(map(math.isfinite, array.tolist())):
         raise ValueError(f"The {name} must be finite.")
     return _frozen(array)
 
@@ -44,7 +46,8 @@ def as_points(value, name: str = "points") -> np.ndarray:
 
 def _unit(value, name: str) -> np.ndarray:
     vector = as_vector(value, name)
-    norm = float(np.sqrt(vector.dot(vector)))  # np.linalg.norm's arithmetic, less overhead
+    # np.linalg.norm's arithmetic (both roots correctly rounded), without its overhead.
+    norm = math.sqrt(float(vector.dot(vector)))
     if abs(norm - 1.0) > 1e-6:
         raise ValueError(f"The {name} must be a unit vector (its norm is {norm:.6g}).")
     return _frozen(vector / norm)
@@ -52,7 +55,7 @@ def _unit(value, name: str) -> np.ndarray:
 
 def _positive(value, name: str) -> float:
     number = float(value)
-    if not np.isfinite(number) or number <= 0.0:
+    if not math.isfinite(number) or number <= 0.0:
         raise ValueError(f"The {name} must be a positive finite number, not {value!r}.")
     return number
 

@@ -217,8 +217,18 @@ def _canonical_rows(points: np.ndarray, centred=None) -> tuple[np.ndarray, np.nd
     """
     if centred is None:
         centred = points - points.mean(axis=0)
+    distance = np.einsum("ij,ij->i", centred, centred)
+    order = distance.argsort()
+    ordered_distance = distance[order]
+    if (ordered_distance[1:] > ordered_distance[:-1]).all():
+        # No two distances equal (nearly every scan): the distance alone gives lexsort's order
+        # below, and no row repeats another; lexsort's four keys cost more than the fit's
+        # checks around it.
+        row_of = np.empty(len(points), dtype=np.intp)
+        row_of[order] = np.arange(len(points))
+        return points[order], row_of
     # np.lexsort's last key sorts first: distance, then x, y, z
-    order = np.lexsort((*points.T[::-1], np.einsum("ij,ij->i", centred, centred)))
+    order = np.lexsort((*points.T[::-1], distance))
     ordered = points[order]
     first = np.ones(len(points), dtype=bool)
     first[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)

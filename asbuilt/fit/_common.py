@@ -190,11 +190,11 @@ def extent_of(points: np.ndarray, axis: np.ndarray | None = None) -> float:
     strip of floor many metres long but a metre wide is a nearly flat patch of a 40 m
     cylinder laid along it, however long the strip.
     """
-    # points.mean(axis=0) and np.max's arithmetic, without their overhead.
+    # points.mean(axis=0), np.outer and np.max's arithmetic, without their overhead.
     centred = points - points.sum(axis=0) / len(points)
     if axis is not None:
-        centred = centred - np.outer(centred @ axis, axis)
-    return 2.0 * float(np.sqrt(np.einsum("ij,ij->i", centred, centred).max()))
+        centred = centred - (centred @ axis)[:, None] * axis
+    return 2.0 * float(np.sqrt(np.maximum.reduce(np.einsum("ij,ij->i", centred, centred))))
 
 
 def radius_text(radius: float) -> str:
