@@ -30,11 +30,10 @@ next, had been fitted 20-47 degrees turned at a stated +-0.1-6.6, 0.46-1.46 m wi
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from asbuilt.errors import FitError
+from asbuilt.fit import _faces
 from asbuilt.fit._cuboid_sparse import on_two_lines
 
 __all__ = ["LONE_SHOTS", "OneLineFace", "lone_shot_lines", "one_line_and_lone_shot"]
@@ -186,14 +185,13 @@ def one_line_and_lone_shot(points: np.ndarray, width: float) -> bool:
     a line of shots stays the farthest from their least-squares line, which it pulls by about
     its distance over m).
     """
-    for _ in range(1 + LONE_SHOTS):
-        m = points.shape[0]
-        if m < 2:
-            return False
-        rel = points - points.sum(axis=0) / m
-        _, spread, vt = np.linalg.svd(rel, full_matrices=False)
-        if spread[1] < width * math.sqrt(m):
-            return True
-        across = rel - np.outer(rel @ vt[0], vt[0])
+    if points.shape[0] < 2:
+        return False
+    for _ in range(LONE_SHOTS):
+        if _faces.on_one_line(points, width):
+            return True  # (two shots always are: a drop below leaves two or more)
+        rel = points - points.sum(axis=0) / points.shape[0]
+        along = np.linalg.svd(rel, full_matrices=False)[2][0]
+        across = rel - np.outer(rel @ along, along)
         points = np.delete(points, int(np.argmax(np.einsum("ij,ij->i", across, across))), axis=0)
-    return False
+    return _faces.on_one_line(points, width)
