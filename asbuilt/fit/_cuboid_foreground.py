@@ -147,7 +147,10 @@ def measured_part(found, shots: np.ndarray, view: np.ndarray, cutoff: float):
     local = (shots - cuboid.center) @ cuboid.axes.T
     low, high = local.min(axis=0), local.max(axis=0)
     toward = (view - cuboid.center) @ cuboid.axes.T
-    k = int(np.argmax(np.abs(toward)))
+    # The seen face's normal is the axis whose size the fit assumed, not the axis nearest the
+    # beams: a face seen at more than 45 degrees from its normal (a wall-side column from far
+    # along the wall) would otherwise have its plate laid across the side it was not seen on.
+    k = int(found.diagnostics["assumed_size"])
     front = 0.5 * float(cuboid.size[k]) * np.sign(toward[k])
     low[k], high[k] = sorted((front, front - 4.0 * cutoff * np.sign(toward[k])))
     size = np.maximum(high - low, 4.0 * cutoff)

@@ -3,11 +3,13 @@ raster window is mostly the wall behind it."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 from asbuilt.fit import fit_points
-from asbuilt.fit._cuboid_foreground import beam_box, behind, contradicting
+from asbuilt.fit._cuboid_foreground import beam_box, behind, contradicting, measured_part
 from asbuilt.primitives import Cuboid
 
 CUBE = Cuboid(np.zeros(3), np.eye(3), np.array([2.0, 2.0, 2.0]))
@@ -109,3 +111,24 @@ def test_a_beam_whose_window_is_mostly_wall_is_fitted_from_its_own_shots(yaw_deg
         assert cuboid.size[k] == pytest.approx(box.size[j], abs=tolerance)
     assert not fit.inliers[~on_box].any()
     assert any("left out as background" in note for note in fit.notes)
+
+
+@pytest.mark.parametrize("from_normal_deg", [0.0, 30.0, 60.0, 80.0])
+def test_a_one_face_fit_is_plated_on_the_face_it_saw_however_obliquely(from_normal_deg):
+    # A column 0.3 x 0.3 x 3 m whose -x face was seen (its x depth made up): the plate lies on
+    # that face, ``4 cutoff`` deep behind it, over its shots' span, whether the station faces
+    # it or looks along it from far down the wall (where y, not x, points most toward it).
+    column = Cuboid(np.array([0.0, 0.0, 1.5]), np.eye(3), np.array([0.3, 0.3, 3.0]))
+    found = SimpleNamespace(primitive=column, diagnostics={"faces": 1.0, "assumed_size": 0.0})
+    rng = np.random.default_rng(3)
+    shots = np.column_stack(
+        [np.full(20, -0.15), rng.uniform(-0.1, 0.1, 20), rng.uniform(0.5, 2.5, 20)]
+    )
+    turn = np.radians(from_normal_deg)
+    view = np.array([-0.15 - 6.0 * np.cos(turn), -6.0 * np.sin(turn), 1.5])
+    cutoff = 0.006
+    plate = measured_part(found, shots, view, cutoff)
+    np.testing.assert_allclose(plate.axes, np.eye(3))
+    np.testing.assert_allclose(plate.size[0], 4.0 * cutoff)
+    np.testing.assert_allclose(plate.center[0], -0.15 + 2.0 * cutoff)
+    np.testing.assert_allclose(plate.size[1:], np.ptp(shots[:, 1:], axis=0))
