@@ -11,6 +11,7 @@ import numpy as np
 
 from asbuilt.errors import FitError, located
 from asbuilt.fit._common import diagonal_extent, quick_median
+from asbuilt.fit._cuboid_inside import ShotsInside
 from asbuilt.fit._cuboid_lone import OneLineFace
 from asbuilt.fit._cuboid_sparse import AmbiguousFrame
 from asbuilt.fit._cylinder_open_space import OpenSpaceFit
@@ -53,10 +54,11 @@ def _fit_with_noise(
     sigma = float(sigma)
     try:
         result = function(np.array(points), sigma=sigma, tolerances=tolerances, **options)
-    except (AmbiguousFrame, BackgroundPlaneFit, OneLineFace):
+    except (AmbiguousFrame, BackgroundPlaneFit, OneLineFace, ShotsInside):
         # Shots that fit frames far apart as well at the sensor's noise: a lower level found
         # without it would only make one frame look settled. A plane-like cylinder on a wall
-        # or floor, a box face on one raster line: the shots' scatter is not what is wrong.
+        # or floor, a box face on one raster line, shots inside the box: the shots' scatter is
+        # not what is wrong.
         raise
     except OpenSpaceFit as open_space:
         return _past_open_space(open_space, function, points, sigma, tolerances, options)

@@ -98,6 +98,7 @@ from asbuilt.fit._common import noise_level, random_subset
 from asbuilt.fit._cuboid_bisection import mixed_returns, spread_subset
 from asbuilt.fit._cuboid_edges import raster_corners
 from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
+from asbuilt.fit._cuboid_inside import ShotsInside, too_many_inside
 from asbuilt.fit._cuboid_lone import OneLineFace, one_line_and_lone_shot
 from asbuilt.fit._cuboid_noise import _likeliest_noise
 from asbuilt.fit._cuboid_open import open_past_faces
@@ -252,7 +253,8 @@ def fit_cuboid(
     FitError
         Too few points, coincident or collinear points, no planar face, or more outliers than
         ``tolerances.max_outlier_fraction``; :class:`~asbuilt.fit._cuboid_lone.OneLineFace`
-        when the one face seen holds one raster line of shots and at most one beside it.
+        when the one face seen holds one raster line of shots and at most one beside it;
+        :class:`~asbuilt.fit._cuboid_inside.ShotsInside` when many shots lie inside the box.
     """
     options = {"edge_pad": edge_pad, "silhouette": silhouette}
     result = _fit_box(points, sigma, tolerances, viewpoint, options)
@@ -268,11 +270,19 @@ def fit_cuboid(
                 "take shots across the face on two or more raster lines, or on a second face."
             )
     if result.inliers.all():
-        return result  # no shot left out, so none that could run on past an end
+        return result  # no shot left out, so none that could run on past an end or lie inside
     # Shots the fit left out that lie on a seen face's plane past an extent bound (a receding
     # beam's far part, cut off at range jumps): that size is only a lower bound.
     cutoff = tolerances.outlier_cutoff_sigma * max(result.sigma, tolerances.sigma_floor)
-    return open_past_faces(result, pts, cutoff)
+    result = open_past_faces(result, pts, cutoff)
+    inside = too_many_inside(result.primitive, pts, result.inliers, cutoff)
+    if inside:
+        raise ShotsInside(
+            f"cuboid: {inside} of the {len(pts)} shots lie inside the fitted box, where no beam "
+            "can measure one: the box was fitted to another surface (a wall or floor behind "
+            "the object); aim the shots at the object's faces only, or take a second face."
+        )
+    return result
 
 
 def _fit_box(points, sigma, tolerances, viewpoint, options) -> FitResult:
