@@ -36,7 +36,13 @@ from asbuilt.errors import FitError
 from asbuilt.fit import _faces
 from asbuilt.fit._cuboid_sparse import on_two_lines
 
-__all__ = ["LONE_SHOTS", "OneLineFace", "lone_shot_lines", "one_line_and_lone_shot"]
+__all__ = [
+    "LONE_SHOTS",
+    "OneLineFace",
+    "face_through_station",
+    "lone_shot_lines",
+    "one_line_and_lone_shot",
+]
 
 #: Most shots off the two lines a fit may hold and still be taken as set by them: one shot
 #: fits the one parameter it sets (the turn, or a face's offset) exactly; a second on the same
@@ -48,8 +54,9 @@ LINE_SHOTS = 3
 
 class OneLineFace(FitError):
     """A cuboid fit refused: its one seen face holds one raster line of shots and at most one
-    shot beside it (:func:`one_line_and_lone_shot`). Not retried at another noise level: the
-    line's shots fix no face at any."""
+    shot beside it (:func:`one_line_and_lone_shot`), or lies in the plane of one raster line's
+    sweep through the station (:func:`face_through_station`). Not retried at another noise
+    level: the line's shots fix no face at any."""
 
 
 def _groups(uv: np.ndarray, radius: float, most: int) -> list[np.ndarray] | None:
@@ -195,3 +202,17 @@ def one_line_and_lone_shot(points: np.ndarray, width: float) -> bool:
         across = rel - np.outer(rel @ along, along)
         points = np.delete(points, int(np.argmax(np.einsum("ij,ij->i", across, across))), axis=0)
     return _faces.on_one_line(points, width)
+
+
+def face_through_station(cuboid, face_axis: int, view: np.ndarray, width: float) -> bool:
+    """Whether the plane of a one-face fit's seen face, the side of ``cuboid`` across its axis
+    ``face_axis`` nearer ``view`` (3,) metres, passes within ``width`` metres of that station.
+
+    A beam in a face's plane only grazes it, so no shot measures such a face: the shots it holds
+    are one raster line's, one sweep of the pan-tilt head through the station, which lie in one
+    plane through it whatever they hit (a column's raster column and the floor shots below its
+    base, fitted as a face 1.23 m wide for 0.29 on the clutter benchmark).
+    """
+    normal = cuboid.axes[face_axis]
+    toward = float((view - cuboid.center) @ normal)
+    return abs(toward) - 0.5 * float(cuboid.size[face_axis]) <= width

@@ -99,7 +99,7 @@ from asbuilt.fit._cuboid_bisection import mixed_returns, spread_subset
 from asbuilt.fit._cuboid_edges import raster_corners
 from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_nearest_box
 from asbuilt.fit._cuboid_inside import ShotsInside, too_many_inside
-from asbuilt.fit._cuboid_lone import OneLineFace, one_line_and_lone_shot
+from asbuilt.fit._cuboid_lone import OneLineFace, face_through_station, one_line_and_lone_shot
 from asbuilt.fit._cuboid_noise import _likeliest_noise
 from asbuilt.fit._cuboid_open import open_past_faces
 from asbuilt.fit._cuboid_planes import fit_past_planes
@@ -268,6 +268,16 @@ def fit_cuboid(
                 "cuboid: the shots on the one face seen lie on one raster line (and at most "
                 "one shot beside it), which measures neither the face's turn nor its width; "
                 "take shots across the face on two or more raster lines, or on a second face."
+            )
+        face = int(result.diagnostics["assumed_size"])
+        if viewpoint is not None and face_through_station(
+            result.primitive, face, np.asarray(viewpoint, dtype=np.float64), width
+        ):
+            raise OneLineFace(
+                "cuboid: the one face seen lies in the plane of one raster line's sweep through "
+                "the station (a beam in a face's plane only grazes it), so its shots measure "
+                "neither the face's turn nor its width; take shots across the face on two or "
+                "more raster lines, or on a second face."
             )
     if result.inliers.all():
         return result  # no shot left out, so none that could run on past an end or lie inside

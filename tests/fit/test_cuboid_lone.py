@@ -23,8 +23,14 @@ from test_cuboid_raster_line_frames import assert_turn_covered, column_scan
 
 from asbuilt.fit import fit_points
 from asbuilt.fit._cuboid_inside import ShotsInside
-from asbuilt.fit._cuboid_lone import OneLineFace, lone_shot_lines, one_line_and_lone_shot
+from asbuilt.fit._cuboid_lone import (
+    OneLineFace,
+    face_through_station,
+    lone_shot_lines,
+    one_line_and_lone_shot,
+)
 from asbuilt.fit.cuboid import _fit_box, fit_cuboid
+from asbuilt.primitives import Cuboid
 from asbuilt.tolerances import DEFAULT_TOLERANCES
 
 
@@ -211,3 +217,35 @@ def test_a_column_fitted_as_one_line_and_a_floor_shot_is_refused():
         fit_cuboid(points, sigma=data["sigma"], viewpoint=station)
     with pytest.raises(OneLineFace):
         fit_points("cuboid", points, sigma=data["sigma"], viewpoint=station)
+
+
+@pytest.mark.parametrize(
+    ("station_x", "expected"),
+    [
+        (-0.15, True),  # in the -x face's plane
+        (-0.155, True),  # 5 mm off it: within the width
+        (-0.157, False),  # 7 mm off it
+        (-0.65, False),  # 0.5 m off: a face seen at 86 degrees
+        (0.15, True),  # in the +x face's plane (the face nearer the station)
+        (2.85, False),  # before the +x face
+    ],
+)
+def test_a_face_through_the_station_is_a_raster_sweep(station_x, expected):
+    # A 0.3 x 0.4 x 3 m column's faces across x lie at x = -0.15 and 0.15; the station 8 m
+    # along y, where a beam in the nearer face's plane only grazes it.
+    column = Cuboid(np.array([0.0, 0.0, 1.5]), np.eye(3), np.array([0.3, 0.4, 3.0]))
+    view = np.array([station_x, -8.0, 1.5])
+    assert face_through_station(column, 0, view, 0.006) is expected
+
+
+@pytest.mark.parametrize("name", ["sweep_plane_column.json", "wall_face_column.json"])
+def test_a_raster_column_and_what_lies_beyond_fitted_as_a_face_are_refused(name):
+    """Clutter benchmark, 1 m of window around a column: fitted faces in the plane of one
+    raster column's sweep through the station, holding the column's shots and the floor shots
+    below its base (1.23 m wide for 0.29, turned 30-36 degrees) or the wall's beside it (1.37
+    m wide for 0.30, 14 of the 105 shots inside its box). Refused, in either shot order."""
+    data = json.loads(Path(__file__).with_name(name).read_text())
+    points, station = np.array(data["points"]), data["station"]
+    for order in (slice(None), slice(None, None, -1)):
+        with pytest.raises(OneLineFace, match="sweep through the station"):
+            fit_points("cuboid", points[order], sigma=data["sigma"], viewpoint=station)
