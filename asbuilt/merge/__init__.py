@@ -60,6 +60,7 @@ __all__ = [
     "PIPE_WORDS",
     "shot_spacing",
     "VESSEL_WORDS",
+    "EQUIPMENT_TAGS",
     "resolve_catalog",
     "resolve_schedule",
 ]
@@ -79,8 +80,29 @@ VESSEL_WORDS = (
     "pole",
     "post",
     "tower",
+    "reactor",
+    "receiver",
+    "separator",
+    "accumulator",
+    "exchanger",
+    "heater",
+    "boiler",
+    "hopper",
+    "cistern",
 )
 _VESSEL = re.compile(r"\b(" + "|".join(VESSEL_WORDS) + r")s?\b", re.IGNORECASE)
+
+#: Equipment tags that mark a vessel: ``TK-101``/``TK101`` (tank), ``V-101`` (vessel),
+#: ``D-101`` (drum), ``R-101`` (reactor), ``E-101`` (exchanger shell), ``C-101`` (column),
+#: with an optional suffix letter (``V-101A``). The usual plant equipment letters (PIP and
+#: ISA-5.1 equipment lists); a field engineer labels a tank by its tag more often than by a
+#: word. A tag stands alone: preceded by a size or a dash (``4"-V-1001-A1``, a vent line's
+#: number) it is part of a line number, not a tag.
+EQUIPMENT_TAGS = ("TK", "V", "D", "R", "E", "C")
+_TAG = re.compile(
+    r"(?<![\w\"'\-])(TK-?\d+|[VDREC]-\d+)[A-Z]?(?![\w\-])",
+    re.IGNORECASE,
+)
 
 #: Words that mark a label as naming a pipe; they win over vessel words ("line from the tank").
 PIPE_WORDS = (
@@ -115,6 +137,9 @@ def _label_says(text: str | None) -> tuple[str | None, str | None]:
     vessel = _VESSEL.search(text)
     if vessel:
         return "vessel", vessel.group(1).lower()
+    tag = _TAG.search(text)
+    if tag:
+        return "vessel", tag.group(0)
     return None, None
 
 
@@ -132,7 +157,8 @@ def is_pipe(
 
     The label decides first (the group when there is no label): a word of :data:`PIPE_WORDS`
     ("NPS 8 line from the tank") marks a pipe candidate, else a word of :data:`VESSEL_WORDS`
-    ("vertical tank", "column C-3") marks a vessel or structure, which is never a pipe. A
+    ("vertical tank", "column C-3") or an equipment tag (:data:`EQUIPMENT_TAGS`: "TK-101",
+    "V-101A") marks a vessel or structure, which is never a pipe. A
     candidate is a pipe when it is linked to another object, carries a nominal hint, or its
     fitted OD (metres) lies within ``[min catalog OD - tolerance, max catalog OD x 1.1]``.
     """

@@ -212,6 +212,13 @@ def test_axis_regularisation_is_recorded():
         (None, "tank farm", 0.0603, "cylinder"),
         ("vertical tank", "SP-1 line", 0.0603, "cylinder"),
         (None, None, 0.0103, "pipe"),
+        # Equipment tags name vessels (a 48 in tank would otherwise be an NPS 48 pipe) ...
+        ("TK-101", None, 1.2192, "cylinder"),
+        ("V-101A", None, 1.0668, "cylinder"),
+        ("receiver", None, 1.0, "cylinder"),
+        # ... but not within a line number (a vent line's "V"), nor a bare letter and number.
+        ('4"-V-1001-A1', None, 0.1143, "pipe"),
+        ("D100", None, 0.1143, "pipe"),
     ],
 )
 def test_which_cylinders_are_pipes(label, group, od, kind):
