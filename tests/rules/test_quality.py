@@ -61,6 +61,18 @@ def test_good_cylinder_is_not_weak():
     assert not only(pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143), "weak-geometry")
 
 
+def test_a_squat_tank_seen_over_a_narrow_arc_is_weak_only_by_its_standard_errors():
+    # A 3 m tank 2 m tall kept as a cylinder (not a pipe), seen over 75 degrees: the arc and
+    # length/diameter limits are for pipes; its radius standard error decides.
+    def tank(radius_se):
+        comp = pipe("T1", [0, 0, 0], [0, 0, 2], 3.0, arc_deg=75.0, radius_se=radius_se)
+        return dataclasses.replace(comp, type="cylinder")
+
+    assert not only(tank(0.004), "weak-geometry")
+    (f,) = only(tank(0.1), "weak-geometry")
+    assert "size known to" in f.message and "arc" not in f.message
+
+
 def test_one_face_cuboid_is_weak():
     (f,) = only(column("C1", [0, 0, 0], faces=1), "weak-geometry")
     assert "1 face seen" in f.message and "second face" in f.suggestions[0].description
