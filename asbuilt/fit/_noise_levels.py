@@ -80,8 +80,9 @@ def _fit_with_noise(
             if kind == "auto" or sigma >= prior:
                 raise first from None
             first.message += (
-                f" (Without the sensor's range sigma, {sigma * 1000:.3g} mm, the best"
-                f" {result.kind} leaves the shots scattered by {result.sigma * 1000:.3g} mm, more"
+                " (Fitted at its own noise level instead of the scan's range sigma,"
+                f" {sigma * 1000:.3g} mm, the best {result.kind} leaves the shots scattered by"
+                f" {result.sigma * 1000:.3g} mm, more"
                 f" than a range finder's noise: these shots are not one {result.kind}, unless"
                 " range_sigma is far too optimistic.)"
             )

@@ -682,7 +682,8 @@ def test_a_box_labelled_a_cylinder_under_an_optimistic_sigma_says_what_the_shots
     with pytest.raises(FitError) as refused:
         fit_points("cylinder", points, sigma=0.0002, viewpoint=np.zeros(3))
     message = str(refused.value)
-    assert "(Without the sensor's range sigma, 0.2 mm, the best cylinder leaves" in message
+    assert "(Fitted at its own noise level instead of the scan's range sigma, 0.2 mm" in message
+    assert "the best cylinder leaves" in message
     assert message.endswith("unless range_sigma is far too optimistic.)")
 
 
