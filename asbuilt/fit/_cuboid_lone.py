@@ -35,6 +35,7 @@ import numpy as np
 from asbuilt.errors import FitError
 from asbuilt.fit import _faces
 from asbuilt.fit._cuboid_sparse import on_two_lines
+from asbuilt.fit._small_linalg import svd
 
 __all__ = ["LONE_SHOTS", "OneLineFace", "lone_shot_lines", "one_line_and_lone_shot"]
 
@@ -150,7 +151,7 @@ def _one_face_lines(trial, x: np.ndarray, width: float):
         return None
     normal = model.normals()[0]
     rel = x[members] - x[members].sum(axis=0) / members.size
-    along = np.linalg.svd(rel, full_matrices=False)[2][0]
+    along = svd(rel)[2][0]
     along = along - (along @ normal) * normal
     w = rel @ np.cross(normal, along)
     for end in dict.fromkeys((int(w.argmin()), int(w.argmax()))):
@@ -191,7 +192,7 @@ def one_line_and_lone_shot(points: np.ndarray, width: float) -> bool:
         if _faces.on_one_line(points, width):
             return True  # (two shots always are: a drop below leaves two or more)
         rel = points - points.sum(axis=0) / points.shape[0]
-        along = np.linalg.svd(rel, full_matrices=False)[2][0]
+        along = svd(rel)[2][0]
         across = rel - np.outer(rel @ along, along)
         points = np.delete(points, int(np.argmax(np.einsum("ij,ij->i", across, across))), axis=0)
     return _faces.on_one_line(points, width)

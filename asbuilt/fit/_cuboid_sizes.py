@@ -22,6 +22,7 @@ from asbuilt.fit._joint import (
     median,
     rodrigues,
 )
+from asbuilt.fit._small_linalg import pinv, svd
 
 __all__ = [
     "SUBSET_GRAZING_DEG",
@@ -86,7 +87,7 @@ def _single_lines(proj, label, index, model, width) -> list:
         direction = None
         if members.shape[0] >= 2:
             rel = proj[members] - proj[members].mean(axis=0)
-            _, spread, vt = np.linalg.svd(rel, full_matrices=False)
+            _, spread, vt = svd(rel)
             if spread[1] < max(width * math.sqrt(members.shape[0]), _LINE_RATIO * spread[0]):
                 direction = vt[0]
         out.append(direction)
@@ -563,7 +564,7 @@ def _derived(model, x, lo_pt, hi_pt, lo_face, hi_face, pad, one_face):
 def covariance(model, x, label, sigma):
     """Parameter covariance (q + m, q + m): sigma^2 (J^T J)^-1 on the inliers."""
     jac = model.jacobian(x, label)
-    return sigma**2 * np.linalg.pinv(jac.T @ jac)
+    return sigma**2 * pinv(jac.T @ jac)
 
 
 def propagate(model, x, cov, bounds_info, sigma, one_face, spans=None):

@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit._small_linalg import eigh
+from asbuilt.fit._small_linalg import eigh, svd
 
 __all__ = [
     "AmbiguousFrame",
@@ -399,7 +399,7 @@ def _direction_through(points: np.ndarray, across: np.ndarray) -> np.ndarray:
     that best fits the points' (m, 3) metres projections (total least squares)."""
     plan = points @ across.T
     rel = plan - plan.mean(axis=0)
-    _, _, vt = np.linalg.svd(rel, full_matrices=False)
+    _, _, vt = svd(rel)
     return vt[0] @ across
 
 
@@ -607,7 +607,7 @@ def on_two_lines(trial, x: np.ndarray, width: float) -> np.ndarray | None:
     # it each line spreads over 20 mm and failed the test.
     centred = rel
     for _ in range(2):
-        _, _, vt = np.linalg.svd(centred, full_matrices=False)
+        _, _, vt = svd(centred)
         along = vt[0] - (vt[0] @ normal) * normal
         along = along / max(float(np.linalg.norm(along)), 1e-12)
         w = rel @ np.cross(normal, along)

@@ -35,6 +35,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from asbuilt.fit._small_linalg import inv
+
 __all__ = [
     "background_sides",
     "edge_shots",
@@ -688,7 +690,7 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
             measured = _extents(los, his, axes, origin, viewpoint, pan0)
             base = measured[0]
             jac = ((measured[1:] - base) / eps).T / tol[:, None]
-            inverse = np.linalg.inv(jac.T @ jac + prior)
+            inverse = inv(jac.T @ jac + prior)
         else:
             base = _extent(lo, hi, axes, origin, viewpoint, pan0)
         now = np.array([(hi if side else lo)[k] for k, side in free])
