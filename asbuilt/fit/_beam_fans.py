@@ -98,7 +98,7 @@ def neighbours(angles: np.ndarray, lines: np.ndarray, among: np.ndarray):
     ``i, j`` (p,) int, indices into the n shots: consecutive in pan along a row, or in tilt
     along a column, counting only the shots ``among``.
     """
-    idx = np.flatnonzero(among)
+    idx = among.nonzero()[0]
     firsts, seconds = [], []
     for along, line in ((0, lines[idx, 0]), (1, lines[idx, 1])):
         order = np.lexsort((angles[idx, along], line))

@@ -101,7 +101,7 @@ def lone_shot_lines(trial, x: np.ndarray, width: float):
     axis_of = np.where(inliers & (label >= 0), model.face_axis[np.maximum(label, 0)], -1)
     local = x @ model.axes.T  # (n, 3): the shots in the frame
     for k in range(3):
-        side = np.flatnonzero((axis_of != k) & (axis_of >= 0))
+        side = ((axis_of != k) & (axis_of >= 0)).nonzero()[0]
         if side.size < 2 * LINE_SHOTS + 1:
             continue
         uv = local[side][:, [a for a in range(3) if a != k]]
@@ -146,7 +146,7 @@ def _one_face_lines(trial, x: np.ndarray, width: float):
     apart no better than a lone shot beside two faces' lines, and it bounded the face's width.
     (One face on two lines alone is :func:`~asbuilt.fit._cuboid_sparse.on_two_lines`'s.)"""
     model, label, residual, inliers = trial[:4]
-    members = np.flatnonzero(inliers)
+    members = inliers.nonzero()[0]
     if members.size < 2 * LINE_SHOTS + LONE_SHOTS:
         return None
     normal = model.normals()[0]

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from asbuilt.fit._common import quick_median
 from asbuilt.fit._small_linalg import inv
 
 __all__ = [
@@ -163,12 +164,14 @@ def _line_blur(points: np.ndarray, viewpoint: np.ndarray, ang: np.ndarray) -> fl
     several of them."""
     blur = _rounding_width(points, viewpoint)
     for j in range(ang.shape[1]):
-        gaps = np.diff(np.sort(ang[:, j]))
-        if gaps.size == 0 or gaps.max() <= 0.0:
+        ordered = ang[:, j].copy()  # np.diff(np.sort(...)) without the wrappers
+        ordered.sort()
+        gaps = ordered[1:] - ordered[:-1]
+        if gaps.size == 0 or np.maximum.reduce(gaps) <= 0.0:
             continue
-        small = gaps[gaps < _SMALL_GAP * gaps.max()]
+        small = gaps[gaps < _SMALL_GAP * np.maximum.reduce(gaps)]
         if small.size >= 3:
-            blur = max(blur, _BLUR_GAPS * float(np.median(small)))
+            blur = max(blur, _BLUR_GAPS * quick_median(small))
     return blur
 
 
@@ -185,9 +188,10 @@ def _grid_step(values: np.ndarray, rounding: float = 0.0) -> float | None:
 
     ``rounding`` (radians): the spread a line may have from the file's rounding alone.
     """
-    ordered = np.sort(values)
-    gaps = np.diff(ordered)
-    if gaps.size == 0 or gaps.max() <= 0.0:
+    ordered = values.copy()  # np.diff(np.sort(values)) without the wrappers
+    ordered.sort()
+    gaps = ordered[1:] - ordered[:-1]
+    if gaps.size == 0 or np.maximum.reduce(gaps) <= 0.0:
         return None
     big = gaps > 0.25 * gaps.max()
     step = float(gaps[big].min())
@@ -550,7 +554,7 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray, seen=None):
         return out, partner
     flagged = np.zeros((2, n), dtype=bool)
     for j in range(2):
-        for i in np.flatnonzero(~full[j]):
+        for i in (~full[j]).nonzero()[0]:
             own = labels[1 - j] == labels[1 - j][i]
             v = ang[i, j]
             # on an evenly spaced progression of its own line (a one-column fill raster, a
@@ -575,8 +579,8 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray, seen=None):
             flagged[j, i] = min(offset, step - offset) > tols[j]
     reach = np.linalg.norm(rel, axis=1)
     for j in range(2):
-        for i in np.flatnonzero(flagged[j] & ~flagged[1 - j]):
-            line = np.flatnonzero((labels[1 - j] == labels[1 - j][i]) & (labels[j] != labels[j][i]))
+        for i in (flagged[j] & ~flagged[1 - j]).nonzero()[0]:
+            line = ((labels[1 - j] == labels[1 - j][i]) & (labels[j] != labels[j][i])).nonzero()[0]
             if line.size == 0:
                 continue
             # the nearest raster shot on the line (the one the bisection started from), else
