@@ -367,14 +367,19 @@ def _lines(members, walk, faces, k, width):
     """:func:`raster_line_groups`' answer from the shots ``members`` (m,) at ``walk`` (m,)
     metres across the lines, or None."""
     order = np.argsort(walk, kind="stable")
-    cuts = np.flatnonzero(np.diff(walk[order]) > 4 * width) + 1
-    lines = [members[part] for part in np.split(order, cuts)]
+    ordered = walk[order]
+    # The lines as slices between the cuts (np.split's parts, without its Python overhead).
+    cuts = ((ordered[1:] - ordered[:-1]) > 4 * width).nonzero()[0] + 1
+    ends = [0, *cuts.tolist(), order.shape[0]]
+    parts = list(zip(ends[:-1], ends[1:]))
+    lines = [members[order[a:b]] for a, b in parts]
     # (Two lines, one on each face, leave the frame free to turn: the fit's covariance says
     # so, as it cannot for a choice between splits.)
     if len(lines) < 3 or len(lines) > LINE_SPLIT_LINES:
         return None
-    for part in np.split(walk[order], cuts):
-        if np.ptp(part) > 2 * width:
+    for a, b in parts:
+        part = ordered[a:b]
+        if np.maximum.reduce(part) - np.minimum.reduce(part) > 2 * width:  # np.ptp
             return None  # shots spread across a face: not lines, and they fix its direction
     return faces, k, lines
 

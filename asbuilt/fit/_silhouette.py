@@ -193,16 +193,19 @@ def _grid_step(values: np.ndarray, rounding: float = 0.0) -> float | None:
     gaps = ordered[1:] - ordered[:-1]
     if gaps.size == 0 or np.maximum.reduce(gaps) <= 0.0:
         return None
-    big = gaps > 0.25 * gaps.max()
-    step = float(gaps[big].min())
+    big = gaps > 0.25 * np.maximum.reduce(gaps)
+    step = float(np.minimum.reduce(gaps[big]))
     multiple = gaps[big] / step
-    if np.any(np.abs(multiple - np.round(multiple)) > _STEP_MULTIPLE):
+    # (The methods and reductions np.any, np.round and np.cumsum call, unwrapped.)
+    if np.logical_or.reduce(np.abs(multiple - multiple.round()) > _STEP_MULTIPLE):
         return None
     # Width of each line of shots (sum of the small gaps between its members).
-    line_id = np.concatenate([[0], np.cumsum(big)])
+    line_id = np.concatenate([[0], big.cumsum()])
     width = np.zeros(line_id[-1] + 1)
     np.add.at(width, line_id[1:], np.where(big, 0.0, gaps))
-    if width.max() > max(_LINE_WIDTH * step, rounding) or rounding > _ROUNDED_OUT * step:
+    if np.maximum.reduce(width) > max(_LINE_WIDTH * step, rounding) or (
+        rounding > _ROUNDED_OUT * step
+    ):
         return None
     return step
 
@@ -631,14 +634,13 @@ def _extents(lo, hi, axes, origin, viewpoint, pan0) -> np.ndarray:
     # (b, 4) answer is column-major, as the fancy-indexed one was: the solver's products of it
     # go through BLAS in that layout, and another layout rounds differently.
     pan, tilt = pan.reshape(lo.shape[0], -1), tilt.reshape(lo.shape[0], -1)
-    return np.stack(
-        [
-            np.minimum.reduce(pan, axis=1),
-            np.maximum.reduce(pan, axis=1),
-            np.minimum.reduce(tilt, axis=1),
-            np.maximum.reduce(tilt, axis=1),
-        ]
-    ).T
+    # Rows of a fresh (4, b) array, as np.stack builds it, without its Python overhead.
+    out = np.empty((4, lo.shape[0]))
+    np.minimum.reduce(pan, axis=1, out=out[0])
+    np.maximum.reduce(pan, axis=1, out=out[1])
+    np.minimum.reduce(tilt, axis=1, out=out[2])
+    np.maximum.reduce(tilt, axis=1, out=out[3])
+    return out.T
 
 
 def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations=10, side_tol=None):
