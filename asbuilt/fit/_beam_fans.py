@@ -46,6 +46,7 @@ import numpy as np
 
 from asbuilt.fit._common import row_norms
 from asbuilt.fit._neighbours import components
+from asbuilt.fit._small_linalg import singular_values, svd
 
 __all__ = ["MAX_INCIDENCE_DEG", "beam_fan_shots", "neighbours", "raster_lines"]
 
@@ -97,7 +98,7 @@ def neighbours(angles: np.ndarray, lines: np.ndarray, among: np.ndarray):
     ``i, j`` (p,) int, indices into the n shots: consecutive in pan along a row, or in tilt
     along a column, counting only the shots ``among``.
     """
-    idx = np.flatnonzero(among)
+    idx = among.nonzero()[0]
     firsts, seconds = [], []
     for along, line in ((0, lines[idx, 0]), (1, lines[idx, 1])):
         order = np.lexsort((angles[idx, along], line))
@@ -232,7 +233,7 @@ def _on_plane_of(near: np.ndarray, far: np.ndarray, viewpoint, noise: float) -> 
     if not _spans_plane(near, noise):
         return False
     centroid = near.mean(axis=0)
-    _, singular, basis = np.linalg.svd(near - centroid, full_matrices=False)
+    _, singular, basis = svd(near - centroid)
     spread = singular / math.sqrt(near.shape[0])
     offsets = np.vstack([far, viewpoint]) - centroid
     offsets = offsets @ basis.T
@@ -250,5 +251,5 @@ def _spans_plane(points: np.ndarray, noise: float) -> bool:
     inlier cutoffs ``noise`` (metres) or more (RMS, along their second principal axis)."""
     if points.shape[0] < 3:
         return False
-    singular = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
+    singular = singular_values(points - points.mean(axis=0))
     return bool(singular[1] >= _MIN_SPREAD_CUTOFFS * noise * math.sqrt(points.shape[0]))

@@ -44,7 +44,7 @@ def raster_corners(edges, seen, steps) -> tuple[np.ndarray, np.ndarray]:
         ``(along, partner)``, copies, -1 for the shots taken back.
     """
     along, partner = edges
-    flagged = np.flatnonzero((along >= 0) & (partner >= 0))
+    flagged = ((along >= 0) & (partner >= 0)).nonzero()[0]
     if seen is None or flagged.size == 0:
         return edges
     _, ang, blur = seen

@@ -18,6 +18,7 @@ import numpy as np
 
 from asbuilt.fit import _faces
 from asbuilt.fit._beam_fans import MAX_INCIDENCE_DEG
+from asbuilt.fit._small_linalg import singular_values
 
 if TYPE_CHECKING:
     from asbuilt.fit._joint import FaceModel
@@ -58,7 +59,7 @@ def _grazing_faces(model, x, label, inliers, viewpoint, width: float) -> list:
         if not np.all(cosine < _GRAZING_COS):
             continue
         # RMS distance of the shots from the plane through the station that fits them best.
-        fan = np.linalg.svd(beams, compute_uv=False)[-1] / math.sqrt(beams.shape[0])
+        fan = singular_values(beams)[-1] / math.sqrt(beams.shape[0])
         if fan <= width:
             out.append(f)
     return out

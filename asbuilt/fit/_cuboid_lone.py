@@ -35,6 +35,7 @@ import numpy as np
 from asbuilt.errors import FitError
 from asbuilt.fit import _faces
 from asbuilt.fit._cuboid_sparse import on_two_lines
+from asbuilt.fit._small_linalg import svd
 
 __all__ = [
     "LONE_SHOTS",
@@ -107,7 +108,7 @@ def lone_shot_lines(trial, x: np.ndarray, width: float):
     axis_of = np.where(inliers & (label >= 0), model.face_axis[np.maximum(label, 0)], -1)
     local = x @ model.axes.T  # (n, 3): the shots in the frame
     for k in range(3):
-        side = np.flatnonzero((axis_of != k) & (axis_of >= 0))
+        side = ((axis_of != k) & (axis_of >= 0)).nonzero()[0]
         if side.size < 2 * LINE_SHOTS + 1:
             continue
         uv = local[side][:, [a for a in range(3) if a != k]]
@@ -152,12 +153,12 @@ def _one_face_lines(trial, x: np.ndarray, width: float):
     apart no better than a lone shot beside two faces' lines, and it bounded the face's width.
     (One face on two lines alone is :func:`~asbuilt.fit._cuboid_sparse.on_two_lines`'s.)"""
     model, label, residual, inliers = trial[:4]
-    members = np.flatnonzero(inliers)
+    members = inliers.nonzero()[0]
     if members.size < 2 * LINE_SHOTS + LONE_SHOTS:
         return None
     normal = model.normals()[0]
     rel = x[members] - x[members].sum(axis=0) / members.size
-    along = np.linalg.svd(rel, full_matrices=False)[2][0]
+    along = svd(rel)[2][0]
     along = along - (along @ normal) * normal
     w = rel @ np.cross(normal, along)
     for end in dict.fromkeys((int(w.argmin()), int(w.argmax()))):
@@ -198,7 +199,7 @@ def one_line_and_lone_shot(points: np.ndarray, width: float) -> bool:
         if _faces.on_one_line(points, width):
             return True  # (two shots always are: a drop below leaves two or more)
         rel = points - points.sum(axis=0) / points.shape[0]
-        along = np.linalg.svd(rel, full_matrices=False)[2][0]
+        along = svd(rel)[2][0]
         across = rel - np.outer(rel @ along, along)
         points = np.delete(points, int(np.argmax(np.einsum("ij,ij->i", across, across))), axis=0)
     return _faces.on_one_line(points, width)

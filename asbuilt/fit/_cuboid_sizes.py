@@ -22,6 +22,7 @@ from asbuilt.fit._joint import (
     median,
     rodrigues,
 )
+from asbuilt.fit._small_linalg import pinv, svd
 
 __all__ = [
     "SUBSET_GRAZING_DEG",
@@ -41,8 +42,10 @@ def _spacing(coords: np.ndarray, noise: float) -> float:
     """Median spacing (metres) between raster lines from sorted 1-D coordinates (k,)."""
     if coords.shape[0] < 2:
         return 0.0
-    gaps = np.diff(np.sort(coords))
-    big = gaps[gaps > max(0.3 * gaps.max(), noise)]
+    ordered = coords.copy()  # np.diff(np.sort(coords)) without the wrappers
+    ordered.sort()
+    gaps = ordered[1:] - ordered[:-1]
+    big = gaps[gaps > max(0.3 * np.maximum.reduce(gaps), noise)]
     return median(big) if big.size else 0.0
 
 
@@ -85,8 +88,9 @@ def _single_lines(proj, label, index, model, width) -> list:
         members = index[label[index] == f]
         direction = None
         if members.shape[0] >= 2:
-            rel = proj[members] - proj[members].mean(axis=0)
-            _, spread, vt = np.linalg.svd(rel, full_matrices=False)
+            on = proj[members]
+            rel = on - np.add.reduce(on, axis=0) / on.shape[0]  # np.mean's sum and division
+            _, spread, vt = svd(rel)
             if spread[1] < max(width * math.sqrt(members.shape[0]), _LINE_RATIO * spread[0]):
                 direction = vt[0]
         out.append(direction)
@@ -111,11 +115,11 @@ def _line_faces(label, index, model, k, single) -> np.ndarray:
     shots up its long axis) or diagonal to it samples the axis and counts.
     """
     keep = np.zeros(label.shape[0], bool)
-    for f in np.flatnonzero(model.face_axis != k):
+    for f in (model.face_axis != k).nonzero()[0]:
         if single[f] is not None and abs(single[f][k]) < _ALONG:
             continue
         keep[index[label[index] == f]] = True
-    return np.flatnonzero(keep)
+    return keep.nonzero()[0]
 
 
 def _face_spacing(proj, label, index, model, k, extreme, single, noise) -> float | None:
@@ -158,7 +162,7 @@ def _corner_step(proj, label, index, model, k, sign, extreme, single, medians) -
     if j == k or direction is None or abs(direction[k]) >= _ALONG or abs(direction[j]) >= _ALONG:
         return None
     spacing = medians[j]
-    neighbour = np.flatnonzero(model.face_axis == k)
+    neighbour = (model.face_axis == k).nonzero()[0]
     if spacing is None or spacing <= 0.0 or neighbour.size != 1:
         return None
     g = int(neighbour[0])
@@ -270,7 +274,7 @@ def bounds(x, label, inliers, model, noise, edge_pad, edges=None, single=None):
         lines = _line_faces(label, index, model, k, single)
         medians.append(_spacing(proj[lines, k], noise) if lines.size else None)
     for k in range(3):
-        for f in np.flatnonzero(model.face_axis == k):
+        for f in (model.face_axis == k).nonzero()[0]:
             if model.face_sign[f] > 0:
                 hi[k], hi_face[k] = model.offset[f], True
             else:
@@ -563,7 +567,7 @@ def _derived(model, x, lo_pt, hi_pt, lo_face, hi_face, pad, one_face):
 def covariance(model, x, label, sigma):
     """Parameter covariance (q + m, q + m): sigma^2 (J^T J)^-1 on the inliers."""
     jac = model.jacobian(x, label)
-    return sigma**2 * np.linalg.pinv(jac.T @ jac)
+    return sigma**2 * pinv(jac.T @ jac)
 
 
 def propagate(model, x, cov, bounds_info, sigma, one_face, spans=None):

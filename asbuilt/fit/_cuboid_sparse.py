@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit._small_linalg import eigh
+from asbuilt.fit._small_linalg import eigh, svd
 
 __all__ = [
     "AmbiguousFrame",
@@ -367,14 +367,19 @@ def _lines(members, walk, faces, k, width):
     """:func:`raster_line_groups`' answer from the shots ``members`` (m,) at ``walk`` (m,)
     metres across the lines, or None."""
     order = np.argsort(walk, kind="stable")
-    cuts = np.flatnonzero(np.diff(walk[order]) > 4 * width) + 1
-    lines = [members[part] for part in np.split(order, cuts)]
+    ordered = walk[order]
+    # The lines as slices between the cuts (np.split's parts, without its Python overhead).
+    cuts = ((ordered[1:] - ordered[:-1]) > 4 * width).nonzero()[0] + 1
+    ends = [0, *cuts.tolist(), order.shape[0]]
+    parts = list(zip(ends[:-1], ends[1:]))
+    lines = [members[order[a:b]] for a, b in parts]
     # (Two lines, one on each face, leave the frame free to turn: the fit's covariance says
     # so, as it cannot for a choice between splits.)
     if len(lines) < 3 or len(lines) > LINE_SPLIT_LINES:
         return None
-    for part in np.split(walk[order], cuts):
-        if np.ptp(part) > 2 * width:
+    for a, b in parts:
+        part = ordered[a:b]
+        if np.maximum.reduce(part) - np.minimum.reduce(part) > 2 * width:  # np.ptp
             return None  # shots spread across a face: not lines, and they fix its direction
     return faces, k, lines
 
@@ -399,7 +404,7 @@ def _direction_through(points: np.ndarray, across: np.ndarray) -> np.ndarray:
     that best fits the points' (m, 3) metres projections (total least squares)."""
     plan = points @ across.T
     rel = plan - plan.mean(axis=0)
-    _, _, vt = np.linalg.svd(rel, full_matrices=False)
+    _, _, vt = svd(rel)
     return vt[0] @ across
 
 
@@ -607,7 +612,7 @@ def on_two_lines(trial, x: np.ndarray, width: float) -> np.ndarray | None:
     # it each line spreads over 20 mm and failed the test.
     centred = rel
     for _ in range(2):
-        _, _, vt = np.linalg.svd(centred, full_matrices=False)
+        _, _, vt = svd(centred)
         along = vt[0] - (vt[0] @ normal) * normal
         along = along / max(float(np.linalg.norm(along)), 1e-12)
         w = rel @ np.cross(normal, along)

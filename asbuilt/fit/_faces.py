@@ -22,7 +22,7 @@ import numpy as np
 
 from asbuilt.fit._common import median_spacing, quick_median, row_norms
 from asbuilt.fit._cuboid_sparse import SPARSE_SHOTS
-from asbuilt.fit._small_linalg import eigh
+from asbuilt.fit._small_linalg import eigh, singular_values
 from asbuilt.fit._vectors import cross3, cross_rows, perpendicular_basis, unit_rows
 
 __all__ = [
@@ -620,7 +620,7 @@ def on_one_line(points: np.ndarray, width: float) -> bool:
     """Whether points (m, 3) metres, m >= 2, lie within ``width`` metres (RMS) of one line: a
     single raster column or row, which lies in every plane through it."""
     rel = points - points.sum(axis=0) / points.shape[0]
-    return bool(np.linalg.svd(rel, compute_uv=False)[1] < width * math.sqrt(points.shape[0]))
+    return bool(singular_values(rel)[1] < width * math.sqrt(points.shape[0]))
 
 
 def _one_station(points, axes, base, grown, threshold, gap) -> list:

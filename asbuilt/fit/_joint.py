@@ -49,6 +49,7 @@ _REFIT_ITERATIONS = 4
 _EYE3 = np.eye(3)
 _EYE3.setflags(write=False)
 _ADD = np.add.reduce
+_MAX = np.maximum.reduce
 
 
 def rodrigues(omega: np.ndarray) -> np.ndarray:
@@ -84,6 +85,8 @@ class FaceModel:
         self.turn = None
         # The fits of those other splits (their sizes differ from this frame's).
         self.split_rivals: list = []
+        # (axes, face_sign, face_axis, normals): :meth:`normals` of those very arrays.
+        self._normals = None
 
     @property
     def grazing(self) -> bool:
@@ -91,7 +94,18 @@ class FaceModel:
         return bool(self.edge_on)
 
     def normals(self) -> np.ndarray:
-        return self.face_sign[:, None] * self.axes[self.face_axis]
+        """Outward unit normals (m, 3) of the faces, read-only.
+
+        Kept until the axes or the faces are replaced (a Gauss-Newton step asks for them
+        again after the assignment that preceded it, with the same axes)."""
+        key = (self.axes, self.face_sign, self.face_axis)
+        kept = self._normals
+        if kept is not None and kept[0] is key[0] and kept[1] is key[1] and kept[2] is key[2]:
+            return kept[3]
+        normals = self.face_sign[:, None] * self.axes[self.face_axis]
+        normals.setflags(write=False)
+        self._normals = (*key, normals)
+        return normals
 
     def all_residuals(self, x: np.ndarray) -> np.ndarray:
         """Signed distance (n, m) of each point to each face plane."""
@@ -136,7 +150,7 @@ class FaceModel:
         rotation = rodrigues(turn)
         self.axes = self.axes @ rotation.T
         self.offset = self.offset + delta[q:]
-        return float(np.abs(delta).max())
+        return float(_MAX(np.abs(delta)))
 
 
 def _tukey(u: np.ndarray) -> np.ndarray:
@@ -148,7 +162,8 @@ def median(values: np.ndarray) -> float:
     k = values.shape[0]
     if k == 0:
         return float("nan")
-    part = np.partition(values, [(k - 1) // 2, k // 2])
+    part = values.copy()  # np.partition's copy, partitioned in place without its wrapper
+    part.partition([(k - 1) // 2, k // 2])
     return 0.5 * float(part[(k - 1) // 2] + part[k // 2])
 
 
@@ -455,7 +470,7 @@ def _one_station_frames(trial, x: np.ndarray, width: float) -> list:
     """
     model, label, _, inliers = trial[:4]
     counts = np.bincount(model.face_axis, minlength=3)
-    free = np.flatnonzero(counts == 0)
+    free = (counts == 0).nonzero()[0]
     if free.size != 1 or counts.max() < 2:
         return []
     u = int(free[0])

@@ -90,6 +90,6 @@ def components(m: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
         np.minimum.at(fresh, i, low)
         np.minimum.at(fresh, j, low)
         fresh = fresh[fresh]
-        if np.array_equal(fresh, group):
+        if not (fresh != group).any():  # np.array_equal of two (m,) int arrays, unwrapped
             return group
         group = fresh

@@ -35,6 +35,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from asbuilt.fit._common import quick_median
+from asbuilt.fit._small_linalg import inv
+
 __all__ = [
     "background_sides",
     "edge_shots",
@@ -161,12 +164,14 @@ def _line_blur(points: np.ndarray, viewpoint: np.ndarray, ang: np.ndarray) -> fl
     several of them."""
     blur = _rounding_width(points, viewpoint)
     for j in range(ang.shape[1]):
-        gaps = np.diff(np.sort(ang[:, j]))
-        if gaps.size == 0 or gaps.max() <= 0.0:
+        ordered = ang[:, j].copy()  # np.diff(np.sort(...)) without the wrappers
+        ordered.sort()
+        gaps = ordered[1:] - ordered[:-1]
+        if gaps.size == 0 or np.maximum.reduce(gaps) <= 0.0:
             continue
-        small = gaps[gaps < _SMALL_GAP * gaps.max()]
+        small = gaps[gaps < _SMALL_GAP * np.maximum.reduce(gaps)]
         if small.size >= 3:
-            blur = max(blur, _BLUR_GAPS * float(np.median(small)))
+            blur = max(blur, _BLUR_GAPS * quick_median(small))
     return blur
 
 
@@ -183,20 +188,24 @@ def _grid_step(values: np.ndarray, rounding: float = 0.0) -> float | None:
 
     ``rounding`` (radians): the spread a line may have from the file's rounding alone.
     """
-    ordered = np.sort(values)
-    gaps = np.diff(ordered)
-    if gaps.size == 0 or gaps.max() <= 0.0:
+    ordered = values.copy()  # np.diff(np.sort(values)) without the wrappers
+    ordered.sort()
+    gaps = ordered[1:] - ordered[:-1]
+    if gaps.size == 0 or np.maximum.reduce(gaps) <= 0.0:
         return None
-    big = gaps > 0.25 * gaps.max()
-    step = float(gaps[big].min())
+    big = gaps > 0.25 * np.maximum.reduce(gaps)
+    step = float(np.minimum.reduce(gaps[big]))
     multiple = gaps[big] / step
-    if np.any(np.abs(multiple - np.round(multiple)) > _STEP_MULTIPLE):
+    # (The methods and reductions np.any, np.round and np.cumsum call, unwrapped.)
+    if np.logical_or.reduce(np.abs(multiple - multiple.round()) > _STEP_MULTIPLE):
         return None
     # Width of each line of shots (sum of the small gaps between its members).
-    line_id = np.concatenate([[0], np.cumsum(big)])
+    line_id = np.concatenate([[0], big.cumsum()])
     width = np.zeros(line_id[-1] + 1)
     np.add.at(width, line_id[1:], np.where(big, 0.0, gaps))
-    if width.max() > max(_LINE_WIDTH * step, rounding) or rounding > _ROUNDED_OUT * step:
+    if np.maximum.reduce(width) > max(_LINE_WIDTH * step, rounding) or (
+        rounding > _ROUNDED_OUT * step
+    ):
         return None
     return step
 
@@ -548,7 +557,7 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray, seen=None):
         return out, partner
     flagged = np.zeros((2, n), dtype=bool)
     for j in range(2):
-        for i in np.flatnonzero(~full[j]):
+        for i in (~full[j]).nonzero()[0]:
             own = labels[1 - j] == labels[1 - j][i]
             v = ang[i, j]
             # on an evenly spaced progression of its own line (a one-column fill raster, a
@@ -573,8 +582,8 @@ def edge_shots(points: np.ndarray, viewpoint: np.ndarray, seen=None):
             flagged[j, i] = min(offset, step - offset) > tols[j]
     reach = np.linalg.norm(rel, axis=1)
     for j in range(2):
-        for i in np.flatnonzero(flagged[j] & ~flagged[1 - j]):
-            line = np.flatnonzero((labels[1 - j] == labels[1 - j][i]) & (labels[j] != labels[j][i]))
+        for i in (flagged[j] & ~flagged[1 - j]).nonzero()[0]:
+            line = ((labels[1 - j] == labels[1 - j][i]) & (labels[j] != labels[j][i])).nonzero()[0]
             if line.size == 0:
                 continue
             # the nearest raster shot on the line (the one the bisection started from), else
@@ -625,14 +634,13 @@ def _extents(lo, hi, axes, origin, viewpoint, pan0) -> np.ndarray:
     # (b, 4) answer is column-major, as the fancy-indexed one was: the solver's products of it
     # go through BLAS in that layout, and another layout rounds differently.
     pan, tilt = pan.reshape(lo.shape[0], -1), tilt.reshape(lo.shape[0], -1)
-    return np.stack(
-        [
-            np.minimum.reduce(pan, axis=1),
-            np.maximum.reduce(pan, axis=1),
-            np.minimum.reduce(tilt, axis=1),
-            np.maximum.reduce(tilt, axis=1),
-        ]
-    ).T
+    # Rows of a fresh (4, b) array, as np.stack builds it, without its Python overhead.
+    out = np.empty((4, lo.shape[0]))
+    np.minimum.reduce(pan, axis=1, out=out[0])
+    np.maximum.reduce(pan, axis=1, out=out[1])
+    np.minimum.reduce(tilt, axis=1, out=out[2])
+    np.maximum.reduce(tilt, axis=1, out=out[3])
+    return out.T
 
 
 def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations=10, side_tol=None):
@@ -688,7 +696,7 @@ def solve_bounds(lo, hi, free, axes, origin, viewpoint, pan0, window, iterations
             measured = _extents(los, his, axes, origin, viewpoint, pan0)
             base = measured[0]
             jac = ((measured[1:] - base) / eps).T / tol[:, None]
-            inverse = np.linalg.inv(jac.T @ jac + prior)
+            inverse = inv(jac.T @ jac + prior)
         else:
             base = _extent(lo, hi, axes, origin, viewpoint, pan0)
         now = np.array([(hi if side else lo)[k] for k, side in free])

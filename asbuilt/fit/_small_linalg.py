@@ -23,7 +23,7 @@ if _umath_linalg is not None and not all(
 ):  # pragma: no cover - renamed in some numpy: the public functions
     _umath_linalg = None
 
-__all__ = ["eigh", "eigvalsh", "inv", "singular_values", "solve", "svd"]
+__all__ = ["eigh", "eigvalsh", "inv", "pinv", "singular_values", "solve", "svd"]
 
 
 def _raise_singular(error, flag):
@@ -108,3 +108,19 @@ def singular_values(matrix: np.ndarray) -> np.ndarray:
         return np.linalg.svd(matrix, compute_uv=False)
     with np.errstate(**_SVD_ERRORS):
         return _umath_linalg.svd(matrix, signature="d->d")
+
+
+def pinv(matrix: np.ndarray) -> np.ndarray:
+    """:func:`numpy.linalg.pinv` of a float64 matrix (m, k) at its default ``rcond`` (1e-15):
+    numpy's own steps (reduced SVD, singular values at most ``rcond`` times the largest set to
+    zero, ``vt.T @ (s^-1 u.T)``) on :func:`svd`, without the public function's checks."""
+    if _umath_linalg is None:  # pragma: no cover
+        return np.linalg.pinv(matrix)
+    u, s, vt = svd(matrix)
+    cutoff = np.asarray(1e-15)[..., np.newaxis] * np.maximum.reduce(s, axis=-1, keepdims=True)
+    large = s > cutoff
+    s = np.divide(1, s, where=large, out=s)
+    s[~large] = 0
+    return np.matmul(
+        np.swapaxes(vt, -1, -2), np.multiply(s[..., np.newaxis], np.swapaxes(u, -1, -2))
+    )

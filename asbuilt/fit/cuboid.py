@@ -128,6 +128,7 @@ from asbuilt.fit._joint import (
 )
 from asbuilt.fit._neighbours import local_normals
 from asbuilt.fit._opposite import outside_outline
+from asbuilt.fit._small_linalg import singular_values
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cuboid, as_points, as_vector
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
@@ -162,7 +163,7 @@ def _validate(points) -> np.ndarray:
             f"cuboid: {pts.shape[0]} points are too few; a cuboid needs at least {need} "
             "(30 or more on two or three faces for a reliable size). Measure more points."
         )
-    spread = np.linalg.svd(pts - pts.mean(axis=0), compute_uv=False)
+    spread = singular_values(pts - pts.mean(axis=0))
     if spread[0] < 1e-9:
         raise FitError(
             "cuboid: all points coincide; measure points spread over the object's faces."
