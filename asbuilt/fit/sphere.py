@@ -111,8 +111,13 @@ def _quad_start(points: np.ndarray, keep: int, samples: int = 64, cutoff: float 
     rest = points[index[:, 1:]] - base[:, None, :]  # (s, 3, 3)
     rhs = 0.5 * np.einsum("sij,sij->si", rest, rest)
     det = np.linalg.det(rest)
-    scale = max(float(np.ptp(points, axis=0).max()), 1e-12)
-    good = np.abs(det) > 1e-9 * scale**3
+    # Degenerate (coplanar) samples are told by each sample's own size: the determinant against
+    # the product of its three edges (the sine-like volume of its tetrahedron). Against the
+    # extent of every point, one stray return kilometres off (a floor hit 7.4 km away among a
+    # 2.5 m sphere's shots) set the threshold above every sample of the sphere, so no
+    # four-point start was left, and the fit was refused or not depending on the stray's range.
+    edges = np.sqrt(np.einsum("sij,sij->si", rest, rest)).prod(axis=1)
+    good = np.abs(det) > 1e-9 * np.maximum(edges, 1e-300)
     if not np.any(good):
         return None
     offset = np.linalg.solve(rest[good], rhs[good][:, :, None])[:, :, 0]
