@@ -42,6 +42,7 @@ from asbuilt.fit._robust import (
     robust_geometric_fit,
     settled_fit,
 )
+from asbuilt.fit._sphere_background import fit_past_background
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Sphere
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
@@ -360,7 +361,11 @@ def fit_sphere(
     tolerances : Tolerances
     viewpoint : array_like, shape (3,), metres, optional
         The sensor's position: the last step then measures the shots along their beams
-        (:func:`_along_beams`).
+        (:func:`_along_beams`), and a fit that is refused, or has three shots or more in front
+        of it or inside it, is made again of the nearest surfaces' shots when every shot they
+        leave out lies behind the sphere along its beam
+        (:mod:`asbuilt.fit._sphere_background`). Without it no shot is taken as background
+        that way.
 
     Returns
     -------
@@ -380,6 +385,24 @@ def fit_sphere(
     FitError
         Too few points, identical, collinear or coplanar points, or too many outliers.
     """
+    if viewpoint is None:
+        return _fit_shots(points, sigma, tolerances, None)
+    # With the station known, whole raster lines on the wall behind the sphere are told from it
+    # by the range jumps between neighbouring beams (a fit that is neither refused nor
+    # contradicted from the station is returned as it is).
+    return fit_past_background(
+        _fit_shots,
+        validate_points(points, "sphere"),
+        np.asarray(viewpoint, dtype=np.float64),
+        sigma,
+        tolerances,
+    )
+
+
+def _fit_shots(points, sigma, tolerances: Tolerances, viewpoint) -> FitResult:
+    """:func:`fit_sphere` of ``points`` (n, 3) metres without the split from the background
+    (``sigma`` metres or None, ``viewpoint`` (3,) metres or None): the fit the split makes of
+    each subset of the shots."""
     pts = validate_points(points, "sphere")
     require_spread(pts, "sphere", 3)
     offset = pts.mean(axis=0)
