@@ -150,10 +150,10 @@ def depth_segments(
     return sorted(segments, key=lambda members: float(np.median(ranges[members])))
 
 
-def near_subsets(segments: list, n: int) -> list[np.ndarray]:
+def near_subsets(segments: list, n: int, share: float = NEAR_SHARE) -> list[np.ndarray]:
     """Masks (n,) bool of the nearest surfaces' shots (``segments``: :func:`depth_segments` of
-    the n shots), each holding at least ``NEAR_SHARE`` of the shots and leaving some out,
-    nearest first (at most ``MOST_SUBSETS``).
+    the n shots), each holding at least ``share`` of the shots (``NEAR_SHARE`` for a pipe) and
+    leaving some out, nearest first (at most ``MOST_SUBSETS``).
 
     The nearest surface alone, then with the next nearest, and so on: a pipe's silhouette shots
     seen nearly edge-on can be cut from its front by a jump of their own.
@@ -165,7 +165,7 @@ def near_subsets(segments: list, n: int) -> list[np.ndarray]:
     for members in segments[:-1]:
         mask = mask.copy()
         mask[members] = True
-        if mask.sum() >= NEAR_SHARE * n:
+        if mask.sum() >= share * n:
             masks.append(mask)
         if len(masks) == MOST_SUBSETS:
             break

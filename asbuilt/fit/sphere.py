@@ -42,6 +42,7 @@ from asbuilt.fit._robust import (
     robust_geometric_fit,
     settled_fit,
 )
+from asbuilt.fit._sphere_background import fit_past_background
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Sphere
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
@@ -111,8 +112,13 @@ def _quad_start(points: np.ndarray, keep: int, samples: int = 64, cutoff: float 
     rest = points[index[:, 1:]] - base[:, None, :]  # (s, 3, 3)
     rhs = 0.5 * np.einsum("sij,sij->si", rest, rest)
     det = np.linalg.det(rest)
-    scale = max(float(np.ptp(points, axis=0).max()), 1e-12)
-    good = np.abs(det) > 1e-9 * scale**3
+    # Degenerate (coplanar) samples are told by each sample's own size: the determinant against
+    # the product of its three edges (the sine-like volume of its tetrahedron). Against the
+    # extent of every point, one stray return kilometres off (a floor hit 7.4 km away among a
+    # 2.5 m sphere's shots) set the threshold above every sample of the sphere, so no
+    # four-point start was left, and the fit was refused or not depending on the stray's range.
+    edges = np.sqrt(np.einsum("sij,sij->si", rest, rest)).prod(axis=1)
+    good = np.abs(det) > 1e-9 * np.maximum(edges, 1e-300)
     if not np.any(good):
         return None
     offset = np.linalg.solve(rest[good], rhs[good][:, :, None])[:, :, 0]
@@ -355,7 +361,11 @@ def fit_sphere(
     tolerances : Tolerances
     viewpoint : array_like, shape (3,), metres, optional
         The sensor's position: the last step then measures the shots along their beams
-        (:func:`_along_beams`).
+        (:func:`_along_beams`), and a fit that is refused, or has three shots or more in front
+        of it or inside it, is made again of the nearest surfaces' shots when every shot they
+        leave out lies behind the sphere along its beam
+        (:mod:`asbuilt.fit._sphere_background`). Without it no shot is taken as background
+        that way.
 
     Returns
     -------
@@ -375,6 +385,24 @@ def fit_sphere(
     FitError
         Too few points, identical, collinear or coplanar points, or too many outliers.
     """
+    if viewpoint is None:
+        return _fit_shots(points, sigma, tolerances, None)
+    # With the station known, whole raster lines on the wall behind the sphere are told from it
+    # by the range jumps between neighbouring beams (a fit that is neither refused nor
+    # contradicted from the station is returned as it is).
+    return fit_past_background(
+        _fit_shots,
+        validate_points(points, "sphere"),
+        np.asarray(viewpoint, dtype=np.float64),
+        sigma,
+        tolerances,
+    )
+
+
+def _fit_shots(points, sigma, tolerances: Tolerances, viewpoint) -> FitResult:
+    """:func:`fit_sphere` of ``points`` (n, 3) metres without the split from the background
+    (``sigma`` metres or None, ``viewpoint`` (3,) metres or None): the fit the split makes of
+    each subset of the shots."""
     pts = validate_points(points, "sphere")
     require_spread(pts, "sphere", 3)
     offset = pts.mean(axis=0)

@@ -283,3 +283,20 @@ def test_extent_across_an_axis_leaves_out_the_span_along_it():
         2 * np.abs(across).max()
     )
     assert common.extent_of(strip, np.array([0.0, 0.0, 1.0])) == pytest.approx(full)
+
+
+def test_the_extent_of_the_points_leaves_out_a_stray_kilometres_off():
+    """The mixture scores' outlier range: one return 7.4 km off among 36 shots spread over
+    20 m made it 370 times the scene's; it is the scene's without the stray, and any point
+    set without one keeps its plain bounding-box diagonal."""
+    from asbuilt.fit._common import diagonal_extent
+
+    rng = np.random.default_rng(3)
+    scene = rng.uniform([10.0, -5.0, 0.0], [25.0, 5.0, 6.0], (36, 3))
+    plain = float(np.linalg.norm(np.ptp(scene, axis=0)))
+    assert diagonal_extent(scene) == plain
+    stray = np.vstack([scene, [7400.0, 0.0, 1.5]])
+    assert diagonal_extent(stray) == plain
+    # Two shots far apart with nothing between are the scene, not strays.
+    pair = np.vstack([scene[:3], scene[:3] + [500.0, 0.0, 0.0]])
+    assert diagonal_extent(pair) == float(np.linalg.norm(np.ptp(pair, axis=0)))

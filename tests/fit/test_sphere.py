@@ -162,3 +162,29 @@ def test_without_a_sigma_the_floor_row_is_background_by_likelihood():
     assert abs(result.primitive.radius - _FLOOR_ROW["radius"]) < 3 * result.stderr["radius"]
     assert result.sigma < 0.003
     assert any("taken as background" in note for note in result.notes)
+
+
+@pytest.mark.parametrize("far", [300.0, 1000.0, 3000.0, 7400.0])
+def test_one_stray_return_kilometres_away_is_an_outlier_at_any_range(far):
+    """A 2.5 m sphere's 6 x 6 raster and one stray return along a beam ``far`` metres away (a
+    review's floor hit at 7.4 km). The four-point starts' degeneracy test was scaled by the
+    extent of every point, so the stray ruled out every sample of the sphere: refused ("n of n
+    points are outliers") at 3 km in 20 of 20 such scans and at 7.4 km in 5, fitted at 1 km.
+    Each sample is now judged by its own size."""
+    from fit_scans import cell_centres, shoot
+
+    sphere = Sphere(np.array([7.0, 1.0, 0.5]), 1.25)
+    distance = float(np.linalg.norm(sphere.center))
+    half = np.arcsin(sphere.radius / distance)
+    pan0 = np.arctan2(sphere.center[1], sphere.center[0])
+    tilt0 = np.arcsin(sphere.center[2] / distance)
+    pan, tilt = np.meshgrid(
+        cell_centres(pan0 - half, pan0 + half, 6), cell_centres(tilt0 - half, tilt0 + half, 6)
+    )
+    points, hit = shoot(sphere, pan.ravel(), tilt.ravel(), np.random.default_rng(3))
+    points = points[hit]
+    stray = points[3] / np.linalg.norm(points[3]) * far
+    result = fit_points("sphere", np.vstack([points, stray]), sigma=0.002, viewpoint=SENSOR)
+    assert abs(result.primitive.radius - sphere.radius) < 4 * result.stderr["radius"]
+    assert result.n_inliers == len(points)
+    assert not result.inliers[-1]
