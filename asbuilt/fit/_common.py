@@ -657,6 +657,18 @@ def _strays(points: np.ndarray):
     on a side of the box can be one; they are taken out one at a time, farthest first, while
     any is left (at most a quarter of the points)."""
     n = len(points)
+    # Most point sets have no stray, told at once: the box around the others spans at least the
+    # whole box's diagonal less the point's distance to its nearest neighbour, so a point whose
+    # nearest neighbour lies within half that diagonal (0.49 of it, against rounding) is no
+    # stray. Every fit that scores a mixture asks (about 100 us for the loop below on 40 points,
+    # 4% of a cylinder fit with outliers).
+    sides = np.concatenate([points.argmin(axis=0), points.argmax(axis=0)])
+    offsets = points[None, :, :] - points[sides][:, None, :]  # (6, n, 3)
+    gaps = np.einsum("kij,kij->ki", offsets, offsets)
+    gaps[np.arange(len(sides)), sides] = np.inf
+    span = points.max(axis=0) - points.min(axis=0)
+    if float(gaps.min(axis=1).max()) <= (0.49 * 0.49) * float(span.dot(span)):
+        return None
     kept = np.ones(n, dtype=bool)
     for _ in range(n // 4):
         rest = points[kept]
