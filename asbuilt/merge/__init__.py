@@ -99,8 +99,12 @@ _VESSEL = re.compile(r"\b(" + "|".join(VESSEL_WORDS) + r")s?\b", re.IGNORECASE)
 #: word. A tag stands alone: preceded by a size or a dash (``4"-V-1001-A1``, a vent line's
 #: number) it is part of a line number, not a tag.
 EQUIPMENT_TAGS = ("TK", "V", "D", "R", "E", "C")
+# A tag of two letters or more may leave out its dash (TK101); one letter and a number without
+# it (D100) is as likely a size.
 _TAG = re.compile(
-    r"(?<![\w\"'\-])(TK-?\d+|[VDREC]-\d+)[A-Z]?(?![\w\-])",
+    r"(?<![\w\"'\-])("
+    + "|".join(f"{tag}-?\\d+" if len(tag) > 1 else f"{tag}-\\d+" for tag in EQUIPMENT_TAGS)
+    + r")[A-Z]?(?![\w\-])",
     re.IGNORECASE,
 )
 
