@@ -271,5 +271,5 @@ def fit_nearest_box(
             "what the raster reached past it (the range jumps there), and were left out as "
             "background before the fit."
         )
-        return rescued(found, points, inliers, note)
+        return rescued(found, points, inliers, note, background=int(np.count_nonzero(left_out)))
     return None

@@ -28,6 +28,7 @@ from asbuilt.fit._neighbours import components
 from asbuilt.fit._small_linalg import svd
 from asbuilt.fit._vectors import cross_rows
 from asbuilt.fit._visibility import excess_and_beyond
+from asbuilt.fit.result import BACKGROUND_PLANE_SHOTS, BACKGROUND_SHOTS
 
 __all__ = [
     "JUMP_SLOPE",
@@ -41,6 +42,8 @@ __all__ = [
     "only_background_behind",
     "fit_without_background",
     "rescued",
+    "BACKGROUND_PLANE_SHOTS",
+    "BACKGROUND_SHOTS",
     "random_planes",
     "segment_noise",
     "subset_fits",
@@ -300,7 +303,7 @@ def fit_without_background(
             " past its silhouette (the range jumps there), and were left out as background"
             " before the fit."
         )
-        return rescued(found, points, inliers, note)
+        return rescued(found, points, inliers, note, background=left)
     return None
 
 
@@ -399,22 +402,21 @@ def fit_without_background_plane(fit, points: np.ndarray, sigma: float, toleranc
             f"{int(np.count_nonzero(~rest))} shot(s) on one plane behind the pipe (raster lines"
             " past its silhouette, on a wall) were left out as background before the fit."
         )
-        return rescued(found, points, inliers, note)
+        return rescued(found, points, inliers, note, background=int(np.count_nonzero(~rest)))
     return None
 
 
-#: The fit's diagnostics key counting the shots left out on background planes (a wall, floor
-#: or ceiling around the object: :mod:`asbuilt.fit._cylinder_planes`,
-#: :mod:`asbuilt.fit._cuboid_planes`).
-BACKGROUND_PLANE_SHOTS = "background_plane_shots"
-
-
-def rescued(found, points, inliers, note: str):
+def rescued(found, points, inliers, note: str, background: int | None = None):
     """``found`` (a FitResult on a subset) as the fit of every one of ``points`` (n, 3) metres:
-    its residuals over all of them, ``inliers`` (n,) bool, and ``note`` added."""
+    its residuals over all of them, ``inliers`` (n,) bool, and ``note`` added; ``background``,
+    when given, the count of shots left out as background (``diagnostics[BACKGROUND_SHOTS]``)."""
+    diagnostics = found.diagnostics
+    if background is not None:
+        diagnostics = {**diagnostics, BACKGROUND_SHOTS: float(background)}
     return dataclasses.replace(
         found,
         residuals=found.primitive.distance(points),
         inliers=inliers,
         notes=(*found.notes, note),
+        diagnostics=diagnostics,
     )

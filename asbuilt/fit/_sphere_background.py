@@ -203,7 +203,7 @@ def fit_nearest_sphere(fit, points: np.ndarray, view: np.ndarray, sigma, toleran
             "on what the raster reached past its silhouette (the range jumps there), and were "
             "left out as background before the fit."
         )
-        return rescued(found, points, inliers, note)
+        return rescued(found, points, inliers, note, background=int(np.count_nonzero(~mask)))
     return None
 
 

@@ -11,7 +11,30 @@ from ..errors import FitError
 from ..primitives import Primitive
 from ..scan.model import Scan, ScanObject
 
-__all__ = ["FitResult", "ObjectFit", "FitFailure", "FitReport"]
+__all__ = [
+    "FitResult",
+    "ObjectFit",
+    "FitFailure",
+    "FitReport",
+    "BACKGROUND_PLANE_SHOTS",
+    "BACKGROUND_SHOTS",
+    "BACKGROUND_KEYS",
+]
+
+#: ``FitResult.diagnostics`` key: the count of shots a fit left out on background planes (a
+#: wall, floor or ceiling around the object: :mod:`asbuilt.fit._cylinder_planes`,
+#: :mod:`asbuilt.fit._cuboid_planes`).
+BACKGROUND_PLANE_SHOTS = "background_plane_shots"
+
+#: ``FitResult.diagnostics`` key: the count of shots a nearest-surface rescue left out as lying
+#: behind the object along their beams (:mod:`asbuilt.fit._cylinder_background`,
+#: :mod:`asbuilt.fit._sphere_background`, :mod:`asbuilt.fit._cuboid_foreground`) or on one
+#: plane behind a pipe seen without a station. Read by the rules only (the ``outliers`` rule
+#: does not count these shots): no fit depends on it.
+BACKGROUND_SHOTS = "background_shots"
+
+#: Every diagnostics key counting shots told apart as background (disjoint: one rescue each).
+BACKGROUND_KEYS = (BACKGROUND_PLANE_SHOTS, BACKGROUND_SHOTS)
 
 
 @dataclass(frozen=True, eq=False)

@@ -14,6 +14,7 @@ import numpy as np
 from asbuilt.findings import Suggestion
 from asbuilt.fit.auto import RIVAL_PREFIX
 from asbuilt.fit.cylinder import END_PLANE_SHOTS, OTHER_ANGLE, OTHER_RADIUS, OTHER_SHOTS
+from asbuilt.fit.result import BACKGROUND_KEYS
 
 from ._context import Context, centre_of, mm, stderr_value, verdict
 
@@ -198,7 +199,13 @@ def check_outliers(ctx: Context) -> None:
         # ... and those that fit another cylinder are another object, which another-object
         # reports with its own remedy.
         on_other = min(_count(fit.diagnostics.get(OTHER_SHOTS)), max(rejected - on_end, 0))
-        unexplained = rejected - on_end - on_other
+        # ... and those a rescue found behind the object along their beams, or on a wall,
+        # floor or ceiling around it, are the background itself, told apart and left out:
+        # the fit did not take it for the object (an independent review's tanks before a
+        # wall drew this warning on every good fit).
+        behind = sum(_count(fit.diagnostics.get(key)) for key in BACKGROUND_KEYS)
+        on_background = min(behind, max(rejected - on_end - on_other, 0))
+        unexplained = rejected - on_end - on_other - on_background
         share = unexplained / n
         se = float(np.sqrt(max(share * (1 - share), 1.0 / n) / n))
         if share <= allowed:
@@ -212,6 +219,8 @@ def check_outliers(ctx: Context) -> None:
             )
         if on_other:
             explained.append(f"{on_other} more fit another cylinder")
+        if on_background:
+            explained.append(f"{on_background} more were told apart as the background behind it")
         said = "; ".join(explained)
         ctx.emit(
             slug,

@@ -86,6 +86,9 @@ def test_without_a_viewpoint_the_wall_rows_are_left_out_by_their_plane():
     assert result is not None
     assert abs(result.primitive.radius - pipe.radius) < 3 * result.stderr["radius"]
     assert (result.inliers == on_pipe).all()
+    # the plane's shots (the rest of the wall's the fit rejected), as the note says
+    (said,) = [int(n.split()[0]) for n in result.notes if "left out as background" in n]
+    assert 0 < result.diagnostics["background_shots"] == said <= np.count_nonzero(~on_pipe)
 
 
 def test_a_shot_in_front_of_the_pipe_is_not_behind_it():
@@ -143,6 +146,11 @@ def test_a_plumb_pipe_before_wall_rows_is_fitted_from_its_own_shots():
     assert abs(result.primitive.radius - pipe.radius) < 3 * result.stderr["radius"] + 0.001
     assert not any("viewpoint was ignored" in note for note in result.notes)
     assert (result.inliers == on_pipe).all()
+    # The rules read the count (the outliers rule does not count them): as the note says.
+    said = [int(n.split()[0]) for n in result.notes if "left out as background" in n]
+    assert [
+        result.diagnostics.get("background_shots", result.diagnostics.get("background_plane_shots"))
+    ] == said
 
 
 def test_the_rescue_keeps_the_viewpoint_it_cut_the_surfaces_by():

@@ -12,7 +12,9 @@ from asbuilt.errors import FitError
 from asbuilt.fit import fit_points
 from asbuilt.fit._sphere_background import behind, in_front
 from asbuilt.fit.sphere import _fit_shots, fit_sphere
+from asbuilt.pipeline import build_model
 from asbuilt.primitives import Cylinder, Sphere
+from asbuilt.scan.model import Scan, ScanObject, Sensor
 from asbuilt.tolerances import DEFAULT_TOLERANCES
 
 SIGMA = 0.002
@@ -80,6 +82,22 @@ def test_a_sphere_before_a_wall_fits_its_own_shots(gap, margin):
     assert offset < 4 * result.stderr["center"]
     assert (result.inliers == on).all()
     assert _left_out(result) == np.count_nonzero(~on)
+    assert result.diagnostics["background_shots"] == np.count_nonzero(~on)
+
+
+def test_the_wall_behind_a_spherical_tank_is_not_reported_as_outliers():
+    """The shots the fit told apart as the wall behind are explained: the ``outliers`` rule
+    (AB404) does not warn of them (it did on every such tank of an independent review)."""
+    points, hit = _scan(np.random.default_rng(12), [TANK], 3.0, 0.2)
+    assert np.count_nonzero(hit != 0) > 0.3 * len(points)
+    scan = Scan(
+        units="m",
+        objects=(ScanObject("TK-1", "sphere", points, label="spherical tank TK-1"),),
+        sensor=Sensor(position=STATION, range_sigma=SIGMA),
+    )
+    model = build_model(scan)
+    assert [c.id for c in model.components] == ["TK-1"]
+    assert not [f for f in model.findings if f.slug == "outliers"]
 
 
 def test_without_the_station_no_shot_is_taken_for_background():

@@ -146,6 +146,26 @@ def test_shots_on_a_plane_across_the_pipe_end_are_not_counted_as_outliers(on_end
     assert [f.message[: len(expected)] for f in found] == ([expected] if expected else [])
 
 
+@pytest.mark.parametrize("key", ["background_shots", "background_plane_shots"])
+@pytest.mark.parametrize(
+    "behind, expected",
+    [
+        (8, None),  # 2 of 25 unexplained: 8%
+        (3, "7 of 25 points (28%) were rejected as outliers (3 more were told apart as the"),
+        (40, None),  # more than were rejected (a model file edited by hand): at most all
+        (float("nan"), "10 of 25 points (40%) were rejected as outliers"),  # null in a file
+    ],
+)
+def test_shots_told_apart_as_the_background_are_not_counted_as_outliers(key, behind, expected):
+    """A rescue that found shots behind the object along their beams, or on a wall or floor
+    around it, left them out as background (``diagnostics["background_shots"]``,
+    ``["background_plane_shots"]``): the fit did not take them for the object."""
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, n=25, rejected=10)
+    fit = dataclasses.replace(comp.fit, diagnostics={**comp.fit.diagnostics, key: behind})
+    found = only(dataclasses.replace(comp, fit=fit), "outliers")
+    assert [f.message[: len(expected)] for f in found] == ([expected] if expected else [])
+
+
 def test_components_without_fits_are_skipped():
     fit = cuboid_fit([0, 0, 1], [0, 0, 1], (0.3, 0.3, 2.0), n=5)
     comp = Component(id="X", type="cuboid", geometry=fit.primitive)
