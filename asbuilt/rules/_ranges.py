@@ -123,6 +123,7 @@ RANGES: dict[tuple[str, str], Range] = {
     ("nonstandard-diameter", "suggest"): _count("catalog sizes suggested"),
     ("out-of-plumb", "steel_ratio"): _RATIO,
     ("out-of-plumb", "pipe_ratio"): _RATIO,
+    ("out-of-plumb", "tank_ratio"): _RATIO,
     # A fraction of the height: 0 would allow no lean at all, above 1 more than the height.
     ("out-of-plumb", "concrete_fraction"): Range(
         0.0, 1.0, low_open=True, meaning="fraction of the height, e.g. 0.003"

@@ -108,6 +108,17 @@ def is_round_column(ctx: Context, component: Component) -> bool:
     return bool(_words(component) & {k.lower() for k in keys})
 
 
+def is_tank(ctx: Context, component: Component) -> bool:
+    """Whether a cylinder is a storage tank: a word of its label, group or id is one of
+    ``tank_keywords`` (or its plural), or one of them with a number joined to it (an equipment
+    tag: ``TK-101``, ``tk101``, ``tank-2a``)."""
+    keys = [re.escape(k.lower()) for k in ctx.general("tank_keywords")]
+    if not keys:
+        return False
+    word = re.compile("(" + "|".join(keys) + r")(s|-?\d+[a-z]?)?")
+    return any(word.fullmatch(w) for w in _words(component))
+
+
 def _plan_azimuth(component: Component) -> float | None:
     """Plan direction (degrees, modulo 90) of a component's horizontal axis or a vertical box's
     face; None when it has none."""
@@ -278,6 +289,8 @@ def check_plumb(ctx: Context) -> None:
         se_deg = axis_stderr_deg(comp)
         if comp.type == "cuboid" or is_round_column(ctx, comp):
             material = material_of(ctx, comp)
+        elif comp.type == "cylinder" and is_tank(ctx, comp):
+            material = "tank"  # a merged pipe is never one, whatever its line number says
         else:
             material = "pipe"
         if material == "steel":
@@ -291,6 +304,10 @@ def check_plumb(ctx: Context) -> None:
             )
             ratio = height / allowed
             standard = "ACI 117-10"
+        elif material == "tank":
+            ratio = float(ctx.opt(slug, "tank_ratio"))
+            allowed = height / ratio
+            standard = "API 650 7.5.2"
         else:
             ratio = float(ctx.opt(slug, "pipe_ratio"))
             allowed = height / ratio

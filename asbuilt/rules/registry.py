@@ -107,7 +107,8 @@ RULES: tuple[Rule, ...] = (
         "error",
         "leans {lean} over {height} (1:{ratio}), allowed {allowed} (1:{allowed_ratio}, {standard})",
         "AISC 303-16 7.13.1.1 (steel columns: 1/500 of the height); ACI 117-10 (concrete: 0.3% "
-        "of the height, at most 25 mm).",
+        "of the height, at most 25 mm); API 650 7.5.2 (storage tanks: the top of the shell "
+        "within 1/200 of the height of its bottom).",
         "alignment",
     ),
     Rule(

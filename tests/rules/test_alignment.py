@@ -409,3 +409,48 @@ def test_report_unverifiable_false_silences_every_unverifiable_finding(
 
     assert plumb(load_rules()) == default
     assert plumb(loads_rules("[general]\nreport_unverifiable = false")) == silenced
+
+
+def _tank(label, lean, height=12.0, *, group=None, kind="cylinder", axis_deg=0.001):
+    """A 6 m storage tank leaning ``lean`` metres over ``height``, kept as a cylinder."""
+    comp = pipe("T1", [0, 0, 0], [lean, 0, height], 6.0, axis_deg=axis_deg, label=label)
+    return dataclasses.replace(comp, type=kind, group=group)
+
+
+@pytest.mark.parametrize("label", ["crude tank", "TK-101", "tk101", "Tank-2A", "TANKS"])
+def test_storage_tanks_are_judged_by_api_650(label):
+    # API 650 7.5.2: 1/200 of the height, 60 mm over 12 m; a 50 mm lean passes, 70 mm does not
+    # (against the pipe limit of 1/500, 24 mm, both would fail).
+    assert not only(run(_tank(label, 0.050)), "out-of-plumb")
+    (f,) = only(run(_tank(label, 0.070)), "out-of-plumb")
+    assert f.allowed == pytest.approx(12.0 / 200, rel=1e-3)
+    assert "(1:200, API 650 7.5.2)" in f.message
+    assert f.severity == "error"
+
+
+@pytest.mark.parametrize(
+    "label, group, kind, allowed",
+    [
+        ("TK-101", None, "pipe", 12.0 / 500),  # a merged pipe is no tank, whatever it says
+        ("4in-TK-101 fill", None, "cylinder", 12.0 / 500),  # the tag inside a line's name
+        ("tanker bay", None, "cylinder", 12.0 / 500),  # not the word
+        ("shell", "tank farm", "cylinder", 12.0 / 200),  # the group names it
+    ],
+)
+def test_what_is_a_tank(label, group, kind, allowed):
+    (f,) = only(run(_tank(label, 0.100, group=group, kind=kind)), "out-of-plumb")
+    assert f.allowed == pytest.approx(allowed, rel=1e-3)
+
+
+def test_tank_keywords_and_ratio_come_from_the_rules_file():
+    config = loads_rules('[general]\ntank_keywords = ["silo"]\n[out-of-plumb]\ntank_ratio = 400')
+    (f,) = only(run(_tank("cement silo", 0.050), config=config), "out-of-plumb")
+    assert f.allowed == pytest.approx(12.0 / 400, rel=1e-3)
+    (f,) = only(run(_tank("crude tank", 0.050), config=config), "out-of-plumb")
+    assert f.allowed == pytest.approx(12.0 / 500, rel=1e-3)  # no longer a tank: the pipe limit
+
+
+def test_a_tank_lean_the_shots_cannot_resolve_is_reported_unverifiable():
+    # Unlike a pipe (no standard: only clear leans), a tank has a limit to verify.
+    (f,) = only(run(_tank("TK-7", 0.065, axis_deg=0.3)), "out-of-plumb")
+    assert f.unverifiable

@@ -43,6 +43,7 @@ CASES = {
     ("nonstandard-diameter", "suggest"): (["0", "-2"], ["1", "5"]),
     ("out-of-plumb", "steel_ratio"): (["0", "-500", "0.002"], ["1", "1000"]),
     ("out-of-plumb", "pipe_ratio"): (["0", "-500", "0.5"], ["1", "200"]),
+    ("out-of-plumb", "tank_ratio"): (["0", "-200", "0.005"], ["1", "500"]),
     ("out-of-plumb", "concrete_fraction"): (["0", "-0.003", "1.5", "333"], ["1", "0.005"]),
     ("out-of-plumb", "concrete_max"): (["0", "-0.025"], ["0.05"]),
     ("slope", "required"): (["-0.01", "1", "2"], ["0", "0.02"]),
