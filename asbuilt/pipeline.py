@@ -212,7 +212,7 @@ def build_model(
         catalog = resolve_catalog(catalog)  # once: the merge, the rules and the model share it
     report = _modelled(fit(scan, tolerances, progress=progress))
     if merge:
-        model = _merged(report, catalog, tolerances, schedule, elbow_radius)
+        model = _merged(report, catalog, tolerances, schedule, elbow_radius, config.label_words)
     else:
         model = model_from_fits(report)
         if catalog is not None:  # the size rules judge against it: the model must say which
@@ -235,8 +235,9 @@ def _modelled(report: FitReport) -> FitReport:
     return refused
 
 
-def _merged(report: FitReport, catalog, tolerances, schedule, elbow_radius) -> Model:
-    """The merged model of ``report`` (its scan and fits attached; no findings yet)."""
+def _merged(report: FitReport, catalog, tolerances, schedule, elbow_radius, words) -> Model:
+    """The merged model of ``report`` (its scan and fits attached; no findings yet), pipes told
+    from vessels by ``words`` (:class:`asbuilt.merge.LabelWords`)."""
     from asbuilt.merge import merge_model
 
     model = merge_model(
@@ -245,6 +246,7 @@ def _merged(report: FitReport, catalog, tolerances, schedule, elbow_radius) -> M
         tolerances=tolerances,
         schedule=schedule,
         elbow_radius=elbow_radius,
+        words=words,
     )
     return model.replace(catalog_file=catalog_file(catalog), scan=report.scan, fits=report)
 
@@ -342,7 +344,12 @@ def relink(
     else:
         report = _modelled(fit(scan, tolerances))
     relinked = _merged(
-        report, catalog, tolerances, _model_schedule(model), _model_elbow_radius(model)
+        report,
+        catalog,
+        tolerances,
+        _model_schedule(model),
+        _model_elbow_radius(model),
+        config.label_words,
     )
     relinked = relinked.replace(findings=fit_refused_findings(report))
     for a, b in links:

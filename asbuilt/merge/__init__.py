@@ -26,7 +26,6 @@ eccentric, axis shifted, end trimmed/extended), the way a spell checker lists wh
 from __future__ import annotations
 
 import dataclasses
-import re
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +52,7 @@ from .loose import loose_ends
 from .regularize import align_lines, fit_up, regularize_directions
 from .snap import SnapResult, snap_diameter, texts_in_units
 from .spool import PipeSpec, build_spools
+from .words import DEFAULT_WORDS, EQUIPMENT_TAGS, PIPE_WORDS, VESSEL_WORDS, LabelWords
 
 __all__ = [
     "merge_model",
@@ -61,90 +61,11 @@ __all__ = [
     "shot_spacing",
     "VESSEL_WORDS",
     "EQUIPMENT_TAGS",
+    "LabelWords",
+    "DEFAULT_WORDS",
     "resolve_catalog",
     "resolve_schedule",
 ]
-
-#: Words in an object's label or group that mark a cylinder as a vessel or structure, not a pipe.
-VESSEL_WORDS = (
-    "tank",
-    "vessel",
-    "column",
-    "chimney",
-    "stack",
-    "silo",
-    "drum",
-    "pile",
-    "pier",
-    "pillar",
-    "pole",
-    "post",
-    "tower",
-    "reactor",
-    "receiver",
-    "separator",
-    "accumulator",
-    "exchanger",
-    "heater",
-    "boiler",
-    "hopper",
-    "cistern",
-)
-_VESSEL = re.compile(r"\b(" + "|".join(VESSEL_WORDS) + r")s?\b", re.IGNORECASE)
-
-#: Equipment tags that mark a vessel: ``TK-101``/``TK101`` (tank), ``V-101`` (vessel),
-#: ``D-101`` (drum), ``R-101`` (reactor), ``E-101`` (exchanger shell), ``C-101`` (column),
-#: with an optional suffix letter (``V-101A``). The usual plant equipment letters (PIP and
-#: ISA-5.1 equipment lists); a field engineer labels a tank by its tag more often than by a
-#: word. A tag stands alone: preceded by a size or a dash (``4"-V-1001-A1``, a vent line's
-#: number) it is part of a line number, not a tag.
-EQUIPMENT_TAGS = ("TK", "V", "D", "R", "E", "C")
-# A tag of two letters or more may leave out its dash (TK101); one letter and a number without
-# it (D100) is as likely a size.
-_TAG = re.compile(
-    r"(?<![\w\"'\-])("
-    + "|".join(f"{tag}-?\\d+" if len(tag) > 1 else f"{tag}-\\d+" for tag in EQUIPMENT_TAGS)
-    + r")[A-Z]?(?![\w\-])",
-    re.IGNORECASE,
-)
-
-#: Words that mark a label as naming a pipe; they win over vessel words ("line from the tank").
-PIPE_WORDS = (
-    "pipe",
-    "piping",
-    "line",
-    "header",
-    "riser",
-    "drop",
-    "run",
-    "spool",
-    "branch",
-    "nps",
-    "dn",
-    "elbow",
-    "tee",
-    "bypass",
-    "drain",
-    "vent",
-    "duct",
-)
-_PIPE = re.compile(r"\b(" + "|".join(PIPE_WORDS) + r")(s|\d+)?\b", re.IGNORECASE)
-
-
-def _label_says(text: str | None) -> tuple[str | None, str | None]:
-    """("pipe" | "vessel" | None, the deciding word) for a label or group text."""
-    if not text:
-        return None, None
-    pipe = _PIPE.search(text)
-    if pipe:
-        return "pipe", pipe.group(1).lower()
-    vessel = _VESSEL.search(text)
-    if vessel:
-        return "vessel", vessel.group(1).lower()
-    tag = _TAG.search(text)
-    if tag:
-        return "vessel", tag.group(0)
-    return None, None
 
 
 def is_pipe(
@@ -156,6 +77,7 @@ def is_pipe(
     hinted: bool,
     catalog: Catalog,
     tolerance: float,
+    words: LabelWords = DEFAULT_WORDS,
 ) -> tuple[bool, str]:
     """Decide whether a fitted cylinder is a pipe; return (answer, reason).
 
@@ -166,9 +88,9 @@ def is_pipe(
     candidate is a pipe when it is linked to another object, carries a nominal hint, or its
     fitted OD (metres) lies within ``[min catalog OD - tolerance, max catalog OD x 1.1]``.
     """
-    says, word = _label_says(label)
+    says, word = words.says(label)
     if says is None:
-        says, word = _label_says(group)
+        says, word = words.says(group)
     if says == "vessel":
         return False, f"labelled {word!r}: a vessel or structure, not a pipe"
     if linked:
@@ -255,6 +177,7 @@ def merge_model(
     tolerances: Tolerances = DEFAULT_TOLERANCES,
     schedule: str | None = None,
     elbow_radius: str = "long",
+    words: LabelWords = DEFAULT_WORDS,
 ) -> Model:
     """Merge fitted primitives into an as-built model of pipes, fittings and spools.
 
@@ -272,6 +195,10 @@ def merge_model(
         catalog's ``default_schedule``, else STD.
     elbow_radius : {"long", "short"}
         Elbow bend radius from the fittings table.
+    words : LabelWords
+        The label vocabulary that tells pipes from vessels (:func:`is_pipe`); a rules file's
+        ``[general]`` ``pipe_keywords``, ``vessel_keywords`` and ``equipment_tags``
+        (:attr:`asbuilt.rules.RulesConfig.label_words`).
 
     Returns
     -------
@@ -317,6 +244,7 @@ def merge_model(
             hinted=bool(obj.nominal),
             catalog=catalog,
             tolerance=tol.diameter_tolerance,
+            words=words,
         )
         if ok:
             pipe_idx.append(k)

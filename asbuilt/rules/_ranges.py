@@ -186,8 +186,25 @@ def check_range(value, kind: str, table: str, key: str) -> str | None:
     return None if found.contains(float(value)) else describe(kind, table, key)
 
 
+#: List options whose items are words of a label (letters, digits and inner dashes), and those
+#: whose items are equipment tag letters; checked by :class:`asbuilt.merge.LabelWords`.
+WORD_LISTS = {
+    ("general", "pipe_keywords"): "pipe",
+    ("general", "vessel_keywords"): "vessel",
+    ("general", "equipment_tags"): "tags",
+}
+
+
 def check_rows(value: list, table: str, key: str) -> str | None:
     """None when the rows of a list-valued option are well formed, else what they must be."""
+    if (table, key) in WORD_LISTS:
+        from asbuilt.merge.words import LabelWords  # the merge's own check, one source
+
+        try:
+            LabelWords(**{WORD_LISTS[table, key]: tuple(value)})
+        except ValueError as err:
+            return "a list of " + str(err).rsplit(" is not a ", 1)[1].removeprefix("word of ")
+        return None
     found = ROWS.get((table, key))
     if found is None:
         return None

@@ -101,6 +101,19 @@ class RulesConfig:
         changes = {k: self.general[k] for k in _TOLERANCE_FIELDS if k in self.general}
         return dataclasses.replace(DEFAULT_TOLERANCES, **changes)
 
+    @property
+    def label_words(self):
+        """:class:`asbuilt.merge.LabelWords` from ``[general]`` ``pipe_keywords``,
+        ``vessel_keywords`` and ``equipment_tags``: the words merging tells a pipe from a
+        vessel by."""
+        from asbuilt.merge.words import LabelWords
+
+        return LabelWords(
+            pipe=tuple(self.general["pipe_keywords"]),
+            vessel=tuple(self.general["vessel_keywords"]),
+            tags=tuple(self.general["equipment_tags"]),
+        )
+
     def with_selection(self, select=None, ignore=()) -> RulesConfig:
         """A copy whose ``select`` is replaced (when given) and ``ignore`` extended.
 
