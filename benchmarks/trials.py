@@ -210,7 +210,8 @@ def cylinder_trial(rng, od_mm, ld, n, operator=False) -> Trial:
     )
     bound = crb.cylinder_bounds(shots.surface_points, centre, axis, radius, sig)
     retained = crb.cylinder_bounds(shots.surface_points[kept], centre, axis, radius, sig[kept])
-    return Trial(shots.points, dirty, {"radius": radius, "axis": axis}, bound, retained)
+    truth = {"radius": radius, "axis": axis, "center": centre}
+    return Trial(shots.points, dirty, truth, bound, retained)
 
 
 def sphere_trial(rng, diameter, n, operator=False) -> Trial:
@@ -222,7 +223,7 @@ def sphere_trial(rng, diameter, n, operator=False) -> Trial:
     shots, dirty, sig, kept = _take(scene, n, rng, operator=operator)
     bound = crb.sphere_bounds(shots.surface_points, centre, sig)
     retained = crb.sphere_bounds(shots.surface_points[kept], centre, sig[kept])
-    return Trial(shots.points, dirty, {"radius": radius}, bound, retained)
+    return Trial(shots.points, dirty, {"radius": radius, "center": centre}, bound, retained)
 
 
 def plane_trial(rng, width, n, operator=False) -> Trial:
@@ -247,7 +248,7 @@ def plane_trial(rng, width, n, operator=False) -> Trial:
     shots, dirty, sig, _ = _take(scene, n, rng, operator=operator)
     front = shots.normals @ normal > 0.999
     bound = crb.plane_bounds(shots.surface_points[front], normal, sig[front])
-    return Trial(shots.points, dirty, {"normal": normal}, bound)
+    return Trial(shots.points, dirty, {"normal": normal, "point": centre}, bound)
 
 
 def cuboid_trial(rng, section, faces, n, operator=False, session=False) -> Trial:
@@ -277,7 +278,8 @@ def cuboid_trial(rng, section, faces, n, operator=False, session=False) -> Trial
     else:
         shots, dirty, sig, _ = _take(scene, n, rng, operator=operator)
     bound = crb.cuboid_bounds(shots.surface_points, shots.normals, centre, sig)
-    return Trial(shots.points, dirty, {"axes": axes, "size": size, "los": los}, bound)
+    truth = {"axes": axes, "size": size, "los": los, "center": centre}
+    return Trial(shots.points, dirty, truth, bound)
 
 
 @dataclass
