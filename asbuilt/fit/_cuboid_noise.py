@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from asbuilt.errors import FitError
+from asbuilt.fit._common import diagonal_extent
 from asbuilt.fit._joint import complexity
 from asbuilt.fit._mixture import mixture_score
 from asbuilt.tolerances import Tolerances
@@ -83,7 +84,7 @@ def _likeliest_noise(
     """
     floor = float(tolerances.sigma_floor)
     n = x.shape[0]
-    extent = float(np.linalg.norm(np.ptp(x, axis=0)))
+    extent = diagonal_extent(x)
     tried: dict[float, tuple] = {}  # level -> (score, fitted or the FitError)
 
     def scored(level: float) -> float:

@@ -319,7 +319,7 @@ def _mixture_cost(fit: FitResult, points: np.ndarray, tolerances: Tolerances) ->
     primitive compare without a parameter count."""
     from asbuilt.fit._mixture import mixing_cost, mixture_score
 
-    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+    extent = diagonal_extent(points)
     kept = int(np.count_nonzero(fit.inliers))
     score = mixture_score(fit.residuals, fit.inliers, extent, float(tolerances.sigma_floor))
     return score + mixing_cost([kept, len(fit.inliers) - kept])

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from asbuilt.errors import FitError
-from asbuilt.fit._common import robust_scale, row_norms, tukey_weights
+from asbuilt.fit._common import diagonal_extent, robust_scale, row_norms, tukey_weights
 from asbuilt.fit._mixture import mixing_cost, mixture_score
 from asbuilt.fit._robust import GeometricModel, RobustFit, gauss_newton, settled_fit
 from asbuilt.tolerances import Tolerances
@@ -419,7 +419,7 @@ def reconsidered(
     best, best_score = None, np.inf
     uniform = np.ones(len(points))
 
-    extent = float(np.linalg.norm(np.ptp(points, axis=0)))
+    extent = diagonal_extent(points)
     floor = float(tolerances.sigma_floor)
 
     def consider(fit) -> np.ndarray | None:
