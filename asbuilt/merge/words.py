@@ -99,7 +99,10 @@ class LabelWords:
 
     def __post_init__(self) -> None:
         for name in ("pipe", "vessel", "tags"):
-            values = tuple(getattr(self, name))
+            raw = getattr(self, name)
+            if isinstance(raw, str):  # tuple("tank") would be four one-letter words
+                raise ValueError(f"{name}: give a list of words, not the string {raw!r}")
+            values = tuple(raw)
             object.__setattr__(self, name, values)
             check = _TAG_LETTERS if name == "tags" else _WORD
             for value in values:

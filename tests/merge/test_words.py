@@ -56,6 +56,7 @@ def test_a_plants_own_words_and_tags():
         ("tags", ("TK-",), "tags: 'TK-' is not a word of letters"),
         ("tags", ("T1",), "tags: 'T1' is not a word of letters"),
         ("vessel", (3,), "vessel: 3 is not a word"),
+        ("vessel", "tank", "vessel: give a list of words, not the string 'tank'"),
     ],
 )
 def test_bad_words_are_refused(field, value, message):
