@@ -25,6 +25,7 @@ import numpy as np
 from scipy.special import chdtri
 
 from asbuilt.errors import FitError, located
+from asbuilt.fit._background_count import with_background_count
 from asbuilt.fit._common import extent_of, radius_text, validate_points
 from asbuilt.fit._edge_brackets import edge_brackets, widen_pinned
 from asbuilt.fit._noise_levels import _fit_with_noise
@@ -184,6 +185,7 @@ def _fit_points(kind: str, points, sigma, tolerances, viewpoint) -> FitResult:
     result = dataclasses.replace(
         result, residuals=result.residuals[row_of], inliers=result.inliers[row_of]
     )
+    result = with_background_count(result, array, viewpoint, sigma, tolerances)
     if repeats:
         notes.append(
             f"{repeats} point(s) repeat other points exactly and were counted once (the same "
