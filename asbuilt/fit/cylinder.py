@@ -136,6 +136,7 @@ from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
 __all__ = [
     "END_PLANE_SHOTS",
+    "VIEW_IGNORED",
     "OTHER_ANGLE",
     "OTHER_RADIUS",
     "OTHER_SHOTS",

@@ -13,7 +13,13 @@ import numpy as np
 
 from asbuilt.findings import Suggestion
 from asbuilt.fit.auto import RIVAL_PREFIX
-from asbuilt.fit.cylinder import END_PLANE_SHOTS, OTHER_ANGLE, OTHER_RADIUS, OTHER_SHOTS
+from asbuilt.fit.cylinder import (
+    END_PLANE_SHOTS,
+    OTHER_ANGLE,
+    OTHER_RADIUS,
+    OTHER_SHOTS,
+    VIEW_IGNORED,
+)
 from asbuilt.fit.result import BACKGROUND_KEYS
 
 from ._context import Context, centre_of, mm, stderr_value, verdict
@@ -306,6 +312,33 @@ def check_another_object(ctx: Context) -> None:
         )
 
 
+def check_viewpoint_ignored(ctx: Context) -> None:
+    """Cylinders fitted only by ignoring the station (the fit's note
+    :data:`asbuilt.fit.cylinder.VIEW_IGNORED`): every cylinder that honours it would have more
+    than a third of the shots seen through the pipe. With the station right that is a fit
+    through the shots of more than one surface; an independent review's rack and occlusion
+    scenes had 3 such fits, all wrong by 50 mm to 4 m (one snapped to NPS 18 for an NPS 4)."""
+    slug = "viewpoint-ignored"
+    for comp in _fitted(ctx):
+        fit = comp.fit
+        if VIEW_IGNORED not in fit.notes:
+            continue
+        ctx.emit(
+            slug,
+            [comp.id],
+            "no cylinder that honours the station fits the shots: the one kept would have more"
+            " than a third of them measured through it, so it likely runs through the shots of"
+            " more than one surface (a neighbour, a wall) and its size and axis are in doubt",
+            location=centre_of(comp.geometry),
+            suggestions=(
+                Suggestion(
+                    f"give {comp.id} only its own shots (rescan with the raster window on it alone)"
+                ),
+                Suggestion(f"check the scan's sensor position or {comp.id}'s station"),
+            ),
+        )
+
+
 CHECKS = {
     "too-few-points": check_points,
     "weak-geometry": check_weak,
@@ -313,4 +346,5 @@ CHECKS = {
     "outliers": check_outliers,
     "ambiguous-kind": check_ambiguous_kind,
     "another-object": check_another_object,
+    "viewpoint-ignored": check_viewpoint_ignored,
 }

@@ -216,6 +216,15 @@ RULES: tuple[Rule, ...] = (
         "quality",
     ),
     Rule(
+        "AB407",
+        "viewpoint-ignored",
+        "warning",
+        "no cylinder that honours the station fits the shots; the one kept is in doubt",
+        "A beam stops at the first surface it meets: a pipe that more than a third of the shots "
+        "were measured through, seen from the station, was not where those shots were taken.",
+        "quality",
+    ),
+    Rule(
         "AB501",
         "clash",
         "error",

@@ -256,3 +256,18 @@ def test_shots_of_another_cylinder_are_not_counted_as_outliers(other, on_end, ex
     comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, n=25, rejected=10)
     found = only(_with_other(comp, other, on_end=on_end), "outliers")
     assert [f.message for f in found] == ([expected] if expected else [])
+
+
+def test_a_cylinder_fitted_by_ignoring_the_station_is_reported():
+    from asbuilt.fit.cylinder import VIEW_IGNORED
+
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143)
+    assert not only(comp, "viewpoint-ignored")
+    fit = dataclasses.replace(comp.fit, notes=(*comp.fit.notes, VIEW_IGNORED))
+    (f,) = only(dataclasses.replace(comp, fit=fit), "viewpoint-ignored")
+    assert f.code == "AB407" and f.severity == "warning"
+    assert "no cylinder that honours the station fits the shots" in f.message
+    assert [s.description for s in f.suggestions] == [
+        "give P1 only its own shots (rescan with the raster window on it alone)",
+        "check the scan's sensor position or P1's station",
+    ]

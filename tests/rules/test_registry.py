@@ -54,6 +54,7 @@ def test_every_required_rule_is_registered(slug):
                 "outliers",
                 "ambiguous-kind",
                 "another-object",
+                "viewpoint-ignored",
             },
         ),
         ("nope", set()),
