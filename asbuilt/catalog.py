@@ -685,12 +685,14 @@ def fitting_dims(
     row = catalog.fitting(size) if size is not None else None
     dims = dict(row.dims) if row is not None else {}
     notes: list[str] = []
+    basis = "nominal bore"
     if size is not None and size.nps is not None:
         bore = size.nps * 0.0254
     elif size is not None and size.dn is not None:
         bore = size.dn * _MM
     else:
         bore = od
+        basis = "OD (no nominal size)"
     factor = 1.5 if elbow_radius == "long" else 1.0
     column = "elbow90_lr" if elbow_radius == "long" else "elbow90_sr"
     radius = dims.get(column)
@@ -699,7 +701,7 @@ def fitting_dims(
         notes.append("no short-radius elbow in the table for this size: long radius used")
     if radius is None:
         radius = factor * bore
-        notes.append(f"bend radius by rule {factor:g} x nominal bore")
+        notes.append(f"bend radius by rule {factor:g} x {basis}")
     radius = max(radius, 0.5 * od * 1.01)
     tee_run = dims.get("tee_run")
     tee_outlet = dims.get("tee_outlet", tee_run)

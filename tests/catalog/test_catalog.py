@@ -247,6 +247,11 @@ def test_fitting_dims_from_table_and_by_rule():
     assert ruled.source == "rule"
     assert ruled.bend_radius == pytest.approx(1.5 * 2 * INCH / 1000)
     assert ruled.tee_run == pytest.approx(two.od)
+    assert "bend radius by rule 1.5 x nominal bore" in ruled.notes
+    # A pipe of no catalog size (an ambiguous snap): the rule's bore is its OD, and says so.
+    unsized = fitting_dims(steel, None, 0.187)
+    assert unsized.bend_radius == pytest.approx(1.5 * 0.187)
+    assert "bend radius by rule 1.5 x OD (no nominal size)" in unsized.notes
     with pytest.raises(ValueError):
         fitting_dims(steel, four, four.od, "medium")
 
