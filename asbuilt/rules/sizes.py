@@ -259,8 +259,69 @@ def check_nonstandard(ctx: Context, table: SizeTable | None) -> None:
         )
 
 
+#: A pipe snapped with its run to a size this many of its own standard errors from its own
+#: fitted OD, and nearer another size, may be that other size (a reducer merging left out).
+EQUALISED_SIGMAS = 2.0
+
+
+def _equalised_away(comp: Component, table: SizeTable | None):
+    """``(nearest nominal, its OD, the snapped OD, standard errors off)`` when ``comp`` was
+    snapped with the other pipes of its run (``snap["run"]``) to a size more than
+    :data:`EQUALISED_SIGMAS` of its own standard errors from its own fitted OD, and another
+    catalog size lies nearer that OD; else None.
+
+    Merging equalises contiguous pipes whose ODs agree within three standard errors: a poorly
+    measured NPS 6 pipe (187 +- 15 mm) after an NPS 8 one was built as NPS 8 with no reducer,
+    silently (an independent review's reducer and reducing-tee scenes, 2 of 28 joints).
+    """
+    snap = comp.snap or {}
+    run = snap.get("run") or ()
+    if table is None or snap.get("status") != "snapped" or len(run) < 2:
+        return None
+    od, se = measured_od(comp)
+    snapped = snap.get("od_catalog")
+    if od is None or not se or snapped is None:
+        return None
+    off = abs(od - float(snapped)) / se
+    if not off > EQUALISED_SIGMAS:
+        return None
+    nominal, size_od = min(((n, s) for n, _, s in table.sizes), key=lambda row: abs(row[1] - od))
+    if abs(size_od - od) >= abs(float(snapped) - od) or abs(size_od - float(snapped)) < 5e-5:
+        return None
+    return nominal, size_od, float(snapped), off
+
+
+def _check_equalised(ctx: Context, table: SizeTable | None, slug: str) -> None:
+    for comp in ctx.pipes:
+        found = _equalised_away(comp, table)
+        if found is None:
+            continue
+        nominal, size_od, snapped, off = found
+        od, se = measured_od(comp)
+        others = ", ".join(i for i in comp.snap["run"] if i != comp.id)
+        ctx.emit(
+            slug,
+            [comp.id],
+            f"OD {mm(od)} +- {mm(se)} is nearer {_label(table, nominal)} ({mm(size_od)}) than "
+            f"the {mm(snapped)} it was given with {others} ({off:.1f} standard errors off its own "
+            "fit): the size cannot be decided, and a reducer may be missing",
+            location=centre_of(comp.geometry),
+            measured=od,
+            allowed=snapped,
+            stderr=se,
+            unit="m",
+            suggestions=(
+                Suggestion(
+                    f"scan more points over a wider arc of {comp.id} to shrink the OD's uncertainty"
+                ),
+                Suggestion(f'give {comp.id} a size hint ("nominal") in the scan'),
+            ),
+        )
+
+
 def check_ambiguous(ctx: Context, table: SizeTable | None) -> None:
     slug = "ambiguous-size"
+    _check_equalised(ctx, table, slug)
     for comp in ctx.pipes:
         if size_status(ctx, comp, table) != "ambiguous":
             continue

@@ -1,5 +1,7 @@
 """Size rules against hand-computed catalog distances (ASME B36.10M ODs from the standard)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from rules_builders import B36, model, pipe
@@ -152,6 +154,42 @@ def test_ambiguous_size_lists_candidates_and_suggests_scanning():
     texts = " ".join(s.description for s in f.suggestions)
     assert "scan more points" in texts and "hint" in texts
     assert not any(s.unambiguous for s in f.suggestions)
+
+
+def _run_member(cid, start, end, od_fit, od_stderr, run_ids=("P1", "P2")):
+    """A pipe snapped to NPS 8 with the other pipes of its run (merging's joint estimate)."""
+    comp = pipe(cid, start, end, 0.2191, status="snapped", od_fit=od_fit, od_stderr=od_stderr)
+    snap = {**comp.snap, "od_catalog": 0.2191, "nominal": "8", "run": list(run_ids)}
+    return dataclasses.replace(comp, snap=snap, nominal="8")
+
+
+@pytest.mark.parametrize(
+    "od_fit, od_stderr, nearer",
+    [
+        (0.1871, 0.0150, "NPS 6 (168.3 mm)"),  # the review's reducer: 2.1 standard errors off
+        (0.1871, 0.0200, None),  # 1.6 standard errors off: within what the fit allows
+        (0.2050, 0.0050, None),  # 2.8 off, but NPS 8 is still the nearest size
+        (0.2170, 0.0024, None),  # a well measured NPS 8
+    ],
+)
+def test_a_run_member_whose_own_fit_points_to_another_size(od_fit, od_stderr, nearer):
+    # Merging equalised P2 with P1 (their ODs agree within 3 standard errors); an NPS 6 P2
+    # after a reducer would have fitted so too, and the reducer would be missing silently.
+    p1 = _run_member("P1", [0, 0, 1], [2, 0, 1], 0.2179, 0.0024)
+    p2 = _run_member("P2", [2, 0, 1], [4, 0, 1], od_fit, od_stderr)
+    found = only(run(p1, p2), "ambiguous-size")
+    if nearer is None:
+        assert not found
+        return
+    (f,) = found
+    assert f.objects == ("P2",) and f.severity == "warning" and f.code == "AB102"
+    assert f"is nearer {nearer} than the 219.1 mm it was given with P1" in f.message
+    assert "a reducer may be missing" in f.message
+
+
+def test_a_lone_pipe_is_not_judged_by_its_run():
+    comp = _run_member("P2", [0, 0, 1], [2, 0, 1], 0.1871, 0.0150, run_ids=("P2",))
+    assert not only(run(comp), "ambiguous-size")
 
 
 def test_ambiguous_from_catalog_window():
