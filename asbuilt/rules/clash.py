@@ -417,7 +417,7 @@ def ends_into(
     of ``gb``'s long axis runs along it rather than into it: its end counts only when its section
     there lies within ``gb``'s cross-section (a pipe through a tank's head or inside a casing) or
     it continues ``gb``'s line (axes within the smaller member's core of each other, sharing at
-    most ``max(its OD, joint_scale)`` of length: an in-line joint). Parallel pipes overlapping
+    most ``max(the larger OD, joint_scale)`` of length: an in-line joint). Parallel pipes overlapping
     side by side along their length are therefore a clash, however near their ends lie.
     Geometries with ends but no straight axis (a bend, a tee) count when a point of the ball of
     their half section around an end is inside.
