@@ -11,7 +11,9 @@ its shot spacing (the last shot may be that far short of the real end, as contig
 would run into another pipe or fitting: the swept pipe and the other component's body (capsules
 around their centrelines: a tee's run and outlet, an elbow's arc in chords, a reducer at its
 larger radius) come within the sum of their outer radii. A pipe that passes above or beside the
-other, or runs alongside it, does not. Pipes merging joined (a lateral's three pipes, a fitting it
+other, or runs alongside it, does not: nor one lying side by side with it, touching it or fitted
+into it along its length (within :data:`IN_LINE_DEG`, off its line, still within the sum of
+their radii ``reach`` back from the end: the clash rule's, not a branch). Pipes merging joined (a lateral's three pipes, a fitting it
 could not build) are not loose to each other; a pair contiguity's notes already name (a link it
 could not make) is recorded with ``noted`` true, so the rules report it once.
 
@@ -110,6 +112,30 @@ def _angle_deg(u: np.ndarray, capsules, point: np.ndarray) -> float:
     return float(np.degrees(np.arccos(min(1.0, abs(float(u @ axis))))))
 
 
+def _alongside(pipe: Straight, point, out, reach: float, capsule) -> bool:
+    """Whether ``capsule`` ``(a, b, radius)`` runs beside the pipe ``pipe`` at its open end
+    ``point`` (3,) m (``out`` its outward unit direction) rather than ahead of it: within
+    :data:`IN_LINE_DEG` of its axis, off its line (axes farther apart than the smaller radius),
+    and still within the sum of their radii ``reach`` metres back along the pipe. Such pipes lie
+    side by side, touching or fitted into each other along their length (the clash rule's
+    business), not one ending on the other; a pipe converging on another's side and ending
+    there leaves it within that reach."""
+    a, b, rad = capsule
+    axis = b - a
+    length = float(np.linalg.norm(axis))
+    if length == 0:
+        return False
+    axis = axis / length
+    if abs(float(axis @ out)) < np.cos(np.radians(IN_LINE_DEG)):
+        return False
+    rel = point - a
+    lateral = float(np.linalg.norm(rel - (rel @ axis) * axis))
+    if lateral <= min(float(pipe.outer_radius), rad):
+        return False  # on one line: a pipe ending in line with (or into) the other
+    back = min(reach, float(np.linalg.norm(pipe.end - pipe.start)))
+    return _point_distance(point - back * out, a, b) <= float(pipe.outer_radius) + rad
+
+
 def loose_ends(
     components: Sequence[Component],
     *,
@@ -204,11 +230,15 @@ def loose_ends(
             theirs = scan_pipes(other)
             if own in theirs or any(frozenset((own, q)) in joined for q in theirs):
                 continue  # a piece of the same pipe, or joined to this pipe by merging
-            if not any(
-                segment_distance(point, tip, a, b) <= radius + rad
+            hits = [
+                (a, b, rad)
                 for a, b, rad in capsules[other.id]
+                if segment_distance(point, tip, a, b) <= radius + rad
+            ]
+            if not hits or all(
+                _alongside(comp.geometry, point, out, length, capsule) for capsule in hits
             ):
-                continue
+                continue  # nothing ahead, or a pipe it runs beside (side by side, overlapping)
             gap = _surface_gap(point, capsules[other.id])
             rank = (gap, other.type == "pipe")  # a fitting before the pipe it joins
             if best is None or rank < best[0]:

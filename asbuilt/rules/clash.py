@@ -15,7 +15,10 @@ millimetre into it) is an unverifiable warning. Components joined end to end (en
 a clash; nor, with ``end_connections`` (the default), is a member whose axis *ends* inside the
 other solid: a beam framing into a column or a nozzle into a tank is a connection (a fitting
 merging placed is not spared so: it ends only at its ports, :data:`FITTINGS`). A clash is
-one member passing through another. Two same-size pipes on one axis are judged before those
+one member passing through another, or lying along it: a member whose side, not its axis,
+reaches into the other at its end, or one parallel to the other and off its line (pipes side by
+side in a rack fitted into each other), does not end in it (:func:`ends_into`), whatever the
+angle. Two same-size pipes on one axis are judged before those
 exceptions: overlapping by more than a joint's scale (:data:`DUPLICATE_DIAMETERS` ODs or
 ``joint_distance``), or one wholly inside the other, they are a clash (a duplicate scan).
 An insulated component's solid here is its envelope (:func:`asbuilt.insulation.envelope`): the
@@ -345,18 +348,111 @@ _PROBE = np.array(
 _PROBE /= np.linalg.norm(_PROBE, axis=1)[:, None]
 
 
-def ends_into(ga, gb, thickness: float = 0.01) -> bool:
-    """Whether member ``ga`` ends in or at solid ``gb`` (a beam framing into a column or meeting
-    another beam at a corner, a nozzle into a tank): a connection, not a clash.
+def _core(geometry) -> float:
+    """Half the smallest cross-section size of a member, metres (0 when it has none): a round
+    member's radius (a reducer's smaller one), a box's half its narrowest side across its long
+    axis."""
+    if isinstance(geometry, Straight):
+        return float(geometry.outer_radius)
+    if isinstance(geometry, Reducer):
+        return float(min(geometry.outer_radius_start, geometry.outer_radius_end))
+    if isinstance(geometry, Cylinder):
+        return float(geometry.radius)
+    if isinstance(geometry, Cuboid):
+        return 0.5 * float(np.sort(geometry.size)[0])
+    return 0.0
 
-    An end counts when it, or a point of the ball of ``ga``'s half section around it, is inside.
-    """
-    ends = member_ends(ga)
-    if not len(ends):
+
+def _section_within(geometry, point, half: float) -> bool:
+    """Whether a section of half size ``half`` (metres) centred on ``point`` (3,) and square to
+    the long axis of ``geometry`` lies within its cross-section: a pipe nested in a larger one
+    (a casing, a sleeve), a nozzle through a tank's head, a post in a pedestal."""
+    found = axis_of(geometry)
+    if found is None:
         return False
-    radius = _half_section(ga)
-    probes = np.concatenate([ends] + [ends + radius * d for d in _PROBE])
-    return bool(inside(gb, probes, thickness).any())
+    axis, _, centre = found
+    rel = np.asarray(point, dtype=np.float64) - centre
+    if isinstance(geometry, Cuboid):
+        local = np.abs(rel @ geometry.axes.T)
+        across = np.abs(geometry.axes @ axis) < 0.5  # the two local axes across the long one
+        return bool(np.all(local[across] + half <= 0.5 * geometry.size[across]))
+    lateral = float(np.linalg.norm(rel - (rel @ axis) * axis))
+    return lateral + half <= _core(geometry)
+
+
+def _axis_ends(geometry) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``(end (3,), outward unit (3,))`` for each end of a straight member (pipe, cylinder,
+    cuboid along its long axis, reducer at its end centres); empty for the rest."""
+    if isinstance(geometry, Reducer):
+        return [(geometry.start, -geometry.direction), (geometry.end, geometry.direction)]
+    found = axis_of(geometry)
+    if found is None:
+        return []
+    axis, length, centre = found
+    return [(centre - 0.5 * length * axis, -axis), (centre + 0.5 * length * axis, axis)]
+
+
+def _shared_stretch(ga, gb) -> float:
+    """Length (metres) of ``ga``'s axis that ``gb``'s axis runs beside (``gb``'s ends projected
+    onto ``ga``'s axis, clipped to ``ga``)."""
+    (ua, la, ca), (ub, lb, cb) = axis_of(ga), axis_of(gb)
+    t = [float((cb + s * 0.5 * lb * ub - ca) @ ua) for s in (-1.0, 1.0)]
+    return max(0.0, min(max(t), 0.5 * la) - max(min(t), -0.5 * la))
+
+
+def ends_into(
+    ga,
+    gb,
+    thickness: float = 0.01,
+    parallel_deg: float = 10.0,
+    joint_scale: float = 0.15,
+) -> bool:
+    """Whether member ``ga`` ends in or at solid ``gb`` (a beam framing into a column or meeting
+    another beam at a corner, a nozzle into a tank, a pipe butting into the next): a connection,
+    not a clash.
+
+    An end counts when ``ga``'s axis, within its half section of the end either way, reaches
+    into ``gb`` (the end is inside, or stops that short of it): a member ending *beside* another
+    (its side, not its axis, in the other) does not end in it. A member within ``parallel_deg``
+    of ``gb``'s long axis runs along it rather than into it: its end counts only when its section
+    there lies within ``gb``'s cross-section (a pipe through a tank's head or inside a casing) or
+    it continues ``gb``'s line (axes within the smaller member's core of each other, sharing at
+    most ``max(the larger OD, joint_scale)`` of length: an in-line joint). Parallel pipes overlapping
+    side by side along their length are therefore a clash, however near their ends lie.
+    Geometries with ends but no straight axis (a bend, a tee) count when a point of the ball of
+    their half section around an end is inside.
+    """
+    half = _half_section(ga)
+    ends = _axis_ends(ga)
+    if not ends:
+        ends = member_ends(ga)
+        if not len(ends):
+            return False
+        probes = np.concatenate([ends] + [ends + half * d for d in _PROBE])
+        return bool(inside(gb, probes, thickness).any())
+    # the axis from half a section inside the end to half a section beyond it, finely enough
+    # for a plate's thickness
+    count = int(np.clip(np.ceil(2.0 * half / max(0.5 * thickness, 1e-4)), 8, 256)) + 1
+    steps = np.linspace(-half, half, count)
+    along_b = axis_of(gb)
+    parallel = False
+    if along_b is not None:
+        cos = abs(float(axis_of(ga)[0] @ along_b[0]))
+        parallel = cos >= np.cos(np.radians(parallel_deg))
+    for end, out in ends:
+        if not inside(gb, end + np.outer(steps, out), thickness).any():
+            continue
+        if not parallel:
+            return True
+        if _section_within(gb, end, half):
+            return True
+        axis, _, centre = along_b
+        rel = end - centre
+        lateral = float(np.linalg.norm(rel - (rel @ axis) * axis))
+        scale = max(DUPLICATE_DIAMETERS * 2.0 * max(half, _half_section(gb)), joint_scale)
+        if lateral <= min(_core(ga), _core(gb)) and _shared_stretch(ga, gb) <= scale:
+            return True
+    return False
 
 
 #: Straight members of one size may overlap along a shared axis by at most
@@ -517,6 +613,8 @@ def check_clash(ctx: Context) -> None:
         return
     boxes = np.asarray(boxes)
     joined = set(end_pairs(keep, touch)) | linked_pairs(ctx.model)
+    parallel = float(ctx.general("intended_angle_deg"))
+    joint = float(ctx.general("joint_distance"))
     for i, j in candidate_pairs(boxes):
         a, b = keep[i], keep[j]
         # before the joint exceptions: a duplicate's ends touch or lie inside the other
@@ -526,8 +624,8 @@ def check_clash(ctx: Context) -> None:
             continue
         ga, gb = solid[i], solid[j]
         if connections and (
-            (a.type not in FITTINGS and ends_into(a.geometry, gb, thickness))
-            or (b.type not in FITTINGS and ends_into(b.geometry, ga, thickness))
+            (a.type not in FITTINGS and ends_into(a.geometry, gb, thickness, parallel, joint))
+            or (b.type not in FITTINGS and ends_into(b.geometry, ga, thickness, parallel, joint))
         ):
             continue
         volume, se, centroid = overlap_volume(

@@ -89,6 +89,51 @@ def test_clash_exits_1_and_reads_like_a_linter(tmp_path, capsys):
     assert lines[-1].split(", ")[0].endswith(("error", "errors"))
 
 
+def _scanned_alone(*objects, seed=1):
+    """A scan of each object simulated on its own (no shot hits the others), as one file: two
+    pipes passing through each other would otherwise hide each other's shots."""
+    scans = [
+        simulate_scan(
+            scene_from_dict(
+                {
+                    "format": "asbuilt-scene",
+                    "version": 1,
+                    "units": "m",
+                    "seed": seed + k,
+                    "stations": [STATION],
+                    "objects": [obj],
+                }
+            ),
+            seed=seed + k,
+        )
+        for k, obj in enumerate(objects)
+    ]
+    doc = scans[0]
+    doc["objects"] = [o for scan in scans for o in scan["objects"]]
+    return doc
+
+
+@pytest.mark.parametrize("offset", [[0.15, 0.0], [0.0, 0.15]], ids=["side-by-side", "stacked"])
+def test_parallel_pipes_passing_through_each_other_are_a_clash(tmp_path, capsys, offset):
+    """Independent review 59, defect 2: an NPS 8 and an NPS 6 5 m from the station, parallel,
+    axes 150 mm apart (radii sum 193.7 mm), gave exit 0 and an AB304 weldolet suggestion."""
+    dx, dz = offset
+
+    def pipe(pid, x, z, od):
+        geometry = {"type": "cylinder", "start": [x, -1.5, z], "end": [x, 1.5, z], "od": od}
+        return {"id": pid, "kind": "cylinder", "points": 35, "geometry": geometry}
+
+    doc = _scanned_alone(pipe("P1", 5.0, 1.5, 0.2191), pipe("P2", 5.0 + dx, 1.5 + dz, 0.1683))
+    path = tmp_path / "scan.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    code, out, _ = run([path, "--format", "concise"], capsys)
+    lines = out.splitlines()
+    assert code == 1, out
+    assert lines[0].startswith(f"{path}: P1,P2: error clash: P1 and P2 intersect: "), out
+    assert "unjoined-end" not in out and "weldolet" not in out
+    assert lines[-1].startswith("1 error, 0 warnings")
+
+
 def test_json_is_the_model_document_shape(tmp_path, capsys):
     path = scan_file(tmp_path, PIPE, CROSSING)
     code, out, _ = run([path, "--format", "json"], capsys)

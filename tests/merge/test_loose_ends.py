@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 from synthetic_pipes import Pipe, report_of
 
@@ -305,3 +306,48 @@ def test_unjoined_end_offers_the_link_only_where_it_would_join(gap, offered):
     else:
         assert changes == []
         assert "too far apart for a scan link to join" in finding.suggestions[-1].description
+
+
+# Parallel pipes side by side whose solids touch or pass through each other along their length
+# (independent review 59, defect 2: an NPS 8 and an NPS 6, axes 150 mm apart, 44 mm into each
+# other over 2.2 m) were recorded as loose ends on each other, and AB304 suggested a weldolet
+# for what is no branch: each end's swept reach met the other pipe beside it. They are the clash
+# rule's (tests/rules/test_clash.py). B36.10M outside diameters.
+OD6, OD8 = 0.1683, 0.2191
+BIG = Pipe("P1", (0, -1.1, 0), (0, 1.1, 0), OD8)
+SIDE_BY_SIDE = {
+    "side-by-side": [BIG, Pipe("P2", (0.15, -1.1, 0), (0.15, 1.1, 0), OD6)],
+    "vertical-stack": [BIG, Pipe("P2", (0, -1.1, 0.15), (0, 1.1, 0.15), OD6)],
+    "staggered": [BIG, Pipe("P2", (0.15, 0.1, 0), (0.15, 2.5, 0), OD6)],
+    "same-size-70-mm-apart": [
+        Pipe("P1", (0, -1.5, 0), (0, 1.5, 0), OD),
+        Pipe("P2", (0.07, -1.5, 0), (0.07, 1.5, 0), OD),
+    ],
+    "touching": [BIG, Pipe("P2", ((OD8 + OD6) / 2, -1.1, 0), ((OD8 + OD6) / 2, 1.1, 0), OD6)],
+    "1-mm-apart": [
+        BIG,
+        Pipe("P2", ((OD8 + OD6) / 2 + 0.001, -1.1, 0), ((OD8 + OD6) / 2 + 0.001, 1.1, 0), OD6),
+    ],
+}
+
+
+@pytest.mark.parametrize("case", list(SIDE_BY_SIDE))
+def test_pipes_side_by_side_are_not_loose_on_each_other(case):
+    model = merge_model(report_of(SIDE_BY_SIDE[case]))
+    assert not [r for c in model.components for r in c.snap.get("loose_ends") or ()]
+    assert not _unjoined(model)
+
+
+def test_a_pipe_converging_on_another_s_side_is_still_a_loose_end():
+    """5 degrees off the other, its end touching its side: it ends on it (no fitting makes
+    that), its body 13 mm clear of the other 0.15 m back, so it does not run alongside."""
+    t = np.radians(5.0)
+    r = OD / 2
+    end = np.array([0.0, 2 * r, 0.0])
+    start = end + 1.5 * np.array([-np.cos(t), np.sin(t), 0.0])
+    pipes = [Pipe("P1", (-2, 0, 0), (2, 0, 0), OD), Pipe("P2", tuple(start), tuple(end), OD)]
+    model = merge_model(report_of(pipes))
+    (record,) = model.components[[c.id for c in model.components].index("P2")].snap["loose_ends"]
+    assert record["touches"] == "P1" and record["angle_deg"] == pytest.approx(5.0)
+    (f,) = _unjoined(model)
+    assert (f.code, f.objects) == ("AB304", ("P2", "P1"))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rules_builders import model, pipe
+from rules_builders import column, model, pipe
 
 from asbuilt.model import Bend, Component, Straight, Tee
 from asbuilt.primitives import Cuboid, Cylinder, Hull, Plane, Sphere
@@ -303,14 +303,16 @@ def test_the_joint_scale_grows_with_the_diameter():
     assert f.allowed == pytest.approx(od)
 
 
-def test_parallel_pipes_beside_each_other_keep_their_behaviour():
+def test_parallel_pipes_beside_each_other_are_a_volume_clash_not_a_duplicate():
     a = pipe("P1", [-1.5, 0, 1], [1.5, 0, 1], OD4)
     clear = pipe("P2", [-1.5, 0.2, 1], [1.5, 0.2, 1], OD4)
     assert not clashes(a, clear)
-    # axes 70 mm apart (more than a radius: not one axis) but the solids overlap over the whole
-    # length: neither end of either member is a joint, and the rule's verdict is not a duplicate
+    # axes 70 mm apart (more than a radius: not one axis) and the solids overlap over the whole
+    # length: neither end of either member is a joint (each end lies in the other only because
+    # its side does), so the overlap is a clash measured in volume, not a duplicate
     beside = pipe("P2", [-1.5, 0.07, 1], [1.5, 0.07, 1], OD4)
-    assert all("duplicate" not in f.message for f in clashes(a, beside))
+    (f,) = clashes(a, beside)
+    assert f.severity == "error" and f.unit == "m3" and "duplicate" not in f.message
 
 
 def test_different_sizes_on_one_axis_are_not_a_duplicate():
@@ -393,3 +395,196 @@ def test_an_insulated_pipe_clashes_at_its_cladding():
     (found,) = [f for f in check_model(model(a, lagged)) if f.slug == "clash"]
     assert found.severity == "error" and found.objects == ("P1", "P2")
     assert "(insulation included)" in found.message
+
+
+# Parallel pipes whose solids pass through each other (independent review 59, defect 2: an NPS 8
+# and an NPS 6 with axes 150 mm apart, radii summing to 193.7 mm, gave no clash but an AB304
+# weldolet suggestion; the same overlap crossing was an AB501 error). Each end of either lay in
+# the other's solid only because its side did, and "a member ending in another" was taken for a
+# connection. Outer radii from ASME B36.10M.
+R4, R6, R8, R12 = 0.05715, 0.08415, 0.10955, 0.1619
+
+
+def _lens_area(r1: float, r2: float, d: float) -> float:
+    """Area (m2) common to two circles of radii ``r1``, ``r2`` whose centres are ``d`` apart."""
+    a1 = r1**2 * np.arccos((d**2 + r1**2 - r2**2) / (2 * d * r1))
+    a2 = r2**2 * np.arccos((d**2 + r2**2 - r1**2) / (2 * d * r2))
+    kite = 0.5 * np.sqrt((-d + r1 + r2) * (d + r1 - r2) * (d - r1 + r2) * (d + r1 + r2))
+    return float(a1 + a2 - kite)
+
+
+def _tank(cid, radius, height):
+    """A vertical storage tank (a cylinder kept as one, not a pipe), base at the origin."""
+    from rules_builders import cylinder_fit
+
+    fit = cylinder_fit([0, 0, 0.5 * height], [0, 0, 1], radius, height)
+    return Component(id=cid, type="cylinder", geometry=fit.primitive, sources=(cid,), fit=fit)
+
+
+def _parallel_cases():
+    """(components, expected clash severity or None, closed-form overlap m3 or None)."""
+    big = pipe("P1", [5, -1.1, 1.5], [5, 1.1, 1.5], 2 * R8)
+    d = 0.15  # 43.7 mm of interpenetration
+    lens = _lens_area(R8, R6, d)
+    col = column("C1", [0, 0, 0], height=4.0, section=(0.35, 0.35))
+    riser_x = 0.175 + R6  # touching the column's face at x = 0.175
+    tilt = 2.2 * np.tan(np.radians(1.0))
+    return {
+        # clashes: the overlap runs along their length
+        "side-by-side": (
+            [big, pipe("P2", [5 + d, -1.1, 1.5], [5 + d, 1.1, 1.5], 2 * R6)],
+            "error",
+            lens * 2.2,
+        ),
+        "vertical-stack": (
+            [big, pipe("P2", [5, -1.1, 1.5 + d], [5, 1.1, 1.5 + d], 2 * R6)],
+            "error",
+            lens * 2.2,
+        ),
+        "staggered": (  # side by side over 1 m only, each end beyond the other's
+            [big, pipe("P2", [5 + d, 0.1, 1.5], [5 + d, 2.5, 1.5], 2 * R6)],
+            "error",
+            lens * 1.0,
+        ),
+        "one-axis-inside-the-other": (  # NPS 4's axis inside NPS 12's solid, walls crossing
+            [
+                pipe("P1", [5, -1.1, 1.5], [5, 1.1, 1.5], 2 * R12),
+                pipe("P2", [5.14, -1.1, 1.5], [5.14, 1.1, 1.5], 2 * R4),
+            ],
+            "error",
+            _lens_area(R12, R4, 0.14) * 2.2,
+        ),
+        "one-degree-apart": (
+            [big, pipe("P2", [5 + d + tilt / 2, -1.1, 1.5], [5 + d - tilt / 2, 1.1, 1.5], 2 * R6)],
+            "error",
+            None,
+        ),
+        "riser-30-mm-into-a-column": (
+            [col, pipe("P1", [riser_x - 0.03, 0, 0.5], [riser_x - 0.03, 0, 3.5], 2 * R6)],
+            "error",
+            None,
+        ),
+        # no clash: apart, touching, joined or nested
+        "1-mm-apart": (
+            [
+                big,
+                pipe(
+                    "P2", [5 + R8 + R6 + 0.001, -1.1, 1.5], [5 + R8 + R6 + 0.001, 1.1, 1.5], 2 * R6
+                ),
+            ],
+            None,
+            None,
+        ),
+        "touching": (  # no volume in common: touching, below min_volume
+            [big, pipe("P2", [5 + R8 + R6, -1.1, 1.5], [5 + R8 + R6, 1.1, 1.5], 2 * R6)],
+            None,
+            None,
+        ),
+        "riser-1-mm-off-a-column": (
+            [col, pipe("P1", [riser_x + 0.001, 0, 0.5], [riser_x + 0.001, 0, 3.5], 2 * R6)],
+            None,
+            None,
+        ),
+        "in-line-butt-weld": (
+            [big, pipe("P2", [5, 1.1, 1.5], [5, 3, 1.5], 2 * R8)],
+            None,
+            None,
+        ),
+        "in-line-butt-weld-offset-2-mm": (
+            [big, pipe("P2", [5.002, 1.1, 1.5], [5.002, 3, 1.5], 2 * R8)],
+            None,
+            None,
+        ),
+        "smaller-pipe-entering-a-larger-in-line": (  # 50 mm into its end, on its axis
+            [big, pipe("P2", [5, 1.05, 1.5], [5, 3, 1.5], 2 * R6)],
+            None,
+            None,
+        ),
+        "carrier-ending-in-a-casing": (  # nested: the casing's bore takes it
+            [big, pipe("P2", [5.01, 0.3, 1.5], [5.01, 3, 1.5], 2 * R4)],
+            None,
+            None,
+        ),
+        "nozzle-through-a-tank-head": (  # parallel to the tank's axis, within its section
+            [_tank("T1", 1.5, 4.0), pipe("N1", [0.8, 0, 3.95], [0.8, 0, 4.5], 2 * R4)],
+            None,
+            None,
+        ),
+    }
+
+
+PARALLEL = _parallel_cases()
+
+
+@pytest.mark.parametrize("case", list(PARALLEL))
+def test_parallel_members_clash_when_their_solids_overlap_along_them(case):
+    components, severity, truth = PARALLEL[case]
+    found = clashes(*components)
+    if severity is None:
+        assert not found, found[0].message
+        return
+    (f,) = found
+    assert (f.code, f.severity, f.unverifiable) == ("AB501", severity, False), f.message
+    assert f.unit == "m3" and "duplicate" not in f.message
+    if truth is not None:  # the lens of the two sections over the length they share
+        assert abs(f.measured - truth) < max(3 * f.stderr, 0.03 * truth), (f.measured, truth)
+
+
+def _square_branch(height: float, end_y: float = 0.0):
+    """An NPS 4 run along x at z = 1 and an NPS 4 stub along y ending at ``end_y``, its axis
+    ``height`` metres above the run's."""
+    run = pipe("P1", [-1, 0, 1], [1, 0, 1], OD4)
+    return run, pipe("P2", [0, -1, 1 + height], [0, end_y, 1 + height], OD4)
+
+
+ANGLED = {
+    # crossing pipes 20 mm apart (their axes): an error, as before
+    "crossing": ([*_square_branch(0.02, 1.0)], "error"),
+    # a square branch ending on the run's axis, its axis meeting the run's: a connection
+    "branch-ending-in-the-run": ([*_square_branch(0.0, 0.01)], None),
+    # a stub ending over the run, its axis 90 mm above the run's (radii sum 114.3 mm): its side,
+    # not its axis, cuts 24 mm into the run, so it does not end in it (was spared as one)
+    "stub-ending-beside-the-run": ([*_square_branch(0.09)], "error"),
+    # the same stub clear of the run by 1 mm
+    "stub-ending-1-mm-over-the-run": ([*_square_branch(OD4 + 0.001)], None),
+}
+
+
+@pytest.mark.parametrize("case", list(ANGLED))
+def test_members_at_an_angle_keep_their_verdicts(case):
+    components, severity = ANGLED[case]
+    found = clashes(*components)
+    assert [f.severity for f in found] == ([severity] if severity else []), [
+        f.message for f in found
+    ]
+
+
+def test_a_tee_with_its_three_pipes_and_a_parallel_pipe_beside_it():
+    """A tee joining three pipes at its ports is no clash; a pipe parallel to the header 1 mm
+    clear of it is none either; the same pipe 30 mm into the header is a clash with it."""
+    r, c = R6, 0.143  # NPS 6 equal tee, B16.9 C = M = 143 mm
+    tee = Component(
+        id="T1",
+        type="tee",
+        geometry=Tee([0, 0, 1], [-c, 0, 1], [c, 0, 1], [0, c, 1], r, r),
+    )
+    header = [pipe("P1", [-2, 0, 1], [-c, 0, 1], 2 * r), pipe("P2", [c, 0, 1], [2, 0, 1], 2 * r)]
+    branch = pipe("P3", [0, c, 1], [0, 2, 1], 2 * r)
+    assert not clashes(*header, tee, branch)
+    beside = 2 * r + 0.001
+    clear = pipe("P4", [-2, -beside, 1], [2, -beside, 1], 2 * r)
+    assert not clashes(*header, tee, branch, clear)
+    into = pipe("P4", [-2, -beside + 0.031, 1], [2, -beside + 0.031, 1], 2 * r)
+    found = clashes(*header, tee, branch, into)
+    assert {f.objects for f in found} >= {("P1", "P4"), ("P2", "P4")}
+    assert all(f.severity == "error" for f in found)
+
+
+def test_parallel_pipes_clash_at_their_insulation():
+    """Clear of each other by 20 mm when bare; 50 mm of lagging on one takes up 30 mm of it."""
+    a = pipe("P1", [-1.5, 0, 1], [1.5, 0, 1], OD4)
+    b = pipe("P2", [-1.5, OD4 + 0.02, 1], [1.5, OD4 + 0.02, 1], OD4)
+    assert not clashes(a, b)
+    (f,) = clashes(a, dataclasses.replace(b, insulation=0.05))
+    assert f.severity == "error" and "(insulation included)" in f.message
+    assert not clashes(a, dataclasses.replace(b, insulation=0.019))
