@@ -73,6 +73,13 @@ def _findings(model, **options):
     ]
 
 
+def _slugs(model) -> list:
+    """The slugs of ``model``'s findings but AB407: P2's synthetic shots (:func:`_crossing_pipes`)
+    lie on its sides facing +-x, which the station at y < 0 looks at end-on, so its fit ignores
+    the station and says so, as it should; not what these tests are about."""
+    return [f[1] for f in _findings(model) if f[1] != "viewpoint-ignored"]
+
+
 def _crossing_pipes(links):
     """Two NPS 4 pipes crossing at (1, 0, 1), linked by the operator or not."""
     return _scan(
@@ -97,7 +104,7 @@ def test_links_reach_the_rules_from_the_document(merge):
     assert _findings(again) == _findings(model)
     # the link is what decides it: the same scan unlinked clashes
     unlinked = build_model(_crossing_pipes([]), merge=merge)
-    assert [f[1] for f in _findings(unlinked)] == ["clash"]
+    assert _slugs(unlinked) == ["clash"]
 
 
 def test_sensor_sigma_reaches_poor_fit_from_the_document():
@@ -256,7 +263,7 @@ def test_older_documents_load_as_before():
     for old in ({k: v for k, v in document.items() if k != "scan"}, {**document, "scan": None}):
         again = model_from_document(old)
         assert again.scan is None
-        assert [f[1] for f in _findings(again)] == ["clash"]
+        assert _slugs(again) == ["clash"]
 
 
 @pytest.mark.parametrize(
