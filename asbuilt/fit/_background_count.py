@@ -56,7 +56,8 @@ def _behind_cylinder(cylinder, points: np.ndarray, view: np.ndarray, cutoff: flo
     start = view - cylinder.center
     along = beams @ axis
     start_along = float(start @ axis)
-    square = np.maximum(1.0 - along * along, 1e-12)  # a beam along the axis: nearest at start
+    # A beam parallel to the axis has no nearest point; the floor makes its ``at`` 0 (the station).
+    square = np.maximum(1.0 - along * along, 1e-12)
     at = (along * start_along - beams @ start) / square  # metres along each beam
     nearest = start + at[:, None] * beams
     axial = nearest @ axis

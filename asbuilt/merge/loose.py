@@ -1,21 +1,22 @@
 """Pipe ends left loose at a fitting or another pipe: found after the fittings are built.
 
 Merging joins each pipe end to at most one other (:mod:`.contiguity`): a fourth pipe at a tee
-that does not meet it as a cross (:mod:`.crosses`: outlets off one line or of two sizes), a pipe ending on another's side at
-an angle no tee makes, or near a pipe end another joint already took, is left unjoined. A
-linked pair gets a note from contiguity; an unlinked one was silent.
+that does not meet it as a cross (:mod:`.crosses`: outlets off one line or of two sizes), a pipe
+ending on another's side at an angle no tee makes, or near a pipe end another joint already
+took, is left unjoined. A linked pair gets a note from contiguity; an unlinked one was silent.
 
 :func:`loose_ends` finds every open pipe end (no other component's port within
-:data:`PORT_TOUCH`) whose pipe, continued straight on by ``reach`` (``joint_distance``) plus
-its shot spacing (the last shot may be that far short of the real end, as contiguity allows),
-would run into another pipe or fitting: the swept pipe and the other component's body (capsules
-around their centrelines: a tee's run and outlet, an elbow's arc in chords, a reducer at its
-larger radius) come within the sum of their outer radii. A pipe that passes above or beside the
-other, or runs alongside it, does not: nor one lying side by side with it, touching it or fitted
-into it along its length (within :data:`IN_LINE_DEG`, off its line, still within the sum of
-their radii ``reach`` back from the end: the clash rule's, not a branch). Pipes merging joined (a lateral's three pipes, a fitting it
-could not build) are not loose to each other; a pair contiguity's notes already name (a link it
-could not make) is recorded with ``noted`` true, so the rules report it once.
+:data:`PORT_TOUCH`) whose pipe, continued straight on by ``reach`` (``joint_distance``) plus its
+shot spacing (the last shot may be that far short of the real end, as contiguity allows), would
+run into another pipe or fitting: the swept pipe and the other component's body (capsules around
+their centrelines: a tee's run and outlet, an elbow's arc in chords, a reducer at its larger
+radius) come within the sum of their outer radii. A pipe that passes above or beside the other,
+or runs alongside it, does not: nor one lying side by side with it, touching it or fitted into
+it along its length (within :data:`IN_LINE_DEG`, off its line, still within the sum of their
+radii ``reach`` back from the end: the clash rule's, not a branch). Pipes merging joined (a
+lateral's three pipes, a fitting it could not build) are not loose to each other; a pair
+contiguity's notes already name (a link it could not make) is recorded with ``noted`` true, so
+the rules report it once.
 
 An open end that runs into nothing within that reach may still point at another pipe's open end
 further on: the two axes meet ahead of both ends (an elbow the scan did not reach: one pipe's
