@@ -28,6 +28,7 @@ from asbuilt.errors import FitError, located
 from asbuilt.fit._background_count import with_background_count
 from asbuilt.fit._common import extent_of, radius_text, validate_points
 from asbuilt.fit._edge_brackets import edge_brackets, widen_pinned
+from asbuilt.fit._neighbour_shots import without_neighbour_shots
 from asbuilt.fit._noise_levels import _fit_with_noise
 from asbuilt.fit._small_linalg import eigvalsh, singular_values
 from asbuilt.fit._stations import fuse_station_views
@@ -565,7 +566,18 @@ def fit(
         raise NothingFittedError(failures)
     report = FitReport(scan=scan, fits=tuple(fits), failures=tuple(failures))
     # Linked objects that are one pipe seen from two stations are fitted as one.
-    return fuse_station_views(report, tolerances)
+    report = fuse_station_views(report, tolerances)
+
+    def refit(obj: ScanObject) -> ObjectFit:
+        try:
+            return fit_object(
+                obj, sigma=sigma, tolerances=tolerances, viewpoint=obj.viewpoint(scan.sensor)
+            )
+        except FitError as exc:
+            raise FitError(exc.message, source=scan.source, where=exc.where) from exc
+
+    # A pipe fitted through a raster line of its neighbour's shots is fitted again without it.
+    return without_neighbour_shots(report, refit, tolerances)
 
 
 class NothingFittedError(FitError):

@@ -19,6 +19,7 @@ __all__ = [
     "BACKGROUND_PLANE_SHOTS",
     "BACKGROUND_SHOTS",
     "BACKGROUND_KEYS",
+    "NEIGHBOUR_SHOTS",
 ]
 
 #: ``FitResult.diagnostics`` key: the count of shots a fit left out on background planes (a
@@ -35,6 +36,11 @@ BACKGROUND_SHOTS = "background_shots"
 
 #: Every diagnostics key counting shots told apart as background (disjoint: one rescue each).
 BACKGROUND_KEYS = (BACKGROUND_PLANE_SHOTS, BACKGROUND_SHOTS)
+
+#: ``FitResult.diagnostics`` key: the count of a cylinder's shots left out as lying on another
+#: object's surface, which that object's own shots fit (:mod:`asbuilt.fit._neighbour_shots`).
+#: Read by the rules only (the ``outliers`` rule does not count these shots).
+NEIGHBOUR_SHOTS = "neighbour_shots"
 
 
 @dataclass(frozen=True, eq=False)

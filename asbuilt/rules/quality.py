@@ -20,7 +20,7 @@ from asbuilt.fit.cylinder import (
     OTHER_SHOTS,
     VIEW_IGNORED,
 )
-from asbuilt.fit.result import BACKGROUND_KEYS
+from asbuilt.fit.result import BACKGROUND_KEYS, NEIGHBOUR_SHOTS
 
 from ._context import Context, centre_of, mm, stderr_value, verdict
 
@@ -211,7 +211,11 @@ def check_outliers(ctx: Context) -> None:
         # wall drew this warning on every good fit).
         behind = sum(_count(fit.diagnostics.get(key)) for key in BACKGROUND_KEYS)
         on_background = min(behind, max(rejected - on_end - on_other, 0))
-        unexplained = rejected - on_end - on_other - on_background
+        # ... and those on a neighbour's surface, which its own shots fit, left out before
+        # the pipe was fitted again.
+        neighbour = _count(fit.diagnostics.get(NEIGHBOUR_SHOTS))
+        on_neighbour = min(neighbour, max(rejected - on_end - on_other - on_background, 0))
+        unexplained = rejected - on_end - on_other - on_background - on_neighbour
         share = unexplained / n
         se = float(np.sqrt(max(share * (1 - share), 1.0 / n) / n))
         if share <= allowed:
@@ -227,6 +231,8 @@ def check_outliers(ctx: Context) -> None:
             explained.append(f"{on_other} more fit another cylinder")
         if on_background:
             explained.append(f"{on_background} more were told apart as the background behind it")
+        if on_neighbour:
+            explained.append(f"{on_neighbour} more lie on a neighbour's surface")
         said = "; ".join(explained)
         ctx.emit(
             slug,

@@ -166,6 +166,24 @@ def test_shots_told_apart_as_the_background_are_not_counted_as_outliers(key, beh
     assert [f.message[: len(expected)] for f in found] == ([expected] if expected else [])
 
 
+@pytest.mark.parametrize(
+    ("count", "expected"),
+    [
+        (5, ""),  # 10 rejected, 5 on a neighbour: 5 of 25 (20%) is within the share
+        (3, "7 of 25 points (28%) were rejected as outliers (3 more lie on a neighbour's surface)"),
+        (40, ""),  # a count above the rejected shots counts them all, no more
+    ],
+)
+def test_shots_left_out_on_a_neighbours_surface_are_not_counted_as_outliers(count, expected):
+    """A pipe fitted again without the shots of its neighbour's surface its window took in
+    (``diagnostics["neighbour_shots"]``): those shots are the neighbour's, not outliers."""
+    comp = pipe("P1", [0, 0, 1], [2, 0, 1], 0.1143, n=25, rejected=10)
+    diagnostics = {**comp.fit.diagnostics, "neighbour_shots": float(count)}
+    fit = dataclasses.replace(comp.fit, diagnostics=diagnostics)
+    found = only(dataclasses.replace(comp, fit=fit), "outliers")
+    assert [f.message for f in found] == ([expected] if expected else [])
+
+
 def test_components_without_fits_are_skipped():
     fit = cuboid_fit([0, 0, 1], [0, 0, 1], (0.3, 0.3, 2.0), n=5)
     comp = Component(id="X", type="cuboid", geometry=fit.primitive)
