@@ -37,6 +37,7 @@ import numpy as np
 from asbuilt.errors import FitError
 from asbuilt.fit._common import extent_of, radius_text
 from asbuilt.fit._cuboid_planes import _plane_through
+from asbuilt.fit._curvature import curvature_measured
 from asbuilt.fit._cylinder_background import (
     BACKGROUND_PLANE_SHOTS,
     DETERMINED_RADIUS,
@@ -337,6 +338,13 @@ def fit_past_planes(
             or first.primitive.radius > PLANE_LIKE * extent_of(points[first.inliers])
         )
         and np.count_nonzero(first_plane & first.inliers) > 0.5 * np.count_nonzero(first.inliers)
+        # Nearly a plane in the shots too, not only by its size: a tank seen over a fifth of
+        # its width by three raster columns is a few times wider than its shots, and the plane
+        # through its outer columns has the middle one in front of it; its curvature (a
+        # sagitta of 25 mm at 2 mm noise) was refused as a floor fitted as a pipe.
+        and not curvature_measured(
+            points[first.inliers], first.residuals[first.inliers], first.sigma, 5
+        )
     ):
         shown = radius_text(first.primitive.radius)
         raise BackgroundPlaneFit(PLANE_NOT_PIPE.format(radius=shown))
