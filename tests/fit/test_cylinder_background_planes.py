@@ -15,13 +15,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from sim_tanks import partial_tank
+from sim_tanks import partial_tank, tank_before_wall
 
 from asbuilt.errors import FitError
 from asbuilt.fit import fit_points
 from asbuilt.fit._cylinder_planes import (
     BACKGROUND_PLANE_SHOTS,
     BackgroundPlaneFit,
+    _background,
     fit_past_planes,
     in_doubt,
 )
@@ -247,7 +248,27 @@ def test_a_plane_refused_at_the_sensor_sigma_is_not_retried_without_it():
         fit_points("cylinder", points, sigma=SIGMA, viewpoint=station)
 
 
-# --- A tank seen over a narrow arc (asbuilt.sim scans: tests/fit/sim_tanks.py) ---
+# --- Planes no background surface lies on (asbuilt.sim scans: tests/fit/sim_tanks.py) ---
+
+
+def test_a_plane_through_the_station_is_no_background():
+    # Ten shots in front of a plane and none behind, but the station lies on the plane: one
+    # raster line's plane, seen edge-on, which hides nothing.
+    heights = np.concatenate([np.zeros(6), np.full(10, 0.5)])[:, None]
+    assert _background(heights, np.array([1.0]), 0.006)[0][0]
+    assert not _background(heights, np.array([0.001]), 0.006)[0][0]
+
+
+@pytest.mark.parametrize("seed", [122, 183, 249])
+def test_a_tank_seen_over_its_lid_keeps_its_three_columns(seed):
+    # A tank scanned by three raster columns from a station above its top, a wall behind. The
+    # plane of one column (its shots, the lid's and the wall's above it, all in one plane
+    # through the station) or of one column and a lid shot was left out as "a wall behind",
+    # and the two other columns fitted r 0.87-1.3 m for 2.65-2.9 m to 1-20 mm.
+    points, station, truth = tank_before_wall(seed, margin=0.5, heights=(1.0, 8.0))
+    result = fit_points("cylinder", points, sigma=SIGMA, viewpoint=station)
+    assert result.primitive.radius == pytest.approx(truth["radius"], rel=0.01)
+    assert BACKGROUND_PLANE_SHOTS not in result.diagnostics
 
 
 @pytest.mark.parametrize("seed", [67, 72, 165])
