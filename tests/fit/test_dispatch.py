@@ -573,7 +573,7 @@ def test_an_end_on_drum_fitted_as_a_huge_cylinder_is_refused_naming_its_end(seed
     assert "a drum's side from a station beside it" in str(caught.value)
 
 
-@pytest.mark.parametrize("seed", [112, 116])
+@pytest.mark.parametrize("seed", [112, 116, 209])
 def test_end_on_drums_seen_enough_from_the_side_are_fitted(seed):
     # Enough of the side is seen among the end's shots: the drum is fitted.
     points, station, truth = end_on_drum(seed)
