@@ -22,15 +22,18 @@ from collections.abc import Callable
 from importlib import import_module
 
 import numpy as np
-from scipy.special import chdtri
 
 from asbuilt.errors import FitError, located
 from asbuilt.fit._background_count import with_background_count
 from asbuilt.fit._common import extent_of, radius_text, validate_points
+from asbuilt.fit._curvature import (  # noqa: F401 (CURVATURE_TAIL: asbuilt.fit's, documented)
+    CURVATURE_TAIL,
+    curvature_measured,
+)
 from asbuilt.fit._edge_brackets import edge_brackets, widen_pinned
 from asbuilt.fit._neighbour_shots import without_neighbour_shots
 from asbuilt.fit._noise_levels import _fit_with_noise
-from asbuilt.fit._small_linalg import eigvalsh, singular_values
+from asbuilt.fit._small_linalg import eigvalsh
 from asbuilt.fit._stations import fuse_station_views
 from asbuilt.fit._window import beyond_window, open_ends
 from asbuilt.fit.result import FitFailure, FitReport, FitResult, ObjectFit
@@ -354,14 +357,6 @@ REFUSED_RELATIVE = 1.0
 #: :func:`_refuse_unknown_radius` compares.
 _PLANE_LIKE_RADIUS = 3.0
 
-#: Upper tail probability of the chi-square test that a plane-like fit's curvature must pass
-#: (:func:`_refuse_unknown_radius`): on a flat wall the curvature's extra parameters (one for a
-#: sphere, two for a cylinder) lower the sum of squares below the plane's by chi-square
-#: sigma^2 by chance alone, more than one sigma^2 in 32% (sphere) and 61% (cylinder) of walls,
-#: which let kilometre-wide solids through; at 1e-3 one wall in a thousand. A real wide curve
-#: clears it by far: a 10 m tank seen over 1 m lies 12 mm off its chord's plane.
-CURVATURE_TAIL = 1e-3
-
 
 def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
     """Raise FitError when the fit's radius is not known to within its own size
@@ -375,8 +370,9 @@ def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
     ``s_k / k`` is the radius's relative standard error. On a flat patch the Gauss-Newton
     search can stop at a radius of kilometres whose local standard error looks small (a 3 m
     wall fitted r 11.5 km +-19%, with a larger sum of squares than its plane). The decrease
-    must pass a chi-square test with the curvature's extra parameters as degrees of freedom at
-    tail ``CURVATURE_TAIL`` (a likelihood-ratio test of the plane against the curved surface).
+    must pass the tests of :func:`asbuilt.fit._curvature.curvature_measured` (chi-square at
+    the noise level, F against the shots' scatter when wider, at tail ``CURVATURE_TAIL``, and
+    again without the shots farthest off the plane).
     """
     radius = getattr(result.primitive, "radius", None)
     stderr = (result.stderr or {}).get("radius")
@@ -393,11 +389,8 @@ def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
         across = getattr(result.primitive, "axis", None)  # a cylinder's; None for a sphere
         if radius <= _PLANE_LIKE_RADIUS * extent_of(kept, across):
             return  # curved over the points: their plane is no rival
-        centred = kept - kept.mean(axis=0)
-        plane_sse = float(singular_values(centred)[-1] ** 2)
-        fit_sse = float(np.sum(result.residuals[result.inliers] ** 2))
-        extra = (len(result.covariance) if result.covariance is not None else 4) - 3
-        if plane_sse - fit_sse >= result.sigma**2 * chdtri(max(extra, 1), CURVATURE_TAIL):
+        params = len(result.covariance) if result.covariance is not None else 4
+        if curvature_measured(kept, result.residuals[result.inliers], result.sigma, params):
             return
         why = "a plane fits the points about as closely"
     reach = (result.diagnostics or {}).get("radius_reach")
@@ -405,7 +398,9 @@ def _refuse_unknown_radius(result: FitResult, points: np.ndarray) -> None:
         f"they lie on two lines along it, which radii up to {reach * 1000:.0f} mm fit as well."
         " Take a third raster line across it"
         if reach is not None
-        else "they lie on a nearly flat strip or patch of it. Shoot across more of its surface"
+        else "they lie on a nearly flat strip or patch of it (a wall, or the flat or dished end"
+        " of a drum or tank seen end-on, not its side). Shoot across more of its surface (a"
+        " drum's side from a station beside it)"
     )
     raise FitError(
         f"These points do not determine the {result.kind}'s radius (best fit r {best}, {why}): "

@@ -16,6 +16,7 @@ from asbuilt.fit._common import column_medians, quick_median
 from asbuilt.fit._cylinder_model import MODEL, angles_about
 from asbuilt.fit._cylinder_starts import POLISH_BELOW, line_axis, polish_axes
 from asbuilt.fit._robust import RobustFit, keep_count, settled_fit
+from asbuilt.fit._silhouette import raster_grid
 from asbuilt.fit._visibility import (
     cylinder_beam_excess,
     edge_on_degrees,
@@ -44,6 +45,8 @@ __all__ = [
     "edge_on",
     "ONE_STATION_DEG",
     "one_station_could_see",
+    "RASTER_SHARE",
+    "shot_from",
     "unseen",
     "unhidden_starts",
     "doubtful",
@@ -290,6 +293,28 @@ def one_station_could_see(robust: RobustFit, points: np.ndarray) -> bool:
     return one_side_could_see(angles, 1.0 - UNSEEN_FRACTION, ONE_STATION_DEG)
 
 
+#: Share of the shots whose directions from a station must fall on one pan-tilt raster's
+#: columns and rows for the shots to be taken as shot from it (:func:`shot_from`): a raster's
+#: own shots all do, edge outliers included (their directions are still the raster's).
+RASTER_SHARE = 0.9
+
+
+def shot_from(points: np.ndarray, view) -> bool:
+    """Whether the shots ``points`` (n, 3) metres were shot from ``view`` (3,) metres: seen
+    from it, ``RASTER_SHARE`` of their directions fall on evenly spaced pan columns and tilt
+    rows (:func:`asbuilt.fit._silhouette.raster_grid`).
+
+    A pan-tilt range finder records each point along its nominal angles, so from the station
+    that shot them the directions line up on the raster's lines whatever the ranges, and from
+    anywhere else (another frame, the far side, several set-ups merged) they do not. A fit
+    that would ignore such a station is wrong, not the station: three raster columns over a
+    tank, one of them past its silhouette on the wall behind, fit a circle exactly with that
+    column on its far side (r 1.5-2 times the tank's to a millimetre, "the viewpoint was
+    ignored")."""
+    grid = raster_grid(points, np.asarray(view, dtype=np.float64))
+    return grid is not None and np.count_nonzero(grid[2]) >= RASTER_SHARE * len(points)
+
+
 def unseen(robust: RobustFit, points, view) -> bool:
     """Whether the viewpoint cannot be where the shots came from: more than ``UNSEEN_FRACTION``
     of the best fit's inliers lie beyond its pipe along their beams by more than a tenth of its
@@ -308,14 +333,17 @@ def unseen(robust: RobustFit, points, view) -> bool:
 THROUGH_FRACTION = 0.5
 
 
-def seen_through(robust: RobustFit, points: np.ndarray, view, cutoff: float) -> np.ndarray:
+def seen_through(
+    robust: RobustFit, points: np.ndarray, view, cutoff: float, fraction: float = THROUGH_FRACTION
+) -> np.ndarray:
     """The fit's inliers, shape (n,) bool, whose beams from ``view`` (3,) metres ran through
-    the middle of its pipe (within ``THROUGH_FRACTION`` of the radius of its axis) and end
-    beyond the middle of their chord by more than ``cutoff`` metres.
+    the middle of its pipe (within ``fraction`` of the radius of its axis) and end beyond the
+    middle of their chord by more than ``cutoff`` metres.
 
     Such a shot contradicts the fit that takes it as an inlier: the pipe would have stopped
     its beam. A wide circle through a thin pipe's front shots and the wall behind it does this
     (an NPS 2 line 8 m away fitted r 612 mm with 3 of its 9 inliers behind its front).
+    ``robust``: anything with the fit's ``state`` (axis, centre, radius) and ``inliers``.
     """
     axis, center, radius = robust.state
     view = np.asarray(view, dtype=np.float64)
@@ -331,7 +359,7 @@ def seen_through(robust: RobustFit, points: np.ndarray, view, cutoff: float) -> 
     # most fits' shots are settled without the chord.
     closest = start_across @ start_across - crossing * crossing / safe
     deep = robust.inliers & (square > 1e-24) & (-crossing < safe)
-    deep &= closest < (THROUGH_FRACTION * radius) ** 2
+    deep &= closest < (fraction * radius) ** 2
     if deep.any():
         chord = cylinder_beam_excess(axis, center, radius, points[deep], view)
         deep[deep] = chord > 2.0 * cutoff

@@ -296,7 +296,12 @@ def finished(robust, scene: Scene, ignored_view, starts, reconsider) -> FitResul
         and on_two_raster_lines(kept, view)
     )
     two_lines = lines_along or lines_over
-    reach = radius_reach(kept, weights, axis, center, radius, walk_noise) if two_lines else radius
+    # Unit weights: the incidence weights were fitted at this fit's own incidences, and a
+    # line it holds at exact grazing (its shots along their beams, tangent to it) shows no
+    # residual and so weighs most, pinning this very radius (three tank columns, the grazing
+    # one taken as a tangent: r 1.59 m +-22 mm for 1.95).
+    unit = np.ones(len(kept))
+    reach = radius_reach(kept, unit, axis, center, radius, walk_noise) if two_lines else radius
     if reach > radius:
         # Two raster lines along the pipe bound its radius only from below
         # (asbuilt.fit._cylinder_two_lines): the radii the shots accept, and the centre that

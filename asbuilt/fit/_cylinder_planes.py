@@ -36,7 +36,9 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit._common import extent_of, radius_text
-from asbuilt.fit._cuboid_planes import _plane_through
+from asbuilt.fit._cuboid_lone import one_line_and_lone_shot
+from asbuilt.fit._cuboid_planes import LINE_CUTOFFS, _plane_through
+from asbuilt.fit._curvature import curvature_measured
 from asbuilt.fit._cylinder_background import (
     BACKGROUND_PLANE_SHOTS,
     DETERMINED_RADIUS,
@@ -122,25 +124,37 @@ def _same_set(one: np.ndarray, other: np.ndarray) -> bool:
     return np.count_nonzero(one & other) > SAME_SHARE * np.count_nonzero(one | other)
 
 
-def _heights(points: np.ndarray, view: np.ndarray, samples: int, rng) -> np.ndarray:
+def _heights(points: np.ndarray, view: np.ndarray, samples: int, rng):
     """Each of ``points``' (n, 3) metres height above the planes through ``samples`` random
     triples of them (RANSAC hypotheses, Fischler & Bolles 1981; degenerate triples dropped),
-    positive on the side of ``view`` (3,) metres: shape (n, planes), metres."""
+    positive on the side of ``view`` (3,) metres: shape (n, planes), metres; and the height of
+    ``view`` above each plane, shape (planes,) metres."""
     normals, offsets = random_planes(points, samples, rng)
     heights = points @ normals.T - offsets
-    return heights * np.where(normals @ view > offsets, 1.0, -1.0)
+    station = normals @ view - offsets
+    return heights * np.where(station > 0.0, 1.0, -1.0), np.abs(station)
 
 
-def _background(heights: np.ndarray, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
+def _background(heights: np.ndarray, station, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
     """For the planes of ``heights`` (n, planes) metres (:func:`_heights`): which of them have
     ``FRONT_SHOTS`` or more shots more than ``FRONT_CUTOFFS`` times ``cutoff`` metres in front
-    of them and few behind (planes,) bool, and how many shots lie on each (planes,)."""
+    of them and few behind, and the station (heights ``station`` (planes,) metres above them)
+    off them by more than that too, (planes,) bool; and how many shots lie on each (planes,).
+
+    A plane through the station is seen edge-on: it holds its shots' beams, so an opaque
+    surface there returns none of them and hides nothing, and "in front of it" means nothing
+    from the station. One raster line's shots lie on such a plane whatever they hit (a
+    vertical tank's raster column, its lid and the wall above it), with the range noise in the
+    plane; taken for a wall with the tank in front of it, it left one of three columns out and
+    the two others fitted a pipe of 0.4 times the tank's radius to a millimetre.
+    """
     n = len(heights)
     front = np.count_nonzero(heights > FRONT_CUTOFFS * cutoff, axis=0)
     behind = np.count_nonzero(heights < -FRONT_CUTOFFS * cutoff, axis=0)
     on = np.count_nonzero(np.abs(heights) <= cutoff, axis=0)
     few = max(BEHIND_SHOTS, BEHIND_SHARE * n)
-    return (front >= FRONT_SHOTS) & (behind <= few), on
+    seen = np.asarray(station) > FRONT_CUTOFFS * cutoff
+    return (front >= FRONT_SHOTS) & (behind <= few) & seen, on
 
 
 def _background_plane(points, view, cutoff, left, rng):
@@ -156,8 +170,8 @@ def _background_plane(points, view, cutoff, left, rng):
     if len(index) < PLANE_SHOTS + FRONT_SHOTS:
         return None
     chosen = points[index]
-    heights = _heights(chosen, view, PLANE_SAMPLES, rng)
-    valid, on = _background(heights, cutoff)
+    heights, station = _heights(chosen, view, PLANE_SAMPLES, rng)
+    valid, on = _background(heights, station, cutoff)
     order = np.flatnonzero(valid & (on >= PLANE_SHOTS))
     seen: list[np.ndarray] = []
     for k in order[np.argsort(-on[order], kind="stable")][:CANDIDATES]:
@@ -170,9 +184,16 @@ def _background_plane(points, view, cutoff, left, rng):
         if plane is None:
             continue
         normal, offset, members = plane
+        if one_line_and_lone_shot(chosen[members], LINE_CUTOFFS * cutoff):
+            # One raster line and a shot beside it: a plane through a line turns freely about
+            # it and the lone shot sets that turn whatever it hit, so the plane measures no
+            # surface (a tank's raster column and one lid shot, taken for a wall with the
+            # tank's other columns in front of it, left a pipe of a third of its radius).
+            continue
         # The refined plane must still have the shots in front and few behind.
-        height = (chosen @ normal - offset) * (1.0 if normal @ view > offset else -1.0)
-        if _background(height[:, None], cutoff)[0][0]:
+        station = float(normal @ view - offset)
+        height = (chosen @ normal - offset) * (1.0 if station > 0.0 else -1.0)
+        if _background(height[:, None], abs(station), cutoff)[0][0]:
             found = np.zeros(len(points), dtype=bool)
             found[index[members]] = True
             return found
@@ -337,6 +358,13 @@ def fit_past_planes(
             or first.primitive.radius > PLANE_LIKE * extent_of(points[first.inliers])
         )
         and np.count_nonzero(first_plane & first.inliers) > 0.5 * np.count_nonzero(first.inliers)
+        # Nearly a plane in the shots too, not only by its size: a tank seen over a fifth of
+        # its width by three raster columns is a few times wider than its shots, and the plane
+        # through its outer columns has the middle one in front of it; its curvature (a
+        # sagitta of 25 mm at 2 mm noise) was refused as a floor fitted as a pipe.
+        and not curvature_measured(
+            points[first.inliers], first.residuals[first.inliers], first.sigma, 5
+        )
     ):
         shown = radius_text(first.primitive.radius)
         raise BackgroundPlaneFit(PLANE_NOT_PIPE.format(radius=shown))

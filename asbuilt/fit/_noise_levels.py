@@ -14,6 +14,7 @@ from asbuilt.fit._common import diagonal_extent, quick_median
 from asbuilt.fit._cuboid_inside import ShotsInside
 from asbuilt.fit._cuboid_lone import OneLineFace
 from asbuilt.fit._cuboid_sparse import AmbiguousFrame
+from asbuilt.fit._cylinder_far_side import FarSideFit
 from asbuilt.fit._cylinder_open_space import OpenSpaceFit
 from asbuilt.fit._cylinder_planes import BACKGROUND_PLANE_SHOTS, BackgroundPlaneFit
 from asbuilt.fit.result import FitResult
@@ -54,7 +55,7 @@ def _fit_with_noise(
     sigma = float(sigma)
     try:
         result = function(np.array(points), sigma=sigma, tolerances=tolerances, **options)
-    except (AmbiguousFrame, BackgroundPlaneFit, OneLineFace, ShotsInside):
+    except (AmbiguousFrame, BackgroundPlaneFit, FarSideFit, OneLineFace, ShotsInside):
         # Shots that fit frames far apart as well at the sensor's noise: a lower level found
         # without it would only make one frame look settled. A plane-like cylinder on a wall
         # or floor, a box face on one raster line, shots inside the box: the shots' scatter is

@@ -80,6 +80,7 @@ from asbuilt.fit._cylinder_checks import (
     one_station_could_see,
     robust_extent,
     same_basin,
+    shot_from,
     unhidden_starts,
     unseen,
 )
@@ -89,6 +90,7 @@ from asbuilt.fit._cylinder_end_plane import (
     fit_without_end_plane,
     worth_a_look,
 )
+from asbuilt.fit._cylinder_far_side import without_far_side
 from asbuilt.fit._cylinder_finish import (
     METHOD,
     VIEW_IGNORED,
@@ -136,6 +138,7 @@ from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
 
 __all__ = [
     "END_PLANE_SHOTS",
+    "ON_RASTER",
     "VIEW_IGNORED",
     "OTHER_ANGLE",
     "OTHER_RADIUS",
@@ -296,6 +299,9 @@ def fit_cylinder(
     # (asbuilt.fit._cylinder_open_space). Read from the stated station even when the fit
     # ignored it: the shots' directions from a wrong one fall on no raster.
     result = apart_across_open_space(_subset_fit(stated), pts, stated, sigma, tolerances, result)
+    # Inliers on the pipe's far side from the station: a raster line past its silhouette that
+    # three lines' exact circle took in (asbuilt.fit._cylinder_far_side).
+    result = without_far_side(_subset_fit(view), result, pts, view, sigma, tolerances)
     return with_other_cylinder(_subset_fit(view), pts, view, sigma, tolerances, result)
 
 
@@ -452,6 +458,14 @@ VIEW_CONTRADICTED = (
     " wall, and no fit of that surface stands: ignoring the viewpoint would take the"
     " background for pipe. Check the scan's sensor position or the object's station; if"
     " they are right, rescan with more of the raster on the pipe."
+)
+
+
+#: Why a fit that would ignore the viewpoint is refused when the shots were shot from it
+#: (:func:`~asbuilt.fit._cylinder_checks.shot_from`).
+ON_RASTER = (
+    "yet their directions from it fall on a pan-tilt raster's columns and rows, so they were"
+    " shot from there"
 )
 
 
@@ -704,6 +718,9 @@ def _fit_and_proof(points, sigma, tolerances, viewpoint) -> tuple[FitResult, boo
             why = "could not have been seen from any one station either"
         elif rejected >= OVERRULE_REJECTED * len(local):
             why = f"rejects {rejected} of the {len(local)} shots, too many to overrule the station"
+        elif shot_from(local, view):
+            # Seen from the station the shots lie on a pan-tilt raster: they were shot from it.
+            why = f"hides some behind itself from the station, {ON_RASTER}"
         else:
             why = None
         if why is not None:

@@ -15,12 +15,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from sim_tanks import partial_tank, tank_before_wall
 
 from asbuilt.errors import FitError
 from asbuilt.fit import fit_points
 from asbuilt.fit._cylinder_planes import (
     BACKGROUND_PLANE_SHOTS,
     BackgroundPlaneFit,
+    _background,
     fit_past_planes,
     in_doubt,
 )
@@ -244,3 +246,38 @@ def test_a_plane_refused_at_the_sensor_sigma_is_not_retried_without_it():
         fit_cylinder(points, sigma=SIGMA, viewpoint=station)
     with pytest.raises(FitError):
         fit_points("cylinder", points, sigma=SIGMA, viewpoint=station)
+
+
+# --- Planes no background surface lies on (asbuilt.sim scans: tests/fit/sim_tanks.py) ---
+
+
+def test_a_plane_through_the_station_is_no_background():
+    # Ten shots in front of a plane and none behind, but the station lies on the plane: one
+    # raster line's plane, seen edge-on, which hides nothing.
+    heights = np.concatenate([np.zeros(6), np.full(10, 0.5)])[:, None]
+    assert _background(heights, np.array([1.0]), 0.006)[0][0]
+    assert not _background(heights, np.array([0.001]), 0.006)[0][0]
+
+
+@pytest.mark.parametrize("seed", [122, 183, 249])
+def test_a_tank_seen_over_its_lid_keeps_its_three_columns(seed):
+    # A tank scanned by three raster columns from a station above its top, a wall behind. The
+    # plane of one column (its shots, the lid's and the wall's above it, all in one plane
+    # through the station) or of one column and a lid shot was left out as "a wall behind",
+    # and the two other columns fitted r 0.87-1.3 m for 2.65-2.9 m to 1-20 mm.
+    points, station, truth = tank_before_wall(seed, margin=0.5, heights=(1.0, 8.0))
+    result = fit_points("cylinder", points, sigma=SIGMA, viewpoint=station)
+    assert result.primitive.radius == pytest.approx(truth["radius"], rel=0.01)
+    assert BACKGROUND_PLANE_SHOTS not in result.diagnostics
+
+
+@pytest.mark.parametrize("seed", [67, 72, 165])
+def test_a_clean_partial_tank_is_not_refused_as_a_floor(seed):
+    # Three or four raster columns over a fifth of a tank's width, nothing around it: the fit
+    # is a few times wider than its shots, and the plane through its outer columns has the
+    # middle one in front of it, so it was refused as a floor fitted as a pipe. Its curvature
+    # is measured (a sagitta of tens of millimetres at 2 mm noise).
+    points, station, truth = partial_tank(seed)
+    result = fit_points("cylinder", points, sigma=SIGMA, viewpoint=station)
+    error = result.primitive.radius - truth["radius"]
+    assert abs(error) <= 3.0 * result.stderr["radius"]
