@@ -34,7 +34,9 @@ fitted solid ``B`` (cylinder, cuboid, sphere) of the scan:
 (``diagnostics[NEIGHBOUR_SHOTS]``, which the ``outliers`` rule does not count), or, when the
 refit is refused, ``A`` is refused with the refit's reason and the neighbour named. The test
 runs again over the changed report (a refit pipe can be a clean neighbour in turn) for at most
-``ROUNDS`` rounds. Lengths in metres.
+``ROUNDS`` rounds. A pipe fused from two stations' views (:mod:`asbuilt.fit._stations`) is
+not fitted again: its shots were seen from two viewpoints, which one fit cannot take. Lengths
+in metres.
 """
 
 from __future__ import annotations
@@ -164,6 +166,8 @@ def _one_round(report: FitReport, refit, sigma, tolerances) -> FitReport | None:
     for a, item in enumerate(fits):
         if item.requested != "cylinder" or not isinstance(item.result.primitive, Cylinder):
             continue
+        if "fused_with" in item.object.extra:
+            continue  # two stations' views fitted as one: no one viewpoint to fit them again
         for b in sorted(leans_on[a]):
             if not leans_on[b] <= {a}:
                 continue

@@ -223,3 +223,22 @@ def test_a_refused_refit_is_a_failure_located_at_the_object():
     (failure,) = [f for f in report.failures if f.object.id == "R3"]
     assert isinstance(failure, FitFailure)
     assert str(failure.error).startswith("26_rack_2-4-6_D4.json: objects[2] (R3)")
+
+
+def test_a_pipe_fused_from_two_stations_is_not_fitted_again():
+    """Its shots were seen from two viewpoints, which one refit cannot take."""
+    own = _pipe_shots(0.0, 0.05715, [-40, -15, 15, 40], XS, seed=11)
+    theirs = _pipe_shots(0.3, 0.1095, [-60, -30, 0, 30, 60], XS, seed=12)
+    stray = _pipe_shots(0.3, 0.1095, [-75], XS, seed=13)
+    a = dataclasses.replace(_object("A", np.vstack([own, stray]), 0), extra={"fused_with": "A2"})
+    report = _report(a, _object("B", theirs, 1))
+    item = report.fits[0]
+    wrong = dataclasses.replace(item.result, inliers=np.ones(len(a.points), dtype=bool))
+    report = dataclasses.replace(
+        report, fits=(dataclasses.replace(item, result=wrong), report.fits[1])
+    )
+
+    def refit(obj):
+        raise AssertionError("a fused pipe was fitted again")
+
+    assert without_neighbour_shots(report, refit, DEFAULT_TOLERANCES) is report
