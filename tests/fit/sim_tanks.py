@@ -46,6 +46,23 @@ def _shots(scene: Scene, station: Station, pan, tilt, rng):
     return points, got.object_index[ok] == 0
 
 
+def _vertical_tank(rng, tall, heights):
+    """A vertical tank drawn from ``rng``: radius 1-3 m, its axis 5-15 m beyond its radius
+    from the station along a random bearing, ``tall`` (low, high) metres tall, the station
+    ``heights`` (low, high) metres up. Returns the radius, the distance, the bearing (radians)
+    and the unit line of sight (3,), the height, the :class:`Station` and the tank's
+    :class:`CylinderShape` (the draws in the order the scenes always made them)."""
+    radius = rng.uniform(1.0, 3.0)
+    distance = rng.uniform(5.0, 15.0) + radius
+    bearing = rng.uniform(-math.pi, math.pi)
+    los = np.array([math.cos(bearing), math.sin(bearing), 0.0])
+    height = rng.uniform(*tall)
+    station = _station(rng.uniform(*heights))
+    centre = distance * los
+    tank = CylinderShape(start=centre, end=centre + [0.0, 0.0, height], radius=radius)
+    return radius, distance, bearing, los, height, station, tank
+
+
 def tank_before_wall(seed: int, margin: float = 0.5, heights=(1.0, 8.0)):
     """A vertical tank (radius 1-3 m, 3-10 m tall, its axis 5-15 m beyond its radius from the
     station) with a wall 0.5-3 m behind it, square to the view, scanned by a raster of 3
@@ -53,14 +70,8 @@ def tank_before_wall(seed: int, margin: float = 0.5, heights=(1.0, 8.0)):
     0-1 raster step on each side (the operator's window); the station ``heights`` (low, high)
     metres above the tank's foot (above its top, it sees the lid)."""
     rng = np.random.default_rng(seed)
-    radius = rng.uniform(1.0, 3.0)
-    distance = rng.uniform(5.0, 15.0) + radius
-    bearing = rng.uniform(-math.pi, math.pi)
-    los = np.array([math.cos(bearing), math.sin(bearing), 0.0])
-    height = rng.uniform(3.0, 10.0)
-    station = _station(rng.uniform(*heights))
+    radius, distance, _, los, height, station, tank = _vertical_tank(rng, (3.0, 10.0), heights)
     centre = distance * los
-    tank = CylinderShape(start=centre, end=centre + [0.0, 0.0, height], radius=radius)
     wall = PlaneShape(point=centre + (radius + rng.uniform(0.5, 3.0)) * los, normal=-los)
     rows = int(rng.integers(8, 16))
     margins = rng.uniform(0.0, margin, size=4)
@@ -75,14 +86,9 @@ def partial_tank(seed: int):
     around it, scanned by 3-8 columns and 4-12 rows over 15-50% of its silhouette's width and
     part of its height: every shot on the tank, over a narrow arc."""
     rng = np.random.default_rng(seed)
-    radius = rng.uniform(1.0, 3.0)
-    distance = rng.uniform(5.0, 15.0) + radius
-    bearing = rng.uniform(-math.pi, math.pi)
-    los = np.array([math.cos(bearing), math.sin(bearing), 0.0])
-    height = rng.uniform(4.0, 12.0)
-    station = _station(rng.uniform(1.0, 3.0))
-    centre = distance * los
-    tank = CylinderShape(start=centre, end=centre + [0.0, 0.0, height], radius=radius)
+    radius, distance, bearing, _, height, station, tank = _vertical_tank(
+        rng, (4.0, 12.0), (1.0, 3.0)
+    )
     half = math.asin(radius / distance)
     width = 2.0 * half * rng.uniform(0.15, 0.5)
     pan0 = bearing + rng.uniform(-half, half - width) + 0.5 * width
