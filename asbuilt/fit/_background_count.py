@@ -15,6 +15,7 @@ import dataclasses
 
 import numpy as np
 
+from asbuilt.fit._common import fit_cutoff
 from asbuilt.fit._cuboid_foreground import behind as behind_box
 from asbuilt.fit._sphere_background import behind as behind_sphere
 from asbuilt.fit.result import BACKGROUND_PLANE_SHOTS, BACKGROUND_SHOTS, FitResult
@@ -81,8 +82,7 @@ def with_background_count(
     """
     if view is None or result.inliers.all():
         return result
-    noise = float(sigma) if sigma is not None else float(result.sigma)
-    cutoff = float(tolerances.outlier_cutoff_sigma) * max(noise, float(tolerances.sigma_floor))
+    cutoff = fit_cutoff(result, sigma, tolerances)
     rejected = points[~result.inliers]
     count = int(np.count_nonzero(behind_fit(result.primitive, rejected, view, cutoff)))
     known = float(result.diagnostics.get(BACKGROUND_SHOTS, 0.0))

@@ -19,6 +19,7 @@ from asbuilt.tolerances import MIN_POINTS, Tolerances
 
 __all__ = [
     "FreshGenerator",
+    "fit_cutoff",
     "radius_text",
     "extent_of",
     "validate_points",
@@ -385,6 +386,14 @@ def noise_level(
     squares += missing * float(tolerances.prior_range_sigma) ** 2
     estimate = float(np.sqrt(squares / (dof + missing))) if dof + missing > 0 else 0.0
     return max(estimate, float(tolerances.sigma_floor)), "residuals"
+
+
+def fit_cutoff(result, sigma: float | None, tolerances: Tolerances) -> float:
+    """A finished fit's inlier cutoff, metres: ``tolerances.outlier_cutoff_sigma`` noise
+    levels, the noise the sensor's ``sigma`` (metres) when given, else the fit's own
+    ``result.sigma``, floored at ``tolerances.sigma_floor``."""
+    noise = float(sigma) if sigma is not None else float(result.sigma)
+    return float(tolerances.outlier_cutoff_sigma) * max(noise, float(tolerances.sigma_floor))
 
 
 def within_noise(residuals: np.ndarray, sigma: float, n_params: int, tail: float) -> bool:

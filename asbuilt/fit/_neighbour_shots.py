@@ -46,6 +46,7 @@ import dataclasses
 import numpy as np
 
 from asbuilt.errors import FitError
+from asbuilt.fit._common import fit_cutoff
 from asbuilt.fit.result import NEIGHBOUR_SHOTS, FitFailure, FitReport, ObjectFit
 from asbuilt.primitives import Cuboid, Cylinder, Sphere
 from asbuilt.tolerances import Tolerances
@@ -74,12 +75,6 @@ ROUNDS = 3
 FIT_RMS_NOISES = 2.0
 
 _SOLIDS = (Cylinder, Cuboid, Sphere)
-
-
-def _cutoff(result, sigma, tolerances: Tolerances) -> float:
-    """A fit's inlier cutoff, metres: the sensor's sigma, else the fit's own noise, in cutoffs."""
-    noise = float(sigma) if sigma is not None else float(result.sigma)
-    return float(tolerances.outlier_cutoff_sigma) * max(noise, float(tolerances.sigma_floor))
 
 
 def _explains_own_shots(result, sigma, tolerances: Tolerances) -> bool:
@@ -115,7 +110,7 @@ def neighbour_candidates(fit: ObjectFit, other: ObjectFit, sigma, tolerances) ->
         return none
     if isinstance(mine, Cylinder) and isinstance(theirs, Cylinder) and _one_line(mine, theirs):
         return none
-    cutoff = _cutoff(other.result, sigma, tolerances)
+    cutoff = fit_cutoff(other.result, sigma, tolerances)
     on = fit.result.inliers & (np.abs(theirs.distance(points)) <= cutoff)
     if isinstance(theirs, Cylinder) and on.any():
         along = (points - theirs.center) @ theirs.axis
@@ -224,7 +219,7 @@ def _without(item: ObjectFit, other: ObjectFit, on, refit, sigma, tolerances):
     result = again.result
     if not _explains_own_shots(result, sigma, tolerances):
         return None  # the shots left are no cylinder without those: they were its own
-    cutoff = _cutoff(result, sigma, tolerances)
+    cutoff = fit_cutoff(result, sigma, tolerances)
     if int(np.count_nonzero(np.abs(result.primitive.distance(points[on])) <= cutoff)) * 2 >= count:
         return None
     inliers = np.zeros(len(points), dtype=bool)
