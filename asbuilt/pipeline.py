@@ -210,7 +210,7 @@ def build_model(
         tolerances = config.tolerances
     if merge or catalog is not None:
         catalog = resolve_catalog(catalog)  # once: the merge, the rules and the model share it
-    report = _modelled(fit(scan, tolerances, progress=progress))
+    report = _modelled(fit(scan, tolerances, progress=progress, words=config.label_words))
     if merge:
         model = _merged(report, catalog, tolerances, schedule, elbow_radius, config.label_words)
     else:
@@ -342,7 +342,7 @@ def relink(
     if model.fits is not None:
         report = dataclasses.replace(model.fits, scan=scan)
     else:
-        report = _modelled(fit(scan, tolerances))
+        report = _modelled(fit(scan, tolerances, words=config.label_words))
     relinked = _merged(
         report,
         catalog,

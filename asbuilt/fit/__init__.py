@@ -33,10 +33,12 @@ from asbuilt.fit._curvature import (  # noqa: F401 (CURVATURE_TAIL: asbuilt.fit'
 from asbuilt.fit._edge_brackets import edge_brackets, widen_pinned
 from asbuilt.fit._neighbour_shots import without_neighbour_shots
 from asbuilt.fit._noise_levels import _fit_with_noise
+from asbuilt.fit._object_words import named_by_label, named_report
 from asbuilt.fit._small_linalg import eigvalsh
 from asbuilt.fit._stations import fuse_station_views
 from asbuilt.fit._window import beyond_window, open_ends
 from asbuilt.fit.result import FitFailure, FitReport, FitResult, ObjectFit
+from asbuilt.labels import DEFAULT_WORDS, LabelWords
 from asbuilt.primitives import as_points, as_vector
 from asbuilt.scan.load import PLAUSIBLE_RANGE_SIGMA
 from asbuilt.scan.model import KINDS, Scan, ScanObject, kind_phrase
@@ -506,6 +508,7 @@ def fit(
     *,
     progress: Progress | None = None,
     strict: bool = False,
+    words: LabelWords = DEFAULT_WORDS,
 ) -> FitReport:
     """Fit every object of a scan, in the scan's order.
 
@@ -527,6 +530,10 @@ def fit(
     strict : bool
         Raise the first refused object's FitError at once instead of recording it (the
         behaviour before failures were recorded).
+    words : LabelWords
+        The vocabulary that marks a cylinder as a vessel or structure by its label or group
+        (a rules file's :attr:`~asbuilt.rules.RulesConfig.label_words`): its notes and refusal
+        then name it by its noun ("the far side of the tank"), not "pipe".
 
     Returns
     -------
@@ -558,7 +565,7 @@ def fit(
         if progress is not None:
             progress(done, total, obj.id)
     if failures and not fits:
-        raise NothingFittedError(failures)
+        raise NothingFittedError(list(named_by_label((), tuple(failures), words)[1]))
     report = FitReport(scan=scan, fits=tuple(fits), failures=tuple(failures))
     # Linked objects that are one pipe seen from two stations are fitted as one.
     report = fuse_station_views(report, tolerances)
@@ -572,7 +579,8 @@ def fit(
             raise FitError(exc.message, source=scan.source, where=exc.where) from exc
 
     # A pipe fitted through a raster line of its neighbour's shots is fitted again without it.
-    return without_neighbour_shots(report, refit, tolerances)
+    report = without_neighbour_shots(report, refit, tolerances)
+    return named_report(report, words)
 
 
 class NothingFittedError(FitError):

@@ -33,6 +33,7 @@ import numpy as np
 from asbuilt.catalog import DEFAULT_CATALOG, Catalog, fitting_dims, load_catalog
 from asbuilt.errors import CatalogError
 from asbuilt.fit.result import FitReport
+from asbuilt.labels import DEFAULT_WORDS, EQUIPMENT_TAGS, PIPE_WORDS, VESSEL_WORDS, LabelWords
 from asbuilt.model import Component, Correction, Model, model_from_fits
 from asbuilt.primitives import Cylinder
 from asbuilt.tolerances import DEFAULT_TOLERANCES, Tolerances
@@ -52,7 +53,6 @@ from .loose import loose_ends
 from .regularize import align_lines, fit_up, regularize_directions
 from .snap import SnapResult, snap_diameter, texts_in_units
 from .spool import PipeSpec, build_spools
-from .words import DEFAULT_WORDS, EQUIPMENT_TAGS, PIPE_WORDS, VESSEL_WORDS, LabelWords
 
 __all__ = [
     "merge_model",

@@ -198,7 +198,7 @@ WORD_LISTS = {
 def check_rows(value: list, table: str, key: str) -> str | None:
     """None when the rows of a list-valued option are well formed, else what they must be."""
     if (table, key) in WORD_LISTS:
-        from asbuilt.merge.words import LabelWords  # the merge's own check, one source
+        from asbuilt.labels import LabelWords  # the merge's own check, one source
 
         try:
             LabelWords(**{WORD_LISTS[table, key]: tuple(value)})

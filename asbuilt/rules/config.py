@@ -106,7 +106,7 @@ class RulesConfig:
         """:class:`asbuilt.merge.LabelWords` from ``[general]`` ``pipe_keywords``,
         ``vessel_keywords`` and ``equipment_tags``: the words merging tells a pipe from a
         vessel by."""
-        from asbuilt.merge.words import LabelWords
+        from asbuilt.labels import LabelWords
 
         return LabelWords(
             pipe=tuple(self.general["pipe_keywords"]),

@@ -1,4 +1,4 @@
-"""The label vocabulary that tells pipes from vessels, and a rules file's own."""
+"""asbuilt.labels in the merge: the words that tell pipes from vessels, and a rules file's own."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import pytest
 from synthetic_pipes import Pipe, report_of
 
 from asbuilt.errors import RulesConfigError
+from asbuilt.labels import EQUIPMENT_TAGS, PIPE_WORDS, VESSEL_WORDS, LabelWords
 from asbuilt.merge import DEFAULT_WORDS, merge_model
-from asbuilt.merge.words import EQUIPMENT_TAGS, PIPE_WORDS, VESSEL_WORDS, LabelWords
 from asbuilt.rules import load_rules, loads_rules
 
 

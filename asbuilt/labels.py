@@ -1,4 +1,5 @@
-"""The words of a label that tell a pipe from a vessel or structure (:func:`asbuilt.merge.is_pipe`).
+"""The words of a label that tell a pipe from a vessel or structure (:func:`asbuilt.merge.is_pipe`,
+and the noun a fit's notes name a vessel by).
 
 The defaults are this module's tuples; a rules file's ``[general]`` ``pipe_keywords``,
 ``vessel_keywords`` and ``equipment_tags`` replace them (:class:`LabelWords`), so that a plant's
@@ -148,6 +149,18 @@ class LabelWords:
         if found:
             return "vessel", found.group(0)
         return None, None
+
+    def vessel_noun(self, label: str | None, group: str | None = None) -> str | None:
+        """The noun a vessel or structure is named by in a fit's notes (``"tank"``, ``"column"``;
+        ``"vessel"`` for an equipment tag), or None when the label (else the group) does not
+        mark one, the same reading as :func:`asbuilt.merge.is_pipe`."""
+        says, word = self.says(label)
+        if says is None:
+            says, word = self.says(group)
+        if says != "vessel":
+            return None
+        lowered = word.lower()
+        return lowered if lowered in (w.lower() for w in self.vessel) else "vessel"
 
 
 #: The shipped vocabulary.
