@@ -129,7 +129,7 @@ from asbuilt.fit._joint import (
 from asbuilt.fit._neighbours import local_normals
 from asbuilt.fit._opposite import outside_outline
 from asbuilt.fit._small_linalg import singular_values
-from asbuilt.fit.result import FitResult
+from asbuilt.fit.result import FitResult, rotation_diagnostics
 from asbuilt.primitives import Cuboid, as_points, as_vector
 from asbuilt.tolerances import DEFAULT_TOLERANCES, MIN_POINTS, Tolerances
 
@@ -247,7 +247,9 @@ def fit_cuboid(
         when the raster window placed the unseen edges), ``mended`` (rejected bisection shots put
         back on the box along their beam), ``open_sizes`` (sizes made lower bounds, when any),
         ``unreached_sizes`` (sizes made lower bounds because the shots are not a raster that
-        reaches the edges, when any: their standard errors infinite).
+        reaches the edges, when any: their standard errors infinite), ``rotation_deg_0..2``
+        and ``rotation_corr_01/02/12`` (the rotation's covariance in the output axes' frame:
+        :func:`asbuilt.fit.result.rotation_diagnostics`).
 
     Raises
     ------
@@ -736,6 +738,11 @@ def _fit_cuboid_shots(
     size_se = size_se[order]
     axes_deg = np.degrees(np.sqrt(np.maximum(axis_var[list(order)], 0.0)))
     faces_per_axis = faces_per_axis[order]
+    # The rotation's covariance in the output axes' frame: a column's two tilt components
+    # (its long axis toward each of the other two) are rotations about those axes, and one seen
+    # face measures the tilt across it far better than the turn in its plane
+    # (asbuilt.rules.alignment judges a lean per direction from them).
+    frame_cov = axes @ c_rot @ axes.T
     cuboid = Cuboid(center=centre, axes=axes, size=size)
 
     residuals = cuboid.distance(pts)
@@ -750,6 +757,7 @@ def _fit_cuboid_shots(
         "faces_axis2": float(faces_per_axis[2]),
         "silhouette": float(used_window),
         "mended": float(mended),
+        **rotation_diagnostics(frame_cov),
     }
     if model.turn is not None:
         # The turn about the raster lines to the farthest frame splitting them otherwise, and

@@ -20,6 +20,10 @@ __all__ = [
     "BACKGROUND_SHOTS",
     "BACKGROUND_KEYS",
     "NEIGHBOUR_SHOTS",
+    "ROTATION_SE_KEYS",
+    "ROTATION_CORR_KEYS",
+    "rotation_diagnostics",
+    "rotation_covariance",
 ]
 
 #: ``FitResult.diagnostics`` key: the count of shots a fit left out on background planes (a
@@ -41,6 +45,49 @@ BACKGROUND_KEYS = (BACKGROUND_PLANE_SHOTS, BACKGROUND_SHOTS)
 #: object's surface, which that object's own shots fit (:mod:`asbuilt.fit._neighbour_shots`).
 #: Read by the rules only (the ``outliers`` rule does not count these shots).
 NEIGHBOUR_SHOTS = "neighbour_shots"
+
+#: ``FitResult.diagnostics`` keys of a cuboid: the standard error (degrees) of its rotation
+#: about each of its output axes (``Cuboid.axes`` rows 0, 1, 2) ...
+ROTATION_SE_KEYS = ("rotation_deg_0", "rotation_deg_1", "rotation_deg_2")
+#: ... and the correlations of the rotations about axes 0 and 1, 0 and 2, 1 and 2. With them
+#: the rotation's covariance in the axes' frame is known: an axis's direction error (``stderr
+#: ["axes_deg"]``) is the rotation about the other two, and its two components (a column's tilt
+#: toward each of its other axes) may be known very differently (one seen face measures the tilt
+#: across it to a tenth of a degree and the turn in its plane to degrees).
+ROTATION_CORR_KEYS = ("rotation_corr_01", "rotation_corr_02", "rotation_corr_12")
+_PAIRS = ((0, 1), (0, 2), (1, 2))
+
+
+def rotation_diagnostics(covariance) -> dict[str, float]:
+    """The diagnostics (:data:`ROTATION_SE_KEYS`, :data:`ROTATION_CORR_KEYS`) of a rotation
+    covariance (3, 3) in radians^2, expressed in a cuboid's output axes' frame; NaN where it
+    is not finite."""
+    cov = np.asarray(covariance, dtype=np.float64)
+    se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    out = {key: float(np.degrees(v)) for key, v in zip(ROTATION_SE_KEYS, se)}
+    for key, (i, j) in zip(ROTATION_CORR_KEYS, _PAIRS):
+        scale = se[i] * se[j]
+        out[key] = float(np.clip(cov[i, j] / scale, -1.0, 1.0)) if scale > 0 else 0.0
+    if not np.isfinite(cov).all():
+        out = dict.fromkeys(out, float("nan"))
+    return out
+
+
+def rotation_covariance(diagnostics: Mapping[str, float]) -> np.ndarray | None:
+    """The rotation covariance (3, 3), radians^2, in a cuboid's axes' frame, read back from its
+    diagnostics (:func:`rotation_diagnostics`); None when they are missing or not finite (a fit
+    of another kind, or a model document written before they were stored)."""
+    try:
+        se = np.radians([float(diagnostics[key]) for key in ROTATION_SE_KEYS])
+        corr = [float(diagnostics[key]) for key in ROTATION_CORR_KEYS]
+    except (KeyError, TypeError, ValueError):
+        return None
+    if not (np.isfinite(se).all() and np.isfinite(corr).all()):
+        return None
+    cov = np.diag(se**2)
+    for c, (i, j) in zip(corr, _PAIRS):
+        cov[i, j] = cov[j, i] = c * se[i] * se[j]
+    return cov
 
 
 @dataclass(frozen=True, eq=False)

@@ -18,6 +18,7 @@ import re
 import numpy as np
 
 from asbuilt.findings import Suggestion
+from asbuilt.fit.result import rotation_covariance
 from asbuilt.merge.regularize import SNAP_SIGMA
 from asbuilt.model import Component
 from asbuilt.primitives import Cuboid
@@ -58,6 +59,95 @@ def axis_stderr_deg(component: Component) -> float | None:
         return None
     length = max(found[1], 1e-9)
     return float(np.degrees(fit.sigma / (length * np.sqrt(fit.n_inliers / 12.0))))
+
+
+def tilt_components(component: Component):
+    """A cuboid column's lean per direction, from its fit's rotation covariance
+    (:func:`asbuilt.fit.result.rotation_covariance`), or None without one (a cylinder, a model
+    document written before it was stored).
+
+    Returns ``(c, cov, across)``: the tilt ``c`` (2,) of the long axis away from vertical,
+    ``sin`` of the lean angle per direction, along the principal directions of its covariance
+    (the best measured first), ``cov`` (2,) the variances of those components (radians^2,
+    ascending), and ``across`` whether the best-measured direction is the normal of the one
+    face seen (a fit of one face: its tilt across the face, toward the station, is measured and
+    its turn in the face's plane is not).
+
+    The long axis ``a`` is ``axes[L]``; it tilts toward another axis ``e`` by ``c = -z . e``
+    (``a . e = 0``), and a rotation ``w`` of the frame moves that by ``-w . (e x z)``; with the
+    rotation's covariance ``M`` in the axes' frame, the two components' covariance is
+    ``J M J^T`` with rows ``-axes @ (e x z)``.
+    """
+    fit = component.fit
+    if fit is None or not isinstance(fit.primitive, Cuboid):
+        return None
+    m = rotation_covariance(fit.diagnostics or {})
+    if m is None:
+        return None
+    axes = np.asarray(fit.primitive.axes, dtype=np.float64)
+    long = int(np.argmax(fit.primitive.size))
+    others = [k for k in range(3) if k != long]
+    c = np.array([-axes[k] @ _Z for k in others])
+    jac = np.array([-(axes @ np.cross(axes[k], _Z)) for k in others])
+    cov = jac @ m @ jac.T
+    variances, directions = np.linalg.eigh(0.5 * (cov + cov.T))
+    components = directions.T @ c
+    assumed = (fit.diagnostics or {}).get("assumed_size")
+    across = False
+    if assumed is not None and np.isfinite(assumed) and int(assumed) in others:
+        # the best-measured direction lies along the seen face's normal
+        normal = others.index(int(assumed))
+        across = abs(directions[normal, 0]) > abs(directions[1 - normal, 0])
+    return components, np.maximum(variances, 0.0), across
+
+
+def _lean_by_direction(comp, height, cos_lean, allowed, k):
+    """The lean's lower bound from one direction alone, when that decides more than the whole
+    lean does: ``(outcome, stderr, text)`` or None.
+
+    Each principal direction's component ``p`` (a length over the height) bounds the lean from
+    below, ``lean >= |p|``; with its standard error ``s`` counted ``sqrt(2)`` times (the root of
+    the sum of both directions' variances when they are equal), the lean is certainly over the
+    allowance when ``|p| - k sqrt(2) s`` is. A column measured alike in every direction is thus
+    judged as before (the lean against the root of the sum of both variances); one seen on a
+    single face, whose tilt across the face is known to a few hundredths of a degree and whose
+    turn in it to degrees, is judged by the direction it measured.
+    """
+    found = tilt_components(comp)
+    if found is None:
+        return None
+    components, variances, across = found
+    scale = height / max(cos_lean, 1e-9)
+    parts = np.abs(components) * scale
+    own = np.sqrt(variances) * scale  # each component's own standard error (the messages')
+    ses = np.sqrt(2.0) * own  # as the verdict counts it
+    lower = parts - k * ses
+    best = int(np.argmax(lower))
+    if lower[best] > allowed:
+        where = (
+            "toward the station (across its one seen face)"
+            if across and best == 0
+            else "in one direction"
+        )
+        return (
+            "violation",
+            float(ses[best]),
+            f"; {where} alone it leans {mm(parts[best])} +- {mm(own[best])}",
+        )
+    if not across or ses[1] < 3.0 * ses[0]:
+        return None  # no direction measured much better than the lean as a whole
+    shown = f"1:{height / parts[0]:.0f}" if parts[0] > 0 else "plumb"
+    if parts[0] + k * ses[0] <= allowed:
+        bound = parts[0] + k * ses[0]
+        said = f"plumb toward the station to 1:{height / bound:.0f} ({mm(bound)} at most)"
+    else:
+        said = f"toward the station it leans {mm(parts[0])} +- {mm(own[0])} ({shown})"
+    return (
+        "unverifiable",
+        None,
+        f"; {said}, across its one seen face; the sideways lean, along the face, is not "
+        f"measured (known to +- {mm(own[1])} only)",
+    )
 
 
 def rotation_between(a, b) -> np.ndarray:
@@ -315,6 +405,14 @@ def check_plumb(ctx: Context) -> None:
         lean = height * np.tan(np.radians(lean_deg))
         se = None if se_deg is None else height * np.radians(se_deg)
         outcome = verdict(lean, allowed, se, ctx.k)
+        split = None
+        if outcome == "unverifiable":
+            # The lean's standard error is its worst direction's; a direction measured far
+            # better (across a column's one seen face) may still decide.
+            cos_lean = float(np.cos(np.radians(lean_deg)))
+            split = _lean_by_direction(comp, height, cos_lean, allowed, ctx.k)
+            if split is not None and split[0] == "violation":
+                outcome, se = "violation", split[1]
         if material == "pipe" and outcome == "unverifiable":
             continue  # no plumb standard for pipes: only clear leans are reported
         shown = f"1:{height / lean:.0f}" if lean > 0 else "plumb"
@@ -330,7 +428,9 @@ def check_plumb(ctx: Context) -> None:
             f"leans {leans} over {height:.2f} m ({shown}), allowed {limit} "
             f"(1:{ratio:.0f}, {standard})"
             + (
-                f"; the lean is known to +- {mm(se)} only"
+                split[2]
+                if split is not None
+                else f"; the lean is known to +- {mm(se)} only"
                 if outcome == "unverifiable" and se
                 else ""
             ),

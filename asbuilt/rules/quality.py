@@ -109,12 +109,10 @@ def check_weak(ctx: Context) -> None:
             if faces is not None and int(faces) < min_faces:
                 reasons.append(f"{int(faces)} face seen, {min_faces} needed")
                 advice.append("shots on a second face")
-            size_se = fit.stderr.get("size") if fit.stderr else None
-            if size_se is not None:
-                rel = np.asarray(size_se, float).ravel() / np.asarray(prim.size, float)
-                observed = np.asarray(fit.observed if fit.observed is not None else [True] * 3)
-                rel = rel[observed[: rel.size]] if rel.size == 3 else rel
-                worst = float(rel.max()) if rel.size else None
+            worst, size_reason = _cuboid_size_weakness(fit, max_rel)
+            if size_reason:
+                reasons.append(size_reason[0])
+                advice.append(size_reason[1])
         elif fit.kind == "sphere":
             r_se = stderr_value(fit.stderr, "radius")
             if r_se is not None:
@@ -133,7 +131,7 @@ def check_weak(ctx: Context) -> None:
                 f"{sizes} only a lower bound (the shots, not a raster, stop short of edges)"
             )
             advice.append("shots near both edges of each face, or a raster from the station")
-        if worst is not None and np.isfinite(worst) and worst > max_rel:
+        if fit.kind != "cuboid" and worst is not None and np.isfinite(worst) and worst > max_rel:
             reasons.append(f"size known to +-{worst * 100:.1f}% > {max_rel * 100:.0f}%")
             advice.append("more points")
         if not reasons:
@@ -148,6 +146,46 @@ def check_weak(ctx: Context) -> None:
             unit="ratio",
             suggestions=(Suggestion(f"rescan {comp.id} with {', '.join(dict.fromkeys(advice))}"),),
         )
+
+
+def _cuboid_size_weakness(fit, max_rel: float) -> tuple[float | None, tuple[str, str] | None]:
+    """A cuboid's largest relative size standard error over its sizes that have one, and when
+    it exceeds ``max_rel`` the reason and advice naming that size.
+
+    Every size with a finite standard error counts: one measured between two seen faces and
+    one bounded by the points' extent (its error the raster step in which the unseen edge
+    lies). A size with an infinite one (a lower bound: run on past the window, shots off a
+    raster, the depth behind a lone face) has its own reason above, not this one.
+    """
+    size_se = fit.stderr.get("size") if fit.stderr else None
+    if size_se is None:
+        return None, None
+    se = np.asarray(size_se, dtype=np.float64).ravel()
+    size = np.asarray(fit.primitive.size, dtype=np.float64).ravel()
+    if se.size != size.size:
+        return None, None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = se / size
+    finite = np.isfinite(rel)
+    if not finite.any():
+        return None, None
+    k = int(np.flatnonzero(finite)[np.argmax(rel[finite])])
+    worst = float(rel[k])
+    if worst <= max_rel:
+        return worst, None
+    observed = fit.observed is not None and k < len(fit.observed) and bool(fit.observed[k])
+    reason = (
+        f"a size of {mm(float(size[k]))} known to +-{mm(float(se[k]))}"
+        f" ({worst * 100:.1f}% > {max_rel * 100:.0f}%)"
+    )
+    if observed:
+        return worst, (reason, "more points on both faces it lies between")
+    # Bounded by the points' extent: the unseen edge lies somewhere in the raster step past
+    # the last shot (a window wider than the object puts it at the window's side).
+    return worst, (
+        reason + ", an unseen edge placed within a raster step",
+        "shots on its unseen edges (an `asbuilt scan` session's edge bisection finds them)",
+    )
 
 
 def _sensor_sigma(ctx: Context, fit) -> float | None:

@@ -289,3 +289,81 @@ def test_a_cylinder_fitted_by_ignoring_the_station_is_reported():
         "give P1 only its own shots (rescan with the raster window on it alone)",
         "check the scan's sensor position or P1's station",
     ]
+
+
+# A cuboid's size standard error over max_relative_stderr (5%) of the size is weak geometry,
+# whether the size lies between two seen faces or is bounded by the points' extent (an unseen
+# edge placed within a raster step). An independent review's beam came out 314 mm +- 125 mm
+# (40%), truth 250 mm, with no finding: the test read only sizes between two seen faces. By
+# hand: 0.3 m known to +-0.016 m is 5.3% (weak), to +-0.014 m 4.7% (not).
+@pytest.mark.parametrize(
+    "size_se, observed, expected, advice",
+    [
+        ((0.001, 0.001, 0.001), (False, False, False), None, None),
+        ((0.014, 0.001, 0.001), (False, False, False), None, None),
+        (
+            (0.016, 0.001, 0.001),
+            (False, False, False),
+            "a size of 300.0 mm known to +-16.0 mm (5.3% > 5%), an unseen edge placed within"
+            " a raster step",
+            "edge bisection",
+        ),
+        (
+            (0.001, 0.12, 0.001),
+            (False, False, False),
+            "a size of 300.0 mm known to +-120.0 mm (40.0% > 5%)",
+            "edge bisection",
+        ),
+        (
+            (0.016, 0.001, 0.001),
+            (True, False, False),
+            "a size of 300.0 mm known to +-16.0 mm (5.3% > 5%)",
+            "more points on both faces",
+        ),
+        # the height: 3 m known to +-0.2 m (6.7%)
+        ((0.001, 0.001, 0.2), (False, False, False), "3000.0 mm known to +-200.0 mm", "edge"),
+        # only infinite ones (lower bounds, said by their own reason), none finite over 5%
+        ((float("inf"), 0.001, 0.001), (False, False, False), None, None),
+    ],
+)
+def test_a_cuboid_size_known_worse_than_5_percent_is_weak(size_se, observed, expected, advice):
+    comp = column("C1", [0, 0, 0])
+    fit = dataclasses.replace(
+        comp.fit, stderr={**comp.fit.stderr, "size": size_se}, observed=observed
+    )
+    found = only(dataclasses.replace(comp, fit=fit), "weak-geometry")
+    if expected is None:
+        assert not found
+        return
+    (f,) = found
+    assert expected in f.message
+    assert advice in f.suggestions[0].description
+    assert f.measured == pytest.approx(max(s / v for s, v in zip(size_se, (0.3, 0.3, 3.0))))
+
+
+def test_a_lower_bound_size_is_reported_once_not_as_a_size_error_too():
+    comp = column("C1", [0, 0, 0])
+    fit = dataclasses.replace(
+        comp.fit,
+        stderr={**comp.fit.stderr, "size": (float("inf"), 0.001, 0.001)},
+        observed=(False, False, False),
+        diagnostics={**comp.fit.diagnostics, "unreached_sizes": 1.0},
+    )
+    (f,) = only(dataclasses.replace(comp, fit=fit), "weak-geometry")
+    assert "a size is only a lower bound" in f.message and "known to" not in f.message
+
+
+_BEAM = Path(__file__).parent / "review_beam_17.json"
+
+
+def test_the_reviews_beam_is_weak():
+    """Review 61's beam (17_beam_y_D4.0: 250 x 500 mm seen from below, its own ray caster):
+    fitted 314 x 549 mm, the width +-125 mm, and nothing said so."""
+    from asbuilt.pipeline import build_model
+    from asbuilt.rules import load_rules
+    from asbuilt.scan.load import load_scan
+
+    built = build_model(load_scan(_BEAM))
+    (f,) = [x for x in check_model(built, load_rules()) if x.slug == "weak-geometry"]
+    assert "known to" in f.message and "edge bisection" in f.suggestions[0].description
+    assert f.measured > 0.3
