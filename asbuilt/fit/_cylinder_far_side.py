@@ -30,6 +30,7 @@ from asbuilt.errors import FitError
 from asbuilt.fit._common import radius_text
 from asbuilt.fit._cylinder_background import DETERMINED_RADIUS, rescued
 from asbuilt.fit._cylinder_checks import seen_through
+from asbuilt.tolerances import MIN_POINTS
 
 __all__ = ["FAR_FRACTION", "FAR_ROUNDS", "FarSideFit", "without_far_side"]
 
@@ -93,10 +94,13 @@ def without_far_side(fit, result, points: np.ndarray, view, sigma, tolerances):
         if not far.any():
             break
         keep &= ~far
-        try:
-            found = fit(points[keep], sigma, tolerances, view)
-        except FitError:
-            found = None
+        found = None
+        # Too few shots left to fit at all (every inlier on the far side): refused as such.
+        if np.count_nonzero(keep) >= MIN_POINTS["cylinder"]:
+            try:
+                found = fit(points[keep], sigma, tolerances, view)
+            except FitError:
+                pass
         if (
             found is None
             or not found.stderr["radius"] <= DETERMINED_RADIUS * found.primitive.radius

@@ -16,7 +16,7 @@ from sim_tanks import SIGMA, tank_before_wall
 
 from asbuilt.errors import FitError
 from asbuilt.fit import fit_points
-from asbuilt.fit._cylinder_far_side import FAR_FRACTION, FarSideFit, _far_side
+from asbuilt.fit._cylinder_far_side import FAR_FRACTION, FarSideFit, _far_side, without_far_side
 from asbuilt.fit.result import FitResult
 from asbuilt.primitives import Cylinder
 from asbuilt.tolerances import DEFAULT_TOLERANCES
@@ -78,3 +78,30 @@ def test_far_side_inliers_are_the_ones_behind_the_pipe():
     )
     far = _far_side(result, points, np.zeros(3), DEFAULT_TOLERANCES)
     assert far.tolist() == [False, False, True, True, False]
+
+
+def test_a_fit_whose_inliers_are_all_on_its_far_side_is_refused_without_refitting():
+    # Shots on the far half of a 1 m pipe 10 m away only (a fit through the wall behind it):
+    # nothing is left to fit once they are out, and the refusal says why rather than the
+    # refit failing on an empty set (a ValueError from the plane sampler before).
+    center = np.array([10.0, 0.0, 0.0])
+    angles = np.radians(np.linspace(-30.0, 30.0, 6))
+    points = np.column_stack([10.0 + np.cos(angles), np.sin(angles), np.linspace(-0.5, 0.5, 6)])
+    result = FitResult(
+        primitive=Cylinder(center, [0.0, 0.0, 1.0], 1.0, 1.0),
+        residuals=np.zeros(len(points)),
+        inliers=np.ones(len(points), dtype=bool),
+        stderr={"radius": 0.001},
+        sigma=SIGMA,
+        sigma_source="sensor",
+        method="test",
+    )
+    calls = []
+
+    def refit(subset, sigma, tolerances, viewpoint):
+        calls.append(len(subset))
+        raise AssertionError("no refit of too few shots")
+
+    with pytest.raises(FarSideFit):
+        without_far_side(refit, result, points, np.zeros(3), SIGMA, DEFAULT_TOLERANCES)
+    assert calls == []
