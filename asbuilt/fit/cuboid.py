@@ -101,6 +101,7 @@ from asbuilt.fit._cuboid_foreground import FRONT_SHOTS, contradicting, fit_neare
 from asbuilt.fit._cuboid_inside import ShotsInside, too_many_inside
 from asbuilt.fit._cuboid_lone import OneLineFace, face_through_station, one_line_and_lone_shot
 from asbuilt.fit._cuboid_noise import _likeliest_noise
+from asbuilt.fit._cuboid_occluder import behind_occluder
 from asbuilt.fit._cuboid_open import open_past_faces
 from asbuilt.fit._cuboid_planes import fit_past_planes
 from asbuilt.fit._cuboid_reach import lower_bounds, unreached
@@ -267,6 +268,24 @@ def fit_cuboid(
         noise = result.sigma if sigma is None else sigma
         width = tolerances.outlier_cutoff_sigma * max(noise, tolerances.sigma_floor)
         if one_line_and_lone_shot(pts[result.inliers], width):
+            # A line of shots on something before the box (a pipe in front of a column) is
+            # the nearest surface: the box may stand behind it (asbuilt.fit._cuboid_occluder).
+            behind = behind_occluder(
+                lambda subset: fit_cuboid(
+                    subset,
+                    sigma=sigma,
+                    tolerances=tolerances,
+                    viewpoint=viewpoint,
+                    edge_pad=edge_pad,
+                    silhouette=silhouette,
+                ),
+                result,
+                pts,
+                None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64),
+                width,
+            )
+            if behind is not None:
+                return behind
             raise OneLineFace(
                 "cuboid: the shots on the one face seen lie on one raster line (and at most "
                 "one shot beside it), which measures neither the face's turn nor its width; "
