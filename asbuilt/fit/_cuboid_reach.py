@@ -63,13 +63,14 @@ def note(sizes, spans, trusted: bool) -> str:
         f"{size:.3f} m (the shots span {span:.3f} m of it)" for size, span in zip(sizes, spans)
     )
     why = (
-        "The shots are not on a pan-tilt raster from the station (aimed by hand?)"
+        "The shots are not on a pan-tilt raster from the station (aimed by hand, or is the"
+        " station's position wrong?)"
         if trusted
         else "Without the station the shots cannot be read as a pan-tilt raster"
     )
     advice = (
-        "Shoot a raster over the whole object, or the face opposite, to measure "
-        + ("them" if plural else "it")
+        "Check the scan's sensor position; if it is right, shoot a raster over the whole"
+        " object, or the face opposite, to measure " + ("them" if plural else "it")
         if trusted
         else "Give the scan's sensor position (a raster is then recognised), or shoot the face "
         "opposite"
