@@ -21,7 +21,7 @@ import pytest
 from fit_scans import cell_centres, corner_angles, shoot, sizes_in_true_order
 
 from asbuilt.fit import fit, fit_points
-from asbuilt.fit._cuboid_reach import DENSE_SHOTS, lower_bounds
+from asbuilt.fit._cuboid_reach import DENSE_SHOTS, lower_bounds, note
 from asbuilt.fit.cuboid import fit_cuboid
 from asbuilt.primitives import Cuboid
 from asbuilt.scan.load import load_scan
@@ -155,3 +155,18 @@ def test_a_raster_with_occluded_columns_keeps_its_standard_errors():
     )
     assert "unreached_sizes" not in result.diagnostics
     assert all(math.isfinite(se) for se in result.stderr["size"])
+
+
+@pytest.mark.parametrize(
+    ("trusted", "says"),
+    [
+        # A station given: the shots may be hand-aimed, or the station's position wrong (a
+        # raster read from a point 0.5 m off is no raster).
+        (True, ("aimed by hand, or is the station's position wrong?", "Check the scan's sensor")),
+        (False, ("Without the station", "Give the scan's sensor position")),
+    ],
+)
+def test_the_lower_bound_note_says_why_and_what_to_do(trusted, says):
+    text = note([4.983, 0.289], [3.337, 0.248], trusted)
+    assert all(part in text for part in says)
+    assert "4.983 m (the shots span 3.337 m of it)" in text
