@@ -69,6 +69,7 @@ __all__ = [
     "seen_past",
     "surface_residuals",
     "traded_background",
+    "ONE_FACE_CUBOID",
     "RIVAL_PREFIX",
 ]
 
@@ -88,6 +89,10 @@ FLAT_RADIUS_EXTENTS = 5.0
 #: Diagnostics key prefix of a kind that explains the points almost as well with as many fitted
 #: parameters (``auto_rival_cuboid``: its BIC minus the chosen kind's).
 RIVAL_PREFIX = "auto_rival_"
+#: Diagnostics key (1.0) of a plane chosen where the cuboid fit saw one face only: the shots
+#: cannot tell a wall or plate from a box seen face-on (a column's front), whose depth they do
+#: not measure. The "ambiguous-kind" rule reports it when the label names a box-like object.
+ONE_FACE_CUBOID = "auto_one_face_cuboid"
 
 
 def _fitter(kind: str):
@@ -452,6 +457,7 @@ def fit_auto(
             " the points' extent) is a plane's trace of curvature, not an object these shots"
             " outline: it is not preferred as the simpler kind."
         )
+    one_face = False
     if "cuboid" in scores and "cuboid" not in candidates:
         if opposite:
             why += (
@@ -461,6 +467,7 @@ def fit_auto(
             )
         else:
             why += " The cuboid fit saw one face only: the plane stands for it."
+            one_face = chosen == "plane"
     rivals = [kind for kind in close if kind != chosen and counts[kind] == counts[chosen]]
     if rivals:
         why += (
@@ -477,6 +484,8 @@ def fit_auto(
     diagnostics = dict(result.diagnostics)
     for kind in rivals:
         diagnostics[f"{RIVAL_PREFIX}{kind}"] = float(scores[kind] - scores[chosen])
+    if one_face:
+        diagnostics[ONE_FACE_CUBOID] = 1.0
     return dataclasses.replace(
         result, notes=tuple(result.notes) + tuple(notes), diagnostics=diagnostics
     )

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from asbuilt.findings import Suggestion
-from asbuilt.fit.auto import RIVAL_PREFIX
+from asbuilt.fit.auto import ONE_FACE_CUBOID, RIVAL_PREFIX
 from asbuilt.fit.cylinder import (
     END_PLANE_SHOTS,
     OTHER_ANGLE,
@@ -296,10 +296,30 @@ def _count(value) -> int:
 
 def check_ambiguous_kind(ctx: Context) -> None:
     """Objects of kind ``auto`` whose shots another kind explains as well (the fit's
-    ``auto_rival_<kind>`` diagnostics, :func:`asbuilt.fit.auto.fit_auto`)."""
+    ``auto_rival_<kind>`` diagnostics, :func:`asbuilt.fit.auto.fit_auto`), and those fitted as
+    a plane from one face of what their label calls a vessel or structure (a column seen
+    face-on: ``auto_one_face_cuboid``), whose depth the shots do not measure."""
     slug = "ambiguous-kind"
+    words = ctx.config.label_words
     for comp in _fitted(ctx):
         fit = comp.fit
+        noun = words.vessel_noun(comp.label, comp.group)
+        if fit.diagnostics.get(ONE_FACE_CUBOID) and noun is not None:
+            ctx.emit(
+                slug,
+                [comp.id],
+                f"auto chose a plane, but {comp.id} is labelled a {noun} and the shots saw one"
+                " face of it: they cannot tell a wall or plate from a box seen face-on, whose"
+                f" depth they do not measure; the model has a {noun} as a plate",
+                location=centre_of(comp.geometry),
+                measured=1.0,
+                unit="faces",
+                suggestions=(
+                    Suggestion(f"set the kind of {comp.id} to cuboid in the scan if it is a box"),
+                    Suggestion(f"take shots on a second face of {comp.id}"),
+                ),
+            )
+            continue
         rivals = {
             key[len(RIVAL_PREFIX) :]: float(gap)
             for key, gap in fit.diagnostics.items()

@@ -367,3 +367,46 @@ def test_the_reviews_beam_is_weak():
     (f,) = [x for x in check_model(built, load_rules()) if x.slug == "weak-geometry"]
     assert "known to" in f.message and "edge bisection" in f.suggestions[0].description
     assert f.measured > 0.3
+
+
+@pytest.mark.parametrize(
+    ("label", "words", "reported"),
+    [
+        ("column C-3", None, True),
+        ("TK-101", None, True),  # an equipment tag: a vessel
+        ("east wall", None, False),
+        (None, None, False),
+        ("Pfeiler 3", None, False),
+        ("Pfeiler 3", '[general]\nvessel_keywords = ["pfeiler"]\n', True),
+    ],
+)
+def test_an_auto_plane_from_one_face_of_a_labelled_column_is_reported(label, words, reported):
+    # Review 61: a 0.5 m column seen face-on, kind auto, became a plane (a 10 mm plate in the
+    # model) with no finding; its label said "column".
+    comp = pipe("A2", [0, 0, 1], [2, 0, 1], 0.1143)
+    fit = dataclasses.replace(
+        comp.fit, diagnostics={**comp.fit.diagnostics, "auto_one_face_cuboid": 1.0}
+    )
+    comp = dataclasses.replace(comp, fit=fit, label=label)
+    config = loads_rules(words) if words else None
+    found = only(comp, "ambiguous-kind", config)
+    assert bool(found) == reported
+    if reported:
+        (f,) = found
+        assert f.code == "AB405"
+        assert "auto chose a plane, but A2 is labelled a" in f.message
+        assert "set the kind of A2 to cuboid in the scan if it is a box" in [
+            s.description for s in f.suggestions
+        ]
+
+
+def test_auto_marks_a_plane_chosen_over_a_one_face_box():
+    # 30 shots on one 0.4 x 2 m face 5 m away (a column seen face-on): a plane, and the box
+    # behind it cannot be told from it.
+    rng = np.random.default_rng(3)
+    y, z = np.meshgrid(np.linspace(-0.16, 0.16, 5), np.linspace(0.2, 1.8, 6))
+    points = np.column_stack([np.full(y.size, 5.0), y.ravel(), z.ravel()])
+    points += rng.normal(0.0, 0.002, points.shape) * [1.0, 0.0, 0.0]
+    result = fit_auto(points, sigma=0.002, viewpoint=np.zeros(3))
+    assert result.primitive.kind == "plane"
+    assert result.diagnostics.get("auto_one_face_cuboid") == 1.0
