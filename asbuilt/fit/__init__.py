@@ -559,9 +559,10 @@ def fit(
             )
         except FitError as exc:
             error = FitError(exc.message, source=scan.source, where=exc.where)
+            failure = FitFailure(object=obj, error=error)
             if strict:
-                raise error from exc
-            failures.append(FitFailure(object=obj, error=error))
+                raise named_by_label((), (failure,), words)[1][0].error from exc
+            failures.append(failure)
         if progress is not None:
             progress(done, total, obj.id)
     if failures and not fits:

@@ -88,3 +88,16 @@ def test_a_refusal_keeps_its_place_and_takes_the_noun():
     assert named.message == "two lines along the drum"
     assert str(named.error) == "tank.json: objects[0] (T1): two lines along the drum"
     assert named.object is obj
+
+
+def test_a_strict_fit_raises_the_refusal_in_the_labels_word(monkeypatch):
+    # strict mode raises the first refusal at once: in the label's word too.
+    import asbuilt.fit as fitting
+
+    def refuse(obj, **options):
+        raise FitError("two lines along the pipe", where=obj.where)
+
+    monkeypatch.setattr(fitting, "fit_object", refuse)
+    with pytest.raises(FitError) as raised:
+        fit(_tank_scan("tank T-1"), strict=True)
+    assert str(raised.value) == "tank.json: objects[0] (T1): two lines along the tank"
