@@ -50,6 +50,19 @@ def test_three_column_tanks_before_a_wall_are_right_or_refused(seed):
     assert abs(error) <= max(3.0 * result.stderr["radius"], 0.05 * truth["radius"])
 
 
+def _vertical_fit(center, points, length: float) -> FitResult:
+    """A fit of ``points`` (every one an inlier) as a 1 m pipe along z through ``center``."""
+    return FitResult(
+        primitive=Cylinder(center, [0.0, 0.0, 1.0], 1.0, length),
+        residuals=np.zeros(len(points)),
+        inliers=np.ones(len(points), dtype=bool),
+        stderr={"radius": 0.001},
+        sigma=SIGMA,
+        sigma_source="sensor",
+        method="test",
+    )
+
+
 def test_far_side_inliers_are_the_ones_behind_the_pipe():
     # A pipe of radius 1 m along z, 10 m from the station: one shot on its near side, one
     # grazing its silhouette, one on its far side behind the middle, one on its far side 0.7
@@ -67,15 +80,7 @@ def test_far_side_inliers_are_the_ones_behind_the_pipe():
         [[9.0, 0.0, 0.0], [10.0 - 0.0995, 0.995, 0.0], far_point(0.0), far_point(0.7)]
         + [far_point(FAR_FRACTION + 0.05)]
     )
-    result = FitResult(
-        primitive=Cylinder(center, [0.0, 0.0, 1.0], 1.0, 2.0),
-        residuals=np.zeros(len(points)),
-        inliers=np.ones(len(points), dtype=bool),
-        stderr={"radius": 0.001},
-        sigma=SIGMA,
-        sigma_source="sensor",
-        method="test",
-    )
+    result = _vertical_fit(center, points, length=2.0)
     far = _far_side(result, points, np.zeros(3), DEFAULT_TOLERANCES)
     assert far.tolist() == [False, False, True, True, False]
 
@@ -87,15 +92,7 @@ def test_a_fit_whose_inliers_are_all_on_its_far_side_is_refused_without_refittin
     center = np.array([10.0, 0.0, 0.0])
     angles = np.radians(np.linspace(-30.0, 30.0, 6))
     points = np.column_stack([10.0 + np.cos(angles), np.sin(angles), np.linspace(-0.5, 0.5, 6)])
-    result = FitResult(
-        primitive=Cylinder(center, [0.0, 0.0, 1.0], 1.0, 1.0),
-        residuals=np.zeros(len(points)),
-        inliers=np.ones(len(points), dtype=bool),
-        stderr={"radius": 0.001},
-        sigma=SIGMA,
-        sigma_source="sensor",
-        method="test",
-    )
+    result = _vertical_fit(center, points, length=1.0)
     calls = []
 
     def refit(subset, sigma, tolerances, viewpoint):
