@@ -33,7 +33,7 @@ from asbuilt.fit._curvature import (  # noqa: F401 (CURVATURE_TAIL: asbuilt.fit'
 from asbuilt.fit._edge_brackets import edge_brackets, widen_pinned
 from asbuilt.fit._neighbour_shots import without_neighbour_shots
 from asbuilt.fit._noise_levels import _fit_with_noise
-from asbuilt.fit._object_words import named_by_label, named_report
+from asbuilt.fit._object_words import named_failure, named_report
 from asbuilt.fit._small_linalg import eigvalsh
 from asbuilt.fit._stations import fuse_station_views
 from asbuilt.fit._window import beyond_window, open_ends
@@ -561,12 +561,12 @@ def fit(
             error = FitError(exc.message, source=scan.source, where=exc.where)
             failure = FitFailure(object=obj, error=error)
             if strict:
-                raise named_by_label((), (failure,), words)[1][0].error from exc
+                raise named_failure(failure, words).error from exc
             failures.append(failure)
         if progress is not None:
             progress(done, total, obj.id)
     if failures and not fits:
-        raise NothingFittedError(list(named_by_label((), tuple(failures), words)[1]))
+        raise NothingFittedError([named_failure(f, words) for f in failures])
     report = FitReport(scan=scan, fits=tuple(fits), failures=tuple(failures))
     # Linked objects that are one pipe seen from two stations are fitted as one.
     report = fuse_station_views(report, tolerances)

@@ -25,6 +25,7 @@ import numpy as np
 
 from asbuilt.errors import FitError
 from asbuilt.fit._common import row_norms
+from asbuilt.fit._cuboid_foreground import beam_box
 from asbuilt.fit._cylinder_background import rescued
 from asbuilt.fit.result import BACKGROUND_SHOTS, FitResult
 from asbuilt.primitives import Cuboid
@@ -39,19 +40,8 @@ BEHIND_SHOTS = 3
 def in_front_of(box: Cuboid, points: np.ndarray, view: np.ndarray, width: float) -> np.ndarray:
     """Which ``points`` (m, 3) metres lie in front of ``box`` as seen from ``view`` (3,)
     metres, shape (m,) bool: each one's beam from ``view`` passes the box by, or enters it
-    more than ``width`` metres beyond the point (slab test in the box's frame)."""
-    rel = points - view
-    ranges = row_norms(rel)
-    beams = rel / ranges[:, None]
-    axes = np.asarray(box.axes, dtype=np.float64)
-    half = 0.5 * np.asarray(box.size, dtype=np.float64)
-    start = (view - box.center) @ axes.T  # (3,) the station in the box's frame
-    along = beams @ axes.T  # (m, 3)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        low = (-half - start) / along
-        high = (half - start) / along
-    enter = np.nanmax(np.minimum(low, high), axis=1)
-    leave = np.nanmin(np.maximum(low, high), axis=1)
+    more than ``width`` metres beyond the point (:func:`beam_box`'s slab test)."""
+    ranges, enter, leave = beam_box(box, points, view)
     misses = ~(enter <= leave) | (leave < 0.0)
     return misses | (ranges < enter - width)
 

@@ -17,7 +17,7 @@ from asbuilt.fit.result import FitFailure, FitReport, ObjectFit
 from asbuilt.labels import LabelWords
 from asbuilt.scan.model import ScanObject
 
-__all__ = ["named_by_label", "named_report", "renamed"]
+__all__ = ["named_failure", "named_report", "renamed"]
 
 #: "pipe", "pipes", "pipe's", "Pipe", with the article before it (which a noun starting with a
 #: vowel turns to "an").
@@ -51,7 +51,8 @@ def _fit(item: ObjectFit, words: LabelWords) -> ObjectFit:
     return dataclasses.replace(item, result=dataclasses.replace(item.result, notes=notes))
 
 
-def _failure(item: FitFailure, words: LabelWords) -> FitFailure:
+def named_failure(item: FitFailure, words: LabelWords) -> FitFailure:
+    """``item`` with a vessel's refusal in its label's noun (itself for any other object)."""
     noun = _noun(item.object, words)
     if noun is None:
         return item
@@ -60,17 +61,8 @@ def _failure(item: FitFailure, words: LabelWords) -> FitFailure:
     return dataclasses.replace(item, error=named)
 
 
-def named_by_label(
-    fits: tuple[ObjectFit, ...], failures: tuple[FitFailure, ...], words: LabelWords
-) -> tuple[tuple[ObjectFit, ...], tuple[FitFailure, ...]]:
-    """The fits and failures with each vessel's notes and refusal in its label's noun."""
-    return (
-        tuple(_fit(item, words) for item in fits),
-        tuple(_failure(item, words) for item in failures),
-    )
-
-
 def named_report(report: FitReport, words: LabelWords) -> FitReport:
-    """:func:`named_by_label` applied to a whole report."""
-    fits, failures = named_by_label(report.fits, report.failures, words)
+    """The report with each vessel's notes and refusal in its label's noun."""
+    fits = tuple(_fit(item, words) for item in report.fits)
+    failures = tuple(named_failure(item, words) for item in report.failures)
     return dataclasses.replace(report, fits=fits, failures=failures)
